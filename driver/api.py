@@ -1,0 +1,92 @@
+"""The one small interface through which anything flies the drone.
+
+Both the embedded driver (:class:`driver.vehicle.Vehicle`) and the remote Ice
+client provide it, so the viewer never knows which it has. Every method returns
+at once: commands hand back a :class:`concurrent.futures.Future` that resolves
+to a :class:`~driver.state.CommandResult`; state is read as an immutable
+snapshot. Nothing here blocks on the network.
+"""
+from __future__ import annotations
+
+import abc
+from concurrent.futures import Future
+from dataclasses import dataclass
+
+from .state import CommandResult, VehicleState
+
+
+@dataclass(frozen=True)
+class Limits:
+    """Clamps applied to every velocity command before it reaches the wire."""
+    horizontal: float = 2.0      # m/s, forward and right each
+    vertical: float = 1.0        # m/s
+    yaw_rate: float = 0.785      # rad/s (45 deg/s)
+
+
+class Drone(abc.ABC):
+    """A vehicle the pilot can fly."""
+
+    @abc.abstractmethod
+    def state(self) -> VehicleState:
+        """The latest snapshot; cheap, never blocks."""
+
+    @property
+    @abc.abstractmethod
+    def description(self) -> str:
+        """Where the vehicle is reached ("tcp:127.0.0.1:5760", "Ice 10.1.1.10")."""
+
+    @property
+    def limits(self) -> Limits:
+        return Limits()
+
+    # -- flight ---------------------------------------------------------------------------
+    @abc.abstractmethod
+    def takeoff(self, altitude: float | None = None) -> Future[CommandResult]:
+        """Run the whole sequence: wait until ready, GUIDED, arm, take off, climb.
+
+        Resolves ACCEPTED once the target altitude is reached (or FAILED/ABORTED).
+        """
+
+    @abc.abstractmethod
+    def land(self) -> Future[CommandResult]:
+        """Switch to LAND; aborts a takeoff in progress. Always accepted by the driver."""
+
+    @abc.abstractmethod
+    def stop(self) -> Future[CommandResult]:
+        """Hold position: zero velocity in GUIDED, else BRAKE. Aborts a takeoff."""
+
+    @abc.abstractmethod
+    def return_to_launch(self) -> Future[CommandResult]:
+        """Switch to RTL."""
+
+    @abc.abstractmethod
+    def arm(self, force: bool = False) -> Future[CommandResult]: ...
+
+    @abc.abstractmethod
+    def disarm(self, force: bool = False) -> Future[CommandResult]: ...
+
+    @abc.abstractmethod
+    def set_mode(self, name: str) -> Future[CommandResult]:
+        """Change flight mode by ArduCopter name ("GUIDED", "LOITER", ...)."""
+
+    @abc.abstractmethod
+    def set_velocity(self, forward: float, right: float, up: float, yaw_rate: float) -> bool:
+        """Command a velocity relative to the vehicle's heading.
+
+        forward/right/up in m/s, yaw_rate in rad/s (positive turns the nose right).
+        Values are clamped to :attr:`limits`; returns False (and sends nothing new)
+        if any value is NaN or infinite. The driver keeps streaming it and falls to
+        zero when calls stop for the deadman time.
+        """
+
+    @abc.abstractmethod
+    def go_to(self, north: float, east: float, altitude: float) -> Future[CommandResult]:
+        """Fly to a point in metres from home (altitude above home)."""
+
+    @abc.abstractmethod
+    def set_yaw(self, degrees: float, relative: bool = False, rate_deg_s: float = 30.0) -> Future[CommandResult]:
+        """Turn to a heading (clockwise from north) or by an angle (relative, positive = right)."""
+
+    @abc.abstractmethod
+    def close(self) -> None:
+        """Stop streaming and release the link."""

@@ -1,0 +1,281 @@
+"""Byte transports to the autopilot: live links (any mavutil connection string) and .tlog replay.
+
+A transport only moves bytes. Parsing, health and state live in
+:mod:`driver.vehicle`. Live transports are opened with pymavlink's
+``mavutil.mavlink_connection`` so every connection string MAVProxy accepts works
+(``udpin:0.0.0.0:14550``, ``tcp:127.0.0.1:5760``, ``udpout:``, ``/dev/ttyUSB0``).
+We read and write raw bytes and never call mavutil's ``recv_msg``: its automatic
+MAVLink 2 switch rewrites process-global state.
+"""
+from __future__ import annotations
+
+import logging
+import os
+import select
+import socket
+import struct
+import threading
+import time
+
+log = logging.getLogger(__name__)
+
+
+class LinkError(Exception):
+    """The transport failed; a reconnectable one may be opened again."""
+
+
+class Transport:
+    description = ""
+    reconnectable = False        # TCP and serial: reopen after an error
+    is_replay = False
+
+    def open(self) -> None: ...
+    def read(self, timeout: float) -> bytes: ...
+    def write(self, data: bytes) -> None: ...
+    def close(self) -> None: ...
+
+    def clock(self) -> float:
+        """Time base for link supervision: real time, or the log's time when replaying."""
+        return time.monotonic()
+
+
+class MavutilTransport(Transport):
+    """Any live pymavlink connection string."""
+
+    def __init__(self, connection: str, baud: int = 57600, source_system: int = 255, source_component: int = 190):
+        self.description = connection
+        self._connection = connection
+        self._baud = baud
+        self._ids = (source_system, source_component)
+        self._conn = None
+        self._sock: socket.socket | None = None     # TCP: used directly (mavtcp prints and swallows EOF)
+        kind = connection.split(":", 1)[0]
+        self.reconnectable = kind in ("tcp", "tcpin") or ":" not in connection or connection.startswith("/")
+        self._lock = threading.Lock()
+
+    def open(self) -> None:
+        from pymavlink import mavutil
+        try:
+            self._conn = mavutil.mavlink_connection(
+                self._connection, baud=self._baud, source_system=self._ids[0], source_component=self._ids[1],
+                autoreconnect=False, retries=0, reconnect_delay=0)
+        except Exception as exc:          # refused, no such device, bad string
+            raise LinkError(f"cannot open {self._connection}: {exc}") from exc
+        self._sock = self._conn.port if self._connection.startswith("tcp:") else None
+
+    def read(self, timeout: float) -> bytes:
+        conn = self._conn
+        if conn is None:
+            raise LinkError("not open")
+        fd = getattr(conn, "fd", None)
+        if fd is not None:
+            try:
+                ready, _, _ = select.select([fd], [], [], timeout)
+            except (OSError, ValueError) as exc:
+                raise LinkError(str(exc)) from exc
+            if not ready:
+                return b""
+        try:
+            if self._sock is not None:
+                data = self._sock.recv(65536)
+                if not data:
+                    raise LinkError("connection closed by the vehicle")
+                return data
+            data = conn.recv(65536) if fd is not None else conn.recv()
+        except LinkError:
+            raise
+        except BlockingIOError:
+            return b""
+        except Exception as exc:
+            raise LinkError(str(exc)) from exc
+        if fd is None and not data:
+            time.sleep(min(timeout, 0.01))    # transports without a file descriptor (rare): poll gently
+        return bytes(data) if data else b""
+
+    def write(self, data: bytes) -> None:
+        conn = self._conn
+        if conn is None:
+            return
+        with self._lock:
+            try:
+                if self._sock is not None:
+                    self._sock.sendall(data)
+                else:
+                    conn.write(data)
+            except BlockingIOError:
+                log.debug("link busy, dropped %d bytes", len(data))
+            except Exception as exc:
+                log.debug("write failed: %s", exc)
+
+    def close(self) -> None:
+        conn, self._conn, self._sock = self._conn, None, None
+        if conn is not None:
+            try:
+                conn.close()
+            except Exception:
+                pass
+
+
+def frame_length(buf: bytes | bytearray, offset: int) -> int:
+    """Length of the MAVLink frame starting at ``offset`` (0 if not a frame start)."""
+    magic = buf[offset]
+    if magic == 0xFE and offset + 1 < len(buf):
+        return 6 + buf[offset + 1] + 2
+    if magic == 0xFD and offset + 2 < len(buf):
+        return 10 + buf[offset + 1] + 2 + (13 if buf[offset + 2] & 0x01 else 0)
+    return 0
+
+
+class TlogWriter:
+    """Writes the MAVProxy/QGroundControl telemetry log: 8-byte big-endian µs timestamp, then the packet."""
+
+    def __init__(self, path: str, append: bool = False):
+        os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
+        self.path = path
+        self._file = open(path, "ab" if append else "wb")
+        self._lock = threading.Lock()
+
+    def write(self, packet: bytes, when: float | None = None) -> None:
+        stamp = struct.pack(">Q", int((time.time() if when is None else when) * 1e6))
+        with self._lock:
+            if self._file is not None:
+                self._file.write(stamp + packet)
+
+    def flush(self) -> None:
+        with self._lock:
+            if self._file is not None:
+                self._file.flush()
+
+    def close(self) -> None:
+        with self._lock:
+            if self._file is not None:
+                self._file.close()
+                self._file = None
+
+
+class TlogReplay(Transport):
+    """Plays a .tlog back as if it were a live link, at 1x or faster, pausable.
+
+    Packets are released when the replay clock reaches their recorded time; the
+    clock stops while paused, so link supervision sees no gap.
+    """
+
+    is_replay = True
+
+    def __init__(self, path: str, speed: float = 1.0):
+        self.description = f"replay {os.path.basename(path)}"
+        self.path = path
+        with open(path, "rb") as f:
+            data = f.read()
+        self._packets: list[tuple[float, bytes]] = []
+        i, n = 0, len(data)
+        while i + 9 <= n:
+            stamp = struct.unpack_from(">Q", data, i)[0] * 1e-6
+            length = frame_length(data, i + 8)
+            if length == 0 or i + 8 + length > n:
+                i += 1                        # resynchronise on a damaged record
+                continue
+            self._packets.append((stamp, data[i + 8:i + 8 + length]))
+            i += 8 + length
+        self.start_time = self._packets[0][0] if self._packets else 0.0
+        self.duration = (self._packets[-1][0] - self.start_time) if self._packets else 0.0
+        self._cond = threading.Condition()
+        self._speed = max(0.1, float(speed))
+        self._paused = False
+        self._index = 0
+        self._position = 0.0                  # seconds of log time played
+        self._anchor = time.monotonic()       # real time at which _position was last set
+        self._closed = False
+
+    # -- controls (any thread) -------------------------------------------------------------
+    @property
+    def speed(self) -> float:
+        return self._speed
+
+    @speed.setter
+    def speed(self, value: float) -> None:
+        with self._cond:
+            self._rebase()
+            self._speed = max(0.1, min(64.0, float(value)))
+            self._cond.notify_all()
+
+    @property
+    def paused(self) -> bool:
+        return self._paused
+
+    def pause(self) -> None:
+        with self._cond:
+            self._rebase()
+            self._paused = True
+
+    def resume(self) -> None:
+        with self._cond:
+            self._rebase()
+            self._paused = False
+            self._cond.notify_all()
+
+    @property
+    def position(self) -> float:
+        with self._cond:
+            return self._now()
+
+    @property
+    def finished(self) -> bool:
+        return self._index >= len(self._packets)
+
+    def _now(self) -> float:
+        if self._paused:
+            return self._position
+        return min(self.duration, self._position + (time.monotonic() - self._anchor) * self._speed)
+
+    def _rebase(self) -> None:
+        self._position = self._now()
+        self._anchor = time.monotonic()
+
+    # -- transport -------------------------------------------------------------------------
+    def clock(self) -> float:
+        return self.position
+
+    def open(self) -> None:
+        with self._cond:
+            self._position, self._anchor = 0.0, time.monotonic()
+
+    def read(self, timeout: float) -> bytes:
+        deadline = time.monotonic() + timeout
+        with self._cond:
+            while not self._closed:
+                if self._index >= len(self._packets):
+                    self._cond.wait(max(0.0, deadline - time.monotonic()))
+                    return b""
+                now = self._now()
+                out = bytearray()
+                while self._index < len(self._packets) and self._packets[self._index][0] - self.start_time <= now:
+                    out += self._packets[self._index][1]
+                    self._index += 1
+                if out:
+                    return bytes(out)
+                remaining = deadline - time.monotonic()
+                if remaining <= 0:
+                    return b""
+                if self._paused:
+                    wait = remaining
+                else:
+                    due = (self._packets[self._index][0] - self.start_time - now) / self._speed
+                    wait = min(remaining, max(0.0005, due))
+                self._cond.wait(wait)
+        return b""
+
+    def write(self, data: bytes) -> None:
+        """A recording cannot be commanded."""
+
+    def close(self) -> None:
+        with self._cond:
+            self._closed = True
+            self._cond.notify_all()
+
+
+def open_transport(connection: str, baud: int = 57600, source_system: int = 255, source_component: int = 190,
+                   replay_speed: float = 1.0) -> Transport:
+    if connection.lower().endswith(".tlog") and os.path.isfile(connection):
+        return TlogReplay(connection, replay_speed)
+    return MavutilTransport(connection, baud, source_system, source_component)

@@ -1,0 +1,306 @@
+"""Immutable snapshots of the vehicle, passed freely between threads.
+
+The driver's reader thread builds a new :class:`VehicleState` whenever telemetry
+changes something and swaps a single reference; readers (the viewer's timer, an
+Ice servant, a test) take that reference and never see a half-updated vehicle.
+
+Frames: NED is the autopilot's (x north, y east, z down, yaw clockwise from
+north). ENU is JdeRobot's (x east, y north, z up, yaw counter-clockwise from
+east). Angles are radians unless a name says ``_deg``.
+"""
+from __future__ import annotations
+
+import enum
+import math
+from dataclasses import dataclass, field, replace
+
+__all__ = [
+    "LandedState", "LinkStatus", "Severity", "CommandStatus", "Attitude", "GlobalPosition",
+    "LocalPosition", "Velocity", "Battery", "Gps", "Readiness", "LinkHealth", "Message",
+    "CommandResult", "Setpoint", "SequencePhase", "SequenceProgress", "Environment",
+    "VehicleState", "replace",
+]
+
+
+class LandedState(enum.IntEnum):
+    """EXTENDED_SYS_STATE.landed_state (MAV_LANDED_STATE)."""
+    UNDEFINED = 0
+    ON_GROUND = 1
+    IN_AIR = 2
+    TAKEOFF = 3
+    LANDING = 4
+
+
+class LinkStatus(enum.Enum):
+    WAITING = "waiting"      # link open, no vehicle heartbeat yet
+    OK = "ok"
+    LOST = "lost"            # no heartbeat for the loss timeout
+    CLOSED = "closed"
+
+
+class Severity(enum.IntEnum):
+    """MAV_SEVERITY: lower is worse."""
+    EMERGENCY = 0
+    ALERT = 1
+    CRITICAL = 2
+    ERROR = 3
+    WARNING = 4
+    NOTICE = 5
+    INFO = 6
+    DEBUG = 7
+
+
+class CommandStatus(enum.Enum):
+    ACCEPTED = "accepted"
+    REFUSED = "refused"          # the vehicle said no (COMMAND_ACK failure / mode not reached)
+    TIMED_OUT = "timed out"      # no answer after every retry
+    REJECTED = "rejected"        # refused by the driver itself (bad value, busy, no link)
+    ABORTED = "aborted"          # cancelled by the pilot (e.g. land during takeoff)
+    IN_PROGRESS = "in progress"  # accepted and still running (e.g. a takeoff climbing)
+
+
+@dataclass(frozen=True)
+class Attitude:
+    roll: float = 0.0
+    pitch: float = 0.0
+    yaw: float = 0.0             # NED yaw, clockwise from north, in (-pi, pi]
+    rollspeed: float = 0.0
+    pitchspeed: float = 0.0
+    yawspeed: float = 0.0
+
+    @property
+    def quaternion(self) -> tuple[float, float, float, float]:
+        """(w, x, y, z) rotating body (FRD) to NED, as pymavlink's Quaternion."""
+        from pymavlink.quaternion import QuaternionBase
+        w, x, y, z = QuaternionBase([self.roll, self.pitch, self.yaw]).q
+        return (float(w), float(x), float(y), float(z))
+
+    @property
+    def heading_deg(self) -> float:
+        return math.degrees(self.yaw) % 360.0
+
+
+@dataclass(frozen=True)
+class GlobalPosition:
+    lat: float                   # degrees
+    lon: float                   # degrees
+    alt: float                   # metres above mean sea level
+
+
+@dataclass(frozen=True)
+class LocalPosition:
+    """Metres from home, NED."""
+    north: float = 0.0
+    east: float = 0.0
+    down: float = 0.0
+
+    @property
+    def enu(self) -> tuple[float, float, float]:
+        return (self.east, self.north, -self.down)
+
+
+@dataclass(frozen=True)
+class Velocity:
+    """Metres per second, NED."""
+    north: float = 0.0
+    east: float = 0.0
+    down: float = 0.0
+
+    @property
+    def ground_speed(self) -> float:
+        return math.hypot(self.north, self.east)
+
+    @property
+    def climb(self) -> float:
+        return -self.down
+
+    def body(self, yaw: float) -> tuple[float, float, float]:
+        """(forward, right, down) relative to a heading ``yaw`` (NED)."""
+        c, s = math.cos(yaw), math.sin(yaw)
+        return (c * self.north + s * self.east, -s * self.north + c * self.east, self.down)
+
+
+@dataclass(frozen=True)
+class Battery:
+    voltage: float | None = None         # V
+    current: float | None = None         # A
+    remaining: float | None = None       # percent 0..100
+    remaining_estimated: bool = False    # True when derived from cell voltage
+    cells: int = 4
+    low: bool = False                    # under 20 % or 3.7 V a cell
+
+    @property
+    def cell_voltage(self) -> float | None:
+        return None if self.voltage is None or self.cells <= 0 else self.voltage / self.cells
+
+
+@dataclass(frozen=True)
+class Gps:
+    fix_type: int = 0                    # GPS_FIX_TYPE: 0/1 none, 2 2D, 3 3D, 4+ DGPS/RTK
+    satellites: int = 0
+    hdop: float | None = None
+
+    @property
+    def fix_name(self) -> str:
+        return {0: "No GPS", 1: "No fix", 2: "2D fix", 3: "3D fix", 4: "DGPS",
+                5: "RTK float", 6: "RTK fixed", 7: "Static", 8: "PPP"}.get(self.fix_type, str(self.fix_type))
+
+
+@dataclass(frozen=True)
+class Readiness:
+    """What the autopilot says about being ready to arm (see arducopter.md)."""
+    prearm_ok: bool = False              # SYS_STATUS health bit MAV_SYS_STATUS_PREARM_CHECK
+    ekf_ok: bool = False                 # EKF_STATUS_REPORT attitude+velocity+position flags
+    gps_ok: bool = False                 # GPS_RAW_INT fix_type >= 3
+
+    @property
+    def ready_to_arm(self) -> bool:
+        return self.prearm_ok and self.ekf_ok and self.gps_ok
+
+
+@dataclass(frozen=True)
+class LinkHealth:
+    status: LinkStatus = LinkStatus.WAITING
+    address: str = ""                    # the connection string
+    heartbeat_age: float | None = None   # seconds since the vehicle's last heartbeat
+    packets_per_s: float = 0.0
+    loss_percent: float = 0.0            # from sequence-number gaps
+    packets_received: int = 0
+    packets_lost: int = 0
+    bad_crc: int = 0
+    mavlink_version: int = 1             # what we send: 1 until the vehicle speaks 2
+    lost_count: int = 0                  # how many times the link was declared lost
+
+
+@dataclass(frozen=True)
+class Message:
+    """A line for the pilot: the autopilot's STATUSTEXT or the driver's own report."""
+    index: int                           # increases by one for every message of a session
+    time: float                          # wall-clock seconds (time.time())
+    severity: Severity
+    text: str
+    source: str = "vehicle"              # "vehicle" (STATUSTEXT) or "driver"
+
+
+@dataclass(frozen=True)
+class CommandResult:
+    command: str                         # "takeoff", "arm", "mode GUIDED", ...
+    status: CommandStatus
+    reason: str = ""                     # the vehicle's words (ACK result + STATUSTEXT) or ours
+    attempts: int = 0
+    index: int = 0                       # increases by one for every result of a session
+
+    @property
+    def ok(self) -> bool:
+        return self.status in (CommandStatus.ACCEPTED, CommandStatus.IN_PROGRESS)
+
+    def __str__(self) -> str:
+        return f"{self.command}: {self.status.value}" + (f" ({self.reason})" if self.reason else "")
+
+
+@dataclass(frozen=True)
+class Setpoint:
+    """The velocity command the driver is streaming, after clamping."""
+    forward: float = 0.0                 # m/s
+    right: float = 0.0                   # m/s
+    up: float = 0.0                      # m/s
+    yaw_rate: float = 0.0                # rad/s, positive = clockwise seen from above (nose right)
+
+    @property
+    def is_zero(self) -> bool:
+        return self.forward == 0.0 and self.right == 0.0 and self.up == 0.0 and self.yaw_rate == 0.0
+
+
+class SequencePhase(enum.Enum):
+    IDLE = "idle"
+    WAITING_READY = "waiting until ready to arm"
+    SETTING_GUIDED = "switching to GUIDED"
+    ARMING = "arming"
+    TAKING_OFF = "taking off"
+    CLIMBING = "climbing"
+    DONE = "done"
+    FAILED = "failed"
+    ABORTED = "aborted"
+
+
+@dataclass(frozen=True)
+class SequenceProgress:
+    """The takeoff sequence, phase by phase."""
+    phase: SequencePhase = SequencePhase.IDLE
+    detail: str = ""
+    target_altitude: float = 0.0
+
+    @property
+    def active(self) -> bool:
+        return self.phase in (SequencePhase.WAITING_READY, SequencePhase.SETTING_GUIDED,
+                              SequencePhase.ARMING, SequencePhase.TAKING_OFF, SequencePhase.CLIMBING)
+
+
+@dataclass(frozen=True)
+class Environment:
+    """Sensor values JdeRobot's Navdata carries; None where the autopilot sent nothing."""
+    mag: tuple[int, int, int] | None = None          # milligauss (SCALED_IMU / RAW_IMU)
+    accel_g: tuple[float, float, float] | None = None
+    pressure_hpa: float | None = None
+    temperature_c: float | None = None
+    wind_speed: float | None = None                  # m/s
+    wind_direction_deg: float | None = None          # where the wind comes from
+    throttle: int | None = None                      # percent (VFR_HUD)
+
+
+@dataclass(frozen=True)
+class VehicleState:
+    """Everything known about the vehicle at one instant."""
+    time: float = 0.0                                # wall clock of the last change
+    link: LinkHealth = field(default_factory=LinkHealth)
+    system_id: int = 0
+    vehicle_type: int = 0                            # MAV_TYPE
+    mode: str = ""                                   # ArduCopter mode name, "" before the first heartbeat
+    armed: bool = False
+    landed_state: LandedState = LandedState.UNDEFINED
+    attitude: Attitude = field(default_factory=Attitude)
+    position: GlobalPosition | None = None
+    home: GlobalPosition | None = None
+    local: LocalPosition | None = None               # from home, NED
+    velocity: Velocity = field(default_factory=Velocity)
+    altitude: float = 0.0                            # above home, m
+    heading_deg: float = 0.0                         # 0..360, clockwise from north
+    airspeed: float = 0.0
+    battery: Battery = field(default_factory=Battery)
+    gps: Gps = field(default_factory=Gps)
+    readiness: Readiness = field(default_factory=Readiness)
+    environment: Environment = field(default_factory=Environment)
+    messages: tuple[Message, ...] = ()               # the most recent, oldest first
+    results: tuple[CommandResult, ...] = ()          # the most recent command results, oldest first
+    takeoff: SequenceProgress = field(default_factory=SequenceProgress)
+    setpoint: Setpoint = field(default_factory=Setpoint)
+
+    # -- derived views -----------------------------------------------------------------------
+    @property
+    def connected(self) -> bool:
+        return self.link.status is LinkStatus.OK
+
+    @property
+    def flying(self) -> bool:
+        """In the air and armed (taking off, flying or landing)."""
+        if not self.armed:
+            return False
+        if self.landed_state is LandedState.UNDEFINED:
+            return self.altitude > 0.3
+        return self.landed_state is not LandedState.ON_GROUND
+
+    @property
+    def can_fly_velocity(self) -> bool:
+        """Velocity setpoints are obeyed: GUIDED, armed and airborne, takeoff finished."""
+        return (self.mode == "GUIDED" and self.flying and not self.takeoff.active
+                and self.landed_state in (LandedState.IN_AIR, LandedState.UNDEFINED))
+
+    @property
+    def distance_from_home(self) -> float | None:
+        return None if self.local is None else math.hypot(self.local.north, self.local.east)
+
+    def messages_since(self, index: int) -> tuple[Message, ...]:
+        return tuple(m for m in self.messages if m.index > index)
+
+    def results_since(self, index: int) -> tuple[CommandResult, ...]:
+        return tuple(r for r in self.results if r.index > index)

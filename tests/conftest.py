@@ -1,0 +1,73 @@
+"""Shared fixtures: a real simulated ArduCopter on a real TCP socket, and the real driver connected to it."""
+from __future__ import annotations
+
+import os
+import sys
+
+import pytest
+
+sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
+
+from driver.sim import SimConfig, SimVehicle  # noqa: E402
+from driver.vehicle import Vehicle, VehicleConfig  # noqa: E402
+
+#: Simulated seconds per real second in tests: fast, yet slow enough for 20 Hz setpoints to matter.
+SPEEDUP = 4.0
+
+
+@pytest.fixture
+def sim_factory():
+    """Start simulated vehicles on ephemeral ports; all are stopped after the test."""
+    sims = []
+
+    def make(**overrides) -> SimVehicle:
+        opts = dict(tcp_port=0, speedup=SPEEDUP, ready_after=1.0, seed=1)
+        opts.update(overrides)
+        sim = SimVehicle(SimConfig(**opts))
+        sim.start()
+        sims.append(sim)
+        return sim
+
+    yield make
+    for sim in sims:
+        sim.stop()
+
+
+@pytest.fixture
+def sim(sim_factory) -> SimVehicle:
+    return sim_factory()
+
+
+@pytest.fixture
+def vehicle_factory(tmp_path):
+    """Start drivers (embedded MAVLinkServer) on given connections; all are closed after the test."""
+    vehicles = []
+
+    def make(connection: str, **overrides) -> Vehicle:
+        opts = dict(connection=connection, tlog_path=str(tmp_path / f"flight{len(vehicles)}.tlog"),
+                    command_timeout=1.0)
+        opts.update(overrides)
+        v = Vehicle(VehicleConfig(**opts)).start()
+        vehicles.append(v)
+        return v
+
+    yield make
+    for v in vehicles:
+        v.close()
+
+
+@pytest.fixture
+def vehicle(sim, vehicle_factory) -> Vehicle:
+    """The driver connected to the simulated vehicle, with a heartbeat seen."""
+    v = vehicle_factory(f"tcp:127.0.0.1:{sim.tcp_port}")
+    assert v.wait_for(lambda s: s.connected, 10), "no heartbeat from the simulated vehicle"
+    return v
+
+
+@pytest.fixture
+def flying(vehicle):
+    """The driver with the simulated vehicle hovering at 3 m in GUIDED."""
+    result = vehicle.takeoff(3.0).result(timeout=60)
+    assert result.ok, str(result)
+    return vehicle

@@ -1,0 +1,177 @@
+"""Link robustness, wire safety, protocol versions, telemetry log and forwarding."""
+from __future__ import annotations
+
+import math
+import os
+import random
+import socket
+import subprocess
+import sys
+
+import pytest
+from pymavlink import mavutil
+from pymavlink.dialects.v20 import ardupilotmega as mavlink
+
+from driver import frames
+from driver.state import CommandStatus, LinkStatus
+
+
+def test_telemetry_fills_the_state(vehicle, sim):
+    s = vehicle.wait_for(lambda s: s.position is not None and s.home is not None and s.local is not None
+                         and s.battery.voltage and s.gps.fix_type >= 3 and s.readiness.ready_to_arm
+                         and s.environment.pressure_hpa and s.environment.mag and s.link.packets_per_s > 0, 15)
+    assert s is not None, vehicle.state()
+    assert s.mode == sim.truth().mode and s.system_id == 1
+    assert abs(s.home.lat - 40.2839) < 1e-4 and abs(s.home.lon + 3.7940) < 1e-4
+    assert abs(s.local.north) < 0.5 and abs(s.local.east) < 0.5
+    assert 14.0 < s.battery.voltage < 17.0 and 0 < s.battery.remaining <= 100
+    w, x, y, z = s.attitude.quaternion
+    assert abs(w * w + x * x + y * y + z * z - 1) < 1e-6
+    assert s.link.packets_per_s > 0 and s.link.heartbeat_age is not None and s.link.status is LinkStatus.OK
+
+
+def test_garbage_and_corrupt_frames_never_stop_the_reader(vehicle, sim):
+    assert vehicle.wait_for(lambda s: s.attitude.roll != 0 or s.position is not None, 10)
+    rnd = random.Random(7)
+    for _ in range(50):
+        sim.inject(bytes(rnd.getrandbits(8) for _ in range(2000)))
+        sim.inject(b"\xfe\x09" + bytes(rnd.getrandbits(8) for _ in range(40)))   # frame-shaped, bad CRC
+    sim.faults.corrupt_fraction = 0.3
+    count = vehicle.state().link.packets_received
+    assert vehicle.wait_for(lambda s: s.link.bad_crc > 5 and s.link.packets_received > count + 50, 15), \
+        vehicle.state().link
+    sim.faults.corrupt_fraction = 0.0
+    assert vehicle.arm().result(timeout=10).ok      # still commanding the vehicle
+    assert vehicle.state().connected
+
+
+def test_dropped_packets_show_as_loss(vehicle, sim):
+    sim.faults.drop_fraction = 0.3
+    assert vehicle.wait_for(lambda s: s.link.loss_percent > 10 and s.link.packets_lost > 10, 15), \
+        vehicle.state().link
+
+
+def test_nan_inf_and_huge_velocities_never_reach_the_wire(flying, sim):
+    lim = flying.limits
+    for bad in ((math.nan, 0, 0, 0), (0, math.inf, 0, 0), (0, 0, -math.inf, 0), (0, 0, 0, math.nan)):
+        assert flying.set_velocity(*bad) is False
+    assert flying.set_velocity(100.0, -100.0, 50.0, 10.0) is True
+    assert flying.wait_for(lambda s: not s.setpoint.is_zero, 2)
+    sp = flying.state().setpoint
+    assert (sp.forward, sp.right, sp.up, sp.yaw_rate) == (lim.horizontal, -lim.horizontal, lim.vertical, lim.yaw_rate)
+    end = sim.truth().time + 1.0
+    while sim.truth().time < end:
+        flying.set_velocity(100.0, -100.0, 50.0, 10.0)
+        flying.set_velocity(math.nan, 1, 1, 1)
+        flying.wait_for(lambda s: sim.truth().time >= end, 0.05)
+    received = list(sim.received_setpoints)
+    assert received
+    for _, frame, mask, vx, vy, vz, yaw_rate in received:
+        assert all(math.isfinite(v) for v in (vx, vy, vz, yaw_rate))
+        assert abs(vx) <= lim.horizontal + 1e-6 and abs(vy) <= lim.horizontal + 1e-6
+        assert abs(vz) <= lim.vertical + 1e-6 and abs(yaw_rate) <= lim.yaw_rate + 1e-6
+    assert any(abs(r[3] - lim.horizontal) < 1e-6 for r in received)
+
+
+def test_deadman_zeroes_a_stalled_stream(flying, sim):
+    assert flying.set_velocity(1.5, 0, 0, 0)
+    assert flying.wait_for(lambda s: not s.setpoint.is_zero, 2)
+    assert flying.wait_for(lambda s: s.setpoint.is_zero, 5), "deadman did not zero the setpoint"
+    received = list(sim.received_setpoints)
+    moving = [i for i, r in enumerate(received) if abs(r[3] - 1.5) < 1e-6]
+    assert moving, received[-5:]
+    assert flying.wait_for(lambda s: any(r[3] == 0.0 and r[4] == 0.0 for r in list(sim.received_setpoints)[moving[-1]:]), 5)
+    assert flying.wait_for(lambda s: math.hypot(sim.truth().vn, sim.truth().ve) < 0.2, 20)
+
+
+def test_solo_style_mavlink1_vehicle(sim_factory, vehicle_factory):
+    sim = sim_factory(mavlink2=False)
+    vehicle = vehicle_factory(f"tcp:127.0.0.1:{sim.tcp_port}")
+    assert vehicle.wait_for(lambda s: s.readiness.ready_to_arm, 15)
+    assert vehicle.arm().result(timeout=10).ok
+    assert vehicle.state().link.mavlink_version == 1
+    assert {v for _, _, v in list(sim.received_messages)} == {1}
+
+
+def test_follows_a_mavlink2_vehicle_from_mavlink1(vehicle, sim):
+    first = list(sim.received_messages)[0]
+    assert first[2] == 1                               # we start on MAVLink 1
+    assert vehicle.wait_for(lambda s: s.link.mavlink_version == 2, 5)
+    n = len(sim.received_messages)
+    assert vehicle.set_mode("LOITER").result(timeout=10).ok
+    assert list(sim.received_messages)[-1][2] == 2
+
+
+def test_tlog_reads_back_with_pymavlink_and_replays(flying, sim, vehicle_factory, tmp_path):
+    flying.land().result(timeout=10)
+    assert flying.wait_for(lambda s: not s.armed, 60)
+    path = flying.config.tlog_path
+    flying.close()
+    log = mavutil.mavlink_connection(path)
+    types = {}
+    while (m := log.recv_match()) is not None:
+        types[m.get_type()] = types.get(m.get_type(), 0) + 1
+    assert types.get("HEARTBEAT", 0) > 5 and types.get("ATTITUDE", 0) > 5 and types.get("COMMAND_ACK", 0) > 2
+    assert types.get("SET_POSITION_TARGET_LOCAL_NED", 0) > 0 or types.get("COMMAND_LONG", 0) > 0
+    dump = subprocess.run([sys.executable, "-m", "pymavlink.tools.mavlogdump", "--types", "HEARTBEAT", path],
+                          capture_output=True, text=True, timeout=60)
+    assert dump.returncode == 0 and dump.stdout.count("HEARTBEAT") > 5
+
+    replay = vehicle_factory(path, tlog_path=None, replay_speed=16.0)
+    assert replay.replay is not None and replay.replay.duration > 2
+    assert replay.wait_for(lambda s: s.armed and s.altitude > 2.0, 30), replay.state()
+    assert replay.wait_for(lambda s: not s.armed and s.mode == "LAND", 30)
+    assert replay.takeoff().result(timeout=2).status is CommandStatus.REJECTED
+
+
+def test_replay_pauses_and_resumes(flying, vehicle_factory):
+    path = flying.config.tlog_path
+    flying.close()
+    replay = vehicle_factory(path, tlog_path=None, replay_speed=1.0)
+    assert replay.wait_for(lambda s: s.connected, 10)
+    replay.replay.pause()
+    at = replay.replay.position
+    count = replay.state().link.packets_received
+    assert replay.wait_for(lambda s: False, 0.5) is None       # half a second passes, paused
+    assert replay.replay.position == at and replay.state().link.packets_received == count
+    assert replay.state().connected                             # a pause is not a lost link
+    replay.replay.resume()
+    assert replay.wait_for(lambda s: s.link.packets_received > count, 5)
+
+
+def test_forwarding_to_another_ground_station(sim, vehicle_factory):
+    gcs = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    gcs.bind(("127.0.0.1", 0))
+    gcs.settimeout(5)
+    port = gcs.getsockname()[1]
+    try:
+        vehicle = vehicle_factory(f"tcp:127.0.0.1:{sim.tcp_port}", outputs=(f"udp:127.0.0.1:{port}",))
+        assert vehicle.wait_for(lambda s: s.connected, 10)
+        codec = mavlink.MAVLink(None)
+        codec.robust_parsing = True
+        seen = set()
+        while "HEARTBEAT" not in seen:
+            data, addr = gcs.recvfrom(65536)
+            seen |= {m.get_type() for m in codec.parse_buffer(data) or ()}
+        # the other ground station commands the vehicle through us
+        out = mavlink.MAVLink(None, srcSystem=254, srcComponent=190)
+        cmd = mavlink.MAVLink_command_long_message(1, 1, mavlink.MAV_CMD_DO_SET_MODE, 0, 1, 5, 0, 0, 0, 0, 0)
+        gcs.sendto(cmd.pack(out), addr)
+        assert vehicle.wait_for(lambda s: s.mode == "LOITER", 10)
+    finally:
+        gcs.close()
+
+
+def test_battery_estimate_from_cell_voltage():
+    assert frames.battery_percent_from_cell(4.2) == 100
+    assert frames.battery_percent_from_cell(3.81) == pytest.approx(17)
+    assert frames.battery_percent_from_cell(3.955) == pytest.approx(17 + 83 * 0.5)
+    assert frames.battery_percent_from_cell(3.505) == pytest.approx(8.5)
+    assert frames.battery_percent_from_cell(3.0) == 0
+
+
+def test_enu_pose_follows_jderobot_convention():
+    for yaw_ned, yaw_enu in ((0, 90), (90, 0), (180, -90), (-90, 180)):
+        w, x, y, z = frames.enu_quaternion(0.0, 0.0, math.radians(yaw_ned))
+        got = math.degrees(math.atan2(2 * (x * y + w * z), w * w + x * x - y * y - z * z))
+        assert abs(math.atan2(math.sin(math.radians(got - yaw_enu)), math.cos(math.radians(got - yaw_enu)))) < 1e-6
