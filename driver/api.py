@@ -39,6 +39,11 @@ class Drone(abc.ABC):
     def limits(self) -> Limits:
         return Limits()
 
+    @property
+    def replay(self):
+        """Play/pause/speed control when the 'vehicle' is a recorded flight, else None."""
+        return None
+
     # -- flight ---------------------------------------------------------------------------
     @abc.abstractmethod
     def takeoff(self, altitude: float | None = None) -> Future[CommandResult]:

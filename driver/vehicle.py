@@ -174,12 +174,12 @@ class Vehicle(Drone):
         self.config = cfg = config or VehicleConfig()
         self._transport: Transport = open_transport(cfg.connection, cfg.baud, cfg.source_system,
                                                     cfg.source_component, cfg.replay_speed)
-        self.replay = ReplayControl(self._transport) if self._transport.is_replay else None
+        self._replay = ReplayControl(self._transport) if self._transport.is_replay else None
         self._codec_in = self._new_parser()
         self._codec_out = mavlink.MAVLink(None, srcSystem=cfg.source_system, srcComponent=cfg.source_component)
         self._tx_lock = threading.Lock()
         self._v2 = cfg.mavlink_version == 2
-        self._tlog = TlogWriter(cfg.tlog_path, cfg.tlog_append) if cfg.tlog_path and not self.replay else None
+        self._tlog = TlogWriter(cfg.tlog_path, cfg.tlog_append) if cfg.tlog_path and not self._replay else None
         self._outputs: list[MavutilTransport] = []
 
         # state, guarded by _lock; published as one immutable snapshot
@@ -233,6 +233,10 @@ class Vehicle(Drone):
     @property
     def limits(self) -> Limits:
         return self.config.limits
+
+    @property
+    def replay(self) -> ReplayControl | None:
+        return self._replay
 
     def start(self) -> "Vehicle":
         """Open the link in the background and begin supervising it. Returns at once."""
@@ -672,7 +676,7 @@ class Vehicle(Drone):
         params = [float(p) for p in (list(params) + [0.0] * 7)[:7]]
         if not frames.finite(*params):
             return self._finish(name, CommandStatus.REJECTED, "parameter is not a finite number")
-        if self.replay is not None:
+        if self._replay is not None:
             return self._finish(name, CommandStatus.REJECTED, "replaying a recording: no vehicle to command")
         future: Future = Future()
         with self._lock:
@@ -923,7 +927,7 @@ class Vehicle(Drone):
         alt = self.config.takeoff_altitude if altitude is None else altitude
         if not frames.finite(alt) or not 0.5 <= alt <= 100.0:
             return self._finish("takeoff", CommandStatus.REJECTED, "altitude must be 0.5 to 100 m")
-        if self.replay is not None:
+        if self._replay is not None:
             return self._finish("takeoff", CommandStatus.REJECTED, "replaying a recording: no vehicle to command")
         s = self._state
         if s.takeoff.active:

@@ -1,0 +1,174 @@
+#!/usr/bin/env python3
+"""UavViewerPy: fly a MAVLink drone (3DR Solo, ArduCopter SITL, the built-in simulator) from a laptop.
+
+    python main.py --sim                     # the built-in simulated ArduCopter, in this process
+    python main.py                           # a 3DR Solo: listen on udpin:0.0.0.0:14550
+    python main.py --connect tcp:127.0.0.1:5760
+    python main.py --replay flight.tlog      # watch a recorded flight
+    python main.py --ice config/viewer.cfg   # fly through a MAVLinkServer (python -m driver) over Ice
+"""
+from __future__ import annotations
+
+import argparse
+import logging
+import signal
+import sys
+from pathlib import Path
+
+SOLO_CONNECTION = "udpin:0.0.0.0:14550"
+
+
+def build_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(
+        prog="main.py", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    link = p.add_argument_group("vehicle (pick one; default: a 3DR Solo on " + SOLO_CONNECTION + ")")
+    source = link.add_mutually_exclusive_group()
+    source.add_argument("--sim", action="store_true",
+                        help="start the built-in simulated ArduCopter in this process and fly it")
+    source.add_argument("--connect", metavar="STRING",
+                        help="any MAVLink connection string: udpin:HOST:PORT, udpout:HOST:PORT, "
+                             "tcp:HOST:PORT, /dev/ttyUSB0 (serial, see --baud), ...")
+    source.add_argument("--replay", metavar="FILE.tlog", type=Path,
+                        help="replay a recorded telemetry log instead of flying")
+    source.add_argument("--ice", metavar="CONFIG", type=Path,
+                        help="fly through a MAVLinkServer (python -m driver) over ZeroC Ice; proxies from an "
+                             "Ice config with UAVViewer.<Interface>.Proxy keys (see config/viewer.cfg)")
+    source.add_argument("--ice-host", metavar="HOST",
+                        help="fly through a MAVLinkServer over ZeroC Ice at HOST, on the default ports")
+    link.add_argument("--baud", type=int, default=57600, help="serial baud rate (default: %(default)s)")
+    flight = p.add_argument_group("flight")
+    flight.add_argument("--takeoff-altitude", type=float, default=None, metavar="M",
+                        help="takeoff altitude above home in metres (default: the last one set in "
+                             "Preferences, first 3.0)")
+    sim = p.add_argument_group("simulator (with --sim)")
+    sim.add_argument("--speedup", type=float, default=1.0,
+                     help="simulated time runs this many times faster than real time (default: %(default)s)")
+    sim.add_argument("--ready-after", type=float, default=3.0, metavar="S",
+                     help="seconds until the simulated vehicle has GPS/EKF and is ready to arm "
+                          "(default: %(default)s)")
+    video = p.add_argument_group("camera")
+    video.add_argument("--camera", action="append", default=[], metavar="URI",
+                       help="video source, repeatable (Switch camera moves to the next): 0, /dev/video0, clip.mp4, "
+                            "rtsp://..., udp://0.0.0.0:5600, stream.sdp, solo, 'ice:Camera:default -h HOST -p 9999', "
+                            "sim (default with --sim; see docs/camera.md)")
+    misc = p.add_argument_group("logging")
+    misc.add_argument("--log-dir", type=Path, default=None, metavar="DIR",
+                      help="record the flight's MAVLink to DIR/flight-<time>.tlog (and the viewer's log)")
+    misc.add_argument("-v", "--verbose", action="count", default=0,
+                      help="more log output (-v info, -vv debug)")
+    # Hidden: for documentation screenshots.
+    p.add_argument("--screenshot", type=Path, help=argparse.SUPPRESS)
+    p.add_argument("--screenshot-after", type=float, default=20.0, help=argparse.SUPPRESS)
+    p.add_argument("--screenshot-fly", action="store_true", help=argparse.SUPPRESS)
+    return p
+
+
+def _setup_logging(verbose: int, log_dir: Path | None) -> None:
+    level = logging.WARNING if verbose == 0 else logging.INFO if verbose == 1 else logging.DEBUG
+    handlers: list[logging.Handler] = [logging.StreamHandler()]
+    if log_dir is not None:
+        log_dir.mkdir(parents=True, exist_ok=True)
+        handlers.append(logging.FileHandler(log_dir / "viewer.log"))
+    logging.basicConfig(level=level, handlers=handlers,
+                        format="%(asctime)s %(levelname)s %(name)s: %(message)s")
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
+    _setup_logging(args.verbose, args.log_dir)
+    import time
+
+    from PyQt5.QtCore import QTimer
+    from PyQt5.QtGui import QIcon
+    from PyQt5.QtWidgets import QApplication
+
+    from driver.vehicle import Vehicle, VehicleConfig
+    from uavviewer import RESOURCES
+    from uavviewer.main_window import MainWindow, load_style
+
+    sim = None
+    if args.sim:
+        from driver.sim import SimConfig, SimVehicle
+        sim = SimVehicle(SimConfig(tcp_port=0, speedup=args.speedup, ready_after=args.ready_after))
+        sim.start()
+        connection = f"tcp:127.0.0.1:{sim.tcp_port}"
+    elif args.replay is not None:
+        if not args.replay.is_file():
+            build_parser().error(f"no such file: {args.replay}")
+        connection = str(args.replay)
+    else:
+        connection = args.connect or SOLO_CONNECTION
+    tlog = None
+    if args.log_dir is not None and args.replay is None:
+        tlog = str(args.log_dir / time.strftime("flight-%Y%m%d-%H%M%S.tlog"))
+    config = VehicleConfig(connection=connection, baud=args.baud, tlog_path=tlog,
+                           takeoff_altitude=args.takeoff_altitude or 3.0)
+    remote = args.ice is not None or args.ice_host is not None
+    if remote:                                                    # the same window, through the Ice client
+        from driver.ice.client import IceDrone
+        if args.ice is not None and not args.ice.is_file():
+            build_parser().error(f"no such file: {args.ice}")
+        drone = IceDrone.from_config(str(args.ice) if args.ice else None, host=args.ice_host).start()
+    else:
+        drone = Vehicle(config).start()
+
+    app = QApplication.instance() or QApplication(sys.argv[:1])
+    app.setApplicationName("UavViewerPy")
+    app.setWindowIcon(QIcon(str(RESOURCES / "icons" / "app.svg")))
+    app.setStyleSheet(load_style())
+    cameras = args.camera or (["sim"] if args.sim else [])
+    if remote and not args.camera:                                # the server's camera, from the viewer's config
+        from driver.ice.client import viewer_properties
+        proxy = viewer_properties(str(args.ice) if args.ice else None, args.ice_host).getProperty(
+            "UAVViewer.Camera.Proxy")
+        cameras = [f"ice:{proxy}"] if proxy else []
+    window = MainWindow(drone, takeoff_altitude=args.takeoff_altitude, cameras=cameras)
+    if args.connect or not (args.sim or args.replay or remote):
+        window.settings.last_connection = connection          # remembered with the window state
+    window.show()
+    signal.signal(signal.SIGINT, lambda *_: window.close())      # Ctrl+C in the terminal closes cleanly
+    wake = QTimer()                                               # let Python see the signal
+    wake.timeout.connect(lambda: None)
+    wake.start(200)
+    if args.screenshot is not None:
+        _schedule_screenshot(window, args.screenshot, args.screenshot_after, args.screenshot_fly)
+    try:
+        return app.exec_()
+    finally:
+        drone.close()
+        if sim is not None:
+            sim.stop()
+
+
+def _schedule_screenshot(window, path: Path, after: float, fly: bool) -> None:
+    """Documentation helper: optionally take off and fly, then save the window and quit."""
+    from PyQt5.QtCore import QTimer
+
+    from driver.state import SequencePhase
+
+    if fly:
+        def takeoff_when_ready():
+            s = window.adapter.state
+            if s.readiness.ready_to_arm:
+                window.adapter.command("takeoff", window.settings.takeoff_altitude)
+            else:
+                QTimer.singleShot(500, takeoff_when_ready)
+        QTimer.singleShot(1000, takeoff_when_ready)
+
+        def push_stick():
+            s = window.adapter.state
+            if s.takeoff.phase is SequencePhase.DONE and s.can_fly_velocity:
+                window.rightStick.hold(0.25, 0.75)                  # as if the pilot held it
+                window.leftStick.hold(0.35, 0.0)
+            QTimer.singleShot(200, push_stick)
+        QTimer.singleShot(1000, push_stick)
+
+    def shoot():
+        path.parent.mkdir(parents=True, exist_ok=True)
+        window.grab().save(str(path))
+        window.close()
+    QTimer.singleShot(int(after * 1000), shoot)
+
+
+if __name__ == "__main__":
+    sys.exit(main())

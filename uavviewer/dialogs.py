@@ -1,0 +1,67 @@
+"""Preferences, the key list, and the takeoff confirmation (non-blocking)."""
+from __future__ import annotations
+
+from dataclasses import replace
+
+from PyQt5 import uic
+from PyQt5.QtWidgets import QDialog, QMessageBox, QTableWidgetItem, QWidget
+
+from . import RESOURCES
+from .keyboard import key_help
+from .settings import ViewerSettings
+from .sticks import StickMode
+
+__all__ = ["SettingsDialog", "KeysDialog", "takeoff_question"]
+
+
+class SettingsDialog(QDialog):
+    """Stick mode, maximum speeds, deadband, expo and takeoff altitude."""
+
+    def __init__(self, settings: ViewerSettings, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        uic.loadUi(str(RESOURCES / "ui" / "settings_dialog.ui"), self)
+        self._settings = settings
+        for mode in StickMode:
+            self.stickMode.addItem(mode.title, mode.value)
+        self.stickMode.setCurrentIndex(self.stickMode.findData(settings.mode.value))
+        self.maxHorizontal.setValue(settings.max_horizontal)
+        self.maxVertical.setValue(settings.max_vertical)
+        self.maxYaw.setValue(settings.max_yaw_deg_s)
+        self.deadband.setValue(settings.deadband)
+        self.expo.setValue(settings.expo)
+        self.takeoffAltitude.setValue(settings.takeoff_altitude)
+
+    def chosen(self) -> ViewerSettings:
+        return replace(self._settings, stick_mode=self.stickMode.currentData(),
+                       max_horizontal=self.maxHorizontal.value(), max_vertical=self.maxVertical.value(),
+                       max_yaw_deg_s=self.maxYaw.value(), deadband=self.deadband.value(),
+                       expo=self.expo.value(), takeoff_altitude=self.takeoffAltitude.value())
+
+
+class KeysDialog(QDialog):
+    """Help > Keys, filled from the same table the keyboard handler uses."""
+
+    def __init__(self, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        uic.loadUi(str(RESOURCES / "ui" / "keys_dialog.ui"), self)
+        rows = key_help()
+        self.table.setColumnCount(2)
+        self.table.setHorizontalHeaderLabels(["Key", "Action"])
+        self.table.setRowCount(len(rows))
+        for i, (key, text) in enumerate(rows):
+            self.table.setItem(i, 0, QTableWidgetItem(key))
+            self.table.setItem(i, 1, QTableWidgetItem(text))
+        self.table.resizeColumnToContents(0)
+
+
+def takeoff_question(parent: QWidget, altitude: float) -> QMessageBox:
+    """A window-modal question, opened with ``open()`` so nothing waits on it."""
+    box = QMessageBox(QMessageBox.Question, "Take off",
+                      f"Take off and climb to {altitude:.1f} m above home?\n\n"
+                      "The motors will start. Keep clear of the propellers.",
+                      QMessageBox.Yes | QMessageBox.Cancel, parent)
+    box.setObjectName("takeoffQuestion")
+    box.button(QMessageBox.Yes).setText("Take off")
+    box.setDefaultButton(QMessageBox.Yes)
+    box.setEscapeButton(QMessageBox.Cancel)
+    return box

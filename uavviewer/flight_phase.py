@@ -1,0 +1,66 @@
+"""What the vehicle is doing, in the pilot's words, read from the snapshot (never a local flag)."""
+from __future__ import annotations
+
+import enum
+
+from driver.state import LandedState, LinkStatus, VehicleState
+
+__all__ = ["FlightPhase", "flight_phase", "takeoff_progress", "stick_hint"]
+
+
+class FlightPhase(enum.Enum):
+    NO_VEHICLE = "no vehicle"
+    ON_GROUND = "on ground"
+    TAKING_OFF = "taking off"
+    FLYING = "flying"
+    LANDING = "landing"
+
+    @property
+    def airborne(self) -> bool:
+        return self in (FlightPhase.TAKING_OFF, FlightPhase.FLYING, FlightPhase.LANDING)
+
+
+def flight_phase(s: VehicleState) -> FlightPhase:
+    if s.link.status is LinkStatus.WAITING or (not s.mode and s.link.status is not LinkStatus.OK):
+        return FlightPhase.NO_VEHICLE
+    if s.takeoff.active:
+        return FlightPhase.TAKING_OFF
+    if not s.flying:
+        return FlightPhase.ON_GROUND
+    if s.landed_state is LandedState.LANDING or s.mode == "LAND":
+        return FlightPhase.LANDING
+    if s.landed_state is LandedState.TAKEOFF:
+        return FlightPhase.TAKING_OFF
+    return FlightPhase.FLYING
+
+
+def takeoff_progress(s: VehicleState) -> float:
+    """0..1 of the takeoff sequence: arming counts a little, the climb the rest."""
+    from driver.state import SequencePhase
+    phase = s.takeoff.phase
+    early = {SequencePhase.WAITING_READY: 0.02, SequencePhase.SETTING_GUIDED: 0.05,
+             SequencePhase.ARMING: 0.1}
+    if phase in early:
+        return early[phase]
+    if phase is SequencePhase.DONE:
+        return 1.0
+    target = s.takeoff.target_altitude
+    if target <= 0:
+        return 0.1
+    return max(0.1, min(1.0, 0.1 + 0.9 * s.altitude / target))
+
+
+def stick_hint(s: VehicleState) -> str:
+    """Why the sticks are inert, or "" when they fly the vehicle."""
+    if s.can_fly_velocity:
+        return ""
+    phase = flight_phase(s)
+    if phase is FlightPhase.NO_VEHICLE or s.link.status is LinkStatus.LOST:
+        return "No link"
+    if phase is FlightPhase.ON_GROUND:
+        return "Take off to fly"
+    if phase is FlightPhase.TAKING_OFF:
+        return "Taking off…"
+    if phase is FlightPhase.LANDING:
+        return "Landing…"
+    return f"Sticks fly in GUIDED\n(mode is {s.mode or '?'})"

@@ -1,0 +1,346 @@
+"""The flying window: instruments, sticks, buttons, telemetry, plots and messages.
+
+It is built from a :class:`driver.api.Drone` and sees the vehicle only through
+:class:`DroneAdapter` (snapshots in, non-blocking commands out). Buttons and
+sticks follow the vehicle's state as reported, never a local flag.
+"""
+from __future__ import annotations
+
+import logging
+import math
+import time
+
+from PyQt5 import uic
+from PyQt5.QtCore import QEvent, QObject, QSettings, Qt
+from PyQt5.QtWidgets import QApplication, QLabel, QMainWindow, QMessageBox, QWidget
+
+from driver.api import Drone
+from driver.state import LinkStatus, Severity, VehicleState
+
+from . import RESOURCES
+from .dialogs import KeysDialog, SettingsDialog, takeoff_question
+from .camera_controller import CameraController
+from .drone_adapter import DroneAdapter
+from .flight_phase import FlightPhase, flight_phase, stick_hint, takeoff_progress
+from .keyboard import ACTION_KEYS, AXIS_KEYS, KeyboardSticks
+from .settings import ViewerSettings, default_qsettings, load_settings, load_window, save_settings, save_window
+from .sticks import Axes, axes_from_pads, combine, pad_labels, velocity_from_axes
+from .widgets.camera_panel import CameraPanel
+
+__all__ = ["MainWindow", "load_style"]
+
+log = logging.getLogger(__name__)
+
+
+def load_style() -> str:
+    """The dark ground-station style sheet, with icon paths made absolute."""
+    qss = (RESOURCES / "style.qss").read_text(encoding="utf-8")
+    return qss.replace("@ICONS@", (RESOURCES / "icons").as_posix())
+
+
+class MainWindow(QMainWindow):
+    """Fly one drone. ``qsettings`` lets tests keep their own settings file."""
+
+    def __init__(self, drone: Drone, qsettings: QSettings | None = None,
+                 takeoff_altitude: float | None = None, rate_hz: float = 30.0,
+                 cameras: list[str] | None = None, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        uic.loadUi(str(RESOURCES / "ui" / "main_window.ui"), self)
+        self._qsettings = qsettings if qsettings is not None else default_qsettings()
+        self.settings: ViewerSettings = load_settings(self._qsettings)
+        if takeoff_altitude is not None:
+            self.settings.takeoff_altitude = takeoff_altitude
+        self.adapter = DroneAdapter(drone, rate_hz=rate_hz, parent=self)
+        self.keyboard = KeyboardSticks()
+        self._last_message = -1
+        self._shown_results: set[int] = set()
+        self._last_result = -1
+        self._last_sample_time: float | None = None
+        self._sticks_live = False
+        self._takeoff_box: QMessageBox | None = None
+        self._t0 = time.monotonic()
+
+        self.setWindowTitle(f"UavViewerPy — {self.adapter.description}")
+        self.camera_panel = CameraPanel()             # video in the reserved camera area; cameras: --camera URIs
+        self.instrumentSplitter.replaceWidget(self.instrumentSplitter.indexOf(self.cameraView), self.camera_panel)
+        self.cameraView.deleteLater()
+        self.camera_panel.show()                      # replaceWidget leaves the newcomer hidden
+        self.cameraView = self.camera_panel
+        self.camera_view = self.camera_panel.view
+        self.camera = CameraController(self.camera_panel, list(cameras or []), state_fn=drone.state, drone=drone,
+                                       parent=self)
+        self.menuView.addAction(self.telemetryDock.toggleViewAction())
+        self.menuView.addAction(self.plotsDock.toggleViewAction())
+        self.menuView.addAction(self.messagesDock.toggleViewAction())
+        self.setCorner(Qt.BottomRightCorner, Qt.RightDockWidgetArea)   # plots run the full height
+        self.resizeDocks([self.telemetryDock, self.plotsDock], [390, 560], Qt.Vertical)
+        self.resizeDocks([self.telemetryDock], [400], Qt.Horizontal)
+        self.resizeDocks([self.messagesDock], [170], Qt.Vertical)
+        self.instrumentSplitter.setStretchFactor(0, 3)
+        self.instrumentSplitter.setStretchFactor(1, 2)
+        self.phaseLabel.setObjectName("phaseLabel")
+        self.link_status = QLabel()
+        self.statusbar.addPermanentWidget(self.link_status)
+
+        self.leftStick.moved.connect(self._sticks_moved)
+        self.rightStick.moved.connect(self._sticks_moved)
+        fc = self.flightControls
+        fc.takeoffRequested.connect(self.request_takeoff)
+        fc.landRequested.connect(self.request_land)
+        fc.stopRequested.connect(self.request_stop)
+        fc.rtlRequested.connect(lambda: self._command("return_to_launch"))
+        fc.armRequested.connect(lambda: self._command("arm"))
+        fc.disarmRequested.connect(lambda: self._command("disarm"))
+        self.modeSelector.modeRequested.connect(lambda name: self._command("set_mode", name))
+        self.replayBar.pauseRequested.connect(self._replay_pause)
+        self.replayBar.speedRequested.connect(self._replay_speed)
+        self.replayBar.setVisible(self.adapter.replay is not None)
+        self.controlsRow.setEnabled(self.adapter.replay is None)     # a recording cannot be flown
+        self.actionQuit.triggered.connect(self.close)
+        self.actionPreferences.triggered.connect(self.edit_settings)
+        self.actionKeys.triggered.connect(self.show_keys)
+        self.actionAbout.triggered.connect(self._about)
+        self.adapter.stateChanged.connect(self.show_state)
+        self.adapter.commandFinished.connect(self._show_result)
+
+        self._apply_settings()
+        geometry, state = load_window(self._qsettings)
+        if geometry is not None:
+            self.restoreGeometry(geometry)
+        if state is not None:
+            self.restoreState(state)
+        self.setFocusPolicy(Qt.StrongFocus)
+        QApplication.instance().installEventFilter(self)
+        self.show_state(VehicleState(link=self.adapter.state.link))
+        self.adapter.start()
+
+    # -- settings --------------------------------------------------------------------------------
+    def _apply_settings(self) -> None:
+        left, right = pad_labels(self.settings.mode)
+        self.leftStick.set_caption(left)
+        self.rightStick.set_caption(right)
+        self.centre_sticks()
+
+    def edit_settings(self) -> None:
+        dialog = SettingsDialog(self.settings, self)
+        dialog.setWindowModality(Qt.WindowModal)
+        dialog.accepted.connect(lambda: self.set_settings(dialog.chosen()))
+        dialog.open()
+
+    def set_settings(self, settings: ViewerSettings) -> None:
+        self.settings = settings
+        save_settings(self._qsettings, settings)
+        self._apply_settings()
+
+    def show_keys(self) -> None:
+        dialog = KeysDialog(self)
+        dialog.setAttribute(Qt.WA_DeleteOnClose)
+        dialog.open()
+
+    def _about(self) -> None:
+        QMessageBox.about(self, "UavViewerPy",
+                          "UavViewerPy — fly a MAVLink drone from a laptop.\n"
+                          f"Vehicle: {self.adapter.description}")
+
+    # -- state in --------------------------------------------------------------------------------
+    def show_state(self, s: VehicleState) -> None:
+        link = s.link
+        self.linkBanner.set_link(link.status, link.address or self.adapter.description, link.heartbeat_age)
+        have_vehicle = link.status is not LinkStatus.WAITING and bool(s.mode)
+        if have_vehicle:
+            self.attitude.set_attitude(s.attitude.roll, s.attitude.pitch, s.heading_deg)
+            self.attitude.set_readouts(s.altitude, s.velocity.ground_speed, s.velocity.climb)
+        self.telemetry.set_state(s)
+        phase = flight_phase(s)
+        progress = takeoff_progress(s) if phase is FlightPhase.TAKING_OFF else None
+        detail = s.takeoff.phase.value if s.takeoff.active else ""
+        self.flightControls.set_vehicle(phase, s.armed, s.connected, progress, detail)
+        self.phaseLabel.setText(self._phase_text(s, phase))
+        self.modeSelector.set_mode(s.mode)
+        self.modeSelector.setEnabled(s.connected)
+        self._set_sticks_live(s)
+        for m in s.messages_since(self._last_message):
+            self.messages.add_message(m.time, m.severity, m.text, m.source)
+            self._last_message = m.index
+        for r in s.results_since(self._last_result):
+            self._last_result = r.index
+            if r.index not in self._shown_results:
+                self._shown_results.add(r.index)
+                self.messages.add_result(r)
+        if have_vehicle and s.time != self._last_sample_time:
+            self._last_sample_time = s.time
+            yaw = s.attitude.yaw
+            forward, right, _ = s.velocity.body(yaw)
+            self.plots.append(time.monotonic() - self._t0, altitude=s.altitude, forward=forward,
+                              right=right, climb=s.velocity.climb, roll=math.degrees(s.attitude.roll),
+                              pitch=math.degrees(s.attitude.pitch), heading=s.heading_deg)
+        replay = self.adapter.replay
+        if replay is not None:
+            try:
+                self.replayBar.set_progress(replay.position, replay.duration, replay.paused, replay.speed)
+            except Exception:               # noqa: BLE001 - a finished replay may drop its file
+                log.debug("replay progress unavailable", exc_info=True)
+        pps = f"{link.packets_per_s:.0f} pkt/s" if link.status is LinkStatus.OK else link.status.value
+        self.link_status.setText(f"{self.adapter.description}  ·  {pps}")
+
+    @staticmethod
+    def _phase_text(s: VehicleState, phase: FlightPhase) -> str:
+        if phase is FlightPhase.NO_VEHICLE:
+            return "No vehicle"
+        if phase is FlightPhase.TAKING_OFF and s.takeoff.active:
+            return f"Taking off to {s.takeoff.target_altitude:.1f} m — {s.takeoff.phase.value}"
+        return {FlightPhase.ON_GROUND: "On the ground" + (" · armed" if s.armed else ""),
+                FlightPhase.TAKING_OFF: "Taking off", FlightPhase.FLYING: f"Flying · {s.mode}",
+                FlightPhase.LANDING: "Landing"}[phase]
+
+    def _set_sticks_live(self, s: VehicleState) -> None:
+        live = s.can_fly_velocity and self.adapter.replay is None
+        hint = stick_hint(s) if self.adapter.replay is None else "Replay"
+        for pad in (self.leftStick, self.rightStick):
+            pad.set_hint(hint)
+            if pad.isEnabled() != live:
+                pad.setEnabled(live)        # disabling centres the pad
+        if live != self._sticks_live:
+            self._sticks_live = live
+            if not live:
+                self.keyboard.clear()
+            self._fly()
+
+    # -- sticks and keys -------------------------------------------------------------------------
+    def _sticks_moved(self, *_: float) -> None:
+        self._fly()
+
+    def demand(self) -> Axes:
+        """The pilot's combined demand from both pads and the keyboard (zero if sticks are inert)."""
+        if not self._sticks_live:
+            return Axes()
+        pads = axes_from_pads(self.settings.mode, self.leftStick.position, self.rightStick.position,
+                              self.settings.shaping)
+        return combine(pads, self.keyboard.axes())
+
+    def _fly(self) -> None:
+        command = velocity_from_axes(self.demand(), self.settings.speeds)
+        self.adapter.fly(command)
+        if command.is_zero:
+            self.setpointLabel.setText("Setpoint: hover")
+        else:
+            self.setpointLabel.setText(
+                f"fwd {command.forward:+.1f}  right {command.right:+.1f}  up {command.up:+.1f} m/s  "
+                f"yaw {math.degrees(command.yaw_rate):+.0f}°/s")
+
+    def centre_sticks(self) -> None:
+        """Both pads and every key back to the centre; one zero velocity goes out."""
+        self.keyboard.clear()
+        self.leftStick.centre()
+        self.rightStick.centre()
+        self._fly()
+
+    def eventFilter(self, watched: QObject, event: QEvent) -> bool:  # noqa: N802
+        kind = event.type()
+        if kind in (QEvent.KeyPress, QEvent.KeyRelease) and self._owns(watched) and self.adapter.replay is None:
+            if QApplication.activeModalWidget() is not None or QApplication.activePopupWidget() is not None:
+                return False
+            if event.isAutoRepeat():
+                return event.key() in ACTION_KEYS or event.key() in AXIS_KEYS   # held: already acted
+            if kind == QEvent.KeyPress:
+                return self._key_pressed(event.key(), event.modifiers())
+            return self._key_released(event.key())
+        return False
+
+    def _owns(self, watched: QObject) -> bool:
+        return isinstance(watched, QWidget) and watched.window() is self
+
+    def _key_pressed(self, key: int, modifiers) -> bool:
+        if modifiers & (Qt.ControlModifier | Qt.AltModifier | Qt.MetaModifier):
+            return False
+        if self.keyboard.press(key):
+            self._fly()
+            return True
+        action = ACTION_KEYS.get(key)
+        if action is None:
+            return False
+        {"stop": self.request_stop, "takeoff": self._key_takeoff, "land": self.request_land}[action[0]]()
+        return True
+
+    def _key_released(self, key: int) -> bool:
+        if self.keyboard.release(key):
+            self._fly()
+            return True
+        return key in ACTION_KEYS
+
+    def _key_takeoff(self) -> None:
+        if self.flightControls.phase is FlightPhase.ON_GROUND:
+            self.request_takeoff()
+
+    def changeEvent(self, event: QEvent) -> None:  # noqa: N802
+        if event.type() == QEvent.ActivationChange and not self.isActiveWindow():
+            self.centre_sticks()            # focus lost: nobody is holding the sticks any more
+        super().changeEvent(event)
+
+    # -- commands ---------------------------------------------------------------------------------
+    def _command(self, name: str, *args) -> None:
+        self.adapter.command(name, *args)
+
+    def request_takeoff(self) -> None:
+        """Ask once, showing the altitude; the answer comes back without blocking."""
+        if self._takeoff_box is not None and self._takeoff_box.isVisible():
+            return
+        altitude = self.settings.takeoff_altitude
+        box = takeoff_question(self, altitude)
+        box.setWindowModality(Qt.WindowModal)
+        box.finished.connect(lambda result, a=altitude, b=box: self._takeoff_answered(b, a))
+        self._takeoff_box = box
+        box.open()
+
+    @property
+    def takeoff_box(self) -> QMessageBox | None:
+        return self._takeoff_box
+
+    def _takeoff_answered(self, box: QMessageBox, altitude: float) -> None:
+        if box.clickedButton() is box.button(QMessageBox.Yes):
+            self._command("takeoff", altitude)
+        box.deleteLater()
+        if self._takeoff_box is box:
+            self._takeoff_box = None
+
+    def request_land(self) -> None:
+        self.centre_sticks()
+        self._command("land")
+
+    def request_stop(self) -> None:
+        self.centre_sticks()
+        self._command("stop")
+
+    def _show_result(self, result) -> None:
+        if result.index and result.index in self._shown_results:
+            return
+        if result.index:
+            self._shown_results.add(result.index)
+        self.messages.add_result(result)
+        if not result.ok:
+            self.statusbar.showMessage(str(result), 8000)
+
+    def _replay_pause(self, pause: bool) -> None:
+        replay = self.adapter.replay
+        if replay is not None:
+            replay.pause() if pause else replay.resume()
+
+    def _replay_speed(self, speed: float) -> None:
+        replay = self.adapter.replay
+        if replay is not None:
+            replay.speed = speed
+
+    # -- closing ----------------------------------------------------------------------------------
+    def closeEvent(self, event) -> None:  # noqa: N802
+        self.centre_sticks()
+        save_settings(self._qsettings, self.settings)
+        save_window(self._qsettings, self.saveGeometry(), self.saveState())
+        QApplication.instance().removeEventFilter(self)
+        self.camera.close(wait=0.5)
+        self.adapter.stop()
+        super().closeEvent(event)
+
+    def log_message(self, text: str, severity: Severity = Severity.INFO) -> None:
+        """A line of the viewer's own in Messages (e.g. a refused setting)."""
+        self.messages.add_message(time.time(), severity, text, "viewer")
+

@@ -1,0 +1,87 @@
+"""What the viewer remembers between runs (QSettings): sticks, speeds, last link, window layout."""
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, fields
+
+from PyQt5.QtCore import QByteArray, QSettings
+
+from .sticks import MaxSpeeds, StickMode, StickShaping
+
+__all__ = ["ViewerSettings", "load_settings", "save_settings", "default_qsettings"]
+
+ORGANISATION = "JdeRobot"
+APPLICATION = "UavViewerPy"
+
+
+@dataclass
+class ViewerSettings:
+    stick_mode: str = StickMode.MODE2.value
+    max_horizontal: float = 2.0      # m/s
+    max_vertical: float = 1.0        # m/s
+    max_yaw_deg_s: float = 45.0      # deg/s
+    deadband: float = 0.05
+    expo: float = 0.0
+    takeoff_altitude: float = 3.0    # m
+    last_connection: str = ""
+
+    @property
+    def mode(self) -> StickMode:
+        try:
+            return StickMode(self.stick_mode)
+        except ValueError:
+            return StickMode.MODE2
+
+    @property
+    def speeds(self) -> MaxSpeeds:
+        return MaxSpeeds(self.max_horizontal, self.max_vertical, self.max_yaw_deg_s)
+
+    @property
+    def shaping(self) -> StickShaping:
+        return StickShaping(self.deadband, self.expo)
+
+
+def default_qsettings() -> QSettings:
+    return QSettings(ORGANISATION, APPLICATION)
+
+
+def load_settings(qs: QSettings) -> ViewerSettings:
+    out = ViewerSettings()
+    for f in fields(ViewerSettings):
+        key = f"viewer/{f.name}"
+        if not qs.contains(key):
+            continue
+        raw = qs.value(key)
+        try:
+            value = float(raw) if isinstance(getattr(out, f.name), float) else str(raw)
+        except (TypeError, ValueError):
+            continue
+        if isinstance(value, float) and value != value:
+            continue
+        setattr(out, f.name, value)
+    # Sanity: a corrupt file must not give wild speeds.
+    out.max_horizontal = min(max(out.max_horizontal, 0.1), 10.0)
+    out.max_vertical = min(max(out.max_vertical, 0.1), 5.0)
+    out.max_yaw_deg_s = min(max(out.max_yaw_deg_s, 5.0), 180.0)
+    out.deadband = min(max(out.deadband, 0.0), 0.5)
+    out.expo = min(max(out.expo, 0.0), 1.0)
+    out.takeoff_altitude = min(max(out.takeoff_altitude, 1.0), 50.0)
+    out.stick_mode = out.mode.value
+    return out
+
+
+def save_settings(qs: QSettings, settings: ViewerSettings) -> None:
+    for name, value in asdict(settings).items():
+        qs.setValue(f"viewer/{name}", value)
+    qs.sync()
+
+
+def save_window(qs: QSettings, geometry: QByteArray, state: QByteArray) -> None:
+    qs.setValue("window/geometry", geometry)
+    qs.setValue("window/state", state)
+    qs.sync()
+
+
+def load_window(qs: QSettings) -> tuple[QByteArray | None, QByteArray | None]:
+    g = qs.value("window/geometry")
+    s = qs.value("window/state")
+    return (g if isinstance(g, QByteArray) else None, s if isinstance(s, QByteArray) else None)

@@ -1,0 +1,111 @@
+"""Take off / Land, Stop, RTL and Arm/Disarm buttons; they show the vehicle's state, not a guess."""
+from __future__ import annotations
+
+from PyQt5.QtCore import QSize, Qt, pyqtSignal
+from PyQt5.QtGui import QIcon
+from PyQt5.QtWidgets import QGridLayout, QProgressBar, QPushButton, QSizePolicy, QWidget
+
+from .. import RESOURCES
+from ..flight_phase import FlightPhase
+
+__all__ = ["FlightControls"]
+
+
+def _icon(name: str) -> QIcon:
+    return QIcon(str(RESOURCES / "icons" / f"{name}.svg"))
+
+
+class FlightControls(QWidget):
+    """Emits what the pilot asks for; ``set_vehicle`` makes the buttons match the vehicle."""
+
+    takeoffRequested = pyqtSignal()
+    landRequested = pyqtSignal()
+    stopRequested = pyqtSignal()
+    rtlRequested = pyqtSignal()
+    armRequested = pyqtSignal()
+    disarmRequested = pyqtSignal()
+
+    def __init__(self, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self._phase = FlightPhase.NO_VEHICLE
+        self._armed = False
+        self.main_button = self._button("mainButton", "Take off", "takeoff")
+        self.main_button.setMinimumHeight(52)
+        self.progress = QProgressBar()
+        self.progress.setObjectName("takeoffProgress")
+        self.progress.setRange(0, 100)
+        self.progress.setTextVisible(True)
+        self.progress.setMaximumHeight(16)
+        self.progress.setVisible(False)
+        self.stop_button = self._button("stopButton", "Stop", "stop")
+        self.rtl_button = self._button("rtlButton", "RTL", "rtl")
+        self.arm_button = self._button("armButton", "Arm", "arm")
+        self.stop_button.setToolTip("Hold position (Space)")
+        self.rtl_button.setToolTip("Return to launch and land")
+        grid = QGridLayout(self)
+        grid.setContentsMargins(0, 0, 0, 0)
+        grid.setSpacing(6)
+        grid.addWidget(self.main_button, 0, 0, 1, 3)
+        grid.addWidget(self.progress, 1, 0, 1, 3)
+        grid.addWidget(self.stop_button, 2, 0)
+        grid.addWidget(self.rtl_button, 2, 1)
+        grid.addWidget(self.arm_button, 2, 2)
+        self.main_button.clicked.connect(self._main_clicked)
+        self.stop_button.clicked.connect(self.stopRequested)
+        self.rtl_button.clicked.connect(self.rtlRequested)
+        self.arm_button.clicked.connect(self._arm_clicked)
+        self.set_vehicle(FlightPhase.NO_VEHICLE, armed=False, connected=False)
+
+    def _button(self, name: str, text: str, icon: str) -> QPushButton:
+        b = QPushButton(_icon(icon), text)
+        b.setObjectName(name)
+        b.setIconSize(QSize(20, 20))
+        b.setFocusPolicy(Qt.NoFocus)        # Space flies (Stop), it must never "click" a focused button
+        b.setSizePolicy(QSizePolicy.Expanding, QSizePolicy.Fixed)
+        b.setMinimumHeight(36)
+        return b
+
+    @property
+    def phase(self) -> FlightPhase:
+        return self._phase
+
+    def set_vehicle(self, phase: FlightPhase, armed: bool, connected: bool,
+                    progress: float | None = None, detail: str = "") -> None:
+        self._phase, self._armed = phase, armed
+        b = self.main_button
+        if phase is FlightPhase.ON_GROUND or phase is FlightPhase.NO_VEHICLE:
+            b.setText("Take off")
+            b.setIcon(_icon("takeoff"))
+            b.setEnabled(connected and phase is FlightPhase.ON_GROUND)
+            b.setProperty("action", "takeoff")
+        elif phase is FlightPhase.LANDING:
+            b.setText("Landing…")
+            b.setIcon(_icon("land"))
+            b.setEnabled(False)
+            b.setProperty("action", "landing")
+        else:
+            b.setText("Land")
+            b.setIcon(_icon("land"))
+            b.setEnabled(True)                  # Land is always available in the air
+            b.setProperty("action", "land")
+        b.style().unpolish(b)
+        b.style().polish(b)
+        taking_off = phase is FlightPhase.TAKING_OFF and progress is not None
+        self.progress.setVisible(taking_off)
+        if taking_off:
+            self.progress.setValue(int(round(100 * max(0.0, min(1.0, progress)))))
+            self.progress.setFormat(detail or "taking off %p%")
+        self.stop_button.setEnabled(phase.airborne)
+        self.rtl_button.setEnabled(phase.airborne or (connected and armed))
+        self.arm_button.setText("Disarm" if armed else "Arm")
+        self.arm_button.setIcon(_icon("disarm" if armed else "arm"))
+        self.arm_button.setEnabled(connected and not phase.airborne)
+
+    def _main_clicked(self) -> None:
+        if self._phase is FlightPhase.ON_GROUND:
+            self.takeoffRequested.emit()
+        elif self._phase in (FlightPhase.TAKING_OFF, FlightPhase.FLYING):
+            self.landRequested.emit()
+
+    def _arm_clicked(self) -> None:
+        (self.disarmRequested if self._armed else self.armRequested).emit()

@@ -1,0 +1,44 @@
+"""A strip across the top that says when there is no vehicle to fly."""
+from __future__ import annotations
+
+from PyQt5.QtCore import Qt
+from PyQt5.QtWidgets import QLabel, QWidget
+
+from driver.state import LinkStatus
+
+__all__ = ["LinkBanner"]
+
+
+class LinkBanner(QLabel):
+    """Hidden while the link is healthy; amber while waiting, red when lost."""
+
+    def __init__(self, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.setObjectName("linkBanner")
+        self.setAlignment(Qt.AlignCenter)
+        self.setMinimumHeight(34)
+        self._status: LinkStatus | None = None
+        self.setVisible(False)
+
+    @property
+    def status(self) -> LinkStatus | None:
+        return self._status
+
+    def set_link(self, status: LinkStatus, address: str, heartbeat_age: float | None) -> None:
+        if status is LinkStatus.OK:
+            text, kind = "", ""
+        elif status is LinkStatus.WAITING:
+            text, kind = f"Waiting for vehicle on {address}…", "waiting"
+        elif status is LinkStatus.LOST:
+            since = "" if heartbeat_age is None else f" — {heartbeat_age:.0f} s since the last heartbeat"
+            text, kind = f"Link lost{since}", "lost"
+        else:
+            text, kind = f"Link closed ({address})", "lost"
+        if status is not self._status:
+            self._status = status
+            self.setProperty("kind", kind)
+            self.style().unpolish(self)
+            self.style().polish(self)
+        if self.text() != text:
+            self.setText(text)
+        self.setVisible(bool(text))

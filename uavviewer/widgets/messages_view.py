@@ -1,0 +1,71 @@
+"""The autopilot's words and the outcome of every command, newest at the bottom."""
+from __future__ import annotations
+
+import time as _time
+
+from PyQt5.QtCore import Qt
+from PyQt5.QtGui import QBrush, QColor
+from PyQt5.QtWidgets import QAbstractItemView, QHeaderView, QTreeWidget, QTreeWidgetItem, QWidget
+
+from driver.state import CommandResult, CommandStatus, Severity
+
+__all__ = ["MessagesView", "severity_color"]
+
+_COLORS = {
+    Severity.EMERGENCY: "#ff3b3b", Severity.ALERT: "#ff3b3b", Severity.CRITICAL: "#ff3b3b",
+    Severity.ERROR: "#ff6b5b", Severity.WARNING: "#ffb020", Severity.NOTICE: "#8fd0ff",
+    Severity.INFO: "#d8dee6", Severity.DEBUG: "#7d8792",
+}
+_RESULT_SEVERITY = {
+    CommandStatus.ACCEPTED: Severity.INFO, CommandStatus.IN_PROGRESS: Severity.INFO,
+    CommandStatus.REFUSED: Severity.ERROR, CommandStatus.TIMED_OUT: Severity.WARNING,
+    CommandStatus.REJECTED: Severity.WARNING, CommandStatus.ABORTED: Severity.NOTICE,
+}
+
+
+def severity_color(severity: Severity) -> str:
+    return _COLORS.get(Severity(severity), "#d8dee6")
+
+
+class MessagesView(QTreeWidget):
+    """Time · source · text, coloured by severity; keeps the last ``limit`` lines."""
+
+    def __init__(self, parent: QWidget | None = None, limit: int = 500) -> None:
+        super().__init__(parent)
+        self.setObjectName("messagesView")
+        self._limit = limit
+        self.setColumnCount(3)
+        self.setHeaderLabels(["Time", "From", "Message"])
+        self.setRootIsDecorated(False)
+        self.setUniformRowHeights(True)
+        self.setSelectionMode(QAbstractItemView.NoSelection)
+        self.setFocusPolicy(Qt.NoFocus)
+        self.setMinimumHeight(120)             # a few lines always visible
+        header = self.header()
+        header.setSectionResizeMode(0, QHeaderView.ResizeToContents)
+        header.setSectionResizeMode(1, QHeaderView.ResizeToContents)
+        header.setStretchLastSection(True)
+
+    def add_message(self, when: float, severity: Severity, text: str, source: str = "vehicle") -> None:
+        stamp = _time.strftime("%H:%M:%S", _time.localtime(when))
+        item = QTreeWidgetItem([stamp, source, text])
+        brush = QBrush(QColor(severity_color(severity)))
+        for col in range(3):
+            item.setForeground(col, brush)
+        item.setData(0, Qt.UserRole, int(severity))
+        item.setToolTip(2, text)
+        self.addTopLevelItem(item)
+        while self.topLevelItemCount() > self._limit:
+            self.takeTopLevelItem(0)
+        self.scrollToBottom()
+
+    def add_result(self, result: CommandResult, when: float | None = None) -> None:
+        severity = _RESULT_SEVERITY.get(result.status, Severity.INFO)
+        self.add_message(_time.time() if when is None else when, severity, str(result), "command")
+
+    # -- for tests ----------------------------------------------------------------------------
+    def texts(self) -> list[str]:
+        return [self.topLevelItem(i).text(2) for i in range(self.topLevelItemCount())]
+
+    def severities(self) -> list[int]:
+        return [self.topLevelItem(i).data(0, Qt.UserRole) for i in range(self.topLevelItemCount())]

@@ -1,0 +1,53 @@
+"""Shows the flight mode and lets the pilot pick another."""
+from __future__ import annotations
+
+from PyQt5.QtCore import Qt, pyqtSignal
+from PyQt5.QtWidgets import QComboBox, QWidget
+
+__all__ = ["ModeSelector", "COPTER_MODES"]
+
+COPTER_MODES = ("STABILIZE", "ALT_HOLD", "LOITER", "GUIDED", "POSHOLD", "BRAKE", "AUTO", "RTL",
+                "SMART_RTL", "LAND", "CIRCLE", "DRIFT", "SPORT", "ACRO")
+
+
+class ModeSelector(QComboBox):
+    """The current mode is the selection; choosing another emits ``modeRequested``.
+
+    The selection snaps back to the vehicle's real mode on the next snapshot, so
+    it never shows a mode the vehicle refused.
+    """
+
+    modeRequested = pyqtSignal(str)
+
+    def __init__(self, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.setObjectName("modeSelector")
+        self.setFocusPolicy(Qt.NoFocus)     # arrow keys fly; they must not change the mode
+        self.setMinimumWidth(130)
+        self.addItems(COPTER_MODES)
+        self._mode = ""
+        self.setCurrentIndex(-1)
+        self.activated.connect(self._picked)
+
+    @property
+    def mode(self) -> str:
+        return self._mode
+
+    def set_mode(self, name: str) -> None:
+        if name == self._mode or self.view().isVisible():
+            return
+        self._mode = name
+        if name and self.findText(name) < 0:
+            self.addItem(name)
+        self.blockSignals(True)
+        self.setCurrentIndex(self.findText(name) if name else -1)
+        self.blockSignals(False)
+
+    def _picked(self, index: int) -> None:
+        name = self.itemText(index)
+        if name and name != self._mode:
+            self.modeRequested.emit(name)
+        # Show the real mode until the vehicle confirms the change.
+        self.blockSignals(True)
+        self.setCurrentIndex(self.findText(self._mode) if self._mode else -1)
+        self.blockSignals(False)

@@ -1,0 +1,110 @@
+"""Altitude, velocities and attitude over the last minute (pyqtgraph).
+
+Samples go into fixed numpy ring buffers as they arrive; curves are redrawn by
+a slower timer so plotting never competes with the 30 Hz instruments.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pyqtgraph as pg
+from PyQt5.QtCore import QTimer
+from PyQt5.QtWidgets import QVBoxLayout, QWidget
+
+__all__ = ["PlotsPanel", "SERIES"]
+
+# series name -> (plot row, colour, legend)
+SERIES = {
+    "altitude": (0, "#5fd068", "altitude m"),
+    "forward": (1, "#4ea3ff", "forward m/s"),
+    "right": (1, "#ffb020", "right m/s"),
+    "climb": (1, "#5fd068", "climb m/s"),
+    "roll": (2, "#ff6b5b", "roll °"),
+    "pitch": (2, "#4ea3ff", "pitch °"),
+    "heading": (3, "#d8dee6", "heading °"),
+}
+_TITLES = ("Alt m", "Vel m/s", "Att °", "Hdg °")
+
+
+class PlotsPanel(QWidget):
+    WINDOW_S = 60.0
+
+    def __init__(self, parent: QWidget | None = None, capacity: int = 60 * 30 + 64,
+                 redraw_hz: float = 8.0) -> None:
+        super().__init__(parent)
+        self.setObjectName("plotsPanel")
+        pg.setConfigOptions(antialias=False, background="#12161c", foreground="#aab4be")
+        self._cap = capacity
+        self._t = np.zeros(capacity)
+        self._data = {name: np.zeros(capacity) for name in SERIES}
+        self._n = 0            # samples written in total
+        self._dirty = False
+        self.graphics = pg.GraphicsLayoutWidget()
+        layout = QVBoxLayout(self)
+        layout.setContentsMargins(0, 0, 0, 0)
+        layout.addWidget(self.graphics)
+        self.plots = []
+        for row, title in enumerate(_TITLES):
+            plot = self.graphics.addPlot(row=row, col=0)
+            plot.setLabel("left", title)
+            plot.showGrid(x=True, y=True, alpha=0.2)
+            plot.setXRange(-self.WINDOW_S, 0, padding=0)
+            plot.setMouseEnabled(x=False, y=False)
+            plot.hideButtons()
+            plot.setMenuEnabled(False)
+            plot.addLegend(offset=(5, 5), labelTextSize="8pt")
+            if row:
+                plot.setXLink(self.plots[0])
+            if row < len(_TITLES) - 1:
+                plot.getAxis("bottom").setStyle(showValues=False)
+            self.plots.append(plot)
+        self.plots[-1].setYRange(0, 360)
+        self.curves = {name: self.plots[row].plot(pen=pg.mkPen(color, width=1.5), name=legend)
+                       for name, (row, color, legend) in SERIES.items()}
+        self._timer = QTimer(self)
+        self._timer.setInterval(int(1000 / redraw_hz))
+        self._timer.timeout.connect(self.redraw)
+        self._timer.start()
+
+    @property
+    def sample_count(self) -> int:
+        return min(self._n, self._cap)
+
+    def append(self, t: float, **values: float) -> None:
+        """One sample at time ``t`` (seconds, any monotonic origin); unknown names are ignored."""
+        i = self._n % self._cap
+        self._t[i] = t
+        for name, arr in self._data.items():
+            v = values.get(name, np.nan)
+            arr[i] = v if v is not None else np.nan
+        self._n += 1
+        self._dirty = True
+
+    def clear(self) -> None:
+        self._n = 0
+        self._dirty = True
+
+    def _ordered(self, arr: np.ndarray) -> np.ndarray:
+        if self._n <= self._cap:
+            return arr[: self._n]
+        i = self._n % self._cap
+        return np.concatenate((arr[i:], arr[:i]))
+
+    def redraw(self) -> None:
+        if not self._dirty or not self.isVisible():
+            return
+        self._dirty = False
+        t = self._ordered(self._t)
+        if t.size == 0:
+            for curve in self.curves.values():
+                curve.setData([], [])
+            return
+        x = t - t[-1]
+        keep = x >= -self.WINDOW_S
+        x = x[keep]
+        for name, curve in self.curves.items():
+            curve.setData(x, self._ordered(self._data[name])[keep], connect="finite")
+
+    def curve_points(self, name: str) -> int:
+        """How many points a curve shows (for tests)."""
+        xs, _ = self.curves[name].getData()
+        return 0 if xs is None else len(xs)

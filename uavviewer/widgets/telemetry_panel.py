@@ -1,0 +1,117 @@
+"""The numbers a pilot glances at: mode, battery, GPS, height, speeds, link health."""
+from __future__ import annotations
+
+import math
+
+from PyQt5.QtCore import Qt
+from PyQt5.QtWidgets import QFrame, QGridLayout, QLabel, QSizePolicy, QWidget
+
+from driver.state import LandedState, LinkStatus, VehicleState
+
+__all__ = ["TelemetryPanel", "battery_is_low"]
+
+NORMAL = "#e6ebf0"
+GOOD = "#5fd068"
+WARN = "#ffb020"
+BAD = "#ff4d4d"
+DIM = "#7d8792"
+
+ROWS = [("mode", "Mode"), ("armed", "Armed"), ("landed", "Landed state"), ("battery", "Battery"),
+        ("gps", "GPS"), ("altitude", "Altitude (home)"), ("ground_speed", "Ground speed"),
+        ("climb", "Climb rate"), ("heading", "Heading"), ("home", "From home"),
+        ("heartbeat", "Heartbeat"), ("packets", "Packets/s"), ("loss", "Link loss")]
+
+LOW_PERCENT = 20.0
+LOW_CELL_VOLTS = 3.7
+
+
+def battery_is_low(voltage: float | None, cells: int, remaining: float | None) -> bool:
+    """Under 20 % or under 3.7 V a cell."""
+    if remaining is not None and remaining < LOW_PERCENT:
+        return True
+    return voltage is not None and cells > 0 and voltage / cells < LOW_CELL_VOLTS
+
+
+def _num(value: float | None, unit: str, digits: int = 1) -> str:
+    return "--" if value is None or not math.isfinite(value) else f"{value:.{digits}f} {unit}"
+
+
+class TelemetryPanel(QFrame):
+    """A two-column list of labelled values; colours warn, the text says why."""
+
+    def __init__(self, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.setObjectName("telemetryPanel")
+        self.setSizePolicy(QSizePolicy.Preferred, QSizePolicy.Expanding)
+        grid = QGridLayout(self)
+        grid.setContentsMargins(10, 10, 10, 10)
+        grid.setVerticalSpacing(6)
+        title = QLabel("TELEMETRY")
+        title.setObjectName("panelTitle")
+        grid.addWidget(title, 0, 0, 1, 2)
+        self._values: dict[str, QLabel] = {}
+        for row, (key, text) in enumerate(ROWS, start=1):
+            name = QLabel(text)
+            name.setObjectName("telemetryName")
+            value = QLabel("--")
+            value.setObjectName("telemetryValue")
+            value.setAlignment(Qt.AlignRight | Qt.AlignVCenter)
+            value.setTextInteractionFlags(Qt.TextSelectableByMouse)
+            grid.addWidget(name, row, 0)
+            grid.addWidget(value, row, 1)
+            self._values[key] = value
+        grid.setRowStretch(len(ROWS) + 1, 1)
+        self._colors: dict[str, str] = {}
+
+    # -- for tests and tooltips ----------------------------------------------------------------
+    def text(self, key: str) -> str:
+        return self._values[key].text()
+
+    def color(self, key: str) -> str:
+        return self._colors.get(key, NORMAL)
+
+    def _put(self, key: str, text: str, color: str = NORMAL) -> None:
+        label = self._values[key]
+        if label.text() != text:
+            label.setText(text)
+        if self._colors.get(key) != color:
+            self._colors[key] = color
+            label.setStyleSheet(f"color: {color};")
+
+    # -- values in ------------------------------------------------------------------------------
+    def set_state(self, s: VehicleState) -> None:
+        self._put("mode", s.mode or "--")
+        self._put("armed", "ARMED" if s.armed else "disarmed", WARN if s.armed else NORMAL)
+        landed = {LandedState.UNDEFINED: "--", LandedState.ON_GROUND: "on ground",
+                  LandedState.IN_AIR: "in air", LandedState.TAKEOFF: "taking off",
+                  LandedState.LANDING: "landing"}[s.landed_state]
+        self._put("landed", landed)
+        self.set_battery(s.battery.voltage, s.battery.cells, s.battery.remaining,
+                         s.battery.low, s.battery.remaining_estimated)
+        fix_color = GOOD if s.gps.fix_type >= 3 else (WARN if s.gps.fix_type == 2 else BAD)
+        self._put("gps", f"{s.gps.fix_name}, {s.gps.satellites} sats", fix_color)
+        has_pos = s.link.status is not LinkStatus.WAITING
+        self._put("altitude", _num(s.altitude if has_pos else None, "m", 2))
+        self._put("ground_speed", _num(s.velocity.ground_speed if has_pos else None, "m/s", 2))
+        self._put("climb", _num(s.velocity.climb if has_pos else None, "m/s", 2))
+        self._put("heading", f"{s.heading_deg:03.0f}°" if has_pos else "--")
+        self._put("home", _num(s.distance_from_home, "m"))
+        age = s.link.heartbeat_age
+        hb_color = DIM if age is None else (GOOD if s.link.status is LinkStatus.OK else BAD)
+        self._put("heartbeat", "--" if age is None else f"{age:.1f} s ago", hb_color)
+        self._put("packets", f"{s.link.packets_per_s:.0f}")
+        loss = s.link.loss_percent
+        self._put("loss", f"{loss:.1f} %", GOOD if loss < 2 else (WARN if loss < 10 else BAD))
+
+    def set_battery(self, voltage: float | None, cells: int, remaining: float | None,
+                    low: bool = False, estimated: bool = False) -> None:
+        if voltage is None and remaining is None:
+            self._put("battery", "--", DIM)
+            return
+        parts = []
+        if voltage is not None:
+            parts.append(f"{voltage:.2f} V")
+        if remaining is not None:
+            parts.append(f"{remaining:.0f} %" + ("*" if estimated else ""))
+        low = low or battery_is_low(voltage, cells, remaining)
+        self._put("battery", "  ".join(parts), BAD if low else GOOD)
