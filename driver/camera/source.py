@@ -1,0 +1,307 @@
+"""A video source read on its own thread, keeping only the newest frame.
+
+Whoever shows or serves video (the viewer's timer, an Ice servant, a recorder)
+asks :meth:`VideoSource.latest` for the newest :class:`Frame`; nothing queues,
+so a slow reader never makes the picture lag behind the camera. Opening, reading
+and decoding (which can hang on a network) happen only on the capture thread,
+and a source that fails or ends says why and tries again with a growing pause.
+"""
+from __future__ import annotations
+
+import logging
+import os
+import threading
+import time
+from dataclasses import dataclass
+from typing import Callable
+
+import numpy as np
+
+log = logging.getLogger(__name__)
+
+__all__ = ["Frame", "SourceStatus", "VideoSource", "OpenCVSource", "SourceEnded", "SourceFailed"]
+
+FFMPEG_TIMEOUT_MS = 5000
+_FFMPEG_ENV = "OPENCV_FFMPEG_CAPTURE_OPTIONS"
+_ENV_LOCK = threading.Lock()
+
+
+@dataclass(frozen=True)
+class Frame:
+    """One decoded picture: ``image`` is height×width×3, uint8, R,G,B order, read-only."""
+    image: np.ndarray
+    index: int                  # 1 for the first frame a source delivers, then +1 per frame
+    decoded: float              # time.monotonic() right after decoding (start of decode-to-paint latency)
+    wall_time: float            # time.time() at the same instant (for Ice timestamps and file names)
+
+    @property
+    def width(self) -> int:
+        return int(self.image.shape[1])
+
+    @property
+    def height(self) -> int:
+        return int(self.image.shape[0])
+
+
+@dataclass(frozen=True)
+class SourceStatus:
+    state: str                  # "connecting", "live", "retrying", "ended", "closed"
+    reason: str = ""            # why there is no video (empty while live)
+    frames: int = 0             # frames delivered since the source was created
+    dropped: int = 0            # frames replaced by a newer one before anyone took them
+    attempts: int = 0           # how many times the source was opened
+
+    @property
+    def live(self) -> bool:
+        return self.state == "live"
+
+
+class SourceEnded(Exception):
+    """The source has no more frames (end of a file that does not loop)."""
+
+
+class SourceFailed(Exception):
+    """The source cannot deliver frames; the message is shown to the pilot."""
+
+
+class VideoSource:
+    """Base: a capture thread calling :meth:`_open` / :meth:`_read` / :meth:`_release`.
+
+    Subclasses implement those three; ``_read`` returns an RGB frame (or None when no
+    new frame is there yet) and raises :class:`SourceEnded` or :class:`SourceFailed`.
+    """
+
+    retry_initial = 0.5
+    retry_max = 5.0
+    retry_on_end = True         # network streams come back; a file that ended may not
+
+    def __init__(self, uri: str, name: str | None = None):
+        self.uri = uri
+        self.name = name or uri
+        self._lock = threading.Lock()
+        self._frame: Frame | None = None
+        self._taken = True
+        self._status = SourceStatus("connecting")
+        self._stop = threading.Event()
+        self._wake = threading.Event()
+        self._listeners: list[Callable[[Frame], None]] = []
+        self._thread: threading.Thread | None = None
+        self._frames = 0
+        self._dropped = 0
+        self._attempts = 0
+
+    # -- what readers use ---------------------------------------------------------------------
+    def start(self) -> "VideoSource":
+        if self._thread is None:
+            self._thread = threading.Thread(target=self._run, name=f"video {self.name}", daemon=True)
+            self._thread.start()
+        return self
+
+    def latest(self) -> Frame | None:
+        """The newest frame (None before the first); marks it taken."""
+        with self._lock:
+            self._taken = True
+            return self._frame
+
+    def status(self) -> SourceStatus:
+        with self._lock:
+            return self._status
+
+    @property
+    def description(self) -> str:
+        """A short human description ("file clip.mp4", "RTSP stream ...")."""
+        return self.name
+
+    @property
+    def streaming_uri(self) -> str:
+        """Where others can watch the same video directly ("" when only we can read it)."""
+        return ""
+
+    def add_listener(self, callback: Callable[[Frame], None]) -> None:
+        """Call ``callback(frame)`` on the capture thread for every new frame (keep it short)."""
+        with self._lock:
+            self._listeners = self._listeners + [callback]
+
+    def remove_listener(self, callback: Callable[[Frame], None]) -> None:
+        with self._lock:
+            self._listeners = [c for c in self._listeners if c is not callback]
+
+    def restart(self) -> None:
+        """Drop the current connection and open again at once."""
+        self._restart = True
+        self._wake.set()
+
+    def close(self, wait: float = 0.0) -> None:
+        """Stop the thread; never blocks the caller longer than ``wait`` seconds."""
+        self._stop.set()
+        self._wake.set()
+        if wait and self._thread is not None and self._thread is not threading.current_thread():
+            self._thread.join(wait)
+
+    @property
+    def closed(self) -> bool:
+        return self._thread is not None and not self._thread.is_alive()
+
+    # -- subclass hooks -----------------------------------------------------------------------
+    def _open(self) -> None:
+        raise NotImplementedError
+
+    def _read(self) -> np.ndarray | None:
+        raise NotImplementedError
+
+    def _release(self) -> None:
+        pass
+
+    # -- the thread ---------------------------------------------------------------------------
+    _restart = False
+
+    def _set_status(self, state: str, reason: str = "") -> None:
+        with self._lock:
+            self._status = SourceStatus(state, reason, self._frames, self._dropped, self._attempts)
+
+    def _publish(self, image: np.ndarray) -> None:
+        now_m, now_w = time.monotonic(), time.time()
+        image.flags.writeable = False
+        with self._lock:
+            self._frames += 1
+            if not self._taken:
+                self._dropped += 1
+            self._frame = Frame(image, self._frames, now_m, now_w)
+            self._taken = False
+            self._status = SourceStatus("live", "", self._frames, self._dropped, self._attempts)
+            frame, listeners = self._frame, self._listeners
+        for callback in listeners:
+            try:
+                callback(frame)
+            except Exception:  # a listener must never kill the capture
+                log.exception("video listener failed")
+
+    def _run(self) -> None:
+        delay = self.retry_initial
+        while not self._stop.is_set():
+            self._restart = False
+            self._attempts += 1
+            self._set_status("connecting", self._status.reason or "connecting")
+            reason, ended = "", False
+            try:
+                self._open()
+                log.info("video source %s open", self.name)
+                while not self._stop.is_set() and not self._restart:
+                    image = self._read()
+                    if image is not None:
+                        self._publish(image)
+                        delay = self.retry_initial
+            except SourceEnded as e:
+                reason, ended = str(e) or "end of stream", True
+            except SourceFailed as e:
+                reason = str(e)
+            except Exception as e:  # OpenCV, sockets, Ice: anything means "no video, try again"
+                log.exception("video source %s failed", self.name)
+                reason = f"{type(e).__name__}: {e}"
+            finally:
+                try:
+                    self._release()
+                except Exception:
+                    log.exception("releasing video source %s", self.name)
+            if self._stop.is_set():
+                break
+            if self._restart:
+                continue
+            log.info("video source %s: %s", self.name, reason)
+            if ended and not self.retry_on_end:
+                self._set_status("ended", reason)
+                self._wake.wait()   # until restart() or close()
+                self._wake.clear()
+                continue
+            self._set_status("retrying", f"{reason} (retrying in {delay:.1f} s)")
+            self._wake.wait(delay)
+            self._wake.clear()
+            delay = min(delay * 2, self.retry_max)
+        self._set_status("closed", "closed")
+
+
+class OpenCVSource(VideoSource):
+    """Anything OpenCV opens: a camera index or device, a file, RTSP/HTTP/UDP, an SDP file."""
+
+    def __init__(self, target: str | int, name: str | None = None, *, loop: bool = False,
+                 api: int | None = None, stream: bool | None = None, ffmpeg_options: str | None = None,
+                 streaming_uri: str = "", timeout_ms: int = FFMPEG_TIMEOUT_MS):
+        import cv2
+        uri = str(target)
+        super().__init__(uri, name)
+        self._target = target
+        self._loop = loop
+        self._api = cv2.CAP_ANY if api is None else api
+        if stream is None:
+            stream = not (isinstance(target, str) and os.path.isfile(target))
+        # a file is paced at its own frame rate, as a camera would deliver it, and may loop;
+        # a stream (camera, network, SDP) is read as fast as it comes and reopened when it ends
+        self._is_file = not stream
+        self._ffmpeg_options = ffmpeg_options
+        self._streaming_uri = streaming_uri
+        self._timeout_ms = int(timeout_ms)
+        self.retry_on_end = not self._is_file
+        self._cap = None
+        self._period = 0.0
+        self._next = 0.0
+
+    @property
+    def streaming_uri(self) -> str:
+        return self._streaming_uri
+
+    def _open(self) -> None:
+        import cv2
+        if isinstance(self._target, str) and self._looks_local_file() and not os.path.exists(self._target):
+            raise SourceFailed(f"no such file: {self._target}")
+        params = [cv2.CAP_PROP_OPEN_TIMEOUT_MSEC, self._timeout_ms, cv2.CAP_PROP_READ_TIMEOUT_MSEC, self._timeout_ms]
+        if self._ffmpeg_options is None:
+            cap = cv2.VideoCapture(self._target, self._api, params)
+        else:
+            # OpenCV's FFmpeg backend reads this variable when a capture opens; it is process-wide,
+            # so it is set only for this open
+            with _ENV_LOCK:
+                old = os.environ.get(_FFMPEG_ENV)
+                os.environ[_FFMPEG_ENV] = self._ffmpeg_options
+                try:
+                    cap = cv2.VideoCapture(self._target, self._api, params)
+                finally:
+                    if old is None:
+                        os.environ.pop(_FFMPEG_ENV, None)
+                    else:
+                        os.environ[_FFMPEG_ENV] = old
+        if not cap.isOpened():
+            cap.release()
+            raise SourceFailed(f"cannot open {self.uri}")
+        self._cap = cap
+        fps = cap.get(cv2.CAP_PROP_FPS)
+        self._period = 1.0 / fps if self._is_file and 1.0 <= fps <= 240.0 else 0.0
+        self._next = time.monotonic()
+
+    def _looks_local_file(self) -> bool:
+        t = self._target
+        return "://" not in t and not t.startswith("/dev/") and not t.isdigit()
+
+    def _read(self) -> np.ndarray | None:
+        import cv2
+        if self._period:
+            wait = self._next - time.monotonic()
+            if wait > 0 and self._stop.wait(wait):
+                return None
+            self._next = max(self._next + self._period, time.monotonic() - self._period)
+        ok, bgr = self._cap.read()
+        if not ok or bgr is None:
+            if self._is_file and self._loop and self._frames:
+                self._cap.set(cv2.CAP_PROP_POS_FRAMES, 0)
+                ok, bgr = self._cap.read()
+            if not ok or bgr is None:
+                if self._is_file:
+                    raise SourceEnded(f"end of file {os.path.basename(self.uri)}")
+                raise SourceFailed(f"stream stopped: {self.uri}")
+        if bgr.ndim == 2:
+            return cv2.cvtColor(bgr, cv2.COLOR_GRAY2RGB)
+        return cv2.cvtColor(bgr, cv2.COLOR_BGR2RGB)   # the one copy: OpenCV decodes to B,G,R
+
+    def _release(self) -> None:
+        cap, self._cap = self._cap, None
+        if cap is not None:
+            cap.release()

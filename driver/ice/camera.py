@@ -1,0 +1,150 @@
+"""JdeRobot's ``Camera`` served from any video source (webcam, file, stream, the simulated camera).
+
+Each new frame is encoded once, on first request, and the same ``ImageData`` answers
+every client until the next frame arrives: work per call is bounded whatever the
+number of clients. ``getImageData`` is AMD in the Slice; it answers at once here.
+
+Configuration (``MAVLinkServer.Camera.*``, prefix removed): ``Uri`` (and ``Uri.2``,
+``Uri.3``… for ArDroneExtra.toggleCam), ``Loop`` (1 = loop files), ``Name``,
+``RecordDir`` (where recordOnUsb(true) writes, default ``recordings``), ``TimeoutMs`` (how long
+opening or reading a stream may hang, default 5000), ``Width``/``Height`` (the simulated camera's, 640×480).
+"""
+from __future__ import annotations
+
+import logging
+import threading
+
+import cv2
+
+from ..api import Drone
+from ..camera import CameraSet, Frame, VideoRecorder, VideoSource
+from . import load_slice
+
+jderobot, _ = load_slice()
+log = logging.getLogger(__name__)
+
+__all__ = ["CameraI", "SUPPORTED_FORMATS", "uris_from_config"]
+
+SUPPORTED_FORMATS = ("RGB8", "GRAY8")
+
+
+def uris_from_config(config: dict[str, str]) -> list[str]:
+    """``Uri``, then ``Uri.2``, ``Uri.3``… in order."""
+    uris = [config["Uri"].strip()] if config.get("Uri", "").strip() else []
+    extra = sorted((k for k in config if k.startswith("Uri.") and k[4:].isdigit()), key=lambda k: int(k[4:]))
+    return uris + [config[k].strip() for k in extra if config[k].strip()]
+
+
+class CameraI(jderobot.Camera):
+    """The ``Camera`` servant; ``toggle()`` and ``record(on)`` serve ArDroneExtra."""
+
+    def __init__(self, config: dict[str, str], vehicle: Drone | None = None):
+        uris = uris_from_config(config)
+        if not uris:
+            raise ValueError("no camera source configured (MAVLinkServer.Camera.Uri)")
+        state_fn = vehicle.state if vehicle is not None else None
+        self._name = config.get("Name", "") or "camera"
+        self._record_dir = config.get("RecordDir", "") or "recordings"
+        options = dict(state_fn=state_fn, loop=config.get("Loop", "0").lower() in ("1", "true", "yes"))
+        if config.get("TimeoutMs", "").strip().isdigit():
+            options["timeout_ms"] = int(config["TimeoutMs"])
+        if config.get("Width", "").strip().isdigit() and config.get("Height", "").strip().isdigit():
+            options["sim_size"] = (int(config["Width"]), int(config["Height"]))
+        self._cameras = CameraSet(uris, **options)
+        self._lock = threading.Lock()
+        self._encoded: dict[str, tuple[int, VideoSource, object]] = {}   # format -> (frame index, source, ImageData)
+        self._recorder: VideoRecorder | None = None
+
+    @property
+    def source(self) -> VideoSource:
+        return self._cameras.source
+
+    # -- ImageProvider ------------------------------------------------------------------------
+    def getImageDescription(self, current=None):
+        frame = self.source.latest()
+        if frame is None:
+            return jderobot.ImageDescription(0, 0, 0, "RGB8", "")
+        return jderobot.ImageDescription(frame.width, frame.height, frame.width * frame.height * 3, "RGB8", "")
+
+    def getImageFormat(self, current=None):
+        return list(SUPPORTED_FORMATS)
+
+    def getImageData(self, format, current=None):
+        fmt = format or "RGB8"
+        if fmt not in SUPPORTED_FORMATS:
+            raise jderobot.DataNotExistException(
+                f"image format {format!r} not supported; supported: {', '.join(SUPPORTED_FORMATS)}")
+        source = self.source
+        status = source.status()
+        frame = source.latest()
+        # still opening for the first time: no image yet; failed, ended or reopening after a failure: gone
+        if status.state in ("retrying", "ended", "closed") or (status.state == "connecting" and status.attempts > 1):
+            raise jderobot.HardwareFailedException(f"{source.description}: {status.reason or status.state}")
+        if frame is None:
+            raise jderobot.DataNotExistException(f"{source.description}: no image yet ({status.reason or status.state})")
+        with self._lock:
+            cached = self._encoded.get(fmt)
+            if cached is not None and cached[0] == frame.index and cached[1] is source:
+                return cached[2]
+            data = self._encode(frame, fmt)
+            self._encoded[fmt] = (frame.index, source, data)
+            return data
+
+    @staticmethod
+    def _encode(frame: Frame, fmt: str):
+        image = frame.image if fmt == "RGB8" else cv2.cvtColor(frame.image, cv2.COLOR_RGB2GRAY)
+        pixels = image.tobytes()
+        seconds = int(frame.wall_time)
+        stamp = jderobot.Time(seconds, int((frame.wall_time - seconds) * 1e6))
+        desc = jderobot.ImageDescription(frame.width, frame.height, len(pixels), fmt, "")
+        return jderobot.ImageData(stamp, desc, pixels)
+
+    # -- Camera -------------------------------------------------------------------------------
+    def getCameraDescription(self, current=None):
+        source = self.source
+        d = jderobot.CameraDescription(name=self._name, shortDescription=source.description,
+                                       streamingUri=source.streaming_uri)
+        camera = getattr(source, "camera", None)            # the simulated camera knows its optics
+        if camera is not None:
+            d.fdistx = d.fdisty = float(camera.focal)
+            d.u0, d.v0 = float(camera.cx), float(camera.cy)
+        return d
+
+    def setCameraDescription(self, description, current=None):
+        return -1                                           # the optics are not ours to change
+
+    def startCameraStreaming(self, current=None):
+        return self.source.streaming_uri
+
+    def stopCameraStreaming(self, current=None):
+        pass
+
+    def reset(self, current=None):
+        self.source.restart()
+
+    # -- ArDroneExtra hooks -------------------------------------------------------------------
+    def toggle(self) -> None:
+        """Switch to the next configured source (ArDroneExtra.toggleCam)."""
+        self._cameras.toggle()
+
+    def record(self, on: bool) -> str:
+        """Start or stop recording on the server (ArDroneExtra.recordOnUsb); returns the file."""
+        with self._lock:
+            recorder = self._recorder
+            if on and recorder is None:
+                recorder = self._recorder = VideoRecorder.in_folder(self._record_dir, self._name)
+                self._cameras.add_listener(recorder.push)
+                log.info("recording the camera to %s", recorder.path)
+                return recorder.path
+            if not on and recorder is not None:
+                self._recorder = None
+            else:
+                return recorder.path if recorder else ""
+        self._cameras.remove_listener(recorder.push)
+        path = recorder.stop()
+        log.info("recording %s finished: %d frames", path, recorder.frames_written)
+        return path
+
+    def close(self) -> None:
+        self.record(False)
+        self._cameras.close(wait=2.0)

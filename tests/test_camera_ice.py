@@ -1,0 +1,186 @@
+"""The jderobot::Camera servant over real Ice sockets, and the viewer's Ice camera source."""
+from __future__ import annotations
+
+import math
+import os
+import time
+
+import cv2
+import numpy as np
+import pytest
+
+Ice = pytest.importorskip("Ice", reason="zeroc-ice is not installed")
+
+from camera_media import COLOURS, free_udp_port, wait, write_clip  # noqa: E402
+from driver.camera import open_source  # noqa: E402
+from driver.camera.sim import SimulatedCamera  # noqa: E402
+from driver.ice import load_slice  # noqa: E402
+from driver.ice.camera import CameraI  # noqa: E402
+from driver.ice.servants import ArDroneExtraI, ServerSettings  # noqa: E402
+from driver.state import Attitude, LocalPosition, VehicleState  # noqa: E402
+
+jderobot, _ = load_slice()
+
+STILL = VehicleState(attitude=Attitude(roll=math.radians(12), pitch=math.radians(-4), yaw=0.7),
+                     local=LocalPosition(3.0, -2.0, -6.0))
+
+
+class StillVehicle:
+    """A vehicle hovering motionless: the simulated camera's picture is then known exactly."""
+
+    def state(self) -> VehicleState:
+        return STILL
+
+
+@pytest.fixture
+def serve():
+    """Serve servants on an ephemeral 127.0.0.1 port; returns their proxies' strings."""
+    init = Ice.InitializationData()
+    init.properties = Ice.createProperties()
+    init.properties.setProperty("Ice.MessageSizeMax", "65536")
+    com = Ice.initialize(init)
+    adapter = com.createObjectAdapterWithEndpoints("CameraTest", "tcp -h 127.0.0.1 -p 0")
+    adapter.activate()
+    cameras = []
+
+    def add(servant, identity):
+        if isinstance(servant, CameraI):
+            cameras.append(servant)
+        return com.proxyToString(adapter.add(servant, Ice.stringToIdentity(identity)))
+
+    add.communicator = com
+    yield add
+    com.destroy()
+    for c in cameras:
+        c.close()
+
+
+def camera_proxy(serve, proxy):
+    return jderobot.CameraPrx.checkedCast(serve.communicator.stringToProxy(proxy))
+
+
+def test_round_trip_preserves_pixels_exactly(serve):
+    servant = CameraI({"Uri": "sim", "Name": "sim"}, StillVehicle())
+    proxy = serve(servant, "Camera")
+    expected = SimulatedCamera(640, 480).render(STILL)
+    src = open_source("ice:" + proxy)
+    try:
+        frame = wait(src.latest, what="an image over Ice")
+    finally:
+        src.close(wait=3)
+    assert frame.image.shape == (480, 640, 3)
+    assert np.array_equal(frame.image, expected)
+
+    cam = camera_proxy(serve, proxy)
+    data = cam.getImageData("RGB8")
+    assert (data.description.width, data.description.height, data.description.format) == (640, 480, "RGB8")
+    assert data.description.size == len(data.pixelData) == 640 * 480 * 3
+    assert abs(data.timeStamp.seconds + data.timeStamp.useconds / 1e6 - time.time()) < 5
+    gray = cam.getImageData("GRAY8")
+    assert np.array_equal(np.frombuffer(gray.pixelData, np.uint8).reshape(480, 640),
+                          cv2.cvtColor(expected, cv2.COLOR_RGB2GRAY))
+    desc = cam.getCameraDescription()
+    assert desc.name == "sim" and "simulated" in desc.shortDescription and desc.u0 == 320.0
+    d = cam.getImageDescription()
+    assert (d.width, d.height, d.size, d.format) == (640, 480, 640 * 480 * 3, "RGB8")
+
+
+def test_unknown_format_lists_supported_ones(serve):
+    cam = camera_proxy(serve, serve(CameraI({"Uri": "sim"}, StillVehicle()), "Camera"))
+    assert cam.getImageFormat() == ["RGB8", "GRAY8"]
+    wait(lambda: cam.getImageDescription().width > 0, what="first frame")
+    with pytest.raises(jderobot.DataNotExistException) as err:
+        cam.getImageData("YUY2")
+    assert "RGB8" in err.value.what and "YUY2" in err.value.what
+
+
+def test_encoded_once_per_frame_whatever_the_clients(tmp_path):
+    servant = CameraI({"Uri": "sim"}, StillVehicle())
+    try:
+        wait(servant.source.latest, what="first frame")
+        frame = servant.source.latest()
+        a = servant.getImageData("RGB8")
+        if servant.source.latest() is frame:
+            assert servant.getImageData("RGB8") is a
+        wait(lambda: servant.source.latest().index > frame.index + 1, what="a newer frame")
+        assert servant.getImageData("RGB8") is not a
+    finally:
+        servant.close()
+
+
+def test_no_image_yet_then_source_gone(serve, tmp_path):
+    # a UDP stream nobody sends: open in progress, nothing decoded yet
+    cam = camera_proxy(serve, serve(CameraI({"Uri": f"udp://127.0.0.1:{free_udp_port()}", "TimeoutMs": "800"}), "Waiting"))
+    with pytest.raises(jderobot.DataNotExistException):
+        cam.getImageData("RGB8")
+    # a file that is not there: the source has failed, and says why
+    missing = str(tmp_path / "gone.mp4")
+    servant = CameraI({"Uri": missing})
+    cam = camera_proxy(serve, serve(servant, "Gone"))
+    wait(lambda: servant.source.status().state == "retrying", what="failure")
+    with pytest.raises(jderobot.HardwareFailedException) as err:
+        cam.getImageData("RGB8")
+    assert "no such file" in err.value.what
+
+
+def test_file_served_frames_keep_their_colours(serve, tmp_path):
+    clip = write_clip(str(tmp_path / "c.mp4"), COLOURS[:1], repeat=200)
+    cam = camera_proxy(serve, serve(CameraI({"Uri": clip}), "Camera"))
+    data = wait(lambda: _try(lambda: cam.getImageData("RGB8")), what="image")
+    px = np.frombuffer(data.pixelData, np.uint8).reshape(240, 320, 3)[120, 160]
+    assert abs(int(px[0]) - 255) < 30 and px[1] < 30 and px[2] < 30     # red stays red
+
+
+def _try(call):
+    try:
+        return call()
+    except jderobot.DataNotExistException:
+        return None
+
+
+def test_extra_records_on_the_server_and_toggles_camera(serve, tmp_path):
+    clip = write_clip(str(tmp_path / "blue.mp4"), [(0, 0, 255)], repeat=10)
+    servant = CameraI({"Uri": "sim", "Uri.2": clip + "?loop=1", "RecordDir": str(tmp_path / "rec")}, StillVehicle())
+    cam = camera_proxy(serve, serve(servant, "Camera"))
+    extra = jderobot.ArDroneExtraPrx.checkedCast(
+        serve.communicator.stringToProxy(serve(ArDroneExtraI(None, ServerSettings(), servant), "Extra")))
+    wait(lambda: cam.getImageDescription().width == 640, what="the simulated camera")
+    extra.recordOnUsb(True)
+    wait(lambda: servant._recorder is not None and servant._recorder.frames_written >= 10, what="frames recorded")
+    recorder = servant._recorder
+    extra.recordOnUsb(False)
+    assert servant._recorder is None
+    files = os.listdir(tmp_path / "rec")
+    assert len(files) == 1 and files[0].endswith(".mp4")
+    cap = cv2.VideoCapture(str(tmp_path / "rec" / files[0]))
+    ok, first = cap.read()
+    cap.release()
+    assert ok and first.shape == (480, 640, 3) and recorder.frames_written >= 10
+
+    extra.toggleCam()
+    wait(lambda: cam.getImageDescription().width == 320, what="the second camera")
+    data = wait(lambda: _try(lambda: cam.getImageData("RGB8")), what="image")
+    px = np.frombuffer(data.pixelData, np.uint8).reshape(240, 320, 3)[120, 160]
+    assert px[2] > 200 and px[0] < 40                                  # blue
+
+
+def test_server_with_sim_serves_the_simulated_camera(tmp_path):
+    """``python -m driver --sim``: with no camera option, Camera serves the simulated vehicle's camera."""
+    import socket
+    import subprocess
+    import sys
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    server = subprocess.Popen([sys.executable, "-m", "driver", "--sim", "--daemon", "--no-log",
+                               "--one-port", str(port)], cwd=root, stdout=subprocess.DEVNULL,
+                              stderr=subprocess.DEVNULL)
+    src = open_source(f"ice:Camera:default -h 127.0.0.1 -p {port}")
+    try:
+        frame = wait(src.latest, timeout=30, what="the server's simulated camera")
+        assert frame.image.shape == (480, 640, 3)
+    finally:
+        src.close(wait=3)
+        server.terminate()
+        server.wait(10)

@@ -1,0 +1,267 @@
+"""Video sources without Qt: files, MPEG-TS over UDP, RTP/SDP, the Solo link, recording, the simulated camera."""
+from __future__ import annotations
+
+import math
+import socket
+import threading
+
+import cv2
+import numpy as np
+import pytest
+
+from camera_media import COLOURS, UdpSender, free_udp_port, wait, write_clip, write_ts
+from driver.camera import VideoRecorder, open_source, save_snapshot
+from driver.camera.sim import SKY, SimulatedCamera
+from driver.camera.solo import SoloSource, write_sdp
+from driver.state import Attitude, LocalPosition, VehicleState
+
+
+def nearest_colour(rgb) -> tuple[int, int, int]:
+    return min(COLOURS, key=lambda c: sum((int(a) - b) ** 2 for a, b in zip(rgb, c)))
+
+
+def close_to(rgb, colour, tol=40) -> bool:
+    return all(abs(int(a) - b) <= tol for a, b in zip(rgb, colour))
+
+
+class Collector:
+    """Every frame a source delivers, as it is delivered (listener on the capture thread)."""
+
+    def __init__(self, source):
+        self.frames = []
+        self._lock = threading.Lock()
+        source.add_listener(self._add)
+
+    def _add(self, frame):
+        with self._lock:
+            self.frames.append(frame)
+
+    def colours(self):
+        with self._lock:
+            centre = [tuple(f.image[f.height // 2, f.width // 2]) for f in self.frames]
+        out = []
+        for rgb in centre:
+            c = nearest_colour(rgb)
+            if not out or out[-1] != c:
+                out.append(c)
+        return out
+
+
+@pytest.fixture
+def sources():
+    opened = []
+
+    def make(uri, **kw):
+        s = open_source(uri, **kw)
+        opened.append(s)
+        return s
+
+    yield make
+    for s in opened:
+        s.close(wait=3)
+
+
+def test_file_delivers_every_colour_in_order_then_ends(tmp_path, sources):
+    clip = write_clip(str(tmp_path / "colours.mp4"), repeat=3)
+    src = sources(clip, start=False)
+    got = Collector(src)
+    src.start()
+    wait(lambda: src.status().state == "ended", what="end of file")
+    assert got.colours() == COLOURS
+    f = got.frames[0]
+    assert f.image.shape == (240, 320, 3) and f.image.dtype == np.uint8
+    assert close_to(f.image[120, 160], (255, 0, 0)), "red must arrive as R,G,B"
+    assert [f.index for f in got.frames] == list(range(1, len(COLOURS) * 3 + 1))
+    assert "end of file" in src.status().reason
+
+
+def test_looping_file_starts_again(tmp_path, sources):
+    clip = write_clip(str(tmp_path / "short.mp4"), COLOURS[:2], repeat=2, fps=60)
+    src = sources(clip + "?loop=1")
+    wait(lambda: src.status().frames > 10, what="frames beyond the file's length")
+    assert src.status().live
+
+
+def test_missing_file_says_so_and_retries(tmp_path, sources):
+    path = tmp_path / "later.mp4"
+    src = sources(str(path))
+    wait(lambda: src.status().state == "retrying", what="retrying")
+    assert "no such file" in src.status().reason
+    write_clip(str(path), repeat=2)
+    wait(lambda: src.latest() is not None, what="the file once it exists")
+
+
+def test_mpegts_over_udp(tmp_path, sources):
+    data = write_ts(str(tmp_path / "stream.ts"))
+    port = free_udp_port()
+    with UdpSender(data, port):
+        src = sources(f"udp://127.0.0.1:{port}", timeout_ms=2000)
+        wait(lambda: src.status().frames >= 10, what="UDP frames")
+        frame = src.latest()
+        src.close(wait=3)
+        assert frame.image.shape == (240, 320, 3)
+        assert any(close_to(frame.image[120, 160], c) for c in COLOURS)
+
+
+def test_stream_that_stops_reports_and_comes_back(tmp_path, sources):
+    data = write_ts(str(tmp_path / "stream.ts"))
+    port = free_udp_port()
+    src = sources(f"udp://127.0.0.1:{port}", timeout_ms=700)
+    with UdpSender(data, port):
+        wait(lambda: src.status().live and src.latest() is not None, what="first video")
+    wait(lambda: src.status().state == "retrying", what="the loss noticed")
+    assert src.status().reason
+    before = src.status().frames
+    with UdpSender(data, port):
+        wait(lambda: src.status().live and src.status().frames > before, what="video again")
+
+
+def test_rtp_described_by_sdp(tmp_path, sources):
+    data = write_ts(str(tmp_path / "stream.ts"))
+    port = free_udp_port()
+    sdp = write_sdp(str(tmp_path / "stream.sdp"), port, "MP2T/90000", 33)
+    with UdpSender(data, port, rtp=True):
+        src = sources(sdp, timeout_ms=2000)
+        wait(lambda: src.status().frames >= 10, what="RTP frames")
+        src.close(wait=3)
+        assert any(close_to(src.latest().image[120, 160], c) for c in COLOURS)
+
+
+class FakeController:
+    """The Solo controller's part: sends RTP video to UDP ``video_port`` while a TCP client holds 5502 open."""
+
+    def __init__(self, data: bytes, video_port: int):
+        self.server = socket.create_server(("127.0.0.1", 0))
+        self.port = self.server.getsockname()[1]
+        self.data, self.video_port = data, video_port
+        self.clients = 0
+        self.client: socket.socket | None = None
+        self._stop = threading.Event()
+        self._thread = threading.Thread(target=self._run, daemon=True)
+        self._thread.start()
+
+    def _run(self):
+        self.server.settimeout(0.2)
+        while not self._stop.is_set():
+            try:
+                client, _ = self.server.accept()
+            except socket.timeout:
+                continue
+            self.clients += 1
+            self.client = client
+            with UdpSender(self.data, self.video_port, rtp=True):
+                client.settimeout(0.2)
+                while not self._stop.is_set() and self.client is client:
+                    try:
+                        if not client.recv(10):
+                            break
+                    except socket.timeout:
+                        continue
+                    except OSError:
+                        break
+
+    def drop_client(self):
+        client, self.client = self.client, None
+        client.close()
+
+    def close(self):
+        self._stop.set()
+        self._thread.join(3)
+        self.server.close()
+
+
+def test_solo_holds_the_link_open_and_reconnects(tmp_path):
+    data = write_ts(str(tmp_path / "solo.ts"))
+    video_port = free_udp_port()
+    controller = FakeController(data, video_port)
+    src = SoloSource("127.0.0.1", controller.port, video_port, str(tmp_path / "solo.sdp"), "MP2T/90000", 33,
+                     timeout_ms=1500).start()
+    try:
+        wait(lambda: src.status().frames >= 5, what="Solo video")
+        assert "m=video %d RTP/AVP 33" % video_port in (tmp_path / "solo.sdp").read_text()
+        assert controller.clients == 1
+        controller.drop_client()
+        wait(lambda: controller.clients == 2 and src.link.connected, what="the link reopened")
+        before = src.status().frames
+        wait(lambda: src.status().frames > before + 5, what="video after the reconnection")
+    finally:
+        src.close(wait=3)
+        controller.close()
+
+
+def test_solo_without_controller_explains(tmp_path):
+    with socket.socket() as s:                # a port nobody listens on
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    src = SoloSource("127.0.0.1", port, free_udp_port(), str(tmp_path / "solo.sdp"), timeout_ms=500).start()
+    try:
+        wait(lambda: src.status().state == "retrying", what="failure")
+        assert "unreachable" in src.status().reason
+    finally:
+        src.close(wait=3)
+
+
+def test_snapshot_and_recording_are_readable(tmp_path, sources):
+    clip = write_clip(str(tmp_path / "in.mp4"), repeat=5)
+    src = sources(clip)
+    frame = wait(src.latest, what="a frame")
+    png = save_snapshot(frame, str(tmp_path / "media"))
+    img = cv2.imread(png)
+    assert img is not None and img.shape == frame.image.shape
+    assert np.array_equal(cv2.cvtColor(img, cv2.COLOR_BGR2RGB), frame.image)   # PNG is lossless
+
+    recorder = VideoRecorder.in_folder(str(tmp_path / "media"), "video", fps=30)
+    src.close(wait=3)
+    src = sources(clip, start=False)
+    src.add_listener(recorder.push)
+    src.start()
+    wait(lambda: src.status().state == "ended", what="end of file")
+    path = recorder.stop()
+    assert path.endswith(".mp4") and recorder.frames_written == len(COLOURS) * 5
+    cap = cv2.VideoCapture(path)
+    colours = []
+    while True:
+        ok, bgr = cap.read()
+        if not ok:
+            break
+        c = nearest_colour(bgr[120, 160][::-1])
+        if not colours or colours[-1] != c:
+            colours.append(c)
+    cap.release()
+    assert colours == COLOURS
+
+
+def horizon_rows(image: np.ndarray, columns=(100, 540)) -> list[int]:
+    """For each column, the first row from the top that is not sky."""
+    rows = []
+    for x in columns:
+        not_sky = np.any(np.abs(image[:, x].astype(int) - SKY) > 12, axis=1)
+        rows.append(int(np.argmax(not_sky)))
+    return rows
+
+
+def test_simulated_horizon_follows_roll_and_pitch():
+    cam = SimulatedCamera(640, 480)
+    level = cam.render(VehicleState(local=LocalPosition(0, 0, -5)))
+    left, right = horizon_rows(level)
+    assert abs(left - right) <= 1
+    rolled = cam.render(VehicleState(attitude=Attitude(roll=math.radians(20)), local=LocalPosition(0, 0, -5)))
+    left_r, right_r = horizon_rows(rolled)
+    angle = math.degrees(math.atan2(left_r - right_r, 440))
+    assert angle == pytest.approx(20, abs=2)          # right roll: the horizon rises on the right
+    nose_down = cam.render(VehicleState(attitude=Attitude(pitch=math.radians(-10)), local=LocalPosition(0, 0, -5)))
+    assert horizon_rows(nose_down)[0] < left - 20     # nose down: more ground, the horizon moves up
+
+
+def test_simulated_ground_moves_when_flying():
+    cam = SimulatedCamera(320, 240)
+    a = cam.render(VehicleState(local=LocalPosition(0, 0, -5)))
+    b = cam.render(VehicleState(local=LocalPosition(2.5, 0, -5)))
+    c = cam.render(VehicleState(local=LocalPosition(0, 0, -5)))
+    assert np.array_equal(a, c)
+    assert np.count_nonzero(np.any(a != b, axis=2)) > 500
+
+
+def test_sim_source_without_state_is_refused():
+    with pytest.raises(ValueError):
+        open_source("sim")

@@ -1,0 +1,227 @@
+"""The camera panel with real video: colours and order as painted, streams, failures, snapshot, record, HUD."""
+from __future__ import annotations
+
+import math
+import os
+
+import cv2
+import numpy as np
+import pytest
+from PyQt5.QtGui import QColor
+
+from camera_media import COLOURS, UdpSender, free_udp_port, write_clip, write_ts
+from viewer_fixtures import viewer_settings, window_factory  # noqa: F401  (fixtures)
+from driver.state import Attitude, LocalPosition, VehicleState
+from uavviewer.camera_controller import CameraController
+from uavviewer.widgets.camera_panel import CameraPanel
+from uavviewer.widgets.camera_view import BACKGROUND
+from uavviewer.widgets.video_hud import HUD_COLOUR
+
+HOVER = VehicleState(attitude=Attitude(roll=math.radians(10)), local=LocalPosition(0, 0, -4), altitude=4.0,
+                     mode="GUIDED")
+
+
+def nearest(rgb):
+    return min(COLOURS, key=lambda c: sum((a - b) ** 2 for a, b in zip(rgb, c)))
+
+
+def painted_rgb(view, x=None, y=None):
+    """The colour actually painted in the widget at (x, y) (default: its centre)."""
+    img = view.grab().toImage()
+    c = QColor(img.pixel(view.width() // 2 if x is None else x, view.height() // 2 if y is None else y))
+    return (c.red(), c.green(), c.blue())
+
+
+@pytest.fixture
+def camera(qtbot, tmp_path):
+    """``camera(uris, **options)`` -> (panel, controller) shown on screen, closed afterwards."""
+    made = []
+
+    def make(uris, **options):
+        panel = CameraPanel()
+        qtbot.addWidget(panel)
+        panel.resize(640, 520)
+        panel.show()
+        options.setdefault("folder", str(tmp_path / "media"))
+        controller = CameraController(panel, uris, **options)
+        made.append(controller)
+        return panel, controller
+
+    yield make
+    for c in made:
+        c.close()
+        if c.source is not None:
+            c.source.close(wait=3)
+
+
+def test_file_colours_reach_the_screen_in_order(qtbot, camera, tmp_path):
+    clip = write_clip(str(tmp_path / "colours.mp4"), repeat=12, fps=30)
+    panel, controller = camera([clip])
+    view = panel.view
+    view.set_hud_visible(False)
+    seen = []
+
+    def record_colour():
+        if view.frame() is not None:
+            rgb = painted_rgb(view)
+            c = nearest(rgb)
+            assert all(abs(a - b) <= 40 for a, b in zip(rgb, c)), f"painted {rgb} is no clip colour"
+            if not seen or seen[-1] != c:
+                seen.append(c)
+        return controller.source.status().state == "ended"
+
+    qtbot.waitUntil(record_colour, timeout=10000)
+    assert seen == COLOURS                       # red painted red: no channel swap, and in order
+    qtbot.waitUntil(lambda: view.message().startswith("No video: end of file"), timeout=2000)
+
+
+def test_picture_keeps_its_aspect_ratio(qtbot, camera, tmp_path):
+    clip = write_clip(str(tmp_path / "red.mp4"), COLOURS[:1], repeat=300)
+    panel, controller = camera([clip])
+    view = panel.view
+    view.set_hud_visible(False)
+    panel.resize(900, 300)
+    qtbot.waitUntil(lambda: view.frame() is not None and view.height() < 300, timeout=5000)
+    rect = view.video_rect()
+    assert rect.width() / rect.height() == pytest.approx(320 / 240, rel=0.01)
+    assert rect.height() == pytest.approx(view.height(), abs=1)
+    assert painted_rgb(view, 5) == BACKGROUND.getRgb()[:3]                    # bars beside the picture
+    assert nearest(painted_rgb(view)) == (255, 0, 0)
+
+
+def test_udp_mpegts_stream_is_shown(qtbot, camera, tmp_path):
+    data = write_ts(str(tmp_path / "s.ts"))
+    port = free_udp_port()
+    with UdpSender(data, port):
+        panel, controller = camera([f"udp://127.0.0.1:{port}"], timeout_ms=2000)
+        qtbot.waitUntil(lambda: panel.view.frame() is not None, timeout=8000)
+        panel.view.set_hud_visible(False)
+        rgb = painted_rgb(panel.view)
+        controller.source.close(wait=3)
+    assert any(all(abs(a - b) <= 40 for a, b in zip(rgb, c)) for c in COLOURS)
+    assert panel.view.frame().width == 320
+
+
+def test_dead_source_shows_why_and_recovers(qtbot, camera, tmp_path):
+    data = write_ts(str(tmp_path / "s.ts"))
+    port = free_udp_port()
+    panel, controller = camera([f"udp://127.0.0.1:{port}"], timeout_ms=600)
+    view = panel.view
+    qtbot.waitUntil(lambda: view.message().startswith("No video: "), timeout=5000)
+    assert "retrying" in view.message()
+    with UdpSender(data, port):
+        qtbot.waitUntil(lambda: view.frame() is not None and view.message() == "", timeout=10000)
+        controller.source.close(wait=3)
+
+
+def test_stats_line_counts_what_is_painted(qtbot, camera, tmp_path):
+    clip = write_clip(str(tmp_path / "c.mp4"), COLOURS, repeat=40)
+    panel, controller = camera([clip])
+    qtbot.waitUntil(lambda: controller.stats()["fps"] >= 5, timeout=5000)
+    s = controller.stats()
+    assert s["resolution"] == (320, 240)
+    assert 0 <= s["latency_median"] <= s["latency_p95"]
+    qtbot.waitUntil(lambda: "fps · 320×240" in panel.view._stats, timeout=2000)
+
+
+def test_snapshot_and_recording_write_readable_files(qtbot, camera, tmp_path):
+    clip = write_clip(str(tmp_path / "c.mp4"), COLOURS[:3], repeat=20)
+    panel, controller = camera([clip + "?loop=1"])
+    qtbot.waitUntil(lambda: panel.view.frame() is not None, timeout=5000)
+    with qtbot.waitSignal(controller.snapshotSaved) as saved:
+        panel.snapshot_button.click()
+    img = cv2.imread(saved.args[0])
+    assert img is not None and img.shape == (240, 320, 3) and saved.args[0].endswith(".png")
+    assert nearest(tuple(int(v) for v in img[120, 160][::-1])) in COLOURS[:3]
+
+    with qtbot.waitSignal(controller.recordingChanged) as started:
+        panel.record_button.click()
+    assert started.args[0] is True and panel.record_button.isChecked()
+    recorder = controller._recorder
+    qtbot.waitUntil(lambda: recorder.frames_written >= 15, timeout=5000)
+    qtbot.waitUntil(lambda: panel.view._recording.startswith("REC "), timeout=2000)
+    with qtbot.waitSignal(controller.recordingChanged) as stopped:
+        panel.record_button.click()
+    path = stopped.args[1]
+    assert stopped.args[0] is False and os.path.basename(path).startswith("video-")
+    cap = cv2.VideoCapture(path)
+    n = 0
+    while cap.read()[0]:
+        n += 1
+    cap.release()
+    assert n == recorder.frames_written >= 15
+
+
+def test_snapshot_without_video_says_so(qtbot, camera, tmp_path):
+    panel, controller = camera([str(tmp_path / "none.mp4")])
+    with qtbot.waitSignal(controller.failed) as failed:
+        controller.snapshot()
+    assert "no video" in failed.args[0]
+
+
+def test_hud_toggles_over_the_video(qtbot, camera):
+    panel, controller = camera(["sim"], state_fn=lambda: HOVER)
+    view = panel.view
+    qtbot.waitUntil(lambda: view.frame() is not None, timeout=5000)
+
+    def hud_pixels():
+        img = view.grab().toImage()
+        arr = np.frombuffer(img.convertToFormat(img.Format_RGB888).constBits().asstring(img.width() * img.height() * 3),
+                            np.uint8)
+        arr = arr.reshape(img.height(), img.width(), 3)
+        return int(np.count_nonzero(np.all(arr == HUD_COLOUR.getRgb()[:3], axis=2)))
+
+    assert hud_pixels() > 200
+    panel.hud_button.click()
+    assert not view.hud_visible()
+    assert hud_pixels() == 0
+
+
+def test_switch_moves_to_the_next_source(qtbot, camera, tmp_path):
+    red = write_clip(str(tmp_path / "red.mp4"), [(255, 0, 0)], repeat=300)
+    blue = write_clip(str(tmp_path / "blue.mp4"), [(0, 0, 255)], repeat=300)
+    panel, controller = camera([red, blue])
+    panel.view.set_hud_visible(False)
+    assert panel.switch_button.isEnabled()
+    qtbot.waitUntil(lambda: panel.view.frame() is not None and nearest(painted_rgb(panel.view)) == (255, 0, 0),
+                    timeout=5000)
+    with qtbot.waitSignal(controller.sourceChanged):
+        panel.switch_button.click()
+    qtbot.waitUntil(lambda: panel.view.frame() is not None and nearest(painted_rgb(panel.view)) == (0, 0, 255),
+                    timeout=5000)
+
+
+def test_simulated_camera_follows_the_simulated_vehicle(qtbot, camera, flying):
+    """--sim: the picture comes from the simulated vehicle, and its horizon tilts as it rolls."""
+    from test_camera_sources import horizon_rows
+    panel, controller = camera(["sim"], state_fn=flying.state)
+    qtbot.waitUntil(lambda: panel.view.frame() is not None, timeout=5000)
+    left, right = horizon_rows(controller.source.latest().image)
+    assert abs(left - right) <= 3                           # hovering level
+
+    def rolled():
+        flying.set_velocity(0.0, 2.0, 0.0, 0.0)             # fly right: the copter rolls right
+        s = flying.state()
+        frame = controller.source.latest()
+        if s.attitude.roll < math.radians(5) or frame is None:
+            return False
+        l, r = horizon_rows(frame.image)
+        return l - r > 10                                    # the horizon rises on the right
+
+    qtbot.waitUntil(rolled, timeout=15000)
+    flying.set_velocity(0.0, 0.0, 0.0, 0.0)
+
+
+def test_main_window_shows_the_simulated_camera(qtbot, vehicle, window_factory):
+    """``main.py --sim``: the camera area of the window shows the simulated vehicle's camera with the HUD."""
+    w = window_factory(vehicle, cameras=["sim"])
+    assert w.instrumentSplitter.indexOf(w.camera_panel) >= 0 and w.camera_panel.isVisible()
+    qtbot.waitUntil(lambda: w.camera_view.frame() is not None and w.camera_view.width() > 100, timeout=5000)
+    assert w.camera_view.frame().image.shape == (480, 640, 3)
+    assert w.camera_view.hud_visible()
+
+
+def test_main_window_without_camera_says_how_to_get_one(qtbot, vehicle, window_factory):
+    w = window_factory(vehicle)
+    assert w.camera_view.message().startswith("No video: no camera configured")
+    assert not w.camera_panel.switch_button.isEnabled()

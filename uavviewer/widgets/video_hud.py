@@ -1,0 +1,136 @@
+"""The flight HUD drawn over the video, like QGroundControl's fly view.
+
+Not a widget: :func:`paint_hud` draws into the camera view's painter so the HUD
+sits exactly on the picture. A right roll turns the horizon line counter-clockwise
+and nose up moves it down, as the pilot sees the world from the camera.
+"""
+from __future__ import annotations
+
+import math
+
+from PyQt5.QtCore import QPointF, QRectF, Qt
+from PyQt5.QtGui import QColor, QFont, QPainter, QPen
+
+from driver.state import VehicleState
+
+__all__ = ["paint_hud", "HUD_COLOUR"]
+
+HUD_COLOUR = QColor(120, 255, 140)
+SHADOW = QColor(0, 0, 0, 160)
+WARN = QColor(255, 90, 70)
+VISIBLE_PITCH_DEG = 30.0        # centre to top edge
+
+
+def _num(value: float | None, digits: int = 1) -> str:
+    return "--" if value is None or not math.isfinite(value) else f"{value:.{digits}f}"
+
+
+def _text(p: QPainter, rect: QRectF, flags, text: str, colour: QColor = HUD_COLOUR) -> None:
+    flags = flags | Qt.TextDontClip
+    p.setPen(SHADOW)
+    p.drawText(rect.translated(1, 1), flags, text)
+    p.setPen(colour)
+    p.drawText(rect, flags, text)
+
+
+def paint_hud(p: QPainter, rect: QRectF, state: VehicleState) -> None:
+    """Horizon and roll, heading, altitude, speed, mode and battery over ``rect``."""
+    p.save()
+    p.setRenderHint(QPainter.Antialiasing)
+    p.setClipRect(rect)
+    size = max(10, int(min(rect.width(), rect.height()) / 22))
+    font = QFont(p.font())
+    font.setPixelSize(size)
+    font.setBold(True)
+    p.setFont(font)
+    _horizon(p, rect, state)
+    _heading(p, rect, state, size)
+    _readouts(p, rect, state, size)
+    p.restore()
+
+
+def _horizon(p: QPainter, rect: QRectF, state: VehicleState) -> None:
+    a = state.attitude
+    roll = a.roll if math.isfinite(a.roll) else 0.0
+    pitch = a.pitch if math.isfinite(a.pitch) else 0.0
+    c = rect.center()
+    px_per_deg = (rect.height() / 2) / VISIBLE_PITCH_DEG
+    p.save()
+    p.translate(c)
+    p.rotate(-math.degrees(roll))
+    p.translate(0, math.degrees(pitch) * px_per_deg)
+    half = rect.width() * 0.35
+    p.setPen(QPen(HUD_COLOUR, 2))
+    p.drawLine(QPointF(-half, 0), QPointF(-half * 0.25, 0))
+    p.drawLine(QPointF(half * 0.25, 0), QPointF(half, 0))
+    p.setPen(QPen(HUD_COLOUR, 1))
+    for deg in (-20, -10, 10, 20):                          # pitch ladder
+        y = -deg * px_per_deg
+        w = half * 0.3
+        p.drawLine(QPointF(-w, y), QPointF(w, y))
+        p.drawText(QRectF(w + 4, y - 10, 40, 20), Qt.AlignLeft | Qt.AlignVCenter, f"{deg}")
+    p.restore()
+    # the fixed aircraft symbol and the roll scale
+    p.setPen(QPen(QColor(255, 196, 0), 3))
+    w = rect.width() * 0.06
+    p.drawLine(QPointF(c.x() - 2 * w, c.y()), QPointF(c.x() - w, c.y()))
+    p.drawLine(QPointF(c.x() - w, c.y()), QPointF(c.x() - w * 0.5, c.y() + w * 0.4))
+    p.drawLine(QPointF(c.x() + 2 * w, c.y()), QPointF(c.x() + w, c.y()))
+    p.drawLine(QPointF(c.x() + w, c.y()), QPointF(c.x() + w * 0.5, c.y() + w * 0.4))
+    radius = min(rect.width(), rect.height()) * 0.38
+    p.setPen(QPen(HUD_COLOUR, 1.5))
+    for tick in (-45, -30, -20, -10, 0, 10, 20, 30, 45):
+        t = math.radians(tick)
+        inner = radius - (10 if tick % 30 == 0 else 6)
+        p.drawLine(QPointF(c.x() + inner * math.sin(t), c.y() - inner * math.cos(t)),
+                   QPointF(c.x() + radius * math.sin(t), c.y() - radius * math.cos(t)))
+    t = -roll                                               # pointer follows the sky
+    p.setPen(QPen(QColor(255, 196, 0), 2))
+    p.drawLine(QPointF(c.x() + (radius - 14) * math.sin(t), c.y() - (radius - 14) * math.cos(t)),
+               QPointF(c.x() + (radius + 2) * math.sin(t), c.y() - (radius + 2) * math.cos(t)))
+
+
+def _heading(p: QPainter, rect: QRectF, state: VehicleState, size: int) -> None:
+    heading = state.heading_deg if math.isfinite(state.heading_deg) else 0.0
+    span = 90.0
+    top = rect.top() + 4
+    width = rect.width() * 0.5
+    left = rect.center().x() - width / 2
+    p.setPen(QPen(HUD_COLOUR, 1))
+    names = {0: "N", 90: "E", 180: "S", 270: "W"}
+    start = int(math.floor((heading - span / 2) / 10.0)) * 10
+    for deg in range(start, int(heading + span / 2) + 10, 10):
+        x = left + (deg - heading + span / 2) / span * width
+        if not left <= x <= left + width:
+            continue
+        d = deg % 360
+        p.drawLine(QPointF(x, top + size * 1.3), QPointF(x, top + size * (1.8 if d % 30 == 0 else 1.55)))
+        if d % 30 == 0:
+            _text(p, QRectF(x - 20, top + size * 1.8, 40, size * 1.3), Qt.AlignCenter, names.get(d, str(d)))
+    _text(p, QRectF(rect.center().x() - 40, top, 80, size * 1.3), Qt.AlignCenter, f"{heading:03.0f}°")
+
+
+def _readouts(p: QPainter, rect: QRectF, state: VehicleState, size: int) -> None:
+    line = size * 1.4
+    margin = 8
+    left = QRectF(rect.left() + margin, rect.center().y() - line, rect.width() * 0.25, line)
+    _text(p, left, Qt.AlignLeft | Qt.AlignVCenter, f"GS {_num(state.velocity.ground_speed)} m/s")
+    _text(p, left.translated(0, line), Qt.AlignLeft | Qt.AlignVCenter, f"VS {_num(state.velocity.climb)} m/s")
+    right = QRectF(rect.right() - margin - rect.width() * 0.25, rect.center().y() - line, rect.width() * 0.25, line)
+    _text(p, right, Qt.AlignRight | Qt.AlignVCenter, f"ALT {_num(state.altitude)} m")
+    dist = state.distance_from_home
+    _text(p, right.translated(0, line), Qt.AlignRight | Qt.AlignVCenter, f"HOME {_num(dist, 0)} m")
+    # mode and arming top-left, battery top-right
+    top = QRectF(rect.left() + margin, rect.top() + 4, rect.width() * 0.3, line)
+    armed = "ARMED" if state.armed else "DISARMED"
+    _text(p, top, Qt.AlignLeft | Qt.AlignVCenter, state.mode or "no link", HUD_COLOUR if state.connected else WARN)
+    _text(p, top.translated(0, line), Qt.AlignLeft | Qt.AlignVCenter, armed, WARN if state.armed else HUD_COLOUR)
+    b = state.battery
+    parts = []
+    if b.remaining is not None:
+        parts.append(f"{b.remaining:.0f}%")
+    if b.voltage is not None:
+        parts.append(f"{b.voltage:.1f} V")
+    top_right = QRectF(rect.right() - margin - rect.width() * 0.3, rect.top() + 4, rect.width() * 0.3, line)
+    _text(p, top_right, Qt.AlignRight | Qt.AlignVCenter, "BAT " + (" ".join(parts) or "--"),
+          WARN if b.low else HUD_COLOUR)
