@@ -1,0 +1,298 @@
+"""The simulated vehicle's links: a TCP server like SITL's 5760, UDP pushed like the Solo's controller.
+
+Every ground station ("peer") gets its own MAVLink sequence numbers and its own
+parser; everything the vehicle says goes to every peer. One I/O thread reads
+all sockets; writes come from the vehicle's clock thread and never block (a peer
+that stops reading loses frames, as over a saturated radio).
+"""
+from __future__ import annotations
+
+import logging
+import random
+import selectors
+import socket
+import threading
+from typing import Callable
+
+from pymavlink.dialects.v20 import ardupilotmega as mavlink
+
+from .faults import Faults
+
+log = logging.getLogger(__name__)
+
+__all__ = ["LinkServer", "parse_address"]
+
+MAX_PENDING = 1 << 20          # bytes queued for a slow TCP peer before frames are dropped
+V2_MARKER = mavlink.PROTOCOL_MARKER_V2
+
+
+def parse_address(text: str) -> tuple[str, int]:
+    """"HOST:PORT" → (host, port)."""
+    host, sep, port = text.rpartition(":")
+    if not sep or not host:
+        raise ValueError(f"expected HOST:PORT, got {text!r}")
+    return host, int(port)
+
+
+class Peer:
+    """One ground station on one link."""
+
+    def __init__(self, name: str, config) -> None:
+        self.name = name
+        self.encoder = mavlink.MAVLink(None, srcSystem=config.system_id, srcComponent=config.component_id)
+        self.parser = mavlink.MAVLink(None, srcSystem=config.system_id, srcComponent=config.component_id)
+        self.parser.robust_parsing = True
+        self.lock = threading.Lock()
+        self.closed = False
+
+    def write(self, data: bytes) -> None:
+        raise NotImplementedError
+
+
+class TcpPeer(Peer):
+    def __init__(self, sock: socket.socket, address, config) -> None:
+        super().__init__(f"tcp {address[0]}:{address[1]}", config)
+        self.sock = sock
+        self.pending = bytearray()
+
+    def write(self, data: bytes) -> None:
+        with self.lock:
+            if self.closed:
+                return
+            if len(self.pending) + len(data) > MAX_PENDING:
+                return
+            self.pending += data
+            try:
+                sent = self.sock.send(self.pending)
+                del self.pending[:sent]
+            except (BlockingIOError, InterruptedError):
+                pass
+            except OSError:
+                self.closed = True
+
+
+class UdpPeer(Peer):
+    """A UDP socket: pushes to fixed addresses (if any) and to whoever spoke last."""
+
+    def __init__(self, name: str, sock: socket.socket, config, push_to: tuple[str, int] | None) -> None:
+        super().__init__(name, config)
+        self.sock = sock
+        self.push_to = push_to
+        self.reply_to: tuple[str, int] | None = None
+
+    def destinations(self) -> list[tuple[str, int]]:
+        out = [self.push_to] if self.push_to else []
+        if self.reply_to and self.reply_to != self.push_to:
+            out.append(self.reply_to)
+        return out
+
+    def write(self, data: bytes) -> None:
+        with self.lock:
+            for address in self.destinations():
+                try:
+                    self.sock.sendto(data, address)
+                except OSError:        # nobody listening (ICMP refused), buffer full: a lost datagram
+                    pass
+
+
+class LinkServer:
+    """Sockets and peers; hands decoded messages to ``on_message(msg, version)``."""
+
+    def __init__(self, config, faults: Faults, on_message: Callable[[object, int], None]) -> None:
+        self.config = config
+        self.faults = faults
+        self.on_message = on_message
+        self.rng = random.Random(None if config.seed is None else config.seed + 1)
+        self.peers: list[Peer] = []
+        self.peers_lock = threading.Lock()
+        self.selector = selectors.DefaultSelector()
+        self.listener: socket.socket | None = None
+        self.udp_out: UdpPeer | None = None
+        self.udp_in: UdpPeer | None = None
+        self.tcp_port = 0
+        self.udp_port: int | None = None
+        self.ignored_v2 = 0
+        self.bad_frames = 0
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+
+    # -- lifecycle ---------------------------------------------------------------------------------
+    def start(self) -> None:
+        cfg = self.config
+        try:
+            if cfg.tcp_port is not None and cfg.tcp_port >= 0:
+                self.listener = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+                self.listener.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+                self.listener.bind((cfg.tcp_host, cfg.tcp_port))
+                self.listener.listen(8)
+                self.listener.setblocking(False)
+                self.tcp_port = self.listener.getsockname()[1]
+                self.selector.register(self.listener, selectors.EVENT_READ, "accept")
+                log.info("serving MAVLink on tcp:%s:%d", cfg.tcp_host, self.tcp_port)
+            if cfg.udp_out:
+                target = parse_address(cfg.udp_out)
+                sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+                sock.setsockopt(socket.SOL_SOCKET, socket.SO_BROADCAST, 1)
+                sock.bind(("", 0))
+                sock.setblocking(False)
+                self.udp_out = UdpPeer(f"udp out {cfg.udp_out}", sock, cfg, target)
+                self._add(self.udp_out)
+                self.selector.register(sock, selectors.EVENT_READ, self.udp_out)
+                log.info("pushing MAVLink to udp:%s:%d", *target)
+            if cfg.udp_listen:
+                host, port = parse_address(cfg.udp_listen)
+                sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+                sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+                sock.bind((host, port))
+                sock.setblocking(False)
+                self.udp_port = sock.getsockname()[1]
+                self.udp_in = UdpPeer(f"udp in {host}:{self.udp_port}", sock, cfg, None)
+                self._add(self.udp_in)
+                self.selector.register(sock, selectors.EVENT_READ, self.udp_in)
+                log.info("serving MAVLink on udp:%s:%d", host, self.udp_port)
+        except OSError:
+            self.stop()
+            raise
+        self._thread = threading.Thread(target=self._run, name="sim-link", daemon=True)
+        self._thread.start()
+
+    def stop(self) -> None:
+        self._stop.set()
+        if self._thread is not None and self._thread is not threading.current_thread():
+            self._thread.join(timeout=1.0)
+        self._thread = None
+        with self.peers_lock:
+            peers, self.peers = self.peers, []
+        for peer in peers:
+            self._close(peer, quiet=True)
+        if self.listener is not None:
+            self.listener.close()
+            self.listener = None
+        try:
+            self.selector.close()
+        except (OSError, RuntimeError):
+            pass
+
+    def _add(self, peer: Peer) -> None:
+        with self.peers_lock:
+            self.peers.append(peer)
+
+    def _close(self, peer: Peer, quiet: bool = False) -> None:
+        with peer.lock:
+            peer.closed = True
+        try:
+            self.selector.unregister(peer.sock)
+        except (KeyError, ValueError, OSError, RuntimeError):
+            pass
+        peer.sock.close()
+        with self.peers_lock:
+            if peer in self.peers:
+                self.peers.remove(peer)
+        if not quiet:
+            log.info("client disconnected: %s", peer.name)
+
+    @property
+    def clients(self) -> int:
+        with self.peers_lock:
+            return sum(isinstance(p, TcpPeer) for p in self.peers)
+
+    # -- sending ------------------------------------------------------------------------------------
+    def broadcast(self, msg) -> None:
+        """Encode ``msg`` for every peer (own sequence numbers) and send it, faults applied."""
+        faults = self.faults
+        if faults.link_down:
+            return
+        mav1 = not self.config.mavlink2
+        if mav1 and msg.get_msgId() > 255:
+            return
+        with self.peers_lock:
+            peers = list(self.peers)
+        for peer in peers:
+            if peer.closed:
+                continue
+            data = bytearray(msg.pack(peer.encoder, force_mavlink1=mav1))
+            peer.encoder.seq = (peer.encoder.seq + 1) % 256
+            if faults.drop_fraction > 0 and self.rng.random() < faults.drop_fraction:
+                continue
+            if faults.corrupt_fraction > 0 and self.rng.random() < faults.corrupt_fraction:
+                index = self.rng.randrange(1, len(data))
+                data[index] ^= 1 << self.rng.randrange(8)
+            peer.write(bytes(data))
+
+    def inject(self, raw: bytes) -> None:
+        with self.peers_lock:
+            peers = list(self.peers)
+        for peer in peers:
+            peer.write(bytes(raw))
+
+    # -- receiving ----------------------------------------------------------------------------------
+    def _run(self) -> None:
+        while not self._stop.is_set():
+            try:
+                events = self.selector.select(timeout=0.05)
+            except (OSError, ValueError, RuntimeError):
+                if self._stop.is_set():
+                    return
+                continue
+            for key, _mask in events:
+                if key.data == "accept":
+                    self._accept()
+                else:
+                    self._read(key.data)
+
+    def _accept(self) -> None:
+        try:
+            sock, address = self.listener.accept()
+        except OSError:
+            return
+        sock.setblocking(False)
+        sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        peer = TcpPeer(sock, address, self.config)
+        self._add(peer)
+        self.selector.register(sock, selectors.EVENT_READ, peer)
+        log.info("client connected: %s", peer.name)
+
+    def _read(self, peer: Peer) -> None:
+        if isinstance(peer, TcpPeer):
+            try:
+                data = peer.sock.recv(65536)
+            except (BlockingIOError, InterruptedError):
+                return
+            except OSError:
+                data = b""
+            if not data:
+                self._close(peer)
+                return
+            with peer.lock:     # flush what a full socket buffer held back
+                if peer.pending and not peer.closed:
+                    try:
+                        del peer.pending[:peer.sock.send(peer.pending)]
+                    except OSError:
+                        pass
+        else:
+            try:
+                data, address = peer.sock.recvfrom(65536)
+            except OSError:     # BlockingIOError, or ICMP port unreachable from an earlier push
+                return
+            if self.faults.link_down:
+                return
+            peer.reply_to = address
+        if self.faults.link_down:
+            return
+        try:
+            messages = peer.parser.parse_buffer(data) or []
+        except Exception:   # robust parsing should not raise; garbage must never stop the link
+            log.exception("parser failed on %d bytes from %s", len(data), peer.name)
+            peer.parser.buf = bytearray()
+            peer.parser.buf_index = 0
+            return
+        for msg in messages:
+            kind = msg.get_type()
+            if kind in ("BAD_DATA", "UNKNOWN") or kind.startswith("UNKNOWN"):
+                self.bad_frames += 1
+                continue
+            version = 2 if msg.get_msgbuf()[0] == V2_MARKER else 1
+            if version == 2 and not self.config.mavlink2:
+                self.ignored_v2 += 1        # a MAVLink 1 autopilot does not see these frames at all
+                continue
+            self.on_message(msg, version)

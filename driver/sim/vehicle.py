@@ -1,0 +1,155 @@
+"""SimVehicle: an ArduCopter stand-in that speaks real MAVLink over real sockets.
+
+A clock thread advances the :class:`~driver.sim.autopilot.Autopilot` at
+``rate_hz`` steps per sim second, ``speedup`` times faster than real time, and
+feeds it what the :class:`~driver.sim.server.LinkServer` received since the
+last step.
+"""
+from __future__ import annotations
+
+import logging
+import queue
+import threading
+import time
+from collections import deque
+from dataclasses import dataclass
+
+from .autopilot import Autopilot, SimTruth
+from .faults import Faults
+from .server import LinkServer
+
+log = logging.getLogger(__name__)
+
+__all__ = ["SimConfig", "SimVehicle"]
+
+
+@dataclass
+class SimConfig:
+    tcp_host: str = "127.0.0.1"
+    tcp_port: int | None = 5760             # 0 = ephemeral (see SimVehicle.tcp_port), None = no TCP
+    udp_out: str | None = None              # "HOST:PORT": push there like the Solo's controller to 14550
+    udp_listen: str | None = None           # "HOST:PORT": serve whoever sent last, like SITL's UDP
+    speedup: float = 1.0
+    ready_after: float = 20.0               # sim seconds until ready to arm
+    home: tuple[float, float, float, float] = (40.2839, -3.7940, 664.0, 0.0)   # lat, lon, alt MSL, heading deg
+    mavlink2: bool = True                   # False: a stock Solo, MAVLink 1 only
+    system_id: int = 1
+    component_id: int = 1
+    battery_cells: int = 4
+    battery_capacity_mah: int = 5200
+    auto_disarm_after: float = 10.0
+    rate_hz: int = 50
+    seed: int | None = None
+
+
+class SimVehicle:
+    """The simulated copter: ``start()``, fly it over MAVLink, read ``truth()``, ``stop()``."""
+
+    def __init__(self, config: SimConfig | None = None) -> None:
+        self.config = config if config is not None else SimConfig()
+        if not self.config.speedup > 0 or not self.config.rate_hz > 0:
+            raise ValueError("speedup and rate_hz must be positive")
+        self.faults = Faults()
+        self.received_setpoints: deque = deque(maxlen=2000)
+        self.received_messages: deque = deque(maxlen=2000)
+        self._inbox: queue.SimpleQueue = queue.SimpleQueue()
+        self._lock = threading.Lock()
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+        self.server = LinkServer(self.config, self.faults, self._received)
+        self._outbox: list = []
+        self.autopilot = Autopilot(self.config, self.faults, emit=self._outbox.append)
+        self._truth = self.autopilot.truth()
+        self._started = False
+
+    # -- lifecycle ---------------------------------------------------------------------------------
+    def start(self) -> "SimVehicle":
+        if self._started:
+            return self
+        self._started = True
+        self._stop.clear()
+        self.server.start()
+        self._thread = threading.Thread(target=self._run, name="sim-clock", daemon=True)
+        self._thread.start()
+        return self
+
+    def stop(self) -> None:
+        """Stop the clock, close every socket. Safe to call twice."""
+        self._stop.set()
+        thread, self._thread = self._thread, None
+        if thread is not None and thread is not threading.current_thread():
+            thread.join(timeout=1.0)
+        self.server.stop()
+
+    def __enter__(self) -> "SimVehicle":
+        return self.start()
+
+    def __exit__(self, *exc) -> None:
+        self.stop()
+
+    @property
+    def tcp_port(self) -> int:
+        return self.server.tcp_port
+
+    @property
+    def udp_port(self) -> int | None:
+        return self.server.udp_port
+
+    @property
+    def clients(self) -> int:
+        """TCP ground stations connected now."""
+        return self.server.clients
+
+    def truth(self) -> SimTruth:
+        return self._truth
+
+    def inject(self, raw: bytes) -> None:
+        """Send raw bytes to every connected peer (garbage-flood tests)."""
+        self.server.inject(raw)
+
+    def step(self, dt: float | None = None) -> None:
+        """Advance one physics step now (for tests that drive the clock themselves)."""
+        with self._lock:
+            self._step(dt or 1.0 / self.config.rate_hz)
+
+    # -- internals -----------------------------------------------------------------------------------
+    def _received(self, msg, version: int) -> None:
+        self._inbox.put((msg, version))
+
+    def _step(self, dt: float) -> None:
+        autopilot = self.autopilot
+        while True:
+            try:
+                msg, version = self._inbox.get_nowait()
+            except queue.Empty:
+                break
+            kind = msg.get_type()
+            self.received_messages.append((autopilot.t, kind, version))
+            if kind == "SET_POSITION_TARGET_LOCAL_NED":
+                self.received_setpoints.append((autopilot.t, msg.coordinate_frame, msg.type_mask,
+                                                msg.vx, msg.vy, msg.vz, msg.yaw_rate))
+            autopilot.handle(msg, version)
+        autopilot.step(dt)
+        self._truth = autopilot.truth()
+        # only now on the wire: nothing a peer hears is newer than truth()
+        for msg in self._outbox:
+            self.server.broadcast(msg)
+        self._outbox.clear()
+
+    def _run(self) -> None:
+        dt = 1.0 / float(self.config.rate_hz)
+        real_step = dt / float(self.config.speedup)
+        next_time = time.monotonic()
+        while not self._stop.is_set():
+            try:
+                with self._lock:
+                    self._step(dt)
+            except Exception:      # keep flying: a bug in one step must not freeze the vehicle
+                log.exception("sim step failed")
+            next_time += real_step
+            delay = next_time - time.monotonic()
+            if delay > 0:
+                if self._stop.wait(delay):
+                    break
+            elif delay < -0.25:    # far behind (machine busy): drop the backlog instead of racing
+                next_time = time.monotonic()
