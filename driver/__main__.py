@@ -1,0 +1,158 @@
+"""``python -m driver``: the MAVLinkServer on the companion computer.
+
+Connects to the autopilot (MAVProxy's options), serves JdeRobot's interfaces
+and our extension over ZeroC Ice, and offers a console unless ``--daemon``::
+
+    python -m driver --master udpin:0.0.0.0:14550 --Ice.Config=config/server.cfg
+    python -m driver --sim --cmd "takeoff 3" --daemon
+"""
+from __future__ import annotations
+
+import argparse
+import logging
+import os
+import signal
+import sys
+import threading
+
+log = logging.getLogger("driver")
+
+SOLO_MASTER = "udpin:0.0.0.0:14550"
+
+
+def parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(
+        prog="python -m driver",
+        description="MAVLinkServer: MAVLink driver serving JdeRobot's interfaces over ZeroC Ice. "
+                    "Ice options: --Ice.Config=FILE, --Ice.*=VALUE, --MAVLinkServer.*=VALUE (see config/server.cfg).")
+    p.add_argument("--master", help=f"MAVLink connection string (default {SOLO_MASTER}, the 3DR Solo; "
+                                    "tcp:HOST:PORT, udpin:, udpout:, a serial device, or a .tlog to replay)")
+    p.add_argument("--baudrate", "--baud", type=int, default=57600, help="serial baud rate (default 57600)")
+    p.add_argument("--out", action="append", default=[], help="forward MAVLink to another ground station "
+                                                              "(repeatable), e.g. udp:127.0.0.1:14551")
+    p.add_argument("--source-system", type=int, default=255, help="our MAVLink system id (default 255)")
+    p.add_argument("--source-component", type=int, default=190, help="our MAVLink component id (default 190)")
+    p.add_argument("--target-system", type=int, default=0, help="vehicle system id (default 0: the first heard)")
+    p.add_argument("--target-component", type=int, default=1, help="vehicle component id (default 1)")
+    p.add_argument("--streamrate", type=int, default=4, help="telemetry stream rate in Hz (default 4)")
+    p.add_argument("--logfile", default="mav.tlog", help="telemetry log (default mav.tlog)")
+    p.add_argument("--append-log", action="store_true", help="append to the log instead of replacing it")
+    p.add_argument("--no-log", action="store_true", help="write no telemetry log")
+    p.add_argument("--aircraft", help="aircraft name: logs go to NAME/logs/, shown in the prompt")
+    p.add_argument("--cmd", action="append", default=[], help='console commands to run at start, ";"-separated')
+    p.add_argument("--daemon", action="store_true", help="no interactive console; run until interrupted")
+    version = p.add_mutually_exclusive_group()
+    version.add_argument("--mav10", action="store_true", help="speak MAVLink 1 only")
+    version.add_argument("--mav20", action="store_true", help="speak MAVLink 2 from the start")
+    p.add_argument("--sim", action="store_true", help="fly the built-in simulated ArduCopter (in-process)")
+    p.add_argument("--sim-speedup", type=float, default=1.0, help="simulated time speed-up (default 1)")
+    p.add_argument("--camera", action="append", default=[], metavar="URI",
+                   help="video served as Camera, repeatable for Extra.toggleCam: 0, clip.mp4, rtsp://..., "
+                        "udp://0.0.0.0:5600, solo, sim (default with --sim; see docs/camera.md)")
+    p.add_argument("--sim-ready-after", type=float, default=20.0,
+                   help="simulated seconds until the vehicle is ready to arm (default 20)")
+    p.add_argument("--takeoff-alt", type=float, help="default takeoff altitude in metres (default 3)")
+    p.add_argument("--host", help="address the Ice interfaces bind (default 127.0.0.1; 0.0.0.0 for all)")
+    p.add_argument("--one-port", nargs="?", type=int, const=9000, metavar="PORT",
+                   help="serve every interface on one port, JdeRobot's Gazebo style (default 9000)")
+    p.add_argument("-v", "--verbose", action="count", default=0, help="more logging (-vv for debug)")
+    return p
+
+
+def log_path(opts) -> str | None:
+    if opts.no_log:
+        return None
+    if opts.aircraft and not os.path.isabs(opts.logfile):
+        os.makedirs(os.path.join(opts.aircraft, "logs"), exist_ok=True)
+        return os.path.join(opts.aircraft, "logs", opts.logfile)
+    return opts.logfile
+
+
+def main(argv: list[str] | None = None) -> int:
+    import Ice
+
+    from .ice.server import IceServer, default_properties
+
+    args = list(sys.argv[1:] if argv is None else argv)
+    props = default_properties(args)                 # removes --Ice.* and --MAVLinkServer.* options
+    opts = parser().parse_args(args)
+    level = logging.DEBUG if opts.verbose > 1 else logging.INFO if (opts.verbose or opts.daemon) else logging.WARNING
+    logging.basicConfig(level=level, format="%(asctime)s %(levelname)s %(name)s: %(message)s")
+
+    from .api import Limits
+    from .console import Console, run_commands
+    from .vehicle import Vehicle, VehicleConfig
+
+    if opts.host:
+        props.setProperty("MAVLinkServer.Host", opts.host)
+    if opts.one_port is not None:
+        host = props.getPropertyWithDefault("MAVLinkServer.Host", "127.0.0.1")
+        props.setProperty("MAVLinkServer.Endpoints", f"default -h {host} -p {opts.one_port}")
+    if opts.takeoff_alt is not None:
+        props.setProperty("MAVLinkServer.TakeoffAltitude", str(opts.takeoff_alt))
+    for i, uri in enumerate(opts.camera):                # MAVLinkServer.Camera.Uri, Uri.2, ...
+        props.setProperty("MAVLinkServer.Camera.Uri" + (f".{i + 1}" if i else ""), uri)
+    if opts.sim and not props.getProperty("MAVLinkServer.Camera.Uri"):
+        props.setProperty("MAVLinkServer.Camera.Uri", "sim")
+
+    sim = None
+    master = opts.master
+    if opts.sim:
+        from .sim import SimConfig, SimVehicle
+        sim = SimVehicle(SimConfig(tcp_port=0, speedup=opts.sim_speedup, ready_after=opts.sim_ready_after))
+        sim.start()
+        master = master or f"tcp:127.0.0.1:{sim.tcp_port}"
+    master = master or SOLO_MASTER
+    takeoff_alt = float(props.getPropertyWithDefault("MAVLinkServer.TakeoffAltitude", "3.0"))
+    vehicle = Vehicle(VehicleConfig(
+        connection=master, baud=opts.baudrate, source_system=opts.source_system,
+        source_component=opts.source_component, target_system=opts.target_system,
+        target_component=opts.target_component, stream_rate=opts.streamrate, takeoff_altitude=takeoff_alt,
+        limits=Limits(), tlog_path=log_path(opts), tlog_append=opts.append_log, outputs=tuple(opts.out),
+        mavlink_version=1 if opts.mav10 else 2 if opts.mav20 else None))
+    server = None
+    try:
+        vehicle.start()
+        try:
+            server = IceServer(vehicle, props).start()
+        except Ice.LocalException as exc:             # port in use, bad endpoint string, ...
+            print(f"cannot serve the Ice interfaces: {exc}", file=sys.stderr)
+            return 1
+        console = Console(vehicle, name=opts.aircraft or "")
+        console.say(f"MAVLink master {master}")
+        for s in server.served.values():
+            console.say(f"serving {s.name:8} {s.proxy}")
+        for text in opts.cmd:
+            run_commands(console, text)
+        if opts.daemon:
+            _wait_for_signal()
+        else:
+            try:
+                import readline  # noqa: F401  (history and line editing for input())
+            except ImportError:
+                pass
+            console.watch_messages()
+            try:
+                console.cmdloop()
+            except KeyboardInterrupt:
+                console.say("")
+            console.stop_watching()
+    finally:
+        if server is not None:
+            server.close()
+        vehicle.close()
+        if sim is not None:
+            sim.stop()
+    return 0
+
+
+def _wait_for_signal() -> None:
+    done = threading.Event()
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, lambda *_: done.set())
+    while not done.wait(1.0):
+        pass
+
+
+if __name__ == "__main__":
+    sys.exit(main())

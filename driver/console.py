@@ -1,0 +1,277 @@
+"""The standalone server's interactive console, in MAVProxy's spirit.
+
+Commands return at once; each result is printed when the vehicle answers, and
+the autopilot's messages are printed as they arrive. Velocity typed here is
+re-sent for a few seconds (the driver's deadman would otherwise stop it after
+half a second) and then falls to zero, like ArduCopter's own guided timeout.
+"""
+from __future__ import annotations
+
+import cmd
+import math
+import sys
+import threading
+import time
+from concurrent.futures import Future
+
+from .state import VehicleState
+
+ARM_USAGE = ("arm [throttle] [force] | arm check [all|none|MASK] | arm safetyon | arm safetyoff | arm list")
+VELOCITY_HOLD = 3.0          # s a typed velocity lasts (ArduCopter's GUID_TIMEOUT)
+VELOCITY_HOLD_MAX = 30.0
+
+
+class Console(cmd.Cmd):
+    """``reboot, arm, disarm, takeoff, land, mode, velocity, parachute, bat, alt, status, help``."""
+
+    intro = "MAVLinkServer console. Type help for commands, exit to quit."
+
+    def __init__(self, vehicle, stdout=None, stdin=None, name: str = ""):
+        super().__init__(stdin=stdin, stdout=stdout or sys.stdout)
+        if stdin is not None:
+            self.use_rawinput = False
+        self.vehicle = vehicle
+        self.name = name
+        self._velocity_gen = 0
+        self._velocity_lock = threading.Lock()
+        self._watching = threading.Event()
+        self._printed = 0
+
+    # -- output ---------------------------------------------------------------------------------
+    @property
+    def prompt(self) -> str:  # type: ignore[override]
+        mode = self.vehicle.state().mode or "MAV"
+        return f"{self.name + ' ' if self.name else ''}{mode}> "
+
+    def say(self, text: str) -> None:
+        self.stdout.write(text + "\n")
+        self.stdout.flush()
+
+    def _report(self, future: Future) -> None:
+        """Print the vehicle's answer when it comes."""
+        def done(f: Future) -> None:
+            try:
+                self.say(str(f.result()))
+            except Exception as exc:
+                self.say(f"error: {exc}")
+        future.add_done_callback(done)
+
+    def watch_messages(self, interval: float = 0.2) -> None:
+        """Print the autopilot's and the driver's messages as they arrive (background thread)."""
+        self._printed = max((m.index for m in self.vehicle.state().messages), default=0)
+        self._watching.set()
+
+        def run() -> None:
+            while self._watching.is_set():
+                for m in self.vehicle.state().messages_since(self._printed):
+                    self.say(f"[{m.severity.name}] {m.text}")
+                    self._printed = m.index
+                time.sleep(interval)
+        threading.Thread(target=run, name="console-messages", daemon=True).start()
+
+    def stop_watching(self) -> None:
+        self._watching.clear()
+
+    # -- cmd.Cmd plumbing -----------------------------------------------------------------------
+    def emptyline(self) -> bool:
+        return False                                    # never repeat the last command by accident
+
+    def default(self, line: str) -> bool:
+        self.say(f"unknown command {line.split()[0]!r}; type help for the list")
+        return False
+
+    def onecmd(self, line: str) -> bool:
+        try:
+            return super().onecmd(line)
+        except ValueError as exc:                       # bad arguments: say so, keep the console alive
+            self.say(f"error: {exc}")
+            return False
+
+    def do_exit(self, arg: str) -> bool:
+        """exit: leave the console (the server stops)"""
+        self._cancel_velocity()
+        return True
+
+    do_quit = do_exit
+
+    def do_EOF(self, arg: str) -> bool:
+        self.say("")
+        return self.do_exit(arg)
+
+    # -- commands -------------------------------------------------------------------------------
+    def do_reboot(self, arg: str) -> None:
+        """reboot: restart the autopilot (refused by ArduCopter while armed)"""
+        self._report(self.vehicle.reboot())
+
+    def do_arm(self, arg: str) -> None:
+        """arm [throttle] [force] | arm check [all|none|MASK] | arm safetyon | arm safetyoff | arm list"""
+        words = arg.split()
+        sub = words[0] if words else "throttle"
+        if sub in ("throttle", "force"):
+            force = "force" in words
+            self._report(self.vehicle.arm(force))
+        elif sub == "check":
+            if len(words) == 1:
+                self.say("arm check all | none | MASK  (sets ARMING_CHECK; all = 1, none = 0, "
+                         "else the ArduPilot bit mask)")
+                return
+            value = {"all": 1, "none": 0}.get(words[1])
+            if value is None:
+                value = _number(words[1], "MASK", integer=True)
+            self._report(self.vehicle.set_parameter("ARMING_CHECK", float(value)))
+        elif sub in ("safetyon", "safetyoff") or (sub == "safety" and len(words) == 2 and words[1] in ("on", "off")):
+            on = sub == "safetyon" or (sub == "safety" and words[1] == "on")
+            self._report(self.vehicle.set_safety(on))
+        elif sub == "list":
+            self.say(ARM_USAGE)
+        else:
+            raise ValueError(f"usage: {ARM_USAGE}")
+
+    def do_disarm(self, arg: str) -> None:
+        """disarm [force]: stop the motors (force also in flight: the vehicle falls)"""
+        words = arg.split()
+        if words and words != ["force"]:
+            raise ValueError("usage: disarm [force]")
+        self._cancel_velocity()
+        self._report(self.vehicle.disarm(bool(words)))
+
+    def do_takeoff(self, arg: str) -> None:
+        """takeoff [ALT]: the whole sequence (GUIDED, arm, take off, climb to ALT metres)"""
+        words = arg.split()
+        if len(words) > 1:
+            raise ValueError("usage: takeoff [ALT]")
+        altitude = _number(words[0], "ALT") if words else None
+        self.say("takeoff started" + (f" to {altitude:g} m" if altitude is not None else ""))
+        self._report(self.vehicle.takeoff(altitude))
+
+    def do_land(self, arg: str) -> None:
+        """land: switch to LAND (also aborts a takeoff)"""
+        self._cancel_velocity()
+        self._report(self.vehicle.land())
+
+    def do_stop(self, arg: str) -> None:
+        """stop: hold position (zero velocity in GUIDED, else BRAKE)"""
+        self._cancel_velocity()
+        self._report(self.vehicle.stop())
+
+    def do_rtl(self, arg: str) -> None:
+        """rtl: return to launch and land"""
+        self._cancel_velocity()
+        self._report(self.vehicle.return_to_launch())
+
+    def do_mode(self, arg: str) -> None:
+        """mode [NAME]: show the flight mode, or change it (GUIDED, LOITER, BRAKE, ...)"""
+        name = arg.strip()
+        if not name:
+            from .vehicle import COPTER_MODES
+            self.say(f"mode {self.vehicle.state().mode or '?'}; available: {' '.join(sorted(COPTER_MODES))}")
+            return
+        if len(name.split()) != 1:
+            raise ValueError("usage: mode [NAME]")
+        self._report(self.vehicle.set_mode(name.upper()))
+
+    def do_velocity(self, arg: str) -> None:
+        """velocity X Y Z [SECONDS]: forward, right, up in m/s relative to the heading, held 3 s (max 30)"""
+        words = arg.split()
+        if len(words) not in (3, 4):
+            raise ValueError("usage: velocity X Y Z [SECONDS]  (forward right up, m/s)")
+        x, y, z = (_number(w, name) for w, name in zip(words, "XYZ"))
+        hold = _number(words[3], "SECONDS") if len(words) == 4 else VELOCITY_HOLD
+        if not 0 < hold <= VELOCITY_HOLD_MAX:
+            raise ValueError(f"SECONDS must be between 0 and {VELOCITY_HOLD_MAX:g}")
+        if not self.vehicle.set_velocity(x, y, z, 0.0):
+            self.say("velocity refused")
+            return
+        gen = self._cancel_velocity()
+        if x == y == z == 0:
+            self.say("velocity zero: holding")
+            return
+        self.say(f"velocity forward {x:g} right {y:g} up {z:g} m/s for {hold:g} s")
+        threading.Thread(target=self._hold_velocity, args=(gen, (x, y, z), hold),
+                         name="console-velocity", daemon=True).start()
+
+    def _cancel_velocity(self) -> int:
+        with self._velocity_lock:
+            self._velocity_gen += 1
+            return self._velocity_gen
+
+    def _hold_velocity(self, gen: int, v: tuple[float, float, float], hold: float) -> None:
+        end = time.monotonic() + hold
+        pause = threading.Event()
+        while time.monotonic() < end and self._velocity_gen == gen:
+            self.vehicle.set_velocity(*v, 0.0)
+            pause.wait(0.1)
+        if self._velocity_gen == gen:
+            self.vehicle.set_velocity(0.0, 0.0, 0.0, 0.0)
+
+    def do_parachute(self, arg: str) -> None:
+        """parachute enable|disable|release"""
+        action = arg.strip()
+        if action not in ("enable", "disable", "release"):
+            raise ValueError("usage: parachute enable|disable|release")
+        self._report(self.vehicle.parachute(action))
+
+    def do_bat(self, arg: str) -> None:
+        """bat: battery voltage, current and remaining charge"""
+        self.say(battery_line(self.vehicle.state()))
+
+    def do_alt(self, arg: str) -> None:
+        """alt: altitude above home and above sea level"""
+        s = self.vehicle.state()
+        amsl = f", {s.position.alt:.1f} m above sea level" if s.position else ""
+        self.say(f"altitude {s.altitude:.2f} m above home{amsl}, climbing {s.velocity.climb:+.1f} m/s")
+
+    def do_status(self, arg: str) -> None:
+        """status: link, mode, armed, position, battery, GPS, takeoff"""
+        for line in status_lines(self.vehicle.state()):
+            self.say(line)
+
+
+def _number(text: str, name: str, integer: bool = False) -> float:
+    try:
+        value = int(text, 0) if integer else float(text)
+    except ValueError:
+        raise ValueError(f"{name} must be a number, not {text!r}") from None
+    if not math.isfinite(value):
+        raise ValueError(f"{name} must be a finite number")
+    return value
+
+
+def battery_line(s: VehicleState) -> str:
+    b = s.battery
+    parts = [f"{b.voltage:.2f} V" if b.voltage is not None else "voltage unknown"]
+    if b.cell_voltage is not None:
+        parts.append(f"{b.cell_voltage:.2f} V/cell ({b.cells}S)")
+    if b.current is not None:
+        parts.append(f"{b.current:.1f} A")
+    if b.remaining is not None:
+        parts.append(f"{b.remaining:.0f} %" + (" (from cell voltage)" if b.remaining_estimated else ""))
+    return "battery " + ", ".join(parts) + (" LOW" if b.low else "")
+
+
+def status_lines(s: VehicleState) -> list[str]:
+    ln = s.link
+    lines = [f"link {ln.status.value} {ln.address} ({ln.packets_per_s:.0f} pkt/s, {ln.loss_percent:.0f} % lost, "
+             f"MAVLink {ln.mavlink_version})",
+             f"mode {s.mode or '?'}, {'ARMED' if s.armed else 'disarmed'}, {s.landed_state.name.lower()}, "
+             f"heading {s.heading_deg:.0f}°",
+             f"altitude {s.altitude:.2f} m"]
+    if s.local is not None:
+        lines[-1] += f", {s.local.north:.1f} m north, {s.local.east:.1f} m east of home"
+    lines.append(battery_line(s))
+    lines.append(f"GPS {s.gps.fix_name}, {s.gps.satellites} satellites; "
+                 f"{'ready to arm' if s.readiness.ready_to_arm else 'not ready to arm'}")
+    if s.takeoff.active:
+        lines.append(f"takeoff: {s.takeoff.phase.value} {s.takeoff.detail}")
+    return lines
+
+
+def run_commands(console: Console, text: str) -> None:
+    """``--cmd "arm; takeoff 3"``: run each command as if typed."""
+    for line in text.split(";"):
+        if line.strip():
+            console.say(f"> {line.strip()}")
+            console.onecmd(line.strip())
+
+
+__all__ = ["Console", "run_commands", "status_lines", "battery_line"]

@@ -1,0 +1,440 @@
+"""IceDrone: a :class:`~driver.api.Drone` on another machine, reached through the MAVLinkServer's Ice interfaces.
+
+The viewer holds it exactly as it holds the embedded driver. No Ice call ever
+runs on the caller's thread: a poller thread reads the server's status into an
+immutable snapshot, a sender thread carries the newest velocity over JdeRobot's
+CMDVel (older ones are dropped, never queued), and a worker thread starts
+commands asynchronously, resolving each Future with the vehicle's own answer.
+A server that stops answering shows as a LOST link, and recovers by itself.
+"""
+from __future__ import annotations
+
+import collections
+import logging
+import threading
+import time
+from concurrent.futures import Future, ThreadPoolExecutor
+
+import Ice
+
+from ..api import Drone, Limits
+from ..frames import clamp, finite
+from ..state import (CommandResult, CommandStatus, LinkHealth, LinkStatus, Message, Severity, VehicleState,
+                     replace)
+from . import convert, load_slice
+from .server import DEFAULT_PORTS
+
+jderobot, mavlinkserver = load_slice()
+log = logging.getLogger(__name__)
+
+_MAX_MESSAGES = 200
+_MAX_RESULTS = 50
+PREFIX = "UAVViewer"
+
+
+def viewer_properties(config: str | None = None, host: str | None = None, args: list[str] | None = None,
+                      prefix: str = PREFIX) -> Ice.Properties:
+    """Client properties: a JdeRobot-style file (``UAVViewer.Pose3D.Proxy=...``) and/or a host on default ports."""
+    props = Ice.createProperties(list(args or []))
+    if config:
+        props.load(config)
+    if not props.getProperty("Ice.MessageSizeMax"):
+        props.setProperty("Ice.MessageSizeMax", "16384")       # KB: camera pictures
+    for name, port in DEFAULT_PORTS.items():
+        key = f"{prefix}.{name}.Proxy"
+        if host and not props.getProperty(key):
+            props.setProperty(key, f"{name}:default -h {host} -p {port}")
+    return props
+
+
+class IceDrone(Drone):
+    """The remote vehicle; ``start()`` returns at once, the first status arrives in the background."""
+
+    def __init__(self, properties: Ice.Properties, prefix: str = PREFIX, poll_interval: float = 0.1,
+                 loss_timeout: float = 2.0, call_timeout: float = 1.0, command_timeout: float = 120.0):
+        self._props = properties
+        self._prefix = prefix
+        self._poll = poll_interval
+        self._loss_timeout = loss_timeout
+        self._call_ms = int(call_timeout * 1000)
+        self._command_ms = int(command_timeout * 1000)
+        self._com: Ice.Communicator | None = None
+        self._vehicle = self._cmdvel = self._commands = None
+        self._jde: dict = {}                   # without the extension: JdeRobot proxies by role
+        proxy = properties.getProperty(f"{prefix}.Vehicle.Proxy") or properties.getProperty(f"{prefix}.Pose3D.Proxy")
+        self._description = f"Ice {_host_of(proxy)}"
+        self._limits = Limits()
+
+        self._lock = threading.Lock()
+        self._state = VehicleState(link=LinkHealth(status=LinkStatus.WAITING, address=self._description))
+        self._messages: collections.deque[Message] = collections.deque(maxlen=_MAX_MESSAGES)
+        self._results: collections.deque[CommandResult] = collections.deque(maxlen=_MAX_RESULTS)
+        self._index = 0                        # our own message numbering (server's + our own lines)
+        self._result_offset = 0                # server result index + offset = ours (bumped when it may restart)
+        self._result_high = 0
+        self._server_message = -1              # the server's last message / result index we have
+        self._server_result = -1
+        self._last_message_time = 0.0
+        self._last_answer: float | None = None
+        self._lost = False
+        self._lost_count = 0
+        self._resync = False                   # after a loss: the server may have restarted its numbering
+        self._said_unreachable = False
+
+        self._velocity: tuple[float, float, float, float] | None = None
+        self._velocity_ready = threading.Condition(threading.Lock())
+        self._closing = threading.Event()
+        self._threads: list[threading.Thread] = []
+        self._worker = ThreadPoolExecutor(max_workers=1, thread_name_prefix="ice-commands")
+
+    @classmethod
+    def from_config(cls, config: str | None = None, host: str | None = None, **kwargs) -> "IceDrone":
+        return cls(viewer_properties(config, host), **kwargs)
+
+    # -- lifecycle ------------------------------------------------------------------------------
+    @property
+    def description(self) -> str:
+        return self._description
+
+    @property
+    def limits(self) -> Limits:
+        return self._limits
+
+    def start(self) -> "IceDrone":
+        init = Ice.InitializationData()
+        init.properties = self._props
+        self._com = Ice.initialize(init)
+        try:
+            self._connect()
+        except Exception:
+            self._com.destroy()
+            raise
+        for target, name in ((self._run_poller, "ice-status"), (self._run_sender, "ice-cmdvel")):
+            t = threading.Thread(target=target, name=name, daemon=True)
+            t.start()
+            self._threads.append(t)
+        return self
+
+    def _connect(self) -> None:
+        """Proxies from the properties (no network call: the poller finds out whether the server is there)."""
+        def proxy(name: str):
+            key = f"{self._prefix}.{name}.Proxy"
+            return self._com.propertyToProxy(key) if self._props.getProperty(key) else None
+
+        vehicle, cmdvel, pose = proxy("Vehicle"), proxy("CMDVel"), proxy("Pose3D")
+        if cmdvel is None or (vehicle is None and pose is None):
+            raise ValueError(f"{self._prefix}.CMDVel.Proxy and {self._prefix}.Vehicle.Proxy (or, for a plain "
+                             f"JdeRobot server, {self._prefix}.Pose3D.Proxy) must be configured")
+        self._cmdvel = jderobot.CMDVelPrx.uncheckedCast(cmdvel.ice_invocationTimeout(self._call_ms))
+        if vehicle is not None:
+            self._vehicle = mavlinkserver.VehiclePrx.uncheckedCast(vehicle.ice_invocationTimeout(self._call_ms))
+            self._commands = mavlinkserver.VehiclePrx.uncheckedCast(
+                vehicle.ice_invocationTimeout(self._command_ms))
+        else:                                  # JdeRobot's interfaces only: Pose3D, Navdata, Extra, WP
+            self._jde = {name: cast.uncheckedCast(prx.ice_invocationTimeout(self._call_ms))
+                         for name, cast in (("Pose3D", jderobot.Pose3DPrx), ("Navdata", jderobot.NavdataPrx),
+                                            ("Extra", jderobot.ArDroneExtraPrx), ("WP", jderobot.Pose3DPrx))
+                         for prx in (proxy(name),) if prx is not None}
+            self._limits = self._clamps(Limits())
+            self._note(Severity.NOTICE, "plain JdeRobot server (no mavlinkserver extension): state from "
+                                        "Pose3D and Navdata, takeoff and land through Extra")
+
+    def close(self) -> None:
+        if self._closing.is_set():
+            return
+        self._closing.set()
+        with self._velocity_ready:
+            self._velocity = None
+            self._velocity_ready.notify_all()
+        for t in self._threads:
+            t.join(timeout=3.0)
+        self._worker.shutdown(wait=False, cancel_futures=True)
+        if self._com is not None:
+            self._com.destroy()
+        with self._lock:
+            self._state = replace(self._state, link=replace(self._state.link, status=LinkStatus.CLOSED))
+
+    # -- state ----------------------------------------------------------------------------------
+    def state(self) -> VehicleState:
+        return self._state
+
+    def wait_for(self, predicate, timeout: float) -> VehicleState | None:
+        """Poll until ``predicate(state)`` holds; for tests and scripts, never the UI thread."""
+        deadline = time.monotonic() + timeout
+        while not self._closing.is_set():
+            s = self._state
+            if predicate(s):
+                return s
+            if time.monotonic() > deadline:
+                return None
+            self._closing.wait(self._poll / 2)
+        return None
+
+    def _note(self, severity: Severity, text: str) -> None:
+        """A line of our own for the pilot (caller holds _lock)."""
+        self._index += 1
+        self._messages.append(Message(self._index, time.time(), severity, text, "driver"))
+        (log.warning if severity <= Severity.WARNING else log.info)("%s", text)
+
+    def _run_poller(self) -> None:
+        first = True
+        while not self._closing.is_set():
+            started = time.monotonic()
+            try:
+                if self._vehicle is None:
+                    navdata = self._jde.get("Navdata")
+                    pose, nav = self._jde["Pose3D"].getPose3DData(), navdata.getNavdata() if navdata else None
+                    self._answered_jderobot(pose, nav)
+                else:
+                    if first:
+                        lim = self._vehicle.getLimits()
+                        self._limits = self._clamps(Limits(lim.horizontal, lim.vertical, lim.yawRate))
+                    self._answered(self._vehicle.getStatus(self._server_message, self._server_result))
+                first = False
+            except Ice.Exception as exc:
+                self._missed(exc)
+            self._closing.wait(max(0.0, self._poll - (time.monotonic() - started)))
+
+    def _clamps(self, server: Limits) -> Limits:
+        """The server's limits, tightened by JdeRobot's optional ``UAVViewer.CMDVel.Xmax/Ymax/Zmax/Yawmax``."""
+        def tighter(key: str, value: float) -> float:
+            text = self._props.getProperty(f"{self._prefix}.CMDVel.{key}")
+            try:
+                return min(value, abs(float(text))) if text else value
+            except ValueError:
+                log.warning("%s.CMDVel.%s=%r is not a number", self._prefix, key, text)
+                return value
+        return Limits(horizontal=min(tighter("Xmax", server.horizontal), tighter("Ymax", server.horizontal)),
+                      vertical=tighter("Zmax", server.vertical), yaw_rate=tighter("Yawmax", server.yaw_rate))
+
+    def _heard(self) -> None:
+        """The server answered (caller holds _lock)."""
+        if self._lost:
+            self._lost = False
+            self._note(Severity.NOTICE, f"server {self._description} answering again")
+        self._last_answer = time.monotonic()
+
+    def _answered_jderobot(self, pose, nav) -> None:
+        with self._lock:
+            self._heard()
+            s = convert.state_from_jderobot(pose, nav, tuple(self._messages), tuple(self._results))
+            self._state = replace(s, link=replace(s.link, address=self._description, lost_count=self._lost_count))
+
+    def _answered(self, status) -> None:
+        with self._lock:
+            self._heard()
+            resync, self._resync = self._resync, False
+            for m in status.messages:
+                # after a loss we asked for everything: the clock says which lines are new
+                if not resync or m.time > self._last_message_time:
+                    self._index += 1
+                    self._messages.append(replace(convert.message_from_status(m), index=self._index))
+                    self._last_message_time = max(self._last_message_time, m.time)
+            if status.messages:
+                self._server_message = status.messages[-1].index
+            if resync:                                 # a restarted server numbers from 1 again
+                self._result_offset = self._result_high
+            for r in status.results if not resync else ():
+                result = self._result(r)
+                self._result_high = max(self._result_high, result.index)
+                self._results.append(result)
+            if status.results:
+                self._server_result = status.results[-1].index
+            s = convert.state_from_status(status, tuple(self._messages), tuple(self._results))
+            link = replace(s.link, address=f"{s.link.address} via {self._description}",
+                           lost_count=s.link.lost_count + self._lost_count)
+            self._state = replace(s, link=link)
+
+    def _result(self, outcome) -> CommandResult:
+        """The server's outcome, numbered as in our results (the window pairs a Future's answer with it)."""
+        result = convert.result_from_outcome(outcome)
+        return replace(result, index=result.index + self._result_offset) if result.index > 0 else result
+
+    def _missed(self, exc: Exception) -> None:
+        with self._lock:
+            now = time.monotonic()
+            since = self._last_answer if self._last_answer is not None else None
+            if self._lost or (since is not None and now - since < self._loss_timeout):
+                return
+            if since is None and self._state.link.status is LinkStatus.WAITING:
+                # never reached: stay WAITING, but say why once
+                if not self._said_unreachable:
+                    self._said_unreachable = True
+                    self._note(Severity.WARNING, f"server {self._description} not answering: {type(exc).__name__}")
+                    self._state = replace(self._state, messages=tuple(self._messages))
+                return
+            self._lost = True
+            self._lost_count += 1
+            self._server_message = -1                  # a restarted server numbers from 1 again
+            self._server_result = -1
+            self._resync = True
+            self._note(Severity.CRITICAL, f"lost the server {self._description}: {type(exc).__name__}")
+            link = self._state.link
+            age = None if link.heartbeat_age is None else link.heartbeat_age + (now - since)
+            self._state = replace(self._state, messages=tuple(self._messages), link=replace(
+                link, status=LinkStatus.LOST, heartbeat_age=age, packets_per_s=0.0,
+                lost_count=link.lost_count + 1))
+
+    # -- velocity over JdeRobot's CMDVel --------------------------------------------------------
+    def set_velocity(self, forward: float, right: float, up: float, yaw_rate: float) -> bool:
+        if not finite(forward, right, up, yaw_rate):
+            log.warning("velocity refused: not finite (%r, %r, %r, %r)", forward, right, up, yaw_rate)
+            return False
+        lim = self._limits
+        command = (clamp(float(forward), lim.horizontal), clamp(float(right), lim.horizontal),
+                   clamp(float(up), lim.vertical), clamp(float(yaw_rate), lim.yaw_rate))
+        with self._velocity_ready:
+            self._velocity = command
+            self._velocity_ready.notify()
+        return True
+
+    def _run_sender(self) -> None:
+        while True:
+            with self._velocity_ready:
+                while self._velocity is None and not self._closing.is_set():
+                    self._velocity_ready.wait()
+                if self._closing.is_set():
+                    return
+                command, self._velocity = self._velocity, None
+            x, y, z, yaw = convert.cmdvel_from_body(*command)
+            try:
+                answer = self._cmdvel.setCMDVelData(jderobot.CMDVelData(x, y, z, 0.0, 0.0, yaw))
+                if answer != 0:
+                    log.warning("server refused velocity %s: %d", command, answer)
+            except Ice.Exception as exc:
+                log.debug("velocity not delivered: %s", exc)
+
+    def _drop_velocity(self) -> None:
+        with self._velocity_ready:
+            self._velocity = None
+
+    # -- commands: started on the worker, answered by the vehicle --------------------------------
+    def _command(self, name: str, start) -> Future:
+        """Run ``start(proxy)`` (an Ice ...Async call) on the worker; the Future gets the vehicle's answer."""
+        future: Future = Future()
+
+        def failed(exc: BaseException) -> None:
+            status = CommandStatus.TIMED_OUT if isinstance(exc, Ice.TimeoutException) else CommandStatus.REJECTED
+            future.set_result(CommandResult(name, status, f"server unreachable: {type(exc).__name__}"))
+
+        def answered(ice_future) -> None:
+            try:
+                outcome = ice_future.result()
+            except Exception as exc:
+                failed(exc)
+                return
+            with self._lock:
+                result = self._result(outcome)
+            future.set_result(result)
+
+        def run() -> None:
+            try:
+                start(self._commands).add_done_callback(answered)
+            except Exception as exc:
+                failed(exc)
+        try:
+            self._worker.submit(run)
+        except RuntimeError as exc:                     # closed
+            failed(exc)
+        return future
+
+    def _jderobot_command(self, name: str, role: str, call) -> Future:
+        """Without the extension: ``call(proxy)`` on a JdeRobot interface, which says nothing of the vehicle."""
+        prx = self._cmdvel if role == "CMDVel" else self._jde.get(role)
+        if prx is None:
+            return self._no_extension(name)
+        future: Future = Future()
+
+        def answered(ice_future) -> None:
+            try:
+                ice_future.result()
+            except Exception as exc:
+                future.set_result(CommandResult(name, CommandStatus.REJECTED,
+                                                f"server unreachable: {type(exc).__name__}"))
+                return
+            future.set_result(self._local_result(name, CommandStatus.ACCEPTED,
+                                                 f"sent through {role}; JdeRobot servers give no answer").result())
+
+        def run() -> None:
+            try:
+                call(prx).add_done_callback(answered)
+            except Exception as exc:
+                future.set_result(CommandResult(name, CommandStatus.REJECTED, f"server unreachable: {exc}"))
+        self._worker.submit(run)
+        return future
+
+    def _local_result(self, name: str, status: CommandStatus, reason: str) -> Future:
+        """A result of our own, numbered in our results so the window shows it once."""
+        with self._lock:
+            self._result_high += 1
+            result = CommandResult(name, status, reason, 0, self._result_high)
+            self._results.append(result)
+            self._state = replace(self._state, results=tuple(self._results))
+        future: Future = Future()
+        future.set_result(result)
+        return future
+
+    def _no_extension(self, name: str) -> Future:
+        return self._local_result(name, CommandStatus.REJECTED,
+                                  "not offered by a plain JdeRobot server (no mavlinkserver extension)")
+
+    def takeoff(self, altitude: float | None = None) -> Future:
+        if self._vehicle is None:
+            return self._jderobot_command("takeoff", "Extra", lambda p: p.takeoffAsync())
+        return self._command("takeoff", lambda p: p.takeoffAsync(0.0 if altitude is None else float(altitude)))
+
+    def land(self) -> Future:
+        self._drop_velocity()
+        if self._vehicle is None:
+            return self._jderobot_command("land", "Extra", lambda p: p.landAsync())
+        return self._command("land", lambda p: p.landAsync())
+
+    def stop(self) -> Future:
+        self._drop_velocity()
+        if self._vehicle is None:                      # zero velocity (an AR.Drone's reset cuts the motors)
+            return self._jderobot_command("stop", "CMDVel", lambda p: p.setCMDVelDataAsync(
+                jderobot.CMDVelData(0.0, 0.0, 0.0, 0.0, 0.0, 0.0)))
+        return self._command("stop", lambda p: p.stopAsync())
+
+    def return_to_launch(self) -> Future:
+        self._drop_velocity()
+        if self._vehicle is None:
+            return self._no_extension("RTL")
+        return self._command("RTL", lambda p: p.returnToLaunchAsync())
+
+    def arm(self, force: bool = False) -> Future:
+        if self._vehicle is None:
+            return self._no_extension("arm")
+        return self._command("arm", lambda p: p.armAsync(bool(force)))
+
+    def disarm(self, force: bool = False) -> Future:
+        if self._vehicle is None:
+            return self._no_extension("disarm")
+        return self._command("disarm", lambda p: p.disarmAsync(bool(force)))
+
+    def set_mode(self, name: str) -> Future:
+        if self._vehicle is None:
+            return self._no_extension(f"mode {name}")
+        return self._command(f"mode {name}", lambda p: p.setModeAsync(str(name)))
+
+    def go_to(self, north: float, east: float, altitude: float) -> Future:
+        if self._vehicle is None:
+            if not finite(north, east, altitude):
+                return self._local_result("go to", CommandStatus.REJECTED, "coordinates are not finite numbers")
+            return self._jderobot_command("go to", "WP", lambda p: p.setPose3DDataAsync(
+                jderobot.Pose3DData(float(east), float(north), float(altitude), 1.0, 1.0, 0.0, 0.0, 0.0)))
+        return self._command("go to", lambda p: p.goToAsync(float(north), float(east), float(altitude)))
+
+    def set_yaw(self, degrees: float, relative: bool = False, rate_deg_s: float = 30.0) -> Future:
+        if self._vehicle is None:
+            return self._no_extension("yaw")
+        return self._command("yaw", lambda p: p.setYawAsync(float(degrees), bool(relative), float(rate_deg_s)))
+
+
+def _host_of(proxy: str) -> str:
+    """The ``-h`` host of a stringified proxy, for display."""
+    parts = proxy.split()
+    for i, part in enumerate(parts[:-1]):
+        if part == "-h":
+            return parts[i + 1]
+    return proxy or "?"

@@ -1,0 +1,308 @@
+"""Ice servants: JdeRobot's Pose3D, CMDVel, ArDroneExtra, Navdata, a placeholder Camera, and our extension.
+
+Every getter answers at once from the driver's latest snapshot (the 2017 server
+slept 50 ms in each); every command hands the driver a job and returns, so an
+Ice dispatch thread never waits for the vehicle. Nothing here raises into a
+JdeRobot client except the Camera's documented DataNotExistException.
+"""
+from __future__ import annotations
+
+import logging
+import math
+import threading
+import time
+from concurrent.futures import Future
+from dataclasses import dataclass
+
+import Ice
+
+from ..api import Drone
+from ..frames import finite
+from ..state import CommandResult, CommandStatus, LandedState
+from . import convert, load_slice
+
+jderobot, mavlinkserver = load_slice()
+log = logging.getLogger(__name__)
+
+
+@dataclass
+class ServerSettings:
+    """What the servants share; filled from MAVLinkServer.* properties."""
+    takeoff_altitude: float = 3.0
+    cmdvel_max: tuple[float, float, float, float] = (2.0, 2.0, 1.0, 0.785)   # linearX, linearY, linearZ, angularZ
+    cmdvel_refuse_above: float = 100.0     # a value beyond this is garbage, not a command: refuse it
+    navdata_vehicle: int = 1               # JdeRobot: 0 ArDrone1, 1 ArDrone2 (10 = simulated)
+    max_takeoff_altitude: float = 100.0
+
+
+def _resolved(result: CommandResult) -> Future:
+    f: Future = Future()
+    f.set_result(result)
+    return f
+
+
+def _log_outcome(what: str):
+    """Done-callback logging a command's result, for JdeRobot operations that return nothing."""
+    def done(fut: Future) -> None:
+        try:
+            result = fut.result()
+        except Exception as exc:                        # the driver failed to run it at all
+            log.error("%s: %s", what, exc)
+            return
+        (log.info if result.ok else log.warning)("%s", result)
+    return done
+
+
+class Pose3DI(jderobot.Pose3D):
+    """Pose in ENU from home; set = fly there (both the ``Pose3D`` and the waypoint ``WP`` servant)."""
+
+    def __init__(self, vehicle: Drone, name: str = "Pose3D"):
+        self._vehicle = vehicle
+        self._name = name
+
+    def getPose3DData(self, current=None):
+        x, y, z, h, q0, q1, q2, q3 = convert.pose_enu(self._vehicle.state())
+        return jderobot.Pose3DData(x, y, z, h, q0, q1, q2, q3)
+
+    def setPose3DData(self, data, current=None):
+        target = None if data is None else convert.waypoint_from_enu(data.x, data.y, data.z)
+        if target is None:
+            log.warning("%s: refused waypoint with a missing or non-finite coordinate", self._name)
+            return -1
+        north, east, altitude = target
+        log.info("%s: go to east %.1f north %.1f up %.1f", self._name, east, north, altitude)
+        answer = self._vehicle.go_to(north, east, altitude)
+        answer.add_done_callback(_log_outcome(f"{self._name} waypoint"))
+        if answer.done() and not answer.result().ok:    # refused at once (not flying, takeoff running...)
+            return -1
+        return 0
+
+
+class CMDVelI(jderobot.CMDVel):
+    """Velocity relative to the heading, JdeRobot's FLU convention, into the driver's body command."""
+
+    def __init__(self, vehicle: Drone, settings: ServerSettings):
+        self._vehicle = vehicle
+        self._settings = settings
+
+    def setCMDVelData(self, data, current=None):
+        if data is None:
+            return -1
+        values = (data.linearX, data.linearY, data.linearZ, data.angularX, data.angularY, data.angularZ)
+        if not finite(*values):
+            log.warning("CMDVel refused: non-finite value in %s", values)
+            return -1
+        if max(abs(v) for v in values) > self._settings.cmdvel_refuse_above:
+            log.warning("CMDVel refused: value beyond %g in %s", self._settings.cmdvel_refuse_above, values)
+            return -2
+        flu = convert.clamp_cmdvel((data.linearX, data.linearY, data.linearZ, data.angularZ),
+                                   self._settings.cmdvel_max)
+        return 0 if self._vehicle.set_velocity(*convert.body_from_cmdvel(*flu)) else -1
+
+
+class NavdataI(jderobot.Navdata):
+    def __init__(self, vehicle: Drone, settings: ServerSettings):
+        self._vehicle = vehicle
+        self._settings = settings
+        self._start = time.monotonic()
+
+    def getNavdata(self, current=None):
+        return jderobot.NavdataData(**convert.navdata_fields(
+            self._vehicle.state(), self._settings.navdata_vehicle, time.monotonic() - self._start))
+
+
+class ArDroneExtraI(jderobot.ArDroneExtra):
+    """The AR.Drone's extra commands, mapped onto ArduCopter where it has an equivalent."""
+
+    def __init__(self, vehicle: Drone, settings: ServerSettings, camera=None):
+        self._vehicle = vehicle
+        self._settings = settings
+        self._camera = camera
+
+    def _run(self, what: str, call) -> None:
+        try:
+            call().add_done_callback(_log_outcome(f"Extra.{what}"))
+        except Exception:                                # never raise into a JdeRobot client
+            log.exception("Extra.%s failed", what)
+
+    def takeoff(self, current=None):
+        self._run("takeoff", lambda: self._vehicle.takeoff(self._settings.takeoff_altitude))
+
+    def land(self, current=None):
+        self._run("land", self._vehicle.land)
+
+    def reset(self, current=None):
+        """The AR.Drone's emergency reset; on a copter the safe meaning is stop and hold."""
+        self._run("reset", self._vehicle.stop)
+
+    def toggleCam(self, current=None):
+        toggle = getattr(self._camera, "toggle", None)
+        if toggle is None:
+            log.warning("Extra.toggleCam: no second camera configured")
+            return
+        try:
+            toggle()
+        except Exception:
+            log.exception("Extra.toggleCam failed")
+
+    def recordOnUsb(self, record, current=None):
+        recorder = getattr(self._camera, "record", None)
+        if recorder is None:
+            log.warning("Extra.recordOnUsb(%s): no camera to record", record)
+            return
+        try:
+            recorder(bool(record))
+        except Exception:
+            log.exception("Extra.recordOnUsb failed")
+
+    def flatTrim(self, current=None):
+        s = self._vehicle.state()
+        on_ground = not s.armed and s.landed_state in (LandedState.ON_GROUND, LandedState.UNDEFINED) \
+            and abs(s.altitude) < 1.0
+        calibrate = getattr(self._vehicle, "calibrate_level", None)
+        if not on_ground:
+            log.warning("Extra.flatTrim refused: level calibration only when disarmed on the ground")
+        elif calibrate is None:
+            log.warning("Extra.flatTrim: this driver cannot calibrate the level")
+        else:
+            self._run("flatTrim", calibrate)
+
+    def ledAnimation(self, type, duration, req, current=None):
+        log.info("Extra.ledAnimation(%s, %s, %s): not supported on ArduCopter", type, duration, req)
+
+    def flightAnimation(self, type, duration, current=None):
+        log.info("Extra.flightAnimation(%s, %s): not supported on ArduCopter", type, duration)
+
+
+class NoCameraI(jderobot.Camera):
+    """Stands in until a camera source is configured: every image request says why there is none."""
+
+    def __init__(self, reason: str = "no camera source configured yet"):
+        self._reason = reason
+
+    def _none(self):
+        raise jderobot.DataNotExistException(self._reason)
+
+    def getImageDescription(self, current=None):
+        return jderobot.ImageDescription(0, 0, 0, "NONE", "")
+
+    def getImageFormat(self, current=None):
+        return []
+
+    def getImageData(self, format, current=None):
+        self._none()
+
+    def getCameraDescription(self, current=None):
+        return jderobot.CameraDescription(name="none", shortDescription=self._reason)
+
+    def setCameraDescription(self, description, current=None):
+        return -1
+
+    def startCameraStreaming(self, current=None):
+        return ""
+
+    def stopCameraStreaming(self, current=None):
+        pass
+
+    def reset(self, current=None):
+        pass
+
+
+class VehicleI(mavlinkserver.Vehicle):
+    """Our extension: status and commands with the vehicle's own answer."""
+
+    def __init__(self, vehicle: Drone, settings: ServerSettings):
+        self._vehicle = vehicle
+        self._settings = settings
+        self._lock = threading.Lock()
+        self._pending: dict[Ice.Future, str] = {}     # answers still waiting for the vehicle
+
+    def _reply(self, answer: Ice.Future, result: CommandResult) -> None:
+        with self._lock:
+            if self._pending.pop(answer, None) is None:
+                return                                  # already answered (e.g. aborted at shutdown)
+        answer.set_result(convert.outcome_from_result(mavlinkserver, result))
+
+    def _answer(self, command: str, call) -> Ice.Future:
+        """An Ice future resolved with the driver's CommandResult once the vehicle has answered."""
+        answer = Ice.Future()
+        with self._lock:
+            self._pending[answer] = command
+
+        def done(fut: Future) -> None:
+            try:
+                result = fut.result()
+            except Exception as exc:
+                result = CommandResult(command, CommandStatus.REJECTED, f"driver error: {exc}")
+            self._reply(answer, result)
+
+        try:
+            call().add_done_callback(done)
+        except Exception as exc:
+            log.exception("%s failed", command)
+            self._reply(answer, CommandResult(command, CommandStatus.REJECTED, f"driver error: {exc}"))
+        return answer
+
+    def _rejected(self, command: str, reason: str) -> Ice.Future:
+        return self._answer(command, lambda: _resolved(CommandResult(command, CommandStatus.REJECTED, reason)))
+
+    def abort_pending(self, reason: str) -> None:
+        """Answer every command still waiting (ABORTED), so shutting down never waits for the vehicle."""
+        with self._lock:
+            pending = list(self._pending.items())
+        for answer, command in pending:
+            self._reply(answer, CommandResult(command, CommandStatus.ABORTED, reason))
+
+    def getStatus(self, messagesSince, resultsSince, current=None):
+        return convert.status_from_state(mavlinkserver, self._vehicle.state(), messagesSince, resultsSince)
+
+    def getLimits(self, current=None):
+        lim = self._vehicle.limits
+        return mavlinkserver.Limits(horizontal=lim.horizontal, vertical=lim.vertical, yawRate=lim.yaw_rate)
+
+    def getDescription(self, current=None):
+        return self._vehicle.description
+
+    def setMode(self, name, current=None):
+        return self._answer(f"mode {name}", lambda: self._vehicle.set_mode(name))
+
+    def arm(self, force, current=None):
+        return self._answer("arm", lambda: self._vehicle.arm(force))
+
+    def disarm(self, force, current=None):
+        return self._answer("disarm", lambda: self._vehicle.disarm(force))
+
+    def takeoff(self, altitude, current=None):
+        if not math.isfinite(altitude) or altitude > self._settings.max_takeoff_altitude:
+            return self._rejected("takeoff", f"altitude {altitude} out of range")
+        target = altitude if altitude > 0 else self._settings.takeoff_altitude
+        return self._answer("takeoff", lambda: self._vehicle.takeoff(target))
+
+    def land(self, current=None):
+        return self._answer("land", self._vehicle.land)
+
+    def stop(self, current=None):
+        return self._answer("stop", self._vehicle.stop)
+
+    def returnToLaunch(self, current=None):
+        return self._answer("RTL", self._vehicle.return_to_launch)
+
+    def goTo(self, north, east, altitude, current=None):
+        if not finite(north, east, altitude):
+            return self._rejected("go to", "non-finite coordinate")
+        return self._answer("go to", lambda: self._vehicle.go_to(north, east, altitude))
+
+    def setYaw(self, degrees, relative, rateDegS, current=None):
+        if not finite(degrees, rateDegS):
+            return self._rejected("yaw", "non-finite angle or rate")
+        return self._answer("yaw", lambda: self._vehicle.set_yaw(degrees, relative, rateDegS))
+
+    def getTakeoffAltitude(self, current=None):
+        return self._settings.takeoff_altitude
+
+    def setTakeoffAltitude(self, altitude, current=None):
+        if not math.isfinite(altitude) or not 0.5 <= altitude <= self._settings.max_takeoff_altitude:
+            return -1
+        self._settings.takeoff_altitude = float(altitude)
+        log.info("takeoff altitude set to %.1f m", altitude)
+        return 0
