@@ -10,6 +10,7 @@ import math
 from PyQt5.QtCore import QPointF, QRectF, Qt
 from PyQt5.QtGui import QColor, QFont, QLinearGradient, QPainter, QPainterPath, QPen, QPolygonF
 from PyQt5.QtWidgets import QSizePolicy, QWidget
+from ..units import fmt as _fmt
 
 __all__ = ["AttitudeIndicator"]
 
@@ -20,10 +21,6 @@ GROUND_BOTTOM = QColor(88, 58, 30)
 SYMBOL = QColor(255, 196, 0)
 PANEL = QColor(10, 14, 20, 190)
 TEXT = QColor(235, 240, 245)
-
-
-def _fmt(value: float | None, digits: int = 1) -> str:
-    return "--" if value is None or not math.isfinite(value) else f"{value:.{digits}f}"
 
 
 class AttitudeIndicator(QWidget):

@@ -121,9 +121,8 @@ class CameraView(QWidget):
         if image is not None and not target.isEmpty():
             p.setRenderHint(QPainter.SmoothPixmapTransform)
             p.drawImage(target, image)
-        area = target if not target.isEmpty() else QRectF(self.rect())
-        if self._hud and self._state is not None:
-            paint_hud(p, area, self._state)
+        if self._hud and self._state is not None and not target.isEmpty():
+            paint_hud(p, target, self._state)        # over the picture only: "No video" stays readable
         font = QFont(self.font())
         font.setPixelSize(max(11, min(16, self.height() // 30)))
         p.setFont(font)

@@ -1,12 +1,12 @@
 """The numbers a pilot glances at: mode, battery, GPS, height, speeds, link health."""
 from __future__ import annotations
 
-import math
 
 from PyQt5.QtCore import Qt
 from PyQt5.QtWidgets import QFrame, QGridLayout, QLabel, QSizePolicy, QWidget
 
 from driver.state import LandedState, LinkStatus, VehicleState
+from ..units import fmt
 
 __all__ = ["TelemetryPanel", "battery_is_low"]
 
@@ -33,7 +33,7 @@ def battery_is_low(voltage: float | None, cells: int, remaining: float | None) -
 
 
 def _num(value: float | None, unit: str, digits: int = 1) -> str:
-    return "--" if value is None or not math.isfinite(value) else f"{value:.{digits}f} {unit}"
+    return fmt(value, digits, unit)
 
 
 class TelemetryPanel(QFrame):

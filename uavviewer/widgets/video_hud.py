@@ -12,6 +12,7 @@ from PyQt5.QtCore import QPointF, QRectF, Qt
 from PyQt5.QtGui import QColor, QFont, QPainter, QPen
 
 from driver.state import VehicleState
+from ..units import fmt as _num
 
 __all__ = ["paint_hud", "HUD_COLOUR"]
 
@@ -19,10 +20,6 @@ HUD_COLOUR = QColor(120, 255, 140)
 SHADOW = QColor(0, 0, 0, 160)
 WARN = QColor(255, 90, 70)
 VISIBLE_PITCH_DEG = 30.0        # centre to top edge
-
-
-def _num(value: float | None, digits: int = 1) -> str:
-    return "--" if value is None or not math.isfinite(value) else f"{value:.{digits}f}"
 
 
 def _text(p: QPainter, rect: QRectF, flags, text: str, colour: QColor = HUD_COLOUR) -> None:
