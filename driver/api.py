@@ -12,7 +12,7 @@ import abc
 from concurrent.futures import Future
 from dataclasses import dataclass
 
-from .state import CommandResult, VehicleState
+from .state import CommandResult, CommandStatus, VehicleState
 
 
 @dataclass(frozen=True)
@@ -91,6 +91,13 @@ class Drone(abc.ABC):
     @abc.abstractmethod
     def set_yaw(self, degrees: float, relative: bool = False, rate_deg_s: float = 30.0) -> Future[CommandResult]:
         """Turn to a heading (clockwise from north) or by an angle (relative, positive = right)."""
+
+    # -- payload --------------------------------------------------------------------------
+    def toggle_camera(self) -> Future[CommandResult]:
+        """Ask the vehicle to show its next camera; a vehicle with one camera (the default) refuses at once."""
+        future: Future[CommandResult] = Future()
+        future.set_result(CommandResult("switch camera", CommandStatus.REJECTED, "this vehicle has no camera switch"))
+        return future
 
     @abc.abstractmethod
     def close(self) -> None:

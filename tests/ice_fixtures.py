@@ -1,6 +1,6 @@
 """Fixtures shared by the tests/test_ice_*.py files: a real Ice server on loopback in front of the real driver.
 
-Imported by those files (``from test_ice_support import ...``); it holds no tests itself.
+Imported by those files (``from ice_fixtures import ...``); it holds no tests itself.
 """
 from __future__ import annotations
 

@@ -8,7 +8,7 @@ import pytest
 from driver.ice.client import IceDrone, viewer_properties
 from driver.state import CommandStatus, LinkStatus
 
-from test_ice_support import (drone_factory, eventually, free_port, ice_server, jde, communicator,  # noqa: F401
+from ice_fixtures import (drone_factory, eventually, free_port, ice_server, jde, communicator,  # noqa: F401
                               server_factory)
 
 

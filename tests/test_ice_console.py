@@ -12,7 +12,7 @@ import Ice
 
 from driver.console import Console
 
-from test_ice_support import eventually, free_port, jderobot, mavlinkserver
+from ice_fixtures import eventually, free_port, jderobot, mavlinkserver
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 

@@ -17,7 +17,7 @@ from driver.ice import SLICE_DIR, convert, slice_files
 from driver.ice.server import DEFAULT_PORTS, default_properties, planned_endpoints
 from driver.state import CommandStatus
 
-from test_ice_support import (communicator, eventually, free_port, ice_server, jde, jderobot,  # noqa: F401
+from ice_fixtures import (communicator, eventually, free_port, ice_server, jde, jderobot,  # noqa: F401
                               mavlinkserver, server_factory)
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))

@@ -7,9 +7,11 @@ import pytest
 from PyQt5.QtCore import Qt
 
 import main
-from driver.state import LinkStatus
+from driver.state import CommandStatus, LinkStatus
 
-from test_ice_support import drone_factory, free_port, server_factory  # noqa: F401  (fixtures)
+from camera_media import write_clip
+from ice_fixtures import drone_factory, free_port, server_factory  # noqa: F401  (fixtures)
+from test_camera_view import nearest, painted_rgb
 from test_viewer_flight import body_velocity, click_takeoff, press, release, speed, wait_flying
 from viewer_fixtures import viewer_settings, window_factory  # noqa: F401  (fixtures)
 
@@ -65,3 +67,36 @@ def test_lost_server_shows_as_lost_link_and_recovers(qtbot, vehicle, server_fact
     server_factory(vehicle, port=port)
     qtbot.waitUntil(lambda: w.linkBanner.isHidden(), timeout=15000)
     assert w.adapter.state.link.status is LinkStatus.OK
+
+
+def test_switch_camera_asks_the_server_for_its_next_camera(qtbot, vehicle, server_factory, drone_factory,
+                                                          window_factory, tmp_path):
+    """Video from the server's Camera: Switch camera goes through Drone.toggle_camera (JdeRobot's toggleCam)."""
+    red = write_clip(str(tmp_path / "red.mp4"), [(255, 0, 0)], repeat=60)
+    blue = write_clip(str(tmp_path / "blue.mp4"), [(0, 0, 255)], repeat=60)
+    server = server_factory(vehicle, **{"MAVLinkServer.Camera.Uri": red, "MAVLinkServer.Camera.Uri.2": blue,
+                                        "MAVLinkServer.Camera.Loop": "1"})
+    drone = drone_factory(server)
+    w = window_factory(drone, default_cameras=[f"ice:{server.proxy('Camera')}"])      # as main.py --ice
+    w.camera_view.set_hud_visible(False)
+    panel = w.camera_panel
+    assert panel.switch_button.isEnabled()
+    qtbot.waitUntil(lambda: w.camera_view.frame() is not None and nearest(painted_rgb(w.camera_view)) == (255, 0, 0),
+                    timeout=10000)
+    with qtbot.waitSignal(w.camera.switchAnswered, timeout=5000) as answer:
+        qtbot.mouseClick(panel.switch_button, Qt.LeftButton)
+    assert answer.args[0].ok, str(answer.args[0])
+    assert panel.note.text().startswith("Camera: the vehicle switched")
+    qtbot.waitUntil(lambda: w.camera_view.frame() is not None and nearest(painted_rgb(w.camera_view)) == (0, 0, 255),
+                    timeout=10000)
+
+
+def test_switch_camera_refusal_is_shown(qtbot, vehicle, window_factory, tmp_path):
+    """A vehicle without a camera switch (the embedded driver) says so in the camera panel."""
+    result = vehicle.toggle_camera().result(timeout=0)
+    assert result.status is CommandStatus.REJECTED and "no camera switch" in result.reason
+    w = window_factory(vehicle, cameras=["ice:Camera:tcp -h 127.0.0.1 -p 9"])
+    assert w.camera_panel.switch_button.isEnabled()
+    with qtbot.waitSignal(w.camera.switchAnswered, timeout=5000):
+        qtbot.mouseClick(w.camera_panel.switch_button, Qt.LeftButton)
+    assert w.camera_panel.note.text() == "Cannot switch camera: this vehicle has no camera switch"

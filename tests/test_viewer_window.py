@@ -1,4 +1,4 @@
-"""The window before any vehicle answers: waiting banner, settings remembered, keys dialog, --help."""
+"""The window before any vehicle answers: waiting banner, settings (camera ones too) remembered, keys dialog, --help."""
 from __future__ import annotations
 
 import socket
@@ -7,14 +7,16 @@ import sys
 from pathlib import Path
 
 import pytest
-from PyQt5.QtWidgets import QApplication
+from PyQt5.QtWidgets import QApplication, QDialogButtonBox
 
 from driver.vehicle import Vehicle, VehicleConfig
-from uavviewer.dialogs import KeysDialog
+from uavviewer.dialogs import KeysDialog, SettingsDialog
 from uavviewer.keyboard import key_help
-from uavviewer.settings import ViewerSettings
+from uavviewer.settings import ViewerSettings, split_uris
 from uavviewer.sticks import StickMode, pad_labels
 
+from camera_media import write_clip
+from test_camera_view import nearest, painted_rgb
 from viewer_fixtures import viewer_settings, window_factory  # noqa: F401  (fixtures)
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -70,3 +72,55 @@ def test_help_documents_every_option():
     for option in ("--sim", "--connect", "--replay", "--baud", "--takeoff-altitude", "--speedup",
                    "--ready-after", "--log-dir", "-v"):
         assert option in out.stdout
+
+
+def test_camera_preferences_reopen_the_camera_and_are_remembered(qtbot, silent_vehicle, window_factory, tmp_path):
+    """Preferences: sources, media folder (chosen with Browse…) and HUD; applied on OK, kept for the next run,
+    and --camera overrides the saved sources for its run."""
+    red = write_clip(str(tmp_path / "red.mp4"), [(255, 0, 0)], repeat=60)
+    blue = write_clip(str(tmp_path / "blue.mp4"), [(0, 0, 255)], repeat=60)
+    media = tmp_path / "media"
+    media.mkdir()
+    w = window_factory(silent_vehicle)
+    assert w.camera_view.message().startswith("No video: no camera configured")
+    w.actionPreferences.trigger()
+    qtbot.waitUntil(lambda: w.findChild(SettingsDialog) is not None and w.findChild(SettingsDialog).isVisible(),
+                    timeout=3000)
+    dialog = w.findChild(SettingsDialog)
+    assert dialog.hudDefault.isChecked() and dialog.cameraUris.toPlainText() == ""
+    dialog.cameraUris.setPlainText(f"{red}?loop=1\n")
+    dialog.browseMediaFolder.click()
+    chooser = dialog.folder_dialog
+    qtbot.waitUntil(chooser.isVisible, timeout=3000)
+    chooser.setDirectory(str(tmp_path))
+    chooser.selectFile(str(media))
+    chooser.accept()
+    assert Path(dialog.mediaFolder.text()) == media
+    dialog.hudDefault.setChecked(False)
+    dialog.buttons.button(QDialogButtonBox.Ok).click()
+
+    assert not w.camera_view.hud_visible() and not w.camera_panel.hud_button.isChecked()
+    qtbot.waitUntil(lambda: w.camera_view.frame() is not None and nearest(painted_rgb(w.camera_view)) == (255, 0, 0),
+                    timeout=10000)
+    with qtbot.waitSignal(w.camera.snapshotSaved, timeout=3000) as saved:
+        w.camera_panel.snapshot_button.click()
+    assert Path(saved.args[0]).parent == media and Path(saved.args[0]).suffix == ".png"
+    assert [p.name for p in media.iterdir()] == [Path(saved.args[0]).name]
+    w.close()
+
+    again = window_factory(silent_vehicle)
+    assert (again.settings.camera_uris, again.settings.media_folder, again.settings.hud) == \
+        ([f"{red}?loop=1"], str(media), False)
+    assert again.camera.uris == [f"{red}?loop=1"] and again.camera.folder == str(media)
+    assert not again.camera_view.hud_visible()
+    again.close()
+
+    override = window_factory(silent_vehicle, cameras=[f"{blue}?loop=1"])      # main.py --camera blue.mp4?loop=1
+    assert override.camera.uris == [f"{blue}?loop=1"]
+    qtbot.waitUntil(lambda: override.camera_view.frame() is not None
+                    and nearest(painted_rgb(override.camera_view)) == (0, 0, 255), timeout=10000)
+
+
+def test_camera_uris_may_be_comma_separated():
+    assert split_uris(" sim, 0\nudp://0.0.0.0:5600,\n\nvideo.mp4?loop=1 ") == \
+        ["sim", "0", "udp://0.0.0.0:5600", "video.mp4?loop=1"]

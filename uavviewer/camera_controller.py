@@ -13,18 +13,21 @@ import os
 import statistics
 import time
 from collections import deque
+from concurrent.futures import Future
 from typing import Callable
 
 from PyQt5.QtCore import QObject, QStandardPaths, Qt, QTimer, pyqtSignal
 
+from driver.api import Drone
 from driver.camera import CameraSet, VideoRecorder, describe_uri, save_snapshot
-from driver.state import VehicleState
+from driver.state import CommandResult, CommandStatus, VehicleState
 
 from .widgets.camera_panel import CameraPanel
 
 __all__ = ["CameraController", "default_media_folder"]
 
 log = logging.getLogger(__name__)
+NO_CAMERA = "No video: no camera configured (--camera URI, or Settings > Preferences)"
 
 
 def default_media_folder() -> str:
@@ -37,10 +40,13 @@ class CameraController(QObject):
     snapshotSaved = pyqtSignal(str)            # PNG path
     recordingChanged = pyqtSignal(bool, str)   # recording?, file
     failed = pyqtSignal(str)                   # a snapshot or recording that could not happen, and why
+    switchAnswered = pyqtSignal(object)        # the vehicle's CommandResult for a camera switch, on the UI thread
     _frameArrived = pyqtSignal()               # emitted on the capture thread, delivered queued
+    _switchDone = pyqtSignal(object)           # a toggle_camera Future, emitted on a driver thread, delivered queued
 
     def __init__(self, panel: CameraPanel, uris: list[str], *, state_fn: Callable[[], VehicleState] | None = None,
-                 drone=None, folder: str | None = None, rate_hz: float = 30.0, parent: QObject | None = None,
+                 drone: Drone | None = None, folder: str | None = None, rate_hz: float = 30.0,
+                 parent: QObject | None = None,
                  **source_options) -> None:
         """``source_options`` go to :func:`driver.camera.open_source` (loop, timeout_ms, image_format)."""
         super().__init__(parent)
@@ -49,9 +55,11 @@ class CameraController(QObject):
         self.folder = folder or default_media_folder()
         self._state_fn = state_fn
         self._drone = drone
-        self._cameras = CameraSet(uris, state_fn=state_fn, **source_options) if uris else None
+        self._open_options = dict(source_options, state_fn=state_fn)
+        self._cameras = CameraSet(uris, **self._open_options) if uris else None
         self._wake_pending = False
         self._frameArrived.connect(self._on_frame_arrived, Qt.QueuedConnection)
+        self._switchDone.connect(self._on_switch_done, Qt.QueuedConnection)
         if self._cameras is not None:
             self._cameras.add_listener(self._wake)
         self._shown_index = 0
@@ -74,7 +82,7 @@ class CameraController(QObject):
         panel.switchRequested.connect(self.switch)
         panel.set_switch_enabled(self._can_switch())
         if self._cameras is None:
-            self.view.set_message("No video: no camera configured (--camera URI)")
+            self.view.set_message(NO_CAMERA)
         self._timer.start()
         self._stats_timer.start()
 
@@ -204,11 +212,18 @@ class CameraController(QObject):
     def switch(self) -> None:
         """The next camera: the remote vehicle's own toggle when video comes from its server,
         else the next configured source."""
-        source = self.source
-        toggle_remote = getattr(self._drone, "toggle_camera", None)
-        if source is not None and source.uri.startswith("ice:") and callable(toggle_remote):
-            toggle_remote()
-            self.panel.set_note("Asked the vehicle to switch camera")
+        if self._remote_source():
+            if self._drone is None:
+                self.panel.set_note("Cannot switch camera: no vehicle to ask")
+                return
+            try:
+                future = self._drone.toggle_camera()
+            except Exception as exc:          # noqa: BLE001 - a remote drone may fail; the video goes on
+                log.exception("toggle_camera failed to start")
+                future = Future()
+                future.set_result(CommandResult("switch camera", CommandStatus.REJECTED, str(exc)))
+            self.panel.set_note("Asking the vehicle to switch camera…")
+            future.add_done_callback(self._switchDone.emit)
             return
         if self._cameras is None or len(self._cameras.uris) < 2:
             return
@@ -218,8 +233,45 @@ class CameraController(QObject):
         self.panel.set_note(f"Camera: {describe_uri(source.uri)}")
         self.sourceChanged.emit(source.uri)
 
+    def _on_switch_done(self, future: Future) -> None:
+        try:
+            result = future.result(timeout=0)
+        except Exception as exc:              # noqa: BLE001
+            result = CommandResult("switch camera", CommandStatus.REJECTED, f"{type(exc).__name__}: {exc}")
+        if result.ok:
+            self.panel.set_note("Camera: the vehicle switched to its next camera")
+        else:
+            self.panel.set_note(f"Cannot switch camera: {result.reason or result.status.value}")
+        self.switchAnswered.emit(result)
+
+    def _remote_source(self) -> bool:
+        """The video comes from the vehicle's own server, which switches it (JdeRobot's Extra.toggleCam)."""
+        source = self.source
+        return source is not None and source.uri.startswith("ice:")
+
     def _can_switch(self) -> bool:
-        return bool(self._cameras and (len(self._cameras.uris) > 1 or callable(getattr(self._drone, "toggle_camera", None))))
+        return bool(self._cameras and (len(self._cameras.uris) > 1 or self._remote_source()))
+
+    @property
+    def uris(self) -> list[str]:
+        return list(self._cameras.uris) if self._cameras else []
+
+    def set_sources(self, uris: list[str]) -> None:
+        """Close the camera shown and open these sources instead (Preferences); recording stops."""
+        if self._recorder is not None:
+            self.set_recording(False)
+        if self._cameras is not None:
+            self._cameras.remove_listener(self._wake)
+            self._cameras.close()
+        self._cameras = CameraSet(list(uris), **self._open_options) if uris else None
+        self._shown_index, self._shown_source = 0, None
+        self.panel.set_switch_enabled(self._can_switch())
+        if self._cameras is None:
+            self.view.set_message(NO_CAMERA)
+            return
+        self._cameras.add_listener(self._wake)
+        self.view.set_message(f"Connecting to {self._cameras.source.description}…")
+        self.sourceChanged.emit(self._cameras.source.uri)
 
     def _fail(self, reason: str) -> None:
         self.panel.set_note(reason)

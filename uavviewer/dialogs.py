@@ -4,18 +4,19 @@ from __future__ import annotations
 from dataclasses import replace
 
 from PyQt5 import uic
-from PyQt5.QtWidgets import QDialog, QMessageBox, QTableWidgetItem, QWidget
+from PyQt5.QtWidgets import QDialog, QFileDialog, QMessageBox, QTableWidgetItem, QWidget
 
 from . import RESOURCES
+from .camera_controller import default_media_folder
 from .keyboard import key_help
-from .settings import ViewerSettings
+from .settings import ViewerSettings, split_uris
 from .sticks import StickMode
 
 __all__ = ["SettingsDialog", "KeysDialog", "takeoff_question"]
 
 
 class SettingsDialog(QDialog):
-    """Stick mode, maximum speeds, deadband, expo and takeoff altitude."""
+    """Stick mode, maximum speeds, deadband, expo, takeoff altitude, and the camera: sources, media folder, HUD."""
 
     def __init__(self, settings: ViewerSettings, parent: QWidget | None = None) -> None:
         super().__init__(parent)
@@ -30,12 +31,30 @@ class SettingsDialog(QDialog):
         self.deadband.setValue(settings.deadband)
         self.expo.setValue(settings.expo)
         self.takeoffAltitude.setValue(settings.takeoff_altitude)
+        self.cameraUris.setPlainText("\n".join(settings.camera_uris))
+        self.mediaFolder.setText(settings.media_folder)
+        self.mediaFolder.setPlaceholderText(default_media_folder())
+        self.hudDefault.setChecked(settings.hud)
+        self.folder_dialog: QFileDialog | None = None
+        self.browseMediaFolder.clicked.connect(self.browse_media_folder)
+
+    def browse_media_folder(self) -> QFileDialog:
+        """Qt's own (non-native) folder chooser, opened without waiting on it."""
+        dialog = QFileDialog(self, "Media folder", self.mediaFolder.text() or default_media_folder())
+        dialog.setFileMode(QFileDialog.Directory)
+        dialog.setOptions(QFileDialog.ShowDirsOnly | QFileDialog.DontUseNativeDialog)
+        dialog.fileSelected.connect(self.mediaFolder.setText)
+        self.folder_dialog = dialog
+        dialog.open()
+        return dialog
 
     def chosen(self) -> ViewerSettings:
         return replace(self._settings, stick_mode=self.stickMode.currentData(),
                        max_horizontal=self.maxHorizontal.value(), max_vertical=self.maxVertical.value(),
                        max_yaw_deg_s=self.maxYaw.value(), deadband=self.deadband.value(),
-                       expo=self.expo.value(), takeoff_altitude=self.takeoffAltitude.value())
+                       expo=self.expo.value(), takeoff_altitude=self.takeoffAltitude.value(),
+                       cameras="\n".join(split_uris(self.cameraUris.toPlainText())),
+                       media_folder=self.mediaFolder.text().strip(), hud=self.hudDefault.isChecked())
 
 
 class KeysDialog(QDialog):

@@ -19,7 +19,7 @@ from driver.state import LinkStatus, Severity, VehicleState
 
 from . import RESOURCES
 from .dialogs import KeysDialog, SettingsDialog, takeoff_question
-from .camera_controller import CameraController
+from .camera_controller import CameraController, default_media_folder
 from .drone_adapter import DroneAdapter
 from .flight_phase import FlightPhase, flight_phase, stick_hint, takeoff_progress
 from .keyboard import ACTION_KEYS, AXIS_KEYS, KeyboardSticks
@@ -39,11 +39,16 @@ def load_style() -> str:
 
 
 class MainWindow(QMainWindow):
-    """Fly one drone. ``qsettings`` lets tests keep their own settings file."""
+    """Fly one drone. ``qsettings`` lets tests keep their own settings file.
+
+    Cameras: ``cameras`` (--camera) if given, else those saved in Preferences, else ``default_cameras``
+    (the mode's own: the simulator's, the Ice server's).
+    """
 
     def __init__(self, drone: Drone, qsettings: QSettings | None = None,
                  takeoff_altitude: float | None = None, rate_hz: float = 30.0,
-                 cameras: list[str] | None = None, parent: QWidget | None = None) -> None:
+                 cameras: list[str] | None = None, default_cameras: list[str] | None = None,
+                 parent: QWidget | None = None) -> None:
         super().__init__(parent)
         uic.loadUi(str(RESOURCES / "ui" / "main_window.ui"), self)
         self._qsettings = qsettings if qsettings is not None else default_qsettings()
@@ -67,8 +72,12 @@ class MainWindow(QMainWindow):
         self.camera_panel.show()                      # replaceWidget leaves the newcomer hidden
         self.cameraView = self.camera_panel
         self.camera_view = self.camera_panel.view
-        self.camera = CameraController(self.camera_panel, list(cameras or []), state_fn=drone.state, drone=drone,
-                                       parent=self)
+        self._default_cameras = list(default_cameras or [])
+        self.camera = CameraController(self.camera_panel, list(cameras or self.settings.camera_uris
+                                                               or self._default_cameras),
+                                       state_fn=drone.state, drone=drone,
+                                       folder=self.settings.media_folder or None, parent=self)
+        self.camera_panel.hud_button.setChecked(self.settings.hud)
         self.menuView.addAction(self.telemetryDock.toggleViewAction())
         self.menuView.addAction(self.plotsDock.toggleViewAction())
         self.menuView.addAction(self.messagesDock.toggleViewAction())
@@ -128,9 +137,14 @@ class MainWindow(QMainWindow):
         dialog.open()
 
     def set_settings(self, settings: ViewerSettings) -> None:
-        self.settings = settings
+        old, self.settings = self.settings, settings
         save_settings(self._qsettings, settings)
         self._apply_settings()
+        self.camera.folder = settings.media_folder or default_media_folder()
+        if settings.hud != old.hud:
+            self.camera_panel.hud_button.setChecked(settings.hud)
+        if settings.camera_uris != old.camera_uris:          # new sources replace even --camera's
+            self.camera.set_sources(settings.camera_uris or self._default_cameras)
 
     def show_keys(self) -> None:
         dialog = KeysDialog(self)

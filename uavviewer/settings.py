@@ -1,13 +1,14 @@
-"""What the viewer remembers between runs (QSettings): sticks, speeds, last link, window layout."""
+"""What the viewer remembers between runs (QSettings): sticks, speeds, last link, camera, window layout."""
 from __future__ import annotations
 
+import re
 from dataclasses import asdict, dataclass, fields
 
 from PyQt5.QtCore import QByteArray, QSettings
 
 from .sticks import MaxSpeeds, StickMode, StickShaping
 
-__all__ = ["ViewerSettings", "load_settings", "save_settings", "default_qsettings"]
+__all__ = ["ViewerSettings", "load_settings", "save_settings", "default_qsettings", "split_uris"]
 
 ORGANISATION = "JdeRobot"
 APPLICATION = "UavViewerPy"
@@ -23,6 +24,13 @@ class ViewerSettings:
     expo: float = 0.0
     takeoff_altitude: float = 3.0    # m
     last_connection: str = ""
+    cameras: str = ""                # camera URIs, one a line or comma separated; "" = the mode's own camera
+    media_folder: str = ""           # snapshots and recordings; "" = Movies/UavViewer
+    hud: bool = True                 # HUD over the video when the viewer starts
+
+    @property
+    def camera_uris(self) -> list[str]:
+        return split_uris(self.cameras)
 
     @property
     def mode(self) -> StickMode:
@@ -40,6 +48,11 @@ class ViewerSettings:
         return StickShaping(self.deadband, self.expo)
 
 
+def split_uris(text: str) -> list[str]:
+    r"""``"sim, 0\nvideo.mp4?loop=1"`` -> ``["sim", "0", "video.mp4?loop=1"]``."""
+    return [u.strip() for u in re.split(r"[,\n]", text or "") if u.strip()]
+
+
 def default_qsettings() -> QSettings:
     return QSettings(ORGANISATION, APPLICATION)
 
@@ -51,8 +64,12 @@ def load_settings(qs: QSettings) -> ViewerSettings:
         if not qs.contains(key):
             continue
         raw = qs.value(key)
+        default = getattr(out, f.name)
+        if isinstance(default, bool):          # an INI file gives "true"/"false"
+            setattr(out, f.name, str(raw).lower() in ("true", "1"))
+            continue
         try:
-            value = float(raw) if isinstance(getattr(out, f.name), float) else str(raw)
+            value = float(raw) if isinstance(default, float) else str(raw)
         except (TypeError, ValueError):
             continue
         if isinstance(value, float) and value != value:

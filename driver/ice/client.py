@@ -59,7 +59,7 @@ class IceDrone(Drone):
         self._call_ms = int(call_timeout * 1000)
         self._command_ms = int(command_timeout * 1000)
         self._com: Ice.Communicator | None = None
-        self._vehicle = self._cmdvel = self._commands = None
+        self._vehicle = self._cmdvel = self._commands = self._extra = None
         self._jde: dict = {}                   # without the extension: JdeRobot proxies by role
         proxy = properties.getProperty(f"{prefix}.Vehicle.Proxy") or properties.getProperty(f"{prefix}.Pose3D.Proxy")
         self._description = f"Ice {_host_of(proxy)}"
@@ -121,11 +121,13 @@ class IceDrone(Drone):
             key = f"{self._prefix}.{name}.Proxy"
             return self._com.propertyToProxy(key) if self._props.getProperty(key) else None
 
-        vehicle, cmdvel, pose = proxy("Vehicle"), proxy("CMDVel"), proxy("Pose3D")
+        vehicle, cmdvel, pose, extra = proxy("Vehicle"), proxy("CMDVel"), proxy("Pose3D"), proxy("Extra")
         if cmdvel is None or (vehicle is None and pose is None):
             raise ValueError(f"{self._prefix}.CMDVel.Proxy and {self._prefix}.Vehicle.Proxy (or, for a plain "
                              f"JdeRobot server, {self._prefix}.Pose3D.Proxy) must be configured")
         self._cmdvel = jderobot.CMDVelPrx.uncheckedCast(cmdvel.ice_invocationTimeout(self._call_ms))
+        if extra is not None:                  # the camera switch, with or without the extension
+            self._extra = jderobot.ArDroneExtraPrx.uncheckedCast(extra.ice_invocationTimeout(self._call_ms))
         if vehicle is not None:
             self._vehicle = mavlinkserver.VehiclePrx.uncheckedCast(vehicle.ice_invocationTimeout(self._call_ms))
             self._commands = mavlinkserver.VehiclePrx.uncheckedCast(
@@ -338,9 +340,10 @@ class IceDrone(Drone):
             failed(exc)
         return future
 
-    def _jderobot_command(self, name: str, role: str, call) -> Future:
-        """Without the extension: ``call(proxy)`` on a JdeRobot interface, which says nothing of the vehicle."""
-        prx = self._cmdvel if role == "CMDVel" else self._jde.get(role)
+    def _jderobot_command(self, name: str, role: str, call,
+                          said: str = "JdeRobot servers give no answer") -> Future:
+        """``call(proxy)`` on a JdeRobot interface, which says nothing of the vehicle: ACCEPTED once it returns."""
+        prx = self._cmdvel if role == "CMDVel" else self._extra if role == "Extra" else self._jde.get(role)
         if prx is None:
             return self._no_extension(name)
         future: Future = Future()
@@ -352,15 +355,17 @@ class IceDrone(Drone):
                 future.set_result(CommandResult(name, CommandStatus.REJECTED,
                                                 f"server unreachable: {type(exc).__name__}"))
                 return
-            future.set_result(self._local_result(name, CommandStatus.ACCEPTED,
-                                                 f"sent through {role}; JdeRobot servers give no answer").result())
+            future.set_result(self._local_result(name, CommandStatus.ACCEPTED, f"sent through {role}; {said}").result())
 
         def run() -> None:
             try:
                 call(prx).add_done_callback(answered)
             except Exception as exc:
                 future.set_result(CommandResult(name, CommandStatus.REJECTED, f"server unreachable: {exc}"))
-        self._worker.submit(run)
+        try:
+            self._worker.submit(run)
+        except RuntimeError as exc:                     # closed
+            future.set_result(CommandResult(name, CommandStatus.REJECTED, f"closed: {exc}"))
         return future
 
     def _local_result(self, name: str, status: CommandStatus, reason: str) -> Future:
@@ -429,6 +434,14 @@ class IceDrone(Drone):
         if self._vehicle is None:
             return self._no_extension("yaw")
         return self._command("yaw", lambda p: p.setYawAsync(float(degrees), bool(relative), float(rate_deg_s)))
+
+    def toggle_camera(self) -> Future:
+        """JdeRobot's ``Extra.toggleCam``: the server moves its Camera to its next source."""
+        if self._extra is None:
+            return self._local_result("switch camera", CommandStatus.REJECTED,
+                                      f"no {self._prefix}.Extra.Proxy configured")
+        return self._jderobot_command("switch camera", "Extra", lambda p: p.toggleCamAsync(),
+                                      "the server shows its next camera")
 
 
 def _host_of(proxy: str) -> str:
