@@ -50,10 +50,13 @@ def build_parser() -> argparse.ArgumentParser:
     video.add_argument("--camera", action="append", default=[], metavar="URI",
                        help="video source, repeatable (Switch camera moves to the next): 0, /dev/video0, clip.mp4, "
                             "rtsp://..., udp://0.0.0.0:5600, stream.sdp, solo, 'ice:Camera:default -h HOST -p 9999', "
-                            "sim (default with --sim; see docs/camera.md)")
+                            "sim (default with --sim; see docs/camera.md); overrides the cameras saved in "
+                            "Preferences for this run")
     misc = p.add_argument_group("logging")
     misc.add_argument("--log-dir", type=Path, default=None, metavar="DIR",
-                      help="record the flight's MAVLink to DIR/flight-<time>.tlog (and the viewer's log)")
+                      help="where every session records its MAVLink as flight-<time>.tlog, with the viewer's "
+                           "log (default: the per-user data folder, e.g. ~/.local/share/UavViewerPy/logs)")
+    misc.add_argument("--no-log", action="store_true", help="record no flight log this session")
     misc.add_argument("-v", "--verbose", action="count", default=0,
                       help="more log output (-v info, -vv debug)")
     # Hidden: for documentation screenshots.
@@ -73,8 +76,19 @@ def _setup_logging(verbose: int, log_dir: Path | None) -> None:
                         format="%(asctime)s %(levelname)s %(name)s: %(message)s")
 
 
+def default_log_dir() -> Path:
+    """The per-user data folder Qt knows for this platform, plus logs/."""
+    from PyQt5.QtCore import QCoreApplication, QStandardPaths
+    QCoreApplication.setApplicationName("UavViewerPy")
+    return Path(QStandardPaths.writableLocation(QStandardPaths.AppDataLocation)) / "logs"
+
+
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
+    if args.no_log:
+        args.log_dir = None
+    elif args.log_dir is None:
+        args.log_dir = default_log_dir()
     _setup_logging(args.verbose, args.log_dir)
     import time
 
@@ -116,13 +130,14 @@ def main(argv: list[str] | None = None) -> int:
     app.setApplicationName("UavViewerPy")
     app.setWindowIcon(QIcon(str(RESOURCES / "icons" / "app.svg")))
     app.setStyleSheet(load_style())
-    cameras = args.camera or (["sim"] if args.sim else [])
-    if remote and not args.camera:                                # the server's camera, from the viewer's config
+    own_camera = ["sim"] if args.sim else []                      # used when Preferences name no camera
+    if remote:                                                    # the server's camera, from the viewer's config
         from driver.ice.client import viewer_properties
         proxy = viewer_properties(str(args.ice) if args.ice else None, args.ice_host).getProperty(
             "UAVViewer.Camera.Proxy")
-        cameras = [f"ice:{proxy}"] if proxy else []
-    window = MainWindow(drone, takeoff_altitude=args.takeoff_altitude, cameras=cameras)
+        own_camera = [f"ice:{proxy}"] if proxy else []
+    window = MainWindow(drone, takeoff_altitude=args.takeoff_altitude, cameras=args.camera,  # --camera: this run
+                        default_cameras=own_camera)
     if args.connect or not (args.sim or args.replay or remote):
         window.settings.last_connection = connection          # remembered with the window state
     window.show()

@@ -242,6 +242,8 @@ class Vehicle(Drone):
         if self._started:
             return self
         self._started = True
+        if self._tlog:
+            self._add_message(Severity.INFO, f"Recording the flight log to {self._tlog.path}")
         for target, name in ((self._run_reader, "mavlink-reader"), (self._run_ticker, "mavlink-ticker")):
             t = threading.Thread(target=target, name=name, daemon=True)
             t.start()
