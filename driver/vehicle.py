@@ -130,12 +130,6 @@ class ReplayControl:
         return self._t.finished
 
 
-def _done(command: str, status: CommandStatus, reason: str = "", attempts: int = 0) -> Future:
-    f: Future = Future()
-    f.set_result(CommandResult(command, status, reason, attempts))
-    return f
-
-
 class _ParamEcho:
     """Waits for the PARAM_VALUE that confirms a PARAM_SET."""
 
@@ -165,7 +159,6 @@ class _ParamEcho:
                 self._cond.wait(remaining)
 
 
-
 class Vehicle(Drone):
     """An ArduCopter reached over MAVLink; the embedded driver behind the viewer and the Ice server."""
 
@@ -192,7 +185,6 @@ class Vehicle(Drone):
         self._state = VehicleState(link=LinkHealth(address=self._transport.description))
         self._target = cfg.target_system
         self._home: GlobalPosition | None = None
-        self._origin_alt: float | None = None
         self._prearm_reported = False
         self._last_seq: dict[tuple[int, int], int] = {}
         self._rx_count = 0
@@ -217,6 +209,7 @@ class Vehicle(Drone):
         self._takeoff_thread: threading.Thread | None = None
         self._param_echo = _ParamEcho()
 
+        self._outbox: collections.deque = collections.deque()   # messages posted by callers, sent by the ticker
         self._wake = threading.Event()
         self._closing = threading.Event()
         self._threads: list[threading.Thread] = []
@@ -331,6 +324,11 @@ class Vehicle(Drone):
             buf = msg.pack(self._codec_out, force_mavlink1=not self._v2)
             self._codec_out.seq = (self._codec_out.seq + 1) % 256
             self._write(buf)
+
+    def _post(self, msg) -> None:
+        """Send from the ticker thread: callers (the UI among them) never touch the link themselves."""
+        self._outbox.append(msg)
+        self._wake.set()
 
     def _write(self, buf: bytes) -> None:
         """Whole frames only, one writer at a time (caller holds _tx_lock)."""
@@ -533,7 +531,6 @@ class Vehicle(Drone):
     def _on_global_position(self, m) -> None:
         lat, lon, alt = m.lat * 1e-7, m.lon * 1e-7, m.alt * 1e-3
         rel = m.relative_alt * 1e-3
-        self._origin_alt = alt - rel
         fields = dict(position=GlobalPosition(lat, lon, alt), altitude=rel,
                       velocity=Velocity(m.vx / 100.0, m.vy / 100.0, m.vz / 100.0))
         if m.hdg != 0xFFFF:
@@ -625,6 +622,8 @@ class Vehicle(Drone):
             if now >= next_heartbeat:
                 next_heartbeat = now + self.config.heartbeat_interval
                 self._send_heartbeat()
+            while self._outbox:
+                self._send(self._outbox.popleft())
             with self._lock:
                 self._stream_setpoint(now)
                 self._service_commands(now)
@@ -806,7 +805,7 @@ class Vehicle(Drone):
 
     def set_safety(self, on: bool) -> Future:
         """Safety switch on (motors locked) or off, as MAVProxy's ``arm safetyon/safetyoff``."""
-        self._send(mavlink.MAVLink_set_mode_message(
+        self._post(mavlink.MAVLink_set_mode_message(
             self._tsys, mavlink.MAV_MODE_FLAG_DECODE_POSITION_SAFETY, 1 if on else 0))
         return self._finish(f"safety {'on' if on else 'off'}", CommandStatus.ACCEPTED, "sent (not acknowledged)")
 
@@ -878,9 +877,12 @@ class Vehicle(Drone):
             self._zero_repeats -= 1
 
     def _send_setpoint(self, sp: Setpoint) -> None:
-        self._send(mavlink.MAVLink_set_position_target_local_ned_message(
+        self._send(self._setpoint_message(sp))
+
+    def _setpoint_message(self, sp: Setpoint):
+        return mavlink.MAVLink_set_position_target_local_ned_message(
             0, self._tsys, self.config.target_component, mavlink.MAV_FRAME_BODY_OFFSET_NED,
-            MASK_VELOCITY_YAW_RATE, 0, 0, 0, sp.forward, sp.right, -sp.up, 0, 0, 0, 0, sp.yaw_rate))
+            MASK_VELOCITY_YAW_RATE, 0, 0, 0, sp.forward, sp.right, -sp.up, 0, 0, 0, 0, sp.yaw_rate)
 
     def go_to(self, north: float, east: float, altitude: float) -> Future:
         name = f"go to N{north:.1f} E{east:.1f} alt {altitude:.1f}"
@@ -897,11 +899,11 @@ class Vehicle(Drone):
             self._set(setpoint=self._setpoint)
         if self._home is not None:
             lat, lon = frames.offset_latlon(self._home.lat, self._home.lon, north, east)
-            self._send(mavlink.MAVLink_set_position_target_global_int_message(
+            self._post(mavlink.MAVLink_set_position_target_global_int_message(
                 0, self._tsys, self.config.target_component, mavlink.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT,
                 MASK_POSITION, int(round(lat * 1e7)), int(round(lon * 1e7)), float(altitude), 0, 0, 0, 0, 0, 0, 0, 0))
         else:
-            self._send(mavlink.MAVLink_set_position_target_local_ned_message(
+            self._post(mavlink.MAVLink_set_position_target_local_ned_message(
                 0, self._tsys, self.config.target_component, mavlink.MAV_FRAME_LOCAL_NED,
                 MASK_POSITION, north, east, -altitude, 0, 0, 0, 0, 0, 0, 0, 0))
         return self._finish(name, CommandStatus.ACCEPTED, "target sent")
@@ -914,7 +916,7 @@ class Vehicle(Drone):
             return busy
         if self._state.mode == "GUIDED" and self._setpoint.is_zero:
             # ArduCopter ignores yaw after takeoff until a first movement command
-            self._send_setpoint(Setpoint())
+            self._post(self._setpoint_message(Setpoint()))
         direction = (1 if degrees >= 0 else -1) if relative else 0
         angle = abs(degrees) if relative else degrees % 360.0
         return self.command_long(mavlink.MAV_CMD_CONDITION_YAW,
