@@ -22,6 +22,17 @@ class Limits:
     vertical: float = 1.0        # m/s
     yaw_rate: float = 0.785      # rad/s (45 deg/s)
 
+    def within(self, ceiling: "Limits") -> "Limits":
+        """These limits, none above ``ceiling`` and none negative or NaN."""
+        def cap(value: float, top: float) -> float:
+            return min(top, value) if value >= 0 else 0.0      # NaN compares false: becomes 0
+        return Limits(cap(self.horizontal, ceiling.horizontal), cap(self.vertical, ceiling.vertical),
+                      cap(self.yaw_rate, ceiling.yaw_rate))
+
+
+#: The most a pilot may configure (Preferences); the driver never streams beyond it.
+CEILING = Limits(10.0, 5.0, 3.1416)
+
 
 class Drone(abc.ABC):
     """A vehicle the pilot can fly."""
@@ -38,6 +49,13 @@ class Drone(abc.ABC):
     @property
     def limits(self) -> Limits:
         return Limits()
+
+    def set_limits(self, limits: Limits) -> Limits:
+        """Change the velocity clamps (the pilot's maximum speeds), capped at :data:`CEILING`.
+
+        Returns the limits now in force. Thread-safe; takes effect on the next setpoint.
+        """
+        raise NotImplementedError
 
     @property
     def replay(self):

@@ -7,6 +7,7 @@ copter flies from home (the 2017 driver reported raw millions of metres).
 from __future__ import annotations
 
 import math
+import numbers
 
 EARTH_RADIUS = 6378137.0  # WGS84 semi-major axis, m
 _M_PER_DEG = EARTH_RADIUS * math.pi / 180.0
@@ -60,7 +61,8 @@ def battery_percent_from_cell(cell_voltage: float) -> float:
 
 
 def finite(*values: float) -> bool:
-    return all(isinstance(v, (int, float)) and math.isfinite(v) for v in values)
+    """Real numbers (numpy's too), not booleans, neither NaN nor infinite."""
+    return all(isinstance(v, numbers.Real) and not isinstance(v, bool) and math.isfinite(v) for v in values)
 
 
 def clamp(value: float, limit: float) -> float:

@@ -134,23 +134,38 @@ class TlogWriter:
         self.path = path
         self._file = open(path, "ab" if append else "wb")
         self._lock = threading.Lock()
+        self.error = ""                       # why it stopped writing (disk full, ...); the link goes on
 
     def write(self, packet: bytes, when: float | None = None) -> None:
         stamp = struct.pack(">Q", int((time.time() if when is None else when) * 1e6))
         with self._lock:
             if self._file is not None:
-                self._file.write(stamp + packet)
+                try:
+                    self._file.write(stamp + packet)
+                except OSError as exc:
+                    self.error = f"{self.path}: {exc.strerror or exc}"
+                    self._close()
 
     def flush(self) -> None:
         with self._lock:
             if self._file is not None:
-                self._file.flush()
+                try:
+                    self._file.flush()
+                except OSError as exc:
+                    self.error = f"{self.path}: {exc.strerror or exc}"
+                    self._close()
 
     def close(self) -> None:
         with self._lock:
-            if self._file is not None:
+            self._close()
+
+    def _close(self) -> None:
+        if self._file is not None:
+            try:
                 self._file.close()
-                self._file = None
+            except OSError:
+                pass
+            self._file = None
 
 
 class TlogReplay(Transport):

@@ -291,8 +291,9 @@ class VehicleState:
 
     @property
     def can_fly_velocity(self) -> bool:
-        """Velocity setpoints are obeyed: GUIDED, armed and airborne, takeoff finished."""
-        return (self.mode == "GUIDED" and self.flying and not self.takeoff.active
+        """Velocity setpoints are obeyed: link up, GUIDED, armed and airborne, takeoff finished."""
+        return (self.link.status is LinkStatus.OK and self.mode == "GUIDED" and self.flying
+                and not self.takeoff.active
                 and self.landed_state in (LandedState.IN_AIR, LandedState.UNDEFINED))
 
     @property

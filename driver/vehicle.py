@@ -18,14 +18,14 @@ import collections
 import logging
 import threading
 import time
-from concurrent.futures import Future
+from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, field
 
 from pymavlink import mavutil
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from . import frames
-from .api import Drone, Limits
+from .api import CEILING, Drone, Limits
 from .link import LinkError, Transport, TlogWriter, open_transport, MavutilTransport
 from .state import (
     Attitude, Battery, CommandResult, CommandStatus, Environment, GlobalPosition, Gps, LandedState, LinkHealth,
@@ -46,6 +46,7 @@ _PREARM_BIT = mavlink.MAV_SYS_STATUS_PREARM_CHECK
 _EKF_NEEDED = (mavlink.EKF_ATTITUDE | mavlink.EKF_VELOCITY_HORIZ | mavlink.EKF_POS_HORIZ_ABS
                | mavlink.EKF_PRED_POS_HORIZ_ABS)
 _MAX_MESSAGES = 200
+PUBLISH_INTERVAL = 0.01            # s: state is republished at most at 100 Hz while telemetry streams
 _MAX_RESULTS = 100
 
 
@@ -91,6 +92,20 @@ class _Pending:
         self.refuse_at = 0.0
         self.expect_mode = expect_mode
         self.fallback_sent = False
+
+
+class _TakeoffRun:
+    """One takeoff sequence: its own abort flag and the commands it issued (cancelled on abort)."""
+
+    def __init__(self, altitude: float):
+        self.altitude = altitude
+        self.abort = threading.Event()
+        self.commands: set[int] = set()
+        self.thread: threading.Thread | None = None
+
+    @property
+    def alive(self) -> bool:
+        return self.thread is not None and self.thread.is_alive()
 
 
 class ReplayControl:
@@ -195,6 +210,7 @@ class Vehicle(Drone):
         self._last_attitude = 0.0
         self._link_status = LinkStatus.WAITING
         self._lost_count = 0
+        self._lost_at = 0.0
         self._streams_requested_at: float | None = None
         self._latest: dict = {}                       # newest telemetry message of each type in this read
 
@@ -205,10 +221,15 @@ class Vehicle(Drone):
         self._setpoint_sent = 0.0
         self._setpoint_dirty = False
         self._zero_repeats = 0
-        self._takeoff_abort = threading.Event()
-        self._takeoff_thread: threading.Thread | None = None
+        self._takeoff_run: _TakeoffRun | None = None
+        # futures resolve here, never under _lock nor on the link threads: a slow callback delays no one
+        self._results_thread = ThreadPoolExecutor(1, thread_name_prefix="command-results")
+        self._open_error = ""
         self._param_echo = _ParamEcho()
 
+        self._reopen = False                          # set by the ticker: reopen a reconnectable link
+        self._published_at = 0.0
+        self._limits = cfg.limits.within(CEILING)
         self._outbox: collections.deque = collections.deque()   # messages posted by callers, sent by the ticker
         self._wake = threading.Event()
         self._closing = threading.Event()
@@ -224,7 +245,11 @@ class Vehicle(Drone):
 
     @property
     def limits(self) -> Limits:
-        return self.config.limits
+        return self._limits
+
+    def set_limits(self, limits: Limits) -> Limits:
+        self._limits = limits.within(CEILING)         # one reference swap: safe from any thread
+        return self._limits
 
     @property
     def replay(self) -> ReplayControl | None:
@@ -250,7 +275,9 @@ class Vehicle(Drone):
     def close(self) -> None:
         if self._closing.is_set():
             return
-        self._takeoff_abort.set()
+        run = self._takeoff_run
+        if run is not None:
+            run.abort.set()
         if self._started and not self._setpoint.is_zero:
             self._send_setpoint(Setpoint())          # leave the vehicle hovering, not drifting
         self._closing.set()
@@ -265,6 +292,7 @@ class Vehicle(Drone):
                 self._resolve(p, CommandStatus.ABORTED, "driver closed")
             self._set(link=self._link_health(LinkStatus.CLOSED))
             self._publish()
+        self._results_thread.shutdown(wait=False)
         if self._tlog:
             self._tlog.close()
 
@@ -298,6 +326,7 @@ class Vehicle(Drone):
 
     def _publish(self) -> None:
         """Swap in a new snapshot (caller holds _lock)."""
+        self._published_at = time.monotonic()
         self._fields["time"] = time.time()
         self._state = VehicleState(**{**self._state.__dict__, **self._fields})
         self._fields = {}
@@ -381,16 +410,28 @@ class Vehicle(Drone):
                 try:
                     self._transport.open()
                     opened, backoff = True, 0.2
+                    self._open_error = ""
+                    self._reopen = False
+                    self._v2 = self.config.mavlink_version == 2
                     log.info("link open: %s", self._transport.description)
                     self._send_heartbeat()            # speak first: udpout and serial peers learn of us
                 except LinkError as exc:
+                    if str(exc) != self._open_error:          # say it once, and again when the reason changes
+                        self._open_error = str(exc)
+                        self._add_message(Severity.WARNING, f"{exc}; retrying")
                     log.info("%s; retrying in %.1f s", exc, backoff)
                     self._closing.wait(backoff)
                     backoff = min(backoff * 2, 3.0)
                     continue
-            try:
-                data = self._transport.read(0.05)
-            except LinkError as exc:
+            if self._reopen:                               # lost on a link that can be reopened (half-open TCP)
+                exc = LinkError("no heartbeat; reopening the link")
+            else:
+                try:
+                    data = self._transport.read(0.05)
+                    exc = None
+                except LinkError as error:
+                    exc = error
+            if exc is not None:
                 if self._closing.is_set():
                     break
                 self._add_message(Severity.WARNING, f"Link error: {exc}; reconnecting")
@@ -403,6 +444,9 @@ class Vehicle(Drone):
                 continue
             if data:
                 self.ingest(data)
+            elif self._latest or self._fields:
+                with self._lock:                              # traffic paused: publish what is held back
+                    self._fold_and_publish()
 
     def ingest(self, data: bytes) -> int:
         """Parse raw bytes as if read from the link and fold them into the state; returns messages parsed."""
@@ -422,15 +466,19 @@ class Vehicle(Drone):
                     n += self._handle(msg)
                 except Exception:                     # a malformed field must not stop the reader
                     log.exception("error handling %s", msg.get_type())
-            if n:
-                latest, self._latest = self._latest, {}
-                for mtype, msg in latest.items():     # telemetry: only the newest of each kind matters
-                    try:
-                        _TELEMETRY[mtype](self, msg)
-                    except Exception:
-                        log.exception("error handling %s", mtype)
-                self._publish()
+            if n and time.monotonic() - self._published_at >= PUBLISH_INTERVAL:
+                self._fold_and_publish()
         return n
+
+    def _fold_and_publish(self) -> None:
+        """Fold the newest telemetry of each kind into the state and publish it (caller holds _lock)."""
+        latest, self._latest = self._latest, {}
+        for mtype, msg in latest.items():             # telemetry: only the newest of each kind matters
+            try:
+                _TELEMETRY[mtype](self, msg)
+            except Exception:
+                log.exception("error handling %s", mtype)
+        self._publish()
 
     def _handle(self, msg) -> int:
         mtype = msg.get_type()
@@ -473,8 +521,9 @@ class Vehicle(Drone):
 
     # -- message handlers (reader thread, _lock held) -------------------------------------------
     def _on_heartbeat(self, m) -> None:
-        if m.autopilot == mavlink.MAV_AUTOPILOT_INVALID:
-            return
+        if m.autopilot == mavlink.MAV_AUTOPILOT_INVALID or (
+                self.config.target_component and m.get_srcComponent() != self.config.target_component):
+            return                                    # a gimbal, camera or companion computer, not the autopilot
         now = self._transport.clock()
         first = self._last_heartbeat is None
         self._last_heartbeat = now
@@ -595,8 +644,8 @@ class Vehicle(Drone):
 
     def _on_command_ack(self, m) -> None:
         p = self._pending.get(m.command)
-        if p is None:
-            return
+        if p is None or getattr(m, "target_system", 0) not in (0, self.config.source_system):
+            return                                    # not ours: another ground station's answer
         if m.result == mavlink.MAV_RESULT_ACCEPTED:
             self._resolve(p, CommandStatus.ACCEPTED)
         elif m.result == mavlink.MAV_RESULT_IN_PROGRESS:
@@ -619,22 +668,33 @@ class Vehicle(Drone):
         next_heartbeat = next_health = 0.0
         while not self._closing.is_set():
             now = time.monotonic()
-            if now >= next_heartbeat:
-                next_heartbeat = now + self.config.heartbeat_interval
-                self._send_heartbeat()
-            while self._outbox:
-                self._send(self._outbox.popleft())
-            with self._lock:
-                self._stream_setpoint(now)
-                self._service_commands(now)
-                if now >= next_health:
-                    next_health = now + 0.1
-                    self._supervise(now)
+            try:
+                if now >= next_heartbeat:
+                    next_heartbeat = now + self.config.heartbeat_interval
+                    self._send_heartbeat()
+                while self._outbox:
+                    self._send(self._outbox.popleft())
+                with self._lock:
+                    self._stream_setpoint(now)
+                    self._service_commands(now)
+                    if now >= next_health:
+                        next_health = now + 0.1
+                        self._supervise(now)
+            except Exception:                         # heartbeat, setpoints and deadman must outlive any bug
+                log.exception("ticker step failed")
             self._wake.wait(min(0.05, 1.0 / self.config.setpoint_rate))
             self._wake.clear()
 
     def _supervise(self, now: float) -> None:
-        """Link health, loss and stream re-requests; republishes every 100 ms."""
+        """Link health, loss, log failures and stream re-requests; republishes every 100 ms."""
+        if self._tlog is not None and self._tlog.error:
+            error, self._tlog = self._tlog.error, None
+            self._add_message(Severity.WARNING, f"Flight log stopped: {error}")
+        if (self._link_status is LinkStatus.LOST and self._transport.reconnectable and self._last_heartbeat
+                is not None and self._transport.clock() - self._last_heartbeat > self.config.loss_timeout + 5.0
+                and now - self._lost_at > 5.0):
+            self._lost_at = now
+            self._reopen = True                       # a half-open TCP link never errors: reopen it
         if not self._window or now - self._window[-1][0] >= 1.0:
             self._window.append((now, self._rx_count, self._rx_lost))
         status = self._link_status
@@ -642,6 +702,7 @@ class Vehicle(Drone):
             age = self._transport.clock() - self._last_heartbeat
             if age > self.config.loss_timeout:
                 self._link_status = LinkStatus.LOST
+                self._lost_at = now
                 self._lost_count += 1
                 self._set(link=self._link_health())
                 self._publish()
@@ -669,10 +730,17 @@ class Vehicle(Drone):
     # ------------------------------------------------------------------------------------------
     # commands
     # ------------------------------------------------------------------------------------------
-    def command_long(self, command: int, params=(), name: str | None = None, *,
-                     expect_mode: int | None = None) -> Future:
+    def command_long(self, command: int, params=(), name: str | None = None) -> Future:
         """Send any MAV_CMD as COMMAND_LONG with ACK handling and retries."""
         name = name or _command_name(command)
+        return self._busy(name) or self._command_long(command, params, name)
+
+    def _command_long(self, command: int, params=(), name: str | None = None, *,
+                      expect_mode: int | None = None) -> Future:
+        name = name or _command_name(command)
+        run = self._takeoff_run
+        if run is not None and threading.current_thread() is run.thread:
+            run.commands.add(command)                 # cancelled if the pilot aborts the takeoff
         params = [float(p) for p in (list(params) + [0.0] * 7)[:7]]
         if not frames.finite(*params):
             return self._finish(name, CommandStatus.REJECTED, "parameter is not a finite number")
@@ -718,7 +786,17 @@ class Vehicle(Drone):
             del self._pending[p.command]
         if not p.future.done():
             result = self._record(p.name, status, reason, p.attempts)
-            p.future.set_result(result)
+            self._settle(p.future, result)
+
+    def _settle(self, future: Future, result: CommandResult) -> None:
+        """Resolve off the link threads and outside _lock, so done-callbacks can take their time."""
+        def settle():
+            if not future.done():
+                future.set_result(result)
+        try:
+            self._results_thread.submit(settle)
+        except RuntimeError:                          # closing: no results thread any more
+            settle()
 
     def _record(self, command: str, status: CommandStatus, reason: str = "", attempts: int = 0) -> CommandResult:
         with self._lock:
@@ -750,19 +828,19 @@ class Vehicle(Drone):
                                 f"unknown mode; known: {', '.join(sorted(COPTER_MODES))}")
         if self._state.mode == name.upper() and self._state.connected:
             return self._finish(f"mode {name.upper()}", CommandStatus.ACCEPTED, "already in that mode")
-        return self.command_long(mavlink.MAV_CMD_DO_SET_MODE,
-                                 (mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, number), f"mode {name.upper()}",
-                                 expect_mode=number)
+        return self._command_long(mavlink.MAV_CMD_DO_SET_MODE,
+                                  (mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, number), f"mode {name.upper()}",
+                                  expect_mode=number)
 
     def arm(self, force: bool = False) -> Future:
         return self._busy("arm") or self._arm(force)
 
     def _arm(self, force: bool = False) -> Future:
-        return self.command_long(mavlink.MAV_CMD_COMPONENT_ARM_DISARM, (1, ARM_FORCE_MAGIC if force else 0),
+        return self._command_long(mavlink.MAV_CMD_COMPONENT_ARM_DISARM, (1, ARM_FORCE_MAGIC if force else 0),
                                  "arm (forced)" if force else "arm")
 
     def disarm(self, force: bool = False) -> Future:
-        return self._busy("disarm") or self.command_long(
+        return self._busy("disarm") or self._command_long(
             mavlink.MAV_CMD_COMPONENT_ARM_DISARM, (0, ARM_FORCE_MAGIC if force else 0),
             "disarm (forced)" if force else "disarm")
 
@@ -787,21 +865,22 @@ class Vehicle(Drone):
         return self._set_mode("BRAKE")
 
     def reboot(self) -> Future:
-        return self._busy("reboot") or self.command_long(mavlink.MAV_CMD_PREFLIGHT_REBOOT_SHUTDOWN, (1,), "reboot")
+        return self._busy("reboot") or self._command_long(mavlink.MAV_CMD_PREFLIGHT_REBOOT_SHUTDOWN, (1,), "reboot")
 
     def calibrate_level(self) -> Future:
         """Level (accelerometer trim) calibration; only sensible disarmed on the ground."""
         s = self._state
         if s.armed or s.flying:
             return self._finish("level calibration", CommandStatus.REJECTED, "only when disarmed on the ground")
-        return self.command_long(mavlink.MAV_CMD_PREFLIGHT_CALIBRATION, (0, 0, 0, 0, 2, 0, 0), "level calibration")
+        return self._busy("level calibration") or self._command_long(mavlink.MAV_CMD_PREFLIGHT_CALIBRATION, (0, 0, 0, 0, 2, 0, 0), "level calibration")
 
     def parachute(self, action: str) -> Future:
         actions = {"disable": mavlink.PARACHUTE_DISABLE, "enable": mavlink.PARACHUTE_ENABLE,
                    "release": mavlink.PARACHUTE_RELEASE}
         if action not in actions:
             return self._finish(f"parachute {action}", CommandStatus.REJECTED, "use enable, disable or release")
-        return self.command_long(mavlink.MAV_CMD_DO_PARACHUTE, (actions[action],), f"parachute {action}")
+        # never blocked by a takeoff: a parachute is the last resort
+        return self._command_long(mavlink.MAV_CMD_DO_PARACHUTE, (actions[action],), f"parachute {action}")
 
     def set_safety(self, on: bool) -> Future:
         """Safety switch on (motors locked) or off, as MAVProxy's ``arm safetyon/safetyoff``."""
@@ -813,6 +892,9 @@ class Vehicle(Drone):
         """PARAM_SET, confirmed by the PARAM_VALUE echo."""
         if not frames.finite(value) or not name or len(name) > 16:
             return self._finish(f"param {name}", CommandStatus.REJECTED, "bad name or value")
+        busy = self._busy(f"param {name}")
+        if busy:
+            return busy
         future: Future = Future()
 
         def watch():
@@ -840,7 +922,7 @@ class Vehicle(Drone):
             return False
         if self._state.takeoff.active:
             return False
-        lim = self.config.limits
+        lim = self._limits
         sp = Setpoint(frames.clamp(float(forward), lim.horizontal), frames.clamp(float(right), lim.horizontal),
                       frames.clamp(float(up), lim.vertical), frames.clamp(float(yaw_rate), lim.yaw_rate))
         with self._lock:
@@ -919,7 +1001,7 @@ class Vehicle(Drone):
             self._post(self._setpoint_message(Setpoint()))
         direction = (1 if degrees >= 0 else -1) if relative else 0
         angle = abs(degrees) if relative else degrees % 360.0
-        return self.command_long(mavlink.MAV_CMD_CONDITION_YAW,
+        return self._command_long(mavlink.MAV_CMD_CONDITION_YAW,
                                  (angle, abs(rate_deg_s), direction, 1 if relative else 0),
                                  f"yaw {'by' if relative else 'to'} {degrees:g}°")
 
@@ -932,41 +1014,53 @@ class Vehicle(Drone):
             return self._finish("takeoff", CommandStatus.REJECTED, "altitude must be 0.5 to 100 m")
         if self._replay is not None:
             return self._finish("takeoff", CommandStatus.REJECTED, "replaying a recording: no vehicle to command")
-        s = self._state
-        if s.takeoff.active:
-            return self._finish("takeoff", CommandStatus.REJECTED, "a takeoff is already running")
-        if s.flying:
-            return self._finish("takeoff", CommandStatus.REJECTED, "already flying")
-        future: Future = Future()
-        self._takeoff_abort.clear()
-        self._progress(SequencePhase.WAITING_READY, "", alt)
-        self._takeoff_thread = threading.Thread(target=self._takeoff_sequence, args=(alt, future),
-                                                name="takeoff", daemon=True)
-        self._takeoff_thread.start()
+        with self._lock:                              # check and start as one step: never two sequences
+            run = self._takeoff_run
+            if run is not None and run.alive:
+                why = "the aborted takeoff is still winding down" if run.abort.is_set() else "a takeoff is already running"
+                return self._finish("takeoff", CommandStatus.REJECTED, why)
+            if self._state.flying:
+                return self._finish("takeoff", CommandStatus.REJECTED, "already flying")
+            future: Future = Future()
+            run = self._takeoff_run = _TakeoffRun(alt)
+            run.thread = threading.Thread(target=self._takeoff_sequence, args=(run, future), name="takeoff",
+                                          daemon=True)
+            self._progress(run, SequencePhase.WAITING_READY)
+            run.thread.start()
         return future
 
     def _abort_takeoff(self, why: str) -> None:
-        if self._state.takeoff.active:
-            self._takeoff_abort.set()
-            self._progress(SequencePhase.ABORTED, f"aborted: {why}")
-
-    def _progress(self, phase: SequencePhase, detail: str = "", altitude: float | None = None) -> None:
+        """Stop the sequence and cancel what it asked the vehicle, so no retry launches it afterwards."""
         with self._lock:
-            current = self._state.takeoff
-            if current.phase is SequencePhase.ABORTED and phase is not SequencePhase.WAITING_READY:
-                return                                # an abort is final for this run
-            self._set(takeoff=SequenceProgress(phase, detail, current.target_altitude if altitude is None else altitude))
+            run = self._takeoff_run
+            if run is None or run.abort.is_set() or not run.alive:
+                return
+            run.abort.set()
+            for command in run.commands:
+                p = self._pending.get(command)
+                if p is not None:
+                    self._resolve(p, CommandStatus.ABORTED, f"takeoff aborted: {why}")
+            self._progress(run, SequencePhase.ABORTED, f"aborted: {why}")
+
+    def _progress(self, run: _TakeoffRun, phase: SequencePhase, detail: str = "") -> None:
+        with self._lock:
+            if run is not self._takeoff_run or self._state.takeoff.phase is SequencePhase.ABORTED and run.abort.is_set():
+                return                                # an abort is final for its run
+            if run.abort.is_set() and phase is not SequencePhase.ABORTED:
+                return
+            self._set(takeoff=SequenceProgress(phase, detail, run.altitude))
             self._publish()
         log.info("takeoff: %s %s", phase.value, detail)
 
-    def _takeoff_sequence(self, alt: float, future: Future) -> None:
+    def _takeoff_sequence(self, run: _TakeoffRun, future: Future) -> None:
         cfg = self.config
-        aborted = self._takeoff_abort.is_set
+        alt = run.altitude
+        aborted = run.abort.is_set
 
         def end(status: CommandStatus, reason: str, phase: SequencePhase):
             if aborted() and status is not CommandStatus.ABORTED:
                 status, reason, phase = CommandStatus.ABORTED, f"aborted by the pilot ({reason})", SequencePhase.ABORTED
-            self._progress(phase, reason)
+            self._progress(run, phase, reason)
             future.set_result(self._record("takeoff", status, reason))
 
         def wait(predicate, timeout):
@@ -991,11 +1085,11 @@ class Vehicle(Drone):
                 return end(CommandStatus.ABORTED if aborted() else CommandStatus.TIMED_OUT,
                            "aborted" if aborted() else "no vehicle on the link", SequencePhase.FAILED)
             if not self._state.readiness.ready_to_arm:
-                self._progress(SequencePhase.WAITING_READY, "waiting for GPS, EKF and pre-arm checks")
+                self._progress(run, SequencePhase.WAITING_READY, "waiting for GPS, EKF and pre-arm checks")
                 wait(lambda s: s.readiness.ready_to_arm, cfg.ready_timeout)   # then let the vehicle decide
             if aborted():
                 return end(CommandStatus.ABORTED, "aborted by the pilot", SequencePhase.ABORTED)
-            self._progress(SequencePhase.SETTING_GUIDED)
+            self._progress(run, SequencePhase.SETTING_GUIDED)
             r = step(self._set_mode("GUIDED"))
             if r is None:
                 return end(CommandStatus.ABORTED, "aborted by the pilot", SequencePhase.ABORTED)
@@ -1003,7 +1097,7 @@ class Vehicle(Drone):
                 return end(CommandStatus.REFUSED if r.status is CommandStatus.REFUSED else r.status,
                            f"GUIDED: {r.reason}", SequencePhase.FAILED)
             if not self._state.armed:
-                self._progress(SequencePhase.ARMING)
+                self._progress(run, SequencePhase.ARMING)
                 r = step(self._arm())
                 if r is None:
                     return end(CommandStatus.ABORTED, "aborted by the pilot", SequencePhase.ABORTED)
@@ -1012,14 +1106,14 @@ class Vehicle(Drone):
                 if not wait(lambda s: s.armed, cfg.command_timeout * 2):
                     return end(CommandStatus.ABORTED if aborted() else CommandStatus.REFUSED,
                                "the vehicle did not report armed", SequencePhase.FAILED)
-            self._progress(SequencePhase.TAKING_OFF, f"to {alt:.1f} m")
-            r = step(self.command_long(mavlink.MAV_CMD_NAV_TAKEOFF, (0, 0, 0, 0, 0, 0, alt),
+            self._progress(run, SequencePhase.TAKING_OFF, f"to {alt:.1f} m")
+            r = step(self._command_long(mavlink.MAV_CMD_NAV_TAKEOFF, (0, 0, 0, 0, 0, 0, alt),
                                        f"NAV_TAKEOFF {alt:.1f} m"))
             if r is None:
                 return end(CommandStatus.ABORTED, "aborted by the pilot", SequencePhase.ABORTED)
             if not r.ok:
                 return end(r.status, f"takeoff command: {r.reason}", SequencePhase.FAILED)
-            self._progress(SequencePhase.CLIMBING, f"to {alt:.1f} m")
+            self._progress(run, SequencePhase.CLIMBING, f"to {alt:.1f} m")
             if not wait(lambda s: s.altitude >= 0.95 * alt or not s.armed, cfg.climb_timeout):
                 if aborted():
                     return end(CommandStatus.ABORTED, "aborted by the pilot", SequencePhase.ABORTED)
@@ -1046,15 +1140,21 @@ class Vehicle(Drone):
             self._add_message(Severity.WARNING, f"Forwarding to {connection} failed: {exc}")
             return
         self._outputs.append(out)
+        parser = self._new_parser()                   # whole frames only: the log and the vehicle get no garbage
         while not self._closing.is_set():
             try:
                 data = out.read(0.2)
             except LinkError:
                 self._closing.wait(0.5)
                 continue
-            if data:
-                with self._tx_lock:
-                    self._write(data)
+            try:
+                frames_in = parser.parse_buffer(data) or () if data else ()
+            except Exception:
+                parser, frames_in = self._new_parser(), ()
+            for msg in frames_in:
+                if msg.get_type() != "BAD_DATA":
+                    with self._tx_lock:
+                        self._write(bytes(msg.get_msgbuf()))
 
 
 def _env(env: Environment, **changes) -> Environment:

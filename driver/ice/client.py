@@ -17,7 +17,7 @@ from concurrent.futures import Future, ThreadPoolExecutor
 
 import Ice
 
-from ..api import Drone, Limits
+from ..api import CEILING, Drone, Limits
 from ..frames import clamp, finite
 from ..state import (CommandResult, CommandStatus, LinkHealth, LinkStatus, Message, Severity, VehicleState,
                      replace)
@@ -64,6 +64,7 @@ class IceDrone(Drone):
         proxy = properties.getProperty(f"{prefix}.Vehicle.Proxy") or properties.getProperty(f"{prefix}.Pose3D.Proxy")
         self._description = f"Ice {_host_of(proxy)}"
         self._limits = Limits()
+        self._pilot_limits: Limits | None = None
 
         self._lock = threading.Lock()
         self._state = VehicleState(link=LinkHealth(status=LinkStatus.WAITING, address=self._description))
@@ -98,7 +99,13 @@ class IceDrone(Drone):
 
     @property
     def limits(self) -> Limits:
-        return self._limits
+        """The pilot's maximum speeds, never above what the server allows."""
+        pilot = self._pilot_limits
+        return self._limits if pilot is None else pilot.within(self._limits)
+
+    def set_limits(self, limits: Limits) -> Limits:
+        self._pilot_limits = limits.within(CEILING)
+        return self.limits
 
     def start(self) -> "IceDrone":
         init = Ice.InitializationData()
@@ -282,7 +289,7 @@ class IceDrone(Drone):
         if not finite(forward, right, up, yaw_rate):
             log.warning("velocity refused: not finite (%r, %r, %r, %r)", forward, right, up, yaw_rate)
             return False
-        lim = self._limits
+        lim = self.limits
         command = (clamp(float(forward), lim.horizontal), clamp(float(right), lim.horizontal),
                    clamp(float(up), lim.vertical), clamp(float(yaw_rate), lim.yaw_rate))
         with self._velocity_ready:
