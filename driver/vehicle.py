@@ -18,7 +18,7 @@ import collections
 import logging
 import threading
 import time
-from concurrent.futures import Future, ThreadPoolExecutor
+from concurrent.futures import Future
 from dataclasses import dataclass, field
 
 from pymavlink import mavutil
@@ -201,7 +201,7 @@ class Vehicle(Drone):
         self._target = cfg.target_system
         self._home: GlobalPosition | None = None
         self._prearm_reported = False
-        self._last_seq: dict[tuple[int, int], int] = {}
+        self._last_seq: dict[int, int] = {}         # component -> last sequence number (target system)
         self._rx_count = 0
         self._rx_lost = 0
         self._bad_crc = 0
@@ -222,8 +222,6 @@ class Vehicle(Drone):
         self._setpoint_dirty = False
         self._zero_repeats = 0
         self._takeoff_run: _TakeoffRun | None = None
-        # futures resolve here, never under _lock nor on the link threads: a slow callback delays no one
-        self._results_thread = ThreadPoolExecutor(1, thread_name_prefix="command-results")
         self._open_error = ""
         self._param_echo = _ParamEcho()
 
@@ -292,7 +290,6 @@ class Vehicle(Drone):
                 self._resolve(p, CommandStatus.ABORTED, "driver closed")
             self._set(link=self._link_health(LinkStatus.CLOSED))
             self._publish()
-        self._results_thread.shutdown(wait=False)
         if self._tlog:
             self._tlog.close()
 
@@ -481,34 +478,33 @@ class Vehicle(Drone):
         self._publish()
 
     def _handle(self, msg) -> int:
+        """One parsed frame (reader thread, _lock held); the hot path of telemetry ingest."""
         mtype = msg.get_type()
         if mtype == "BAD_DATA":
             if "CRC" in getattr(msg, "reason", ""):
                 self._bad_crc += 1
             return 0
-        src = (msg.get_srcSystem(), msg.get_srcComponent())
+        header = msg.get_header()
         if self._tlog:
             self._tlog.write(bytes(msg.get_msgbuf()))
-        if self._target == 0:
-            if mtype == "HEARTBEAT" and msg.autopilot != mavlink.MAV_AUTOPILOT_INVALID \
-                    and msg.type != mavlink.MAV_TYPE_GCS:
-                self._target = src[0]
-                self._set(system_id=src[0])
-                log.info("vehicle found: system %d", src[0])
-            else:
-                return 0
-        if src[0] != self._target:
-            return 0
+        system = header.srcSystem
+        if system != self._target:
+            if self._target or not (mtype == "HEARTBEAT" and msg.autopilot != mavlink.MAV_AUTOPILOT_INVALID
+                                    and msg.type != mavlink.MAV_TYPE_GCS):
+                return 0                              # another system (a second GCS), or no vehicle yet
+            self._target = system
+            self._set(system_id=system)
+            log.info("vehicle found: system %d", system)
         # sequence numbers: packet loss per component
-        seq = msg.get_seq()
-        last = self._last_seq.get(src)
+        component, seq = header.srcComponent, header.seq
+        last = self._last_seq.get(component)
         if last is not None:
-            gap = (seq - last - 1) % 256
+            gap = (seq - last - 1) & 0xFF
             if gap < 128:                             # larger jumps are a restart, not loss
                 self._rx_lost += gap
-        self._last_seq[src] = seq
+        self._last_seq[component] = seq
         self._rx_count += 1
-        if not self._v2 and self.config.mavlink_version is None and msg.get_msgbuf()[0] == 0xFD:
+        if not self._v2 and msg.get_msgbuf()[0] == 0xFD and self.config.mavlink_version is None:
             self._v2 = True
             log.info("vehicle speaks MAVLink 2: following it")
         if mtype in _TELEMETRY:
@@ -789,14 +785,12 @@ class Vehicle(Drone):
             self._settle(p.future, result)
 
     def _settle(self, future: Future, result: CommandResult) -> None:
-        """Resolve off the link threads and outside _lock, so done-callbacks can take their time."""
+        """Resolve on a thread of its own, outside _lock and off the link threads: a done-callback that
+        takes its time delays neither the link, nor callers, nor other commands' results."""
         def settle():
             if not future.done():
                 future.set_result(result)
-        try:
-            self._results_thread.submit(settle)
-        except RuntimeError:                          # closing: no results thread any more
-            settle()
+        threading.Thread(target=settle, name="command-result", daemon=True).start()
 
     def _record(self, command: str, status: CommandStatus, reason: str = "", attempts: int = 0) -> CommandResult:
         with self._lock:
@@ -853,8 +847,13 @@ class Vehicle(Drone):
 
     def stop(self) -> Future:
         """Hold position: zero velocity in GUIDED (which also cancels a go-to), BRAKE otherwise."""
+        taking_off = self._state.takeoff.active
         self._abort_takeoff("stop")
-        if self._state.mode == "GUIDED":
+        s = self._state
+        if not s.flying and not s.armed:
+            return self._finish("stop", CommandStatus.ACCEPTED,
+                                "takeoff aborted" if taking_off else "on the ground: nothing to stop")
+        if s.mode == "GUIDED":
             with self._lock:
                 self._setpoint = Setpoint()
                 self._set(setpoint=self._setpoint)

@@ -82,9 +82,14 @@ def test_yaw_rate_turns_the_nose(flying, sim):
     assert sim.received_setpoints[-1][2] == 1479               # velocity + yaw-rate mask
 
 
-def test_stop_holds_position(flying, sim):
+def test_stop_holds_position(sim, vehicle_factory):
+    # a deadman far longer than the test: only stop() can bring the setpoint to zero here
+    flying = vehicle_factory(f"tcp:127.0.0.1:{sim.tcp_port}", deadman=60.0)
+    assert flying.takeoff(3.0).result(timeout=60).ok
     hold_velocity(flying, sim, 2.0, 1.0, 0, 0, 1.0)
+    assert not flying.state().setpoint.is_zero
     assert flying.stop().result(timeout=5).ok
+    assert flying.state().setpoint.is_zero
     settle(flying, sim)
     held = sim.truth()
     end = held.time + 2.0
@@ -181,3 +186,58 @@ def test_heartbeats_stop_but_traffic_flows(sim, vehicle_factory):
     assert vehicle.wait_for(lambda s: s.link.status.value == "lost", 10)
     sim.faults.heartbeats = True
     assert vehicle.wait_for(lambda s: s.connected, 10)
+
+
+def test_stop_during_takeoff_cancels_what_the_takeoff_asked(vehicle, sim):
+    """The first NAV_TAKEOFF is lost; the pilot presses Stop; the retry must not launch the vehicle."""
+    assert vehicle.wait_for(lambda s: s.readiness.ready_to_arm, 20)
+    sim.faults.ignore_commands = {mavlink.MAV_CMD_NAV_TAKEOFF}
+    takeoff = vehicle.takeoff(3.0)
+    assert vehicle.wait_for(lambda s: s.takeoff.phase is SequencePhase.TAKING_OFF, 20)
+    assert vehicle.stop().result(timeout=5).ok
+    assert takeoff.result(timeout=5).status is CommandStatus.ABORTED
+    sim.faults.ignore_commands = set()                  # the radio recovers
+    n = len(sim.received_messages)
+    # three command timeouts later nothing of the takeoff went out again and the vehicle stayed down
+    end = sim.truth().time + 3 * vehicle.config.command_timeout * 4.0
+    vehicle.wait_for(lambda s: sim.truth().time >= end, 30)
+    assert sim.truth().landed_state == LandedState.ON_GROUND and -sim.truth().down < 0.2
+    aborted = [r for r in vehicle.state().results if r.command.startswith("NAV_TAKEOFF")]
+    assert aborted and aborted[-1].status is CommandStatus.ABORTED, aborted
+    assert sum(1 for m in list(sim.received_messages)[n:] if m[1] == "COMMAND_LONG") == 0
+
+
+def test_one_takeoff_at_a_time_even_after_an_abort(sim_factory, vehicle_factory):
+    sim = sim_factory(ready_after=600.0)                # never ready: the sequence waits
+    vehicle = vehicle_factory(f"tcp:127.0.0.1:{sim.tcp_port}", ready_timeout=600.0)
+    assert vehicle.wait_for(lambda s: s.connected, 10)
+    first = vehicle.takeoff()
+    assert vehicle.takeoff().result(timeout=2).status is CommandStatus.REJECTED
+    assert vehicle.land().result(timeout=10).ok
+    assert first.result(timeout=5).status is CommandStatus.ABORTED
+    second = vehicle.takeoff()
+    assert vehicle.wait_for(lambda s: s.takeoff.active, 5)
+    import threading
+    assert sum(1 for t in threading.enumerate() if t.name == "takeoff") == 1
+    stopped = vehicle.stop().result(timeout=5)
+    assert stopped.ok and stopped.reason == "takeoff aborted", stopped
+    assert second.result(timeout=5).status is CommandStatus.ABORTED
+
+
+def test_a_slow_result_callback_delays_neither_link_nor_caller(vehicle, sim):
+    import threading
+    release = threading.Event()
+    entered = threading.Event()
+
+    def slow(_future):
+        entered.set()
+        release.wait(30)                                # e.g. a client that chains a blocking call
+
+    vehicle.set_mode("LOITER").add_done_callback(slow)
+    try:
+        assert entered.wait(10)
+        count = vehicle.state().link.packets_received
+        assert vehicle.wait_for(lambda s: s.link.packets_received > count + 20, 10), "the link stalled"
+        assert vehicle.set_mode("GUIDED").result(timeout=10).ok is not None
+    finally:
+        release.set()

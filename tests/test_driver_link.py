@@ -13,6 +13,7 @@ from pymavlink import mavutil
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from driver import frames
+from driver.sim.autopilot import DEFAULT_PARAMS
 from driver.state import CommandStatus, LinkStatus
 
 
@@ -73,7 +74,11 @@ def test_nan_inf_and_huge_velocities_never_reach_the_wire(flying, sim):
     assert any(abs(r[3] - lim.horizontal) < 1e-6 for r in received)
 
 
-def test_deadman_zeroes_a_stalled_stream(flying, sim):
+def test_deadman_zeroes_a_stalled_stream(sim_factory, vehicle_factory):
+    """The driver falls to zero before the autopilot's own 3 s guided timeout would stop the vehicle."""
+    sim = sim_factory(speedup=1.0)                      # vehicle time = real time: the two timeouts compare
+    flying = vehicle_factory(f"tcp:127.0.0.1:{sim.tcp_port}")
+    assert flying.takeoff(3.0).result(timeout=60).ok
     assert flying.set_velocity(1.5, 0, 0, 0)
     assert flying.wait_for(lambda s: not s.setpoint.is_zero, 2)
     assert flying.wait_for(lambda s: s.setpoint.is_zero, 5), "deadman did not zero the setpoint"
@@ -81,6 +86,11 @@ def test_deadman_zeroes_a_stalled_stream(flying, sim):
     moving = [i for i, r in enumerate(received) if abs(r[3] - 1.5) < 1e-6]
     assert moving, received[-5:]
     assert flying.wait_for(lambda s: any(r[3] == 0.0 and r[4] == 0.0 for r in list(sim.received_setpoints)[moving[-1]:]), 5)
+    received = list(sim.received_setpoints)
+    last_moving = max(r[0] for r in received if abs(r[3] - 1.5) < 1e-6)
+    first_zero = min(r[0] for r in received if r[0] > last_moving and r[3] == 0.0)
+    guided_timeout = DEFAULT_PARAMS["GUID_TIMEOUT"][0]                # ArduCopter's own failsafe, 3 s
+    assert first_zero - last_moving < guided_timeout, (first_zero, last_moving)
     assert flying.wait_for(lambda s: math.hypot(sim.truth().vn, sim.truth().ve) < 0.2, 20)
 
 
@@ -108,9 +118,12 @@ def test_tlog_reads_back_with_pymavlink_and_replays(flying, sim, vehicle_factory
     path = flying.config.tlog_path
     flying.close()
     log = mavutil.mavlink_connection(path)
-    types = {}
+    types, stamps = {}, []
     while (m := log.recv_match()) is not None:
         types[m.get_type()] = types.get(m.get_type(), 0) + 1
+        stamps.append(m._timestamp)
+    assert "BAD_DATA" not in types, types
+    assert stamps == sorted(stamps)
     assert types.get("HEARTBEAT", 0) > 5 and types.get("ATTITUDE", 0) > 5 and types.get("COMMAND_ACK", 0) > 2
     assert types.get("SET_POSITION_TARGET_LOCAL_NED", 0) > 0 or types.get("COMMAND_LONG", 0) > 0
     dump = subprocess.run([sys.executable, "-m", "pymavlink.tools.mavlogdump", "--types", "HEARTBEAT", path],
@@ -175,3 +188,89 @@ def test_enu_pose_follows_jderobot_convention():
         w, x, y, z = frames.enu_quaternion(0.0, 0.0, math.radians(yaw_ned))
         got = math.degrees(math.atan2(2 * (x * y + w * z), w * w + x * x - y * y - z * z))
         assert abs(math.atan2(math.sin(math.radians(got - yaw_enu)), math.cos(math.radians(got - yaw_enu)))) < 1e-6
+
+
+def test_forwarded_traffic_keeps_the_tlog_clean(sim, vehicle_factory, tmp_path):
+    gcs = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+    gcs.bind(("127.0.0.1", 0))
+    gcs.settimeout(5)
+    try:
+        path = str(tmp_path / "forward.tlog")
+        vehicle = vehicle_factory(f"tcp:127.0.0.1:{sim.tcp_port}", tlog_path=path,
+                                  outputs=(f"udp:127.0.0.1:{gcs.getsockname()[1]}",))
+        assert vehicle.wait_for(lambda s: s.connected, 10)
+        _, addr = gcs.recvfrom(65536)
+        out = mavlink.MAVLink(None, srcSystem=254, srcComponent=190)
+        beat = mavlink.MAVLink_heartbeat_message(6, 8, 0, 0, 4, 3)
+        two = beat.pack(out) + beat.pack(out)
+        gcs.sendto(two, addr)                                           # two frames in one datagram
+        gcs.sendto(b"\xfe\x09garbage-not-a-frame" * 3, addr)           # and noise
+        cmd = mavlink.MAVLink_command_long_message(1, 1, mavlink.MAV_CMD_DO_SET_MODE, 0, 1, 5, 0, 0, 0, 0, 0)
+        gcs.sendto(cmd.pack(out), addr)
+        assert vehicle.wait_for(lambda s: s.mode == "LOITER", 10)
+        vehicle.close()
+    finally:
+        gcs.close()
+    log = mavutil.mavlink_connection(path)
+    seen = []
+    while (m := log.recv_match()) is not None:
+        seen.append((m.get_type(), m.get_srcSystem()))
+    assert ("BAD_DATA", 254) not in seen and not any(t == "BAD_DATA" for t, _ in seen)
+    assert seen.count(("HEARTBEAT", 254)) == 2
+
+
+def test_a_failing_flight_log_stops_with_a_warning_and_flying_goes_on(sim, vehicle_factory):
+    vehicle = vehicle_factory(f"tcp:127.0.0.1:{sim.tcp_port}", tlog_path="/dev/full")   # every write: ENOSPC
+    s = vehicle.wait_for(lambda s: any(m.text.startswith("Flight log stopped") for m in s.messages), 10)
+    assert s is not None, [m.text for m in vehicle.state().messages]
+    assert vehicle.wait_for(lambda s: s.readiness.ready_to_arm, 15)
+    assert vehicle.arm().result(timeout=10).ok                           # commands, heartbeat, ticker alive
+    count = vehicle.state().link.packets_received
+    assert vehicle.wait_for(lambda s: s.link.packets_received > count + 10, 10)
+
+
+def test_serial_link_over_a_pseudo_terminal(sim, vehicle_factory):
+    """A serial device (a pty here) bridged to the simulated vehicle: the driver flies through it."""
+    import pty
+    import select
+    import threading
+    import tty
+    master, slave = pty.openpty()
+    tty.setraw(slave)
+    device = os.ttyname(slave)
+    vehicle_side = socket.create_connection(("127.0.0.1", sim.tcp_port))
+    stop = threading.Event()
+
+    def bridge():
+        while not stop.is_set():
+            ready, _, _ = select.select([master, vehicle_side], [], [], 0.1)
+            try:
+                if master in ready:
+                    vehicle_side.sendall(os.read(master, 4096))
+                if vehicle_side in ready:
+                    os.write(master, vehicle_side.recv(4096))
+            except OSError:
+                return
+
+    t = threading.Thread(target=bridge, daemon=True)
+    t.start()
+    try:
+        vehicle = vehicle_factory(device, baud=115200)
+        assert vehicle.wait_for(lambda s: s.connected and s.readiness.ready_to_arm, 15), vehicle.state().link
+        assert vehicle.arm().result(timeout=10).ok
+    finally:
+        stop.set()
+        t.join(2)
+        vehicle_side.close()
+        os.close(master)
+        os.close(slave)
+
+
+def test_a_link_that_cannot_open_says_why(vehicle_factory):
+    probe = socket.socket()
+    probe.bind(("127.0.0.1", 0))
+    port = probe.getsockname()[1]
+    probe.close()                                                     # nothing listens there
+    vehicle = vehicle_factory(f"tcp:127.0.0.1:{port}")
+    s = vehicle.wait_for(lambda s: any("cannot open" in m.text for m in s.messages), 10)
+    assert s is not None and s.link.status is LinkStatus.WAITING
