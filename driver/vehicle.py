@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import collections
 import logging
+import math
 import threading
 import time
 from concurrent.futures import Future
@@ -61,6 +62,8 @@ class VehicleConfig:
     stream_rate: int = 4                      # Hz, MAVProxy's default
     attitude_rate: int = 10                   # Hz for ATTITUDE and VFR_HUD, as QGroundControl
     takeoff_altitude: float = 3.0             # m above home
+    max_altitude: float = 120.0               # m above home: no takeoff or go-to target above it (EU open category)
+    max_distance: float = 500.0               # m from home: no go-to target beyond it
     limits: Limits = field(default_factory=Limits)
     tlog_path: str | None = None
     tlog_append: bool = False
@@ -966,9 +969,13 @@ class Vehicle(Drone):
             MASK_VELOCITY_YAW_RATE, 0, 0, 0, sp.forward, sp.right, -sp.up, 0, 0, 0, 0, sp.yaw_rate)
 
     def go_to(self, north: float, east: float, altitude: float) -> Future:
-        name = f"go to N{north:.1f} E{east:.1f} alt {altitude:.1f}"
         if not frames.finite(north, east, altitude):
             return self._finish("go to", CommandStatus.REJECTED, "coordinates are not finite numbers")
+        name = f"go to N{north:.1f} E{east:.1f} alt {altitude:.1f}"
+        cfg = self.config
+        if not 1.0 <= altitude <= cfg.max_altitude or math.hypot(north, east) > cfg.max_distance:
+            return self._finish(name, CommandStatus.REJECTED, f"outside the limits: 1 to {cfg.max_altitude:g} m "
+                                f"above home, at most {cfg.max_distance:g} m from it")
         busy = self._busy(name)
         if busy:
             return busy
@@ -1009,8 +1016,9 @@ class Vehicle(Drone):
     # ------------------------------------------------------------------------------------------
     def takeoff(self, altitude: float | None = None) -> Future:
         alt = self.config.takeoff_altitude if altitude is None else altitude
-        if not frames.finite(alt) or not 0.5 <= alt <= 100.0:
-            return self._finish("takeoff", CommandStatus.REJECTED, "altitude must be 0.5 to 100 m")
+        if not frames.finite(alt) or not 0.5 <= alt <= self.config.max_altitude:
+            return self._finish("takeoff", CommandStatus.REJECTED,
+                                f"altitude must be 0.5 to {self.config.max_altitude:g} m")
         if self._replay is not None:
             return self._finish("takeoff", CommandStatus.REJECTED, "replaying a recording: no vehicle to command")
         with self._lock:                              # check and start as one step: never two sequences

@@ -100,6 +100,10 @@ def test_stop_holds_position(sim, vehicle_factory):
 
 
 def test_go_to_a_local_point(flying, sim):
+    for north, east, alt in ((0, 0, 500.0), (400.0, 400.0, 5.0), (0, 0, -2.0), (math.nan, 0, 5)):
+        refused = flying.go_to(north, east, alt).result(timeout=5)
+        assert refused.status is CommandStatus.REJECTED, refused
+    assert not any(m[1] == "SET_POSITION_TARGET_GLOBAL_INT" for m in list(sim.received_messages))
     assert flying.go_to(6.0, -4.0, 5.0).result(timeout=5).ok
     assert flying.wait_for(lambda s: math.hypot(sim.truth().north - 6.0, sim.truth().east + 4.0) < 0.5
                            and abs(-sim.truth().down - 5.0) < 0.4, 40), sim.truth()
