@@ -35,6 +35,17 @@ def write_clip(path: str, colours=COLOURS, repeat: int = 1, size=(320, 240), fps
     return path
 
 
+def frames_and_rate(path: str) -> tuple[int, float]:
+    """How many frames a video file holds, and the frame rate its container declares."""
+    cap = cv2.VideoCapture(path)
+    fps = cap.get(cv2.CAP_PROP_FPS)
+    n = 0
+    while cap.read()[0]:
+        n += 1
+    cap.release()
+    return n, fps
+
+
 def write_ts(path: str, colours=COLOURS, repeat: int = 10, size=(320, 240)) -> bytes:
     """An MPEG-TS file (MPEG-1 video); returns its bytes."""
     write_clip(path, colours, repeat, size, fourcc="PIM1")
@@ -46,12 +57,17 @@ def write_ts(path: str, colours=COLOURS, repeat: int = 10, size=(320, 240)) -> b
 
 
 class UdpSender:
-    """Sends MPEG-TS bytes to 127.0.0.1:port in a loop, 7 TS packets a datagram, optionally as RTP."""
+    """Sends MPEG-TS bytes to 127.0.0.1:port in a loop, 7 TS packets a datagram, optionally as RTP.
+
+    :meth:`pause` stops sending with the socket left open, as a camera that goes quiet.
+    """
 
     def __init__(self, data: bytes, port: int, rtp: bool = False, rate_bytes_s: float = 400_000):
         self.data, self.port, self.rtp = data, port, rtp
         self._period = 7 * TS_PACKET / rate_bytes_s
         self._stop = threading.Event()
+        self._sending = threading.Event()
+        self._sending.set()
         self._thread = threading.Thread(target=self._run, daemon=True)
         self.sent = 0
 
@@ -62,8 +78,15 @@ class UdpSender:
     def __exit__(self, *exc):
         self.stop()
 
+    def pause(self):
+        self._sending.clear()
+
+    def resume(self):
+        self._sending.set()
+
     def stop(self):
         self._stop.set()
+        self._sending.set()
         self._thread.join(2)
 
     def _run(self):
@@ -73,6 +96,7 @@ class UdpSender:
         try:
             while not self._stop.is_set():
                 for off in range(0, len(self.data), chunk):
+                    self._sending.wait()
                     if self._stop.is_set():
                         break
                     payload = self.data[off:off + chunk]

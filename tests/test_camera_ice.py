@@ -11,7 +11,7 @@ import pytest
 
 Ice = pytest.importorskip("Ice", reason="zeroc-ice is not installed")
 
-from camera_media import COLOURS, free_udp_port, wait, write_clip  # noqa: E402
+from camera_media import COLOURS, UdpSender, free_udp_port, wait, write_clip, write_ts  # noqa: E402
 from driver.camera import open_source  # noqa: E402
 from driver.camera.sim import SimulatedCamera  # noqa: E402
 from driver.ice import load_slice  # noqa: E402
@@ -85,6 +85,42 @@ def test_round_trip_preserves_pixels_exactly(serve):
     assert (d.width, d.height, d.size, d.format) == (640, 480, 640 * 480 * 3, "RGB8")
 
 
+class CountingCamera(CameraI):
+    """Counts the getImageData calls that reach the server."""
+
+    calls = 0
+
+    def getImageData(self, format, current=None):
+        self.calls += 1
+        return super().getImageData(format, current)
+
+
+def test_ice_source_asks_about_once_per_new_frame(serve):
+    """Each ask that gets the same image again sends the whole image again: the client paces its asks
+    to the camera's frame rate (30 frames/s here) rather than asking as fast as it can."""
+    servant = CountingCamera({"Uri": "sim"}, StillVehicle())
+    src = open_source("ice:" + serve(servant, "Camera"))
+    try:
+        wait(lambda: src.status().frames >= 10, what="video over Ice")
+        calls, frames = servant.calls, src.status().frames
+        wait(lambda: src.status().frames >= frames + 30, what="30 more frames")
+        calls, frames = servant.calls - calls, src.status().frames - frames
+    finally:
+        src.close(wait=3)
+    assert calls < 2 * frames, f"{calls} asks for {frames} new frames"
+
+
+def test_description_gives_the_size_and_only_a_uri_others_can_watch(serve):
+    sim = camera_proxy(serve, serve(CameraI({"Uri": "sim"}, StillVehicle()), "Sim"))
+    wait(lambda: "640×480" in sim.getCameraDescription().shortDescription, what="the size once a frame exists")
+    port = free_udp_port()
+    listening = camera_proxy(serve, serve(CameraI({"Uri": f"udp://0.0.0.0:{port}", "TimeoutMs": "500"}), "Udp"))
+    assert listening.getCameraDescription().streamingUri == ""    # our own receive port: nobody else can read it
+    assert listening.startCameraStreaming() == ""
+    rtsp = camera_proxy(serve, serve(CameraI({"Uri": "rtsp://127.0.0.1:1/cam", "TimeoutMs": "500"}), "Rtsp"))
+    assert rtsp.getCameraDescription().streamingUri == "rtsp://127.0.0.1:1/cam"
+
+
 def test_unknown_format_lists_supported_ones(serve):
     cam = camera_proxy(serve, serve(CameraI({"Uri": "sim"}, StillVehicle()), "Camera"))
     assert cam.getImageFormat() == ["RGB8", "GRAY8"]
@@ -121,6 +157,31 @@ def test_no_image_yet_then_source_gone(serve, tmp_path):
     with pytest.raises(jderobot.HardwareFailedException) as err:
         cam.getImageData("RGB8")
     assert "no such file" in err.value.what
+
+
+def test_stalled_stream_is_a_hardware_failure_until_frames_resume(serve, tmp_path):
+    """A stream gone quiet while the capture still waits in its read fails with the reason, not a frozen image."""
+    data = write_ts(str(tmp_path / "s.ts"))
+    port = free_udp_port()
+    with UdpSender(data, port) as sender:
+        servant = CameraI({"Uri": f"udp://127.0.0.1:{port}", "TimeoutMs": "30000", "StallMs": "500"})
+        cam = camera_proxy(serve, serve(servant, "Camera"))
+        wait(lambda: _try(lambda: cam.getImageData("RGB8")), what="image")
+        sender.pause()
+        err = wait(lambda: _failure(lambda: cam.getImageData("RGB8")), what="the stall reported")
+        assert "no frame for " in err.what
+        sender.resume()
+        wait(lambda: _failure(lambda: cam.getImageData("RGB8")) is None, what="images again")
+        servant.close()                                   # while frames still come: the read returns
+
+
+def _failure(call):
+    """The HardwareFailedException ``call`` raises, else None."""
+    try:
+        call()
+    except jderobot.HardwareFailedException as e:
+        return e
+    return None
 
 
 def test_file_served_frames_keep_their_colours(serve, tmp_path):

@@ -9,7 +9,7 @@ import cv2
 import numpy as np
 import pytest
 
-from camera_media import COLOURS, UdpSender, free_udp_port, wait, write_clip, write_ts
+from camera_media import COLOURS, UdpSender, frames_and_rate, free_udp_port, wait, write_clip, write_ts
 from driver.camera import VideoRecorder, open_source, save_snapshot
 from driver.camera.sim import SKY, SimulatedCamera
 from driver.camera.solo import SoloSource, write_sdp
@@ -91,6 +91,36 @@ def test_missing_file_says_so_and_retries(tmp_path, sources):
     wait(lambda: src.latest() is not None, what="the file once it exists")
 
 
+QUIET_RETRIES = """
+import sys, time
+from driver.camera import open_source
+sources = [open_source(uri, timeout_ms=300) for uri in sys.argv[1:]]
+deadline = time.monotonic() + 10
+while time.monotonic() < deadline and not all(s.status().attempts >= 3 for s in sources):
+    time.sleep(0.05)
+for s in sources:
+    print(s.status().reason)
+"""
+
+
+def test_missing_camera_says_no_such_device_and_retries_quietly():
+    """A webcam that is not plugged in, or a stream nobody sends: the reason is on screen, and retrying
+    does not fill the terminal with OpenCV's own warnings."""
+    import os
+    import subprocess
+    import sys
+    missing = next(n for n in range(90, 200) if not os.path.exists(f"/dev/video{n}"))
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    env = {k: v for k, v in os.environ.items() if k != "OPENCV_LOG_LEVEL"}
+    run = subprocess.run([sys.executable, "-c", QUIET_RETRIES, f"/dev/video{missing}",
+                          f"udp://127.0.0.1:{free_udp_port()}"], cwd=root, env=env, capture_output=True,
+                         text=True, timeout=30)
+    device, stream = run.stdout.splitlines()
+    assert device.startswith(f"no such device: /dev/video{missing}")
+    assert stream.startswith("cannot open udp://")
+    assert "WARN" not in run.stderr and "ERROR" not in run.stderr, run.stderr
+
+
 def test_mpegts_over_udp(tmp_path, sources):
     data = write_ts(str(tmp_path / "stream.ts"))
     port = free_udp_port()
@@ -114,6 +144,23 @@ def test_stream_that_stops_reports_and_comes_back(tmp_path, sources):
     before = src.status().frames
     with UdpSender(data, port):
         wait(lambda: src.status().live and src.status().frames > before, what="video again")
+
+
+def test_stream_that_goes_quiet_is_stalled_then_live_again(tmp_path, sources):
+    """The sender stops with its socket open: the capture hangs in a read (30 s timeout here),
+    yet the source says "stalled" as soon as no frame has come for the stall time."""
+    data = write_ts(str(tmp_path / "stream.ts"))
+    port = free_udp_port()
+    src = sources(f"udp://127.0.0.1:{port}", timeout_ms=30000, stall_s=0.5)
+    with UdpSender(data, port) as sender:
+        wait(lambda: src.status().live and src.status().frames >= 5, what="video")
+        sender.pause()
+        stalled = wait(lambda: (s := src.status()).state == "stalled" and s, what="the stall noticed")
+        assert stalled.reason.startswith("no frame for ") and not stalled.live
+        assert stalled.attempts == 1                      # still the first connection: the read has not timed out
+        sender.resume()
+        wait(lambda: src.status().live and src.status().frames > stalled.frames + 1, what="video again")
+        src.close(wait=3)                                 # while frames still come: the read returns
 
 
 def test_rtp_described_by_sdp(tmp_path, sources):
@@ -229,6 +276,20 @@ def test_snapshot_and_recording_are_readable(tmp_path, sources):
             colours.append(c)
     cap.release()
     assert colours == COLOURS
+
+
+def test_recording_plays_at_the_source_frame_rate(tmp_path, sources):
+    """Nobody tells the recorder the rate: a 10 frames/s camera makes a 10 frames/s file, every frame in it."""
+    clip = write_clip(str(tmp_path / "ten.mp4"), COLOURS, repeat=5, fps=10)
+    src = sources(clip + "?loop=1", start=False)
+    recorder = VideoRecorder(str(tmp_path / "rec.mp4"))
+    src.add_listener(recorder.push)
+    src.start()
+    wait(lambda: recorder.frames_written >= 20, what="2 s recorded")
+    src.remove_listener(recorder.push)
+    n, fps = frames_and_rate(recorder.stop())
+    assert fps == pytest.approx(10, abs=1)
+    assert n == recorder.frames_written >= 20 and recorder.frames_dropped == 0
 
 
 def horizon_rows(image: np.ndarray, columns=(100, 540)) -> list[int]:

@@ -7,15 +7,16 @@ import os
 import cv2
 import numpy as np
 import pytest
-from PyQt5.QtGui import QColor
+from PyQt5.QtCore import QRectF
+from PyQt5.QtGui import QColor, QImage, QPainter
 
-from camera_media import COLOURS, UdpSender, free_udp_port, write_clip, write_ts
+from camera_media import COLOURS, UdpSender, frames_and_rate, free_udp_port, write_clip, write_ts
 from viewer_fixtures import viewer_settings, window_factory  # noqa: F401  (fixtures)
-from driver.state import Attitude, LocalPosition, VehicleState
+from driver.state import Attitude, Battery, LocalPosition, VehicleState, Velocity
 from uavviewer.camera_controller import CameraController
 from uavviewer.widgets.camera_panel import CameraPanel
 from uavviewer.widgets.camera_view import BACKGROUND
-from uavviewer.widgets.video_hud import HUD_COLOUR
+from uavviewer.widgets.video_hud import HUD_COLOUR, paint_hud, text_rows
 
 HOVER = VehicleState(attitude=Attitude(roll=math.radians(10)), local=LocalPosition(0, 0, -4), altitude=4.0,
                      mode="GUIDED")
@@ -114,6 +115,33 @@ def test_dead_source_shows_why_and_recovers(qtbot, camera, tmp_path):
         controller.source.close(wait=3)
 
 
+def test_stalled_stream_shows_why_without_the_hud_then_recovers(qtbot, camera, tmp_path):
+    """A camera that goes quiet (the capture still waiting in its read) is not shown as a frozen
+    live picture: the view says why, without picture or HUD, and shows video again when it resumes."""
+    data = write_ts(str(tmp_path / "s.ts"))
+    port = free_udp_port()
+    with UdpSender(data, port) as sender:
+        panel, controller = camera([f"udp://127.0.0.1:{port}"], state_fn=lambda: HOVER, timeout_ms=30000,
+                                   stall_s=0.5)
+        view = panel.view
+        qtbot.waitUntil(lambda: view.frame() is not None and hud_pixels(view) > 200, timeout=8000)
+        sender.pause()
+        qtbot.waitUntil(lambda: view.message().startswith("No video: no frame for "), timeout=5000)
+        assert view.frame() is None and hud_pixels(view) == 0
+        sender.resume()
+        qtbot.waitUntil(lambda: view.frame() is not None and view.message() == "", timeout=8000)
+        controller.source.close(wait=3)                   # while frames still come: the read returns
+
+
+def hud_pixels(view):
+    """How many pixels of the view are painted in the HUD's colour."""
+    img = view.grab().toImage()
+    arr = np.frombuffer(img.convertToFormat(img.Format_RGB888).constBits().asstring(img.width() * img.height() * 3),
+                        np.uint8)
+    arr = arr.reshape(img.height(), img.width(), 3)
+    return int(np.count_nonzero(np.all(arr == HUD_COLOUR.getRgb()[:3], axis=2)))
+
+
 def test_stats_line_counts_what_is_painted(qtbot, camera, tmp_path):
     clip = write_clip(str(tmp_path / "c.mp4"), COLOURS, repeat=40)
     panel, controller = camera([clip])
@@ -125,7 +153,7 @@ def test_stats_line_counts_what_is_painted(qtbot, camera, tmp_path):
 
 
 def test_snapshot_and_recording_write_readable_files(qtbot, camera, tmp_path):
-    clip = write_clip(str(tmp_path / "c.mp4"), COLOURS[:3], repeat=20)
+    clip = write_clip(str(tmp_path / "c.mp4"), COLOURS[:3], repeat=10, fps=15)
     panel, controller = camera([clip + "?loop=1"])
     qtbot.waitUntil(lambda: panel.view.frame() is not None, timeout=5000)
     with qtbot.waitSignal(controller.snapshotSaved) as saved:
@@ -144,12 +172,25 @@ def test_snapshot_and_recording_write_readable_files(qtbot, camera, tmp_path):
         panel.record_button.click()
     path = stopped.args[1]
     assert stopped.args[0] is False and os.path.basename(path).startswith("video-")
-    cap = cv2.VideoCapture(path)
-    n = 0
-    while cap.read()[0]:
-        n += 1
-    cap.release()
+    n, fps = frames_and_rate(path)
     assert n == recorder.frames_written >= 15
+    assert fps == pytest.approx(15, abs=1)               # plays at the speed it was filmed
+
+
+def test_recording_that_fails_on_its_thread_says_so(qtbot, camera, tmp_path):
+    """The encoder opens the file only once it knows the frame rate; if it cannot then (the media
+    folder has gone), REC goes away and the pilot is told, without pressing anything."""
+    import shutil
+    clip = write_clip(str(tmp_path / "c.mp4"), COLOURS[:3], repeat=20)
+    panel, controller = camera([clip + "?loop=1"], folder=str(tmp_path / "gone"))
+    qtbot.waitUntil(lambda: panel.view.frame() is not None, timeout=5000)
+    panel.record_button.click()
+    assert controller.recording
+    shutil.rmtree(tmp_path / "gone")
+    with qtbot.waitSignal(controller.failed, timeout=5000) as failed:
+        pass
+    assert failed.args[0].startswith("Cannot record: ") and panel.note.text() == failed.args[0]
+    assert not controller.recording and not panel.record_button.isChecked() and panel.view._recording == ""
 
 
 def test_snapshot_without_video_says_so(qtbot, camera, tmp_path):
@@ -163,18 +204,50 @@ def test_hud_toggles_over_the_video(qtbot, camera):
     panel, controller = camera(["sim"], state_fn=lambda: HOVER)
     view = panel.view
     qtbot.waitUntil(lambda: view.frame() is not None, timeout=5000)
-
-    def hud_pixels():
-        img = view.grab().toImage()
-        arr = np.frombuffer(img.convertToFormat(img.Format_RGB888).constBits().asstring(img.width() * img.height() * 3),
-                            np.uint8)
-        arr = arr.reshape(img.height(), img.width(), 3)
-        return int(np.count_nonzero(np.all(arr == HUD_COLOUR.getRgb()[:3], axis=2)))
-
-    assert hud_pixels() > 200
+    assert hud_pixels(view) > 200
     panel.hud_button.click()
     assert not view.hud_visible()
-    assert hud_pixels() == 0
+    assert hud_pixels(view) == 0
+
+
+def hud_image(state, size=(448, 336)):
+    """The HUD alone, painted over black, as an array (rows, columns, R G B)."""
+    img = QImage(size[0], size[1], QImage.Format_RGB888)
+    img.fill(QColor(0, 0, 0))
+    p = QPainter(img)
+    paint_hud(p, QRectF(0, 0, *size), state)
+    p.end()
+    return np.frombuffer(img.constBits().asstring(img.bytesPerLine() * img.height()), np.uint8) \
+        .reshape(img.height(), img.bytesPerLine())[:, :size[0] * 3].reshape(size[1], size[0], 3)
+
+
+def in_rows(rows, shape):
+    """A mask of the pixels whose centres lie in any of ``rows`` (QRectF)."""
+    ys, xs = np.mgrid[0:shape[0], 0:shape[1]] + 0.5
+    mask = np.zeros(shape[:2], bool)
+    for r in rows:
+        mask |= (xs >= r.left()) & (xs <= r.right()) & (ys >= r.top()) & (ys <= r.bottom())
+    return mask
+
+
+def test_hud_text_stays_clear_of_horizon_ladder_and_roll_scale(qtbot):
+    """The heading tape and the readouts look the same whatever the attitude: no rung, horizon line or
+    roll pointer crosses them (and the rows do hold all the text)."""
+    rows = text_rows(QRectF(0, 0, 448, 336))
+    base = dict(local=LocalPosition(0, 0, -3), altitude=3.0, mode="GUIDED", armed=True, heading_deg=175.0,
+                velocity=Velocity(north=1.5), battery=Battery(voltage=16.1, remaining=99))
+    level = hud_image(VehicleState(**base))
+    mask = in_rows(rows, level.shape)
+    other = dict(base, altitude=123.4, mode="LOITER", armed=False, heading_deg=20.0,
+                 velocity=Velocity(north=12.5, down=3.2), battery=Battery(voltage=11.0, remaining=5))
+    changed = np.any(hud_image(VehicleState(**other)) != level, axis=2)
+    assert changed.any() and not (changed & ~mask).any(), "text drawn outside text_rows"
+    for roll in (-25, 0, 25):
+        for pitch in (-15, -8, 0, 8, 15):
+            tilted = hud_image(VehicleState(attitude=Attitude(roll=math.radians(roll), pitch=math.radians(pitch)),
+                                            **base))
+            crossed = np.any(tilted != level, axis=2) & mask
+            assert not crossed.any(), f"roll {roll}°, pitch {pitch}°: {np.argwhere(crossed)[:3].tolist()} (row, col)"
 
 
 def test_switch_moves_to_the_next_source(qtbot, camera, tmp_path):

@@ -68,7 +68,6 @@ class CameraController(QObject):
         self._record_started = 0.0
         self._painted: deque[float] = deque(maxlen=240)       # paint times, for frames/s
         self._latency: deque[float] = deque(maxlen=240)       # decode-to-paint, seconds
-        self._capture: deque[tuple[float, int]] = deque(maxlen=60)
         self._timer = QTimer(self)
         self._timer.setInterval(max(1, int(1000 / rate_hz)))
         self._timer.timeout.connect(self.poll)
@@ -142,9 +141,6 @@ class CameraController(QObject):
         }
 
     def _update_stats(self) -> None:
-        source = self.source
-        if source is not None:
-            self._capture.append((time.monotonic(), source.status().frames))
         s = self.stats()
         if s["resolution"] is None:
             self.view.set_stats("")
@@ -152,16 +148,11 @@ class CameraController(QObject):
             w, h = s["resolution"]
             latency = "--" if s["latency_median"] is None else f"{s['latency_median'] * 1000:.0f}"
             self.view.set_stats(f"{s['fps']:.0f} fps · {w}×{h} · {latency} ms · {s['dropped']} dropped")
+        if self._recorder is not None and self._recorder.error:     # the encoder gave up on its thread
+            self.set_recording(False)
         if self._recorder is not None:
             seconds = int(time.monotonic() - self._record_started)
             self.view.set_recording(f"REC {seconds // 60:02d}:{seconds % 60:02d}")
-
-    def capture_fps(self) -> float:
-        """Frames per second the source delivers (not only those painted)."""
-        if len(self._capture) < 2:
-            return 0.0
-        (t0, n0), (t1, n1) = self._capture[0], self._capture[-1]
-        return (n1 - n0) / (t1 - t0) if t1 > t0 and n1 >= n0 else 0.0
 
     # -- pilot's intents -----------------------------------------------------------------------
     def snapshot(self) -> str | None:
@@ -187,9 +178,8 @@ class CameraController(QObject):
             if self._cameras is None:
                 self.panel.set_recording(False)
                 return self._fail("Cannot record: no camera")
-            fps = self.capture_fps()
             try:
-                recorder = VideoRecorder.in_folder(self.folder, "video", fps if 1.0 <= fps <= 120.0 else 30.0)
+                recorder = VideoRecorder.in_folder(self.folder, "video")     # at the source's own frame rate
             except OSError as e:
                 self.panel.set_recording(False)
                 return self._fail(f"Cannot record: {e}")
@@ -201,8 +191,10 @@ class CameraController(QObject):
             self._cameras.remove_listener(recorder.push)
             recorder.stop()
             self.view.set_recording("")
-            note = f"Recorded {recorder.path} ({recorder.frames_written} frames)"
-            self.panel.set_note(f"Cannot record: {recorder.error}" if recorder.error else note)
+            if recorder.error:
+                self._fail(f"Cannot record: {recorder.error}")
+            else:
+                self.panel.set_note(f"Recorded {recorder.path} ({recorder.frames_written} frames)")
         else:
             return self._recorder.path if self._recorder else None
         self.panel.set_recording(on)

@@ -2,7 +2,9 @@
 
 The recorder encodes on its own thread from a short queue, so neither the capture
 thread nor the viewer waits for the encoder; if the encoder falls behind, frames
-are dropped and counted rather than piling up.
+are dropped and counted rather than piling up. The file's frame rate is the source's
+own, measured from the first second of frames (held back until then), so a recording
+plays at the speed it was filmed.
 """
 from __future__ import annotations
 
@@ -37,10 +39,18 @@ def save_snapshot(frame: Frame, folder: str, prefix: str = "snapshot") -> str:
     return path
 
 
-class VideoRecorder:
-    """Records frames handed to :meth:`push` into ``path`` (MP4, mp4v)."""
+FALLBACK_FPS = 30.0             # a recording too short to measure its rate
+MEASURE_S = 1.0                 # how much video tells the frame rate
+MEASURE_FRAMES = 32             # ... or how many frames, whichever comes first (bounds the memory held)
 
-    def __init__(self, path: str, fps: float = 30.0, fourcc: str = "mp4v", max_queue: int = 8):
+
+class VideoRecorder:
+    """Records frames handed to :meth:`push` into ``path`` (MP4, mp4v).
+
+    ``fps`` fixes the file's frame rate; None (the default) measures it from the frames.
+    """
+
+    def __init__(self, path: str, fps: float | None = None, fourcc: str = "mp4v", max_queue: int = 8):
         self.path = path
         self.fps = fps
         self.frames_written = 0
@@ -55,7 +65,7 @@ class VideoRecorder:
         self._thread.start()
 
     @classmethod
-    def in_folder(cls, folder: str, prefix: str = "video", fps: float = 30.0) -> "VideoRecorder":
+    def in_folder(cls, folder: str, prefix: str = "video", fps: float | None = None) -> "VideoRecorder":
         return cls(dated_path(folder, prefix, "mp4"), fps)
 
     @property
@@ -85,18 +95,34 @@ class VideoRecorder:
         return self.path
 
     def _run(self) -> None:
+        held: list[Frame] = []            # the first frames, until they tell the frame rate
         try:
             while True:
                 frame = self._queue.get()
                 if frame is None:
                     break
-                self._write(frame)
+                if self._writer is None:
+                    held.append(frame)
+                    if self.fps is None and not _enough_to_measure(held):
+                        continue
+                    self._write_all(held)
+                else:
+                    self._write(frame)
+            self._write_all(held)
         except Exception as e:
             log.exception("recording %s failed", self.path)
             self.error = str(e)
         finally:
             if self._writer is not None:
                 self._writer.release()
+
+    def _write_all(self, held: list[Frame]) -> None:
+        if held and self.fps is None:
+            self.fps = measured_fps(held)
+            log.info("recording %s at %.2f frames/s", self.path, self.fps)
+        for frame in held:
+            self._write(frame)
+        held.clear()
 
     def _write(self, frame: Frame) -> None:
         size = (frame.width, frame.height)
@@ -111,3 +137,25 @@ class VideoRecorder:
             image = cv2.resize(image, self._size, interpolation=cv2.INTER_AREA)
         self._writer.write(cv2.cvtColor(np.ascontiguousarray(image), cv2.COLOR_RGB2BGR))
         self.frames_written += 1
+
+
+def _enough_to_measure(frames: list[Frame]) -> bool:
+    return len(frames) >= MEASURE_FRAMES or frames[-1].decoded - frames[0].decoded >= MEASURE_S
+
+
+def measured_fps(frames: list[Frame]) -> float:
+    """The source's frame rate from decode times; source frame numbers count the ones not recorded.
+
+    A rate within 2 % of a whole number is taken as that number (29.97 → 30).
+    """
+    span = frames[-1].decoded - frames[0].decoded
+    count = frames[-1].index - frames[0].index
+    if count <= 0:                       # the source changed (its numbering restarted)
+        count = len(frames) - 1
+    if count <= 0 or span <= 0:
+        return FALLBACK_FPS
+    fps = count / span
+    if not 1.0 <= fps <= 240.0:
+        return FALLBACK_FPS
+    whole = round(fps)
+    return float(whole) if abs(fps - whole) <= 0.02 * whole else round(fps, 2)

@@ -151,7 +151,7 @@ class SimSource(VideoSource):
 
     @property
     def description(self) -> str:
-        return f"simulated camera {self.camera.width}x{self.camera.height}"
+        return "simulated camera"
 
     def _open(self) -> None:
         self._next = time.monotonic()

@@ -5,23 +5,27 @@ asks :meth:`VideoSource.latest` for the newest :class:`Frame`; nothing queues,
 so a slow reader never makes the picture lag behind the camera. Opening, reading
 and decoding (which can hang on a network) happen only on the capture thread,
 and a source that fails or ends says why and tries again with a growing pause.
+A source whose frames stop coming while the capture still hangs in a read (a network
+stream that went quiet) reports "stalled" once no frame has come for ``stall_s``.
 """
 from __future__ import annotations
 
 import logging
 import os
+import sys
 import threading
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Callable
 
 import numpy as np
 
 log = logging.getLogger(__name__)
 
-__all__ = ["Frame", "SourceStatus", "VideoSource", "OpenCVSource", "SourceEnded", "SourceFailed"]
+__all__ = ["Frame", "SourceStatus", "VideoSource", "OpenCVSource", "SourceEnded", "SourceFailed", "STALL_S"]
 
 FFMPEG_TIMEOUT_MS = 5000
+STALL_S = 2.0                   # no new frame for this long: the video is stalled, not live
 _FFMPEG_ENV = "OPENCV_FFMPEG_CAPTURE_OPTIONS"
 _ENV_LOCK = threading.Lock()
 
@@ -45,7 +49,7 @@ class Frame:
 
 @dataclass(frozen=True)
 class SourceStatus:
-    state: str                  # "connecting", "live", "retrying", "ended", "closed"
+    state: str                  # "connecting", "live", "stalled", "retrying", "ended", "closed"
     reason: str = ""            # why there is no video (empty while live)
     frames: int = 0             # frames delivered since the source was created
     dropped: int = 0            # frames replaced by a newer one before anyone took them
@@ -75,9 +79,13 @@ class VideoSource:
     retry_max = 5.0
     retry_on_end = True         # network streams come back; a file that ended may not
 
-    def __init__(self, uri: str, name: str | None = None):
+    def __init__(self, uri: str, name: str | None = None, stall_s: float = STALL_S):
         self.uri = uri
         self.name = name or uri
+        self.stall_s = stall_s          # 0 = never report a stall
+        self._min_stall = 0.0           # a subclass's slowest normal frame spacing (a slow file)
+        self._steady = 0.0              # monotonic time of the last frame that came in a steady flow
+        self._previous = 0.0            # monotonic time of the newest frame (0: none since opening)
         self._lock = threading.Lock()
         self._frame: Frame | None = None
         self._taken = True
@@ -104,8 +112,15 @@ class VideoSource:
             return self._frame
 
     def status(self) -> SourceStatus:
+        """The state; "live" turns into "stalled" when no frame has come for the stall time."""
         with self._lock:
-            return self._status
+            status = self._status
+            stall = max(self.stall_s, self._min_stall)
+            if status.state == "live" and self.stall_s > 0:
+                age = time.monotonic() - self._steady
+                if age >= stall:
+                    return replace(status, state="stalled", reason=f"no frame for {age:.{1 if age < 10 else 0}f} s")
+            return status
 
     @property
     def description(self) -> str:
@@ -163,6 +178,11 @@ class VideoSource:
         now_m, now_w = time.monotonic(), time.time()
         image.flags.writeable = False
         with self._lock:
+            # a lone frame after a silence (FFmpeg hands back a buffered one when a read times out)
+            # does not end a stall: video is live again once frames follow each other
+            if not self._previous or now_m - self._previous < max(self.stall_s, self._min_stall):
+                self._steady = now_m
+            self._previous = now_m
             self._frames += 1
             if not self._taken:
                 self._dropped += 1
@@ -183,6 +203,7 @@ class VideoSource:
             self._attempts += 1
             self._set_status("connecting", self._status.reason or "connecting")
             reason, ended = "", False
+            self._previous = 0.0
             try:
                 self._open()
                 log.info("video source %s open", self.name)
@@ -253,6 +274,9 @@ class OpenCVSource(VideoSource):
         import cv2
         if isinstance(self._target, str) and self._looks_local_file() and not os.path.exists(self._target):
             raise SourceFailed(f"no such file: {self._target}")
+        device = self._device_path()
+        if device and not os.path.exists(device):      # checked here: OpenCV would only log its own complaint
+            raise SourceFailed(f"no such device: {device}")
         params = [cv2.CAP_PROP_OPEN_TIMEOUT_MSEC, self._timeout_ms, cv2.CAP_PROP_READ_TIMEOUT_MSEC, self._timeout_ms]
         if self._ffmpeg_options is None:
             cap = cv2.VideoCapture(self._target, self._api, params)
@@ -275,7 +299,17 @@ class OpenCVSource(VideoSource):
         self._cap = cap
         fps = cap.get(cv2.CAP_PROP_FPS)
         self._period = 1.0 / fps if self._is_file and 1.0 <= fps <= 240.0 else 0.0
+        self._min_stall = 3 * self._period
         self._next = time.monotonic()
+
+    def _device_path(self) -> str:
+        """The video device file a camera source needs ("" when it is not one, or not on Linux)."""
+        t = self._target
+        if isinstance(t, str) and t.startswith("/dev/"):
+            return t
+        if isinstance(t, int) and sys.platform.startswith("linux"):
+            return f"/dev/video{t}"
+        return ""
 
     def _looks_local_file(self) -> bool:
         t = self._target

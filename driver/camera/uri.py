@@ -14,13 +14,14 @@
 """
 from __future__ import annotations
 
+import ipaddress
 import logging
 import os
 import threading
 from typing import Callable
 
 from ..state import VehicleState
-from .source import FFMPEG_TIMEOUT_MS, OpenCVSource, VideoSource
+from .source import FFMPEG_TIMEOUT_MS, STALL_S, OpenCVSource, VideoSource
 
 log = logging.getLogger(__name__)
 
@@ -35,6 +36,19 @@ def _split_loop(uri: str) -> tuple[str, bool]:
         if query in ("loop", "loop=1", "loop=true"):
             return path, True
     return uri, False
+
+
+def _shareable(uri: str) -> bool:
+    """Whether another program can watch ``uri`` too: UDP/RTP input listens on a local port, which
+    only one reader can have, unless the address is a multicast group."""
+    scheme, _, rest = uri.partition("://")
+    if scheme.lower() not in ("udp", "rtp"):
+        return True
+    host = rest.split("?", 1)[0].rsplit(":", 1)[0].strip("[]@")
+    try:
+        return ipaddress.ip_address(host).is_multicast
+    except ValueError:
+        return False
 
 
 def describe_uri(uri: str) -> str:
@@ -60,11 +74,12 @@ def describe_uri(uri: str) -> str:
 
 def open_source(uri: str, *, state_fn: Callable[[], VehicleState] | None = None, loop: bool = False,
                 image_format: str = "RGB8", timeout_ms: int = FFMPEG_TIMEOUT_MS,
-                sim_size: tuple[int, int] = (640, 480), start: bool = True) -> VideoSource:
+                sim_size: tuple[int, int] = (640, 480), stall_s: float = STALL_S, start: bool = True) -> VideoSource:
     """The source ``uri`` names (see the module table), started unless ``start`` is False.
 
     ``state_fn`` returns the latest vehicle state; the simulated camera needs it. ``timeout_ms``
-    bounds how long opening or reading a stream may hang before it counts as failed; ``sim_size``
+    bounds how long opening or reading a stream may hang before it counts as failed; ``stall_s`` is
+    how long without a new frame makes a live source "stalled" (0: never); ``sim_size``
     is the simulated camera's width and height.
     Opening happens on the source's own thread, so this never blocks.
     """
@@ -89,8 +104,8 @@ def open_source(uri: str, *, state_fn: Callable[[], VehicleState] | None = None,
     elif u.startswith("/dev/"):
         source = OpenCVSource(u, f"camera {u}", stream=True, timeout_ms=timeout_ms)
     elif "://" in u and u.split("://", 1)[0].lower() in STREAM_SCHEMES:
-        source = OpenCVSource(u, describe_uri(u), api=cv2.CAP_FFMPEG, stream=True, streaming_uri=u,
-                              timeout_ms=timeout_ms)
+        source = OpenCVSource(u, describe_uri(u), api=cv2.CAP_FFMPEG, stream=True,
+                              streaming_uri=u if _shareable(u) else "", timeout_ms=timeout_ms)
     elif u.lower().endswith(".sdp"):
         source = OpenCVSource(os.path.abspath(u), describe_uri(u), api=cv2.CAP_FFMPEG, stream=True,
                               ffmpeg_options=RTP_FFMPEG_OPTIONS, timeout_ms=timeout_ms)
@@ -99,6 +114,7 @@ def open_source(uri: str, *, state_fn: Callable[[], VehicleState] | None = None,
         source = OpenCVSource(os.path.abspath(path), describe_uri(u), api=cv2.CAP_FFMPEG, stream=False,
                               loop=loop or looped)
     source.uri = u
+    source.stall_s = stall_s
     return source.start() if start else source
 
 
@@ -109,7 +125,7 @@ class CameraSet:
     """
 
     def __init__(self, uris: list[str], *, on_switch: Callable[[VideoSource], None] | None = None, **options):
-        """``options`` go to :func:`open_source` (state_fn, loop, image_format, timeout_ms)."""
+        """``options`` go to :func:`open_source` (state_fn, loop, image_format, timeout_ms, stall_s)."""
         if not uris:
             raise ValueError("no camera source configured")
         self.uris = list(uris)

@@ -7,7 +7,8 @@ number of clients. ``getImageData`` is AMD in the Slice; it answers at once here
 Configuration (``MAVLinkServer.Camera.*``, prefix removed): ``Uri`` (and ``Uri.2``,
 ``Uri.3``… for ArDroneExtra.toggleCam), ``Loop`` (1 = loop files), ``Name``,
 ``RecordDir`` (where recordOnUsb(true) writes, default ``recordings``), ``TimeoutMs`` (how long
-opening or reading a stream may hang, default 5000), ``Width``/``Height`` (the simulated camera's, 640×480).
+opening or reading a stream may hang, default 5000), ``StallMs`` (how long without a new frame
+counts as a failure, default 2000), ``Width``/``Height`` (the simulated camera's, 640×480).
 """
 from __future__ import annotations
 
@@ -48,6 +49,8 @@ class CameraI(jderobot.Camera):
         options = dict(state_fn=state_fn, loop=config.get("Loop", "0").lower() in ("1", "true", "yes"))
         if config.get("TimeoutMs", "").strip().isdigit():
             options["timeout_ms"] = int(config["TimeoutMs"])
+        if config.get("StallMs", "").strip().isdigit():
+            options["stall_s"] = int(config["StallMs"]) / 1000.0
         if config.get("Width", "").strip().isdigit() and config.get("Height", "").strip().isdigit():
             options["sim_size"] = (int(config["Width"]), int(config["Height"]))
         self._cameras = CameraSet(uris, **options)
@@ -77,8 +80,9 @@ class CameraI(jderobot.Camera):
         source = self.source
         status = source.status()
         frame = source.latest()
-        # still opening for the first time: no image yet; failed, ended or reopening after a failure: gone
-        if status.state in ("retrying", "ended", "closed") or (status.state == "connecting" and status.attempts > 1):
+        # still opening for the first time: no image yet; stalled, failed, ended or reopening after a failure: gone
+        if status.state in ("stalled", "retrying", "ended", "closed") or \
+                (status.state == "connecting" and status.attempts > 1):
             raise jderobot.HardwareFailedException(f"{source.description}: {status.reason or status.state}")
         if frame is None:
             raise jderobot.DataNotExistException(f"{source.description}: no image yet ({status.reason or status.state})")
@@ -102,8 +106,9 @@ class CameraI(jderobot.Camera):
     # -- Camera -------------------------------------------------------------------------------
     def getCameraDescription(self, current=None):
         source = self.source
-        d = jderobot.CameraDescription(name=self._name, shortDescription=source.description,
-                                       streamingUri=source.streaming_uri)
+        frame = source.latest()
+        short = source.description if frame is None else f"{source.description}, {frame.width}×{frame.height}"
+        d = jderobot.CameraDescription(name=self._name, shortDescription=short, streamingUri=source.streaming_uri)
         camera = getattr(source, "camera", None)            # the simulated camera knows its optics
         if camera is not None:
             d.fdistx = d.fdisty = float(camera.focal)

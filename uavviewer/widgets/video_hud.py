@@ -2,24 +2,28 @@
 
 Not a widget: :func:`paint_hud` draws into the camera view's painter so the HUD
 sits exactly on the picture. A right roll turns the horizon line counter-clockwise
-and nose up moves it down, as the pilot sees the world from the camera.
+and nose up moves it down, as the pilot sees the world from the camera. The text
+(:func:`text_rows`) stays readable: the roll scale stays below the heading tape, the
+horizon line stops short of the side readouts, and a pitch rung that would cross any
+text is not drawn.
 """
 from __future__ import annotations
 
 import math
 
 from PyQt5.QtCore import QPointF, QRectF, Qt
-from PyQt5.QtGui import QColor, QFont, QPainter, QPen
+from PyQt5.QtGui import QColor, QFont, QPainter, QPen, QRegion
 
 from driver.state import VehicleState
 from ..units import fmt as _num
 
-__all__ = ["paint_hud", "HUD_COLOUR"]
+__all__ = ["paint_hud", "text_rows", "HUD_COLOUR"]
 
 HUD_COLOUR = QColor(120, 255, 140)
 SHADOW = QColor(0, 0, 0, 160)
 WARN = QColor(255, 90, 70)
 VISIBLE_PITCH_DEG = 30.0        # centre to top edge
+MARGIN = 8
 
 
 def _text(p: QPainter, rect: QRectF, flags, text: str, colour: QColor = HUD_COLOUR) -> None:
@@ -30,42 +34,79 @@ def _text(p: QPainter, rect: QRectF, flags, text: str, colour: QColor = HUD_COLO
     p.drawText(rect, flags, text)
 
 
+def _text_size(rect: QRectF) -> int:
+    return max(10, int(min(rect.width(), rect.height()) / 22))
+
+
+def _top_band(rect: QRectF, size: int) -> QRectF:
+    """The heading tape with its labels, and the mode and battery rows beside it."""
+    return QRectF(rect.left(), rect.top(), rect.width(), 4 + size * 3.1)
+
+
+def _side_rows(rect: QRectF, size: int) -> tuple[QRectF, QRectF]:
+    """Speeds on the left, altitude and distance on the right: two rows each, about the centre."""
+    line = size * 1.4
+    w = rect.width() * 0.25
+    top = rect.center().y() - line
+    return (QRectF(rect.left() + MARGIN, top, w, 2 * line),
+            QRectF(rect.right() - MARGIN - w, top, w, 2 * line))
+
+
+def text_rows(rect: QRectF) -> list[QRectF]:
+    """Where the HUD over ``rect`` writes text; horizon, ladder and roll scale keep out of them."""
+    size = _text_size(rect)
+    return [_top_band(rect, size), *_side_rows(rect, size)]
+
+
 def paint_hud(p: QPainter, rect: QRectF, state: VehicleState) -> None:
     """Horizon and roll, heading, altitude, speed, mode and battery over ``rect``."""
     p.save()
     p.setRenderHint(QPainter.Antialiasing)
     p.setClipRect(rect)
-    size = max(10, int(min(rect.width(), rect.height()) / 22))
+    size = _text_size(rect)
     font = QFont(p.font())
     font.setPixelSize(size)
     font.setBold(True)
     p.setFont(font)
-    _horizon(p, rect, state)
+    _horizon(p, rect, state, size)
     _heading(p, rect, state, size)
     _readouts(p, rect, state, size)
     p.restore()
 
 
-def _horizon(p: QPainter, rect: QRectF, state: VehicleState) -> None:
+def _horizon(p: QPainter, rect: QRectF, state: VehicleState, size: int) -> None:
     a = state.attitude
     roll = a.roll if math.isfinite(a.roll) else 0.0
     pitch = a.pitch if math.isfinite(a.pitch) else 0.0
     c = rect.center()
     px_per_deg = (rect.height() / 2) / VISIBLE_PITCH_DEG
+    texts = text_rows(rect)
     p.save()
+    clear = QRegion(rect.toAlignedRect())
+    for t in texts:
+        clear -= QRegion(t.toAlignedRect())
+    p.setClipRegion(clear, Qt.IntersectClip)                # a steep horizon passes behind the heading tape
+    base = p.transform()
     p.translate(c)
     p.rotate(-math.degrees(roll))
     p.translate(0, math.degrees(pitch) * px_per_deg)
-    half = rect.width() * 0.35
+    # the side readouts start a quarter of the width from the centre: the line, turned any way, ends before
+    half = rect.width() * 0.22
     p.setPen(QPen(HUD_COLOUR, 2))
-    p.drawLine(QPointF(-half, 0), QPointF(-half * 0.25, 0))
-    p.drawLine(QPointF(half * 0.25, 0), QPointF(half, 0))
+    p.drawLine(QPointF(-half, 0), QPointF(-half * 0.3, 0))
+    p.drawLine(QPointF(half * 0.3, 0), QPointF(half, 0))
     p.setPen(QPen(HUD_COLOUR, 1))
+    w = rect.width() * 0.1
+    to_rect = p.transform() * base.inverted()[0]            # rung coordinates to those of ``rect``
     for deg in (-20, -10, 10, 20):                          # pitch ladder
         y = -deg * px_per_deg
-        w = half * 0.3
+        label = QRectF(w + 4, y - size * 0.7, size * 3, size * 1.4)
+        # with 2 px for antialiased edges
+        extent = to_rect.mapRect(QRectF(-w, y, 2 * w + 4 + label.width(), 0).united(label).adjusted(-2, -2, 2, 2))
+        if any(extent.intersects(t) for t in texts):
+            continue
         p.drawLine(QPointF(-w, y), QPointF(w, y))
-        p.drawText(QRectF(w + 4, y - 10, 40, 20), Qt.AlignLeft | Qt.AlignVCenter, f"{deg}")
+        p.drawText(label, Qt.AlignLeft | Qt.AlignVCenter, f"{deg}")
     p.restore()
     # the fixed aircraft symbol and the roll scale
     p.setPen(QPen(QColor(255, 196, 0), 3))
@@ -74,7 +115,8 @@ def _horizon(p: QPainter, rect: QRectF, state: VehicleState) -> None:
     p.drawLine(QPointF(c.x() - w, c.y()), QPointF(c.x() - w * 0.5, c.y() + w * 0.4))
     p.drawLine(QPointF(c.x() + 2 * w, c.y()), QPointF(c.x() + w, c.y()))
     p.drawLine(QPointF(c.x() + w, c.y()), QPointF(c.x() + w * 0.5, c.y() + w * 0.4))
-    radius = min(rect.width(), rect.height()) * 0.38
+    # below the heading tape, with room for the pointer's overshoot
+    radius = max(0.0, min(min(rect.width(), rect.height()) * 0.38, c.y() - _top_band(rect, size).bottom() - 4))
     p.setPen(QPen(HUD_COLOUR, 1.5))
     for tick in (-45, -30, -20, -10, 0, 10, 20, 30, 45):
         t = math.radians(tick)
@@ -109,11 +151,10 @@ def _heading(p: QPainter, rect: QRectF, state: VehicleState, size: int) -> None:
 
 def _readouts(p: QPainter, rect: QRectF, state: VehicleState, size: int) -> None:
     line = size * 1.4
-    margin = 8
-    left = QRectF(rect.left() + margin, rect.center().y() - line, rect.width() * 0.25, line)
+    margin = MARGIN
+    left, right = (QRectF(r.left(), r.top(), r.width(), line) for r in _side_rows(rect, size))
     _text(p, left, Qt.AlignLeft | Qt.AlignVCenter, f"GS {_num(state.velocity.ground_speed)} m/s")
     _text(p, left.translated(0, line), Qt.AlignLeft | Qt.AlignVCenter, f"VS {_num(state.velocity.climb)} m/s")
-    right = QRectF(rect.right() - margin - rect.width() * 0.25, rect.center().y() - line, rect.width() * 0.25, line)
     _text(p, right, Qt.AlignRight | Qt.AlignVCenter, f"ALT {_num(state.altitude)} m")
     dist = state.distance_from_home
     _text(p, right.translated(0, line), Qt.AlignRight | Qt.AlignVCenter, f"HOME {_num(dist, 0)} m")
