@@ -80,7 +80,7 @@ def main(argv: list[str] | None = None) -> int:
     logging.basicConfig(level=level, format="%(asctime)s %(levelname)s %(name)s: %(message)s")
 
     from .api import Limits
-    from .console import Console, run_commands
+    from .console import Console, run_commands, show_logs, wait_for_vehicle
     from .vehicle import Vehicle, VehicleConfig
 
     if opts.host:
@@ -119,23 +119,30 @@ def main(argv: list[str] | None = None) -> int:
             print(f"cannot serve the Ice interfaces: {exc}", file=sys.stderr)
             return 1
         console = Console(vehicle, name=opts.aircraft or "")
+        if not opts.daemon:                          # logs through the console: on a fresh line, each once
+            show_logs(console, level)
         console.say(f"MAVLink master {master}")
         for s in server.served.values():
             console.say(f"serving {s.name:8} {s.proxy}")
+        if opts.cmd:
+            wait_for_vehicle(console)
         for text in opts.cmd:
             run_commands(console, text)
         if opts.daemon:
             _wait_for_signal()
         else:
             try:
-                import readline  # noqa: F401  (history and line editing for input())
+                import readline  # (history and line editing for input())
             except ImportError:
-                pass
+                readline = None
+            if readline is not None and sys.stdin.isatty() and sys.stdout.isatty():
+                console.redraw_input(readline)
             console.watch_messages()
             try:
                 console.cmdloop()
             except KeyboardInterrupt:
                 console.say("")
+            console.redraw_input(None)
             console.stop_watching()
     finally:
         if server is not None:

@@ -1,24 +1,33 @@
 """The standalone server's interactive console, in MAVProxy's spirit.
 
 Commands return at once; each result is printed when the vehicle answers, and
-the autopilot's messages are printed as they arrive. Velocity typed here is
+the autopilot's messages, every command result (also those asked for over Ice)
+and the noteworthy log records are printed as they arrive, each once, on a
+fresh line above the prompt and what is being typed. Velocity typed here is
 re-sent for a few seconds (the driver's deadman would otherwise stop it after
 half a second) and then falls to zero, like ArduCopter's own guided timeout.
 """
 from __future__ import annotations
 
 import cmd
+import inspect
+import logging
 import math
 import sys
 import threading
 import time
 from concurrent.futures import Future
 
-from .state import VehicleState
+from .state import CommandResult, VehicleState
 
 ARM_USAGE = ("arm [throttle] [force] | arm check [all|none|MASK] | arm safetyon | arm safetyoff | arm list")
 VELOCITY_HOLD = 3.0          # s a typed velocity lasts (ArduCopter's GUID_TIMEOUT)
 VELOCITY_HOLD_MAX = 30.0
+CMD_WAIT = 30.0              # s --cmd waits for the vehicle's first heartbeat before running anyway
+TELEMETRY_WAIT = 5.0         # s more for the requested telemetry (battery, position) to start
+#: Loggers whose INFO records the console shows although it runs at WARNING: what an Ice client
+#: asked the vehicle to do (Extra takeoff/land/flatTrim...), camera switches and recordings.
+NOTEWORTHY = ("driver.ice.servants", "driver.ice.camera", "driver.camera.uri")
 
 
 class Console(cmd.Cmd):
@@ -36,41 +45,86 @@ class Console(cmd.Cmd):
         self._velocity_lock = threading.Lock()
         self._watching = threading.Event()
         self._printed = 0
+        self._results_seen = 0
+        self._results_printed: set[int] = set()        # indices already shown: each result once
+        self._out_lock = threading.RLock()
+        self._prompting = ""                           # the prompt input() shows now, "" between lines
+        self._readline = None                          # the module, when async lines redraw the input line
 
     # -- output ---------------------------------------------------------------------------------
     @property
     def prompt(self) -> str:  # type: ignore[override]
         mode = self.vehicle.state().mode or "MAV"
-        return f"{self.name + ' ' if self.name else ''}{mode}> "
+        text = f"{self.name + ' ' if self.name else ''}{mode}> "
+        self._prompting = text                         # read by cmdloop right before input()
+        return text
+
+    def precmd(self, line: str) -> str:
+        self._prompting = ""
+        return line
+
+    def redraw_input(self, readline_module) -> None:
+        """Let asynchronous lines redraw the prompt and the partial input (a terminal with readline)."""
+        self._readline = readline_module
 
     def say(self, text: str) -> None:
-        self.stdout.write(text + "\n")
-        self.stdout.flush()
+        """Print one line; while input() waits, on a fresh line, then the prompt and the typed text again."""
+        with self._out_lock:
+            if self._prompting and self._readline is not None:
+                typed = self._readline.get_line_buffer()
+                self.stdout.write(f"\r\x1b[K{text}\n{self._prompting}{typed}")
+            else:
+                self.stdout.write(text + "\n")
+            self.stdout.flush()
+
+    def _claim(self, result: CommandResult) -> bool:
+        """True the first time a result is to be shown (results from the driver carry an index)."""
+        if not result.index:
+            return True
+        with self._out_lock:
+            if result.index in self._results_printed:
+                return False
+            self._results_printed.add(result.index)
+            return True
 
     def _report(self, future: Future) -> None:
         """Print the vehicle's answer when it comes."""
         def done(f: Future) -> None:
             try:
-                self.say(str(f.result()))
+                result = f.result()
             except Exception as exc:
                 self.say(f"error: {exc}")
+                return
+            if self._claim(result):
+                self.say(str(result))
         future.add_done_callback(done)
 
     def watch_messages(self, interval: float = 0.2) -> None:
-        """Print the autopilot's and the driver's messages as they arrive (background thread)."""
-        self._printed = max((m.index for m in self.vehicle.state().messages), default=0)
+        """Print the autopilot's and the driver's messages, and every command result, as they arrive."""
+        s = self.vehicle.state()
+        self._printed = max((m.index for m in s.messages), default=0)
+        self._results_seen = max((r.index for r in s.results), default=0)
         self._watching.set()
 
         def run() -> None:
             while self._watching.is_set():
-                for m in self.vehicle.state().messages_since(self._printed):
+                s = self.vehicle.state()
+                for m in s.messages_since(self._printed):
                     self.say(f"[{m.severity.name}] {m.text}")
                     self._printed = m.index
+                for r in s.results_since(self._results_seen):
+                    if self._claim(r):
+                        self.say(str(r))
+                    self._results_seen = r.index
                 time.sleep(interval)
         threading.Thread(target=run, name="console-messages", daemon=True).start()
 
     def stop_watching(self) -> None:
         self._watching.clear()
+
+    def log_handler(self) -> logging.Handler:
+        """A logging handler printing through :meth:`say`, without what the console shows already."""
+        return _ConsoleLogHandler(self)
 
     # -- cmd.Cmd plumbing -----------------------------------------------------------------------
     def emptyline(self) -> bool:
@@ -86,6 +140,13 @@ class Console(cmd.Cmd):
         except ValueError as exc:                       # bad arguments: say so, keep the console alive
             self.say(f"error: {exc}")
             return False
+
+    def do_help(self, arg: str) -> None:
+        doc = getattr(getattr(self, "do_" + arg.strip(), None), "__doc__", None) if arg.strip() else None
+        if doc:
+            self.say(inspect.cleandoc(doc))             # multi-line help without the source's indentation
+        else:
+            super().do_help(arg)
 
     def do_exit(self, arg: str) -> bool:
         """exit: leave the console (the server stops)"""
@@ -171,10 +232,11 @@ class Console(cmd.Cmd):
         self._report(self.vehicle.set_mode(name.upper()))
 
     def do_velocity(self, arg: str) -> None:
-        """velocity X Y Z [SECONDS]: forward, right, up in m/s relative to the heading, held 3 s (max 30)"""
+        """velocity X Y Z [SECONDS]: forward, right, UP in m/s relative to the heading, held 3 s (max 30)
+        (not MAVProxy's velocity, which is LOCAL_NED: north, east, z down)"""
         words = arg.split()
         if len(words) not in (3, 4):
-            raise ValueError("usage: velocity X Y Z [SECONDS]  (forward right up, m/s)")
+            raise ValueError("usage: velocity X Y Z [SECONDS]  (forward right up, m/s, relative to the heading)")
         x, y, z = (_number(w, name) for w, name in zip(words, "XYZ"))
         hold = _number(words[3], "SECONDS") if len(words) == 4 else VELOCITY_HOLD
         if not 0 < hold <= VELOCITY_HOLD_MAX:
@@ -266,6 +328,51 @@ def status_lines(s: VehicleState) -> list[str]:
     return lines
 
 
+class _ConsoleLogHandler(logging.Handler):
+    """Log records as console lines. The driver's records of status messages and command results
+    are left out: the console prints those itself (watch_messages), once."""
+
+    def __init__(self, console: Console):
+        super().__init__()
+        self.console = console
+        self.setFormatter(logging.Formatter("%(levelname)s %(name)s: %(message)s"))
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        if record.name == "driver.vehicle" and record.args and isinstance(record.args, tuple):
+            first = record.args[0]
+            if isinstance(first, CommandResult):                   # "command %s"
+                return False
+            if record.msg == "%s: %s" and first in ("driver", "vehicle"):   # a status message
+                return False
+        return super().filter(record)
+
+    def emit(self, record: logging.LogRecord) -> None:
+        try:
+            self.console.say(self.format(record))
+        except Exception:
+            self.handleError(record)
+
+
+def show_logs(console: Console, level: int = logging.WARNING) -> logging.Handler:
+    """Route all logging through the console at ``level``, the :data:`NOTEWORTHY` loggers at INFO."""
+    handler = console.log_handler()
+    logging.basicConfig(level=level, handlers=[handler], force=True)
+    for name in NOTEWORTHY:
+        noteworthy = logging.getLogger(name)
+        if noteworthy.level == logging.NOTSET or noteworthy.level > logging.INFO:
+            noteworthy.setLevel(min(level, logging.INFO))
+    return handler
+
+
+def wait_for_vehicle(console: Console, timeout: float = CMD_WAIT) -> bool:
+    """Before ``--cmd``: the vehicle's first heartbeat, then its telemetry; after ``timeout``, go on anyway."""
+    if console.vehicle.wait_for(lambda s: s.connected, timeout) is None:
+        console.say(f"warning: no heartbeat from the vehicle after {timeout:g} s; running the commands anyway")
+        return False
+    console.vehicle.wait_for(lambda s: s.battery.voltage is not None or s.local is not None, TELEMETRY_WAIT)
+    return True
+
+
 def run_commands(console: Console, text: str) -> None:
     """``--cmd "arm; takeoff 3"``: run each command as if typed."""
     for line in text.split(";"):
@@ -274,4 +381,4 @@ def run_commands(console: Console, text: str) -> None:
             console.onecmd(line.strip())
 
 
-__all__ = ["Console", "run_commands", "status_lines", "battery_line"]
+__all__ = ["Console", "run_commands", "wait_for_vehicle", "show_logs", "status_lines", "battery_line"]

@@ -2,11 +2,16 @@
 from __future__ import annotations
 
 import io
+import logging
 import os
+import pty
+import re
+import select
 import signal
 import socket
 import subprocess
 import sys
+import threading
 
 import Ice
 
@@ -82,42 +87,100 @@ def test_console_arm_check_safety_and_parachute_reach_the_vehicle(vehicle):
                       and "parachute enable" in out.getvalue(), 15), out.getvalue()
 
 
-def _server(port: int, *extra: str, stdin=None) -> subprocess.Popen:
+def _server(port: int, *extra: str, stdin=None, speedup: float = 4) -> subprocess.Popen:
     return subprocess.Popen(
-        [sys.executable, "-m", "driver", "--sim", "--sim-speedup", "4", "--sim-ready-after", "1", "--no-log",
-         "--one-port", str(port), *extra],
+        [sys.executable, "-m", "driver", "--sim", "--sim-speedup", str(speedup), "--sim-ready-after", "1",
+         "--no-log", "--one-port", str(port), *extra],
         cwd=ROOT, stdin=stdin, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
 
 
-def test_python_m_driver_daemon_runs_cmd_and_serves_jderobot(tmp_path):
+class Output:
+    """A child's stdout and stderr read as they come: the pipes never fill, and a failure shows them."""
+
+    def __init__(self, proc: subprocess.Popen):
+        self.out: list[str] = []
+        self.err: list[str] = []
+        self._threads = [threading.Thread(target=self._read, args=(pipe, lines), daemon=True)
+                         for pipe, lines in ((proc.stdout, self.out), (proc.stderr, self.err))]
+        for t in self._threads:
+            t.start()
+
+    @staticmethod
+    def _read(pipe, lines: list[str]) -> None:
+        for line in pipe:
+            lines.append(line)
+
+    def line(self, start: str) -> str | None:
+        return next((line for line in list(self.out) if line.startswith(start)), None)
+
+    def join(self) -> None:
+        for t in self._threads:
+            t.join(10)
+
+    def __str__(self) -> str:
+        return "stdout:\n" + "".join(self.out) + "\nstderr:\n" + "".join(self.err)
+
+
+def test_python_m_driver_daemon_runs_cmd_and_serves_jderobot():
+    # Speed-up 2: the simulated ArduCopter disarms DISARM_DELAY (10 sim-s) after arming without a takeoff;
+    # at 4x that is 2.5 s of wall time, less than one of the driver's command retries (3 s) on a busy machine.
     port = free_port()
-    proc = _server(port, "--daemon", "--cmd", "takeoff 2")
+    proc = _server(port, "--daemon", "--cmd", "takeoff 2", speedup=2)
+    output = Output(proc)
     com = Ice.initialize(["--Ice.Default.InvocationTimeout=3000"])
     try:
+        result = eventually(lambda: output.line("takeoff: ") or proc.poll() is not None, 90, interval=0.2)
+        assert result and output.line("takeoff: accepted"), output        # the sequence's own answer
         pose3d = jderobot.Pose3DPrx.uncheckedCast(com.stringToProxy(f"Pose3D:tcp -h 127.0.0.1 -p {port}"))
         status = mavlinkserver.VehiclePrx.uncheckedCast(com.stringToProxy(f"Vehicle:tcp -h 127.0.0.1 -p {port}"))
-
-        def altitude():
-            try:
-                return pose3d.getPose3DData().z > 1.7
-            except Ice.ConnectionRefusedException:
-                return False
-        assert eventually(altitude, 60, interval=0.2)
+        assert eventually(lambda: pose3d.getPose3DData().z > 1.7, 10), (pose3d.getPose3DData(), output)
         assert status.getStatus(-1, -1).mode == "GUIDED"
     finally:
         com.destroy()
         proc.send_signal(signal.SIGTERM)
-        out, err = proc.communicate(timeout=20)
-    assert proc.returncode == 0, err
-    assert f"-p {port}" in out and "serving Pose3D" in out
+        proc.wait(timeout=20)
+        output.join()
+    assert proc.returncode == 0, output
+    text = "".join(output.out)
+    assert f"-p {port}" in text and "serving Pose3D" in text
+    # the takeoff waited for the vehicle: it ran once, and succeeded the first time
+    assert text.count("takeoff: ") == 1, output
 
 
 def test_python_m_driver_console_reads_commands_from_stdin():
-    proc = _server(free_port(), stdin=subprocess.PIPE)
-    out, err = proc.communicate("help\nbogus\nvelocity x 0 0\nstatus\nexit\n", timeout=60)
+    proc = _server(free_port(), "--cmd", "bat; alt", stdin=subprocess.PIPE)
+    out, err = proc.communicate("help\nbogus\nvelocity x 0 0\nmode XYZ\nstatus\nexit\n", timeout=60)
     assert proc.returncode == 0, err
     assert "Documented commands" in out and "unknown command 'bogus'" in out
     assert "error: X must be a number" in out and "link " in out
+    # --cmd waited for the vehicle: the battery is known, not "voltage unknown"
+    assert "> bat\nbattery " in out and "voltage unknown" not in out, out
+    assert "m above home" in out
+    # a rejection is shown once, not again by the driver's log
+    assert (out + err).count("mode XYZ: rejected") == 1, out + err
+
+
+def test_console_prints_each_result_and_message_once(vehicle):
+    console, out = console_for(vehicle)
+    handler = console.log_handler()                     # as python -m driver installs it
+    root = logging.getLogger()
+    root.addHandler(handler)
+    try:
+        assert vehicle.wait_for(lambda s: s.connected, 10)
+        console.watch_messages(interval=0.05)
+        console.onecmd("mode XYZ")                      # typed here
+        vehicle.set_mode("ABC")                         # asked for elsewhere (an Ice client)
+        vehicle.command_long(31000, (0,) * 7, "user command")   # the vehicle's own refusal, later
+        assert eventually(lambda: "mode ABC: rejected" in out.getvalue()
+                          and "user command: " in out.getvalue(), 15), out.getvalue()
+        logging.getLogger("driver.ice.servants").warning("Extra.ledAnimation(1, 1.0, 1.0): not supported")
+    finally:
+        console.stop_watching()
+        root.removeHandler(handler)
+    text = out.getvalue()
+    for line in ("mode XYZ: rejected", "mode ABC: rejected", "user command: "):
+        assert text.count(line) == 1, text
+    assert "WARNING driver.ice.servants: Extra.ledAnimation(1, 1.0, 1.0): not supported" in text
 
 
 def test_python_m_driver_says_when_its_port_is_taken():
@@ -128,3 +191,50 @@ def test_python_m_driver_says_when_its_port_is_taken():
         out, err = proc.communicate(timeout=60)
     assert proc.returncode == 1
     assert "cannot serve the Ice interfaces" in err and "Traceback" not in err
+
+
+def test_console_on_a_terminal_shows_extra_events_above_the_typed_line():
+    """At the default level (WARNING) an Ice client's unsupported request is shown, on a fresh line, and the
+    prompt with the half-typed command is drawn again below it."""
+    port = free_port()
+    master, terminal = pty.openpty()
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "driver", "--sim", "--sim-speedup", "4", "--sim-ready-after", "1", "--no-log",
+         "--one-port", str(port)],
+        cwd=ROOT, stdin=terminal, stdout=terminal, stderr=terminal, env={**os.environ, "TERM": "dumb"})
+    os.close(terminal)
+    seen = bytearray()
+
+    def screen() -> str:
+        while select.select([master], [], [], 0)[0]:
+            try:
+                chunk = os.read(master, 65536)
+            except OSError:                             # the child closed the terminal
+                break
+            if not chunk:
+                break
+            seen.extend(chunk)
+        return seen.decode(errors="replace")
+
+    com = Ice.initialize(["--Ice.Default.InvocationTimeout=3000"])
+    try:
+        assert eventually(lambda: re.search(r"\n[A-Z_]+> $", screen()), 30), screen()
+        os.write(master, b"sta")                       # half a command, no Enter
+        assert eventually(lambda: screen().endswith("sta"), 10), screen()
+        extra = jderobot.ArDroneExtraPrx.uncheckedCast(com.stringToProxy(f"Extra:tcp -h 127.0.0.1 -p {port}"))
+        extra.ledAnimation(1, 1.0, 1.0)
+        extra.flightAnimation(2, 1.0)
+        shown = re.compile(r"\r\x1b\[K[^\n]*flightAnimation\(2, 1\.0\): not supported on ArduCopter\r?\n"
+                           r"[A-Z_]+> sta$")
+        assert eventually(lambda: shown.search(screen()), 10), screen()
+        assert "ledAnimation(1, 1.0, 1.0): not supported on ArduCopter" in screen()
+        os.write(master, b"tus\n")                     # the typed text is still there: "status" runs
+        assert eventually(lambda: "link ok" in screen() or "link waiting" in screen(), 10), screen()
+        os.write(master, b"exit\n")
+        assert proc.wait(timeout=20) == 0, screen()
+    finally:
+        com.destroy()
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait()
+        os.close(master)

@@ -14,7 +14,7 @@ import Ice
 import pytest
 
 from driver.ice import SLICE_DIR, convert, slice_files
-from driver.ice.server import DEFAULT_PORTS, default_properties, planned_endpoints
+from driver.ice.server import DEFAULT_PORTS, default_properties, default_record_dir, planned_endpoints
 from driver.state import CommandStatus
 
 from ice_fixtures import (communicator, eventually, free_port, ice_server, jde, jderobot,  # noqa: F401
@@ -238,6 +238,42 @@ def test_camera_without_a_source_says_why(jde):
         jde.Camera.getImageData("RGB8")
     assert "no camera source" in raised.value.what
     assert jde.Camera.getImageFormat() == []
+
+
+def test_toggle_cam_with_one_camera_says_there_is_nothing_to_switch(vehicle, server_factory, communicator, caplog):
+    caplog.set_level(logging.INFO, logger="driver")
+    one = server_factory(vehicle, **{"MAVLinkServer.Camera.Uri": "sim"})
+    extra = jderobot.ArDroneExtraPrx.checkedCast(communicator.stringToProxy(one.proxy("Extra")))
+    source = one.camera.source
+    extra.toggleCam()
+    assert one.camera.source is source
+    assert "only one camera configured; nothing to switch" in caplog.text
+    caplog.clear()
+    two = server_factory(vehicle, **{"MAVLinkServer.Camera.Uri": "sim", "MAVLinkServer.Camera.Uri.2": "sim"})
+    extra = jderobot.ArDroneExtraPrx.checkedCast(communicator.stringToProxy(two.proxy("Extra")))
+    source = two.camera.source
+    extra.toggleCam()
+    assert two.camera.source is not source
+    assert "nothing to switch" not in caplog.text and "camera switched to sim" in caplog.text
+
+
+def test_record_on_usb_defaults_to_the_per_user_data_folder(vehicle, server_factory, communicator, tmp_path,
+                                                            monkeypatch):
+    monkeypatch.setenv("XDG_DATA_HOME", str(tmp_path / "data"))
+    monkeypatch.setenv("APPDATA", str(tmp_path / "data"))
+    monkeypatch.setenv("HOME", str(tmp_path / "home"))
+    folder = default_record_dir()
+    assert folder.endswith(os.path.join("UavViewerPy", "recordings")) and folder.startswith(str(tmp_path))
+    if sys.platform.startswith("linux"):
+        assert folder == str(tmp_path / "data" / "UavViewerPy" / "recordings")
+    server = server_factory(vehicle, **{"MAVLinkServer.Camera.Uri": "sim"})
+    extra = jderobot.ArDroneExtraPrx.checkedCast(communicator.stringToProxy(server.proxy("Extra")))
+    assert eventually(lambda: server.camera.source.latest() is not None, 10)
+    extra.recordOnUsb(True)
+    assert eventually(lambda: os.path.isdir(folder) and os.listdir(folder), 10)
+    extra.recordOnUsb(False)
+    files = os.listdir(folder)
+    assert len(files) == 1 and files[0].endswith(".mp4") and os.path.getsize(os.path.join(folder, files[0])) > 0
 
 
 # -- an unmodified JdeRobot client ------------------------------------------------------------

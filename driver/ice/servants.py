@@ -41,15 +41,17 @@ def _resolved(result: CommandResult) -> Future:
     return f
 
 
-def _log_outcome(what: str):
-    """Done-callback logging a command's result, for JdeRobot operations that return nothing."""
+def _log_failure(what: str):
+    """Done-callback for JdeRobot operations that return nothing.
+
+    The driver logs every command result itself (and the console prints it), so
+    only a failure to run the command at all is logged here: once, not twice.
+    """
     def done(fut: Future) -> None:
         try:
-            result = fut.result()
+            fut.result()
         except Exception as exc:                        # the driver failed to run it at all
             log.error("%s: %s", what, exc)
-            return
-        (log.info if result.ok else log.warning)("%s", result)
     return done
 
 
@@ -70,9 +72,10 @@ class Pose3DI(jderobot.Pose3D):
             log.warning("%s: refused waypoint with a missing or non-finite coordinate", self._name)
             return -1
         north, east, altitude = target
-        log.info("%s: go to east %.1f north %.1f up %.1f", self._name, east, north, altitude)
+        # DEBUG: a client may stream waypoints; the driver records each result ("go to ...") anyway
+        log.debug("%s: go to east %.1f north %.1f up %.1f", self._name, east, north, altitude)
         answer = self._vehicle.go_to(north, east, altitude)
-        answer.add_done_callback(_log_outcome(f"{self._name} waypoint"))
+        answer.add_done_callback(_log_failure(f"{self._name} waypoint"))
         if answer.done() and not answer.result().ok:    # refused at once (not flying, takeoff running...)
             return -1
         return 0
@@ -120,28 +123,34 @@ class ArDroneExtraI(jderobot.ArDroneExtra):
         self._camera = camera
 
     def _run(self, what: str, call) -> None:
+        """Hand the driver a job; the request is noteworthy, its result the driver logs."""
+        log.info("Extra.%s", what)
         try:
-            call().add_done_callback(_log_outcome(f"Extra.{what}"))
+            call().add_done_callback(_log_failure(f"Extra.{what}"))
         except Exception:                                # never raise into a JdeRobot client
             log.exception("Extra.%s failed", what)
 
     def takeoff(self, current=None):
-        self._run("takeoff", lambda: self._vehicle.takeoff(self._settings.takeoff_altitude))
+        altitude = self._settings.takeoff_altitude
+        self._run(f"takeoff to {altitude:g} m", lambda: self._vehicle.takeoff(altitude))
 
     def land(self, current=None):
         self._run("land", self._vehicle.land)
 
     def reset(self, current=None):
         """The AR.Drone's emergency reset; on a copter the safe meaning is stop and hold."""
-        self._run("reset", self._vehicle.stop)
+        self._run("reset: stop and hold", self._vehicle.stop)
 
     def toggleCam(self, current=None):
         toggle = getattr(self._camera, "toggle", None)
         if toggle is None:
-            log.warning("Extra.toggleCam: no second camera configured")
+            log.warning("Extra.toggleCam: no camera configured; nothing to switch")
             return
         try:
-            toggle()
+            before = getattr(self._camera, "source", None)
+            toggle()                                     # the camera logs the switch
+            if before is not None and self._camera.source is before:
+                log.warning("Extra.toggleCam: only one camera configured; nothing to switch")
         except Exception:
             log.exception("Extra.toggleCam failed")
 
@@ -151,7 +160,7 @@ class ArDroneExtraI(jderobot.ArDroneExtra):
             log.warning("Extra.recordOnUsb(%s): no camera to record", record)
             return
         try:
-            recorder(bool(record))
+            recorder(bool(record))                       # the camera logs the file it writes
         except Exception:
             log.exception("Extra.recordOnUsb failed")
 
@@ -165,13 +174,13 @@ class ArDroneExtraI(jderobot.ArDroneExtra):
         elif calibrate is None:
             log.warning("Extra.flatTrim: this driver cannot calibrate the level")
         else:
-            self._run("flatTrim", calibrate)
+            self._run("flatTrim: level calibration", calibrate)
 
     def ledAnimation(self, type, duration, req, current=None):
-        log.info("Extra.ledAnimation(%s, %s, %s): not supported on ArduCopter", type, duration, req)
+        log.warning("Extra.ledAnimation(%s, %s, %s): not supported on ArduCopter", type, duration, req)
 
     def flightAnimation(self, type, duration, current=None):
-        log.info("Extra.flightAnimation(%s, %s): not supported on ArduCopter", type, duration)
+        log.warning("Extra.flightAnimation(%s, %s): not supported on ArduCopter", type, duration)
 
 
 class NoCameraI(jderobot.Camera):

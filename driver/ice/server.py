@@ -10,11 +10,14 @@ Defaults are the 2017 server's: ``Camera`` 9999, ``Pose3D`` 9998, ``CMDVel``
 - ``MAVLinkServer.Endpoints``: if set, every interface on this one adapter (JdeRobot's Gazebo style, port 9000)
 - ``MAVLinkServer.TakeoffAltitude``, ``MAVLinkServer.CMDVel.Xmax/Ymax/Zmax/Yawmax/RefuseAbove``,
   ``MAVLinkServer.Navdata.Vehicle``
-- ``MAVLinkServer.Camera.*``: handed to the camera servant (see :func:`make_camera_servant`)
+- ``MAVLinkServer.Camera.*``: handed to the camera servant (see :func:`make_camera_servant`);
+  ``Camera.RecordDir`` defaults to :func:`default_record_dir`
 """
 from __future__ import annotations
 
 import logging
+import os
+import sys
 from dataclasses import dataclass
 
 import Ice
@@ -73,15 +76,30 @@ def settings_from(props: Ice.Properties, limits=None) -> ServerSettings:
     )
 
 
+def default_record_dir() -> str:
+    """Where Extra.recordOnUsb writes when ``Camera.RecordDir`` is not set: the per-user data folder
+    the viewer also uses (Qt's AppDataLocation, found here without Qt), never the current directory."""
+    if sys.platform == "win32":
+        base = os.environ.get("APPDATA") or os.path.join(os.path.expanduser("~"), "AppData", "Roaming")
+    elif sys.platform == "darwin":
+        base = os.path.join(os.path.expanduser("~"), "Library", "Application Support")
+    else:
+        base = os.environ.get("XDG_DATA_HOME") or os.path.join(os.path.expanduser("~"), ".local", "share")
+    return os.path.join(base, "UavViewerPy", "recordings")
+
+
 def make_camera_servant(props: Ice.Properties, vehicle: Drone):
     """The Camera servant: ``driver.ice.camera.CameraI(config, vehicle)`` when a source is configured.
 
     ``config`` is a dict of the ``MAVLinkServer.Camera.*`` properties with the
-    prefix removed (``{"Uri": "0", ...}``). Without a ``Uri``, without the camera
+    prefix removed (``{"Uri": "0", ...}``), with ``RecordDir`` defaulting to
+    :func:`default_record_dir`. Without a ``Uri``, without the camera
     module, or if it fails, a servant that answers DataNotExistException saying why.
     """
     prefix = PREFIX + "Camera."
     config = {k[len(prefix):]: v for k, v in props.getPropertiesForPrefix(prefix).items()}
+    if not config.get("RecordDir", "").strip():
+        config["RecordDir"] = default_record_dir()
     if not config.get("Uri", "").strip():
         return servants.NoCameraI(f"no camera source configured yet (set {prefix}Uri)")
     try:
