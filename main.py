@@ -2,7 +2,7 @@
 """UavViewerPy: fly a MAVLink drone (3DR Solo, ArduCopter SITL, the built-in simulator) from a laptop.
 
     python main.py --sim                     # the built-in simulated ArduCopter, in this process
-    python main.py                           # a 3DR Solo: listen on udpin:0.0.0.0:14550
+    python main.py                           # the last connection used, first a 3DR Solo on udpin:0.0.0.0:14550
     python main.py --connect tcp:127.0.0.1:5760
     python main.py --replay flight.tlog      # watch a recorded flight
     python main.py --ice config/viewer.cfg   # fly through a MAVLinkServer (python -m driver) over Ice
@@ -11,23 +11,45 @@ from __future__ import annotations
 
 import argparse
 import logging
+import math
 import signal
 import sys
 from pathlib import Path
 
+from uavviewer.settings import TAKEOFF_ALTITUDE_RANGE
+
 SOLO_CONNECTION = "udpin:0.0.0.0:14550"
+
+
+def _takeoff_altitude(text: str) -> float:
+    """A takeoff altitude in the range Preferences allow."""
+    low, high = TAKEOFF_ALTITUDE_RANGE
+    try:
+        value = float(text)
+    except ValueError:
+        value = math.nan
+    if not (low <= value <= high):                      # NaN fails too
+        raise argparse.ArgumentTypeError(f"{text!r}: a takeoff altitude is {low:g} to {high:g} m")
+    return value
+
+
+def choose_connection(args: argparse.Namespace, remembered: str) -> str:
+    """--connect, else the last connection remembered, else a Solo (for runs with no --sim/--replay/--ice)."""
+    return args.connect or remembered or SOLO_CONNECTION
 
 
 def build_parser() -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(
         prog="main.py", description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    link = p.add_argument_group("vehicle (pick one; default: a 3DR Solo on " + SOLO_CONNECTION + ")")
+    link = p.add_argument_group("vehicle (pick one; default: the last connection used, the first time a "
+                                "3DR Solo on " + SOLO_CONNECTION + ")")
     source = link.add_mutually_exclusive_group()
     source.add_argument("--sim", action="store_true",
                         help="start the built-in simulated ArduCopter in this process and fly it")
     source.add_argument("--connect", metavar="STRING",
                         help="any MAVLink connection string: udpin:HOST:PORT, udpout:HOST:PORT, "
-                             "tcp:HOST:PORT, /dev/ttyUSB0 (serial, see --baud), ...")
+                             "tcp:HOST:PORT, /dev/ttyUSB0 (serial, see --baud), ...; remembered as the "
+                             "last connection for the next run without a vehicle option")
     source.add_argument("--replay", metavar="FILE.tlog", type=Path,
                         help="replay a recorded telemetry log instead of flying")
     source.add_argument("--ice", metavar="CONFIG", type=Path,
@@ -37,9 +59,10 @@ def build_parser() -> argparse.ArgumentParser:
                         help="fly through a MAVLinkServer over ZeroC Ice at HOST, on the default ports")
     link.add_argument("--baud", type=int, default=57600, help="serial baud rate (default: %(default)s)")
     flight = p.add_argument_group("flight")
-    flight.add_argument("--takeoff-altitude", type=float, default=None, metavar="M",
-                        help="takeoff altitude above home in metres (default: the last one set in "
-                             "Preferences, first 3.0)")
+    flight.add_argument("--takeoff-altitude", type=_takeoff_altitude, default=None, metavar="M",
+                        help=f"takeoff altitude above home for this run, {TAKEOFF_ALTITUDE_RANGE[0]:g} to "
+                             f"{TAKEOFF_ALTITUDE_RANGE[1]:g} m (default: the one set in Preferences, first 3.0; "
+                             "never saved)")
     sim = p.add_argument_group("simulator (with --sim)")
     sim.add_argument("--speedup", type=float, default=1.0,
                      help="simulated time runs this many times faster than real time (default: %(default)s)")
@@ -99,6 +122,7 @@ def main(argv: list[str] | None = None) -> int:
     from driver.vehicle import Vehicle, VehicleConfig
     from uavviewer import RESOURCES
     from uavviewer.main_window import MainWindow, load_style
+    from uavviewer.settings import default_qsettings, load_settings
 
     sim = None
     if args.sim:
@@ -111,12 +135,12 @@ def main(argv: list[str] | None = None) -> int:
             build_parser().error(f"no such file: {args.replay}")
         connection = str(args.replay)
     else:
-        connection = args.connect or SOLO_CONNECTION
+        connection = choose_connection(args, load_settings(default_qsettings()).last_connection)
     tlog = None
     if args.log_dir is not None and args.replay is None:
         tlog = str(args.log_dir / time.strftime("flight-%Y%m%d-%H%M%S.tlog"))
     config = VehicleConfig(connection=connection, baud=args.baud, tlog_path=tlog,
-                           takeoff_altitude=args.takeoff_altitude or 3.0)
+                           takeoff_altitude=args.takeoff_altitude or load_settings(default_qsettings()).takeoff_altitude)
     remote = args.ice is not None or args.ice_host is not None
     if remote:                                                    # the same window, through the Ice client
         from driver.ice.client import IceDrone
@@ -165,7 +189,7 @@ def _schedule_screenshot(window, path: Path, after: float, fly: bool) -> None:
         def takeoff_when_ready():
             s = window.adapter.state
             if s.readiness.ready_to_arm:
-                window.adapter.command("takeoff", window.settings.takeoff_altitude)
+                window.adapter.command("takeoff", window.takeoff_altitude)
             else:
                 QTimer.singleShot(500, takeoff_when_ready)
         QTimer.singleShot(1000, takeoff_when_ready)

@@ -209,3 +209,13 @@ def test_instruments_and_plots_follow_the_vehicle(qtbot, sim, flying, window):
     assert shown["valid"] and shown["altitude"] == pytest.approx(flying.state().altitude, abs=0.5)
     assert w.telemetry.text("mode") == "GUIDED"
     assert w.telemetry.text("armed") == "ARMED"
+
+
+def test_on_the_ground_the_pilot_sees_what_the_autopilot_waits_for(qtbot, sim_factory, vehicle_factory,
+                                                                    window_factory):
+    late = sim_factory(ready_after=8.0)                     # 2 s of real time at the test speedup
+    w = window_factory(vehicle_factory(f"tcp:127.0.0.1:{late.tcp_port}"), takeoff_altitude=3.0)
+    qtbot.waitUntil(lambda: w.flightControls.phase is FlightPhase.ON_GROUND, timeout=10000)
+    qtbot.waitUntil(lambda: "waiting for" in w.phaseLabel.text(), timeout=5000)
+    assert "GPS fix" in w.phaseLabel.text() or "EKF" in w.phaseLabel.text()
+    qtbot.waitUntil(lambda: w.phaseLabel.text() == "On the ground · ready to arm", timeout=15000)

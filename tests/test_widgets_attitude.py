@@ -79,9 +79,18 @@ def test_right_roll_turns_horizon_left(ai):
     assert kind(img, cx - 90, cy + 25) == "sky"
 
 
-def test_no_attitude_is_level_and_nan_is_safe(ai):
-    ai.set_attitude(float("nan"), float("inf"), float("nan"))
-    img = ai.grab().toImage()
+def test_unknown_attitude_shows_the_failure_flag_not_a_level_horizon(ai):
     cx, cy = ai.centre().x(), ai.centre().y()
-    assert kind(img, cx + 90, cy - 9) == "sky"
-    assert kind(img, cx + 90, cy + 9) == "ground"
+    for unknown in ((float("nan"), 0.0), (0.0, float("inf"))):
+        ai.set_attitude(0.1, 0.0, 10.0)
+        assert ai.values["valid"]
+        ai.set_attitude(unknown[0], unknown[1], 10.0)
+        img = ai.grab().toImage()
+        assert not ai.values["valid"]
+        for x, y in ((cx + 90, cy - 30), (cx + 90, cy + 30), (cx - 90, cy + 30)):
+            assert kind(img, x, y).startswith("other"), (x, y)      # neither sky nor ground
+    ai.set_attitude(0.0, 0.0, 0.0)
+    img = ai.grab().toImage()
+    assert kind(img, cx + 90, cy - 9) == "sky" and kind(img, cx + 90, cy + 9) == "ground"
+    ai.clear()
+    assert kind(ai.grab().toImage(), cx + 90, cy - 30).startswith("other")

@@ -2,7 +2,9 @@
 from __future__ import annotations
 
 import time
+from dataclasses import replace
 
+import numpy as np
 import pytest
 from PyQt5.QtCore import Qt
 
@@ -13,9 +15,9 @@ from uavviewer.widgets.flight_controls import FlightControls
 from uavviewer.widgets.link_banner import LinkBanner
 from uavviewer.widgets.messages_view import MessagesView, severity_color
 from uavviewer.widgets.mode_selector import ModeSelector
-from uavviewer.widgets.plots_panel import PlotsPanel
+from uavviewer.widgets.plots_panel import MIN_SPAN, PlotsPanel
 from uavviewer.widgets.replay_bar import ReplayBar
-from uavviewer.widgets.telemetry_panel import BAD, GOOD, TelemetryPanel
+from uavviewer.widgets.telemetry_panel import BAD, DIM, GOOD, TelemetryPanel
 
 OK_LINK = LinkHealth(status=LinkStatus.OK, address="tcp:x", heartbeat_age=0.3, packets_per_s=42.0)
 
@@ -49,8 +51,33 @@ def test_telemetry_values(qtbot):
     assert t.text("gps") == "3D fix, 11 sats" and t.color("gps") == GOOD
     assert t.text("packets") == "42"
     assert t.text("heartbeat") == "0.3 s ago"
-    t.set_state(VehicleState(link=OK_LINK, gps=Gps(fix_type=1, satellites=3)))
+    t.set_state(VehicleState(link=OK_LINK, mode="STABILIZE", gps=Gps(fix_type=1, satellites=3)))
     assert t.color("gps") == BAD
+
+
+def test_telemetry_before_the_first_heartbeat_is_unknown(qtbot):
+    t = make(TelemetryPanel, qtbot)
+    t.set_state(VehicleState(link=LinkHealth(status=LinkStatus.WAITING, address="udpin:x")))
+    for key in ("mode", "armed", "battery", "gps", "altitude", "heading", "loss"):
+        assert t.text(key) == "--" and t.color(key) == DIM, key
+
+
+def test_telemetry_with_the_link_lost_is_stale(qtbot):
+    t = make(TelemetryPanel, qtbot)
+    flying = VehicleState(link=OK_LINK, mode="GUIDED", armed=True, altitude=5.0, gps=Gps(fix_type=3, satellites=9),
+                          battery=Battery(voltage=16.0, remaining=80.0))
+    t.set_state(flying)
+    assert t.color("gps") == GOOD and t.color("armed") != DIM
+    lost = LinkHealth(status=LinkStatus.LOST, address="tcp:x", heartbeat_age=4.2, packets_per_s=40.0)
+    t.set_state(replace(flying, link=lost))
+    for key in ("mode", "armed", "battery", "gps", "altitude"):
+        assert t.color(key) == DIM, key
+    assert t.text("altitude") == "5.00 m"                 # the last known value, dimmed
+    assert (t.text("packets"), t.color("packets")) == ("0", BAD)
+    assert t.text("loss") == "link lost" and t.color("loss") == BAD
+    assert t.text("heartbeat") == "4.2 s ago" and t.color("heartbeat") == BAD
+    t.set_state(flying)
+    assert t.color("gps") == GOOD and t.text("packets") == "42"
 
 
 def test_link_banner_text(qtbot):
@@ -161,6 +188,38 @@ def test_plots_keep_the_last_minute(qtbot):
     assert len(xs) == 61 and xs[0] == -60.0 and ys[-1] == 299.0
 
 
+def test_plots_have_a_minimum_y_range(qtbot):
+    p = make(PlotsPanel, qtbot)
+    p.show()
+    for i in range(30):
+        p.append(i * 0.1, altitude=0.001 * (i % 2), forward=0.0, right=0.0, climb=0.0, roll=0.0, pitch=0.0,
+                 heading=0.0)
+    p.redraw()
+    for row, span in enumerate(MIN_SPAN):
+        lo, hi = p.y_range(row)
+        assert hi - lo >= span, row
+        assert not p.plots[row].getAxis("left").autoSIPrefix
+    for i in range(30, 60):
+        p.append(i * 0.1, altitude=float(i))                 # a real climb is shown whole
+    p._dirty = True
+    p.redraw()
+    lo, hi = p.y_range(0)
+    assert lo <= 0.0 and hi >= 59.0
+
+
+def test_plots_break_their_lines_at_a_gap(qtbot):
+    p = make(PlotsPanel, qtbot)
+    p.show()
+    for i in range(10):
+        p.append(float(i), altitude=1.0)
+    p.gap(10.0)
+    for i in range(20, 30):
+        p.append(float(i), altitude=2.0)
+    p.redraw()
+    xs, ys = p.curves["altitude"].getData()
+    assert np.isnan(ys[10]) and np.isfinite(ys[:10]).all() and np.isfinite(ys[11:]).all()
+
+
 def test_replay_bar(qtbot):
     r = make(ReplayBar, qtbot)
     r.set_progress(65.0, 130.0, paused=False, speed=2.0)
@@ -170,3 +229,11 @@ def test_replay_bar(qtbot):
     with qtbot.waitSignal(r.pauseRequested, timeout=1000) as sig:
         qtbot.mouseClick(r.play_button, Qt.LeftButton)
     assert sig.args == [True]
+
+
+def test_replay_bar_says_when_the_log_is_finished(qtbot):
+    r = make(ReplayBar, qtbot)
+    r.set_progress(129.6, 130.0, paused=False, speed=1.0, finished=True)
+    assert r.clock.text() == "02:10 / 02:10  (finished)"
+    assert r.play_button.text() == "Finished" and not r.play_button.isEnabled()
+    assert r.progress.value() == 1000

@@ -1,15 +1,19 @@
 """Preferences, the key list, and the takeoff confirmation (non-blocking)."""
 from __future__ import annotations
 
+import math
 from dataclasses import replace
 
 from PyQt5 import uic
+from PyQt5.QtCore import Qt
 from PyQt5.QtWidgets import QDialog, QFileDialog, QMessageBox, QTableWidgetItem, QWidget
+
+from driver.api import CEILING
 
 from . import RESOURCES
 from .camera_controller import default_media_folder
 from .keyboard import key_help
-from .settings import ViewerSettings, split_uris
+from .settings import TAKEOFF_ALTITUDE_RANGE, ViewerSettings, split_uris
 from .sticks import StickMode
 
 __all__ = ["SettingsDialog", "KeysDialog", "takeoff_question"]
@@ -25,6 +29,10 @@ class SettingsDialog(QDialog):
         for mode in StickMode:
             self.stickMode.addItem(mode.title, mode.value)
         self.stickMode.setCurrentIndex(self.stickMode.findData(settings.mode.value))
+        self.maxHorizontal.setMaximum(CEILING.horizontal)     # no more than the driver ever streams
+        self.maxVertical.setMaximum(CEILING.vertical)
+        self.maxYaw.setMaximum(math.floor(math.degrees(CEILING.yaw_rate)))
+        self.takeoffAltitude.setRange(*TAKEOFF_ALTITUDE_RANGE)
         self.maxHorizontal.setValue(settings.max_horizontal)
         self.maxVertical.setValue(settings.max_vertical)
         self.maxYaw.setValue(settings.max_yaw_deg_s)
@@ -74,13 +82,19 @@ class KeysDialog(QDialog):
 
 
 def takeoff_question(parent: QWidget, altitude: float) -> QMessageBox:
-    """A window-modal question, opened with ``open()`` so nothing waits on it."""
+    """A window-modal question, opened with ``open()`` so nothing waits on it.
+
+    Cancel is the focused default: Space (Stop) or Enter must never start the motors; only a click does.
+    """
     box = QMessageBox(QMessageBox.Question, "Take off",
                       f"Take off and climb to {altitude:.1f} m above home?\n\n"
                       "The motors will start. Keep clear of the propellers.",
                       QMessageBox.Yes | QMessageBox.Cancel, parent)
     box.setObjectName("takeoffQuestion")
-    box.button(QMessageBox.Yes).setText("Take off")
-    box.setDefaultButton(QMessageBox.Yes)
+    go = box.button(QMessageBox.Yes)
+    go.setText("Take off")
+    go.setFocusPolicy(Qt.NoFocus)
+    go.setAutoDefault(False)
+    box.setDefaultButton(QMessageBox.Cancel)
     box.setEscapeButton(QMessageBox.Cancel)
     return box

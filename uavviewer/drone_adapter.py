@@ -27,6 +27,7 @@ log = logging.getLogger(__name__)
 class DroneAdapter(QObject):
     stateChanged = pyqtSignal(object)        # VehicleState
     commandFinished = pyqtSignal(object)     # CommandResult, on the UI thread
+    commandSent = pyqtSignal(str)            # a command handed to the drone (its name)
     _futureDone = pyqtSignal(str, object)    # emitted on driver threads; queued to the UI thread
 
     def __init__(self, drone: Drone, rate_hz: float = 30.0, refresh_hz: float = 10.0,
@@ -82,6 +83,7 @@ class DroneAdapter(QObject):
     # -- commands -------------------------------------------------------------------------------
     def command(self, name: str, *args) -> None:
         """Call ``drone.<name>(*args)``; the result arrives as ``commandFinished``."""
+        self.commandSent.emit(name)
         try:
             future = getattr(self.drone, name)(*args)
         except Exception as exc:             # noqa: BLE001

@@ -5,7 +5,7 @@ import enum
 
 from driver.state import LandedState, LinkStatus, VehicleState
 
-__all__ = ["FlightPhase", "flight_phase", "takeoff_progress", "stick_hint"]
+__all__ = ["FlightPhase", "flight_phase", "takeoff_progress", "stick_hint", "readiness_text"]
 
 
 class FlightPhase(enum.Enum):
@@ -64,3 +64,11 @@ def stick_hint(s: VehicleState) -> str:
     if phase is FlightPhase.LANDING:
         return "Landing…"
     return f"Sticks fly in GUIDED\n(mode is {s.mode or '?'})"
+
+
+def readiness_text(s: VehicleState) -> str:
+    """On the ground: what the autopilot still waits for before it can arm, or "ready to arm"."""
+    r = s.readiness
+    missing = [what for ok, what in ((r.gps_ok, "GPS fix"), (r.ekf_ok, "EKF"), (r.prearm_ok, "pre-arm checks"))
+               if not ok]
+    return "waiting for " + ", ".join(missing) if missing else "ready to arm"

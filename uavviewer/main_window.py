@@ -9,22 +9,23 @@ from __future__ import annotations
 import logging
 import math
 import time
+from dataclasses import replace
 
 from PyQt5 import uic
 from PyQt5.QtCore import QEvent, QObject, QSettings, Qt
-from PyQt5.QtWidgets import QApplication, QLabel, QMainWindow, QMessageBox, QWidget
+from PyQt5.QtWidgets import QApplication, QDialog, QLabel, QMainWindow, QMessageBox, QWidget
 
-from driver.api import Drone
+from driver.api import Drone, Limits
 from driver.state import LinkStatus, Severity, VehicleState
 
 from . import RESOURCES
 from .dialogs import KeysDialog, SettingsDialog, takeoff_question
 from .camera_controller import CameraController, default_media_folder
 from .drone_adapter import DroneAdapter
-from .flight_phase import FlightPhase, flight_phase, stick_hint, takeoff_progress
+from .flight_phase import FlightPhase, flight_phase, readiness_text, stick_hint, takeoff_progress
 from .keyboard import ACTION_KEYS, AXIS_KEYS, KeyboardSticks
 from .settings import ViewerSettings, default_qsettings, load_settings, load_window, save_settings, save_window
-from .sticks import Axes, axes_from_pads, combine, pad_labels, velocity_from_axes
+from .sticks import Axes, MaxSpeeds, axes_from_pads, combine, pad_labels, velocity_from_axes
 from .widgets.camera_panel import CameraPanel
 
 __all__ = ["MainWindow", "load_style"]
@@ -42,7 +43,8 @@ class MainWindow(QMainWindow):
     """Fly one drone. ``qsettings`` lets tests keep their own settings file.
 
     Cameras: ``cameras`` (--camera) if given, else those saved in Preferences, else ``default_cameras``
-    (the mode's own: the simulator's, the Ice server's).
+    (the mode's own: the simulator's, the Ice server's). ``takeoff_altitude`` (--takeoff-altitude) holds
+    for this run only; it is never saved as the Preferences' value.
     """
 
     def __init__(self, drone: Drone, qsettings: QSettings | None = None,
@@ -53,14 +55,15 @@ class MainWindow(QMainWindow):
         uic.loadUi(str(RESOURCES / "ui" / "main_window.ui"), self)
         self._qsettings = qsettings if qsettings is not None else default_qsettings()
         self.settings: ViewerSettings = load_settings(self._qsettings)
-        if takeoff_altitude is not None:
-            self.settings.takeoff_altitude = takeoff_altitude
+        self._takeoff_override = takeoff_altitude
         self.adapter = DroneAdapter(drone, rate_hz=rate_hz, parent=self)
+        self._speeds = MaxSpeeds()
         self.keyboard = KeyboardSticks()
         self._last_message = -1
         self._shown_results: set[int] = set()
         self._last_result = -1
         self._last_sample_time: float | None = None
+        self._plot_gap = False
         self._sticks_live = False
         self._takeoff_box: QMessageBox | None = None
         self._t0 = time.monotonic()
@@ -128,16 +131,44 @@ class MainWindow(QMainWindow):
         left, right = pad_labels(self.settings.mode)
         self.leftStick.set_caption(left)
         self.rightStick.set_caption(right)
+        self._speeds = self._set_limits(self.settings.speeds)
         self.centre_sticks()
 
+    def _set_limits(self, wish: MaxSpeeds) -> MaxSpeeds:
+        """The pilot's maximum speeds become the driver's clamps; the sticks scale by what is in force."""
+        drone = self.adapter.drone
+        try:
+            limits = drone.set_limits(Limits(wish.horizontal, wish.vertical, math.radians(wish.yaw_deg_s)))
+        except NotImplementedError:
+            limits = drone.limits
+        except Exception:                       # noqa: BLE001 - a remote drone may fail; keep its clamps
+            log.exception("setting the speed limits failed")
+            limits = drone.limits
+        if (limits.horizontal, limits.vertical) != (wish.horizontal, wish.vertical) \
+                or not math.isclose(limits.yaw_rate, math.radians(wish.yaw_deg_s), abs_tol=1e-4):
+            self.log_message(f"Maximum speeds in force: {limits.horizontal:g} m/s, {limits.vertical:g} m/s, "
+                             f"{math.degrees(limits.yaw_rate):.0f}°/s", Severity.WARNING)
+        return MaxSpeeds(limits.horizontal, limits.vertical, math.degrees(limits.yaw_rate))
+
+    @property
+    def speeds(self) -> MaxSpeeds:
+        """Full-deflection speeds: the limits the drone has in force."""
+        return self._speeds
+
+    @property
+    def takeoff_altitude(self) -> float:
+        """--takeoff-altitude for this run, else the Preferences' value."""
+        return self._takeoff_override if self._takeoff_override is not None else self.settings.takeoff_altitude
+
     def edit_settings(self) -> None:
-        dialog = SettingsDialog(self.settings, self)
+        dialog = SettingsDialog(replace(self.settings, takeoff_altitude=self.takeoff_altitude), self)
         dialog.setWindowModality(Qt.WindowModal)
         dialog.accepted.connect(lambda: self.set_settings(dialog.chosen()))
         dialog.open()
 
     def set_settings(self, settings: ViewerSettings) -> None:
         old, self.settings = self.settings, settings
+        self._takeoff_override = None            # the pilot has now chosen the altitude in Preferences
         save_settings(self._qsettings, settings)
         self._apply_settings()
         self.camera.folder = settings.media_folder or default_media_folder()
@@ -181,17 +212,23 @@ class MainWindow(QMainWindow):
             if r.index not in self._shown_results:
                 self._shown_results.add(r.index)
                 self.messages.add_result(r)
-        if have_vehicle and s.time != self._last_sample_time:
+        replay = self.adapter.replay
+        if link.status is not LinkStatus.OK or (replay is not None and replay.paused):
+            if not self._plot_gap:                  # no line drawn across the time nothing came in
+                self._plot_gap = True
+                self.plots.gap(time.monotonic() - self._t0)
+        elif have_vehicle and s.time != self._last_sample_time:
+            self._plot_gap = False
             self._last_sample_time = s.time
             yaw = s.attitude.yaw
             forward, right, _ = s.velocity.body(yaw)
             self.plots.append(time.monotonic() - self._t0, altitude=s.altitude, forward=forward,
                               right=right, climb=s.velocity.climb, roll=math.degrees(s.attitude.roll),
                               pitch=math.degrees(s.attitude.pitch), heading=s.heading_deg)
-        replay = self.adapter.replay
         if replay is not None:
             try:
-                self.replayBar.set_progress(replay.position, replay.duration, replay.paused, replay.speed)
+                self.replayBar.set_progress(replay.position, replay.duration, replay.paused, replay.speed,
+                                            replay.finished)
             except Exception:               # noqa: BLE001 - a finished replay may drop its file
                 log.debug("replay progress unavailable", exc_info=True)
         pps = f"{link.packets_per_s:.0f} pkt/s" if link.status is LinkStatus.OK else link.status.value
@@ -203,8 +240,9 @@ class MainWindow(QMainWindow):
             return "No vehicle"
         if phase is FlightPhase.TAKING_OFF and s.takeoff.active:
             return f"Taking off to {s.takeoff.target_altitude:.1f} m — {s.takeoff.phase.value}"
-        return {FlightPhase.ON_GROUND: "On the ground" + (" · armed" if s.armed else ""),
-                FlightPhase.TAKING_OFF: "Taking off", FlightPhase.FLYING: f"Flying · {s.mode}",
+        if phase is FlightPhase.ON_GROUND:
+            return "On the ground · " + ("armed" if s.armed else readiness_text(s))
+        return {FlightPhase.TAKING_OFF: "Taking off", FlightPhase.FLYING: f"Flying · {s.mode}",
                 FlightPhase.LANDING: "Landing"}[phase]
 
     def _set_sticks_live(self, s: VehicleState) -> None:
@@ -216,8 +254,7 @@ class MainWindow(QMainWindow):
                 pad.setEnabled(live)        # disabling centres the pad
         if live != self._sticks_live:
             self._sticks_live = live
-            if not live:
-                self.keyboard.clear()
+            self.keyboard.clear()           # a key held while inert needs a fresh press to fly
             self._fly()
 
     # -- sticks and keys -------------------------------------------------------------------------
@@ -233,7 +270,7 @@ class MainWindow(QMainWindow):
         return combine(pads, self.keyboard.axes())
 
     def _fly(self) -> None:
-        command = velocity_from_axes(self.demand(), self.settings.speeds)
+        command = velocity_from_axes(self.demand(), self._speeds)
         self.adapter.fly(command)
         if command.is_zero:
             self.setpointLabel.setText("Setpoint: hover")
@@ -250,7 +287,15 @@ class MainWindow(QMainWindow):
         self._fly()
 
     def eventFilter(self, watched: QObject, event: QEvent) -> bool:  # noqa: N802
+        """Keys fly only when aimed at this window, but a release counts wherever it lands, and a menu,
+        popup or dialog opening centres everything (the release would go to it)."""
         kind = event.type()
+        if kind == QEvent.KeyRelease and not event.isAutoRepeat() and event.key() in AXIS_KEYS:
+            if self.keyboard.release(event.key()):
+                self._fly()
+        elif kind == QEvent.Show and self._interrupts(watched):
+            self.centre_sticks()
+            return False
         if kind in (QEvent.KeyPress, QEvent.KeyRelease) and self._owns(watched) and self.adapter.replay is None:
             if QApplication.activeModalWidget() is not None or QApplication.activePopupWidget() is not None:
                 return False
@@ -258,8 +303,14 @@ class MainWindow(QMainWindow):
                 return event.key() in ACTION_KEYS or event.key() in AXIS_KEYS   # held: already acted
             if kind == QEvent.KeyPress:
                 return self._key_pressed(event.key(), event.modifiers())
-            return self._key_released(event.key())
+            return event.key() in ACTION_KEYS or event.key() in AXIS_KEYS
         return False
+
+    def _interrupts(self, watched: QObject) -> bool:
+        """A menu, popup list or dialog is opening: it will take the keys (tooltips do not)."""
+        if not isinstance(watched, QWidget) or not watched.isWindow() or watched is self:
+            return False
+        return isinstance(watched, QDialog) or watched.windowType() in (Qt.Popup, Qt.Dialog)
 
     def _owns(self, watched: QObject) -> bool:
         return isinstance(watched, QWidget) and watched.window() is self
@@ -273,18 +324,18 @@ class MainWindow(QMainWindow):
         action = ACTION_KEYS.get(key)
         if action is None:
             return False
-        {"stop": self.request_stop, "takeoff": self._key_takeoff, "land": self.request_land}[action[0]]()
+        self._key_action(action[0])
         return True
 
-    def _key_released(self, key: int) -> bool:
-        if self.keyboard.release(key):
-            self._fly()
-            return True
-        return key in ACTION_KEYS
-
-    def _key_takeoff(self) -> None:
-        if self.flightControls.phase is FlightPhase.ON_GROUND:
-            self.request_takeoff()
+    def _key_action(self, action: str) -> None:
+        """Space, T and L do what their button does, and only while it is enabled."""
+        fc = self.flightControls
+        if action == "stop":
+            fc.stop_button.click()              # click() does nothing on a disabled button
+        elif action == "takeoff" and fc.phase is FlightPhase.ON_GROUND:
+            fc.main_button.click()
+        elif action == "land" and fc.phase in (FlightPhase.TAKING_OFF, FlightPhase.FLYING):
+            fc.main_button.click()
 
     def changeEvent(self, event: QEvent) -> None:  # noqa: N802
         if event.type() == QEvent.ActivationChange and not self.isActiveWindow():
@@ -299,7 +350,7 @@ class MainWindow(QMainWindow):
         """Ask once, showing the altitude; the answer comes back without blocking."""
         if self._takeoff_box is not None and self._takeoff_box.isVisible():
             return
-        altitude = self.settings.takeoff_altitude
+        altitude = self.takeoff_altitude
         box = takeoff_question(self, altitude)
         box.setWindowModality(Qt.WindowModal)
         box.finished.connect(lambda result, a=altitude, b=box: self._takeoff_answered(b, a))

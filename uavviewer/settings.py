@@ -1,14 +1,21 @@
 """What the viewer remembers between runs (QSettings): sticks, speeds, last link, camera, window layout."""
 from __future__ import annotations
 
+import math
 import re
 from dataclasses import asdict, dataclass, fields
 
 from PyQt5.QtCore import QByteArray, QSettings
 
+from driver.api import CEILING
+
 from .sticks import MaxSpeeds, StickMode, StickShaping
 
-__all__ = ["ViewerSettings", "load_settings", "save_settings", "default_qsettings", "split_uris"]
+__all__ = ["ViewerSettings", "load_settings", "save_settings", "default_qsettings", "split_uris",
+           "TAKEOFF_ALTITUDE_RANGE"]
+
+#: Takeoff altitudes a pilot may choose, in metres above home (Preferences and --takeoff-altitude).
+TAKEOFF_ALTITUDE_RANGE = (1.0, 50.0)
 
 ORGANISATION = "JdeRobot"
 APPLICATION = "UavViewerPy"
@@ -76,12 +83,13 @@ def load_settings(qs: QSettings) -> ViewerSettings:
             continue
         setattr(out, f.name, value)
     # Sanity: a corrupt file must not give wild speeds.
-    out.max_horizontal = min(max(out.max_horizontal, 0.1), 10.0)
-    out.max_vertical = min(max(out.max_vertical, 0.1), 5.0)
-    out.max_yaw_deg_s = min(max(out.max_yaw_deg_s, 5.0), 180.0)
+    out.max_horizontal = min(max(out.max_horizontal, 0.1), CEILING.horizontal)
+    out.max_vertical = min(max(out.max_vertical, 0.1), CEILING.vertical)
+    out.max_yaw_deg_s = min(max(out.max_yaw_deg_s, 5.0), float(math.floor(math.degrees(CEILING.yaw_rate))))
     out.deadband = min(max(out.deadband, 0.0), 0.5)
     out.expo = min(max(out.expo, 0.0), 1.0)
-    out.takeoff_altitude = min(max(out.takeoff_altitude, 1.0), 50.0)
+    low, high = TAKEOFF_ALTITUDE_RANGE
+    out.takeoff_altitude = min(max(out.takeoff_altitude, low), high)
     out.stick_mode = out.mode.value
     return out
 

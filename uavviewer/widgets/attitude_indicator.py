@@ -44,10 +44,17 @@ class AttitudeIndicator(QWidget):
 
     # -- values in ---------------------------------------------------------------------------
     def set_attitude(self, roll: float, pitch: float, heading_deg: float) -> None:
-        """Roll and pitch in radians (right wing down and nose up positive), heading 0..360."""
-        values = [v if math.isfinite(v) else 0.0 for v in (roll, pitch, heading_deg)]
+        """Roll and pitch in radians (right wing down and nose up positive), heading 0..360.
+
+        A roll or pitch that is not a number means the attitude is unknown: the failure flag is shown."""
+        if not (math.isfinite(roll) and math.isfinite(pitch)):
+            if self._valid:
+                self._valid = False
+                self.update()
+            return
+        values = [roll, pitch, heading_deg % 360.0 if math.isfinite(heading_deg) else 0.0]
         if values != [self._roll, self._pitch, self._heading] or not self._valid:
-            self._roll, self._pitch, self._heading = values[0], values[1], values[2] % 360.0
+            self._roll, self._pitch, self._heading = values
             self._valid = True
             self.update()
 
@@ -58,7 +65,7 @@ class AttitudeIndicator(QWidget):
             self.update()
 
     def clear(self) -> None:
-        """No vehicle: draw the instrument level with dashes."""
+        """No vehicle: the failure flag and dashes."""
         self._valid = False
         self._roll = self._pitch = self._heading = 0.0
         self._altitude = self._ground_speed = self._climb = None
@@ -100,13 +107,16 @@ class AttitudeIndicator(QWidget):
         p.setRenderHint(QPainter.Antialiasing)
         p.fillRect(self.rect(), QColor(16, 20, 26))
         area = self.horizon_rect()
-        p.save()
-        p.setClipRect(area)
-        self._draw_horizon(p, area)
-        self._draw_ladder(p, area)
-        p.restore()
-        self._draw_roll_arc(p, area)
-        self._draw_symbol(p, area)
+        if self._valid:
+            p.save()
+            p.setClipRect(area)
+            self._draw_horizon(p, area)
+            self._draw_ladder(p, area)
+            p.restore()
+            self._draw_roll_arc(p, area)
+            self._draw_symbol(p, area)
+        else:
+            self._draw_failure_flag(p, area)
         self._draw_readouts(p, area)
         self._draw_heading_tape(p, QRectF(0, area.bottom(), self.width(), self.height() - area.height()))
         p.end()
@@ -227,13 +237,22 @@ class AttitudeIndicator(QWidget):
         self._readout_box(p, right, "ALT", _fmt(self._altitude), "m")
         climb = QRectF(right.left(), right.bottom() + 6, bw, bh * 0.8)
         self._readout_box(p, climb, "CLIMB", _fmt(self._climb), "m/s")
-        if not self._valid:
-            p.setPen(TEXT)
-            font = QFont(self.font())
-            font.setPixelSize(max(12, int(area.height() / 16)))
-            p.setFont(font)
-            p.drawText(QRectF(area.left(), area.top() + area.height() * 0.62, area.width(), 40),
-                       Qt.AlignCenter, "NO ATTITUDE")
+
+    def _draw_failure_flag(self, p: QPainter, area: QRectF) -> None:
+        """No attitude known: no horizon at all (a level one would lie), but the avionics red X."""
+        p.fillRect(area, QColor(28, 32, 38))
+        p.setPen(QPen(QColor(200, 50, 50, 160), 3))
+        p.drawLine(area.topLeft(), area.bottomRight())
+        p.drawLine(area.topRight(), area.bottomLeft())
+        font = QFont(self.font())
+        font.setPixelSize(max(12, int(area.height() / 14)))
+        font.setBold(True)
+        p.setFont(font)
+        label = QRectF(0, 0, area.width() * 0.5, font.pixelSize() * 2.0)
+        label.moveCenter(area.center())
+        p.fillRect(label, QColor(16, 20, 26))
+        p.setPen(QColor(230, 80, 80))
+        p.drawText(label, Qt.AlignCenter, "NO ATTITUDE")
 
     def _draw_heading_tape(self, p: QPainter, rect: QRectF) -> None:
         p.fillRect(rect, QColor(12, 16, 22))

@@ -23,6 +23,9 @@ SERIES = {
     "heading": (3, "#d8dee6", "heading °"),
 }
 _TITLES = ("Alt m", "Vel m/s", "Att °", "Hdg °")
+# plot row -> the smallest y span shown, so a vehicle sitting still does not magnify its noise
+MIN_SPAN = (4.0, 2.0, 10.0)
+AXIS_WIDTH = 44        # px for the left axis of every plot, so their time axes line up
 
 
 class PlotsPanel(QWidget):
@@ -46,6 +49,8 @@ class PlotsPanel(QWidget):
         for row, title in enumerate(_TITLES):
             plot = self.graphics.addPlot(row=row, col=0)
             plot.setLabel("left", title)
+            plot.getAxis("left").enableAutoSIPrefix(False)     # never "(x0.001)"
+            plot.getAxis("left").setWidth(AXIS_WIDTH)            # the four time axes line up
             plot.showGrid(x=True, y=True, alpha=0.2)
             plot.setXRange(-self.WINDOW_S, 0, padding=0)
             plot.setMouseEnabled(x=False, y=False)
@@ -79,6 +84,10 @@ class PlotsPanel(QWidget):
         self._n += 1
         self._dirty = True
 
+    def gap(self, t: float) -> None:
+        """Break every line at ``t`` (link lost, replay paused): no line is drawn across missing data."""
+        self.append(t)
+
     def clear(self) -> None:
         self._n = 0
         self._dirty = True
@@ -101,8 +110,22 @@ class PlotsPanel(QWidget):
         x = t - t[-1]
         keep = x >= -self.WINDOW_S
         x = x[keep]
+        shown = {name: self._ordered(self._data[name])[keep] for name in self.curves}
         for name, curve in self.curves.items():
-            curve.setData(x, self._ordered(self._data[name])[keep], connect="finite")
+            curve.setData(x, shown[name], connect="finite")
+        for row, span in enumerate(MIN_SPAN):
+            values = np.concatenate([shown[name] for name, (r, _, _) in SERIES.items() if r == row])
+            values = values[np.isfinite(values)]
+            lo, hi = (float(values.min()), float(values.max())) if values.size else (0.0, 0.0)
+            if hi - lo < span:
+                mid = (lo + hi) / 2.0
+                lo, hi = mid - span / 2.0, mid + span / 2.0
+            self.plots[row].setYRange(lo, hi, padding=0.05)
+
+    def y_range(self, row: int) -> tuple[float, float]:
+        """The y range a plot shows (for tests)."""
+        lo, hi = self.plots[row].viewRange()[1]
+        return float(lo), float(hi)
 
     def curve_points(self, name: str) -> int:
         """How many points a curve shows (for tests)."""

@@ -48,12 +48,16 @@ class ReplayBar(QWidget):
         self.speed.activated.connect(lambda i: self.speedRequested.emit(float(self.speed.itemData(i))))
 
     def set_progress(self, position: float | None, duration: float | None, paused: bool,
-                     speed: float | None = None) -> None:
+                     speed: float | None = None, finished: bool = False) -> None:
+        """``finished``: the whole log has been played; nothing more will come."""
         self._paused = paused
-        self.play_button.setText("Play" if paused else "Pause")
+        self.play_button.setText("Finished" if finished else ("Play" if paused else "Pause"))
+        self.play_button.setEnabled(not finished)
         if duration:
-            self.progress.setValue(int(1000 * max(0.0, min(1.0, (position or 0.0) / duration))))
-        self.clock.setText(f"{_clock(position)} / {_clock(duration)}")
+            fraction = 1.0 if finished else (position or 0.0) / duration
+            self.progress.setValue(int(1000 * max(0.0, min(1.0, fraction))))
+        end = "  (finished)" if finished else ""
+        self.clock.setText(f"{_clock(duration if finished else position)} / {_clock(duration)}{end}")
         if speed is not None and not self.speed.view().isVisible():
             i = self.speed.findData(float(speed))
             if i >= 0 and i != self.speed.currentIndex():

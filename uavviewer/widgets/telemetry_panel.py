@@ -1,7 +1,6 @@
 """The numbers a pilot glances at: mode, battery, GPS, height, speeds, link health."""
 from __future__ import annotations
 
-
 from PyQt5.QtCore import Qt
 from PyQt5.QtWidgets import QFrame, QGridLayout, QLabel, QSizePolicy, QWidget
 
@@ -62,6 +61,7 @@ class TelemetryPanel(QFrame):
             self._values[key] = value
         grid.setRowStretch(len(ROWS) + 1, 1)
         self._colors: dict[str, str] = {}
+        self._stale = False
 
     # -- for tests and tooltips ----------------------------------------------------------------
     def text(self, key: str) -> str:
@@ -71,6 +71,8 @@ class TelemetryPanel(QFrame):
         return self._colors.get(key, NORMAL)
 
     def _put(self, key: str, text: str, color: str = NORMAL) -> None:
+        if self._stale:
+            color = DIM
         label = self._values[key]
         if label.text() != text:
             label.setText(text)
@@ -80,7 +82,20 @@ class TelemetryPanel(QFrame):
 
     # -- values in ------------------------------------------------------------------------------
     def set_state(self, s: VehicleState) -> None:
-        self._put("mode", s.mode or "--")
+        """Before the first heartbeat nothing is known ("--"); with the link lost the last values are
+        shown dimmed, as stale, and the link rows say so."""
+        self._stale = s.link.status is LinkStatus.LOST
+        if s.link.status is LinkStatus.WAITING or not s.mode:
+            for key in ("mode", "armed", "landed", "battery", "gps", "altitude", "ground_speed", "climb",
+                        "heading", "home"):
+                self._put(key, "--", DIM)
+        else:
+            self._vehicle_values(s)
+        self._stale = False
+        self._link_values(s)
+
+    def _vehicle_values(self, s: VehicleState) -> None:
+        self._put("mode", s.mode)
         self._put("armed", "ARMED" if s.armed else "disarmed", WARN if s.armed else NORMAL)
         landed = {LandedState.UNDEFINED: "--", LandedState.ON_GROUND: "on ground",
                   LandedState.IN_AIR: "in air", LandedState.TAKEOFF: "taking off",
@@ -90,16 +105,24 @@ class TelemetryPanel(QFrame):
                          s.battery.low, s.battery.remaining_estimated)
         fix_color = GOOD if s.gps.fix_type >= 3 else (WARN if s.gps.fix_type == 2 else BAD)
         self._put("gps", f"{s.gps.fix_name}, {s.gps.satellites} sats", fix_color)
-        has_pos = s.link.status is not LinkStatus.WAITING
-        self._put("altitude", _num(s.altitude if has_pos else None, "m", 2))
-        self._put("ground_speed", _num(s.velocity.ground_speed if has_pos else None, "m/s", 2))
-        self._put("climb", _num(s.velocity.climb if has_pos else None, "m/s", 2))
-        self._put("heading", f"{s.heading_deg:03.0f}°" if has_pos else "--")
+        self._put("altitude", _num(s.altitude, "m", 2))
+        self._put("ground_speed", _num(s.velocity.ground_speed, "m/s", 2))
+        self._put("climb", _num(s.velocity.climb, "m/s", 2))
+        self._put("heading", f"{s.heading_deg:03.0f}°")
         self._put("home", _num(s.distance_from_home, "m"))
+
+    def _link_values(self, s: VehicleState) -> None:
         age = s.link.heartbeat_age
         hb_color = DIM if age is None else (GOOD if s.link.status is LinkStatus.OK else BAD)
         self._put("heartbeat", "--" if age is None else f"{age:.1f} s ago", hb_color)
-        self._put("packets", f"{s.link.packets_per_s:.0f}")
+        if s.link.status is LinkStatus.LOST:
+            self._put("packets", "0", BAD)
+            self._put("loss", "link lost", BAD)
+            return
+        self._put("packets", f"{s.link.packets_per_s:.0f}", NORMAL if s.link.status is LinkStatus.OK else DIM)
+        if s.link.status is not LinkStatus.OK:
+            self._put("loss", "--", DIM)
+            return
         loss = s.link.loss_percent
         self._put("loss", f"{loss:.1f} %", GOOD if loss < 2 else (WARN if loss < 10 else BAD))
 
