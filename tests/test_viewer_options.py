@@ -35,3 +35,25 @@ def test_takeoff_altitude_from_the_command_line_is_not_saved(qtbot, silent_vehic
     w.close()
     again = window_factory(silent_vehicle)
     assert again.takeoff_altitude == again.settings.takeoff_altitude == 3.0
+
+
+def test_preferences_left_alone_do_not_save_the_command_line_altitude(qtbot, silent_vehicle, viewer_settings,
+                                                                       window_factory):
+    from PyQt5.QtWidgets import QDialogButtonBox
+
+    from uavviewer.dialogs import SettingsDialog
+    from uavviewer.settings import load_settings
+    w = window_factory(silent_vehicle, takeoff_altitude=25.0)
+    w.edit_settings()
+    dialog = w.findChild(SettingsDialog)
+    assert dialog.takeoffAltitude.value() == 25.0                 # what is in force is what is shown
+    dialog.maxHorizontal.setValue(3.0)
+    dialog.buttons.button(QDialogButtonBox.Ok).click()
+    assert w.takeoff_altitude == 25.0
+    saved = load_settings(viewer_settings)
+    assert saved.takeoff_altitude == 3.0 and saved.max_horizontal == 3.0
+    w.edit_settings()                                             # now the pilot does choose an altitude
+    dialog = w.findChild(SettingsDialog)
+    dialog.takeoffAltitude.setValue(7.0)
+    dialog.buttons.button(QDialogButtonBox.Ok).click()
+    assert w.takeoff_altitude == 7.0 and load_settings(viewer_settings).takeoff_altitude == 7.0

@@ -167,3 +167,72 @@ def test_lost_link_in_flight_makes_the_sticks_inert_and_keys_need_a_fresh_press(
     qtbot.keyPress(w, Qt.Key_W)                          # a fresh press does
     assert w.adapter.setpoint.forward > 0
     qtbot.keyRelease(w, Qt.Key_W)
+
+
+def test_a_takeoff_question_is_withdrawn_when_the_link_is_lost(qtbot, sim, vehicle_factory, window_factory):
+    v = vehicle_factory(f"tcp:127.0.0.1:{sim.tcp_port}", loss_timeout=1.0)
+    w = window_factory(v, takeoff_altitude=3.0)
+    sent = sent_commands(w)
+    qtbot.waitUntil(lambda: w.flightControls.main_button.isEnabled(), timeout=15000)
+    qtbot.mouseClick(w.flightControls.main_button, Qt.LeftButton)
+    qtbot.waitUntil(lambda: w.takeoff_box is not None and w.takeoff_box.isVisible(), timeout=3000)
+    clicked: list[str] = []
+    w.takeoff_box.buttonClicked.connect(lambda b: clicked.append(b.text()))
+    sim.faults.link_down = True
+    qtbot.waitUntil(lambda: w.takeoff_box is None, timeout=10000)        # withdrawn, never answered
+    assert clicked == []
+    sim.faults.link_down = False
+    qtbot.waitUntil(lambda: w.adapter.state.link.status.value == "ok"
+                    and w.flightControls.main_button.isEnabled(), timeout=15000)
+    assert "takeoff" not in sent and not sim.truth().armed
+
+
+def test_scrolling_over_the_mode_selector_never_changes_the_mode(qtbot, sim, flying, window):
+    from PyQt5.QtCore import QPointF
+    from PyQt5.QtGui import QWheelEvent
+    w = window
+    wait_flying(qtbot, w)
+    sent = sent_commands(w)
+    sel = w.modeSelector
+    for delta in (120, 120, -120):
+        pos = QPointF(sel.width() / 2, sel.height() / 2)
+        QApplication.sendEvent(sel, QWheelEvent(pos, QPointF(sel.mapToGlobal(pos.toPoint())), QPoint(0, 0),
+                                                QPoint(0, delta), Qt.NoButton, Qt.NoModifier, Qt.NoScrollPhase,
+                                                False))
+    assert sent == [] and sel.mode == "GUIDED"
+    assert w.adapter.state.mode == "GUIDED"
+
+
+def test_the_attitude_indicator_flags_a_lost_link(qtbot, sim, vehicle_factory, window_factory):
+    v = vehicle_factory(f"tcp:127.0.0.1:{sim.tcp_port}", loss_timeout=1.0)
+    w = window_factory(v, takeoff_altitude=3.0)
+    qtbot.waitUntil(lambda: w.attitude.values["valid"], timeout=10000)
+    sim.faults.link_down = True
+    qtbot.waitUntil(lambda: w.attitude.values["flag"] == "NO LINK", timeout=10000)
+    assert w.attitude.values["altitude"] is None
+    sim.faults.link_down = False
+    qtbot.waitUntil(lambda: w.attitude.values["valid"] and w.attitude.values["altitude"] is not None,
+                    timeout=15000)
+
+
+def test_preferences_leave_stop_and_land_within_reach(qtbot, sim, flying, window):
+    w = window
+    wait_flying(qtbot, w)
+    w.actionPreferences.trigger()
+    qtbot.waitUntil(lambda: w.findChild(SettingsDialog) is not None and w.findChild(SettingsDialog).isVisible(),
+                    timeout=3000)
+    assert QApplication.activeModalWidget() is None
+    sent = sent_commands(w)
+    qtbot.mouseClick(w.flightControls.stop_button, Qt.LeftButton)
+    assert sent == ["stop"]
+    w.findChild(SettingsDialog).reject()
+
+
+def test_minimising_centres_the_sticks(qtbot, sim, flying, window):
+    w = window
+    wait_flying(qtbot, w)
+    w.rightStick.hold(0.0, 1.0)
+    assert w.adapter.setpoint.forward > 0
+    w.showMinimized()
+    qtbot.waitUntil(lambda: w.adapter.setpoint.is_zero, timeout=3000)
+    assert w.rightStick.position == (0.0, 0.0)

@@ -231,6 +231,14 @@ def test_replay_bar(qtbot):
     assert sig.args == [True]
 
 
+def test_link_banner_says_when_a_replay_is_finished(qtbot):
+    b = make(LinkBanner, qtbot)
+    b.set_link(LinkStatus.OK, "flight.tlog", 0.0)
+    assert b.isHidden()
+    b.set_link(LinkStatus.OK, "flight.tlog", 0.0, replay_finished=True)
+    assert not b.isHidden() and "Replay finished" in b.text()
+
+
 def test_replay_bar_says_when_the_log_is_finished(qtbot):
     r = make(ReplayBar, qtbot)
     r.set_progress(129.6, 130.0, paused=False, speed=1.0, finished=True)

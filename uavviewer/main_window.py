@@ -66,6 +66,7 @@ class MainWindow(QMainWindow):
         self._plot_gap = False
         self._sticks_live = False
         self._takeoff_box: QMessageBox | None = None
+        self._settings_dialog: SettingsDialog | None = None
         self._t0 = time.monotonic()
 
         self.setWindowTitle(f"UavViewerPy — {self.adapter.description}")
@@ -161,14 +162,31 @@ class MainWindow(QMainWindow):
         return self._takeoff_override if self._takeoff_override is not None else self.settings.takeoff_altitude
 
     def edit_settings(self) -> None:
-        dialog = SettingsDialog(replace(self.settings, takeoff_altitude=self.takeoff_altitude), self)
-        dialog.setWindowModality(Qt.WindowModal)
-        dialog.accepted.connect(lambda: self.set_settings(dialog.chosen()))
-        dialog.open()
+        """Not modal: Stop, Land and RTL stay one click away while it is open (its opening centres the sticks)."""
+        if self._settings_dialog is not None:
+            self._settings_dialog.raise_()
+            self._settings_dialog.activateWindow()
+            return
+        shown = self.takeoff_altitude
+        dialog = SettingsDialog(replace(self.settings, takeoff_altitude=shown), self)
+        dialog.setAttribute(Qt.WA_DeleteOnClose)
+        dialog.accepted.connect(lambda: self._settings_chosen(dialog.chosen(), shown))
+        dialog.destroyed.connect(lambda: setattr(self, "_settings_dialog", None))
+        self._settings_dialog = dialog
+        dialog.show()
 
-    def set_settings(self, settings: ViewerSettings) -> None:
+    def _settings_chosen(self, settings: ViewerSettings, shown_altitude: float) -> None:
+        if self._takeoff_override is not None and settings.takeoff_altitude == shown_altitude:
+            # --takeoff-altitude was shown and left alone: it stays for this run and is not saved.
+            self.set_settings(replace(settings, takeoff_altitude=self.settings.takeoff_altitude),
+                              keep_override=True)
+        else:
+            self.set_settings(settings)
+
+    def set_settings(self, settings: ViewerSettings, keep_override: bool = False) -> None:
         old, self.settings = self.settings, settings
-        self._takeoff_override = None            # the pilot has now chosen the altitude in Preferences
+        if not keep_override:
+            self._takeoff_override = None        # the pilot has now chosen the altitude in Preferences
         save_settings(self._qsettings, settings)
         self._apply_settings()
         self.camera.folder = settings.media_folder or default_media_folder()
@@ -183,16 +201,27 @@ class MainWindow(QMainWindow):
         dialog.open()
 
     def _about(self) -> None:
-        QMessageBox.about(self, "UavViewerPy",
+        """Not modal and no nested event loop: flying goes on while it is open."""
+        box = QMessageBox(QMessageBox.Information, "UavViewerPy",
                           "UavViewerPy — fly a MAVLink drone from a laptop.\n"
-                          f"Vehicle: {self.adapter.description}")
+                          f"Vehicle: {self.adapter.description}", QMessageBox.Ok, self)
+        box.setObjectName("aboutBox")
+        box.setWindowModality(Qt.NonModal)
+        box.setAttribute(Qt.WA_DeleteOnClose)
+        box.show()
 
     # -- state in --------------------------------------------------------------------------------
     def show_state(self, s: VehicleState) -> None:
         link = s.link
-        self.linkBanner.set_link(link.status, link.address or self.adapter.description, link.heartbeat_age)
+        replay = self.adapter.replay
+        finished = replay is not None and replay.finished
+        self.linkBanner.set_link(link.status, link.address or self.adapter.description, link.heartbeat_age,
+                                 finished)
         have_vehicle = link.status is not LinkStatus.WAITING and bool(s.mode)
-        if have_vehicle:
+        if link.status in (LinkStatus.LOST, LinkStatus.CLOSED):
+            if self.attitude.values["flag"] != "NO LINK":       # the last attitude is no longer the drone's
+                self.attitude.clear("NO LINK")
+        elif have_vehicle:
             self.attitude.set_attitude(s.attitude.roll, s.attitude.pitch, s.heading_deg)
             self.attitude.set_readouts(s.altitude, s.velocity.ground_speed, s.velocity.climb)
         self.telemetry.set_state(s)
@@ -200,6 +229,8 @@ class MainWindow(QMainWindow):
         progress = takeoff_progress(s) if phase is FlightPhase.TAKING_OFF else None
         detail = s.takeoff.phase.value if s.takeoff.active else ""
         self.flightControls.set_vehicle(phase, s.armed, s.connected, progress, detail)
+        if self._takeoff_box is not None and not self._may_take_off(s):
+            self._takeoff_box.reject()              # the question no longer fits the vehicle: withdraw it
         self.phaseLabel.setText(self._phase_text(s, phase))
         self.modeSelector.set_mode(s.mode)
         self.modeSelector.setEnabled(s.connected)
@@ -212,7 +243,6 @@ class MainWindow(QMainWindow):
             if r.index not in self._shown_results:
                 self._shown_results.add(r.index)
                 self.messages.add_result(r)
-        replay = self.adapter.replay
         if link.status is not LinkStatus.OK or (replay is not None and replay.paused):
             if not self._plot_gap:                  # no line drawn across the time nothing came in
                 self._plot_gap = True
@@ -340,7 +370,13 @@ class MainWindow(QMainWindow):
     def changeEvent(self, event: QEvent) -> None:  # noqa: N802
         if event.type() == QEvent.ActivationChange and not self.isActiveWindow():
             self.centre_sticks()            # focus lost: nobody is holding the sticks any more
+        elif event.type() == QEvent.WindowStateChange and self.isMinimized():
+            self.centre_sticks()            # minimised: the sticks are out of sight and out of hand
         super().changeEvent(event)
+
+    def hideEvent(self, event) -> None:  # noqa: N802
+        self.centre_sticks()
+        super().hideEvent(event)
 
     # -- commands ---------------------------------------------------------------------------------
     def _command(self, name: str, *args) -> None:
@@ -361,9 +397,17 @@ class MainWindow(QMainWindow):
     def takeoff_box(self) -> QMessageBox | None:
         return self._takeoff_box
 
+    def _may_take_off(self, s: VehicleState) -> bool:
+        """What the takeoff question assumes: on the ground with the link up."""
+        return flight_phase(s) is FlightPhase.ON_GROUND and s.link.status is LinkStatus.OK
+
     def _takeoff_answered(self, box: QMessageBox, altitude: float) -> None:
         if box.clickedButton() is box.button(QMessageBox.Yes):
-            self._command("takeoff", altitude)
+            if self._may_take_off(self.adapter.state):
+                self._command("takeoff", altitude)
+            else:
+                self.log_message("Takeoff not sent: the vehicle is no longer on the ground with a link",
+                                 Severity.WARNING)
         box.deleteLater()
         if self._takeoff_box is box:
             self._takeoff_box = None

@@ -38,6 +38,7 @@ class AttitudeIndicator(QWidget):
         self._ground_speed: float | None = None
         self._climb: float | None = None
         self._valid = False
+        self._flag = "NO ATTITUDE"
         self.setAttribute(Qt.WA_OpaquePaintEvent)
         self.setMinimumSize(260, 220)
         self.setSizePolicy(QSizePolicy.Expanding, QSizePolicy.Expanding)
@@ -49,7 +50,7 @@ class AttitudeIndicator(QWidget):
         A roll or pitch that is not a number means the attitude is unknown: the failure flag is shown."""
         if not (math.isfinite(roll) and math.isfinite(pitch)):
             if self._valid:
-                self._valid = False
+                self._valid, self._flag = False, "NO ATTITUDE"
                 self.update()
             return
         values = [roll, pitch, heading_deg % 360.0 if math.isfinite(heading_deg) else 0.0]
@@ -64,8 +65,9 @@ class AttitudeIndicator(QWidget):
             self._altitude, self._ground_speed, self._climb = values
             self.update()
 
-    def clear(self) -> None:
-        """No vehicle: the failure flag and dashes."""
+    def clear(self, reason: str = "NO ATTITUDE") -> None:
+        """No vehicle or no link: the failure flag saying why, and dashes. The next attitude lifts it."""
+        self._flag = reason
         self._valid = False
         self._roll = self._pitch = self._heading = 0.0
         self._altitude = self._ground_speed = self._climb = None
@@ -75,6 +77,7 @@ class AttitudeIndicator(QWidget):
     def values(self) -> dict:
         """What is on display (for tests and tooltips)."""
         return {"roll": self._roll, "pitch": self._pitch, "heading": self._heading, "valid": self._valid,
+                "flag": "" if self._valid else self._flag,
                 "altitude": self._altitude, "ground_speed": self._ground_speed, "climb": self._climb}
 
     # -- geometry (public so tests can check pixels against it) -------------------------------
@@ -252,15 +255,16 @@ class AttitudeIndicator(QWidget):
         label.moveCenter(area.center())
         p.fillRect(label, QColor(16, 20, 26))
         p.setPen(QColor(230, 80, 80))
-        p.drawText(label, Qt.AlignCenter, "NO ATTITUDE")
+        p.drawText(label, Qt.AlignCenter, self._flag)
 
     def _draw_heading_tape(self, p: QPainter, rect: QRectF) -> None:
         p.fillRect(rect, QColor(12, 16, 22))
+        if not self._valid:                           # no scale to read a heading from: only the "---" box
+            self._draw_heading_box(p, rect)
+            return
         ppd = rect.width() / self.HEADING_SPAN_DEG
         cx = rect.center().x()
-        font = QFont(self.font())
-        font.setPixelSize(max(10, int(rect.height() * 0.42)))
-        p.setFont(font)
+        p.setFont(self._tape_font(rect))
         first = int(math.floor(self._heading - self.HEADING_SPAN_DEG / 2)) // 5 * 5
         for deg in range(first, first + int(self.HEADING_SPAN_DEG) + 10, 5):
             x = cx + (deg - self._heading) * ppd
@@ -274,12 +278,20 @@ class AttitudeIndicator(QWidget):
                 label = {0: "N", 90: "E", 180: "S", 270: "W"}.get(d, f"{d:03d}")
                 p.drawText(QRectF(x - 20, rect.top() + rect.height() * 0.35, 40, rect.height() * 0.6),
                            Qt.AlignCenter, label)
-        box = QRectF(cx - 30, rect.top() + 1, 60, rect.height() - 2)
+        self._draw_heading_box(p, rect)
+
+    def _tape_font(self, rect: QRectF) -> QFont:
+        font = QFont(self.font())
+        font.setPixelSize(max(10, int(rect.height() * 0.42)))
+        return font
+
+    def _draw_heading_box(self, p: QPainter, rect: QRectF) -> None:
+        box = QRectF(rect.center().x() - 30, rect.top() + 1, 60, rect.height() - 2)
         p.setPen(QPen(SYMBOL, 1.5))
         p.setBrush(QColor(0, 0, 0, 220))
         p.drawRoundedRect(box, 4, 4)
         p.setPen(TEXT)
-        bold = QFont(font)
+        bold = self._tape_font(rect)
         bold.setBold(True)
         p.setFont(bold)
         p.drawText(box, Qt.AlignCenter, f"{self._heading:03.0f}°" if self._valid else "---")

@@ -24,8 +24,12 @@ class LinkBanner(QLabel):
     def status(self) -> LinkStatus | None:
         return self._status
 
-    def set_link(self, status: LinkStatus, address: str, heartbeat_age: float | None) -> None:
-        if status is LinkStatus.OK:
+    def set_link(self, status: LinkStatus, address: str, heartbeat_age: float | None,
+                 replay_finished: bool = False) -> None:
+        """``replay_finished``: a recorded flight has played to its end; what is shown is its last moment."""
+        if replay_finished:
+            text, kind = "Replay finished — the instruments show the recording's last moment", "waiting"
+        elif status is LinkStatus.OK:
             text, kind = "", ""
         elif status is LinkStatus.WAITING:
             text, kind = f"Waiting for vehicle on {address}…", "waiting"
@@ -34,7 +38,7 @@ class LinkBanner(QLabel):
             text, kind = f"Link lost{since}", "lost"
         else:
             text, kind = f"Link closed ({address})", "lost"
-        if status is not self._status:
+        if (status, kind) != (self._status, self.property("kind")):
             self._status = status
             self.setProperty("kind", kind)
             self.style().unpolish(self)

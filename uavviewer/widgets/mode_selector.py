@@ -43,6 +43,10 @@ class ModeSelector(QComboBox):
         self.setCurrentIndex(self.findText(name) if name else -1)
         self.blockSignals(False)
 
+    def wheelEvent(self, event) -> None:  # noqa: N802 (Qt name)
+        """A stray scroll over the selector must never change the flight mode; only a pick from the list."""
+        event.ignore()
+
     def _picked(self, index: int) -> None:
         name = self.itemText(index)
         if name and name != self._mode:
