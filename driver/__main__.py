@@ -15,26 +15,33 @@ import signal
 import sys
 import threading
 
+from .options import as_float, connection, not_negative, port, positive, takeoff_altitude, whole
+
 log = logging.getLogger("driver")
 
 SOLO_MASTER = "udpin:0.0.0.0:14550"
 
 
 def parser() -> argparse.ArgumentParser:
+    from .sim import DEMO_READY_AFTER
     p = argparse.ArgumentParser(
         prog="python -m driver",
         description="MAVLinkServer: MAVLink driver serving JdeRobot's interfaces over ZeroC Ice. "
                     "Ice options: --Ice.Config=FILE, --Ice.*=VALUE, --MAVLinkServer.*=VALUE (see config/server.cfg).")
-    p.add_argument("--master", help=f"MAVLink connection string (default {SOLO_MASTER}, the 3DR Solo; "
-                                    "tcp:HOST:PORT, udpin:, udpout:, a serial device, or a .tlog to replay)")
-    p.add_argument("--baudrate", "--baud", type=int, default=57600, help="serial baud rate (default 57600)")
-    p.add_argument("--out", action="append", default=[], help="forward MAVLink to another ground station "
-                                                              "(repeatable), e.g. udp:127.0.0.1:14551")
-    p.add_argument("--source-system", type=int, default=255, help="our MAVLink system id (default 255)")
-    p.add_argument("--source-component", type=int, default=190, help="our MAVLink component id (default 190)")
-    p.add_argument("--target-system", type=int, default=0, help="vehicle system id (default 0: the first heard)")
-    p.add_argument("--target-component", type=int, default=1, help="vehicle component id (default 1)")
-    p.add_argument("--streamrate", type=int, default=4, help="telemetry stream rate in Hz (default 4)")
+    p.add_argument("--master", type=connection,
+                   help=f"MAVLink connection string (default {SOLO_MASTER}, the 3DR Solo; "
+                        "tcp:HOST:PORT, udpin:, udpout:, a serial device, or a .tlog to replay)")
+    p.add_argument("--baudrate", "--baud", type=whole(1, 10_000_000), default=57600,
+                   help="serial baud rate (default 57600)")
+    p.add_argument("--out", type=connection, action="append", default=[],
+                   help="forward MAVLink to another ground station (repeatable), e.g. udp:127.0.0.1:14551")
+    p.add_argument("--source-system", type=whole(1, 255), default=255, help="our MAVLink system id (default 255)")
+    p.add_argument("--source-component", type=whole(0, 255), default=190,
+                   help="our MAVLink component id (default 190)")
+    p.add_argument("--target-system", type=whole(0, 255), default=0,
+                   help="vehicle system id (default 0: the first heard)")
+    p.add_argument("--target-component", type=whole(0, 255), default=1, help="vehicle component id (default 1)")
+    p.add_argument("--streamrate", type=whole(1, 50), default=4, help="telemetry stream rate in Hz (default 4)")
     p.add_argument("--logfile", default="mav.tlog", help="telemetry log (default mav.tlog)")
     p.add_argument("--append-log", action="store_true", help="append to the log instead of replacing it")
     p.add_argument("--no-log", action="store_true", help="write no telemetry log")
@@ -45,15 +52,16 @@ def parser() -> argparse.ArgumentParser:
     version.add_argument("--mav10", action="store_true", help="speak MAVLink 1 only")
     version.add_argument("--mav20", action="store_true", help="speak MAVLink 2 from the start")
     p.add_argument("--sim", action="store_true", help="fly the built-in simulated ArduCopter (in-process)")
-    p.add_argument("--sim-speedup", type=float, default=1.0, help="simulated time speed-up (default 1)")
+    p.add_argument("--sim-speedup", type=positive, default=1.0, help="simulated time speed-up (default 1)")
     p.add_argument("--camera", action="append", default=[], metavar="URI",
                    help="video served as Camera, repeatable for Extra.toggleCam: 0, clip.mp4, rtsp://..., "
                         "udp://0.0.0.0:5600, solo, sim (default with --sim; see docs/camera.md)")
-    p.add_argument("--sim-ready-after", type=float, default=20.0,
-                   help="simulated seconds until the vehicle is ready to arm (default 20)")
-    p.add_argument("--takeoff-alt", type=float, help="default takeoff altitude in metres (default 3)")
+    p.add_argument("--sim-ready-after", type=not_negative, default=DEMO_READY_AFTER, metavar="SECONDS",
+                   help=f"simulated seconds until the vehicle is ready to arm (default {DEMO_READY_AFTER:g})")
+    p.add_argument("--takeoff-alt", type=takeoff_altitude,
+                   help="default takeoff altitude in metres above home (default 3)")
     p.add_argument("--host", help="address the Ice interfaces bind (default 127.0.0.1; 0.0.0.0 for all)")
-    p.add_argument("--one-port", nargs="?", type=int, const=9000, metavar="PORT",
+    p.add_argument("--one-port", nargs="?", type=port, const=9000, metavar="PORT",
                    help="serve every interface on one port, JdeRobot's Gazebo style (default 9000)")
     p.add_argument("-v", "--verbose", action="count", default=0, help="more logging (-vv for debug)")
     return p
@@ -71,17 +79,21 @@ def log_path(opts) -> str | None:
 def main(argv: list[str] | None = None) -> int:
     import Ice
 
-    from .ice.server import IceServer, default_properties
+    from .ice.server import IceServer, ServeError, default_properties, ice_problem
 
     args = list(sys.argv[1:] if argv is None else argv)
-    props = default_properties(args)                 # removes --Ice.* and --MAVLinkServer.* options
-    opts = parser().parse_args(args)
+    p = parser()
+    try:
+        props = default_properties(args)             # removes --Ice.* and --MAVLinkServer.* options
+    except Ice.LocalException as exc:                # --Ice.Config=/missing.cfg, ...
+        p.error(f"cannot read the Ice configuration {ice_problem(exc)}")
+    opts = p.parse_args(args)
     level = logging.DEBUG if opts.verbose > 1 else logging.INFO if (opts.verbose or opts.daemon) else logging.WARNING
     logging.basicConfig(level=level, format="%(asctime)s %(levelname)s %(name)s: %(message)s")
 
     from .api import Limits
     from .console import Console, run_commands, show_logs, wait_for_vehicle
-    from .vehicle import Vehicle, VehicleConfig
+    from .vehicle import Vehicle, VehicleConfig, takeoff_altitude_problem
 
     if opts.host:
         props.setProperty("MAVLinkServer.Host", opts.host)
@@ -90,33 +102,37 @@ def main(argv: list[str] | None = None) -> int:
         props.setProperty("MAVLinkServer.Endpoints", f"default -h {host} -p {opts.one_port}")
     if opts.takeoff_alt is not None:
         props.setProperty("MAVLinkServer.TakeoffAltitude", str(opts.takeoff_alt))
+    text = props.getPropertyWithDefault("MAVLinkServer.TakeoffAltitude", str(VehicleConfig.takeoff_altitude))
+    takeoff_alt = as_float(text)
+    problem = takeoff_altitude_problem(takeoff_alt)
+    if problem:                                      # from --Ice.Config or --MAVLinkServer.TakeoffAltitude
+        p.error(f"MAVLinkServer.TakeoffAltitude={text}: {problem}")
     for i, uri in enumerate(opts.camera):                # MAVLinkServer.Camera.Uri, Uri.2, ...
         props.setProperty("MAVLinkServer.Camera.Uri" + (f".{i + 1}" if i else ""), uri)
     if opts.sim and not props.getProperty("MAVLinkServer.Camera.Uri"):
         props.setProperty("MAVLinkServer.Camera.Uri", "sim")
 
-    sim = None
-    master = opts.master
-    if opts.sim:
-        from .sim import SimConfig, SimVehicle
-        sim = SimVehicle(SimConfig(tcp_port=0, speedup=opts.sim_speedup, ready_after=opts.sim_ready_after))
-        sim.start()
-        master = master or f"tcp:127.0.0.1:{sim.tcp_port}"
-    master = master or SOLO_MASTER
-    takeoff_alt = float(props.getPropertyWithDefault("MAVLinkServer.TakeoffAltitude", "3.0"))
-    vehicle = Vehicle(VehicleConfig(
-        connection=master, baud=opts.baudrate, source_system=opts.source_system,
-        source_component=opts.source_component, target_system=opts.target_system,
-        target_component=opts.target_component, stream_rate=opts.streamrate, takeoff_altitude=takeoff_alt,
-        limits=Limits(), tlog_path=log_path(opts), tlog_append=opts.append_log, outputs=tuple(opts.out),
-        mavlink_version=1 if opts.mav10 else 2 if opts.mav20 else None))
-    server = None
+    _stop_on_sigterm()
+    sim = vehicle = server = None
     try:
+        master = opts.master
+        if opts.sim:
+            from .sim import SimConfig, SimVehicle
+            sim = SimVehicle(SimConfig(tcp_port=0, speedup=opts.sim_speedup, ready_after=opts.sim_ready_after))
+            sim.start()
+            master = master or f"tcp:127.0.0.1:{sim.tcp_port}"
+        master = master or SOLO_MASTER
+        vehicle = Vehicle(VehicleConfig(
+            connection=master, baud=opts.baudrate, source_system=opts.source_system,
+            source_component=opts.source_component, target_system=opts.target_system,
+            target_component=opts.target_component, stream_rate=opts.streamrate, takeoff_altitude=takeoff_alt,
+            limits=Limits(), tlog_path=log_path(opts), tlog_append=opts.append_log, outputs=tuple(opts.out),
+            mavlink_version=1 if opts.mav10 else 2 if opts.mav20 else None))
         vehicle.start()
         try:
             server = IceServer(vehicle, props).start()
-        except Ice.LocalException as exc:             # port in use, bad endpoint string, ...
-            print(f"cannot serve the Ice interfaces: {exc}", file=sys.stderr)
+        except ServeError as exc:                    # port in use, bad endpoint string, unknown host
+            print(exc, file=sys.stderr)
             return 1
         console = Console(vehicle, name=opts.aircraft or "")
         if not opts.daemon:                          # logs through the console: on a fresh line, each once
@@ -131,32 +147,60 @@ def main(argv: list[str] | None = None) -> int:
         if opts.daemon:
             _wait_for_signal()
         else:
-            try:
-                import readline  # (history and line editing for input())
-            except ImportError:
-                readline = None
-            if readline is not None and sys.stdin.isatty() and sys.stdout.isatty():
-                console.redraw_input(readline)
-            console.watch_messages()
-            try:
-                console.cmdloop()
-            except KeyboardInterrupt:
-                console.say("")
-            console.redraw_input(None)
-            console.stop_watching()
+            _console_loop(console)
+    except (KeyboardInterrupt, Terminated):          # Ctrl-C or SIGTERM: stop cleanly, as exit does
+        pass
     finally:
+        _default_sigterm()                           # a SIGTERM during the clean-up ends the process at once
         if server is not None:
             server.close()
-        vehicle.close()
+        if vehicle is not None:
+            vehicle.close()
         if sim is not None:
             sim.stop()
     return 0
 
 
+def _console_loop(console) -> None:
+    try:
+        import readline  # (history and line editing for input())
+    except ImportError:
+        readline = None
+    if readline is not None and sys.stdin.isatty() and sys.stdout.isatty():
+        console.redraw_input(readline)
+    console.watch_messages()
+    try:
+        console.cmdloop()
+    except (KeyboardInterrupt, Terminated):
+        console.say("")                              # off the prompt line
+        raise
+    finally:
+        console.redraw_input(None)
+        console.stop_watching()
+
+
+class Terminated(Exception):
+    """SIGTERM arrived: the server stops as if told to exit."""
+
+
+def _stop_on_sigterm() -> None:
+    """SIGTERM raises :class:`Terminated` in the main thread, so the vehicle, Ice and the sim are closed;
+    a second SIGTERM during that clean-up ends the process at once."""
+    def terminate(*_) -> None:
+        _default_sigterm()
+        raise Terminated()
+    if threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGTERM, terminate)
+
+
+def _default_sigterm() -> None:
+    if threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGTERM, signal.SIG_DFL)
+
+
 def _wait_for_signal() -> None:
+    """--daemon: run until Ctrl-C or SIGTERM (each raises here)."""
     done = threading.Event()
-    for sig in (signal.SIGINT, signal.SIGTERM):
-        signal.signal(sig, lambda *_: done.set())
     while not done.wait(1.0):
         pass
 

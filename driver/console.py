@@ -18,7 +18,8 @@ import threading
 import time
 from concurrent.futures import Future
 
-from .state import CommandResult, VehicleState
+from .state import CommandResult, CommandStatus, LandedState, LinkStatus, SequencePhase, VehicleState
+from .vehicle import COPTER_MODES
 
 ARM_USAGE = ("arm [throttle] [force] | arm check [all|none|MASK] | arm safetyon | arm safetyoff | arm list")
 VELOCITY_HOLD = 3.0          # s a typed velocity lasts (ArduCopter's GUID_TIMEOUT)
@@ -96,7 +97,7 @@ class Console(cmd.Cmd):
                 self.say(f"error: {exc}")
                 return
             if self._claim(result):
-                self.say(str(result))
+                self.say(result_line(result))
         future.add_done_callback(done)
 
     def watch_messages(self, interval: float = 0.2) -> None:
@@ -114,7 +115,7 @@ class Console(cmd.Cmd):
                     self._printed = m.index
                 for r in s.results_since(self._results_seen):
                     if self._claim(r):
-                        self.say(str(r))
+                        self.say(result_line(r))
                     self._results_seen = r.index
                 time.sleep(interval)
         threading.Thread(target=run, name="console-messages", daemon=True).start()
@@ -202,8 +203,10 @@ class Console(cmd.Cmd):
         if len(words) > 1:
             raise ValueError("usage: takeoff [ALT]")
         altitude = _number(words[0], "ALT") if words else None
-        self.say("takeoff started" + (f" to {altitude:g} m" if altitude is not None else ""))
-        self._report(self.vehicle.takeoff(altitude))
+        future = self.vehicle.takeoff(altitude)
+        if not future.done():                 # the driver refuses at once (out of range, already flying): no "started"
+            self.say("takeoff started" + (f" to {altitude:g} m" if altitude is not None else ""))
+        self._report(future)
 
     def do_land(self, arg: str) -> None:
         """land: switch to LAND (also aborts a takeoff)"""
@@ -224,7 +227,6 @@ class Console(cmd.Cmd):
         """mode [NAME]: show the flight mode, or change it (GUIDED, LOITER, BRAKE, ...)"""
         name = arg.strip()
         if not name:
-            from .vehicle import COPTER_MODES
             self.say(f"mode {self.vehicle.state().mode or '?'}; available: {' '.join(sorted(COPTER_MODES))}")
             return
         if len(name.split()) != 1:
@@ -241,6 +243,11 @@ class Console(cmd.Cmd):
         hold = _number(words[3], "SECONDS") if len(words) == 4 else VELOCITY_HOLD
         if not 0 < hold <= VELOCITY_HOLD_MAX:
             raise ValueError(f"SECONDS must be between 0 and {VELOCITY_HOLD_MAX:g}")
+        why = velocity_hint(self.vehicle.state())
+        if why:
+            self._cancel_velocity()                     # a hold still running falls to zero
+            self.say(f"velocity not sent: {why}")
+            return
         if not self.vehicle.set_velocity(x, y, z, 0.0):
             self.say("velocity refused")
             return
@@ -281,7 +288,7 @@ class Console(cmd.Cmd):
         """alt: altitude above home and above sea level"""
         s = self.vehicle.state()
         amsl = f", {s.position.alt:.1f} m above sea level" if s.position else ""
-        self.say(f"altitude {s.altitude:.2f} m above home{amsl}, climbing {s.velocity.climb:+.1f} m/s")
+        self.say(f"altitude {s.altitude:.2f} m above home{amsl}, {vertical_speed(s.velocity.climb)}")
 
     def do_status(self, arg: str) -> None:
         """status: link, mode, armed, position, battery, GPS, takeoff"""
@@ -324,8 +331,49 @@ def status_lines(s: VehicleState) -> list[str]:
     lines.append(f"GPS {s.gps.fix_name}, {s.gps.satellites} satellites; "
                  f"{'ready to arm' if s.readiness.ready_to_arm else 'not ready to arm'}")
     if s.takeoff.active:
-        lines.append(f"takeoff: {s.takeoff.phase.value} {s.takeoff.detail}")
+        lines.append(takeoff_line(s))
     return lines
+
+
+def takeoff_line(s: VehicleState) -> str:
+    """The takeoff sequence's phase; while it waits, what the autopilot still lacks (from the live state)."""
+    phase = s.takeoff.phase
+    if phase is SequencePhase.WAITING_READY:
+        r = s.readiness
+        missing = [what for ok, what in ((r.gps_ok, "GPS fix"), (r.ekf_ok, "EKF"), (r.prearm_ok, "pre-arm checks"))
+                   if not ok]
+        return f"takeoff: {phase.value}" + (f" (still missing: {', '.join(missing)})" if missing else "")
+    return f"takeoff: {phase.value}" + (f" {s.takeoff.detail}" if s.takeoff.detail else "")
+
+
+def velocity_hint(s: VehicleState) -> str:
+    """Why a typed velocity would not fly the vehicle, or "": the viewer's stick hint, for the console."""
+    if s.can_fly_velocity:
+        return ""
+    if s.link.status is not LinkStatus.OK:
+        return "no link"
+    if s.takeoff.active:
+        return "taking off"
+    if not s.flying:
+        return "take off to fly"
+    if s.landed_state is LandedState.LANDING or s.mode == "LAND":
+        return "landing"
+    if s.landed_state is LandedState.TAKEOFF:
+        return "taking off"
+    return f"velocity flies only in GUIDED (mode is {s.mode or '?'})"
+
+
+def vertical_speed(climb: float) -> str:
+    """"climbing 0.4 m/s", "descending 0.4 m/s"; a speed that rounds to zero is "climbing 0.0", never "-0.0"."""
+    shown = round(climb, 1) + 0.0                       # + 0.0 turns -0.0 into 0.0
+    return f"descending {-shown:.1f} m/s" if shown < 0 else f"climbing {shown:.1f} m/s"
+
+
+def result_line(result: CommandResult) -> str:
+    """A command's answer; one the vehicle never acknowledges (the safety switch) says just that it was sent."""
+    if result.status is CommandStatus.ACCEPTED and result.reason.startswith("sent"):
+        return f"{result.command}: {result.reason}"
+    return str(result)
 
 
 class _ConsoleLogHandler(logging.Handler):
@@ -381,4 +429,5 @@ def run_commands(console: Console, text: str) -> None:
             console.onecmd(line.strip())
 
 
-__all__ = ["Console", "run_commands", "wait_for_vehicle", "show_logs", "status_lines", "battery_line"]
+__all__ = ["Console", "run_commands", "wait_for_vehicle", "show_logs", "status_lines", "battery_line",
+           "velocity_hint", "result_line"]

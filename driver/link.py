@@ -31,12 +31,16 @@ class Transport:
 
     def open(self) -> None: ...
     def read(self, timeout: float) -> bytes: ...
-    def write(self, data: bytes) -> None: ...
+    def write(self, data: bytes) -> bool: ...           # True when handed to the link (and so logged)
     def close(self) -> None: ...
 
     def clock(self) -> float:
         """Time base for link supervision: real time, or the log's time when replaying."""
         return time.monotonic()
+
+    def wall_time(self) -> float:
+        """The date of what is heard now (time.time()): now, or when it was recorded for a replay."""
+        return time.time()
 
 
 class MavutilTransport(Transport):
@@ -92,20 +96,22 @@ class MavutilTransport(Transport):
             time.sleep(min(timeout, 0.01))    # transports without a file descriptor (rare): poll gently
         return bytes(data) if data else b""
 
-    def write(self, data: bytes) -> None:
+    def write(self, data: bytes) -> bool:
         conn = self._conn
         if conn is None:
-            return
+            return False
         with self._lock:
             try:
                 if self._sock is not None:
                     self._sock.sendall(data)
                 else:
                     conn.write(data)
+                return True
             except BlockingIOError:
                 log.debug("link busy, dropped %d bytes", len(data))
             except Exception as exc:
                 log.debug("write failed: %s", exc)
+        return False
 
     def close(self) -> None:
         conn, self._conn, self._sock = self._conn, None, None
@@ -127,11 +133,16 @@ def frame_length(buf: bytes | bytearray, offset: int) -> int:
 
 
 class TlogWriter:
-    """Writes the MAVProxy/QGroundControl telemetry log: 8-byte big-endian µs timestamp, then the packet."""
+    """Writes the MAVProxy/QGroundControl telemetry log: 8-byte big-endian µs timestamp, then the packet.
+
+    A log that never received a packet (no vehicle answered) is removed on close: no empty files pile up.
+    """
 
     def __init__(self, path: str, append: bool = False):
         os.makedirs(os.path.dirname(os.path.abspath(path)), exist_ok=True)
         self.path = path
+        self._new = not (append and os.path.exists(path))
+        self._written = False
         self._file = open(path, "ab" if append else "wb")
         self._lock = threading.Lock()
         self.error = ""                       # why it stopped writing (disk full, ...); the link goes on
@@ -142,6 +153,7 @@ class TlogWriter:
             if self._file is not None:
                 try:
                     self._file.write(stamp + packet)
+                    self._written = True
                 except OSError as exc:
                     self.error = f"{self.path}: {exc.strerror or exc}"
                     self._close()
@@ -158,6 +170,11 @@ class TlogWriter:
     def close(self) -> None:
         with self._lock:
             self._close()
+            if self._new and not self._written and not self.error:
+                try:
+                    os.remove(self.path)
+                except OSError:
+                    pass
 
     def _close(self) -> None:
         if self._file is not None:
@@ -251,6 +268,9 @@ class TlogReplay(Transport):
     def clock(self) -> float:
         return self.position
 
+    def wall_time(self) -> float:
+        return self.start_time + self.position
+
     def open(self) -> None:
         with self._cond:
             self._position, self._anchor = 0.0, time.monotonic()
@@ -280,13 +300,48 @@ class TlogReplay(Transport):
                 self._cond.wait(wait)
         return b""
 
-    def write(self, data: bytes) -> None:
+    def write(self, data: bytes) -> bool:
         """A recording cannot be commanded."""
+        return False
 
     def close(self) -> None:
         with self._cond:
             self._closed = True
             self._cond.notify_all()
+
+
+NETWORK_SCHEMES = ("udp", "udpin", "udpout", "udpbcast", "tcp", "tcpin")
+OTHER_SCHEMES = ("ws", "wss", "wsserver", "mcast")      # pymavlink takes these too; checked by it
+
+
+def connection_problem(connection: str) -> str | None:
+    """Why ``connection`` cannot be a link, in a line for the user; None when it may be one.
+
+    Network strings need SCHEME:HOST:PORT; a .tlog must exist; a serial device is a path (/dev/...) or a
+    Windows COM port, and may be missing for now: a USB radio can be plugged in later and the link retries.
+    """
+    text = connection.strip()
+    usage = "a link is udpin:HOST:PORT, udpout:HOST:PORT, tcp:HOST:PORT, a serial device such as " \
+            "/dev/ttyUSB0, or a .tlog file"
+    if not text:
+        return "empty connection string: " + usage
+    scheme, colon, rest = text.partition(":")
+    if colon and scheme.lower() in NETWORK_SCHEMES:
+        host, colon2, port = rest.rpartition(":")
+        if not colon2 or not host:
+            return f"{text!r}: {scheme} needs HOST:PORT"
+        if not port.isdigit() or not 0 < int(port) < 65536:
+            return f"{text!r}: the port must be a number from 1 to 65535"
+        return None
+    if colon and scheme.lower() in OTHER_SCHEMES:
+        return None
+    if text.lower().endswith(".tlog"):
+        return None if os.path.isfile(text) else f"no such flight log: {text}"
+    device = text.split(",")[0]
+    if device.startswith("/dev/") or os.path.exists(device) or \
+            (device.upper().startswith("COM") and device[3:].isdigit()):
+        return None
+    return f"{text!r} is not a connection string: {usage}"
 
 
 def open_transport(connection: str, baud: int = 57600, source_system: int = 255, source_component: int = 190,

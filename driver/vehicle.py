@@ -49,6 +49,15 @@ _EKF_NEEDED = (mavlink.EKF_ATTITUDE | mavlink.EKF_VELOCITY_HORIZ | mavlink.EKF_P
 _MAX_MESSAGES = 200
 PUBLISH_INTERVAL = 0.01            # s: state is republished at most at 100 Hz while telemetry streams
 _MAX_RESULTS = 100
+MIN_TAKEOFF_ALTITUDE = 0.5         # m above home: lower is no takeoff
+MAX_ALTITUDE = 120.0               # m above home: no takeoff or go-to target above it (EU open category)
+
+
+def takeoff_altitude_problem(altitude: float, ceiling: float = MAX_ALTITUDE) -> str | None:
+    """Why ``altitude`` cannot be a takeoff target, or None: one rule for the driver, its CLI and console."""
+    if frames.finite(altitude) and MIN_TAKEOFF_ALTITUDE <= altitude <= ceiling:
+        return None
+    return f"altitude must be {MIN_TAKEOFF_ALTITUDE:g} to {ceiling:g} m"
 
 
 @dataclass(frozen=True)
@@ -62,7 +71,7 @@ class VehicleConfig:
     stream_rate: int = 4                      # Hz, MAVProxy's default
     attitude_rate: int = 10                   # Hz for ATTITUDE and VFR_HUD, as QGroundControl
     takeoff_altitude: float = 3.0             # m above home
-    max_altitude: float = 120.0               # m above home: no takeoff or go-to target above it (EU open category)
+    max_altitude: float = MAX_ALTITUDE
     max_distance: float = 500.0               # m from home: no go-to target beyond it
     limits: Limits = field(default_factory=Limits)
     tlog_path: str | None = None
@@ -335,7 +344,7 @@ class Vehicle(Drone):
     def _add_message(self, severity: Severity, text: str, source: str = "driver") -> Message:
         with self._lock:
             self._message_index += 1
-            m = Message(self._message_index, time.time(), Severity(severity), text, source)
+            m = Message(self._message_index, self._transport.wall_time(), Severity(severity), text, source)
             self._messages.append(m)
             self._set(messages=tuple(self._messages))
             if source == "driver":
@@ -361,8 +370,7 @@ class Vehicle(Drone):
 
     def _write(self, buf: bytes) -> None:
         """Whole frames only, one writer at a time (caller holds _tx_lock)."""
-        self._transport.write(buf)
-        if self._tlog:
+        if self._transport.write(buf) and self._tlog:       # the log holds what really went out
             self._tlog.write(buf)
 
     @property
@@ -1016,9 +1024,9 @@ class Vehicle(Drone):
     # ------------------------------------------------------------------------------------------
     def takeoff(self, altitude: float | None = None) -> Future:
         alt = self.config.takeoff_altitude if altitude is None else altitude
-        if not frames.finite(alt) or not 0.5 <= alt <= self.config.max_altitude:
-            return self._finish("takeoff", CommandStatus.REJECTED,
-                                f"altitude must be 0.5 to {self.config.max_altitude:g} m")
+        problem = takeoff_altitude_problem(alt, self.config.max_altitude)
+        if problem:
+            return self._finish("takeoff", CommandStatus.REJECTED, problem)
         if self._replay is not None:
             return self._finish("takeoff", CommandStatus.REJECTED, "replaying a recording: no vehicle to command")
         with self._lock:                              # check and start as one step: never two sequences

@@ -91,6 +91,12 @@ def test_missing_file_says_so_and_retries(tmp_path, sources):
     wait(lambda: src.latest() is not None, what="the file once it exists")
 
 
+def test_an_unknown_scheme_says_it_is_unsupported(sources):
+    src = sources("bogus://camera")
+    wait(lambda: src.status().state == "retrying", what="retrying")
+    assert "unsupported camera source bogus://" in src.status().reason and "rtsp://" in src.status().reason
+
+
 QUIET_RETRIES = """
 import sys, time
 from driver.camera import open_source

@@ -15,7 +15,8 @@ import threading
 
 import Ice
 
-from driver.console import Console
+from driver.console import Console, vertical_speed
+from driver.state import SequencePhase
 
 from ice_fixtures import eventually, free_port, jderobot, mavlinkserver
 
@@ -85,6 +86,55 @@ def test_console_arm_check_safety_and_parachute_reach_the_vehicle(vehicle):
     console.onecmd("parachute enable")
     assert eventually(lambda: "param ARMING_CHECK=1" in out.getvalue() and "safety off" in out.getvalue()
                       and "parachute enable" in out.getvalue(), 15), out.getvalue()
+    # the safety switch has no acknowledgement: said so, not "accepted (sent (not acknowledged))"
+    assert "safety off: sent (not acknowledged)\n" in out.getvalue(), out.getvalue()
+
+
+def test_console_refuses_at_once_what_cannot_fly(vehicle):
+    """On the ground: an out-of-range takeoff and a velocity are refused with the reason, nothing "started"."""
+    console, out = console_for(vehicle)
+    console.onecmd("takeoff -3")
+    assert out.getvalue() == "takeoff: rejected (altitude must be 0.5 to 120 m)\n"
+    console.onecmd("velocity 1 0 0")
+    assert out.getvalue().endswith("velocity not sent: take off to fly\n"), out.getvalue()
+    assert not any(t.name == "console-velocity" for t in threading.enumerate())     # no 3 s hold
+    assert vehicle.state().setpoint.is_zero and not vehicle.state().takeoff.active
+
+
+def test_console_in_flight_refuses_a_second_takeoff_and_velocity_outside_guided(flying):
+    console, out = console_for(flying)
+    console.onecmd("takeoff 3")
+    assert out.getvalue() == "takeoff: rejected (already flying)\n"
+    console.onecmd("mode LOITER")
+    assert flying.wait_for(lambda s: s.mode == "LOITER", 10), out.getvalue()
+    console.onecmd("velocity 1 0 0")
+    assert out.getvalue().endswith("velocity not sent: velocity flies only in GUIDED (mode is LOITER)\n"), \
+        out.getvalue()
+    assert not any(t.name == "console-velocity" for t in threading.enumerate())
+    console.onecmd("alt")
+    assert "-0.0" not in out.getvalue() and " m/s\n" in out.getvalue(), out.getvalue()
+
+
+def test_vertical_speed_never_shows_minus_zero():
+    assert vertical_speed(-0.04) == "climbing 0.0 m/s"
+    assert vertical_speed(0.36) == "climbing 0.4 m/s"
+    assert vertical_speed(-0.5) == "descending 0.5 m/s"
+
+
+def test_status_while_the_takeoff_waits_says_what_is_missing(sim_factory, vehicle_factory):
+    sim = sim_factory(ready_after=120.0)                 # GPS and EKF still starting
+    vehicle = vehicle_factory(f"tcp:127.0.0.1:{sim.tcp_port}")
+    assert vehicle.wait_for(lambda s: s.connected, 10)
+    console, out = console_for(vehicle)
+    console.onecmd("takeoff")
+    assert out.getvalue() == "takeoff started\n"
+    assert vehicle.wait_for(lambda s: s.takeoff.phase is SequencePhase.WAITING_READY and s.takeoff.detail, 10)
+    console.onecmd("status")
+    line = next(ln for ln in out.getvalue().splitlines() if ln.startswith("takeoff: "))
+    assert line.startswith("takeoff: waiting until ready to arm (still missing: ") and "GPS fix" in line, line
+    assert line.count("waiting") == 1, line
+    console.onecmd("land")                               # aborts the sequence
+    assert vehicle.wait_for(lambda s: not s.takeoff.active, 10)
 
 
 def _server(port: int, *extra: str, stdin=None, speedup: float = 4) -> subprocess.Popen:
@@ -187,10 +237,13 @@ def test_python_m_driver_says_when_its_port_is_taken():
     with socket.socket() as taken:
         taken.bind(("127.0.0.1", 0))
         taken.listen(1)
-        proc = _server(taken.getsockname()[1], "--daemon")
+        port = taken.getsockname()[1]
+        proc = _server(port, "--daemon")
         out, err = proc.communicate(timeout=60)
     assert proc.returncode == 1
-    assert "cannot serve the Ice interfaces" in err and "Traceback" not in err
+    # one line that names the address (every interface shares the one port here)
+    assert f"\ncannot serve the Ice interfaces on 127.0.0.1:{port}: address already in use\n" in err, err
+    assert "Traceback" not in err
 
 
 def test_console_on_a_terminal_shows_extra_events_above_the_typed_line():

@@ -21,7 +21,7 @@ import threading
 from typing import Callable
 
 from ..state import VehicleState
-from .source import FFMPEG_TIMEOUT_MS, STALL_S, OpenCVSource, VideoSource
+from .source import FFMPEG_TIMEOUT_MS, STALL_S, OpenCVSource, SourceFailed, VideoSource
 
 log = logging.getLogger(__name__)
 
@@ -106,6 +106,8 @@ def open_source(uri: str, *, state_fn: Callable[[], VehicleState] | None = None,
     elif "://" in u and u.split("://", 1)[0].lower() in STREAM_SCHEMES:
         source = OpenCVSource(u, describe_uri(u), api=cv2.CAP_FFMPEG, stream=True,
                               streaming_uri=u if _shareable(u) else "", timeout_ms=timeout_ms)
+    elif "://" in u:
+        source = UnsupportedSource(u)
     elif u.lower().endswith(".sdp"):
         source = OpenCVSource(os.path.abspath(u), describe_uri(u), api=cv2.CAP_FFMPEG, stream=True,
                               ffmpeg_options=RTP_FFMPEG_OPTIONS, timeout_ms=timeout_ms)
@@ -116,6 +118,16 @@ def open_source(uri: str, *, state_fn: Callable[[], VehicleState] | None = None,
     source.uri = u
     source.stall_s = stall_s
     return source.start() if start else source
+
+
+class UnsupportedSource(VideoSource):
+    """A URI with a scheme no source reads: it fails, saying so (and what would work), like any dead source."""
+
+    def _open(self) -> None:
+        scheme = self.uri.split("://", 1)[0]
+        raise SourceFailed(f"unsupported camera source {scheme}://; use " +
+                           ", ".join(f"{s}://" for s in STREAM_SCHEMES) +
+                           ", a file, an .sdp file, a device, solo, ice:PROXY or sim")
 
 
 class CameraSet:

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import logging
 import os
+import re
 import sys
 from dataclasses import dataclass
 
@@ -32,6 +33,29 @@ PREFIX = "MAVLinkServer."
 DEFAULT_PORTS = {"Camera": 9999, "Pose3D": 9998, "CMDVel": 9997, "Navdata": 9996, "Extra": 9995, "WP": 9994,
                  "Vehicle": 9993}
 ONE_PORT = 9000                                         # JdeRobot's Gazebo drone served everything here
+
+
+class ServeError(RuntimeError):
+    """An interface cannot be served (port taken, bad endpoint, unknown host), said in one line."""
+
+
+def ice_problem(exc: Exception) -> str:
+    """An Ice exception in a few words on one line ("address already in use"), not Ice's multi-line dump."""
+    if isinstance(exc, Ice.DNSException):
+        return f"cannot resolve host {exc.host}"
+    if isinstance(exc, Ice.FileException) and exc.path:
+        return f"{exc.path}: {os.strerror(exc.error).lower() if exc.error > 0 else 'cannot read'}"
+    if isinstance(exc, Ice.SyscallException) and exc.error > 0:
+        return os.strerror(exc.error).lower()
+    text = getattr(exc, "str", "") or getattr(exc, "reason", "") or str(exc)
+    return " ".join(str(text).split())
+
+
+def _where(endpoints: str) -> str:
+    """``default -h 127.0.0.1 -p 9000`` → ``127.0.0.1:9000``; other endpoint strings as they are."""
+    host = re.findall(r"-h\s+(\S+)", endpoints)
+    port = re.findall(r"-p\s+(\d+)", endpoints)
+    return f"{host[0]}:{port[0]}" if len(host) == len(port) == 1 else repr(endpoints)
 
 
 def default_properties(args: list[str] | None = None) -> Ice.Properties:
@@ -166,10 +190,16 @@ class IceServer:
     def _serve(self, table: dict[str, Ice.Object]) -> None:
         com = self.communicator
         adapters: dict[str, Ice.ObjectAdapter] = {}
-        for name, (identity, endpoints) in planned_endpoints(self.properties).items():
+        planned = planned_endpoints(self.properties)
+        for name, (identity, endpoints) in planned.items():
             adapter = adapters.get(endpoints)
             if adapter is None:
-                adapter = com.createObjectAdapterWithEndpoints(f"MAVLinkServer-{name}", endpoints)
+                try:
+                    adapter = com.createObjectAdapterWithEndpoints(f"MAVLinkServer-{name}", endpoints)
+                except Ice.LocalException as exc:
+                    sharing = [n for n, (_, e) in planned.items() if e == endpoints]
+                    what = name if len(sharing) == 1 else "the Ice interfaces"
+                    raise ServeError(f"cannot serve {what} on {_where(endpoints)}: {ice_problem(exc)}") from exc
                 adapters[endpoints] = adapter
                 self._adapters.append(adapter)
             prx = adapter.add(table[name], Ice.stringToIdentity(identity))

@@ -11,4 +11,8 @@ from .autopilot import MODE_NAMES, MODES, Autopilot, SimTruth
 from .faults import Faults
 from .vehicle import SimConfig, SimVehicle
 
-__all__ = ["SimVehicle", "SimConfig", "SimTruth", "Faults", "Autopilot", "MODES", "MODE_NAMES"]
+#: Simulated seconds until ready to arm in a demo (``python -m driver --sim``, ``main.py --sim``): a first
+#: takeoff starts at once. SimConfig's own default (20 s) is a real vehicle's GPS and EKF start-up.
+DEMO_READY_AFTER = 3.0
+
+__all__ = ["SimVehicle", "SimConfig", "SimTruth", "Faults", "Autopilot", "MODES", "MODE_NAMES", "DEMO_READY_AFTER"]

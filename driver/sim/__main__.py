@@ -11,6 +11,7 @@ import signal
 import sys
 import threading
 
+from ..options import not_negative, positive
 from .server import parse_address
 from .vehicle import SimConfig, SimVehicle
 
@@ -25,10 +26,12 @@ def _home(text: str) -> tuple[float, float, float, float]:
 
 
 def _address(text: str) -> str:
-    try:
-        parse_address(text)
-    except ValueError as exc:
-        raise argparse.ArgumentTypeError(str(exc)) from None
+    """HOST:PORT, port 0 to 65535 (0: any free port)."""
+    host, sep, port = text.rpartition(":")
+    if not sep or not host:
+        raise argparse.ArgumentTypeError(f"expected HOST:PORT, got {text!r}")
+    if not port.isdigit() or int(port) > 65535:
+        raise argparse.ArgumentTypeError(f"{text!r}: the port must be a number from 0 to 65535")
     return text
 
 
@@ -40,16 +43,14 @@ def main(argv: list[str] | None = None) -> int:
                         help="push telemetry there, like the Solo's controller to 14550")
     parser.add_argument("--udp-in", type=_address, metavar="HOST:PORT",
                         help="serve UDP on this address, answering whoever sent last")
-    parser.add_argument("--speedup", type=float, default=1.0, help="sim seconds per real second")
-    parser.add_argument("--ready-after", type=float, default=20.0, metavar="SECONDS",
-                        help="sim seconds until ready to arm (GPS fix, EKF)")
+    parser.add_argument("--speedup", type=positive, default=1.0, help="sim seconds per real second")
+    parser.add_argument("--ready-after", type=not_negative, default=SimConfig.ready_after, metavar="SECONDS",
+                        help=f"sim seconds until ready to arm (GPS fix, EKF; default {SimConfig.ready_after:g})")
     parser.add_argument("--home", type=_home, default=SimConfig.home, metavar="LAT,LON,ALT,HEADING")
     parser.add_argument("--mav1", action="store_true", help="MAVLink 1 only, like a stock 3DR Solo")
     parser.add_argument("--seed", type=int, default=None)
     parser.add_argument("-v", "--verbose", action="store_true")
     args = parser.parse_args(argv)
-    if args.speedup <= 0:
-        parser.error("--speedup must be positive")
 
     logging.basicConfig(level=logging.DEBUG if args.verbose else logging.INFO,
                         format="%(asctime)s %(name)s: %(message)s")
@@ -61,7 +62,9 @@ def main(argv: list[str] | None = None) -> int:
     try:
         sim.start()
     except OSError as exc:
-        log.error("cannot open the links: %s", exc)
+        tcp_failed = config.tcp_port is not None and not sim.tcp_port      # else the UDP socket failed
+        where = f"tcp:{args.tcp}" if tcp_failed else f"udp:{args.udp_in}"
+        log.error("cannot serve MAVLink on %s: %s", where, (exc.strerror or str(exc)).lower())
         return 1
     log.info("simulated ArduCopter at %.6f, %.6f (%s); Ctrl-C to stop", config.home[0], config.home[1],
              "MAVLink 2" if config.mavlink2 else "MAVLink 1 only")
