@@ -11,31 +11,28 @@ from __future__ import annotations
 
 import argparse
 import logging
-import math
 import signal
 import sys
 from pathlib import Path
 
+from driver import options
 from uavviewer.settings import TAKEOFF_ALTITUDE_RANGE
 
 SOLO_CONNECTION = "udpin:0.0.0.0:14550"
-
-
-def _takeoff_altitude(text: str) -> float:
-    """A takeoff altitude in the range Preferences allow."""
-    low, high = TAKEOFF_ALTITUDE_RANGE
-    try:
-        value = float(text)
-    except ValueError:
-        value = math.nan
-    if not (low <= value <= high):                      # NaN fails too
-        raise argparse.ArgumentTypeError(f"{text!r}: a takeoff altitude is {low:g} to {high:g} m")
-    return value
+#: --takeoff-altitude: the range Preferences allow
+TAKEOFF_ALTITUDE = options.number(*TAKEOFF_ALTITUDE_RANGE,
+                                  "a takeoff altitude is {:g} to {:g} m".format(*TAKEOFF_ALTITUDE_RANGE))
 
 
 def choose_connection(args: argparse.Namespace, remembered: str) -> str:
-    """--connect, else the last connection remembered, else a Solo (for runs with no --sim/--replay/--ice)."""
-    return args.connect or remembered or SOLO_CONNECTION
+    """--connect, else the last connection remembered (if it still reads as one), else a Solo (for runs
+    with no --sim/--replay/--ice)."""
+    from driver.link import connection_problem
+    if args.connect:
+        return args.connect
+    if remembered and connection_problem(remembered) is None:
+        return remembered
+    return SOLO_CONNECTION
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -46,10 +43,10 @@ def build_parser() -> argparse.ArgumentParser:
     source = link.add_mutually_exclusive_group()
     source.add_argument("--sim", action="store_true",
                         help="start the built-in simulated ArduCopter in this process and fly it")
-    source.add_argument("--connect", metavar="STRING",
+    source.add_argument("--connect", metavar="STRING", type=options.connection,
                         help="any MAVLink connection string: udpin:HOST:PORT, udpout:HOST:PORT, "
-                             "tcp:HOST:PORT, /dev/ttyUSB0 (serial, see --baud), ...; remembered as the "
-                             "last connection for the next run without a vehicle option")
+                             "tcp:HOST:PORT, /dev/ttyUSB0 (serial, see --baud), ...; once a vehicle answers on it, "
+                             "remembered for the next run without a vehicle option")
     source.add_argument("--replay", metavar="FILE.tlog", type=Path,
                         help="replay a recorded telemetry log instead of flying")
     source.add_argument("--ice", metavar="CONFIG", type=Path,
@@ -59,14 +56,14 @@ def build_parser() -> argparse.ArgumentParser:
                         help="fly through a MAVLinkServer over ZeroC Ice at HOST, on the default ports")
     link.add_argument("--baud", type=int, default=57600, help="serial baud rate (default: %(default)s)")
     flight = p.add_argument_group("flight")
-    flight.add_argument("--takeoff-altitude", type=_takeoff_altitude, default=None, metavar="M",
+    flight.add_argument("--takeoff-altitude", type=TAKEOFF_ALTITUDE, default=None, metavar="M",
                         help=f"takeoff altitude above home for this run, {TAKEOFF_ALTITUDE_RANGE[0]:g} to "
                              f"{TAKEOFF_ALTITUDE_RANGE[1]:g} m (default: the one set in Preferences, first 3.0; "
                              "never saved)")
     sim = p.add_argument_group("simulator (with --sim)")
-    sim.add_argument("--speedup", type=float, default=1.0,
+    sim.add_argument("--speedup", type=options.positive, default=1.0,
                      help="simulated time runs this many times faster than real time (default: %(default)s)")
-    sim.add_argument("--ready-after", type=float, default=3.0, metavar="S",
+    sim.add_argument("--ready-after", type=options.not_negative, default=3.0, metavar="S",
                      help="seconds until the simulated vehicle has GPS/EKF and is ready to arm "
                           "(default: %(default)s)")
     video = p.add_argument_group("camera")
@@ -93,8 +90,11 @@ def _setup_logging(verbose: int, log_dir: Path | None) -> None:
     level = logging.WARNING if verbose == 0 else logging.INFO if verbose == 1 else logging.DEBUG
     handlers: list[logging.Handler] = [logging.StreamHandler()]
     if log_dir is not None:
-        log_dir.mkdir(parents=True, exist_ok=True)
-        handlers.append(logging.FileHandler(log_dir / "viewer.log"))
+        try:
+            log_dir.mkdir(parents=True, exist_ok=True)
+            handlers.append(logging.FileHandler(log_dir / "viewer.log"))
+        except OSError as exc:
+            build_parser().error(f"--log-dir {log_dir}: {exc.strerror or exc} (or --no-log to record nothing)")
     logging.basicConfig(level=level, handlers=handlers,
                         format="%(asctime)s %(levelname)s %(name)s: %(message)s")
 
@@ -163,9 +163,10 @@ def main(argv: list[str] | None = None) -> int:
     window = MainWindow(drone, takeoff_altitude=args.takeoff_altitude, cameras=args.camera,  # --camera: this run
                         default_cameras=own_camera)
     if args.connect or not (args.sim or args.replay or remote):
-        window.settings.last_connection = connection          # remembered with the window state
+        window.remember_connection_when_answered(connection)
     window.show()
-    signal.signal(signal.SIGINT, lambda *_: window.close())      # Ctrl+C in the terminal closes cleanly
+    for number in (signal.SIGINT, signal.SIGTERM):              # Ctrl+C, kill: close cleanly, without asking
+        signal.signal(number, lambda *_: window.quit_without_asking())
     wake = QTimer()                                               # let Python see the signal
     wake.timeout.connect(lambda: None)
     wake.start(200)

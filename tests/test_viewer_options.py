@@ -2,13 +2,22 @@
 that is checked and kept for that run only."""
 from __future__ import annotations
 
+import os
+import signal
+import subprocess
+import sys
+from pathlib import Path
+
 import pytest
+from PyQt5.QtCore import Qt
 
 import main
 from uavviewer.settings import TAKEOFF_ALTITUDE_RANGE
 
 from test_viewer_window import silent_vehicle  # noqa: F401  (fixture)
-from viewer_fixtures import viewer_settings, window_factory  # noqa: F401  (fixtures)
+from viewer_fixtures import viewer_settings, window, window_factory  # noqa: F401  (fixtures)
+
+ROOT = Path(__file__).resolve().parent.parent
 
 
 def test_no_vehicle_option_uses_the_last_connection():
@@ -57,3 +66,79 @@ def test_preferences_left_alone_do_not_save_the_command_line_altitude(qtbot, sil
     dialog.takeoffAltitude.setValue(7.0)
     dialog.buttons.button(QDialogButtonBox.Ok).click()
     assert w.takeoff_altitude == 7.0 and load_settings(viewer_settings).takeoff_altitude == 7.0
+
+
+@pytest.mark.parametrize("argv,words", [
+    (["--connect", "foo:bar"], "not a connection string"),
+    (["--connect", "tcp:127.0.0.1"], "needs HOST:PORT"),
+    (["--connect", "udpin:0.0.0.0:99999"], "1 to 65535"),
+    (["--connect", "/nope/flight.tlog"], "no such flight log"),
+    (["--sim", "--speedup", "0"], "positive"),
+    (["--sim", "--speedup", "-1"], "positive"),
+    (["--sim", "--ready-after", "nan"], "zero or a positive"),
+])
+def test_bad_options_are_refused_in_one_line(argv, words, capsys):
+    with pytest.raises(SystemExit) as exit_:
+        main.build_parser().parse_args(argv)
+    assert exit_.value.code == 2
+    err = capsys.readouterr().err
+    assert words in err and "Traceback" not in err
+
+
+def test_a_remembered_connection_that_is_no_longer_one_falls_back_to_the_solo():
+    assert main.choose_connection(main.build_parser().parse_args([]), "foo:bar") == main.SOLO_CONNECTION
+
+
+def test_an_unwritable_log_folder_is_an_error_not_a_traceback(tmp_path):
+    blocker = tmp_path / "file"
+    blocker.write_text("")
+    out = subprocess.run([sys.executable, str(ROOT / "main.py"), "--sim", "--log-dir", str(blocker / "logs")],
+                         capture_output=True, text=True, timeout=60, cwd=ROOT)
+    assert out.returncode == 2 and "--log-dir" in out.stderr and "Traceback" not in out.stderr
+
+
+def test_the_connection_is_remembered_only_once_a_vehicle_answers(qtbot, sim, vehicle_factory, silent_vehicle,
+                                                                   viewer_settings, window_factory):
+    from uavviewer.settings import load_settings
+    w = window_factory(silent_vehicle)
+    w.remember_connection_when_answered("udpin:127.0.0.1:1")         # nobody answers there
+    qtbot.waitUntil(lambda: w.linkBanner.isVisible(), timeout=3000)
+    w.quit_without_asking()
+    assert load_settings(viewer_settings).last_connection == ""
+    url = f"tcp:127.0.0.1:{sim.tcp_port}"
+    w = window_factory(vehicle_factory(url))
+    w.remember_connection_when_answered(url)
+    qtbot.waitUntil(lambda: load_settings(viewer_settings).last_connection == url, timeout=10000)
+
+
+def test_closing_in_flight_asks_and_land_lands(qtbot, sim, flying, window):
+    w = window
+    qtbot.waitUntil(lambda: w.flightControls.main_button.text() == "Land", timeout=20000)
+    sent: list[str] = []
+    w.adapter.commandSent.connect(sent.append)
+    w.close()
+    qtbot.waitUntil(lambda: w.quit_box is not None and w.quit_box.isVisible(), timeout=3000)
+    assert w.isVisible()                                     # still there: nobody would command the vehicle
+    qtbot.mouseClick(next(b for b in w.quit_box.buttons() if b.text() == "Land"), Qt.LeftButton)
+    assert sent == ["land"] and w.isVisible()
+    qtbot.waitUntil(lambda: not sim.truth().armed, timeout=40000)
+    w.close()                                                # on the ground: closes without a question
+    assert not w.isVisible() and w.quit_box is None
+
+
+def test_sigterm_closes_the_app_cleanly(tmp_path):
+    """kill on `main.py --sim`: the window closes through its own close path and the process exits 0."""
+    env = dict(os.environ, XDG_CONFIG_HOME=str(tmp_path / "config"), QT_QPA_PLATFORM="offscreen")
+    proc = subprocess.Popen([sys.executable, "-u", str(ROOT / "main.py"), "--sim", "--no-log", "-v"], cwd=ROOT,
+                            env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    try:
+        for line in proc.stdout:                             # the driver says when the vehicle is there
+            if "connected on tcp:" in line:
+                break
+        proc.send_signal(signal.SIGTERM)
+        out, _ = proc.communicate(timeout=30)
+    finally:
+        proc.kill()
+    assert proc.returncode == 0, out
+    assert "Traceback" not in out
+    assert (tmp_path / "config" / "JdeRobot" / "UavViewerPy.conf").is_file()     # closeEvent saved the settings

@@ -23,7 +23,7 @@ def window_factory(qtbot, viewer_settings):
 
     def make(drone, **kw) -> MainWindow:
         w = MainWindow(drone, qsettings=viewer_settings, **kw)
-        qtbot.addWidget(w)
+        qtbot.addWidget(w, before_close_func=MainWindow.quit_without_asking)   # a flying test ends unasked
         w.resize(1400, 900)
         w.show()
         qtbot.waitExposed(w)
@@ -33,7 +33,7 @@ def window_factory(qtbot, viewer_settings):
 
     yield make
     for w in windows:
-        w.close()
+        w.quit_without_asking()
 
 
 @pytest.fixture

@@ -67,6 +67,9 @@ class MainWindow(QMainWindow):
         self._sticks_live = False
         self._takeoff_box: QMessageBox | None = None
         self._settings_dialog: SettingsDialog | None = None
+        self._quit_box: QMessageBox | None = None
+        self._quitting = False                   # closing without asking (answered, or a signal)
+        self._connection_to_remember = ""
         self._t0 = time.monotonic()
 
         self.setWindowTitle(f"UavViewerPy — {self.adapter.description}")
@@ -210,8 +213,16 @@ class MainWindow(QMainWindow):
         box.setAttribute(Qt.WA_DeleteOnClose)
         box.show()
 
+    def remember_connection_when_answered(self, connection: str) -> None:
+        """Save ``connection`` as the next run's default once a vehicle answers on it (not before: a typo
+        must not become the default)."""
+        self._connection_to_remember = connection
+
     # -- state in --------------------------------------------------------------------------------
     def show_state(self, s: VehicleState) -> None:
+        if self._connection_to_remember and s.connected:
+            self.settings.last_connection, self._connection_to_remember = self._connection_to_remember, ""
+            save_settings(self._qsettings, self.settings)
         link = s.link
         replay = self.adapter.replay
         finished = replay is not None and replay.finished
@@ -440,7 +451,52 @@ class MainWindow(QMainWindow):
             replay.speed = speed
 
     # -- closing ----------------------------------------------------------------------------------
+    def quit_without_asking(self) -> None:
+        """Ctrl+C or kill in the terminal: close now, even in flight (said in the log)."""
+        if flight_phase(self.adapter.state).airborne and self.adapter.replay is None:
+            log.warning("closing while the vehicle is in the air: it keeps hovering in GUIDED until its "
+                        "own failsafe acts")
+        self._quitting = True
+        if self._quit_box is not None:
+            self._quit_box.reject()
+        self.close()
+
+    def _ask_before_leaving_the_air(self) -> bool:
+        """Closing with the vehicle in the air: ask (Land / Quit anyway / Cancel) and keep the window."""
+        if self._quitting or self.adapter.replay is not None or not flight_phase(self.adapter.state).airborne:
+            return False
+        if self._quit_box is None:
+            box = QMessageBox(QMessageBox.Warning, "The vehicle is flying",
+                              "The vehicle is in the air. Without this window nobody commands it; it hovers in "
+                              "GUIDED until its own failsafe acts.", QMessageBox.NoButton, self)
+            box.setObjectName("quitQuestion")
+            land = box.addButton("Land", QMessageBox.AcceptRole)
+            leave = box.addButton("Quit anyway", QMessageBox.DestructiveRole)
+            box.addButton(QMessageBox.Cancel)
+            box.setDefaultButton(land)
+            box.setWindowModality(Qt.WindowModal)
+            box.finished.connect(lambda _r, b=box, l=land, q=leave: self._quit_answered(b, l, q))
+            self._quit_box = box
+            box.open()
+        return True
+
+    def _quit_answered(self, box: QMessageBox, land, leave) -> None:
+        clicked = box.clickedButton()
+        self._quit_box = None
+        box.deleteLater()
+        if clicked is land:
+            self.request_land()
+        elif clicked is leave:
+            self.quit_without_asking()
+
+    @property
+    def quit_box(self) -> QMessageBox | None:
+        return self._quit_box
+
     def closeEvent(self, event) -> None:  # noqa: N802
+        if self._ask_before_leaving_the_air():
+            event.ignore()
+            return
         self.centre_sticks()
         save_settings(self._qsettings, self.settings)
         save_window(self._qsettings, self.saveGeometry(), self.saveState())

@@ -8,6 +8,7 @@ from __future__ import annotations
 import numpy as np
 import pyqtgraph as pg
 from PyQt5.QtCore import QTimer
+from PyQt5.QtGui import QFont
 from PyQt5.QtWidgets import QVBoxLayout, QWidget
 
 __all__ = ["PlotsPanel", "SERIES"]
@@ -25,7 +26,14 @@ SERIES = {
 _TITLES = ("Alt m", "Vel m/s", "Att °", "Hdg °")
 # plot row -> the smallest y span shown, so a vehicle sitting still does not magnify its noise
 MIN_SPAN = (4.0, 2.0, 10.0)
-AXIS_WIDTH = 44        # px for the left axis of every plot, so their time axes line up
+AXIS_WIDTH = 62        # px for the left axis of every plot (title + "-0.5"), so their time axes line up
+TICK_FONT_PX = 11
+
+
+def _tick_font() -> QFont:
+    font = QFont()
+    font.setPixelSize(TICK_FONT_PX)
+    return font
 
 
 class PlotsPanel(QWidget):
@@ -51,6 +59,8 @@ class PlotsPanel(QWidget):
             plot.setLabel("left", title)
             plot.getAxis("left").enableAutoSIPrefix(False)     # never "(x0.001)"
             plot.getAxis("left").setWidth(AXIS_WIDTH)            # the four time axes line up
+            for side in ("left", "bottom"):
+                plot.getAxis(side).setStyle(tickFont=_tick_font())
             plot.showGrid(x=True, y=True, alpha=0.2)
             plot.setXRange(-self.WINDOW_S, 0, padding=0)
             plot.setMouseEnabled(x=False, y=False)
