@@ -1,6 +1,7 @@
 """The window before any vehicle answers: waiting banner, settings (camera ones too) remembered, keys dialog, --help."""
 from __future__ import annotations
 
+import os
 import socket
 import subprocess
 import sys
@@ -124,3 +125,41 @@ def test_camera_preferences_reopen_the_camera_and_are_remembered(qtbot, silent_v
 def test_camera_uris_may_be_comma_separated():
     assert split_uris(" sim, 0\nudp://0.0.0.0:5600,\n\nvideo.mp4?loop=1 ") == \
         ["sim", "0", "udp://0.0.0.0:5600", "video.mp4?loop=1"]
+
+
+COLLECT_AFTER_PREFERENCES = """
+import gc, socket, sys
+from PyQt5.QtCore import QSettings
+from PyQt5.QtWidgets import QApplication
+app = QApplication([])
+from driver.vehicle import Vehicle, VehicleConfig
+from uavviewer.dialogs import SettingsDialog
+from uavviewer.main_window import MainWindow
+with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
+    s.bind(("127.0.0.1", 0))
+    port = s.getsockname()[1]
+vehicle = Vehicle(VehicleConfig(connection=f"udpin:127.0.0.1:{port}")).start()
+w = MainWindow(vehicle, qsettings=QSettings(sys.argv[1], QSettings.IniFormat))
+w.show()
+app.processEvents()
+w.actionPreferences.trigger()
+app.processEvents()
+w.findChild(SettingsDialog).reject()       # its deletion is still pending when the window goes
+w.quit_without_asking()
+del w
+gc.collect()                               # the window (in reference cycles) and its children are deleted here
+for _ in range(10):
+    app.processEvents()
+vehicle.close()
+print("collected")
+"""
+
+
+def test_a_window_collected_after_preferences_were_open_does_not_crash(tmp_path):
+    """A slot on the dialog's ``destroyed`` once ran inside the collector on a half-deleted window: a
+    segmentation fault at a random later moment (in CI, two tests later). A subprocess, so a crash fails
+    only this test."""
+    out = subprocess.run([sys.executable, "-X", "faulthandler", "-c", COLLECT_AFTER_PREFERENCES,
+                          str(tmp_path / "settings.ini")], capture_output=True, text=True, timeout=60, cwd=ROOT,
+                         env={**os.environ, "PYTHONPATH": str(ROOT)})
+    assert out.returncode == 0 and "collected" in out.stdout, out.stderr[-3000:]

@@ -24,11 +24,20 @@ __all__ = ["DroneAdapter"]
 log = logging.getLogger(__name__)
 
 
+class _FutureRelay(QObject):
+    """Carries a finished command from a driver thread to the UI thread.
+
+    It has no parent, so only Python references keep it: a command that finishes after the window (and
+    its adapter) was deleted emits into a living object, and the queued connection to the deleted adapter
+    is simply gone. Emitting on the adapter itself could race with its deletion on the UI thread.
+    """
+    done = pyqtSignal(str, object)           # command name, its Future
+
+
 class DroneAdapter(QObject):
     stateChanged = pyqtSignal(object)        # VehicleState
     commandFinished = pyqtSignal(object)     # CommandResult, on the UI thread
     commandSent = pyqtSignal(str)            # a command handed to the drone (its name)
-    _futureDone = pyqtSignal(str, object)    # emitted on driver threads; queued to the UI thread
 
     def __init__(self, drone: Drone, rate_hz: float = 30.0, refresh_hz: float = 10.0,
                  parent: QObject | None = None) -> None:
@@ -42,7 +51,8 @@ class DroneAdapter(QObject):
         self._refresh = QTimer(self)
         self._refresh.setInterval(max(1, int(1000 / refresh_hz)))
         self._refresh.timeout.connect(self._resend)
-        self._futureDone.connect(self._on_future_done)
+        self._relay = _FutureRelay()
+        self._relay.done.connect(self._on_future_done)
         self.sent_setpoints = 0              # set_velocity calls made (for tests and the status bar)
 
     # -- state ----------------------------------------------------------------------------------
@@ -91,7 +101,8 @@ class DroneAdapter(QObject):
             self.commandFinished.emit(CommandResult(name, CommandStatus.REJECTED, str(exc)))
             return
         if isinstance(future, Future):
-            future.add_done_callback(lambda f, n=name: self._futureDone.emit(n, f))
+            relay = self._relay              # the callback holds the relay, not this adapter (see _FutureRelay)
+            future.add_done_callback(lambda f, n=name: relay.done.emit(n, f))
 
     def _on_future_done(self, name: str, future: Future) -> None:
         try:

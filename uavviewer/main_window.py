@@ -174,7 +174,9 @@ class MainWindow(QMainWindow):
         dialog = SettingsDialog(replace(self.settings, takeoff_altitude=shown), self)
         dialog.setAttribute(Qt.WA_DeleteOnClose)
         dialog.accepted.connect(lambda: self._settings_chosen(dialog.chosen(), shown))
-        dialog.destroyed.connect(lambda: setattr(self, "_settings_dialog", None))
+        # finished, not destroyed: a slot on ``destroyed`` would run while a garbage-collected window is being
+        # torn down (its children go with it) and touch a half-deleted wrapper.
+        dialog.finished.connect(lambda _result: setattr(self, "_settings_dialog", None))
         self._settings_dialog = dialog
         dialog.show()
 
