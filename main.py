@@ -206,7 +206,7 @@ def _schedule_screenshot(window, path: Path, after: float, fly: bool) -> None:
     def shoot():
         path.parent.mkdir(parents=True, exist_ok=True)
         window.grab().save(str(path))
-        window.close()
+        window.quit_without_asking()                                  # it is flying: no question
     QTimer.singleShot(int(after * 1000), shoot)
 
 

@@ -220,6 +220,19 @@ def test_plots_break_their_lines_at_a_gap(qtbot):
     assert np.isnan(ys[10]) and np.isfinite(ys[:10]).all() and np.isfinite(ys[11:]).all()
 
 
+def test_the_heading_line_is_not_drawn_across_north(qtbot):
+    p = make(PlotsPanel, qtbot)
+    p.show()
+    for i, heading in enumerate((350.0, 355.0, 2.0, 7.0, 12.0)):
+        p.append(float(i), heading=heading)
+    p.gap(5.0)
+    p.append(6.0, heading=20.0)
+    p.append(7.0, heading=25.0)
+    p.redraw()
+    joined = p.curves["heading"].opts["connect"]
+    assert list(joined) == [True, False, True, True, False, False, True, False]
+
+
 def test_replay_bar(qtbot):
     r = make(ReplayBar, qtbot)
     r.set_progress(65.0, 130.0, paused=False, speed=2.0)

@@ -28,12 +28,24 @@ _TITLES = ("Alt m", "Vel m/s", "Att °", "Hdg °")
 MIN_SPAN = (4.0, 2.0, 10.0)
 AXIS_WIDTH = 62        # px for the left axis of every plot (title + "-0.5"), so their time axes line up
 TICK_FONT_PX = 11
+# series that wrap (degrees): no line is drawn across the wrap, which would look like a turn through south
+WRAPS = {"heading": 360.0}
 
 
 def _tick_font() -> QFont:
     font = QFont()
     font.setPixelSize(TICK_FONT_PX)
     return font
+
+
+def _connections(y: np.ndarray, wrap: float | None) -> np.ndarray | str:
+    """Which points join the next: finite neighbours, and for a wrapping series not across the wrap."""
+    if wrap is None:
+        return "finite"
+    joined = np.zeros(y.size, dtype=bool)
+    with np.errstate(invalid="ignore"):
+        joined[:-1] = np.abs(np.diff(y)) < wrap / 2           # NaN compares False: gaps stay open too
+    return joined
 
 
 class PlotsPanel(QWidget):
@@ -122,7 +134,7 @@ class PlotsPanel(QWidget):
         x = x[keep]
         shown = {name: self._ordered(self._data[name])[keep] for name in self.curves}
         for name, curve in self.curves.items():
-            curve.setData(x, shown[name], connect="finite")
+            curve.setData(x, shown[name], connect=_connections(shown[name], WRAPS.get(name)))
         for row, span in enumerate(MIN_SPAN):
             values = np.concatenate([shown[name] for name, (r, _, _) in SERIES.items() if r == row])
             values = values[np.isfinite(values)]
