@@ -459,14 +459,16 @@ class Vehicle(Drone):
     def ingest(self, data: bytes) -> int:
         """Parse raw bytes as if read from the link and fold them into the state; returns messages parsed."""
         try:
-            msgs = self._codec_in.parse_buffer(data) or ()
+            msgs = self._codec_in.parse_buffer(data)
         except Exception as exc:                      # robust parsing should catch all; never let it escape
             log.debug("parser reset after %s", exc)
             self._codec_in = self._new_parser()
-            msgs = ()
+            msgs = None
         if self._outputs:
             for out in self._outputs:
                 out.write(data)
+        if not msgs:                                  # part of a frame (TCP, serial): nothing to fold yet
+            return 0
         n = 0
         with self._lock:
             for msg in msgs:
