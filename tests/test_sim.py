@@ -296,7 +296,11 @@ def test_arming_before_ready_is_refused_with_a_prearm_reason(make_sim, connect):
     gs = connect(sim)
     gs.request_streams(4)
     assert gs.wait("SYS_STATUS")
-    assert not gs.messages("SYS_STATUS")[-1].onboard_control_sensors_health & PREARM
+    status = gs.messages("SYS_STATUS")[-1]
+    assert not status.onboard_control_sensors_health & PREARM
+    # as ArduPilot: a fence that has not failed is healthy, present or not (else MAVProxy says "fence breach")
+    assert status.onboard_control_sensors_health & mavlink.MAV_SYS_STATUS_GEOFENCE
+    assert not status.onboard_control_sensors_present & mavlink.MAV_SYS_STATUS_GEOFENCE
     assert gs.wait("GPS_RAW_INT").fix_type < 3
     mark = gs.mark()
     ack = gs.command(mavlink.MAV_CMD_COMPONENT_ARM_DISARM, 1)

@@ -67,6 +67,9 @@ class Telemetry:
 
     def _msg_sys_status(self):
         health = SENSORS_PRESENT if self.ready else SENSORS_PRESENT & ~SENSORS_NEED_READY
+        # ArduPilot sets the geofence health bit whenever the fence has not failed, present or not
+        # (GCS_MAVLINK::update_sensor_status_flags); without it MAVProxy announces "fence breach".
+        health |= mavlink.MAV_SYS_STATUS_GEOFENCE
         enabled = SENSORS_PRESENT
         return self.factory.sys_status_encode(
             SENSORS_PRESENT, enabled, health, 150 + int(self.rng.random() * 20),
