@@ -31,8 +31,8 @@ def number(low: float, high: float, wanted: str) -> Callable[[str], float]:
 
 def positive(text: str) -> float:
     """A finite number above zero."""
-    value = number(0.0, math.inf, "a positive number is needed")(text)
-    if value == 0:
+    value = as_float(text)
+    if not 0 < value < math.inf:
         raise argparse.ArgumentTypeError(f"{text!r}: a positive number is needed")
     return value
 
