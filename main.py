@@ -16,6 +16,7 @@ import sys
 from pathlib import Path
 
 from driver import options
+from driver.sim import DEMO_READY_AFTER
 from uavviewer.settings import TAKEOFF_ALTITUDE_RANGE
 
 SOLO_CONNECTION = "udpin:0.0.0.0:14550"
@@ -54,7 +55,7 @@ def build_parser() -> argparse.ArgumentParser:
                              "Ice config with UAVViewer.<Interface>.Proxy keys (see config/viewer.cfg)")
     source.add_argument("--ice-host", metavar="HOST",
                         help="fly through a MAVLinkServer over ZeroC Ice at HOST, on the default ports")
-    link.add_argument("--baud", type=int, default=57600, help="serial baud rate (default: %(default)s)")
+    link.add_argument("--baud", type=options.whole(1, 10_000_000), default=57600, help="serial baud rate (default: %(default)s)")
     flight = p.add_argument_group("flight")
     flight.add_argument("--takeoff-altitude", type=TAKEOFF_ALTITUDE, default=None, metavar="M",
                         help=f"takeoff altitude above home for this run, {TAKEOFF_ALTITUDE_RANGE[0]:g} to "
@@ -63,7 +64,7 @@ def build_parser() -> argparse.ArgumentParser:
     sim = p.add_argument_group("simulator (with --sim)")
     sim.add_argument("--speedup", type=options.positive, default=1.0,
                      help="simulated time runs this many times faster than real time (default: %(default)s)")
-    sim.add_argument("--ready-after", type=options.not_negative, default=3.0, metavar="S",
+    sim.add_argument("--ready-after", type=options.not_negative, default=DEMO_READY_AFTER, metavar="S",
                      help="seconds until the simulated vehicle has GPS/EKF and is ready to arm "
                           "(default: %(default)s)")
     video = p.add_argument_group("camera")

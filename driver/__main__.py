@@ -14,6 +14,7 @@ import os
 import signal
 import sys
 import threading
+import time
 
 from .options import as_float, connection, not_negative, port, positive, takeoff_altitude, whole
 
@@ -200,9 +201,8 @@ def _default_sigterm() -> None:
 
 def _wait_for_signal() -> None:
     """--daemon: run until Ctrl-C or SIGTERM (each raises here)."""
-    done = threading.Event()
-    while not done.wait(1.0):
-        pass
+    while True:
+        time.sleep(3600)
 
 
 if __name__ == "__main__":

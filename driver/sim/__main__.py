@@ -26,12 +26,10 @@ def _home(text: str) -> tuple[float, float, float, float]:
 
 
 def _address(text: str) -> str:
-    """HOST:PORT, port 0 to 65535 (0: any free port)."""
-    host, sep, port = text.rpartition(":")
-    if not sep or not host:
-        raise argparse.ArgumentTypeError(f"expected HOST:PORT, got {text!r}")
-    if not port.isdigit() or int(port) > 65535:
-        raise argparse.ArgumentTypeError(f"{text!r}: the port must be a number from 0 to 65535")
+    try:
+        parse_address(text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
     return text
 
 

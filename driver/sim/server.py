@@ -27,10 +27,12 @@ V2_MARKER = mavlink.PROTOCOL_MARKER_V2
 
 
 def parse_address(text: str) -> tuple[str, int]:
-    """"HOST:PORT" → (host, port)."""
+    """"HOST:PORT" → (host, port); port 0 to 65535 (0: any free port)."""
     host, sep, port = text.rpartition(":")
     if not sep or not host:
         raise ValueError(f"expected HOST:PORT, got {text!r}")
+    if not port.isdigit() or int(port) > 65535:
+        raise ValueError(f"{text!r}: the port must be a number from 0 to 65535")
     return host, int(port)
 
 
