@@ -1057,6 +1057,10 @@ class Vehicle(Drone):
                 p = self._pending.get(command)
                 if p is not None:
                     self._resolve(p, CommandStatus.ABORTED, f"takeoff aborted: {why}")
+                    if command == mavlink.MAV_CMD_NAV_TAKEOFF and p.attempts:
+                        # a command on its way cannot be called back: say so rather than promise the ground
+                        self._add_message(Severity.WARNING, "Takeoff aborted after NAV_TAKEOFF went out: if the "
+                                          "vehicle got it, it lifts off (Land brings it down)")
             self._progress(run, SequencePhase.ABORTED, f"aborted: {why}")
 
     def _progress(self, run: _TakeoffRun, phase: SequencePhase, detail: str = "") -> None:

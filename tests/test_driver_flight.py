@@ -197,7 +197,10 @@ def test_stop_during_takeoff_cancels_what_the_takeoff_asked(vehicle, sim):
     assert vehicle.wait_for(lambda s: s.readiness.ready_to_arm, 20)
     sim.faults.ignore_commands = {mavlink.MAV_CMD_NAV_TAKEOFF}
     takeoff = vehicle.takeoff(3.0)
-    assert vehicle.wait_for(lambda s: s.takeoff.phase is SequencePhase.TAKING_OFF, 20)
+    # Stop only once the vehicle has lost the first NAV_TAKEOFF: a command still on its way when the pilot
+    # presses Stop cannot be called back, and the vehicle would rightly obey it
+    assert vehicle.wait_for(lambda s: mavlink.MAV_CMD_NAV_TAKEOFF in sim.faults.ignored, 20)
+    assert vehicle.state().takeoff.phase is SequencePhase.TAKING_OFF
     assert vehicle.stop().result(timeout=5).ok
     assert takeoff.result(timeout=5).status is CommandStatus.ABORTED
     sim.faults.ignore_commands = set()                  # the radio recovers
@@ -209,6 +212,8 @@ def test_stop_during_takeoff_cancels_what_the_takeoff_asked(vehicle, sim):
     aborted = [r for r in vehicle.state().results if r.command.startswith("NAV_TAKEOFF")]
     assert aborted and aborted[-1].status is CommandStatus.ABORTED, aborted
     assert sum(1 for m in list(sim.received_messages)[n:] if m[1] == "COMMAND_LONG") == 0
+    # the pilot is told the one that went out could still have reached the vehicle
+    assert any("after NAV_TAKEOFF went out" in m.text for m in vehicle.state().messages)
 
 
 def test_one_takeoff_at_a_time_even_after_an_abort(sim_factory, vehicle_factory):

@@ -700,6 +700,7 @@ class Autopilot(Telemetry):
     def _command(self, msg, command: int, params) -> None:
         self.last_command = command_name(command)
         if self.faults.ignores(command):
+            self.faults.ignored.append(command)
             log.info("ignoring %s (fault)", self.last_command)
             return
         handler = getattr(self, "_cmd_" + self.last_command.removeprefix("MAV_CMD_").lower(), None)

@@ -5,6 +5,7 @@ effect at once without locking (each is a single reference swap).
 """
 from __future__ import annotations
 
+from collections import deque
 from dataclasses import dataclass, field
 
 __all__ = ["Faults"]
@@ -18,6 +19,7 @@ class Faults:
     corrupt_fraction: float = 0.0             # share of outgoing frames with a flipped byte (bad CRC)
     ignore_commands: set[int] | bool = field(default_factory=set)   # MAV_CMD ids never answered; True = all
     refuse_arm: str | None = None             # arming refused with "PreArm: <reason>"
+    ignored: deque = field(default_factory=lambda: deque(maxlen=200))   # MAV_CMD ids swallowed so far, oldest first
 
     def ignores(self, command: int) -> bool:
         ignored = self.ignore_commands
