@@ -46,6 +46,35 @@ def test_garbage_and_corrupt_frames_never_stop_the_reader(vehicle, sim):
     assert vehicle.state().connected
 
 
+
+@pytest.mark.parametrize("cut", ["one frame per read", "two frames per read", "7 bytes per read", "with garbage"])
+def test_every_way_a_link_cuts_the_bytes_gives_the_frames_pymavlink_gives(cut):
+    """ingest() takes a shortcut past parse_buffer() for one-frame reads: it must not lose or invent a frame."""
+    from driver.link import frame_length
+    from driver.vehicle import Vehicle, VehicleConfig
+    mav = mavlink.MAVLink(None, srcSystem=1, srcComponent=1)
+    frames_ = [mavlink.MAVLink_heartbeat_message(2, 3, 217, 4, 4, 3).pack(mav)]
+    for i in range(40):
+        mav.seq = (mav.seq + 1) % 256
+        frames_.append(mavlink.MAVLink_attitude_message(i, 0.01 * i, 0, 0, 0, 0, 0).pack(mav))
+    data = b"".join(frames_)
+    if cut == "one frame per read":
+        reads = frames_
+    elif cut == "two frames per read":
+        reads = [b"".join(frames_[i:i + 2]) for i in range(0, len(frames_), 2)]
+    elif cut == "7 bytes per read":
+        reads = [data[i:i + 7] for i in range(0, len(data), 7)]
+    else:
+        reads = [f + b"\x00\x01garbage" if i % 3 == 0 else f for i, f in enumerate(frames_)]
+    assert sum(frame_length(f, 0) for f in frames_) == len(data)
+    codec = mavlink.MAVLink(None)
+    codec.robust_parsing = True
+    expected = [m.get_type() for r in reads for m in codec.parse_buffer(r) or ()]
+    vehicle = Vehicle(VehicleConfig(connection="udpin:127.0.0.1:0"))   # not started: only the parser runs
+    got = sum(vehicle.ingest(r) for r in reads)
+    assert got == len(frames_) == expected.count("ATTITUDE") + expected.count("HEARTBEAT")
+    assert vehicle.state().mode == "GUIDED"                             # the heartbeat was folded in
+
 def test_dropped_packets_show_as_loss(vehicle, sim):
     sim.faults.drop_fraction = 0.3
     assert vehicle.wait_for(lambda s: s.link.loss_percent > 10 and s.link.packets_lost > 10, 15), \
