@@ -18,7 +18,7 @@ import threading
 import time
 from concurrent.futures import Future
 
-from .state import CommandResult, CommandStatus, LandedState, LinkStatus, SequencePhase, VehicleState
+from .state import CommandResult, CommandStatus, SequencePhase, VehicleState
 from .vehicle import COPTER_MODES
 
 ARM_USAGE = ("arm [throttle] [force] | arm check [all|none|MASK] | arm safetyon | arm safetyoff | arm list")
@@ -339,28 +339,19 @@ def takeoff_line(s: VehicleState) -> str:
     """The takeoff sequence's phase; while it waits, what the autopilot still lacks (from the live state)."""
     phase = s.takeoff.phase
     if phase is SequencePhase.WAITING_READY:
-        r = s.readiness
-        missing = [what for ok, what in ((r.gps_ok, "GPS fix"), (r.ekf_ok, "EKF"), (r.prearm_ok, "pre-arm checks"))
-                   if not ok]
+        missing = s.readiness.missing
         return f"takeoff: {phase.value}" + (f" (still missing: {', '.join(missing)})" if missing else "")
     return f"takeoff: {phase.value}" + (f" {s.takeoff.detail}" if s.takeoff.detail else "")
 
 
 def velocity_hint(s: VehicleState) -> str:
     """Why a typed velocity would not fly the vehicle, or "": the viewer's stick hint, for the console."""
-    if s.can_fly_velocity:
-        return ""
-    if s.link.status is not LinkStatus.OK:
-        return "no link"
-    if s.takeoff.active:
-        return "taking off"
-    if not s.flying:
+    why = s.velocity_blocker
+    if why == "on the ground":
         return "take off to fly"
-    if s.landed_state is LandedState.LANDING or s.mode == "LAND":
-        return "landing"
-    if s.landed_state is LandedState.TAKEOFF:
-        return "taking off"
-    return f"velocity flies only in GUIDED (mode is {s.mode or '?'})"
+    if why == "not GUIDED":
+        return f"velocity flies only in GUIDED (mode is {s.mode or '?'})"
+    return why
 
 
 def vertical_speed(climb: float) -> str:

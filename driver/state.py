@@ -157,6 +157,12 @@ class Readiness:
     def ready_to_arm(self) -> bool:
         return self.prearm_ok and self.ekf_ok and self.gps_ok
 
+    @property
+    def missing(self) -> tuple[str, ...]:
+        """What the autopilot still lacks before it can arm, in the order it usually arrives."""
+        return tuple(what for ok, what in ((self.gps_ok, "GPS fix"), (self.ekf_ok, "EKF"),
+                                           (self.prearm_ok, "pre-arm checks")) if not ok)
+
 
 @dataclass(frozen=True)
 class LinkHealth:
@@ -295,6 +301,24 @@ class VehicleState:
         return (self.link.status is LinkStatus.OK and self.mode == "GUIDED" and self.flying
                 and not self.takeoff.active
                 and self.landed_state in (LandedState.IN_AIR, LandedState.UNDEFINED))
+
+    @property
+    def velocity_blocker(self) -> str:
+        """Why velocity setpoints would not fly the vehicle now: "" (they would), "no link", "taking off",
+        "on the ground", "landing" or "not GUIDED"; each front end words it its own way."""
+        if self.can_fly_velocity:
+            return ""
+        if self.link.status is not LinkStatus.OK:
+            return "no link"
+        if self.takeoff.active:
+            return "taking off"
+        if not self.flying:
+            return "on the ground"
+        if self.landed_state is LandedState.LANDING or self.mode == "LAND":
+            return "landing"
+        if self.landed_state is LandedState.TAKEOFF:
+            return "taking off"
+        return "not GUIDED"
 
     @property
     def distance_from_home(self) -> float | None:

@@ -50,25 +50,19 @@ def takeoff_progress(s: VehicleState) -> float:
     return max(0.1, min(1.0, 0.1 + 0.9 * s.altitude / target))
 
 
+_STICK_HINTS = {"no link": "No link", "on the ground": "Take off to fly", "taking off": "Taking off…",
+                "landing": "Landing…"}
+
+
 def stick_hint(s: VehicleState) -> str:
     """Why the sticks are inert, or "" when they fly the vehicle."""
-    if s.can_fly_velocity:
-        return ""
-    phase = flight_phase(s)
-    if phase is FlightPhase.NO_VEHICLE or s.link.status is LinkStatus.LOST:
-        return "No link"
-    if phase is FlightPhase.ON_GROUND:
-        return "Take off to fly"
-    if phase is FlightPhase.TAKING_OFF:
-        return "Taking off…"
-    if phase is FlightPhase.LANDING:
-        return "Landing…"
-    return f"Sticks fly in GUIDED\n(mode is {s.mode or '?'})"
+    why = s.velocity_blocker
+    if why == "not GUIDED":
+        return f"Sticks fly in GUIDED\n(mode is {s.mode or '?'})"
+    return _STICK_HINTS.get(why, why)
 
 
 def readiness_text(s: VehicleState) -> str:
     """On the ground: what the autopilot still waits for before it can arm, or "ready to arm"."""
-    r = s.readiness
-    missing = [what for ok, what in ((r.gps_ok, "GPS fix"), (r.ekf_ok, "EKF"), (r.prearm_ok, "pre-arm checks"))
-               if not ok]
+    missing = s.readiness.missing
     return "waiting for " + ", ".join(missing) if missing else "ready to arm"
