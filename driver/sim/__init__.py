@@ -4,15 +4,23 @@
     sim = SimVehicle(SimConfig(tcp_port=0, speedup=4.0, ready_after=1.0)).start()
     url = f"tcp:127.0.0.1:{sim.tcp_port}"
     ...
-    sim.truth()      # ground truth for assertions
+    sim.faults.downlink.latency = 0.3     # a faultable link, both ways (faults.py)
+    sim.truth()      # ground truth for assertions (NED from home)
     sim.stop()
+
+``SimConfig.profile`` picks the firmware: "copter-4" (matched to a real ArduCopter 4.7
+recording) or "solo" (a stock 3DR Solo); ``gimbal``/``companion`` add components.
 """
 from .autopilot import MODE_NAMES, MODES, Autopilot, SimTruth
-from .faults import Faults
+from .clock import ManualClock, RealClock
+from .faults import Faults, LinkCounters, LinkFaults
+from .gcs import OtherGroundStation
+from .profiles import PROFILES
 from .vehicle import SimConfig, SimVehicle
 
 #: Simulated seconds until ready to arm in a demo (``python -m driver --sim``, ``main.py --sim``): a first
 #: takeoff starts at once. SimConfig's own default (20 s) is a real vehicle's GPS and EKF start-up.
 DEMO_READY_AFTER = 3.0
 
-__all__ = ["SimVehicle", "SimConfig", "SimTruth", "Faults", "Autopilot", "MODES", "MODE_NAMES", "DEMO_READY_AFTER"]
+__all__ = ["SimVehicle", "SimConfig", "SimTruth", "Faults", "LinkFaults", "LinkCounters", "Autopilot", "MODES",
+           "MODE_NAMES", "DEMO_READY_AFTER", "PROFILES", "OtherGroundStation", "ManualClock", "RealClock"]

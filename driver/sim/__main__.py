@@ -1,7 +1,8 @@
 """python -m driver.sim: a simulated ArduCopter any MAVLink ground station can fly.
 
     python -m driver.sim                          # tcp:127.0.0.1:5760 like SITL
-    python -m driver.sim --udp-out 127.0.0.1:14550 --mav1   # like a stock 3DR Solo
+    python -m driver.sim --udp-out 127.0.0.1:14550 --profile solo --gimbal   # like a stock 3DR Solo
+    python -m driver.sim --uplink-loss 0.1 --downlink-loss 0.1 --latency 0.2 --jitter 0.05 --lose-replies
 """
 from __future__ import annotations
 
@@ -11,9 +12,15 @@ import signal
 import sys
 import threading
 
-from ..options import not_negative, positive
+from pymavlink.dialects.v20 import ardupilotmega as mavlink
+
+from ..options import not_negative, number, positive
+from .faults import LinkFaults
+from .profiles import PROFILES, speaks_mavlink2
 from .server import parse_address
 from .vehicle import SimConfig, SimVehicle
+
+share = number(0.0, 1.0, "a share from 0 to 1 is needed")
 
 log = logging.getLogger("driver.sim")
 
@@ -25,6 +32,35 @@ def _home(text: str) -> tuple[float, float, float, float]:
     return parts[0], parts[1], parts[2], parts[3]
 
 
+def _ned(text: str) -> tuple[float, float, float]:
+    try:
+        parts = tuple(float(v) for v in text.split(","))
+    except ValueError:
+        parts = ()
+    if len(parts) != 3 or not all(abs(v) < 1e4 for v in parts):
+        raise argparse.ArgumentTypeError(f"{text!r}: expected NORTH,EAST,DOWN in metres")
+    return parts
+
+
+def _replies(text: str):
+    """"all", a share from 0 to 1 (with a point: 0.5), or MAV_CMD ids/names separated by commas."""
+    if text == "all":
+        return True
+    if "." in text:
+        return share(text)
+    ids = set()
+    by_name = {entry.name.removeprefix("MAV_CMD_"): number for number, entry in mavlink.enums["MAV_CMD"].items()}
+    for part in text.split(","):
+        part = part.strip().upper().removeprefix("MAV_CMD_")
+        if part.isdigit():
+            ids.add(int(part))
+        elif part in by_name:
+            ids.add(by_name[part])
+        else:
+            raise argparse.ArgumentTypeError(f"{text!r}: expected all, a share like 0.5, or MAV_CMD ids or names")
+    return ids
+
+
 def _address(text: str) -> str:
     try:
         parse_address(text)
@@ -33,7 +69,7 @@ def _address(text: str) -> str:
     return text
 
 
-def main(argv: list[str] | None = None) -> int:
+def parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="python -m driver.sim", description=__doc__.splitlines()[0])
     parser.add_argument("--tcp", type=_address, default="127.0.0.1:5760", metavar="HOST:PORT",
                         help="TCP server address (default 127.0.0.1:5760, port 0 = any)")
@@ -45,18 +81,61 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--ready-after", type=not_negative, default=SimConfig.ready_after, metavar="SECONDS",
                         help=f"sim seconds until ready to arm (GPS fix, EKF; default {SimConfig.ready_after:g})")
     parser.add_argument("--home", type=_home, default=SimConfig.home, metavar="LAT,LON,ALT,HEADING")
-    parser.add_argument("--mav1", action="store_true", help="MAVLink 1 only, like a stock 3DR Solo")
+    parser.add_argument("--profile", choices=sorted(PROFILES), default=SimConfig.profile,
+                        help="firmware: copter-4 (ArduCopter 4.x as recorded) or solo (stock 3DR Solo, 3.3 era)")
+    parser.add_argument("--mav1", action="store_true", help="MAVLink 1 only (the solo profile implies it)")
+    parser.add_argument("--origin-offset", type=_ned, default=SimConfig.origin_offset, metavar="N,E,D",
+                        help="where the EKF origin is from home, metres (default %(default)s)")
+    parser.add_argument("--gimbal", action="store_true", help="a gimbal (component 154) on the link, MAVLink 2")
+    parser.add_argument("--companion", action="store_true", help="a companion computer (component 191)")
+    faults = parser.add_argument_group("link faults (real seconds; shares from 0 to 1)")
+    faults.add_argument("--uplink-loss", type=share, default=0.0, metavar="SHARE",
+                        help="share of frames from the ground station lost")
+    faults.add_argument("--downlink-loss", type=share, default=0.0, metavar="SHARE",
+                        help="share of frames from the vehicle lost")
+    faults.add_argument("--burst-rate", type=share, default=0.0, metavar="SHARE",
+                        help="chance per frame, each way, that a burst of loss starts")
+    faults.add_argument("--burst-seconds", type=not_negative, default=0.0, metavar="SECONDS",
+                        help="how long a burst lasts")
+    faults.add_argument("--duplicate", type=share, default=0.0, metavar="SHARE", help="frames delivered twice")
+    faults.add_argument("--latency", type=not_negative, default=0.0, metavar="SECONDS", help="delay, each way")
+    faults.add_argument("--jitter", type=not_negative, default=0.0, metavar="SECONDS",
+                        help="the delay varies by up to this much")
+    faults.add_argument("--reorder", type=share, default=0.0, metavar="SHARE",
+                        help="frames held back behind the next one")
+    faults.add_argument("--corrupt", type=share, default=0.0, metavar="SHARE",
+                        help="frames from the vehicle with a flipped bit")
+    faults.add_argument("--lose-replies", type=_replies, nargs="?", const=True, default=set(), metavar="WHICH",
+                        help="the vehicle acts but its COMMAND_ACK is lost: all (default), a share like 0.3, "
+                             "or MAV_CMD ids/names (NAV_TAKEOFF,400)")
     parser.add_argument("--seed", type=int, default=None)
     parser.add_argument("-v", "--verbose", action="store_true")
-    args = parser.parse_args(argv)
+    return parser
 
-    logging.basicConfig(level=logging.DEBUG if args.verbose else logging.INFO,
-                        format="%(asctime)s %(name)s: %(message)s")
+
+def configure(args: argparse.Namespace) -> SimVehicle:
+    """The vehicle and its faults as the options say, not started yet."""
     host, port = parse_address(args.tcp)
     config = SimConfig(tcp_host=host, tcp_port=port, udp_out=args.udp_out, udp_listen=args.udp_in,
                        speedup=args.speedup, ready_after=args.ready_after, home=args.home,
-                       mavlink2=not args.mav1, seed=args.seed)
+                       mavlink2=not args.mav1, seed=args.seed, profile=args.profile,
+                       origin_offset=args.origin_offset, gimbal=args.gimbal, companion=args.companion)
     sim = SimVehicle(config)
+    both = dict(burst_rate=args.burst_rate, burst_seconds=args.burst_seconds, duplicate=args.duplicate,
+                latency=args.latency, jitter=args.jitter, reorder=args.reorder)
+    sim.faults.uplink = LinkFaults(loss=args.uplink_loss, **both)
+    sim.faults.downlink = LinkFaults(loss=args.downlink_loss, **both)
+    sim.faults.corrupt_fraction = args.corrupt
+    sim.faults.lose_replies = args.lose_replies
+    return sim
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = parser().parse_args(argv)
+    logging.basicConfig(level=logging.DEBUG if args.verbose else logging.INFO,
+                        format="%(asctime)s %(name)s: %(message)s")
+    sim = configure(args)
+    config = sim.config
     try:
         sim.start()
     except OSError as exc:
@@ -64,8 +143,11 @@ def main(argv: list[str] | None = None) -> int:
         where = f"tcp:{args.tcp}" if tcp_failed else f"udp:{args.udp_in}"
         log.error("cannot serve MAVLink on %s: %s", where, (exc.strerror or str(exc)).lower())
         return 1
-    log.info("simulated ArduCopter at %.6f, %.6f (%s); Ctrl-C to stop", config.home[0], config.home[1],
-             "MAVLink 2" if config.mavlink2 else "MAVLink 1 only")
+    log.info("simulated ArduCopter (%s) at %.6f, %.6f (%s); Ctrl-C to stop", config.profile, config.home[0],
+             config.home[1], "MAVLink 2" if speaks_mavlink2(config) else "MAVLink 1 only")
+    if sim.faults.uplink.active or sim.faults.downlink.active or args.corrupt or args.lose_replies:
+        log.info("link faults: uplink %s, downlink %s, corrupt %g, lose replies %s", sim.faults.uplink,
+                 sim.faults.downlink, args.corrupt, args.lose_replies or "none")
     done = threading.Event()
     signal.signal(signal.SIGTERM, lambda *_: done.set())
     try:

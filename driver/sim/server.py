@@ -1,9 +1,11 @@
 """The simulated vehicle's links: a TCP server like SITL's 5760, UDP pushed like the Solo's controller.
 
-Every ground station ("peer") gets its own MAVLink sequence numbers and its own
-parser; everything the vehicle says goes to every peer. One I/O thread reads
-all sockets; writes come from the vehicle's clock thread and never block (a peer
-that stops reading loses frames, as over a saturated radio).
+Every ground station ("peer") gets its own MAVLink sequence numbers (one series
+per component of the vehicle) and its own parser; everything the vehicle says
+goes to every peer. One I/O thread reads all sockets; writes come from the
+vehicle's clock thread and never block (a peer that stops reading loses frames,
+as over a saturated radio). Each peer's link has a :class:`~driver.sim.pipe.Pipe`
+each way, applying the uplink and downlink faults.
 """
 from __future__ import annotations
 
@@ -17,6 +19,8 @@ from typing import Callable
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from .faults import Faults
+from .pipe import Pipe
+from .profiles import speaks_mavlink2
 
 log = logging.getLogger(__name__)
 
@@ -41,11 +45,23 @@ class Peer:
 
     def __init__(self, name: str, config) -> None:
         self.name = name
+        self.system_id = config.system_id
         self.encoder = mavlink.MAVLink(None, srcSystem=config.system_id, srcComponent=config.component_id)
+        self.encoders = {config.component_id: self.encoder}
         self.parser = mavlink.MAVLink(None, srcSystem=config.system_id, srcComponent=config.component_id)
         self.parser.robust_parsing = True
         self.lock = threading.Lock()
         self.closed = False
+        self.up: Pipe | None = None          # set by the LinkServer
+        self.down: Pipe | None = None
+
+    def encoder_for(self, component: int):
+        """This peer's encoder (own sequence numbers) for one component of the vehicle."""
+        encoder = self.encoders.get(component)
+        if encoder is None:
+            encoder = self.encoders[component] = mavlink.MAVLink(None, srcSystem=self.system_id,
+                                                                 srcComponent=component)
+        return encoder
 
     def write(self, data: bytes) -> None:
         raise NotImplementedError
@@ -105,6 +121,10 @@ class LinkServer:
         self.faults = faults
         self.on_message = on_message
         self.rng = random.Random(None if config.seed is None else config.seed + 1)
+        self.mavlink2 = speaks_mavlink2(config)
+        self.peers_added = 0
+        self.up_lock = threading.Lock()      # the uplink's counters are counted by the I/O and clock threads
+        self.down_lock = threading.Lock()
         self.peers: list[Peer] = []
         self.peers_lock = threading.Lock()
         self.selector = selectors.DefaultSelector()
@@ -176,7 +196,14 @@ class LinkServer:
             pass
 
     def _add(self, peer: Peer) -> None:
+        faults, seed = self.faults, self.config.seed
         with self.peers_lock:
+            index = self.peers_added = self.peers_added + 1
+            base = None if seed is None else seed * 1000 + 10 * index
+            peer.up = Pipe(faults, lambda: faults.uplink, faults.counters.uplink,
+                           random.Random(None if base is None else base + 2), self.up_lock)
+            peer.down = Pipe(faults, lambda: faults.downlink, faults.counters.downlink,
+                             random.Random(None if base is None else base + 3), self.down_lock)
             self.peers.append(peer)
 
     def _close(self, peer: Peer, quiet: bool = False) -> None:
@@ -199,27 +226,47 @@ class LinkServer:
             return sum(isinstance(p, TcpPeer) for p in self.peers)
 
     # -- sending ------------------------------------------------------------------------------------
-    def broadcast(self, msg) -> None:
-        """Encode ``msg`` for every peer (own sequence numbers) and send it, faults applied."""
+    def broadcast(self, msg, component: int | None = None, mavlink2: bool | None = None) -> None:
+        """Encode ``msg`` for every peer (own sequence numbers) and send it, faults applied.
+
+        ``component``: which part of the vehicle speaks (default the autopilot); ``mavlink2``: its framing
+        (default the autopilot's: a MAVLink-1 autopilot's gimbal may still speak MAVLink 2).
+        """
         faults = self.faults
-        if faults.link_down:
-            return
-        mav1 = not self.config.mavlink2
+        mav1 = not (self.mavlink2 if mavlink2 is None else mavlink2)
         if mav1 and msg.get_msgId() > 255:
             return
+        component = self.config.component_id if component is None else component
+        now = faults.clock()
         with self.peers_lock:
             peers = list(self.peers)
         for peer in peers:
             if peer.closed:
                 continue
-            data = bytearray(msg.pack(peer.encoder, force_mavlink1=mav1))
-            peer.encoder.seq = (peer.encoder.seq + 1) % 256
-            if faults.drop_fraction > 0 and self.rng.random() < faults.drop_fraction:
-                continue
+            encoder = peer.encoder_for(component)
+            data = bytearray(msg.pack(encoder, force_mavlink1=mav1))
+            encoder.seq = (encoder.seq + 1) % 256
             if faults.corrupt_fraction > 0 and self.rng.random() < faults.corrupt_fraction:
                 index = self.rng.randrange(1, len(data))
                 data[index] ^= 1 << self.rng.randrange(8)
-            peer.write(bytes(data))
+                faults.counters.downlink.corrupted += 1
+            for frame in peer.down.send(bytes(data), now, faults.drop_fraction):
+                peer.write(frame)
+
+    def pump(self) -> None:
+        """Hand on what latency and reordering held back, now that its time has come (the clock thread)."""
+        now = self.faults.clock()
+        with self.peers_lock:
+            peers = list(self.peers)
+        for peer in peers:
+            if peer.closed:
+                continue
+            if peer.down.pending:
+                for frame in peer.down.due(now):
+                    peer.write(frame)
+            if peer.up.pending:
+                for msg, version in peer.up.due(now):
+                    self._deliver(msg, version)
 
     def inject(self, raw: bytes) -> None:
         with self.peers_lock:
@@ -276,11 +323,8 @@ class LinkServer:
                 data, address = peer.sock.recvfrom(65536)
             except OSError:     # BlockingIOError, or ICMP port unreachable from an earlier push
                 return
-            if self.faults.link_down:
-                return
-            peer.reply_to = address
-        if self.faults.link_down:
-            return
+            if not self.faults.dead():
+                peer.reply_to = address
         try:
             messages = peer.parser.parse_buffer(data) or []
         except Exception:   # robust parsing should not raise; garbage must never stop the link
@@ -288,13 +332,19 @@ class LinkServer:
             peer.parser.buf = bytearray()
             peer.parser.buf_index = 0
             return
+        now = self.faults.clock()
         for msg in messages:
             kind = msg.get_type()
             if kind in ("BAD_DATA", "UNKNOWN") or kind.startswith("UNKNOWN"):
                 self.bad_frames += 1
                 continue
             version = 2 if msg.get_msgbuf()[0] == V2_MARKER else 1
-            if version == 2 and not self.config.mavlink2:
-                self.ignored_v2 += 1        # a MAVLink 1 autopilot does not see these frames at all
-                continue
-            self.on_message(msg, version)
+            for item in peer.up.send((msg, version), now):
+                self._deliver(*item)
+
+    def _deliver(self, msg, version: int) -> None:
+        """What reached the vehicle through the uplink's faults."""
+        if version == 2 and not self.mavlink2:
+            self.ignored_v2 += 1        # a MAVLink 1 autopilot does not see these frames at all
+            return
+        self.on_message(msg, version)

@@ -2,8 +2,11 @@
 
 Mixed into :class:`~driver.sim.autopilot.Autopilot`; each ``_msg_<name>`` reads
 the vehicle's state and returns a message object (or None when it has nothing
-to say, e.g. HOME_POSITION before home is set). Streams and requests look the
-builders up by message name.
+to say, e.g. HOME_POSITION before home is set, LOCAL_POSITION_NED before the EKF
+has a position). Streams and requests look the builders up by message name.
+What is said when follows the 4.7 recording: nothing streamed before "ArduPilot
+Ready", GLOBAL_POSITION_INT at 0, 0 until the GPS has a fix, LOCAL_POSITION_NED
+(from the EKF origin) only once the EKF uses GPS.
 """
 from __future__ import annotations
 
@@ -11,6 +14,9 @@ import math
 import time
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
+
+from .common import clamp
+from .profiles import speaks_mavlink2
 
 __all__ = ["Telemetry", "EARTH_RADIUS", "METRES_PER_DEG", "GRAVITY", "clamp"]
 
@@ -37,16 +43,24 @@ SENSORS_NEED_READY = (mavlink.MAV_SYS_STATUS_SENSOR_GPS | mavlink.MAV_SYS_STATUS
 EKF_GOOD = (mavlink.EKF_ATTITUDE | mavlink.EKF_VELOCITY_HORIZ | mavlink.EKF_VELOCITY_VERT
             | mavlink.EKF_POS_HORIZ_REL | mavlink.EKF_POS_HORIZ_ABS | mavlink.EKF_POS_VERT_ABS
             | mavlink.EKF_PRED_POS_HORIZ_REL | mavlink.EKF_PRED_POS_HORIZ_ABS)
-EKF_ALIGNING = (mavlink.EKF_ATTITUDE | mavlink.EKF_VELOCITY_VERT | mavlink.EKF_POS_VERT_ABS
-                | mavlink.EKF_CONST_POS_MODE)
-
-
-def clamp(value: float, low: float, high: float) -> float:
-    return low if value < low else high if value > high else value
+# Recording: 0xa7 while aligning (attitude, velocities, vertical position, constant-position mode).
+EKF_ALIGNING = (mavlink.EKF_ATTITUDE | mavlink.EKF_VELOCITY_HORIZ | mavlink.EKF_VELOCITY_VERT
+                | mavlink.EKF_POS_VERT_ABS | mavlink.EKF_CONST_POS_MODE)
 
 
 class Telemetry:
     """Message builders; the state they read (n, e, d, yaw, ...) belongs to the Autopilot."""
+
+    def _can_send(self, name: str) -> bool:
+        """Whether this vehicle has the message at all (what REQUEST_MESSAGE / SET_MESSAGE_INTERVAL accept)."""
+        if name == "EXTENDED_SYS_STATE" and not self.profile.extended_sys_state:
+            return False
+        return hasattr(self, "_msg_" + name.lower())
+
+    def _local(self) -> tuple[float, float, float]:
+        """Where the vehicle is from the EKF origin (NED m): what LOCAL_POSITION_NED reports."""
+        on, oe, od = self.origin
+        return self.n - on, self.e - oe, self.d - od
 
     def _msg_heartbeat(self):
         base = mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED | mavlink.MAV_MODE_FLAG_STABILIZE_ENABLED \
@@ -55,7 +69,12 @@ class Telemetry:
             base |= mavlink.MAV_MODE_FLAG_GUIDED_ENABLED
         if self.armed:
             base |= mavlink.MAV_MODE_FLAG_SAFETY_ARMED
-        status = mavlink.MAV_STATE_ACTIVE if self.armed and not self.landed else mavlink.MAV_STATE_STANDBY
+        if not self.initialised:
+            status = mavlink.MAV_STATE_BOOT                 # recording: until "ArduPilot Ready"
+        elif self.armed and not self.landed:
+            status = mavlink.MAV_STATE_ACTIVE
+        else:
+            status = mavlink.MAV_STATE_STANDBY              # exactly while land_complete
         return self.factory.heartbeat_encode(mavlink.MAV_TYPE_QUADROTOR, mavlink.MAV_AUTOPILOT_ARDUPILOTMEGA,
                                              base, self.mode, status, 3)
 
@@ -66,7 +85,16 @@ class Telemetry:
         return self.rng.gauss(0.0, size)
 
     def _msg_sys_status(self):
-        health = SENSORS_PRESENT if self.ready else SENSORS_PRESENT & ~SENSORS_NEED_READY
+        if not self.initialised:
+            return None
+        health = SENSORS_PRESENT & ~SENSORS_NEED_READY
+        stage = self.stage
+        if stage.gps_fix:
+            health |= mavlink.MAV_SYS_STATUS_SENSOR_GPS
+        if stage.ahrs_ok:
+            health |= mavlink.MAV_SYS_STATUS_AHRS
+        if self.ready:
+            health |= mavlink.MAV_SYS_STATUS_PREARM_CHECK
         # ArduPilot sets the geofence health bit whenever the fence has not failed, present or not
         # (GCS_MAVLINK::update_sensor_status_flags); without it MAVProxy announces "fence breach".
         health |= mavlink.MAV_SYS_STATUS_GEOFENCE
@@ -98,7 +126,7 @@ class Telemetry:
             self.roll_rate, self.pitch_rate, self.yaw_rate)
 
     def _msg_global_position_int(self):
-        lat, lon = self._lat_lon()
+        lat, lon = self._lat_lon() if self.stage.gps_fix else (0.0, 0.0)
         hdg = int(round(math.degrees(self.yaw) * 100)) % 36000
         return self.factory.global_position_int_encode(
             self.time_boot_ms(), int(round(lat * 1e7)), int(round(lon * 1e7)),
@@ -106,8 +134,13 @@ class Telemetry:
             int(round(self.vn * 100)), int(round(self.ve * 100)), int(round(self.vd * 100)), hdg)
 
     def _msg_local_position_ned(self):
-        return self.factory.local_position_ned_encode(self.time_boot_ms(), self.n, self.e, self.d,
-                                                      self.vn, self.ve, self.vd)
+        if not self.ready:
+            return None
+        return self.factory.local_position_ned_encode(self.time_boot_ms(), *self._local(), self.vn, self.ve, self.vd)
+
+    def _spinning(self) -> bool:
+        """Armed and past the arming delay (ArduCopter holds the motors at minimum for 2 s)."""
+        return self.armed and self.t >= self.armed_at + self.profile.arming_delay
 
     def _throttle(self) -> int:
         if not self.armed:
@@ -123,7 +156,7 @@ class Telemetry:
 
     def _msg_gps_raw_int(self):
         usec = int(self.t * 1e6)
-        if not self.ready:
+        if not self.stage.gps_fix:
             sats = min(4, int(5 * self.boot_seconds / max(self.config.ready_after, 1e-3)))
             return self.factory.gps_raw_int_encode(usec, mavlink.GPS_FIX_TYPE_NO_FIX, 0, 0, 0, 9999, 9999,
                                                    0, 0, sats)
@@ -135,20 +168,39 @@ class Telemetry:
             int(round((self.home_alt - self.d) * 1000)), 121, 200, int(speed * 100), cog, 10,
             int(round((self.home_alt + 51.0 - self.d) * 1000)), 300, 500, 150, 0, 0)
 
+    def _origin_lat_lon_alt(self) -> tuple[float, float, float]:
+        on, oe, od = self.origin
+        return self.home_lat + on / METRES_PER_DEG, self.home_lon + oe / self.m_per_deg_lon, self.home_alt - od
+
     def _msg_home_position(self):
+        """Home in the world and from the EKF origin (x, y, z: where home is in LOCAL_POSITION_NED's frame)."""
         if not self.home_set:
             return None
+        on, oe, od = self.origin
         return self.factory.home_position_encode(
             int(round(self.home_lat * 1e7)), int(round(self.home_lon * 1e7)), int(round(self.home_alt * 1000)),
-            0.0, 0.0, 0.0, [1.0, 0.0, 0.0, 0.0], 0.0, 0.0, 0.0, int(self.t * 1e6))
+            -on, -oe, -od, [1.0, 0.0, 0.0, 0.0], 0.0, 0.0, 0.0, int(self.t * 1e6))
+
+    def _msg_gps_global_origin(self):
+        if not self.home_set:
+            return None
+        lat, lon, alt = self._origin_lat_lon_alt()
+        return self.factory.gps_global_origin_encode(int(round(lat * 1e7)), int(round(lon * 1e7)),
+                                                     int(round(alt * 1000)), int(self.t * 1e6))
 
     def _msg_extended_sys_state(self):
+        if not self.profile.extended_sys_state:
+            return None
         return self.factory.extended_sys_state_encode(mavlink.MAV_VTOL_STATE_UNDEFINED, self.landed_state())
 
     def _msg_ekf_status_report(self):
-        if self.ready:
+        ekf = self.stage.ekf
+        if ekf == "good":
             return self.factory.ekf_status_report_encode(EKF_GOOD, 0.02, 0.01, 0.01, 0.02, 0.0)
-        return self.factory.ekf_status_report_encode(EKF_ALIGNING, 0.8, 1.0, 0.2, 0.1, 0.0)
+        if ekf == "aligning":
+            return self.factory.ekf_status_report_encode(EKF_ALIGNING, 0.8, 1.0, 0.2, 0.1, 0.0)
+        return self.factory.ekf_status_report_encode(mavlink.EKF_UNINITIALIZED if ekf == "uninitialised" else 0,
+                                                     0.0, 0.0, 0.0, 0.0, 0.0)
 
     def _msg_scaled_pressure(self):
         alt = self.home_alt - self.d
@@ -211,7 +263,7 @@ class Telemetry:
                                                          bearing, target_bearing, dist, alt_error, 0.0, 0.0)
 
     def _msg_servo_output_raw(self):
-        if not self.armed:
+        if not self._spinning():
             pwm = 1000
         elif self.landed:
             pwm = 1150
@@ -230,8 +282,9 @@ class Telemetry:
                 | mavlink.MAV_PROTOCOL_CAPABILITY_SET_POSITION_TARGET_GLOBAL_INT
                 | mavlink.MAV_PROTOCOL_CAPABILITY_FLIGHT_TERMINATION
                 | mavlink.MAV_PROTOCOL_CAPABILITY_COMPASS_CALIBRATION)
-        if self.config.mavlink2:
+        if speaks_mavlink2(self.config):
             caps |= mavlink.MAV_PROTOCOL_CAPABILITY_MAVLINK2
-        version = (4 << 24) | (5 << 16) | (7 << 8) | mavlink.FIRMWARE_VERSION_TYPE_OFFICIAL
+        major, minor, patch, kind = self.profile.version
+        version = (major << 24) | (minor << 16) | (patch << 8) | kind
         return self.factory.autopilot_version_encode(caps, version, 0, 0, 0, [0] * 8, [0] * 8, [0] * 8,
                                                      0x1209, 0x5740, 0x0123456789ABCDEF)

@@ -3,19 +3,22 @@
 A clock thread advances the :class:`~driver.sim.autopilot.Autopilot` at
 ``rate_hz`` steps per sim second, ``speedup`` times faster than real time, and
 feeds it what the :class:`~driver.sim.server.LinkServer` received since the
-last step.
+last step (through the uplink's faults); what the vehicle says goes out through
+the downlink's faults. The same thread hands on frames the faults held back.
 """
 from __future__ import annotations
 
 import logging
 import queue
 import threading
-import time
 from collections import deque
 from dataclasses import dataclass
 
 from .autopilot import Autopilot, SimTruth
+from .clock import RealClock
+from .components import components_of
 from .faults import Faults
+from .profiles import profile_of
 from .server import LinkServer
 
 log = logging.getLogger(__name__)
@@ -32,7 +35,13 @@ class SimConfig:
     speedup: float = 1.0
     ready_after: float = 20.0               # sim seconds until ready to arm
     home: tuple[float, float, float, float] = (40.2839, -3.7940, 664.0, 0.0)   # lat, lon, alt MSL, heading deg
-    mavlink2: bool = True                   # False: a stock Solo, MAVLink 1 only
+    # Where the EKF origin is from home, NED metres: the origin is set where the vehicle was at GPS lock,
+    # home where it armed, so they differ; LOCAL_POSITION_NED and MAV_FRAME_LOCAL_NED targets use the origin.
+    origin_offset: tuple[float, float, float] = (3.0, -2.0, 1.5)
+    profile: str = "copter-4"               # "copter-4" (ArduCopter 4.x, as recorded) or "solo" (stock 3DR Solo)
+    mavlink2: bool = True                   # False: MAVLink 1 only (the "solo" profile implies it)
+    gimbal: bool = False                    # a gimbal (component 154) says HEARTBEAT, in MAVLink 2 always
+    companion: bool = False                 # a companion computer (component 191) says HEARTBEAT
     system_id: int = 1
     component_id: int = 1
     battery_cells: int = 4
@@ -43,15 +52,24 @@ class SimConfig:
 
 
 class SimVehicle:
-    """The simulated copter: ``start()``, fly it over MAVLink, read ``truth()``, ``stop()``."""
+    """The simulated copter: ``start()``, fly it over MAVLink, read ``truth()``, ``stop()``.
 
-    def __init__(self, config: SimConfig | None = None) -> None:
+    ``clock``: real time by default; a :class:`~driver.sim.clock.ManualClock` makes the sim's pace (and the
+    link faults' latency and outages) move only when a test says so.
+    """
+
+    def __init__(self, config: SimConfig | None = None, clock=None) -> None:
         self.config = config if config is not None else SimConfig()
         if not self.config.speedup > 0 or not self.config.rate_hz > 0:
             raise ValueError("speedup and rate_hz must be positive")
-        self.faults = Faults()
+        profile_of(self.config)                          # an unknown profile fails here
+        if len(tuple(self.config.origin_offset)) != 3:
+            raise ValueError("origin_offset is (north, east, down) in metres")
+        self.clock = clock if clock is not None else RealClock()
+        self.faults = Faults(seed=self.config.seed, clock=self.clock.now)
         self.received_setpoints: deque = deque(maxlen=2000)
         self.received_messages: deque = deque(maxlen=2000)
+        self.steps = 0                                   # physics steps taken so far
         self._inbox: queue.SimpleQueue = queue.SimpleQueue()
         self._lock = threading.Lock()
         self._stop = threading.Event()
@@ -59,6 +77,7 @@ class SimVehicle:
         self.server = LinkServer(self.config, self.faults, self._received)
         self._outbox: list = []
         self.autopilot = Autopilot(self.config, self.faults, emit=self._outbox.append)
+        self.components = components_of(self.config)
         self._truth = self.autopilot.truth()
         self._started = False
 
@@ -117,6 +136,7 @@ class SimVehicle:
         self._inbox.put((msg, version))
 
     def _step(self, dt: float) -> None:
+        self.server.pump()                 # uplink frames whose latency is over join the inbox
         autopilot = self.autopilot
         while True:
             try:
@@ -130,16 +150,22 @@ class SimVehicle:
                                                 msg.vx, msg.vy, msg.vz, msg.yaw_rate))
             autopilot.handle(msg, version)
         autopilot.step(dt)
+        self.steps += 1
         self._truth = autopilot.truth()
         # only now on the wire: nothing a peer hears is newer than truth()
         for msg in self._outbox:
             self.server.broadcast(msg)
         self._outbox.clear()
+        for component in self.components:
+            for msg in component.step(autopilot.t):
+                self.server.broadcast(msg, component.component_id, component.mavlink2)
+        self.server.pump()                 # downlink frames whose latency is over
 
     def _run(self) -> None:
+        clock = self.clock
         dt = 1.0 / float(self.config.rate_hz)
         real_step = dt / float(self.config.speedup)
-        next_time = time.monotonic()
+        next_time = clock.now()
         while not self._stop.is_set():
             try:
                 with self._lock:
@@ -147,9 +173,9 @@ class SimVehicle:
             except Exception:      # keep flying: a bug in one step must not freeze the vehicle
                 log.exception("sim step failed")
             next_time += real_step
-            delay = next_time - time.monotonic()
+            delay = next_time - clock.now()
             if delay > 0:
-                if self._stop.wait(delay):
+                if clock.wait(self._stop, delay):
                     break
             elif delay < -0.25:    # far behind (machine busy): drop the backlog instead of racing
-                next_time = time.monotonic()
+                next_time = clock.now()

@@ -1,0 +1,108 @@
+"""What the simulated ArduCopter's parts share: modes, streams, parameters, small helpers."""
+from __future__ import annotations
+
+import math
+
+from pymavlink.dialects.v20 import ardupilotmega as mavlink
+
+__all__ = ["MODES", "MODE_NAMES", "POSITION_MODES", "NOT_ARMABLE", "STREAMS", "STREAM_PARAMS", "DEFAULT_PARAMS",
+           "FORCE_ARM_MAGIC", "POS_IGNORE", "VEL_IGNORE", "YAW_IGNORE", "YAW_RATE_IGNORE", "wrap_pi", "finite",
+           "command_name", "clamp"]
+
+FORCE_ARM_MAGIC = 21196
+
+MODES = {
+    "STABILIZE": 0, "ACRO": 1, "ALT_HOLD": 2, "AUTO": 3, "GUIDED": 4, "LOITER": 5, "RTL": 6,
+    "CIRCLE": 7, "LAND": 9, "DRIFT": 11, "SPORT": 13, "FLIP": 14, "AUTOTUNE": 15, "POSHOLD": 16,
+    "BRAKE": 17, "THROW": 18, "AVOID_ADSB": 19, "GUIDED_NOGPS": 20, "SMART_RTL": 21,
+    "FLOWHOLD": 22, "FOLLOW": 23, "ZIGZAG": 24,
+}
+MODE_NAMES = {number: name for name, number in MODES.items()}
+# Modes that need a position estimate: armed, "Mode change failed: X requires position"; disarmed any mode
+# may be set (Copter::set_mode: ignore_checks = !motors->armed(); the arming checks catch it).
+POSITION_MODES = {3, 4, 5, 6, 7, 11, 16, 17, 19, 21, 23, 24}
+# Modes from which ArduCopter refuses to arm.
+NOT_ARMABLE = {3, 6, 7, 9, 19, 21, 23}
+# REQUEST_DATA_STREAM ids → the messages ArduCopter puts in them (GCS_Mavlink.cpp). EXTENDED_SYS_STATE is in
+# none: the 4.7 recording never got it from REQUEST_DATA_STREAM (ask by SET_MESSAGE_INTERVAL), 3.3 had none.
+STREAMS = {
+    mavlink.MAV_DATA_STREAM_RAW_SENSORS: ("RAW_IMU", "SCALED_IMU2", "SCALED_PRESSURE"),
+    mavlink.MAV_DATA_STREAM_EXTENDED_STATUS: ("SYS_STATUS", "POWER_STATUS", "MEMINFO", "MISSION_CURRENT",
+                                              "GPS_RAW_INT", "NAV_CONTROLLER_OUTPUT"),
+    mavlink.MAV_DATA_STREAM_RC_CHANNELS: ("SERVO_OUTPUT_RAW", "RC_CHANNELS"),
+    mavlink.MAV_DATA_STREAM_POSITION: ("GLOBAL_POSITION_INT", "LOCAL_POSITION_NED"),
+    mavlink.MAV_DATA_STREAM_EXTRA1: ("ATTITUDE",),
+    mavlink.MAV_DATA_STREAM_EXTRA2: ("VFR_HUD",),
+    mavlink.MAV_DATA_STREAM_EXTRA3: ("SYSTEM_TIME", "BATTERY_STATUS", "EKF_STATUS_REPORT", "VIBRATION", "WIND"),
+}
+
+# SET_POSITION_TARGET type_mask bits (set = ignore).
+POS_IGNORE = 0b111
+VEL_IGNORE = 0b111000
+YAW_IGNORE = 1024
+YAW_RATE_IGNORE = 2048
+
+# name → (value, MAV_PARAM_TYPE)
+DEFAULT_PARAMS = {
+    "SYSID_THISMAV": (1, mavlink.MAV_PARAM_TYPE_INT16),
+    "SYSID_MYGCS": (255, mavlink.MAV_PARAM_TYPE_INT16),
+    "ARMING_CHECK": (1, mavlink.MAV_PARAM_TYPE_INT32),
+    "DISARM_DELAY": (10, mavlink.MAV_PARAM_TYPE_INT8),
+    "GUID_TIMEOUT": (3.0, mavlink.MAV_PARAM_TYPE_REAL32),
+    "RTL_ALT": (1500, mavlink.MAV_PARAM_TYPE_INT32),
+    "RTL_ALT_FINAL": (0, mavlink.MAV_PARAM_TYPE_INT16),
+    "RTL_LOIT_TIME": (5000, mavlink.MAV_PARAM_TYPE_INT32),
+    "RTL_SPEED": (0, mavlink.MAV_PARAM_TYPE_INT16),
+    "WPNAV_SPEED": (500.0, mavlink.MAV_PARAM_TYPE_REAL32),
+    "WPNAV_SPEED_UP": (250.0, mavlink.MAV_PARAM_TYPE_REAL32),
+    "WPNAV_SPEED_DN": (150.0, mavlink.MAV_PARAM_TYPE_REAL32),
+    "WPNAV_ACCEL": (250.0, mavlink.MAV_PARAM_TYPE_REAL32),
+    "LAND_SPEED": (50, mavlink.MAV_PARAM_TYPE_INT16),
+    "LAND_SPEED_HIGH": (0, mavlink.MAV_PARAM_TYPE_INT16),
+    "PILOT_SPEED_UP": (250, mavlink.MAV_PARAM_TYPE_INT16),
+    "PILOT_SPEED_DN": (0, mavlink.MAV_PARAM_TYPE_INT16),
+    "LOIT_SPEED": (1250.0, mavlink.MAV_PARAM_TYPE_REAL32),
+    "ANGLE_MAX": (3000, mavlink.MAV_PARAM_TYPE_INT16),
+    "WP_YAW_BEHAVIOR": (2, mavlink.MAV_PARAM_TYPE_INT8),
+    "FRAME_CLASS": (1, mavlink.MAV_PARAM_TYPE_INT8),
+    "FRAME_TYPE": (1, mavlink.MAV_PARAM_TYPE_INT8),
+    "BATT_MONITOR": (4, mavlink.MAV_PARAM_TYPE_INT8),
+    "BATT_CAPACITY": (5200, mavlink.MAV_PARAM_TYPE_INT32),
+    "BATT_LOW_VOLT": (0.0, mavlink.MAV_PARAM_TYPE_REAL32),
+    "FS_GCS_ENABLE": (0, mavlink.MAV_PARAM_TYPE_INT8),
+    "FENCE_ENABLE": (0, mavlink.MAV_PARAM_TYPE_INT8),
+    "CHUTE_ENABLED": (1, mavlink.MAV_PARAM_TYPE_INT8),
+    "CHUTE_ALT_MIN": (10, mavlink.MAV_PARAM_TYPE_INT16),
+    "SERIAL0_PROTOCOL": (2, mavlink.MAV_PARAM_TYPE_INT8),
+    "SR0_EXT_STAT": (0, mavlink.MAV_PARAM_TYPE_INT16),
+    "SR0_POSITION": (0, mavlink.MAV_PARAM_TYPE_INT16),
+    "SR0_EXTRA1": (0, mavlink.MAV_PARAM_TYPE_INT16),
+    "SR0_EXTRA2": (0, mavlink.MAV_PARAM_TYPE_INT16),
+    "SR0_EXTRA3": (0, mavlink.MAV_PARAM_TYPE_INT16),
+}
+STREAM_PARAMS = {
+    mavlink.MAV_DATA_STREAM_EXTENDED_STATUS: "SR0_EXT_STAT", mavlink.MAV_DATA_STREAM_POSITION: "SR0_POSITION",
+    mavlink.MAV_DATA_STREAM_EXTRA1: "SR0_EXTRA1", mavlink.MAV_DATA_STREAM_EXTRA2: "SR0_EXTRA2",
+    mavlink.MAV_DATA_STREAM_EXTRA3: "SR0_EXTRA3",
+}
+
+
+def clamp(value: float, low: float, high: float) -> float:
+    return low if value < low else high if value > high else value
+
+
+def wrap_pi(angle: float) -> float:
+    """Angle in (-pi, pi]."""
+    a = math.fmod(angle + math.pi, 2.0 * math.pi)
+    if a <= 0.0:
+        a += 2.0 * math.pi
+    return a - math.pi
+
+
+def finite(*values: float) -> bool:
+    return all(math.isfinite(v) for v in values)
+
+
+def command_name(command: int) -> str:
+    entry = mavlink.enums["MAV_CMD"].get(command)
+    return entry.name if entry is not None else str(command)

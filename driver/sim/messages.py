@@ -1,0 +1,234 @@
+"""Every other message a ground station sends the simulated ArduCopter: streams, modes, setpoints, parameters.
+
+Mixed into :class:`~driver.sim.autopilot.Autopilot`: ``handle()`` routes a decoded
+message to ``_on_<name>``. Setpoints follow the firmware profile: 4.x reads the
+coordinate frame and yaw of SET_POSITION_TARGET_LOCAL_NED and takes MAV_FRAME_LOCAL_NED
+positions from the EKF origin; the Solo (3.3) reads neither frame nor yaw and takes z
+above home (profiles.py has the sources).
+"""
+from __future__ import annotations
+
+import logging
+import math
+
+from pymavlink.dialects.v20 import ardupilotmega as mavlink
+
+from .common import (DEFAULT_PARAMS, MODES, POS_IGNORE, STREAM_PARAMS, STREAMS, VEL_IGNORE, YAW_IGNORE,
+                     YAW_RATE_IGNORE, clamp as _clamp, finite, wrap_pi)
+from .telemetry import METRES_PER_DEG
+
+__all__ = ["Messages"]
+
+log = logging.getLogger("driver.sim.autopilot")
+
+AUTO_YAW_SLEW = math.radians(60.0)
+ACC_IGNORE = 0b111000000
+BODY_FRAMES = (mavlink.MAV_FRAME_BODY_NED, mavlink.MAV_FRAME_BODY_OFFSET_NED)
+LOCAL_FRAMES = (mavlink.MAV_FRAME_LOCAL_NED, mavlink.MAV_FRAME_LOCAL_OFFSET_NED) + BODY_FRAMES
+
+
+class Messages:
+    """Handlers of incoming messages other than commands; the state belongs to the Autopilot."""
+
+    def handle(self, msg, version: int = 2) -> None:
+        """One decoded MAVLink message from a ground station."""
+        if self.rebooting_until is not None:
+            return
+        kind = msg.get_type()
+        if getattr(msg, "target_system", 0) not in (0, self.config.system_id):
+            return
+        if getattr(msg, "target_component", 0) not in (0, self.config.component_id):
+            return
+        handler = getattr(self, "_on_" + kind.lower(), None)
+        if handler is not None:
+            try:
+                handler(msg)
+            except Exception:  # a malformed field must never stop the vehicle
+                log.exception("handling %s", kind)
+        if self.mode_changed:
+            self.mode_changed = False
+            if self.profile.mode_heartbeat and self.faults.heartbeats:
+                self.emit(self._msg_heartbeat())     # 4.7 announces a new mode at once (after the ACK)
+
+    def _on_heartbeat(self, msg) -> None:
+        pass
+
+    # -- streams --------------------------------------------------------------------------------------
+    def _on_request_data_stream(self, msg) -> None:
+        if msg.req_stream_id == mavlink.MAV_DATA_STREAM_ALL:
+            streams = list(STREAMS)
+        elif msg.req_stream_id in STREAMS:
+            streams = [msg.req_stream_id]
+        else:
+            return
+        rate = msg.req_message_rate if msg.start_stop else 0
+        rate = min(int(rate), 50)
+        for stream in streams:
+            if stream in STREAM_PARAMS:
+                self.params[STREAM_PARAMS[stream]] = rate
+            for name in STREAMS[stream]:
+                self._set_interval(name, 1.0 / rate if rate > 0 else None)
+
+    def _set_interval(self, name: str, interval: float | None) -> None:
+        if name == "HEARTBEAT":
+            self.heartbeat_interval = interval if interval else 1.0
+            return
+        if interval is None:
+            self.intervals.pop(name, None)
+        else:
+            interval = max(interval, 1.0 / float(self.config.rate_hz))
+            current = self.intervals.get(name)
+            due = self.t if current is None else min(current[1], self.t + interval)
+            self.intervals[name] = [interval, due]
+
+    # -- modes and sticks -----------------------------------------------------------------------------
+    def _on_set_mode(self, msg) -> None:
+        """The legacy message: no COMMAND_ACK, the HEARTBEAT shows the mode (recording, 65.79 s)."""
+        self._set_mode_common(msg.base_mode, msg.custom_mode)
+
+    def _on_manual_control(self, msg) -> None:
+        if msg.target not in (0, self.config.system_id) or msg.get_srcSystem() != int(self.params["SYSID_MYGCS"]):
+            return
+        self.manual = (_clamp(msg.x / 1000.0, -1, 1), _clamp(msg.y / 1000.0, -1, 1),
+                       _clamp(msg.z / 1000.0, 0, 1), _clamp(msg.r / 1000.0, -1, 1), self.t)
+
+    # -- guided targets ---------------------------------------------------------------------------
+    def _guided_accepts(self) -> bool:
+        return self.mode == MODES["GUIDED"] and self.armed and not self.landed
+
+    def _on_set_position_target_local_ned(self, msg) -> None:
+        frame, mask = msg.coordinate_frame, msg.type_mask
+        if not self._guided_accepts():
+            return
+        if not finite(msg.x, msg.y, msg.z, msg.vx, msg.vy, msg.vz, msg.yaw, msg.yaw_rate):
+            log.warning("non-finite SET_POSITION_TARGET_LOCAL_NED ignored")
+            return
+        profile = self.profile
+        if not profile.setpoint_frames:
+            frame = mavlink.MAV_FRAME_LOCAL_NED          # 3.3 never reads coordinate_frame
+            if mask & ACC_IGNORE != ACC_IGNORE:
+                return                                   # 3.3: "result = MAV_RESULT_FAILED", nothing flies
+        if frame not in LOCAL_FRAMES:
+            return
+        body = frame in BODY_FRAMES
+        c, s = math.cos(self.yaw), math.sin(self.yaw)
+        use_pos = not (mask & POS_IGNORE)
+        use_vel = not (mask & VEL_IGNORE)
+        if use_pos:
+            x, y, z = msg.x, msg.y, msg.z
+            if body:
+                x, y = c * x - s * y, s * x + c * y
+            if frame == mavlink.MAV_FRAME_LOCAL_NED:     # from the EKF origin, not from home
+                on, oe, od = self.origin
+                x, y = x + on, y + oe
+                z = z if profile.local_z_from_home else z + od
+            else:
+                x, y, z = x + self.n, y + self.e, z + self.d
+            self._go_to(x, y, z)
+        elif use_vel:
+            vx, vy, vz = msg.vx, msg.vy, msg.vz
+            if body:
+                vx, vy = c * vx - s * vy, s * vx + c * vy
+            self._fly_velocity(vx, vy, vz)
+        else:
+            return
+        self._target_yaw(mask, msg.yaw, msg.yaw_rate, relative=body)
+
+    def _on_set_position_target_global_int(self, msg) -> None:
+        if not self._guided_accepts():
+            return
+        mask = msg.type_mask
+        if not finite(msg.alt, msg.vx, msg.vy, msg.vz, msg.yaw, msg.yaw_rate):
+            return
+        if not (mask & POS_IGNORE):
+            north = (msg.lat_int / 1e7 - self.home_lat) * METRES_PER_DEG
+            east = (msg.lon_int / 1e7 - self.home_lon) * self.m_per_deg_lon
+            if msg.coordinate_frame in (mavlink.MAV_FRAME_GLOBAL, mavlink.MAV_FRAME_GLOBAL_INT):
+                down = -(msg.alt - self.home_alt)
+            else:
+                down = -msg.alt
+            self._go_to(north, east, down)
+        elif not (mask & VEL_IGNORE):
+            self._fly_velocity(msg.vx, msg.vy, msg.vz)
+        else:
+            return
+        self._target_yaw(mask, msg.yaw, msg.yaw_rate, relative=False)
+
+    def _fly_velocity(self, vn: float, ve: float, vd: float) -> None:
+        self.vel_target = (_clamp(vn, -20, 20), _clamp(ve, -20, 20), _clamp(vd, -5, 5))
+        self.vel_time = self.t
+        self.guided = "velocity"
+        self.hold_point = None
+
+    def _go_to(self, north: float, east: float, down: float) -> None:
+        self.pos_target = (_clamp(north, -1e5, 1e5), _clamp(east, -1e5, 1e5), _clamp(down, -1000.0, 0.0))
+        self.guided = "position"
+        self.hold_point = None
+
+    def _target_yaw(self, mask: int, yaw: float, yaw_rate: float, relative: bool) -> None:
+        self.yaw_cmds_enabled = True
+        if not self.profile.setpoint_yaw:
+            # 3.3: yaw and yaw_rate are "for future use"; the nose keeps its auto heading (to the travel)
+            if self.yaw_mode in ("hold", "rate"):
+                self.yaw_mode = "look_ahead"
+            return
+        if not (mask & YAW_IGNORE):
+            target = yaw + (self.yaw if relative else 0.0)
+            self.yaw_mode = "fixed"
+            self.yaw_remaining = wrap_pi(target - self.yaw)
+            self.yaw_slew = AUTO_YAW_SLEW
+        elif not (mask & YAW_RATE_IGNORE):
+            self.yaw_mode = "rate"
+            self.yaw_rate_cmd = _clamp(yaw_rate, -3.5, 3.5)
+        else:
+            self.yaw_mode = "look_ahead"
+
+    # -- parameters, missions, misc -----------------------------------------------------------------
+    def _param_value(self, name: str):
+        value = self.params[name]
+        ptype = DEFAULT_PARAMS[name][1]
+        return self.factory.param_value_encode(name.encode(), float(value), ptype, len(self.param_names),
+                                               self.param_names.index(name))
+
+    def _on_param_request_list(self, msg) -> None:
+        self._banner()
+        for name in self.param_names:
+            self.emit(self._param_value(name))
+
+    def _on_param_request_read(self, msg) -> None:
+        name = msg.param_id
+        if msg.param_index >= 0:
+            if msg.param_index >= len(self.param_names):
+                return
+            name = self.param_names[msg.param_index]
+        if name in self.params:
+            self.emit(self._param_value(name))
+
+    def _on_param_set(self, msg) -> None:
+        name = msg.param_id
+        if name not in self.params or not finite(msg.param_value):
+            return
+        ptype = DEFAULT_PARAMS[name][1]
+        value = float(msg.param_value) if ptype == mavlink.MAV_PARAM_TYPE_REAL32 else int(round(msg.param_value))
+        self.params[name] = value
+        self.emit(self._param_value(name))
+
+    def _on_mission_request_list(self, msg) -> None:
+        self.emit(self.factory.mission_count_encode(msg.get_srcSystem(), msg.get_srcComponent(), 0,
+                                                    getattr(msg, "mission_type", 0)))
+
+    def _on_mission_clear_all(self, msg) -> None:
+        self.emit(self.factory.mission_ack_encode(msg.get_srcSystem(), msg.get_srcComponent(),
+                                                  mavlink.MAV_MISSION_ACCEPTED, getattr(msg, "mission_type", 0)))
+
+    def _on_mission_count(self, msg) -> None:
+        result = mavlink.MAV_MISSION_ACCEPTED if msg.count == 0 else mavlink.MAV_MISSION_UNSUPPORTED
+        self.emit(self.factory.mission_ack_encode(msg.get_srcSystem(), msg.get_srcComponent(), result,
+                                                  getattr(msg, "mission_type", 0)))
+
+    def _on_autopilot_version_request(self, msg) -> None:
+        self._send_now("AUTOPILOT_VERSION")
+
+    def _on_timesync(self, msg) -> None:
+        if msg.tc1 == 0:
+            self.emit(self.factory.timesync_encode(int(self.t * 1e9), msg.ts1))
