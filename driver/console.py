@@ -19,7 +19,7 @@ import time
 from concurrent.futures import Future
 
 from .state import CommandResult, CommandStatus, SequencePhase, VehicleState
-from .vehicle import COPTER_MODES
+from .rules import COPTER_MODES, mode_warning
 
 ARM_USAGE = ("arm [throttle] [force] | arm check [all|none|MASK] | arm safetyon | arm safetyoff | arm list")
 VELOCITY_HOLD = 3.0          # s a typed velocity lasts (ArduCopter's GUID_TIMEOUT)
@@ -190,7 +190,8 @@ class Console(cmd.Cmd):
             raise ValueError(f"usage: {ARM_USAGE}")
 
     def do_disarm(self, arg: str) -> None:
-        """disarm [force]: stop the motors (force also in flight: the vehicle falls)"""
+        """disarm [force]: stop the motors (force skips the vehicle's checks, on the ground only: in the air it
+        would fall, so the driver refuses)"""
         words = arg.split()
         if words and words != ["force"]:
             raise ValueError("usage: disarm [force]")
@@ -224,14 +225,20 @@ class Console(cmd.Cmd):
         self._report(self.vehicle.return_to_launch())
 
     def do_mode(self, arg: str) -> None:
-        """mode [NAME]: show the flight mode, or change it (GUIDED, LOITER, BRAKE, ...)"""
-        name = arg.strip()
-        if not name:
+        """mode [NAME [confirm]]: show the flight mode, or change it (GUIDED, LOITER, BRAKE, ...); modes that
+        need an RC transmitter in flight (STABILIZE, ALT_HOLD, ...) ask for confirm"""
+        words = arg.split()
+        if not words:
             self.say(f"mode {self.vehicle.state().mode or '?'}; available: {' '.join(sorted(COPTER_MODES))}")
             return
-        if len(name.split()) != 1:
-            raise ValueError("usage: mode [NAME]")
-        self._report(self.vehicle.set_mode(name.upper()))
+        if len(words) > 2 or words[1:] not in ([], ["confirm"]):
+            raise ValueError("usage: mode [NAME [confirm]]")
+        name = words[0].upper()
+        warning = mode_warning(name, self.vehicle.state().flying)
+        if warning and len(words) == 1:
+            self.say(f"{warning} Type 'mode {name} confirm' to switch anyway.")
+            return
+        self._report(self.vehicle.set_mode(name))
 
     def do_velocity(self, arg: str) -> None:
         """velocity X Y Z [SECONDS]: forward, right, UP in m/s relative to the heading, held 3 s (max 30)

@@ -19,6 +19,8 @@ import time
 
 log = logging.getLogger(__name__)
 
+MAX_UNSENT = 1 << 16        # bytes a TCP link may hold back before new frames are dropped (whole)
+
 
 class LinkError(Exception):
     """The transport failed; a reconnectable one may be opened again."""
@@ -56,6 +58,7 @@ class MavutilTransport(Transport):
         kind = connection.split(":", 1)[0]
         self.reconnectable = kind in ("tcp", "tcpin") or ":" not in connection or connection.startswith("/")
         self._lock = threading.Lock()
+        self._unsent = bytearray()              # TCP: the tail of a frame the socket did not take yet
 
     def open(self) -> None:
         from pymavlink import mavutil
@@ -103,9 +106,8 @@ class MavutilTransport(Transport):
         with self._lock:
             try:
                 if self._sock is not None:
-                    self._sock.sendall(data)
-                else:
-                    conn.write(data)
+                    return self._send_whole(self._sock, data)
+                conn.write(data)
                 return True
             except BlockingIOError:
                 log.debug("link busy, dropped %d bytes", len(data))
@@ -113,7 +115,25 @@ class MavutilTransport(Transport):
                 log.debug("write failed: %s", exc)
         return False
 
+    def _send_whole(self, sock: socket.socket, frame: bytes) -> bool:
+        """TCP: whole frames or nothing. pymavlink's socket is non-blocking, so ``sendall`` could leave half a
+        frame on the wire when the buffer fills; the unsent tail waits here and goes out first next time,
+        and a frame that does not fit is dropped whole (caller holds _lock)."""
+        if len(self._unsent) + len(frame) > MAX_UNSENT:
+            log.debug("link busy, dropped a %d-byte frame", len(frame))
+            accepted = False
+        else:
+            self._unsent += frame
+            accepted = True
+        if self._unsent:
+            try:
+                del self._unsent[:sock.send(self._unsent)]
+            except (BlockingIOError, InterruptedError):
+                pass
+        return accepted
+
     def close(self) -> None:
+        self._unsent = bytearray()
         conn, self._conn, self._sock = self._conn, None, None
         if conn is not None:
             try:
@@ -185,6 +205,47 @@ class TlogWriter:
             self._file = None
 
 
+MAX_RECORD_GAP = 86400.0     # s: a record further from the previous one than a day is damage, not a flight
+MAX_RECORD_BACK = 60.0       # s a record may stand before the previous one (clock adjustments)
+
+
+def _records(data: bytes) -> list[tuple[float, bytes]]:
+    """(time, frame) of every whole record of a .tlog, resynchronising byte by byte over damage.
+
+    A record counts only when its frame passes pymavlink's CRC check and its time follows the previous
+    record's: bytes that merely look like a timestamp and a frame start (a damaged or foreign file) would
+    otherwise be played at a made-up time, and one stamped in the future would hold back everything after it.
+    """
+    from pymavlink.dialects.v20 import ardupilotmega as mavlink
+    parser = mavlink.MAVLink(None)
+    parser.robust_parsing = True
+    records: list[tuple[float, bytes]] = []
+    last: float | None = None
+    i, n = 0, len(data)
+    while i + 9 <= n:
+        stamp = struct.unpack_from(">Q", data, i)[0] * 1e-6
+        length = frame_length(data, i + 8)
+        frame = data[i + 8:i + 8 + length]
+        if (length == 0 or i + 8 + length > n
+                or (last is not None and not last - MAX_RECORD_BACK <= stamp <= last + MAX_RECORD_GAP)
+                or not _whole_frame(parser, frame)):
+            i += 1                            # resynchronise on a damaged record
+            continue
+        records.append((stamp, frame))
+        last = stamp
+        i += 8 + length
+    return records
+
+
+def _whole_frame(parser, frame: bytes) -> bool:
+    parser.buf, parser.buf_index = bytearray(), 0
+    try:
+        msg = parser.parse_char(frame)
+    except Exception:                         # robust parsing reports damage as BAD_DATA, but never trust it
+        return False
+    return msg is not None and msg.get_type() != "BAD_DATA" and parser.buf_len() == 0
+
+
 class TlogReplay(Transport):
     """Plays a .tlog back as if it were a live link, at 1x or faster, pausable.
 
@@ -199,20 +260,11 @@ class TlogReplay(Transport):
         self.path = path
         with open(path, "rb") as f:
             data = f.read()
-        self._packets: list[tuple[float, bytes]] = []
-        i, n = 0, len(data)
-        while i + 9 <= n:
-            stamp = struct.unpack_from(">Q", data, i)[0] * 1e-6
-            length = frame_length(data, i + 8)
-            if length == 0 or i + 8 + length > n:
-                i += 1                        # resynchronise on a damaged record
-                continue
-            self._packets.append((stamp, data[i + 8:i + 8 + length]))
-            i += 8 + length
+        self._packets = _records(data)
         self.start_time = self._packets[0][0] if self._packets else 0.0
         self.duration = (self._packets[-1][0] - self.start_time) if self._packets else 0.0
         self._cond = threading.Condition()
-        self._speed = max(0.1, float(speed))
+        self._speed = max(0.1, min(64.0, float(speed)))
         self._paused = False
         self._index = 0
         self._position = 0.0                  # seconds of log time played

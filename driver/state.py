@@ -22,6 +22,10 @@ __all__ = [
 ]
 
 
+MAV_STATE_STANDBY = 3        # MAVLink's MAV_STATE values that ArduCopter uses for "landed" and "flying"
+MAV_STATE_ACTIVE = 4
+
+
 class LandedState(enum.IntEnum):
     """EXTENDED_SYS_STATE.landed_state (MAV_LANDED_STATE)."""
     UNDEFINED = 0
@@ -126,8 +130,11 @@ class Battery:
     current: float | None = None         # A
     remaining: float | None = None       # percent 0..100
     remaining_estimated: bool = False    # True when derived from cell voltage
-    cells: int = 4
-    low: bool = False                    # under 20 % or 3.7 V a cell
+    cells: int = 0                       # 0: not known yet
+    low: bool = False                    # the autopilot's battery failsafe state, else under 20 % or 3.7 V a cell
+    cells_source: str = ""               # "configured", "vehicle" (per-cell voltages) or "inferred" (from voltage)
+    charge_state: int = 0                # MAV_BATTERY_CHARGE_STATE from the autopilot, 0 when it sends none
+    reported_remaining: float | None = None   # the autopilot's own percentage, None when it gives none
 
     @property
     def cell_voltage(self) -> float | None:
@@ -152,6 +159,7 @@ class Readiness:
     prearm_ok: bool = False              # SYS_STATUS health bit MAV_SYS_STATUS_PREARM_CHECK
     ekf_ok: bool = False                 # EKF_STATUS_REPORT attitude+velocity+position flags
     gps_ok: bool = False                 # GPS_RAW_INT fix_type >= 3
+    prearm_reported: bool = False        # the autopilot reports its pre-arm check in SYS_STATUS
 
     @property
     def ready_to_arm(self) -> bool:
@@ -263,7 +271,8 @@ class VehicleState:
     vehicle_type: int = 0                            # MAV_TYPE
     mode: str = ""                                   # ArduCopter mode name, "" before the first heartbeat
     armed: bool = False
-    landed_state: LandedState = LandedState.UNDEFINED
+    landed_state: LandedState = LandedState.UNDEFINED  # EXTENDED_SYS_STATE; UNDEFINED on firmware without it
+    system_status: int | None = None                 # HEARTBEAT.system_status (MAV_STATE) of the autopilot
     attitude: Attitude = field(default_factory=Attitude)
     position: GlobalPosition | None = None
     home: GlobalPosition | None = None
@@ -280,6 +289,9 @@ class VehicleState:
     results: tuple[CommandResult, ...] = ()          # the most recent command results, oldest first
     takeoff: SequenceProgress = field(default_factory=SequenceProgress)
     setpoint: Setpoint = field(default_factory=Setpoint)
+    rejected_values: int = 0                         # telemetry messages dropped for impossible values
+    gcs_failsafe: int | None = None                  # the vehicle's FS_GCS_ENABLE, None until read
+    firmware: str = ""                               # AUTOPILOT_VERSION's flight software, "3.3.1"; "" until known
 
     # -- derived views -----------------------------------------------------------------------
     @property
@@ -287,13 +299,26 @@ class VehicleState:
         return self.link.status is LinkStatus.OK
 
     @property
-    def flying(self) -> bool:
-        """In the air and armed (taking off, flying or landing)."""
-        if not self.armed:
+    def in_air(self) -> bool | None:
+        """Whether the autopilot says it is off the ground; None when it does not say.
+
+        EXTENDED_SYS_STATE when the firmware sends it; otherwise the HEARTBEAT's system status, which
+        ArduCopter sets to STANDBY exactly while it counts as landed (GCS_MAVLINK_Copter::vehicle_system_status)
+        and to CRITICAL in a failsafe (then it does not tell). Never a guess from the barometer.
+        """
+        if self.landed_state is not LandedState.UNDEFINED:
+            return self.landed_state is not LandedState.ON_GROUND
+        if self.system_status == MAV_STATE_STANDBY:
             return False
-        if self.landed_state is LandedState.UNDEFINED:
-            return self.altitude > 0.3
-        return self.landed_state is not LandedState.ON_GROUND
+        if self.system_status == MAV_STATE_ACTIVE:
+            return self.armed
+        return None
+
+    @property
+    def flying(self) -> bool:
+        """Armed and not known to be on the ground (taking off, flying, landing, or the autopilot does not
+        say): the cautious reading for every decision that must not be taken in the air."""
+        return self.armed and self.in_air is not False
 
     @property
     def can_fly_velocity(self) -> bool:

@@ -1,16 +1,21 @@
 """The MAVLinkServer core: one ArduCopter vehicle over one MAVLink link.
 
-Two threads do all the work, so no caller ever waits on the network:
+:class:`Vehicle` is the embedded driver behind the viewer and the Ice server, and it puts together parts
+that each do one job:
 
-* the *reader* opens the link (reopening TCP/serial links that fail), parses
-  every byte with pymavlink's codec, and folds messages into the vehicle state;
-* the *ticker* sends the GCS heartbeat, supervises the link, streams the
-  velocity setpoint (20 Hz, zero after the deadman time), retries unanswered
-  commands and republishes link health.
+* :mod:`driver.telemetry` folds telemetry into the state (pure, no I/O);
+* :mod:`driver.supervision` keeps the link supervised and asks the vehicle for streams, home, parameters;
+* :mod:`driver.commands` sends commands with retries and matches each reply to what it answers;
+* :mod:`driver.setpoints` streams the velocity setpoint, with the deadman;
+* :mod:`driver.takeoff` runs the takeoff sequence against the public :class:`~driver.api.Drone` interface;
+* :mod:`driver.store` publishes immutable :class:`~driver.state.VehicleState` snapshots.
 
-Readers get an immutable :class:`~driver.state.VehicleState` from :meth:`Vehicle.state`.
-Commands return :class:`concurrent.futures.Future` objects resolving to a
-:class:`~driver.state.CommandResult` carrying the vehicle's own reason on refusal.
+Two threads do all the link work, so no caller ever waits on the network: the *reader* opens the link
+(reopening TCP/serial links that fail), parses every byte with pymavlink's codec and folds it into the
+state; the *ticker* sends the heartbeat, steps the takeoff, streams setpoints, services commands and
+supervises the link. Both decide under the state lock and write to the link only after releasing it, so
+a slow serial write never stalls the reader or :meth:`Vehicle.set_velocity`. Command results settle on a
+small fixed pool (:class:`~driver.commands.Notifier`).
 """
 from __future__ import annotations
 
@@ -22,42 +27,36 @@ import time
 from concurrent.futures import Future
 from dataclasses import dataclass, field
 
-from pymavlink import mavutil
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from . import frames
 from .api import CEILING, Drone, Limits
-from .link import LinkError, Transport, TlogWriter, open_transport, MavutilTransport
+from .commands import CommandSender, Notifier, command_name
+from .link import LinkError, MavutilTransport, TlogWriter, Transport, open_transport
+from .rules import COPTER_MODES, MAX_ALTITUDE, MIN_TAKEOFF_ALTITUDE, go_to_problem, takeoff_altitude_problem
+from .setpoints import SetpointStreamer
 from .state import (
-    Attitude, Battery, CommandResult, CommandStatus, Environment, GlobalPosition, Gps, LandedState, LinkHealth,
-    LinkStatus, LocalPosition, Message, Readiness, SequencePhase, SequenceProgress, Setpoint, Severity, Velocity,
-    VehicleState,
+    Battery, CommandResult, CommandStatus, LinkHealth, LinkStatus, SequencePhase, SequenceProgress, Setpoint,
+    Severity, VehicleState,
 )
+from .store import StateStore
+from .supervision import LinkSupervisor
+from .takeoff import TakeoffSequence
+from .telemetry import COPTER_MODE_NAMES, TELEMETRY, fold_heartbeat
 
 log = logging.getLogger(__name__)
 
-#: ArduCopter custom_mode numbers by name, from pymavlink's own table.
-COPTER_MODES: dict[str, int] = {name: number for number, name in mavutil.mode_mapping_acm.items()}
-COPTER_MODE_NAMES: dict[int, str] = dict(mavutil.mode_mapping_acm)
+__all__ = ["Vehicle", "VehicleConfig", "ReplayControl", "COPTER_MODES", "COPTER_MODE_NAMES",
+           "MIN_TAKEOFF_ALTITUDE", "MAX_ALTITUDE", "takeoff_altitude_problem"]
 
 MASK_VELOCITY_YAW_RATE = 1479      # use vx, vy, vz and yaw rate (arducopter.md)
 MASK_POSITION = 3576               # use x, y, z only
+MASK_VELOCITY = 3527               # use vx, vy, vz only
+YAW_LEAD = 0.5                     # s: old firmware's heading target is this far ahead of a turning nose
+YAW_RESEND = 0.2                   # s between those targets
 ARM_FORCE_MAGIC = 21196
-_PREARM_BIT = mavlink.MAV_SYS_STATUS_PREARM_CHECK
-_EKF_NEEDED = (mavlink.EKF_ATTITUDE | mavlink.EKF_VELOCITY_HORIZ | mavlink.EKF_POS_HORIZ_ABS
-               | mavlink.EKF_PRED_POS_HORIZ_ABS)
-_MAX_MESSAGES = 200
 PUBLISH_INTERVAL = 0.01            # s: state is republished at most at 100 Hz while telemetry streams
-_MAX_RESULTS = 100
-MIN_TAKEOFF_ALTITUDE = 0.5         # m above home: lower is no takeoff
-MAX_ALTITUDE = 120.0               # m above home: no takeoff or go-to target above it (EU open category)
-
-
-def takeoff_altitude_problem(altitude: float, ceiling: float = MAX_ALTITUDE) -> str | None:
-    """Why ``altitude`` cannot be a takeoff target, or None: one rule for the driver, its CLI and console."""
-    if frames.finite(altitude) and MIN_TAKEOFF_ALTITUDE <= altitude <= ceiling:
-        return None
-    return f"altitude must be {MIN_TAKEOFF_ALTITUDE:g} to {ceiling:g} m"
+LOG_FLUSH_INTERVAL = 1.0           # s: a crash loses at most this much of the flight log
 
 
 @dataclass(frozen=True)
@@ -67,7 +66,7 @@ class VehicleConfig:
     source_system: int = 255                  # ArduPilot ignores manual control from other ids
     source_component: int = 190               # MAV_COMP_ID_MISSIONPLANNER
     target_system: int = 0                    # 0: the first vehicle heard
-    target_component: int = 1
+    target_component: int = 1                 # the autopilot: only it decides mode, arming and framing
     stream_rate: int = 4                      # Hz, MAVProxy's default
     attitude_rate: int = 10                   # Hz for ATTITUDE and VFR_HUD, as QGroundControl
     takeoff_altitude: float = 3.0             # m above home
@@ -79,45 +78,15 @@ class VehicleConfig:
     outputs: tuple[str, ...] = ()             # forward to other ground stations, e.g. "udp:127.0.0.1:14551"
     loss_timeout: float = 3.5                 # s without a heartbeat before the link is lost (QGC)
     deadman: float = 0.5                      # s without set_velocity before the setpoint falls to zero
-    setpoint_rate: float = 20.0               # Hz while the setpoint is not zero
+    setpoint_rate: float = 20.0               # Hz while streaming
     command_timeout: float = 3.0              # s per attempt (QGC re-sends 3 s apart)
     command_attempts: int = 3
     ready_timeout: float = 60.0               # s the takeoff waits for readiness before trying anyway
-    climb_timeout: float = 45.0               # s for the climb to reach 95 % of the target
-    mavlink_version: int | None = None        # None: start on 1, follow the vehicle to 2
-    battery_cells: int = 4                    # 3DR Solo: 4S
+    climb_timeout: float = 20.0               # s for the climb to 95 % of the target, plus 2 s a metre
+    mavlink_version: int | None = None        # None: start on 1, follow the autopilot to 2
+    battery_cells: int | None = None          # None: from the vehicle, or inferred from the first voltage
     replay_speed: float = 1.0
     heartbeat_interval: float = 1.0
-
-
-class _Pending:
-    """A COMMAND_LONG waiting for its COMMAND_ACK."""
-    __slots__ = ("name", "command", "params", "future", "attempts", "next_send", "message_index",
-                 "refused", "refuse_at", "expect_mode", "fallback_sent")
-
-    def __init__(self, name, command, params, future, message_index, expect_mode=None):
-        self.name, self.command, self.params, self.future = name, command, params, future
-        self.attempts = 0
-        self.next_send = 0.0
-        self.message_index = message_index
-        self.refused: str | None = None
-        self.refuse_at = 0.0
-        self.expect_mode = expect_mode
-        self.fallback_sent = False
-
-
-class _TakeoffRun:
-    """One takeoff sequence: its own abort flag and the commands it issued (cancelled on abort)."""
-
-    def __init__(self, altitude: float):
-        self.altitude = altitude
-        self.abort = threading.Event()
-        self.commands: set[int] = set()
-        self.thread: threading.Thread | None = None
-
-    @property
-    def alive(self) -> bool:
-        return self.thread is not None and self.thread.is_alive()
 
 
 class ReplayControl:
@@ -157,33 +126,13 @@ class ReplayControl:
         return self._t.finished
 
 
-class _ParamEcho:
-    """Waits for the PARAM_VALUE that confirms a PARAM_SET."""
+def _ground_only(s: VehicleState) -> str | None:
+    """Guard for commands that only make sense disarmed on the ground, checked each time one goes out."""
+    return "only when disarmed on the ground" if s.armed or s.flying else None
 
-    def __init__(self):
-        self._cond = threading.Condition()
-        self._values: dict[str, float] = {}
 
-    def update(self, name: str, value: float) -> None:
-        with self._cond:
-            self._values[name] = value
-            self._cond.notify_all()
-
-    def expect(self, name: str) -> None:
-        with self._cond:
-            self._values.pop(name, None)
-
-    def wait_for(self, name: str, value: float, timeout: float) -> bool:
-        deadline = time.monotonic() + timeout
-        with self._cond:
-            while True:
-                v = self._values.get(name)
-                if v is not None and abs(v - value) <= 1e-6 * max(1.0, abs(value)):
-                    return True
-                remaining = deadline - time.monotonic()
-                if remaining <= 0:
-                    return False
-                self._cond.wait(remaining)
+def _not_in_flight(s: VehicleState) -> str | None:
+    return "not while flying (the motors would stop in the air)" if s.flying else None
 
 
 class Vehicle(Drone):
@@ -200,50 +149,30 @@ class Vehicle(Drone):
         self._v2 = cfg.mavlink_version == 2
         self._tlog = TlogWriter(cfg.tlog_path, cfg.tlog_append) if cfg.tlog_path and not self._replay else None
         self._outputs: list[MavutilTransport] = []
-
-        # state, guarded by _lock; published as one immutable snapshot
-        self._lock = threading.RLock()
-        self._changed = threading.Condition(self._lock)
-        self._fields: dict = {}
-        self._messages: collections.deque[Message] = collections.deque(maxlen=_MAX_MESSAGES)
-        self._results: collections.deque[CommandResult] = collections.deque(maxlen=_MAX_RESULTS)
-        self._message_index = 0
-        self._result_index = 0
-        self._state = VehicleState(link=LinkHealth(address=self._transport.description))
+        battery = Battery(cells=cfg.battery_cells, cells_source="configured") if cfg.battery_cells else Battery()
+        self._store = StateStore(VehicleState(link=LinkHealth(address=self._transport.description), battery=battery),
+                                 self._transport.wall_time)
+        self._lock = self._store.lock
         self._target = cfg.target_system
-        self._home: GlobalPosition | None = None
-        self._prearm_reported = False
-        self._last_seq: dict[int, int] = {}         # component -> last sequence number (target system)
-        self._rx_count = 0
-        self._rx_lost = 0
-        self._bad_crc = 0
-        self._window: collections.deque[tuple[float, int, int]] = collections.deque(maxlen=6)
-        self._last_heartbeat: float | None = None     # transport clock
-        self._last_attitude = 0.0
-        self._link_status = LinkStatus.WAITING
-        self._lost_count = 0
-        self._lost_at = 0.0
-        self._streams_requested_at: float | None = None
-        self._latest: dict = {}                       # newest telemetry message of each type in this read
-
-        # commands and setpoint, guarded by _lock
-        self._pending: dict[int, _Pending] = {}
-        self._setpoint = Setpoint()
-        self._setpoint_time = 0.0
-        self._setpoint_sent = 0.0
-        self._setpoint_dirty = False
-        self._zero_repeats = 0
-        self._takeoff_run: _TakeoffRun | None = None
+        self._autopilot = cfg.target_component       # 0: any component speaks for the vehicle
+        self._notifier = Notifier()
+        self._commands = CommandSender(self._store, cfg, self._notifier, self._target_ids)
+        self._link = LinkSupervisor(cfg, self._transport, self._commands.capabilities, self._target_ids)
+        self._setpoints = SetpointStreamer(cfg.deadman, cfg.setpoint_rate)
+        self._takeoff: TakeoffSequence | None = None
+        self._stepping_takeoff = False        # the ticker is stepping the sequence: its commands pass
+        self._yaw_next = 0.0                  # old firmware: next CONDITION_YAW of a held yaw stick
+        self._yaw_held = False                # old firmware: the heading is held by CONDITION_YAW
+        self._latest: dict = {}               # newest telemetry message of each type in this read
         self._open_error = ""
-        self._param_echo = _ParamEcho()
-
-        self._reopen = False                          # set by the ticker: reopen a reconnectable link
-        self._published_at = 0.0
+        self._gcs_failsafe_warned = False
+        self._reopen = False
         self._limits = cfg.limits.within(CEILING)
         self._outbox: collections.deque = collections.deque()   # messages posted by callers, sent by the ticker
         self._wake = threading.Event()
         self._closing = threading.Event()
         self._threads: list[threading.Thread] = []
+        self._ticker: threading.Thread | None = None
         self._started = False
 
     # ------------------------------------------------------------------------------------------
@@ -271,11 +200,13 @@ class Vehicle(Drone):
             return self
         self._started = True
         if self._tlog:
-            self._add_message(Severity.INFO, f"Recording the flight log to {self._tlog.path}")
+            self._store.add_message(Severity.INFO, f"Recording the flight log to {self._tlog.path}")
         for target, name in ((self._run_reader, "mavlink-reader"), (self._run_ticker, "mavlink-ticker")):
             t = threading.Thread(target=target, name=name, daemon=True)
             t.start()
             self._threads.append(t)
+            if name == "mavlink-ticker":
+                self._ticker = t
         for out in self.config.outputs:
             t = threading.Thread(target=self._run_output, args=(out,), name=f"mavlink-out {out}", daemon=True)
             t.start()
@@ -285,11 +216,11 @@ class Vehicle(Drone):
     def close(self) -> None:
         if self._closing.is_set():
             return
-        run = self._takeoff_run
-        if run is not None:
-            run.abort.set()
-        if self._started and not self._setpoint.is_zero:
-            self._send_setpoint(Setpoint())          # leave the vehicle hovering, not drifting
+        with self._lock:
+            self._abort_takeoff("driver closed")
+            moving = not self._setpoints.setpoint.is_zero
+        if self._started and moving:
+            self._send(self._setpoint_message(Setpoint()))   # leave the vehicle hovering, not drifting
         self._closing.set()
         self._wake.set()
         self._transport.close()
@@ -298,10 +229,10 @@ class Vehicle(Drone):
         for t in self._threads:
             t.join(timeout=2.0)
         with self._lock:
-            for p in list(self._pending.values()):
-                self._resolve(p, CommandStatus.ABORTED, "driver closed")
-            self._set(link=self._link_health(LinkStatus.CLOSED))
-            self._publish()
+            self._commands.abort_all("driver closed")
+            self._store.set(link=self._link.health(self._version, LinkStatus.CLOSED))
+            self._store.publish()
+        self._notifier.close()
         if self._tlog:
             self._tlog.close()
 
@@ -315,45 +246,21 @@ class Vehicle(Drone):
     # state
     # ------------------------------------------------------------------------------------------
     def state(self) -> VehicleState:
-        return self._state
+        return self._store.state
 
     def wait_for(self, predicate, timeout: float) -> VehicleState | None:
         """Block until ``predicate(state)`` holds; for tests and the console, never the UI thread."""
-        deadline = time.monotonic() + timeout
-        with self._changed:
-            while True:
-                s = self._state
-                if predicate(s):
-                    return s
-                remaining = deadline - time.monotonic()
-                if remaining <= 0 or self._closing.is_set():
-                    return None
-                self._changed.wait(min(remaining, 0.2))
+        return self._store.wait_for(predicate, timeout, self._closing)
 
-    def _set(self, **changes) -> None:
-        self._fields.update(changes)
+    @property
+    def _version(self) -> int:
+        return 2 if self._v2 else 1
 
-    def _publish(self) -> None:
-        """Swap in a new snapshot (caller holds _lock)."""
-        self._published_at = time.monotonic()
-        self._fields["time"] = time.time()
-        self._state = VehicleState(**{**self._state.__dict__, **self._fields})
-        self._fields = {}
-        self._changed.notify_all()
-
-    def _add_message(self, severity: Severity, text: str, source: str = "driver") -> Message:
-        with self._lock:
-            self._message_index += 1
-            m = Message(self._message_index, self._transport.wall_time(), Severity(severity), text, source)
-            self._messages.append(m)
-            self._set(messages=tuple(self._messages))
-            if source == "driver":
-                self._publish()
-        log.log(logging.WARNING if severity <= Severity.WARNING else logging.INFO, "%s: %s", source, text)
-        return m
+    def _target_ids(self) -> tuple[int, int]:
+        return self._target or 1, self.config.target_component
 
     # ------------------------------------------------------------------------------------------
-    # sending
+    # sending: decided under the lock, written after it
     # ------------------------------------------------------------------------------------------
     def _send(self, msg) -> None:
         if self._transport.is_replay:
@@ -373,33 +280,38 @@ class Vehicle(Drone):
         if self._transport.write(buf) and self._tlog:       # the log holds what really went out
             self._tlog.write(buf)
 
-    @property
-    def _tsys(self) -> int:
-        return self._target or 1
+    def _heartbeat_message(self):
+        return mavlink.MAVLink_heartbeat_message(mavlink.MAV_TYPE_GCS, mavlink.MAV_AUTOPILOT_INVALID, 0, 0,
+                                                 mavlink.MAV_STATE_ACTIVE, 3)
 
-    def _send_heartbeat(self) -> None:
-        self._send(mavlink.MAVLink_heartbeat_message(
-            mavlink.MAV_TYPE_GCS, mavlink.MAV_AUTOPILOT_INVALID, 0, 0, mavlink.MAV_STATE_ACTIVE, 3))
+    def _setpoint_message(self, sp: Setpoint):
+        system, component = self._target_ids()
+        return mavlink.MAVLink_set_position_target_local_ned_message(
+            0, system, component, mavlink.MAV_FRAME_BODY_OFFSET_NED,
+            MASK_VELOCITY_YAW_RATE, 0, 0, 0, sp.forward, sp.right, -sp.up, 0, 0, 0, 0, sp.yaw_rate)
 
-    def _request_streams(self) -> None:
-        cfg = self.config
-        rate = max(1, int(cfg.stream_rate))
-        fast = max(rate, int(cfg.attitude_rate))
-        for stream, hz in ((mavlink.MAV_DATA_STREAM_EXTENDED_STATUS, rate),
-                           (mavlink.MAV_DATA_STREAM_POSITION, rate),
-                           (mavlink.MAV_DATA_STREAM_EXTRA1, fast),
-                           (mavlink.MAV_DATA_STREAM_EXTRA2, fast),
-                           (mavlink.MAV_DATA_STREAM_EXTRA3, max(1, rate // 2)),
-                           (mavlink.MAV_DATA_STREAM_RAW_SENSORS, max(1, rate // 2))):
-            self._send(mavlink.MAVLink_request_data_stream_message(self._tsys, cfg.target_component, stream, hz, 1))
-        for msg_id, hz in ((mavlink.MAVLINK_MSG_ID_EXTENDED_SYS_STATE, rate), (mavlink.MAVLINK_MSG_ID_HOME_POSITION, 0.5)):
-            self._send(mavlink.MAVLink_command_long_message(
-                self._tsys, cfg.target_component, mavlink.MAV_CMD_SET_MESSAGE_INTERVAL, 0,
-                msg_id, 1e6 / hz, 0, 0, 0, 0, 0))
-        self._send(mavlink.MAVLink_command_long_message(
-            self._tsys, cfg.target_component, mavlink.MAV_CMD_REQUEST_MESSAGE, 0,
-            mavlink.MAVLINK_MSG_ID_HOME_POSITION, 0, 0, 0, 0, 0, 0))
-        self._streams_requested_at = time.monotonic()
+    def _legacy_setpoint_messages(self, sp: Setpoint, now: float) -> list:
+        """Firmware before ArduCopter 3.5 (the stock Solo) reads neither the frame nor the yaw rate of
+        SET_POSITION_TARGET_LOCAL_NED ("for future use" in its GCS_Mavlink): body velocities are turned to
+        north/east here, with the heading the vehicle reports, and the nose is steered with CONDITION_YAW
+        heading targets a little ahead of it (else the vehicle turns its nose to the direction of travel)."""
+        system, component = self._target_ids()
+        yaw = self._store.state.attitude.yaw
+        c, s = math.cos(yaw), math.sin(yaw)
+        out = [mavlink.MAVLink_set_position_target_local_ned_message(
+            0, system, component, mavlink.MAV_FRAME_LOCAL_NED, MASK_VELOCITY,
+            0, 0, 0, c * sp.forward - s * sp.right, s * sp.forward + c * sp.right, -sp.up, 0, 0, 0, 0, 0)]
+        if sp.yaw_rate and now >= self._yaw_next:
+            target = math.degrees(yaw + sp.yaw_rate * YAW_LEAD) % 360.0
+            out.append(mavlink.MAVLink_command_long_message(
+                system, component, mavlink.MAV_CMD_CONDITION_YAW, 0, target, math.degrees(abs(sp.yaw_rate)),
+                1 if sp.yaw_rate > 0 else -1, 0, 0, 0, 0))
+            self._yaw_next, self._yaw_held = now + YAW_RESEND, False
+        elif not sp.yaw_rate and not self._yaw_held:          # hold the heading the pilot left it at
+            out.append(mavlink.MAVLink_command_long_message(
+                system, component, mavlink.MAV_CMD_CONDITION_YAW, 0, math.degrees(yaw) % 360.0, 30, 0, 0, 0, 0, 0))
+            self._yaw_held = True
+        return out
 
     # ------------------------------------------------------------------------------------------
     # reader thread
@@ -422,11 +334,11 @@ class Vehicle(Drone):
                     self._reopen = False
                     self._v2 = self.config.mavlink_version == 2
                     log.info("link open: %s", self._transport.description)
-                    self._send_heartbeat()            # speak first: udpout and serial peers learn of us
+                    self._send(self._heartbeat_message())   # speak first: udpout and serial peers learn of us
                 except LinkError as exc:
                     if str(exc) != self._open_error:          # say it once, and again when the reason changes
                         self._open_error = str(exc)
-                        self._add_message(Severity.WARNING, f"{exc}; retrying")
+                        self._store.add_message(Severity.WARNING, f"{exc}; retrying")
                     log.info("%s; retrying in %.1f s", exc, backoff)
                     self._closing.wait(backoff)
                     backoff = min(backoff * 2, 3.0)
@@ -442,17 +354,17 @@ class Vehicle(Drone):
             if exc is not None:
                 if self._closing.is_set():
                     break
-                self._add_message(Severity.WARNING, f"Link error: {exc}; reconnecting")
+                self._store.add_message(Severity.WARNING, f"Link error: {exc}; reconnecting")
                 self._transport.close()
                 opened = False
                 self._codec_in = self._new_parser()
                 with self._lock:
-                    self._last_seq.clear()
+                    self._link.reset_sequences()
                 self._closing.wait(backoff)
                 continue
             if data:
                 self.ingest(data)
-            elif self._latest or self._fields:
+            elif self._latest or self._store.fields:
                 with self._lock:                              # traffic paused: publish what is held back
                     self._fold_and_publish()
 
@@ -476,7 +388,7 @@ class Vehicle(Drone):
                     n += self._handle(msg)
                 except Exception:                     # a malformed field must not stop the reader
                     log.exception("error handling %s", msg.get_type())
-            if n and time.monotonic() - self._published_at >= PUBLISH_INTERVAL:
+            if n and time.monotonic() - self._store.published_at >= PUBLISH_INTERVAL:
                 self._fold_and_publish()
         return n
 
@@ -492,19 +404,32 @@ class Vehicle(Drone):
     def _fold_and_publish(self) -> None:
         """Fold the newest telemetry of each kind into the state and publish it (caller holds _lock)."""
         latest, self._latest = self._latest, {}
+        store = self._store
+        view = store.view()
         for mtype, msg in latest.items():             # telemetry: only the newest of each kind matters
             try:
-                _TELEMETRY[mtype](self, msg)
+                changes = TELEMETRY[mtype](view, msg)
             except Exception:
-                log.exception("error handling %s", mtype)
-        self._publish()
+                log.exception("error folding %s", mtype)
+                continue
+            store.fields.update(changes)
+            if mtype == "HOME_POSITION" and "home" in changes:
+                self._link.home_received()
+            elif mtype == "ATTITUDE":
+                self._link.last_attitude = time.monotonic()
+        store.fields["link"] = self._link.health(self._version)   # packet counts as current as the telemetry
+        if store.fields.get("rejected_values", 0) > store.state.rejected_values == 0:
+            store.add_message_locked(Severity.WARNING, "The vehicle sent impossible telemetry values (NaN, "
+                                     "infinity or out of range): ignored, the last good values stay")
+        store.publish()
 
     def _handle(self, msg) -> int:
         """One parsed frame (reader thread, _lock held); the hot path of telemetry ingest."""
         mtype = msg.get_type()
+        link = self._link
         if mtype == "BAD_DATA":
             if "CRC" in getattr(msg, "reason", ""):
-                self._bad_crc += 1
+                link.bad_crc += 1
             return 0
         header = msg.get_header()
         if self._tlog:
@@ -515,21 +440,24 @@ class Vehicle(Drone):
                                     and msg.type != mavlink.MAV_TYPE_GCS):
                 return 0                              # another system (a second GCS), or no vehicle yet
             self._target = system
-            self._set(system_id=system)
+            self._store.set(system_id=system)
             log.info("vehicle found: system %d", system)
-        # sequence numbers: packet loss per component
         component, seq = header.srcComponent, header.seq
-        last = self._last_seq.get(component)
+        last = link.last_seq.get(component)           # sequence gaps: packet loss per component (inline: hot)
         if last is not None:
             gap = (seq - last - 1) & 0xFF
             if gap < 128:                             # larger jumps are a restart, not loss
-                self._rx_lost += gap
-        self._last_seq[component] = seq
-        self._rx_count += 1
+                link.rx_lost += gap
+        link.last_seq[component] = seq
+        link.rx_count += 1
+        if component != self._autopilot and self._autopilot:   # a gimbal, camera or companion computer
+            if mtype == "STATUSTEXT":
+                self._on_statustext(msg)
+            return 1
         if not self._v2 and msg.get_msgbuf()[0] == 0xFD and self.config.mavlink_version is None:
-            self._v2 = True
+            self._v2 = True                           # the autopilot's own framing, never another component's
             log.info("vehicle speaks MAVLink 2: following it")
-        if mtype in _TELEMETRY:
+        if mtype in TELEMETRY:
             self._latest[mtype] = msg                 # folded once per read, see ingest()
         else:
             handler = _EVENTS.get(mtype)
@@ -537,105 +465,29 @@ class Vehicle(Drone):
                 handler(self, msg)
         return 1
 
-    # -- message handlers (reader thread, _lock held) -------------------------------------------
+    # -- events (reader thread, _lock held) ---------------------------------------------------------
     def _on_heartbeat(self, m) -> None:
-        if m.autopilot == mavlink.MAV_AUTOPILOT_INVALID or (
-                self.config.target_component and m.get_srcComponent() != self.config.target_component):
-            return                                    # a gimbal, camera or companion computer, not the autopilot
-        now = self._transport.clock()
-        first = self._last_heartbeat is None
-        self._last_heartbeat = now
-        mode = COPTER_MODE_NAMES.get(m.custom_mode, f"MODE({m.custom_mode})")
-        armed = bool(m.base_mode & mavlink.MAV_MODE_FLAG_SAFETY_ARMED)
-        self._set(mode=mode, armed=armed, vehicle_type=m.type)
-        for p in list(self._pending.values()):
-            if p.expect_mode is not None and p.expect_mode == m.custom_mode:
-                self._resolve(p, CommandStatus.ACCEPTED)
-        if self._link_status is not LinkStatus.OK:
-            if not self._transport.is_replay:
-                self._request_streams()               # before anyone sees the link up
-            recovered = self._link_status is LinkStatus.LOST
-            self._link_status = LinkStatus.OK
-            self._set(link=self._link_health())
-            if recovered:
-                self._publish()
-                self._add_message(Severity.NOTICE, "Link recovered")
-            elif first:
-                self._add_message(Severity.INFO, f"Vehicle {self._target} connected on {self.description}")
-
-    def _on_sys_status(self, m) -> None:
-        if m.onboard_control_sensors_present & _PREARM_BIT:
-            self._prearm_reported = True
-        r = self._state.readiness if "readiness" not in self._fields else self._fields["readiness"]
-        prearm = bool(m.onboard_control_sensors_health & _PREARM_BIT) if self._prearm_reported else r.ekf_ok and r.gps_ok
-        self._set(readiness=Readiness(prearm, r.ekf_ok, r.gps_ok))
-        voltage = None if m.voltage_battery in (0, 0xFFFF) else m.voltage_battery / 1000.0
-        current = None if m.current_battery < 0 else m.current_battery / 100.0
-        self._set_battery(voltage, current, None if m.battery_remaining < 0 else float(m.battery_remaining))
-
-    def _on_battery_status(self, m) -> None:
-        cells = [v for v in m.voltages if v not in (0xFFFF, 0)]
-        voltage = sum(cells) / 1000.0 if cells else None
-        b = self._fields.get("battery", self._state.battery)
-        if voltage is None or (len(cells) == 1 and b.voltage is not None):
-            voltage = b.voltage                         # one total voltage: SYS_STATUS has it already
-        current = None if m.current_battery < 0 else m.current_battery / 100.0
-        self._set_battery(voltage, current if current is not None else b.current,
-                          None if m.battery_remaining < 0 else float(m.battery_remaining))
-
-    def _set_battery(self, voltage, current, remaining) -> None:
-        cells = self.config.battery_cells
-        estimated = False
-        if remaining is None and voltage is not None:
-            remaining, estimated = round(frames.battery_percent_from_cell(voltage / cells), 1), True
-        low = (remaining is not None and remaining < 20.0) or (voltage is not None and voltage / cells < 3.7)
-        self._set(battery=Battery(voltage, current, remaining, estimated, cells, low))
-
-    def _on_attitude(self, m) -> None:
-        self._last_attitude = time.monotonic()
-        self._set(attitude=Attitude(m.roll, m.pitch, m.yaw, m.rollspeed, m.pitchspeed, m.yawspeed))
-
-    def _on_global_position(self, m) -> None:
-        lat, lon, alt = m.lat * 1e-7, m.lon * 1e-7, m.alt * 1e-3
-        rel = m.relative_alt * 1e-3
-        fields = dict(position=GlobalPosition(lat, lon, alt), altitude=rel,
-                      velocity=Velocity(m.vx / 100.0, m.vy / 100.0, m.vz / 100.0))
-        if m.hdg != 0xFFFF:
-            fields["heading_deg"] = m.hdg / 100.0
-        if self._home is not None:
-            north, east = frames.offset_ned(self._home.lat, self._home.lon, lat, lon)
-            fields["local"] = LocalPosition(north, east, -rel)
-        self._set(**fields)
-
-    def _on_local_position(self, m) -> None:
-        if self._home is None:                          # no home yet: the EKF origin is the best we have
-            self._set(local=LocalPosition(m.x, m.y, m.z))
-
-    def _on_home_position(self, m) -> None:
-        self._home = GlobalPosition(m.latitude * 1e-7, m.longitude * 1e-7, m.altitude * 1e-3)
-        self._set(home=self._home)
-
-    def _on_vfr_hud(self, m) -> None:
-        env = self._fields.get("environment", self._state.environment)
-        self._set(airspeed=m.airspeed, heading_deg=float(m.heading % 360),
-                  environment=_env(env, throttle=int(m.throttle)))
-
-    def _on_gps_raw(self, m) -> None:
-        r = self._fields.get("readiness", self._state.readiness)
-        hdop = None if m.eph == 0xFFFF else m.eph / 100.0
-        self._set(gps=Gps(m.fix_type, m.satellites_visible if m.satellites_visible != 255 else 0, hdop),
-                  readiness=Readiness(r.prearm_ok, r.ekf_ok, m.fix_type >= 3))
-
-    def _on_ekf_status(self, m) -> None:
-        r = self._fields.get("readiness", self._state.readiness)
-        ok = (m.flags & _EKF_NEEDED) == _EKF_NEEDED and not (m.flags & mavlink.EKF_UNINITIALIZED)
-        self._set(readiness=Readiness(r.prearm_ok, ok, r.gps_ok))
-
-    def _on_extended_sys_state(self, m) -> None:
-        try:
-            self._set(landed_state=LandedState(m.landed_state))
-        except ValueError:
-            pass
+        if m.autopilot == mavlink.MAV_AUTOPILOT_INVALID:
+            return
+        store = self._store
+        now = time.monotonic()
+        was_armed = store.view()["armed"]
+        changes = fold_heartbeat(store.view(), m)
+        store.fields.update(changes)
+        self._commands.on_mode(m.custom_mode)
+        if changes["armed"] != was_armed:
+            self._link.armed_changed(changes["armed"], now)
+        event = self._link.heartbeat(now)
+        if event is None:
+            return
+        store.set(link=self._link.health(self._version))
+        self._wake.set()                              # the ticker asks for streams at once
+        if event == "recovered":
+            self._commands.link_recovered(now)
+            store.publish()
+            store.add_message_locked(Severity.NOTICE, "Link recovered")
+        elif event == "first":
+            store.add_message_locked(Severity.INFO, f"Vehicle {self._target} connected on {self.description}")
 
     def _on_statustext(self, m) -> None:
         text = m.text.rstrip("\x00").strip() if isinstance(m.text, str) else bytes(m.text).decode("ascii", "replace")
@@ -644,193 +496,133 @@ class Vehicle(Drone):
                 sev = Severity(m.severity)
             except ValueError:
                 sev = Severity.INFO
-            self._add_message(sev, text, "vehicle")
-
-    def _on_scaled_pressure(self, m) -> None:
-        env = self._fields.get("environment", self._state.environment)
-        self._set(environment=_env(env, pressure_hpa=float(m.press_abs), temperature_c=m.temperature / 100.0))
-
-    def _on_imu(self, m) -> None:
-        env = self._fields.get("environment", self._state.environment)
-        # ArduPilot sends RAW_IMU/SCALED_IMU accelerations in milli-g and magnetometer in milligauss
-        self._set(environment=_env(env, mag=(int(m.xmag), int(m.ymag), int(m.zmag)),
-                                   accel_g=(m.xacc / 1000.0, m.yacc / 1000.0, m.zacc / 1000.0)))
-
-    def _on_wind(self, m) -> None:
-        env = self._fields.get("environment", self._state.environment)
-        self._set(environment=_env(env, wind_speed=float(m.speed), wind_direction_deg=float(m.direction) % 360))
+            self._store.add_message_locked(sev, text, "vehicle")
 
     def _on_command_ack(self, m) -> None:
-        p = self._pending.get(m.command)
-        if p is None or getattr(m, "target_system", 0) not in (0, self.config.source_system):
-            return                                    # not ours: another ground station's answer
-        if m.result == mavlink.MAV_RESULT_ACCEPTED:
-            self._resolve(p, CommandStatus.ACCEPTED)
-        elif m.result == mavlink.MAV_RESULT_IN_PROGRESS:
-            p.next_send = time.monotonic() + self.config.command_timeout * 3   # still working: stop re-sending
-        elif p.expect_mode is not None and m.result == mavlink.MAV_RESULT_UNSUPPORTED and not p.fallback_sent:
-            # old firmware (stock Solo) without MAV_CMD_DO_SET_MODE: SET_MODE, confirmed by the heartbeat
-            p.fallback_sent = True
-            self._send(mavlink.MAVLink_set_mode_message(
-                self._tsys, mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, p.expect_mode))
-        else:
-            result = mavlink.enums["MAV_RESULT"].get(m.result)
-            p.refused = result.name if result else f"result {m.result}"
-            p.refuse_at = time.monotonic() + 0.3     # the STATUSTEXT explaining it may trail the ACK
-            self._wake.set()
+        self._commands.on_ack(m, time.monotonic())
+        self._wake.set()
+
+    def _on_autopilot_version(self, m) -> None:
+        v = m.flight_sw_version
+        major, minor, patch = (v >> 24) & 0xFF, (v >> 16) & 0xFF, (v >> 8) & 0xFF
+        self._link.version_known = True
+        if major:
+            self._commands.capabilities.setpoint_yaw = (major, minor) >= (3, 5)
+            self._store.set(firmware=f"{major}.{minor}.{patch}")
+            if (major, minor) < (3, 5):
+                self._store.add_message_locked(
+                    Severity.NOTICE, f"Firmware {major}.{minor}.{patch}: velocity goes north/east and the nose is "
+                    "steered with CONDITION_YAW (it ignores body frames and yaw rates)")
+
+    def _on_param_value(self, m) -> None:
+        name = m.param_id.rstrip("\x00") if isinstance(m.param_id, str) else bytes(m.param_id).decode(errors="replace")
+        if not frames.finite(m.param_value):
+            return
+        self._commands.on_param_value(name, m.param_value)
+        if name == "FS_GCS_ENABLE":
+            self._link.param_known = True
+            self._store.set(gcs_failsafe=int(m.param_value))
+            if int(m.param_value) == 0 and not self._gcs_failsafe_warned:
+                self._gcs_failsafe_warned = True
+                self._store.add_message_locked(
+                    Severity.WARNING, "GCS failsafe is off on the vehicle (FS_GCS_ENABLE=0): if this link is lost "
+                    "or you quit in flight, it keeps hovering until its battery failsafe")
 
     # ------------------------------------------------------------------------------------------
     # ticker thread
     # ------------------------------------------------------------------------------------------
     def _run_ticker(self) -> None:
-        next_heartbeat = next_health = 0.0
+        next_heartbeat = next_health = next_flush = 0.0
         while not self._closing.is_set():
             now = time.monotonic()
+            out: list = []
             try:
                 if now >= next_heartbeat:
                     next_heartbeat = now + self.config.heartbeat_interval
-                    self._send_heartbeat()
+                    out.append(self._heartbeat_message())
                 while self._outbox:
-                    self._send(self._outbox.popleft())
+                    out.append(self._outbox.popleft())
                 with self._lock:
-                    self._stream_setpoint(now)
-                    self._service_commands(now)
+                    self._step_takeoff(now)
+                    out += self._stream_setpoint(now)
+                    out += self._commands.service(now, self._store.state)
                     if now >= next_health:
                         next_health = now + 0.1
-                        self._supervise(now)
+                        out += self._supervise(now)
             except Exception:                         # heartbeat, setpoints and deadman must outlive any bug
                 log.exception("ticker step failed")
+            for msg in out:                           # outside the lock: a slow link stalls nobody else
+                self._send(msg)
+            if self._tlog is not None and now >= next_flush:
+                next_flush = now + LOG_FLUSH_INTERVAL
+                self._tlog.flush()
             self._wake.wait(min(0.05, 1.0 / self.config.setpoint_rate))
             self._wake.clear()
 
-    def _supervise(self, now: float) -> None:
-        """Link health, loss, log failures and stream re-requests; republishes every 100 ms."""
+    def _supervise(self, now: float) -> list:
+        """Link health, loss, log failures and requests to the vehicle; republishes every 100 ms."""
+        store = self._store
         if self._tlog is not None and self._tlog.error:
             error, self._tlog = self._tlog.error, None
-            self._add_message(Severity.WARNING, f"Flight log stopped: {error}")
-        if (self._link_status is LinkStatus.LOST and self._transport.reconnectable and self._last_heartbeat
-                is not None and self._transport.clock() - self._last_heartbeat > self.config.loss_timeout + 5.0
-                and now - self._lost_at > 5.0):
-            self._lost_at = now
-            self._reopen = True                       # a half-open TCP link never errors: reopen it
-        if not self._window or now - self._window[-1][0] >= 1.0:
-            self._window.append((now, self._rx_count, self._rx_lost))
-        status = self._link_status
-        if self._last_heartbeat is not None and status is LinkStatus.OK:
-            age = self._transport.clock() - self._last_heartbeat
-            if age > self.config.loss_timeout:
-                self._link_status = LinkStatus.LOST
-                self._lost_at = now
-                self._lost_count += 1
-                self._set(link=self._link_health())
-                self._publish()
-                self._add_message(Severity.CRITICAL, f"Link lost: no heartbeat for {age:.1f} s")
-                for p in self._pending.values():      # give commands their full retries after recovery
-                    p.attempts = min(p.attempts, self.config.command_attempts - 1)
-        elif (status is LinkStatus.OK and not self._transport.is_replay and self._streams_requested_at
-              and now - self._last_attitude > 3.0 and now - self._streams_requested_at > 5.0):
-            self._request_streams()                   # the vehicle rebooted or forgot our rates
-        self._set(link=self._link_health())
-        self._publish()
+            store.add_message_locked(Severity.WARNING, f"Flight log stopped: {error}")
+        out, event, reopen = self._link.tick(now)
+        if reopen:
+            self._reopen = True
+        store.set(link=self._link.health(self._version))
+        store.publish()
+        if event == "lost":
+            age = self._link.health(self._version).heartbeat_age or 0.0
+            store.add_message_locked(Severity.CRITICAL, f"Link lost: no heartbeat for {age:.1f} s")
+            self._commands.link_lost()
+        return out
 
-    def _link_health(self, status: LinkStatus | None = None) -> LinkHealth:
-        age = None if self._last_heartbeat is None else max(0.0, self._transport.clock() - self._last_heartbeat)
-        rate = loss = 0.0
-        if len(self._window) >= 2:
-            (t0, c0, l0), (t1, c1, l1) = self._window[0], self._window[-1]
-            if t1 > t0:
-                rate = (c1 - c0) / (t1 - t0)
-            if (c1 - c0) + (l1 - l0) > 0:
-                loss = 100.0 * (l1 - l0) / ((c1 - c0) + (l1 - l0))
-        return LinkHealth(status or self._link_status, self._transport.description, age, rate, loss,
-                          self._rx_count, self._rx_lost, self._bad_crc, 2 if self._v2 else 1, self._lost_count)
+    def _stream_setpoint(self, now: float) -> list:
+        sp, fired = self._setpoints.tick(now)
+        if fired:
+            self._store.set(setpoint=self._setpoints.setpoint)
+            self._store.publish()
+        if not self._setpoints.streaming:
+            self._yaw_held = False                    # the next stick movement holds the heading it finds
+        if sp is None or self._store.state.mode != "GUIDED":
+            return []
+        if self._commands.capabilities.setpoint_yaw is False:
+            return self._legacy_setpoint_messages(sp, now)
+        return [self._setpoint_message(sp)]
 
     # ------------------------------------------------------------------------------------------
     # commands
     # ------------------------------------------------------------------------------------------
-    def command_long(self, command: int, params=(), name: str | None = None) -> Future:
+    def command_long(self, command: int, params=(), name: str | None = None, *, guard=None) -> Future:
         """Send any MAV_CMD as COMMAND_LONG with ACK handling and retries."""
-        name = name or _command_name(command)
-        return self._busy(name) or self._command_long(command, params, name)
+        name = name or command_name(command)
+        return self._busy(name) or self._command_long(command, params, name, guard=guard)
 
-    def _command_long(self, command: int, params=(), name: str | None = None, *,
-                      expect_mode: int | None = None) -> Future:
-        name = name or _command_name(command)
-        run = self._takeoff_run
-        if run is not None and threading.current_thread() is run.thread:
-            run.commands.add(command)                 # cancelled if the pilot aborts the takeoff
+    def _command_long(self, command: int, params=(), name: str | None = None, *, guard=None) -> Future:
+        name = name or command_name(command)
         params = [float(p) for p in (list(params) + [0.0] * 7)[:7]]
         if not frames.finite(*params):
             return self._finish(name, CommandStatus.REJECTED, "parameter is not a finite number")
         if self._replay is not None:
             return self._finish(name, CommandStatus.REJECTED, "replaying a recording: no vehicle to command")
-        future: Future = Future()
         with self._lock:
-            old = self._pending.pop(command, None)
-            if old is not None:
-                self._resolve(old, CommandStatus.ABORTED, f"superseded by {name}", remove=False)
-            self._pending[command] = _Pending(name, command, params, future, self._message_index, expect_mode)
+            future = self._commands.submit(name, command, params, time.monotonic(), guard=guard,
+                                           tag=self._takeoff_tag())
         self._wake.set()
         return future
 
-    def _service_commands(self, now: float) -> None:
-        cfg = self.config
-        for p in list(self._pending.values()):
-            if p.refused is not None:
-                if now >= p.refuse_at:
-                    texts = [m.text for m in self._messages if m.index > p.message_index and m.source == "vehicle"]
-                    reason = "; ".join(texts[-3:]) + f" ({p.refused})" if texts else p.refused
-                    self._resolve(p, CommandStatus.REFUSED, reason)
-                continue
-            if now < p.next_send:
-                continue
-            if p.attempts >= cfg.command_attempts:
-                if p.expect_mode is not None and not p.fallback_sent:
-                    p.fallback_sent = True             # no ACK at all: try SET_MODE before giving up
-                    self._send(mavlink.MAVLink_set_mode_message(
-                        self._tsys, mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, p.expect_mode))
-                    p.next_send = now + cfg.command_timeout
-                    continue
-                self._resolve(p, CommandStatus.TIMED_OUT,
-                              f"no answer from the vehicle after {p.attempts} attempts")
-                continue
-            self._send(mavlink.MAVLink_command_long_message(
-                self._tsys, cfg.target_component, p.command, p.attempts, *p.params))
-            p.attempts += 1
-            p.next_send = now + cfg.command_timeout
-
-    def _resolve(self, p: _Pending, status: CommandStatus, reason: str = "", remove: bool = True) -> None:
-        if remove and self._pending.get(p.command) is p:
-            del self._pending[p.command]
-        if not p.future.done():
-            result = self._record(p.name, status, reason, p.attempts)
-            self._settle(p.future, result)
-
-    def _settle(self, future: Future, result: CommandResult) -> None:
-        """Resolve on a thread of its own, outside _lock and off the link threads: a done-callback that
-        takes its time delays neither the link, nor callers, nor other commands' results."""
-        def settle():
-            if not future.done():
-                future.set_result(result)
-        threading.Thread(target=settle, name="command-result", daemon=True).start()
-
-    def _record(self, command: str, status: CommandStatus, reason: str = "", attempts: int = 0) -> CommandResult:
-        with self._lock:
-            self._result_index += 1
-            result = CommandResult(command, status, reason, attempts, self._result_index)
-            self._results.append(result)
-            self._set(results=tuple(self._results))
-            self._publish()
-        (log.info if result.ok else log.warning)("command %s", result)
-        return result
+    def _takeoff_tag(self):
+        """Commands the takeoff sequence issues carry its tag: an abort cancels them, so no retry launches."""
+        return self._takeoff if self._stepping_takeoff else None
 
     def _finish(self, command: str, status: CommandStatus, reason: str = "") -> Future:
         f: Future = Future()
-        f.set_result(self._record(command, status, reason))
+        f.set_result(self._store.record(command, status, reason))
         return f
 
     def _busy(self, command: str) -> Future | None:
-        if self._state.takeoff.active:
+        if self._stepping_takeoff and threading.current_thread() is self._ticker:
+            return None                               # the sequence's own commands
+        if self.state().takeoff.active:
             return self._finish(command, CommandStatus.REJECTED, "takeoff in progress: only Land and Stop")
         return None
 
@@ -842,23 +634,30 @@ class Vehicle(Drone):
         if number is None:
             return self._finish(f"mode {name}", CommandStatus.REJECTED,
                                 f"unknown mode; known: {', '.join(sorted(COPTER_MODES))}")
-        if self._state.mode == name.upper() and self._state.connected:
+        if self._replay is not None:
+            return self._finish(f"mode {name.upper()}", CommandStatus.REJECTED,
+                                "replaying a recording: no vehicle to command")
+        if self.state().mode == name.upper() and self.state().connected:
             return self._finish(f"mode {name.upper()}", CommandStatus.ACCEPTED, "already in that mode")
-        return self._command_long(mavlink.MAV_CMD_DO_SET_MODE,
-                                  (mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, number), f"mode {name.upper()}",
-                                  expect_mode=number)
+        with self._lock:
+            future = self._commands.submit_mode(f"mode {name.upper()}", number, time.monotonic(),
+                                                tag=self._takeoff_tag())
+        self._wake.set()
+        return future
 
     def arm(self, force: bool = False) -> Future:
-        return self._busy("arm") or self._arm(force)
-
-    def _arm(self, force: bool = False) -> Future:
-        return self._command_long(mavlink.MAV_CMD_COMPONENT_ARM_DISARM, (1, ARM_FORCE_MAGIC if force else 0),
-                                 "arm (forced)" if force else "arm")
+        return self._busy("arm") or self._command_long(
+            mavlink.MAV_CMD_COMPONENT_ARM_DISARM, (1, ARM_FORCE_MAGIC if force else 0),
+            "arm (forced)" if force else "arm")
 
     def disarm(self, force: bool = False) -> Future:
+        if force:                                     # forced disarm in the air stops the motors: a crash
+            problem = _not_in_flight(self.state())
+            if problem:
+                return self._finish("disarm (forced)", CommandStatus.REJECTED, problem)
         return self._busy("disarm") or self._command_long(
             mavlink.MAV_CMD_COMPONENT_ARM_DISARM, (0, ARM_FORCE_MAGIC if force else 0),
-            "disarm (forced)" if force else "disarm")
+            "disarm (forced)" if force else "disarm", guard=_not_in_flight if force else None)
 
     def land(self) -> Future:
         self._abort_takeoff("landing")
@@ -869,31 +668,35 @@ class Vehicle(Drone):
 
     def stop(self) -> Future:
         """Hold position: zero velocity in GUIDED (which also cancels a go-to), BRAKE otherwise."""
-        taking_off = self._state.takeoff.active
+        taking_off = self.state().takeoff.active
         self._abort_takeoff("stop")
-        s = self._state
+        s = self.state()
         if not s.flying and not s.armed:
             return self._finish("stop", CommandStatus.ACCEPTED,
                                 "takeoff aborted" if taking_off else "on the ground: nothing to stop")
         if s.mode == "GUIDED":
             with self._lock:
-                self._setpoint = Setpoint()
-                self._set(setpoint=self._setpoint)
-                self._zero_repeats = 3
-                self._setpoint_dirty = True
+                self._setpoints.stop(time.monotonic())
+                self._store.set(setpoint=self._setpoints.setpoint)
+                self._store.publish()
             self._wake.set()
             return self._finish("stop", CommandStatus.ACCEPTED, "holding position (zero velocity in GUIDED)")
         return self._set_mode("BRAKE")
 
     def reboot(self) -> Future:
-        return self._busy("reboot") or self._command_long(mavlink.MAV_CMD_PREFLIGHT_REBOOT_SHUTDOWN, (1,), "reboot")
+        problem = _ground_only(self.state())
+        if problem:
+            return self._finish("reboot", CommandStatus.REJECTED, problem)
+        return self._busy("reboot") or self._command_long(mavlink.MAV_CMD_PREFLIGHT_REBOOT_SHUTDOWN, (1,), "reboot",
+                                                          guard=_ground_only)
 
     def calibrate_level(self) -> Future:
         """Level (accelerometer trim) calibration; only sensible disarmed on the ground."""
-        s = self._state
-        if s.armed or s.flying:
-            return self._finish("level calibration", CommandStatus.REJECTED, "only when disarmed on the ground")
-        return self._busy("level calibration") or self._command_long(mavlink.MAV_CMD_PREFLIGHT_CALIBRATION, (0, 0, 0, 0, 2, 0, 0), "level calibration")
+        problem = _ground_only(self.state())
+        if problem:
+            return self._finish("level calibration", CommandStatus.REJECTED, problem)
+        return self._busy("level calibration") or self._command_long(
+            mavlink.MAV_CMD_PREFLIGHT_CALIBRATION, (0, 0, 0, 0, 2, 0, 0), "level calibration", guard=_ground_only)
 
     def parachute(self, action: str) -> Future:
         actions = {"disable": mavlink.PARACHUTE_DISABLE, "enable": mavlink.PARACHUTE_ENABLE,
@@ -906,7 +709,7 @@ class Vehicle(Drone):
     def set_safety(self, on: bool) -> Future:
         """Safety switch on (motors locked) or off, as MAVProxy's ``arm safetyon/safetyoff``."""
         self._post(mavlink.MAVLink_set_mode_message(
-            self._tsys, mavlink.MAV_MODE_FLAG_DECODE_POSITION_SAFETY, 1 if on else 0))
+            self._target_ids()[0], mavlink.MAV_MODE_FLAG_DECODE_POSITION_SAFETY, 1 if on else 0))
         return self._finish(f"safety {'on' if on else 'off'}", CommandStatus.ACCEPTED, "sent (not acknowledged)")
 
     def set_parameter(self, name: str, value: float, timeout: float = 3.0) -> Future:
@@ -916,103 +719,55 @@ class Vehicle(Drone):
         busy = self._busy(f"param {name}")
         if busy:
             return busy
-        future: Future = Future()
-
-        def watch():
-            for attempt in range(self.config.command_attempts):
-                self._param_echo.expect(name)
-                self._send(mavlink.MAVLink_param_set_message(
-                    self._tsys, self.config.target_component, name.encode(), float(value),
-                    mavlink.MAV_PARAM_TYPE_REAL32))
-                if self._param_echo.wait_for(name, value, timeout):
-                    future.set_result(self._record(f"param {name}={value:g}", CommandStatus.ACCEPTED, "", attempt + 1))
-                    return
-                if self._closing.is_set():
-                    break
-            future.set_result(self._record(f"param {name}={value:g}", CommandStatus.TIMED_OUT,
-                                           "no PARAM_VALUE echo", self.config.command_attempts))
-        threading.Thread(target=watch, daemon=True, name="param-set").start()
+        if self._replay is not None:
+            return self._finish(f"param {name}", CommandStatus.REJECTED, "replaying a recording: no vehicle to command")
+        with self._lock:
+            future = self._commands.submit_param(name, value, time.monotonic())
+        self._wake.set()
         return future
 
     # ------------------------------------------------------------------------------------------
     # velocity, position and yaw
     # ------------------------------------------------------------------------------------------
     def set_velocity(self, forward: float, right: float, up: float, yaw_rate: float) -> bool:
-        if not frames.finite(forward, right, up, yaw_rate):
+        sp = SetpointStreamer.clamp(forward, right, up, yaw_rate, self._limits)
+        if sp is None:
             log.warning("velocity refused: not finite (%r, %r, %r, %r)", forward, right, up, yaw_rate)
             return False
-        if self._state.takeoff.active:
+        if self.state().takeoff.active:
             return False
-        lim = self._limits
-        sp = Setpoint(frames.clamp(float(forward), lim.horizontal), frames.clamp(float(right), lim.horizontal),
-                      frames.clamp(float(up), lim.vertical), frames.clamp(float(yaw_rate), lim.yaw_rate))
         with self._lock:
-            self._setpoint_time = time.monotonic()
-            if sp != self._setpoint:
-                if sp.is_zero:
-                    self._zero_repeats = 3
-                self._setpoint = sp
-                self._setpoint_dirty = True
-                self._set(setpoint=sp)
-                self._publish()
+            if self._setpoints.demand(sp, time.monotonic()):
+                self._store.set(setpoint=sp)
+                self._store.publish()
                 self._wake.set()
         return True
-
-    def _stream_setpoint(self, now: float) -> None:
-        sp = self._setpoint
-        if not sp.is_zero and now - self._setpoint_time > self.config.deadman:
-            self._setpoint = sp = Setpoint()
-            self._zero_repeats = 3
-            self._setpoint_dirty = True
-            self._set(setpoint=sp)
-            self._publish()
-            log.warning("velocity commands stopped for %.1f s: hovering", self.config.deadman)
-        if sp.is_zero and not self._zero_repeats:
-            self._setpoint_dirty = False
-            return
-        if not self._setpoint_dirty and now - self._setpoint_sent < 1.0 / self.config.setpoint_rate - 0.002:
-            return
-        if self._state.mode == "GUIDED":
-            self._send_setpoint(sp)
-        self._setpoint_sent = now
-        self._setpoint_dirty = False
-        if sp.is_zero:
-            self._zero_repeats -= 1
-
-    def _send_setpoint(self, sp: Setpoint) -> None:
-        self._send(self._setpoint_message(sp))
-
-    def _setpoint_message(self, sp: Setpoint):
-        return mavlink.MAVLink_set_position_target_local_ned_message(
-            0, self._tsys, self.config.target_component, mavlink.MAV_FRAME_BODY_OFFSET_NED,
-            MASK_VELOCITY_YAW_RATE, 0, 0, 0, sp.forward, sp.right, -sp.up, 0, 0, 0, 0, sp.yaw_rate)
 
     def go_to(self, north: float, east: float, altitude: float) -> Future:
         if not frames.finite(north, east, altitude):
             return self._finish("go to", CommandStatus.REJECTED, "coordinates are not finite numbers")
         name = f"go to N{north:.1f} E{east:.1f} alt {altitude:.1f}"
         cfg = self.config
-        if not 1.0 <= altitude <= cfg.max_altitude or math.hypot(north, east) > cfg.max_distance:
-            return self._finish(name, CommandStatus.REJECTED, f"outside the limits: 1 to {cfg.max_altitude:g} m "
-                                f"above home, at most {cfg.max_distance:g} m from it")
+        problem = go_to_problem(north, east, altitude, cfg.max_altitude, cfg.max_distance)
+        if problem:
+            return self._finish(name, CommandStatus.REJECTED, problem)
         busy = self._busy(name)
         if busy:
             return busy
-        s = self._state
+        s = self.state()
         if s.mode != "GUIDED" or not s.flying:
             return self._finish(name, CommandStatus.REJECTED, f"needs GUIDED and flying (mode {s.mode or '?'})")
+        if s.home is None:
+            return self._finish(name, CommandStatus.REJECTED, "the vehicle has not sent its home position yet")
         with self._lock:                              # a velocity stream would override the target
-            self._setpoint, self._zero_repeats, self._setpoint_dirty = Setpoint(), 0, False
-            self._set(setpoint=self._setpoint)
-        if self._home is not None:
-            lat, lon = frames.offset_latlon(self._home.lat, self._home.lon, north, east)
-            self._post(mavlink.MAVLink_set_position_target_global_int_message(
-                0, self._tsys, self.config.target_component, mavlink.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT,
-                MASK_POSITION, int(round(lat * 1e7)), int(round(lon * 1e7)), float(altitude), 0, 0, 0, 0, 0, 0, 0, 0))
-        else:
-            self._post(mavlink.MAVLink_set_position_target_local_ned_message(
-                0, self._tsys, self.config.target_component, mavlink.MAV_FRAME_LOCAL_NED,
-                MASK_POSITION, north, east, -altitude, 0, 0, 0, 0, 0, 0, 0, 0))
+            self._setpoints.silence()
+            self._store.set(setpoint=self._setpoints.setpoint)
+        # latitude/longitude from home, altitude above home: never the EKF origin's frame
+        lat, lon = frames.offset_latlon(s.home.lat, s.home.lon, north, east)
+        system, component = self._target_ids()
+        self._post(mavlink.MAVLink_set_position_target_global_int_message(
+            0, system, component, mavlink.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT,
+            MASK_POSITION, int(round(lat * 1e7)), int(round(lon * 1e7)), float(altitude), 0, 0, 0, 0, 0, 0, 0, 0))
         return self._finish(name, CommandStatus.ACCEPTED, "target sent")
 
     def set_yaw(self, degrees: float, relative: bool = False, rate_deg_s: float = 30.0) -> Future:
@@ -1021,17 +776,19 @@ class Vehicle(Drone):
         busy = self._busy("yaw")
         if busy:
             return busy
-        if self._state.mode == "GUIDED" and self._setpoint.is_zero:
+        if self.state().mode == "GUIDED" and self._setpoints.setpoint.is_zero:
+            with self._lock:                          # zeros carry a yaw rate of 0, which would cancel the turn
+                self._setpoints.silence()
             # ArduCopter ignores yaw after takeoff until a first movement command
             self._post(self._setpoint_message(Setpoint()))
         direction = (1 if degrees >= 0 else -1) if relative else 0
         angle = abs(degrees) if relative else degrees % 360.0
         return self._command_long(mavlink.MAV_CMD_CONDITION_YAW,
-                                 (angle, abs(rate_deg_s), direction, 1 if relative else 0),
-                                 f"yaw {'by' if relative else 'to'} {degrees:g}°")
+                                  (angle, abs(rate_deg_s), direction, 1 if relative else 0),
+                                  f"yaw {'by' if relative else 'to'} {degrees:g}°")
 
     # ------------------------------------------------------------------------------------------
-    # takeoff sequence
+    # takeoff sequence (stepped by the ticker)
     # ------------------------------------------------------------------------------------------
     def takeoff(self, altitude: float | None = None) -> Future:
         alt = self.config.takeoff_altitude if altitude is None else altitude
@@ -1041,121 +798,58 @@ class Vehicle(Drone):
         if self._replay is not None:
             return self._finish("takeoff", CommandStatus.REJECTED, "replaying a recording: no vehicle to command")
         with self._lock:                              # check and start as one step: never two sequences
-            run = self._takeoff_run
-            if run is not None and run.alive:
-                why = "the aborted takeoff is still winding down" if run.abort.is_set() else "a takeoff is already running"
-                return self._finish("takeoff", CommandStatus.REJECTED, why)
-            if self._state.flying:
+            if self._takeoff is not None:
+                return self._finish("takeoff", CommandStatus.REJECTED, "a takeoff is already running")
+            if self.state().flying:
                 return self._finish("takeoff", CommandStatus.REJECTED, "already flying")
-            future: Future = Future()
-            run = self._takeoff_run = _TakeoffRun(alt)
-            run.thread = threading.Thread(target=self._takeoff_sequence, args=(run, future), name="takeoff",
-                                          daemon=True)
-            self._progress(run, SequencePhase.WAITING_READY)
-            run.thread.start()
-        return future
+            seq = self._takeoff = TakeoffSequence(self, alt, self.config, time.monotonic())
+            self._progress(seq)
+        self._wake.set()
+        return seq.future
+
+    def _step_takeoff(self, now: float) -> None:
+        seq = self._takeoff
+        if seq is None:
+            return
+        self._stepping_takeoff = True
+        try:
+            outcome = seq.step(now)
+        except Exception as exc:                      # never leave the future unresolved
+            log.exception("takeoff sequence failed")
+            outcome = CommandStatus.REJECTED, f"internal error: {exc}", SequencePhase.FAILED
+        finally:
+            self._stepping_takeoff = False
+        if outcome is None:
+            self._progress(seq)
+            return
+        status, reason, phase = outcome
+        self._takeoff = None
+        self._store.set(takeoff=SequenceProgress(phase, reason, seq.altitude))
+        log.info("takeoff: %s %s", phase.value, reason)
+        self._notifier.settle(seq.future, self._store.record_locked("takeoff", status, reason))
+
+    def _progress(self, seq: TakeoffSequence) -> None:
+        progress = SequenceProgress(seq.phase, seq.detail, seq.altitude)
+        if self.state().takeoff != progress:
+            self._store.set(takeoff=progress)
+            self._store.publish()
+            log.info("takeoff: %s %s", seq.phase.value, seq.detail)
 
     def _abort_takeoff(self, why: str) -> None:
         """Stop the sequence and cancel what it asked the vehicle, so no retry launches it afterwards."""
         with self._lock:
-            run = self._takeoff_run
-            if run is None or run.abort.is_set() or not run.alive:
+            seq = self._takeoff
+            if seq is None:
                 return
-            run.abort.set()
-            for command in run.commands:
-                p = self._pending.get(command)
-                if p is not None:
-                    self._resolve(p, CommandStatus.ABORTED, f"takeoff aborted: {why}")
-                    if command == mavlink.MAV_CMD_NAV_TAKEOFF and p.attempts:
-                        # a command on its way cannot be called back: say so rather than promise the ground
-                        self._add_message(Severity.WARNING, "Takeoff aborted after NAV_TAKEOFF went out: if the "
-                                          "vehicle got it, it lifts off (Land brings it down)")
-            self._progress(run, SequencePhase.ABORTED, f"aborted: {why}")
-
-    def _progress(self, run: _TakeoffRun, phase: SequencePhase, detail: str = "") -> None:
-        with self._lock:
-            if run is not self._takeoff_run or self._state.takeoff.phase is SequencePhase.ABORTED and run.abort.is_set():
-                return                                # an abort is final for its run
-            if run.abort.is_set() and phase is not SequencePhase.ABORTED:
-                return
-            self._set(takeoff=SequenceProgress(phase, detail, run.altitude))
-            self._publish()
-        log.info("takeoff: %s %s", phase.value, detail)
-
-    def _takeoff_sequence(self, run: _TakeoffRun, future: Future) -> None:
-        cfg = self.config
-        alt = run.altitude
-        aborted = run.abort.is_set
-
-        def end(status: CommandStatus, reason: str, phase: SequencePhase):
-            if aborted() and status is not CommandStatus.ABORTED:
-                status, reason, phase = CommandStatus.ABORTED, f"aborted by the pilot ({reason})", SequencePhase.ABORTED
-            self._progress(run, phase, reason)
-            future.set_result(self._record("takeoff", status, reason))
-
-        def wait(predicate, timeout):
-            deadline = time.monotonic() + timeout
-            while time.monotonic() < deadline and not aborted() and not self._closing.is_set():
-                if self.wait_for(predicate, min(0.2, deadline - time.monotonic())) is not None:
-                    return True
-            return False
-
-        def step(fut: Future) -> CommandResult | None:
-            while not fut.done():
-                if aborted():
-                    return None
-                try:
-                    fut.result(timeout=0.1)
-                except Exception:
-                    pass
-            return fut.result()
-
-        try:
-            if not wait(lambda s: s.connected, cfg.ready_timeout):
-                return end(CommandStatus.ABORTED if aborted() else CommandStatus.TIMED_OUT,
-                           "aborted" if aborted() else "no vehicle on the link", SequencePhase.FAILED)
-            if not self._state.readiness.ready_to_arm:
-                self._progress(run, SequencePhase.WAITING_READY, "waiting for GPS, EKF and pre-arm checks")
-                wait(lambda s: s.readiness.ready_to_arm, cfg.ready_timeout)   # then let the vehicle decide
-            if aborted():
-                return end(CommandStatus.ABORTED, "aborted by the pilot", SequencePhase.ABORTED)
-            self._progress(run, SequencePhase.SETTING_GUIDED)
-            r = step(self._set_mode("GUIDED"))
-            if r is None:
-                return end(CommandStatus.ABORTED, "aborted by the pilot", SequencePhase.ABORTED)
-            if not r.ok:
-                return end(CommandStatus.REFUSED if r.status is CommandStatus.REFUSED else r.status,
-                           f"GUIDED: {r.reason}", SequencePhase.FAILED)
-            if not self._state.armed:
-                self._progress(run, SequencePhase.ARMING)
-                r = step(self._arm())
-                if r is None:
-                    return end(CommandStatus.ABORTED, "aborted by the pilot", SequencePhase.ABORTED)
-                if not r.ok:
-                    return end(r.status, f"arming: {r.reason}", SequencePhase.FAILED)
-                if not wait(lambda s: s.armed, cfg.command_timeout * 2):
-                    return end(CommandStatus.ABORTED if aborted() else CommandStatus.REFUSED,
-                               "the vehicle did not report armed", SequencePhase.FAILED)
-            self._progress(run, SequencePhase.TAKING_OFF, f"to {alt:.1f} m")
-            r = step(self._command_long(mavlink.MAV_CMD_NAV_TAKEOFF, (0, 0, 0, 0, 0, 0, alt),
-                                       f"NAV_TAKEOFF {alt:.1f} m"))
-            if r is None:
-                return end(CommandStatus.ABORTED, "aborted by the pilot", SequencePhase.ABORTED)
-            if not r.ok:
-                return end(r.status, f"takeoff command: {r.reason}", SequencePhase.FAILED)
-            self._progress(run, SequencePhase.CLIMBING, f"to {alt:.1f} m")
-            if not wait(lambda s: s.altitude >= 0.95 * alt or not s.armed, cfg.climb_timeout):
-                if aborted():
-                    return end(CommandStatus.ABORTED, "aborted by the pilot", SequencePhase.ABORTED)
-                return end(CommandStatus.TIMED_OUT, f"did not reach {alt:.1f} m (at {self._state.altitude:.1f} m)",
-                           SequencePhase.FAILED)
-            if not self._state.armed:
-                return end(CommandStatus.REFUSED, "the vehicle disarmed during the climb", SequencePhase.FAILED)
-            end(CommandStatus.ACCEPTED, f"reached {self._state.altitude:.1f} m", SequencePhase.DONE)
-        except Exception as exc:                      # never leave the future unresolved
-            log.exception("takeoff sequence failed")
-            if not future.done():
-                end(CommandStatus.REJECTED, f"internal error: {exc}", SequencePhase.FAILED)
+            self._takeoff = None
+            sent = self._commands.cancel_tagged(seq, f"takeoff aborted: {why}")
+            if any(command == mavlink.MAV_CMD_NAV_TAKEOFF for command, _ in sent):
+                # a command on its way cannot be called back: say so rather than promise the ground
+                self._store.add_message_locked(Severity.WARNING, "Takeoff aborted after NAV_TAKEOFF went out: if "
+                                               "the vehicle got it, it lifts off (Land brings it down)")
+            self._store.set(takeoff=SequenceProgress(SequencePhase.ABORTED, f"aborted: {why}", seq.altitude))
+            self._notifier.settle(seq.future, self._store.record_locked(
+                "takeoff", CommandStatus.ABORTED, f"aborted by the pilot ({why})"))
 
     # ------------------------------------------------------------------------------------------
     # forwarding to other ground stations
@@ -1167,7 +861,7 @@ class Vehicle(Drone):
         try:
             out.open()
         except LinkError as exc:
-            self._add_message(Severity.WARNING, f"Forwarding to {connection} failed: {exc}")
+            self._store.add_message(Severity.WARNING, f"Forwarding to {connection} failed: {exc}")
             return
         self._outputs.append(out)
         parser = self._new_parser()                   # whole frames only: the log and the vehicle get no garbage
@@ -1187,44 +881,11 @@ class Vehicle(Drone):
                         self._write(bytes(msg.get_msgbuf()))
 
 
-def _env(env: Environment, **changes) -> Environment:
-    return Environment(**{**env.__dict__, **changes})
-
-
-def _command_name(command: int) -> str:
-    entry = mavlink.enums["MAV_CMD"].get(command)
-    return entry.name.replace("MAV_CMD_", "") if entry else f"command {command}"
-
-
-def _on_param_value(self: Vehicle, m) -> None:
-    name = m.param_id.rstrip("\x00") if isinstance(m.param_id, str) else bytes(m.param_id).decode(errors="replace")
-    self._param_echo.update(name, m.param_value)
-
-
-
-#: Pure telemetry: state follows the newest message of each type, so a read folds only the last one.
-_TELEMETRY = {
-    "SYS_STATUS": Vehicle._on_sys_status,
-    "BATTERY_STATUS": Vehicle._on_battery_status,
-    "ATTITUDE": Vehicle._on_attitude,
-    "GLOBAL_POSITION_INT": Vehicle._on_global_position,
-    "LOCAL_POSITION_NED": Vehicle._on_local_position,
-    "HOME_POSITION": Vehicle._on_home_position,
-    "VFR_HUD": Vehicle._on_vfr_hud,
-    "GPS_RAW_INT": Vehicle._on_gps_raw,
-    "EKF_STATUS_REPORT": Vehicle._on_ekf_status,
-    "EXTENDED_SYS_STATE": Vehicle._on_extended_sys_state,
-    "SCALED_PRESSURE": Vehicle._on_scaled_pressure,
-    "RAW_IMU": Vehicle._on_imu,
-    "SCALED_IMU": Vehicle._on_imu,
-    "SCALED_IMU2": Vehicle._on_imu,
-    "WIND": Vehicle._on_wind,
-}
-
 #: Events: every one counts (mode/arming changes, the pilot's messages, command answers).
 _EVENTS = {
     "HEARTBEAT": Vehicle._on_heartbeat,
     "STATUSTEXT": Vehicle._on_statustext,
     "COMMAND_ACK": Vehicle._on_command_ack,
-    "PARAM_VALUE": _on_param_value,
+    "PARAM_VALUE": Vehicle._on_param_value,
+    "AUTOPILOT_VERSION": Vehicle._on_autopilot_version,
 }

@@ -4,6 +4,7 @@ Imported by those files (``from ice_fixtures import ...``); it holds no tests it
 """
 from __future__ import annotations
 
+import os
 import socket
 import time
 
@@ -17,10 +18,32 @@ from driver.ice.server import IceServer, default_properties
 jderobot, mavlinkserver = load_slice()
 
 
+def _port_block() -> range:
+    """Ports a test may hand to a server it starts later: below the kernel's ephemeral range (32768 and up,
+    which every socket bound to port 0 draws from, in every xdist worker at once) and one block per worker,
+    so no other test's socket can take a port between this choice and its use."""
+    worker = os.environ.get("PYTEST_XDIST_WORKER", "gw0")
+    index = int(worker[2:]) if worker[2:].isdigit() else 0
+    start = 20000 + 500 * (index % 24)
+    return range(start, start + 500)
+
+
+_next_port = iter(())
+
+
 def free_port() -> int:
-    with socket.socket() as s:
-        s.bind(("127.0.0.1", 0))
-        return s.getsockname()[1]
+    """A free TCP port on 127.0.0.1 from this worker's own block."""
+    global _next_port
+    for _ in range(2):
+        for port in _next_port:
+            with socket.socket() as s:
+                try:
+                    s.bind(("127.0.0.1", port))
+                except OSError:
+                    continue
+                return port
+        _next_port = iter(_port_block())          # wrap around: the block's first ports are free again by now
+    raise RuntimeError("no free port in this worker's block")
 
 
 def eventually(condition, timeout: float, interval: float = 0.05):

@@ -65,7 +65,7 @@ def test_console_answers_bad_input_clearly(vehicle):
                            ("parachute open", "usage: parachute enable|disable|release"),
                            ("arm sideways", "usage: arm"),
                            ("disarm now", "usage: disarm [force]"),
-                           ("mode GUIDED LOITER", "usage: mode [NAME]"),
+                           ("mode GUIDED LOITER", "usage: mode [NAME [confirm]]"),
                            ("arm check", "ARMING_CHECK"),
                            ("arm list", "arm safetyon")):
         before = len(out.getvalue())

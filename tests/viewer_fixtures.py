@@ -6,7 +6,7 @@ window is added, with its own settings file so tests never touch the user's.
 from __future__ import annotations
 
 import pytest
-from PyQt5.QtCore import QSettings
+from PyQt5.QtCore import QSettings, Qt
 
 from uavviewer.main_window import MainWindow
 
@@ -41,3 +41,14 @@ def window(vehicle, window_factory) -> MainWindow:
     """The window on the driver connected to the simulated vehicle."""
     w = window_factory(vehicle, takeoff_altitude=3.0)
     return w
+
+
+def pick_mode(qtbot, selector, name: str) -> None:
+    """Open the mode selector's list and click ``name`` in it, as the pilot does."""
+    selector.showPopup()
+    view = selector.view()
+    qtbot.waitUntil(view.isVisible, timeout=3000)
+    index = view.model().index(selector.findText(name), 0)
+    view.scrollTo(index)
+    qtbot.mouseClick(view.viewport(), Qt.LeftButton, pos=view.visualRect(index).center())
+    qtbot.waitUntil(lambda: not view.isVisible(), timeout=3000)

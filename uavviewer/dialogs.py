@@ -16,7 +16,7 @@ from .keyboard import key_help
 from .settings import TAKEOFF_ALTITUDE_RANGE, ViewerSettings, split_uris
 from .sticks import StickMode
 
-__all__ = ["SettingsDialog", "KeysDialog", "takeoff_question"]
+__all__ = ["SettingsDialog", "KeysDialog", "takeoff_question", "mode_question"]
 
 
 class SettingsDialog(QDialog):
@@ -93,6 +93,23 @@ def takeoff_question(parent: QWidget, altitude: float) -> QMessageBox:
     box.setObjectName("takeoffQuestion")
     go = box.button(QMessageBox.Yes)
     go.setText("Take off")
+    go.setFocusPolicy(Qt.NoFocus)
+    go.setAutoDefault(False)
+    box.setDefaultButton(QMessageBox.Cancel)
+    box.setEscapeButton(QMessageBox.Cancel)
+    return box
+
+
+def mode_question(parent: QWidget, mode: str, warning: str) -> QMessageBox:
+    """Confirm a mode that needs an RC transmitter in flight, saying why (the driver's words).
+
+    Like the takeoff question: window-modal, opened without waiting, Cancel the focused default.
+    """
+    box = QMessageBox(QMessageBox.Warning, f"Switch to {mode}", warning, QMessageBox.Yes | QMessageBox.Cancel,
+                      parent)
+    box.setObjectName("modeQuestion")
+    go = box.button(QMessageBox.Yes)
+    go.setText(f"Switch to {mode}")
     go.setFocusPolicy(Qt.NoFocus)
     go.setAutoDefault(False)
     box.setDefaultButton(QMessageBox.Cancel)

@@ -16,10 +16,11 @@ from PyQt5.QtCore import QEvent, QObject, QSettings, Qt
 from PyQt5.QtWidgets import QApplication, QDialog, QLabel, QMainWindow, QMessageBox, QWidget
 
 from driver.api import Drone, Limits
+from driver.rules import mode_warning
 from driver.state import LinkStatus, Severity, VehicleState
 
 from . import RESOURCES
-from .dialogs import KeysDialog, SettingsDialog, takeoff_question
+from .dialogs import KeysDialog, SettingsDialog, mode_question, takeoff_question
 from .camera_controller import CameraController, default_media_folder
 from .drone_adapter import DroneAdapter
 from .flight_phase import FlightPhase, flight_phase, readiness_text, stick_hint, takeoff_progress
@@ -66,6 +67,7 @@ class MainWindow(QMainWindow):
         self._plot_gap = False
         self._sticks_live = False
         self._takeoff_box: QMessageBox | None = None
+        self._mode_box: QMessageBox | None = None
         self._settings_dialog: SettingsDialog | None = None
         self._quit_box: QMessageBox | None = None
         self._quitting = False                   # closing without asking (answered, or a signal)
@@ -107,7 +109,7 @@ class MainWindow(QMainWindow):
         fc.rtlRequested.connect(lambda: self._command("return_to_launch"))
         fc.armRequested.connect(lambda: self._command("arm"))
         fc.disarmRequested.connect(lambda: self._command("disarm"))
-        self.modeSelector.modeRequested.connect(lambda name: self._command("set_mode", name))
+        self.modeSelector.modeRequested.connect(self.request_mode)
         self.replayBar.pauseRequested.connect(self._replay_pause)
         self.replayBar.speedRequested.connect(self._replay_speed)
         self.replayBar.setVisible(self.adapter.replay is not None)
@@ -394,6 +396,29 @@ class MainWindow(QMainWindow):
     # -- commands ---------------------------------------------------------------------------------
     def _command(self, name: str, *args) -> None:
         self.adapter.command(name, *args)
+
+    def request_mode(self, name: str) -> None:
+        """Switch at once, or ask first when the driver says the mode needs an RC transmitter in flight."""
+        warning = mode_warning(name, self.adapter.state.flying)
+        if warning is None:
+            self._command("set_mode", name)
+            return
+        box = mode_question(self, name, warning)
+        box.setWindowModality(Qt.WindowModal)
+        box.finished.connect(lambda _result, b=box, n=name: self._mode_answered(b, n))
+        self._mode_box = box
+        box.open()
+
+    def _mode_answered(self, box: QMessageBox, name: str) -> None:
+        if box.clickedButton() is box.button(QMessageBox.Yes):
+            self._command("set_mode", name)
+        box.deleteLater()
+        if self._mode_box is box:
+            self._mode_box = None
+
+    @property
+    def mode_box(self) -> QMessageBox | None:
+        return self._mode_box
 
     def request_takeoff(self) -> None:
         """Ask once, showing the altitude; the answer comes back without blocking."""

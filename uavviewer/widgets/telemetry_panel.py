@@ -97,9 +97,11 @@ class TelemetryPanel(QFrame):
     def _vehicle_values(self, s: VehicleState) -> None:
         self._put("mode", s.mode)
         self._put("armed", "ARMED" if s.armed else "disarmed", WARN if s.armed else NORMAL)
-        landed = {LandedState.UNDEFINED: "--", LandedState.ON_GROUND: "on ground",
-                  LandedState.IN_AIR: "in air", LandedState.TAKEOFF: "taking off",
-                  LandedState.LANDING: "landing"}[s.landed_state]
+        landed = {LandedState.ON_GROUND: "on ground", LandedState.IN_AIR: "in air", LandedState.TAKEOFF: "taking off",
+                  LandedState.LANDING: "landing"}.get(s.landed_state)
+        if landed is None:                  # firmware without EXTENDED_SYS_STATE: its heartbeat, or unknown
+            landed = {True: "in air", False: "on ground"}.get(s.in_air, "unknown") if s.link.status is \
+                LinkStatus.OK else "--"
         self._put("landed", landed)
         self.set_battery(s.battery.voltage, s.battery.cells, s.battery.remaining,
                          s.battery.low, s.battery.remaining_estimated)

@@ -1,0 +1,309 @@
+"""The command sender: COMMAND_LONG, mode changes and parameter writes, each with retries and its own reply.
+
+What a pilot must be able to trust, on a lossy link shared with other systems:
+
+* a COMMAND_ACK settles only a command that was really sent (attempts > 0), from the autopilot, and
+  addressed to us (target system *and* component; MAVLink 1 ACKs carry neither and are taken as ours);
+* a mode change is confirmed by the HEARTBEAT, never by the ACK alone: an ACK cannot say which of two
+  DO_SET_MODEs it answers, so a late one for an earlier switch would otherwise confirm a lost packet;
+* firmware without MAV_CMD_DO_SET_MODE (the stock Solo) is remembered per vehicle after its first
+  UNSUPPORTED: later mode changes go straight to SET_MODE, re-sent about every second until the heartbeat
+  shows the mode, within the command's time;
+* MAV_RESULT_IN_PROGRESS waits for the final answer and never re-sends (a re-sent long command restarts);
+* a command with a guard (ground-only commands) is checked each time it is about to go out.
+
+:meth:`CommandSender.service` runs on the driver's ticker with the state lock held and only *returns*
+the messages to send: the caller writes them after releasing the lock. Futures are settled by one
+:class:`Notifier` thread, never under a lock and never on a thread per command.
+"""
+from __future__ import annotations
+
+import logging
+from concurrent.futures import Future, ThreadPoolExecutor
+from dataclasses import dataclass, field
+from typing import Callable
+
+from pymavlink.dialects.v20 import ardupilotmega as mavlink
+
+from .state import CommandResult, CommandStatus, Severity, VehicleState
+
+log = logging.getLogger(__name__)
+
+__all__ = ["Capabilities", "CommandSender", "Notifier", "command_name"]
+
+MODE_RESEND = 1.0            # s between SET_MODE messages on firmware that answers none (one heartbeat)
+ACKED_MODE_WAIT = 1.5        # s an accepted mode change waits for a heartbeat showing it before re-sending
+STATUSTEXT_GRACE = 0.3       # s: the STATUSTEXT explaining a refusal may trail the ACK
+PROGRESS_TIMEOUT = 30.0      # s an IN_PROGRESS command may stay silent before it counts as lost
+
+
+def command_name(command: int) -> str:
+    entry = mavlink.enums["MAV_CMD"].get(command)
+    return entry.name.replace("MAV_CMD_", "") if entry else f"command {command}"
+
+
+class Notifier:
+    """A few fixed threads settle every future, never under a lock: a done-callback that takes its time
+    (a client chaining a blocking call) delays neither the link nor other commands' results, and no
+    thread is started per command."""
+
+    WORKERS = 4
+
+    def __init__(self) -> None:
+        self._pool = ThreadPoolExecutor(max_workers=self.WORKERS, thread_name_prefix="command-results")
+
+    def settle(self, future: Future, result: CommandResult) -> None:
+        try:
+            self._pool.submit(self._set, future, result)
+        except RuntimeError:                  # shut down: settle here, nothing else is waiting on the pool
+            self._set(future, result)
+
+    @staticmethod
+    def _set(future: Future, result: CommandResult) -> None:
+        if not future.done():
+            future.set_result(result)         # concurrent.futures logs a failing callback itself
+
+    def close(self) -> None:
+        self._pool.shutdown(wait=False)
+
+
+@dataclass
+class Capabilities:
+    """What this vehicle's firmware turned out to understand (None: not known yet)."""
+    set_mode_command: bool | None = None      # MAV_CMD_DO_SET_MODE
+    request_message: bool | None = None       # MAV_CMD_REQUEST_MESSAGE
+    message_interval: bool | None = None      # MAV_CMD_SET_MESSAGE_INTERVAL
+    setpoint_yaw: bool | None = None          # SET_POSITION_TARGET_LOCAL_NED reads its frame and yaw rate (3.5+)
+
+
+@dataclass(eq=False)
+class _Command:
+    name: str
+    key: object                               # the command id, or ("param", NAME)
+    command: int
+    params: list
+    future: Future
+    message_index: int
+    mode: int | None = None                   # a mode change: the custom_mode the heartbeat must show
+    param: tuple[str, float] | None = None
+    guard: Callable[[VehicleState], str | None] | None = None
+    attempts: int = 0
+    next_send: float = 0.0
+    deadline: float | None = None
+    acked: bool = False                       # mode change: ACCEPTED, waiting for the heartbeat
+    in_progress: bool = False
+    legacy: bool = False                      # mode change by the SET_MODE message
+    refused: str | None = None
+    refuse_at: float = 0.0
+    tags: set = field(default_factory=set)
+    settled: bool = False
+
+
+class CommandSender:
+    """Pending commands of one vehicle; all methods run with the driver's state lock held."""
+
+    def __init__(self, store, config, notifier: Notifier, target: Callable[[], tuple[int, int]]):
+        self._store = store
+        self._cfg = config
+        self._notifier = notifier
+        self._target = target                 # () -> (system, component) of the autopilot
+        self.capabilities = Capabilities()
+        self._pending: dict[object, _Command] = {}
+
+    # -- submitting (any thread, under the lock) ------------------------------------------------------
+    def submit(self, name: str, command: int, params, now: float, *, guard=None, tag=None) -> Future:
+        """A COMMAND_LONG: sent on the next service, re-sent unanswered, settled by its ACK."""
+        return self._add(_Command(name, command, command, params, Future(), self._store.message_index,
+                                  guard=guard), now, tag)
+
+    def submit_mode(self, name: str, number: int, now: float, *, tag=None) -> Future:
+        """A mode change, confirmed by the heartbeat; SET_MODE on firmware known to lack DO_SET_MODE."""
+        c = _Command(name, mavlink.MAV_CMD_DO_SET_MODE, mavlink.MAV_CMD_DO_SET_MODE,
+                     [mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, number, 0, 0, 0, 0, 0],
+                     Future(), self._store.message_index, mode=number)
+        c.legacy = self.capabilities.set_mode_command is False
+        return self._add(c, now, tag)
+
+    def submit_param(self, name: str, value: float, now: float) -> Future:
+        """PARAM_SET, confirmed by the PARAM_VALUE echo."""
+        return self._add(_Command(f"param {name}={value:g}", ("param", name), 0, [], Future(),
+                                  self._store.message_index, param=(name, float(value))), now, None)
+
+    def _add(self, c: _Command, now: float, tag) -> Future:
+        if tag is not None:
+            c.tags.add(tag)
+        old = self._pending.pop(c.key, None)
+        if old is not None:
+            self._resolve(old, CommandStatus.ABORTED, f"superseded by {c.name}", remove=False)
+        c.next_send = now
+        self._pending[c.key] = c
+        return c.future
+
+    # -- cancelling ----------------------------------------------------------------------------------------
+    def cancel_tagged(self, tag, reason: str) -> list[tuple[int, int]]:
+        """Abort every command carrying ``tag``; returns (command, attempts) of those that had gone out."""
+        sent = []
+        for c in [c for c in self._pending.values() if tag in c.tags]:
+            self._resolve(c, CommandStatus.ABORTED, reason)
+            if c.attempts:
+                sent.append((c.command, c.attempts))
+        return sent
+
+    def abort_all(self, reason: str) -> None:
+        for c in list(self._pending.values()):
+            self._resolve(c, CommandStatus.ABORTED, reason)
+
+    def link_lost(self) -> None:
+        """Commands get their full retries once the link is back."""
+        for c in self._pending.values():
+            c.attempts = min(c.attempts, self._cfg.command_attempts - 1)
+
+    def link_recovered(self, now: float) -> None:
+        for c in self._pending.values():
+            if c.deadline is not None and not c.in_progress:
+                c.deadline = max(c.deadline, now + self._cfg.command_timeout * self._cfg.command_attempts)
+            c.next_send = min(c.next_send, now)
+
+    # -- replies (reader thread, under the lock) ----------------------------------------------------------
+    def on_ack(self, m, now: float) -> None:
+        """A COMMAND_ACK from the autopilot (the caller checked its source)."""
+        to_system, to_component = getattr(m, "target_system", 0), getattr(m, "target_component", 0)
+        cfg = self._cfg
+        if to_system not in (0, cfg.source_system) or to_component not in (0, cfg.source_component):
+            return                                # another ground station's (or component's) answer
+        self._learn(m.command, m.result)
+        c = self._pending.get(m.command)
+        if c is None or c.attempts == 0:
+            return                                # nothing of ours is waiting, or ours has not gone out yet
+        result = m.result
+        if result == mavlink.MAV_RESULT_IN_PROGRESS:
+            c.in_progress = True
+            c.deadline = now + PROGRESS_TIMEOUT
+            return
+        if c.mode is not None:
+            if result == mavlink.MAV_RESULT_ACCEPTED:
+                c.acked = True                    # the heartbeat settles it
+                c.next_send = now + ACKED_MODE_WAIT
+            elif result == mavlink.MAV_RESULT_UNSUPPORTED:
+                c.legacy, c.next_send = True, now  # old firmware: SET_MODE now, and from now on
+            else:
+                self._refuse(c, result, now)
+            return
+        if result == mavlink.MAV_RESULT_ACCEPTED:
+            self._resolve(c, CommandStatus.ACCEPTED)
+        else:
+            self._refuse(c, result, now)
+
+    def _learn(self, command: int, result: int) -> None:
+        known = result != mavlink.MAV_RESULT_UNSUPPORTED
+        caps = self.capabilities
+        if command == mavlink.MAV_CMD_DO_SET_MODE and (caps.set_mode_command is None or not known):
+            caps.set_mode_command = known
+            if not known:
+                self._store.add_message_locked(
+                    5, "The vehicle does not know MAV_CMD_DO_SET_MODE (old firmware): modes are set with "
+                       "SET_MODE and confirmed by its heartbeat")
+        elif command == mavlink.MAV_CMD_REQUEST_MESSAGE:
+            caps.request_message = known
+        elif command == mavlink.MAV_CMD_SET_MESSAGE_INTERVAL:
+            caps.message_interval = known
+
+    def _refuse(self, c: _Command, result: int, now: float) -> None:
+        entry = mavlink.enums["MAV_RESULT"].get(result)
+        c.refused = entry.name if entry else f"result {result}"
+        c.refuse_at = now + STATUSTEXT_GRACE
+
+    def on_mode(self, custom_mode: int) -> None:
+        """The autopilot's heartbeat shows ``custom_mode``: the truth for every mode change."""
+        for c in list(self._pending.values()):
+            if c.mode == custom_mode:
+                self._resolve(c, CommandStatus.ACCEPTED, "" if c.acked or not c.legacy else "shown by the heartbeat")
+
+    def on_param_value(self, name: str, value: float) -> None:
+        c = self._pending.get(("param", name))
+        if c is not None and c.attempts and abs(value - c.param[1]) <= 1e-6 * max(1.0, abs(c.param[1])):
+            self._resolve(c, CommandStatus.ACCEPTED)
+
+    # -- the ticker ---------------------------------------------------------------------------------------
+    def service(self, now: float, state: VehicleState) -> list:
+        """Re-send, time out and settle; returns the MAVLink messages to send (after the lock is released)."""
+        out = []
+        cfg = self._cfg
+        system, component = self._target()
+        for c in list(self._pending.values()):
+            if c.refused is not None:
+                if c.mode is not None and state.mode and state.mode == _mode_name(c.mode):
+                    self._resolve(c, CommandStatus.ACCEPTED)
+                elif now >= c.refuse_at:
+                    self._resolve(c, CommandStatus.REFUSED, self._vehicle_reason(c, c.refused))
+                continue
+            if c.deadline is not None and now >= c.deadline:
+                self._time_out(c, state)
+                continue
+            if c.in_progress or now < c.next_send:
+                continue
+            if c.guard is not None:
+                problem = c.guard(state)
+                if problem:
+                    self._resolve(c, CommandStatus.REJECTED, problem)
+                    continue
+            if c.mode is not None:
+                if not c.legacy and c.attempts >= cfg.command_attempts:
+                    c.legacy = True               # no ACK at all: SET_MODE before giving up
+                if c.legacy:
+                    if c.deadline is None:        # SET_MODE has no reply: only the heartbeat, within this time
+                        c.deadline = now + cfg.command_timeout * cfg.command_attempts
+                    out.append(mavlink.MAVLink_set_mode_message(system, mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED,
+                                                                c.mode))
+                    c.next_send = now + MODE_RESEND
+                else:
+                    out.append(mavlink.MAVLink_command_long_message(system, component, c.command,
+                                                                    min(c.attempts, 255), *c.params))
+                    c.next_send = now + (ACKED_MODE_WAIT if c.acked else cfg.command_timeout)
+            elif c.param is not None:
+                if c.attempts >= cfg.command_attempts:
+                    self._resolve(c, CommandStatus.TIMED_OUT, "no PARAM_VALUE echo")
+                    continue
+                out.append(mavlink.MAVLink_param_set_message(system, component, c.param[0].encode(), c.param[1],
+                                                             mavlink.MAV_PARAM_TYPE_REAL32))
+                c.next_send = now + cfg.command_timeout
+            else:
+                if c.attempts >= cfg.command_attempts:
+                    self._resolve(c, CommandStatus.TIMED_OUT, f"no answer from the vehicle after {c.attempts} attempts")
+                    continue
+                out.append(mavlink.MAVLink_command_long_message(system, component, c.command,
+                                                                min(c.attempts, 255), *c.params))
+                c.next_send = now + cfg.command_timeout
+            c.attempts += 1
+        return out
+
+    def _time_out(self, c: _Command, state: VehicleState) -> None:
+        if c.in_progress:
+            reason = f"the vehicle said IN_PROGRESS and then nothing for {PROGRESS_TIMEOUT:g} s"
+        elif c.mode is not None:
+            shown = state.mode or "no mode"
+            said = "accepted it, but its" if c.acked else "did not confirm it, and its"
+            reason = self._vehicle_reason(c, f"the vehicle {said} heartbeat still shows {shown} "
+                                             f"after {c.attempts} attempts (the last ones by SET_MODE)")
+        else:
+            reason = f"no answer from the vehicle after {c.attempts} attempts"
+        self._resolve(c, CommandStatus.TIMED_OUT, reason)
+
+    def _vehicle_reason(self, c: _Command, fallback: str) -> str:
+        """The vehicle's own words since the command: its warnings first (ArduCopter explains a refusal at
+        NOTICE or worse), not the INFO lines that happened to arrive meanwhile."""
+        said = [m for m in self._store.messages_since(c.message_index) if m.source == "vehicle"]
+        texts = [m.text for m in said if m.severity <= Severity.NOTICE] or [m.text for m in said]
+        return "; ".join(texts[-3:]) + f" ({fallback})" if texts else fallback
+
+    def _resolve(self, c: _Command, status: CommandStatus, reason: str = "", remove: bool = True) -> None:
+        if remove and self._pending.get(c.key) is c:
+            del self._pending[c.key]
+        if not c.settled:
+            c.settled = True
+            self._notifier.settle(c.future, self._store.record_locked(c.name, status, reason, c.attempts))
+
+
+def _mode_name(number: int) -> str:
+    from .telemetry import COPTER_MODE_NAMES
+    return COPTER_MODE_NAMES.get(number, f"MODE({number})")

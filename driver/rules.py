@@ -1,0 +1,56 @@
+"""Flight rules every front end shows but only the driver decides: altitude and distance limits, and which
+modes a pilot without an RC transmitter should not pick in flight. The viewer and the console only word
+them."""
+from __future__ import annotations
+
+import math
+
+from pymavlink import mavutil
+
+from . import frames
+
+__all__ = ["COPTER_MODES", "MIN_TAKEOFF_ALTITUDE", "MAX_ALTITUDE", "MIN_GOTO_ALTITUDE", "THROTTLE_MODES",
+           "takeoff_altitude_problem", "go_to_problem", "mode_warning"]
+
+#: ArduCopter custom_mode numbers by name, from pymavlink's own table.
+COPTER_MODES: dict[str, int] = {name: number for number, name in mavutil.mode_mapping_acm.items()}
+
+MIN_TAKEOFF_ALTITUDE = 0.5         # m above home: lower is no takeoff
+MAX_ALTITUDE = 120.0               # m above home: no takeoff or go-to target above it (EU open category)
+MIN_GOTO_ALTITUDE = 1.0            # m above home
+
+#: Modes in which ArduCopter takes the throttle (and so the altitude) from the RC transmitter: a pilot
+#: flying from a laptop has none, so the vehicle descends (ALT_HOLD, SPORT hold at mid-stick only with sticks)
+#: or falls (STABILIZE, ACRO, DRIFT at zero throttle).
+THROTTLE_MODES = {
+    "STABILIZE": "throttle comes straight from the RC transmitter: without one the motors go to idle and it falls",
+    "ACRO": "throttle comes straight from the RC transmitter: without one the motors go to idle and it falls",
+    "DRIFT": "throttle comes straight from the RC transmitter: without one the motors go to idle and it falls",
+    "ALT_HOLD": "climb and descent come from the RC transmitter's throttle stick: without one it descends",
+    "SPORT": "climb and descent come from the RC transmitter's throttle stick: without one it descends",
+}
+
+
+def takeoff_altitude_problem(altitude: float, ceiling: float = MAX_ALTITUDE) -> str | None:
+    """Why ``altitude`` cannot be a takeoff target, or None: one rule for the driver, its CLI and console."""
+    if frames.finite(altitude) and MIN_TAKEOFF_ALTITUDE <= altitude <= ceiling:
+        return None
+    return f"altitude must be {MIN_TAKEOFF_ALTITUDE:g} to {ceiling:g} m"
+
+
+def go_to_problem(north: float, east: float, altitude: float, max_altitude: float, max_distance: float) -> str | None:
+    """Why a go-to target (metres from home) is outside the configured limits, or None."""
+    if not frames.finite(north, east, altitude):
+        return "coordinates are not finite numbers"
+    if not MIN_GOTO_ALTITUDE <= altitude <= max_altitude or math.hypot(north, east) > max_distance:
+        return (f"outside the limits: {MIN_GOTO_ALTITUDE:g} to {max_altitude:g} m above home, at most "
+                f"{max_distance:g} m from it")
+    return None
+
+
+def mode_warning(mode: str, flying: bool) -> str | None:
+    """Why switching to ``mode`` now needs the pilot's confirmation, or None when it does not."""
+    why = THROTTLE_MODES.get(mode.upper())
+    if not flying or why is None:
+        return None
+    return f"{mode.upper()} in flight: its {why}. Only with an RC transmitter in hand."

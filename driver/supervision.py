@@ -1,0 +1,166 @@
+"""Link supervision: is the vehicle there, how healthy is the link, and what must we ask it for.
+
+Counts frames and sequence gaps per component, ages the autopilot's heartbeat, declares the link lost
+and recovered, decides when a half-open TCP link must be reopened, and asks the vehicle for what a
+ground station needs and does not get unasked: its streams (again when it forgets them, e.g. after a
+reboot), its firmware version (AUTOPILOT_VERSION), its home position (REQUEST_MESSAGE, or MAV_CMD_GET_HOME_POSITION on firmware without it, again
+after arming since arming sets home) and FS_GCS_ENABLE (is there a GCS failsafe if we go away?).
+Runs with the driver's state lock held and returns the MAVLink messages to send; sends nothing itself.
+"""
+from __future__ import annotations
+
+import collections
+
+from pymavlink.dialects.v20 import ardupilotmega as mavlink
+
+from .commands import Capabilities
+from .state import LinkHealth, LinkStatus
+
+__all__ = ["LinkSupervisor"]
+
+HOME_RETRY = 2.0             # s between home requests while the vehicle has not sent it
+PARAM_RETRY = 3.0            # s between FS_GCS_ENABLE reads while unanswered
+PARAM_TRIES = 3
+STREAM_SILENCE = 3.0         # s without ATTITUDE before the streams are asked for again
+REOPEN_AFTER = 5.0           # s past the loss timeout before a reconnectable link is reopened
+
+
+class LinkSupervisor:
+    def __init__(self, config, transport, capabilities: Capabilities, target):
+        self._cfg = config
+        self._transport = transport
+        self._caps = capabilities
+        self._target = target                 # () -> (system, component)
+        self.status = LinkStatus.WAITING
+        self.lost_count = 0
+        self.lost_at = 0.0
+        self.last_heartbeat: float | None = None          # transport clock
+        self.last_attitude = 0.0                          # monotonic
+        self.rx_count = 0
+        self.rx_lost = 0
+        self.bad_crc = 0
+        self.last_seq: dict[int, int] = {}
+        self._window: collections.deque[tuple[float, int, int]] = collections.deque(maxlen=6)
+        self._streams_at: float | None = None
+        self._home_wanted_since: float | None = None
+        self._home_asked_at = -1e9
+        self._home_tries = 0
+        self._param_tries = 0
+        self._param_asked_at = -1e9
+        self.param_known = False
+        self.version_known = False
+        self._version_tries = 0
+        self._version_asked_at = -1e9
+
+    # -- frames (reader thread; the driver counts rx_count, rx_lost and last_seq inline, the hot path) ------
+    def reset_sequences(self) -> None:
+        self.last_seq.clear()
+
+    def heartbeat(self, now: float) -> str | None:
+        """The autopilot's heartbeat; returns "first", "recovered" or None (no change of status)."""
+        first = self.last_heartbeat is None
+        self.last_heartbeat = self._transport.clock()
+        if self.status is LinkStatus.OK:
+            return None
+        recovered = self.status is LinkStatus.LOST
+        self.status = LinkStatus.OK
+        if not self._transport.is_replay:
+            self._streams_at = None               # ask at once, before anyone sees the link up
+            self._home_wanted_since = now
+            self._param_tries = 0 if not self.param_known else PARAM_TRIES
+            self._version_tries = 0 if not self.version_known else PARAM_TRIES
+        return "recovered" if recovered else ("first" if first else "up")
+
+    def armed_changed(self, armed: bool, now: float) -> None:
+        if armed:                                 # arming sets home: ask for the new one
+            self._home_wanted_since, self._home_tries = now, 0
+
+    def home_received(self) -> None:
+        self._home_wanted_since = None
+
+    # -- the ticker (lock held) -----------------------------------------------------------------------------
+    def tick(self, now: float) -> tuple[list, str | None, bool]:
+        """(messages to send, "lost" when the link was just lost, whether to reopen the link)."""
+        out: list = []
+        event = None
+        reopen = False
+        cfg = self._cfg
+        clock = self._transport.clock()
+        if (self.status is LinkStatus.LOST and self._transport.reconnectable and self.last_heartbeat is not None
+                and clock - self.last_heartbeat > cfg.loss_timeout + REOPEN_AFTER and now - self.lost_at > REOPEN_AFTER):
+            self.lost_at = now
+            reopen = True                         # a half-open TCP link never errors: reopen it
+        if not self._window or now - self._window[-1][0] >= 1.0:
+            self._window.append((now, self.rx_count, self.rx_lost))
+        if self.last_heartbeat is not None and self.status is LinkStatus.OK:
+            if clock - self.last_heartbeat > cfg.loss_timeout:
+                self.status = LinkStatus.LOST
+                self.lost_at = now
+                self.lost_count += 1
+                event = "lost"
+            elif not self._transport.is_replay:
+                out += self._requests(now)
+        return out, event, reopen
+
+    def _requests(self, now: float) -> list:
+        out = []
+        if self._streams_at is None or (now - self.last_attitude > STREAM_SILENCE and now - self._streams_at > 5.0):
+            out += self.stream_requests()
+            self._streams_at = now
+        if self._home_wanted_since is not None and now - self._home_asked_at >= HOME_RETRY:
+            out += self._home_request()
+            self._home_asked_at = now
+        if not self.version_known and self._version_tries < PARAM_TRIES and now - self._version_asked_at >= PARAM_RETRY:
+            system, component = self._target()           # AUTOPILOT_VERSION: understood since ArduCopter 3.2
+            out.append(mavlink.MAVLink_command_long_message(
+                system, component, mavlink.MAV_CMD_REQUEST_AUTOPILOT_CAPABILITIES, 0, 1, 0, 0, 0, 0, 0, 0))
+            self._version_tries += 1
+            self._version_asked_at = now
+        if not self.param_known and self._param_tries < PARAM_TRIES and now - self._param_asked_at >= PARAM_RETRY:
+            system, component = self._target()
+            out.append(mavlink.MAVLink_param_request_read_message(system, component, b"FS_GCS_ENABLE", -1))
+            self._param_tries += 1
+            self._param_asked_at = now
+        return out
+
+    def stream_requests(self) -> list:
+        """REQUEST_DATA_STREAM as MAVProxy, plus per-message intervals where the firmware has them."""
+        cfg = self._cfg
+        system, component = self._target()
+        rate = max(1, int(cfg.stream_rate))
+        fast = max(rate, int(cfg.attitude_rate))
+        out = [mavlink.MAVLink_request_data_stream_message(system, component, stream, hz, 1)
+               for stream, hz in ((mavlink.MAV_DATA_STREAM_EXTENDED_STATUS, rate),
+                                  (mavlink.MAV_DATA_STREAM_POSITION, rate),
+                                  (mavlink.MAV_DATA_STREAM_EXTRA1, fast),
+                                  (mavlink.MAV_DATA_STREAM_EXTRA2, fast),
+                                  (mavlink.MAV_DATA_STREAM_EXTRA3, max(1, rate // 2)),
+                                  (mavlink.MAV_DATA_STREAM_RAW_SENSORS, max(1, rate // 2)))]
+        if self._caps.message_interval is not False:   # 4.7 sends EXTENDED_SYS_STATE only when asked so
+            for msg_id, hz in ((mavlink.MAVLINK_MSG_ID_EXTENDED_SYS_STATE, rate),
+                               (mavlink.MAVLINK_MSG_ID_HOME_POSITION, 0.5)):
+                out.append(mavlink.MAVLink_command_long_message(
+                    system, component, mavlink.MAV_CMD_SET_MESSAGE_INTERVAL, 0, msg_id, 1e6 / hz, 0, 0, 0, 0, 0))
+        return out
+
+    def _home_request(self) -> list:
+        system, component = self._target()
+        self._home_tries += 1
+        if self._caps.request_message is not False and self._home_tries % 2:
+            return [mavlink.MAVLink_command_long_message(system, component, mavlink.MAV_CMD_REQUEST_MESSAGE, 0,
+                                                         mavlink.MAVLINK_MSG_ID_HOME_POSITION, 0, 0, 0, 0, 0, 0)]
+        return [mavlink.MAVLink_command_long_message(system, component, mavlink.MAV_CMD_GET_HOME_POSITION, 0,
+                                                     0, 0, 0, 0, 0, 0, 0)]
+
+    def health(self, mavlink_version: int, status: LinkStatus | None = None) -> LinkHealth:
+        clock = self._transport.clock()
+        age = None if self.last_heartbeat is None else max(0.0, clock - self.last_heartbeat)
+        rate = loss = 0.0
+        if len(self._window) >= 2:
+            (t0, c0, l0), (t1, c1, l1) = self._window[0], self._window[-1]
+            if t1 > t0:
+                rate = (c1 - c0) / (t1 - t0)
+            if (c1 - c0) + (l1 - l0) > 0:
+                loss = 100.0 * (l1 - l0) / ((c1 - c0) + (l1 - l0))
+        return LinkHealth(status or self.status, self._transport.description, age, rate, loss, self.rx_count,
+                          self.rx_lost, self.bad_crc, mavlink_version, self.lost_count)

@@ -1,0 +1,59 @@
+"""Modes that need an RC transmitter: in flight the window asks first, saying why (the driver's words)."""
+from __future__ import annotations
+
+import pytest
+from PyQt5.QtWidgets import QMessageBox
+
+from driver.rules import mode_warning
+from viewer_fixtures import pick_mode, viewer_settings, window, window_factory  # noqa: F401  (fixtures)
+
+pytestmark = pytest.mark.timeout(120)
+
+
+def test_in_flight_stabilize_is_asked_first_and_cancel_keeps_guided(qtbot, sim, flying, window_factory):
+    w = window_factory(flying, takeoff_altitude=3.0)
+    sel = w.modeSelector
+    qtbot.waitUntil(lambda: sel.mode == "GUIDED", timeout=10000)
+    sent: list[str] = []
+    w.adapter.commandSent.connect(sent.append)
+
+    pick_mode(qtbot, sel, "STABILIZE")
+    qtbot.waitUntil(lambda: w.mode_box is not None and w.mode_box.isVisible(), timeout=3000)
+    box = w.mode_box
+    assert box.text() == mode_warning("STABILIZE", True) and "RC transmitter" in box.text()
+    assert box.defaultButton() is box.button(QMessageBox.Cancel)
+    box.button(QMessageBox.Cancel).click()
+    qtbot.waitUntil(lambda: w.mode_box is None, timeout=3000)
+    assert sent == [] and sim.truth().mode == "GUIDED"
+
+    pick_mode(qtbot, sel, "ALT_HOLD")
+    qtbot.waitUntil(lambda: w.mode_box is not None and w.mode_box.isVisible(), timeout=3000)
+    w.mode_box.button(QMessageBox.Yes).click()
+    assert sent == ["set_mode"]
+    qtbot.waitUntil(lambda: sim.truth().mode == "ALT_HOLD", timeout=10000)
+
+
+def test_in_flight_loiter_needs_no_question(qtbot, sim, flying, window_factory):
+    w = window_factory(flying, takeoff_altitude=3.0)
+    qtbot.waitUntil(lambda: w.modeSelector.mode == "GUIDED", timeout=10000)
+    pick_mode(qtbot, w.modeSelector, "LOITER")
+    assert w.mode_box is None
+    qtbot.waitUntil(lambda: sim.truth().mode == "LOITER", timeout=10000)
+
+
+def test_on_the_ground_no_mode_needs_a_question():
+    assert all(mode_warning(m, flying=False) is None for m in ("STABILIZE", "ACRO", "ALT_HOLD", "DRIFT", "SPORT"))
+    assert all(mode_warning(m, flying=True) for m in ("STABILIZE", "ACRO", "ALT_HOLD", "DRIFT", "SPORT"))
+    assert mode_warning("LOITER", flying=True) is None
+
+
+def test_the_console_asks_for_confirm_in_flight(flying, sim):
+    import io
+    from driver.console import Console
+    out = io.StringIO()
+    console = Console(flying, stdout=out)
+    console.onecmd("mode STABILIZE")
+    assert "mode STABILIZE confirm" in out.getvalue()
+    assert flying.state().mode == "GUIDED" and sim.truth().mode == "GUIDED"
+    console.onecmd("mode LOITER")
+    assert flying.wait_for(lambda s: s.mode == "LOITER", 10)
