@@ -130,18 +130,46 @@ def test_unknown_format_lists_supported_ones(serve):
     assert "RGB8" in err.value.what and "YUY2" in err.value.what
 
 
-def test_encoded_once_per_frame_whatever_the_clients(tmp_path):
-    servant = CameraI({"Uri": "sim"}, StillVehicle())
-    try:
-        wait(servant.source.latest, what="first frame")
+class EncodeCountingCamera(CameraI):
+    """Notes each image it encodes: (frame index, format)."""
+
+    def __init__(self, *args):
+        super().__init__(*args)
+        self.encoded: list[tuple[int, str]] = []
+
+    def _encode(self, frame, fmt):
+        self.encoded.append((frame.index, fmt))
+        return CameraI._encode(frame, fmt)
+
+
+def test_encoded_once_per_frame_whatever_the_clients(serve):
+    """However many clients ask, and however often, each frame is encoded once per format; a newer frame is
+    encoded anew."""
+    servant = EncodeCountingCamera({"Uri": "sim", "Width": "160", "Height": "120"}, StillVehicle())  # quick asks
+    encoded = servant.encoded
+    proxy = serve(servant, "Camera")
+    clients = [camera_proxy(serve, proxy) for _ in range(3)]
+    wait(servant.source.latest, what="first frame")
+
+    def asked_within_one_frame():
+        """Ask from here and from every client while the source shows one frame; (frame, the answers here)
+        once that happened, None if a new frame came in between."""
         frame = servant.source.latest()
-        a = servant.getImageData("RGB8")
-        if servant.source.latest() is frame:
-            assert servant.getImageData("RGB8") is a
-        wait(lambda: servant.source.latest().index > frame.index + 1, what="a newer frame")
-        assert servant.getImageData("RGB8") is not a
-    finally:
-        servant.close()
+        first = servant.getImageData("RGB8")
+        over_ice = [c.getImageData("RGB8") for c in clients]
+        again = servant.getImageData("RGB8")
+        if servant.source.latest() is not frame:
+            return None
+        return frame, first, again, over_ice
+
+    frame, first, again, over_ice = wait(asked_within_one_frame, what="all asks within one frame")
+    assert again is first                                        # the same encoded image, not a new one
+    assert encoded.count((frame.index, "RGB8")) == 1
+    assert all(d.pixelData == first.pixelData for d in over_ice)
+    wait(lambda: servant.source.latest().index > frame.index + 1, what="a newer frame")
+    newer = servant.getImageData("RGB8")
+    assert newer is not first and any(index > frame.index for index, _ in encoded)
+    assert len(encoded) == len(set(encoded))                     # never the same frame twice in one format
 
 
 def test_no_image_yet_then_source_gone(serve, tmp_path):

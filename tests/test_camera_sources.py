@@ -11,8 +11,10 @@ import pytest
 
 from camera_media import COLOURS, UdpSender, frames_and_rate, free_udp_port, wait, write_clip, write_ts
 from driver.camera import VideoRecorder, open_source, save_snapshot
+from driver.camera.record import MEASURE_FRAMES, MEASURE_S, measured_fps
 from driver.camera.sim import SKY, SimulatedCamera
 from driver.camera.solo import SoloSource, write_sdp
+from driver.camera.source import Frame
 from driver.state import Attitude, LocalPosition, VehicleState
 
 
@@ -284,18 +286,81 @@ def test_snapshot_and_recording_are_readable(tmp_path, sources):
     assert colours == COLOURS
 
 
-def test_recording_plays_at_the_source_frame_rate(tmp_path, sources):
-    """Nobody tells the recorder the rate: a 10 frames/s camera makes a 10 frames/s file, every frame in it."""
-    clip = write_clip(str(tmp_path / "ten.mp4"), COLOURS, repeat=5, fps=10)
-    src = sources(clip + "?loop=1", start=False)
-    recorder = VideoRecorder(str(tmp_path / "rec.mp4"))
-    src.add_listener(recorder.push)
+def made_frames(rate: float, count: int, size=(320, 240)) -> list[Frame]:
+    """``count`` frames of a camera filming at ``rate`` frames/s, decode times exactly 1/rate apart (no clock
+    involved), cycling through COLOURS."""
+    frames = []
+    for i in range(count):
+        image = np.empty((size[1], size[0], 3), np.uint8)
+        image[:] = COLOURS[i % len(COLOURS)]
+        frames.append(Frame(image, i + 1, 1000.0 + i / rate, 1.7e9 + i / rate))
+    return frames
+
+
+def file_colours(path: str) -> list[tuple[int, int, int]]:
+    """The colour of each frame of a video file, in order."""
+    cap = cv2.VideoCapture(path)
+    colours = []
+    while True:
+        ok, bgr = cap.read()
+        if not ok:
+            break
+        colours.append(nearest_colour(bgr[bgr.shape[0] // 2, bgr.shape[1] // 2][::-1]))
+    cap.release()
+    return colours
+
+
+@pytest.mark.parametrize("rate, count, declared", [
+    (10.0, 25, 10.0),          # more than the measuring second
+    (12.5, 25, 12.5),          # not a whole rate: kept as it is
+    (29.97, 40, 30.0),         # NTSC: the whole rate it stands for
+    (10.0, 5, 10.0),           # stopped within the first second: measured from what there is
+])
+def test_recording_declares_the_rate_the_frames_were_decoded_at(tmp_path, rate, count, declared):
+    """Nobody tells the recorder the rate: the file declares the one the frames' own decode times give, and holds
+    every frame handed to it, in order. (The decode times are made here, so no clock and no load matter.)"""
+    frames = made_frames(rate, count)
+    recorder = VideoRecorder(str(tmp_path / "rec.mp4"), max_queue=count)     # room for all: nothing dropped
+    for frame in frames:
+        recorder.push(frame)
+    path = recorder.stop()
+    assert recorder.error == "" and recorder.frames_dropped == 0
+    n, fps = frames_and_rate(path)
+    assert fps == pytest.approx(declared, abs=1e-3)
+    assert n == recorder.frames_written == count
+    assert file_colours(path) == [COLOURS[i % len(COLOURS)] for i in range(count)]
+
+
+def rate_of(delivered: list[Frame]) -> float:
+    """The rate ``delivered`` came at by their own decode times, over the span the recorder measures (its first
+    second of frames, or MEASURE_FRAMES of them, or all there are), in the recorder's rounding."""
+    window = []
+    for frame in delivered:
+        window.append(frame)
+        if len(window) >= MEASURE_FRAMES or frame.decoded - delivered[0].decoded >= MEASURE_S:
+            break
+    return measured_fps(window)
+
+
+def test_recording_from_a_camera_holds_each_delivered_frame_at_its_rate(tmp_path, sources):
+    """A file camera filmed at 10 frames/s, recorded whole: the file holds exactly the frames the camera delivered,
+    and declares the rate they came at (counted from them, never from how long the test took)."""
+    clip = write_clip(str(tmp_path / "ten.mp4"), COLOURS, repeat=2, fps=10)      # 12 frames, 1.2 s
+    src = sources(clip, start=False)
+    recorder = VideoRecorder(str(tmp_path / "rec.mp4"), max_queue=100)         # room for all: nothing dropped
+    delivered: list[Frame] = []
+
+    def record(frame):
+        delivered.append(frame)
+        recorder.push(frame)
+    src.add_listener(record)
     src.start()
-    wait(lambda: recorder.frames_written >= 20, what="2 s recorded")
-    src.remove_listener(recorder.push)
+    wait(lambda: src.status().state == "ended", what="end of file")
     n, fps = frames_and_rate(recorder.stop())
-    assert fps == pytest.approx(10, abs=1)
-    assert n == recorder.frames_written >= 20 and recorder.frames_dropped == 0
+    assert len(delivered) == len(COLOURS) * 2 and recorder.frames_dropped == 0
+    assert n == recorder.frames_written == len(delivered)
+    assert fps == pytest.approx(rate_of(delivered), abs=1e-3)
+    assert file_colours(recorder.path) == [c for c in COLOURS for _ in range(2)]
 
 
 def horizon_rows(image: np.ndarray, columns=(100, 540)) -> list[int]:

@@ -8,9 +8,26 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from driver.state import CommandStatus, LandedState, SequencePhase
 
+#: The deadman of the drivers that fly here (real seconds). The deadman is a real-time safety net, tested on
+#: its own (test_driver_link.py); with its default 0.5 s a test thread that a busy machine stalls for half a
+#: second would end a held stick early, and the vehicle would fly less far than the test holds it.
+STICK_DEADMAN = 10.0
+
+
+@pytest.fixture
+def vehicle(sim, vehicle_factory):
+    """conftest's ``vehicle`` (and so ``flying``), with a deadman no stalled test thread runs into."""
+    v = vehicle_factory(f"tcp:127.0.0.1:{sim.tcp_port}", deadman=STICK_DEADMAN)
+    assert v.wait_for(lambda s: s.connected, 10), "no heartbeat from the simulated vehicle"
+    return v
+
 
 def hold_velocity(vehicle, sim, forward, right, up, yaw_rate, sim_seconds):
-    """Act as a pilot holding the sticks: refresh the command until ``sim_seconds`` of vehicle time pass."""
+    """Act as a pilot holding the sticks: refresh the command until ``sim_seconds`` of vehicle time pass.
+
+    The command holds until the vehicle's clock has moved on ``sim_seconds``, however slowly this thread runs;
+    fly a driver with a deadman far above the refresh (:data:`STICK_DEADMAN`)."""
+    assert vehicle.config.deadman >= STICK_DEADMAN, "a stalled refresh would let the deadman end the stick"
     end = sim.truth().time + sim_seconds
     while sim.truth().time < end:
         assert vehicle.set_velocity(forward, right, up, yaw_rate)
@@ -259,11 +276,16 @@ def test_a_slow_result_callback_delays_neither_link_nor_caller(vehicle, sim):
         entered.set()
         release.wait(30)                                # e.g. a client that chains a blocking call
 
-    vehicle.set_mode("LOITER").add_done_callback(slow)
+    assert vehicle.wait_for(lambda s: s.readiness.ready_to_arm, 15)   # both modes need a position
+    loiter = vehicle.set_mode("LOITER")
+    loiter.add_done_callback(slow)
     try:
         assert entered.wait(10)
+        assert loiter.result().status is CommandStatus.ACCEPTED and sim.truth().mode == "LOITER"
         count = vehicle.state().link.packets_received
         assert vehicle.wait_for(lambda s: s.link.packets_received > count + 20, 10), "the link stalled"
-        assert vehicle.set_mode("GUIDED").result(timeout=10).ok is not None
+        result = vehicle.set_mode("GUIDED").result(timeout=10)
+        assert result.status is CommandStatus.ACCEPTED, str(result)
+        assert sim.truth().mode == "GUIDED"
     finally:
         release.set()

@@ -136,9 +136,13 @@ def test_follows_a_mavlink2_vehicle_from_mavlink1(vehicle, sim):
     first = list(sim.received_messages)[0]
     assert first[2] == 1                               # we start on MAVLink 1
     assert vehicle.wait_for(lambda s: s.link.mavlink_version == 2, 5)
-    n = len(sim.received_messages)
+    assert vehicle.wait_for(lambda s: s.readiness.ready_to_arm, 15)
+    since = sim.truth().time
     assert vehicle.set_mode("LOITER").result(timeout=10).ok
-    assert list(sim.received_messages)[-1][2] == 2
+    assert sim.truth().mode == "LOITER"
+    # the command went out in MAVLink 2 (heartbeats already on their way may still be MAVLink 1)
+    commands = [version for t, kind, version in list(sim.received_messages) if t >= since and kind == "COMMAND_LONG"]
+    assert commands and set(commands) == {2}, commands
 
 
 def test_tlog_reads_back_with_pymavlink_and_replays(flying, sim, vehicle_factory, tmp_path):
@@ -166,6 +170,20 @@ def test_tlog_reads_back_with_pymavlink_and_replays(flying, sim, vehicle_factory
     assert replay.takeoff().result(timeout=2).status is CommandStatus.REJECTED
 
 
+def vehicle_frames_until(path: str, seconds: float, system: int = 1) -> int:
+    """Frames of the vehicle in the first ``seconds`` of a .tlog (from its first heartbeat on), counted by pymavlink:
+    what a replay paused there has delivered."""
+    log = mavutil.mavlink_connection(path)
+    start, count = None, 0
+    while (m := log.recv_match()) is not None:
+        start = m._timestamp if start is None else start
+        if m._timestamp - start > seconds:
+            break
+        if m.get_srcSystem() == system and m.get_type() != "BAD_DATA" and (count or m.get_type() == "HEARTBEAT"):
+            count += 1
+    return count
+
+
 def test_replay_pauses_and_resumes(flying, vehicle_factory):
     path = flying.config.tlog_path
     flying.close()
@@ -173,12 +191,17 @@ def test_replay_pauses_and_resumes(flying, vehicle_factory):
     assert replay.wait_for(lambda s: s.connected, 10)
     replay.replay.pause()
     at = replay.replay.position
-    count = replay.state().link.packets_received
-    assert replay.wait_for(lambda s: False, 0.5) is None       # half a second passes, paused
-    assert replay.replay.position == at and replay.state().link.packets_received == count
-    assert replay.state().connected                             # a pause is not a lost link
+    # the state catches up with exactly what was recorded up to the pause, and not one frame more
+    expected = vehicle_frames_until(path, at)
+    s = replay.wait_for(lambda s: s.link.packets_received >= expected, 10)
+    assert s is not None and s.link.packets_received == expected, (replay.state().link, expected)
+    for _ in range(3):          # three link-health refreshes later, still there (nothing changes without one)
+        s = replay.wait_for(lambda new, old=s: new is not old, 1) or replay.state()
+        assert s.link.packets_received == expected, s.link
+    assert replay.replay.paused and replay.replay.position == at
+    assert s.connected                                          # a pause is not a lost link
     replay.replay.resume()
-    assert replay.wait_for(lambda s: s.link.packets_received > count, 5)
+    assert replay.wait_for(lambda s: s.link.packets_received > expected, 5)
 
 
 def test_forwarding_to_another_ground_station(sim, vehicle_factory):

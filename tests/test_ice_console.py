@@ -79,14 +79,22 @@ def test_console_answers_bad_input_clearly(vehicle):
         assert command in out.getvalue()
 
 
-def test_console_arm_check_safety_and_parachute_reach_the_vehicle(vehicle):
+def test_console_arm_check_safety_and_parachute_reach_the_vehicle(vehicle, sim):
+    autopilot = sim.autopilot
+    # the vehicle starts from the opposite of what the commands ask: each must reach it to show
+    autopilot.params["ARMING_CHECK"] = 0
+    autopilot.params["CHUTE_ENABLED"] = 0
+    autopilot.safety_on = True
     console, out = console_for(vehicle)
     console.onecmd("arm check all")
     console.onecmd("arm safetyoff")
     console.onecmd("parachute enable")
-    assert eventually(lambda: "param ARMING_CHECK=1" in out.getvalue() and "safety off" in out.getvalue()
-                      and "parachute enable" in out.getvalue(), 15), out.getvalue()
-    # the safety switch has no acknowledgement: said so, not "accepted (sent (not acknowledged))"
+    assert eventually(lambda: autopilot.params["ARMING_CHECK"] == 1 and not autopilot.safety_on
+                      and autopilot.params["CHUTE_ENABLED"] == 1, 15), (autopilot.params, autopilot.safety_on)
+    # and the console says what the vehicle answered: confirmed, acknowledged, or (the safety switch has no
+    # acknowledgement) just sent, not "accepted (sent (not acknowledged))"
+    assert eventually(lambda: "param ARMING_CHECK=1: accepted\n" in out.getvalue()
+                      and "parachute enable: accepted\n" in out.getvalue(), 15), out.getvalue()
     assert "safety off: sent (not acknowledged)\n" in out.getvalue(), out.getvalue()
 
 
@@ -171,11 +179,15 @@ class Output:
         return "stdout:\n" + "".join(self.out) + "\nstderr:\n" + "".join(self.err)
 
 
-def test_python_m_driver_daemon_runs_cmd_and_serves_jderobot():
-    # Speed-up 2: the simulated ArduCopter disarms DISARM_DELAY (10 sim-s) after arming without a takeoff;
-    # at 4x that is 2.5 s of wall time, less than one of the driver's command retries (3 s) on a busy machine.
+def test_python_m_driver_daemon_runs_cmd_and_serves_jderobot(sim_factory):
+    # The vehicle is this test's, with no disarm of its own after arming (DISARM_DELAY 0): however slowly a busy
+    # machine runs the server's takeoff, the vehicle waits for it, at any speed-up.
+    sim = sim_factory(auto_disarm_after=0)
     port = free_port()
-    proc = _server(port, "--daemon", "--cmd", "takeoff 2", speedup=2)
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "driver", "--master", f"tcp:127.0.0.1:{sim.tcp_port}", "--no-log",
+         "--one-port", str(port), "--daemon", "--cmd", "takeoff 2"],
+        cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     output = Output(proc)
     com = Ice.initialize(["--Ice.Default.InvocationTimeout=3000"])
     try:
@@ -185,6 +197,8 @@ def test_python_m_driver_daemon_runs_cmd_and_serves_jderobot():
         status = mavlinkserver.VehiclePrx.uncheckedCast(com.stringToProxy(f"Vehicle:tcp -h 127.0.0.1 -p {port}"))
         assert eventually(lambda: pose3d.getPose3DData().z > 1.7, 10), (pose3d.getPose3DData(), output)
         assert status.getStatus(-1, -1).mode == "GUIDED"
+        truth = sim.truth()
+        assert truth.armed and truth.mode == "GUIDED" and truth.altitude > 1.7, truth
     finally:
         com.destroy()
         proc.send_signal(signal.SIGTERM)

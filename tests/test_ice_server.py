@@ -162,6 +162,10 @@ def test_waypoint_flies_to_enu_position(flying, jde):
 
 
 def test_pose_and_navdata_match_the_vehicle(flying, jde):
+    # every value the autopilot sends is carried: wait until the vehicle has sent each one
+    assert flying.wait_for(lambda s: None not in (s.environment.pressure_hpa, s.environment.mag,
+                                                  s.environment.accel_g, s.environment.wind_speed), 15), \
+        flying.state().environment
     assert eventually(lambda: jde.Navdata.getNavdata().state == convert.NAV_HOVERING, 15)   # settled
     pose, nav = jde.Pose3D.getPose3DData(), jde.Navdata.getNavdata()
     s = flying.state()
@@ -174,15 +178,11 @@ def test_pose_and_navdata_match_the_vehicle(flying, jde):
     assert angle_between(math.radians(nav.rotZ), math.pi / 2 - s.attitude.yaw) < math.radians(3)
     assert nav.rotX == pytest.approx(math.degrees(s.attitude.roll), abs=2)
     assert abs(nav.vx) < 300 and abs(nav.vy) < 300 and abs(nav.vz) < 300
-    env = s.environment                                 # every value the autopilot sends is carried
-    if env.pressure_hpa is not None:
-        assert nav.pressure == pytest.approx(env.pressure_hpa * 100, rel=0.01)
-    if env.mag is not None:
-        assert (nav.magX, nav.magY, nav.magZ) != (0, 0, 0)
-    if env.accel_g is not None:
-        assert nav.az == pytest.approx(1.0, abs=0.2)
-    if env.wind_speed is not None:
-        assert nav.windSpeed == pytest.approx(env.wind_speed, abs=0.5)
+    env = s.environment
+    assert nav.pressure == pytest.approx(env.pressure_hpa * 100, rel=0.01)          # Pa
+    assert (nav.magX, nav.magY, nav.magZ) == pytest.approx(env.mag, abs=20) and env.mag != (0, 0, 0)
+    assert nav.az == pytest.approx(1.0, abs=0.2)                                     # hovering: 1 g up (FLU)
+    assert nav.windSpeed == pytest.approx(env.wind_speed, abs=0.5)
     assert (nav.tagsCount, list(nav.tagsType), list(nav.tagsDistance)) == (0, [], [])
 
 
@@ -199,21 +199,37 @@ def test_cmdvel_refuses_nan_and_huge_and_clamps_the_rest(vehicle, jde):
     assert (sp.forward, sp.right, sp.up, sp.yaw_rate) == pytest.approx((lim.horizontal, -1.0, -0.5, -0.3))
 
 
-def test_every_extra_operation_answers_on_the_ground(vehicle, jde, caplog):
+def test_every_extra_operation_answers_on_the_ground(vehicle, sim, jde, caplog):
     caplog.set_level(logging.INFO, logger="driver.ice")
     extra = jde.Extra
-    assert vehicle.wait_for(lambda s: s.mode != "", 10)
-    for call in (extra.toggleCam, lambda: extra.recordOnUsb(True), lambda: extra.recordOnUsb(False),
-                 lambda: extra.ledAnimation(3, 2.0, 1.0), lambda: extra.flightAnimation(1, 1.0), extra.flatTrim,
-                 extra.reset):
-        assert call() is None
-    assert "not supported on ArduCopter" in caplog.text
-    # flatTrim disarmed on the ground reaches the vehicle as a level calibration
+    assert vehicle.wait_for(lambda s: s.readiness.ready_to_arm, 15)
+    # the operations return nothing: each is seen by what it did (this server has no camera)
+    for call, said in ((extra.toggleCam, "Extra.toggleCam: no camera configured; nothing to switch"),
+                       (lambda: extra.recordOnUsb(True), "Extra.recordOnUsb(True): no camera to record"),
+                       (lambda: extra.recordOnUsb(False), "Extra.recordOnUsb(False): no camera to record"),
+                       (lambda: extra.ledAnimation(3, 2.0, 1.0), "Extra.ledAnimation(3, 2.0, 1.0): not supported "
+                                                                 "on ArduCopter"),
+                       (lambda: extra.flightAnimation(1, 1.0), "Extra.flightAnimation(1, 1.0): not supported on "
+                                                              "ArduCopter")):
+        call()
+        assert said in caplog.text, (said, caplog.text)
+    # flatTrim disarmed on the ground reaches the vehicle as a level calibration, which it accepts (the
+    # driver's own requests of the start-up, home and streams, are answered by now: none follows it)
+    assert vehicle.wait_for(lambda s: s.home is not None, 15)
+    extra.flatTrim()
+    assert eventually(lambda: sim.truth().last_command == "MAV_CMD_PREFLIGHT_CALIBRATION", 10, interval=0.01), \
+        sim.truth().last_command
     result = eventually(lambda: next((r for r in vehicle.state().results if r.command == "level calibration"
                                       and r.status is not CommandStatus.IN_PROGRESS), None), 15)
-    assert result is not None and result.status in (CommandStatus.ACCEPTED, CommandStatus.REFUSED)
+    assert result is not None and result.status is CommandStatus.ACCEPTED, result
+    # reset is Stop: on the ground, nothing to stop, and the vehicle stays as it was
+    extra.reset()
+    stop = eventually(lambda: next((r for r in vehicle.state().results if r.command == "stop"), None), 10)
+    assert stop is not None and stop.status is CommandStatus.ACCEPTED, stop
+    assert not sim.truth().armed and sim.truth().mode == "STABILIZE"
     extra.land()
-    assert eventually(lambda: any(r.command.startswith("mode LAND") for r in vehicle.state().results), 10)
+    assert eventually(lambda: sim.truth().mode == "LAND", 10), sim.truth()
+    assert vehicle.wait_for(lambda s: s.mode == "LAND", 10)
 
 
 def test_closing_the_server_answers_commands_still_waiting(vehicle_factory, server_factory, communicator):
@@ -307,7 +323,8 @@ CLIENT = textwrap.dedent("""
 """)
 
 
-def test_client_generated_by_slice2py_from_jderobot_files_only(vehicle, ice_server, tmp_path):
+def test_client_generated_by_slice2py_from_jderobot_files_only(vehicle, sim, ice_server, tmp_path):
+    assert vehicle.wait_for(lambda s: s.position is not None and s.home is not None, 15)   # telemetry flows
     jderobot_files = [f for f in slice_files(extension=False)]
     assert all("/jderobot/" in f for f in jderobot_files)
     generated = tmp_path / "generated"
@@ -324,11 +341,13 @@ def test_client_generated_by_slice2py_from_jderobot_files_only(vehicle, ice_serv
                           timeout=60, cwd=str(tmp_path))
     assert done.returncode == 0, done.stderr
     out = json.loads(done.stdout)
-    s = vehicle.state()
-    x, y, z, h, *q = convert.pose_enu(s)
-    assert out["pose"] == pytest.approx([x, y, z, h, *q], abs=0.05)
+    truth = sim.truth()                                 # on the ground at home, disarmed, still
+    x, y, z, h, q0, q1, q2, q3 = out["pose"]
+    assert (x, y, z, h) == pytest.approx((truth.east, truth.north, truth.altitude, 1.0), abs=0.05)   # ENU
+    assert q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3 == pytest.approx(1.0, abs=1e-6)
+    assert math.degrees(angle_between(enu_yaw(jderobot.Pose3DData(*out["pose"])), math.pi / 2 - truth.yaw)) < 1
     assert out["nav"]["vehicle"] == 1 and out["nav"]["tags"] == []
-    assert out["nav"]["state"] == convert.navdata_state(s)
+    assert out["nav"]["state"] == 2                     # the AR.Drone's "landed"
     assert out["answers"][0] == 0 and out["answers"][1] != 0
     assert "no camera source" in out["camera"]
     assert out["wp"] == "::jderobot::Pose3D"

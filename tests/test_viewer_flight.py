@@ -15,7 +15,7 @@ from PyQt5.QtWidgets import QApplication, QMessageBox
 from driver.state import LandedState, LinkStatus
 from uavviewer.flight_phase import FlightPhase
 
-from viewer_fixtures import viewer_settings, window, window_factory  # noqa: F401  (fixtures)
+from viewer_fixtures import pick_mode, viewer_settings, window, window_factory  # noqa: F401  (fixtures)
 
 pytestmark = pytest.mark.timeout(90)
 
@@ -110,17 +110,26 @@ def test_keyboard_w_moves_and_release_stops(qtbot, sim, flying, window):
     qtbot.waitUntil(lambda: speed(sim) < 0.2, timeout=20000)
 
 
-def test_keyboard_climb_and_yaw_axes(qtbot, sim, flying, window):
+def test_keyboard_climbs_and_yaws_the_vehicle(qtbot, sim, flying, window):
+    """↑ climbs and → turns the nose right: the simulated vehicle really does, and each stops with its key."""
     w = window
     wait_flying(qtbot, w)
+    start = sim.truth()
     qtbot.keyPress(w, Qt.Key_Up)
     qtbot.keyPress(w, Qt.Key_Right)
     sp = w.adapter.setpoint
     assert sp.up == pytest.approx(1.0) and sp.yaw_rate == pytest.approx(math.radians(45))
+    qtbot.waitUntil(lambda: sim.truth().vd < -0.5 and sim.truth().yaw_rate > 0.5
+                    and sim.truth().altitude > start.altitude + 0.5, timeout=20000)
+    assert speed(sim) < 0.3                              # climbing and turning on the spot, not sliding
     qtbot.keyRelease(w, Qt.Key_Up)
     assert w.adapter.setpoint.up == 0.0 and w.adapter.setpoint.yaw_rate > 0
+    # the climb stops, the turn goes on
+    qtbot.waitUntil(lambda: abs(sim.truth().vd) < 0.1 and sim.truth().yaw_rate > 0.5, timeout=20000)
     qtbot.keyRelease(w, Qt.Key_Right)
     assert w.adapter.setpoint.is_zero
+    qtbot.waitUntil(lambda: abs(sim.truth().yaw_rate) < 0.05 and abs(sim.truth().vd) < 0.1, timeout=20000)
+    assert sim.truth().altitude > start.altitude + 0.5
 
 
 def test_stop_holds_position(qtbot, sim, flying, window):
@@ -213,9 +222,55 @@ def test_instruments_and_plots_follow_the_vehicle(qtbot, sim, flying, window):
 
 def test_on_the_ground_the_pilot_sees_what_the_autopilot_waits_for(qtbot, sim_factory, vehicle_factory,
                                                                     window_factory):
-    late = sim_factory(ready_after=8.0)                     # 2 s of real time at the test speedup
+    late = sim_factory(ready_after=1e6)                     # not ready until the test says so
     w = window_factory(vehicle_factory(f"tcp:127.0.0.1:{late.tcp_port}"), takeoff_altitude=3.0)
-    qtbot.waitUntil(lambda: w.flightControls.phase is FlightPhase.ON_GROUND, timeout=10000)
-    qtbot.waitUntil(lambda: "waiting for" in w.phaseLabel.text(), timeout=5000)
-    assert "GPS fix" in w.phaseLabel.text() or "EKF" in w.phaseLabel.text()
+    qtbot.waitUntil(lambda: w.flightControls.phase is FlightPhase.ON_GROUND
+                    and "waiting for" in w.phaseLabel.text(), timeout=15000)
+    assert w.phaseLabel.text().startswith("On the ground · waiting for GPS fix")
+    late.config.ready_after = 0.0                           # the fix and the EKF come now
     qtbot.waitUntil(lambda: w.phaseLabel.text() == "On the ground · ready to arm", timeout=15000)
+    assert late.truth().ready
+
+
+def test_a_mode_picked_in_the_selector_reaches_the_vehicle(qtbot, sim, window):
+    w = window
+    sel = w.modeSelector
+    qtbot.waitUntil(lambda: sel.isEnabled() and sel.mode == "STABILIZE", timeout=15000)
+    sent: list[str] = []
+    w.adapter.commandSent.connect(sent.append)
+    pick_mode(qtbot, sel, "ALT_HOLD")
+    assert sent == ["set_mode"]
+    qtbot.waitUntil(lambda: sim.truth().mode == "ALT_HOLD", timeout=10000)
+    qtbot.waitUntil(lambda: sel.currentText() == "ALT_HOLD" and w.telemetry.text("mode") == "ALT_HOLD",
+                    timeout=5000)
+
+
+def test_a_takeoff_confirmed_after_the_link_was_lost_is_not_sent(qtbot, sim, vehicle_factory, window_factory):
+    """The window withdraws the takeoff question as soon as it shows a state the question no longer fits; should
+    the pilot's "Take off" come while the window is behind the vehicle (held here one snapshot behind, the link
+    lost in between), the window checks the newest state again: nothing is sent, and the pilot is told."""
+    v = vehicle_factory(f"tcp:127.0.0.1:{sim.tcp_port}", loss_timeout=1.0)
+    w = window_factory(v, takeoff_altitude=3.0)
+    sent: list[str] = []
+    w.adapter.commandSent.connect(sent.append)
+    qtbot.waitUntil(lambda: w.flightControls.main_button.isEnabled()
+                    and w.flightControls.main_button.text() == "Take off", timeout=15000)
+    qtbot.mouseClick(w.flightControls.main_button, Qt.LeftButton)
+    qtbot.waitUntil(lambda: w.takeoff_box is not None and w.takeoff_box.isVisible(), timeout=3000)
+    box = w.takeoff_box
+    w.adapter.stateChanged.disconnect(w.show_state)         # the window has not yet shown the newest state...
+    try:
+        sim.faults.link_down = True                         # ...in which the link is lost
+        qtbot.waitUntil(lambda: w.adapter.state.link.status is LinkStatus.LOST, timeout=10000)
+        assert w.takeoff_box is box and box.isVisible()
+        qtbot.mouseClick(box.button(QMessageBox.Yes), Qt.LeftButton)
+    finally:
+        w.adapter.stateChanged.connect(w.show_state)
+    assert "takeoff" not in sent
+    assert any(t.startswith("Takeoff not sent") for t in w.messages.texts())
+    qtbot.waitUntil(lambda: w.takeoff_box is None, timeout=3000)
+    sim.faults.link_down = False
+    qtbot.waitUntil(lambda: w.adapter.state.link.status is LinkStatus.OK
+                    and w.flightControls.main_button.isEnabled(), timeout=15000)
+    assert "takeoff" not in sent
+    assert not sim.truth().armed and not v.state().takeoff.active
