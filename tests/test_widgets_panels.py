@@ -28,12 +28,26 @@ def make(widget_cls, qtbot):
     return w
 
 
+def battery_from_autopilot(voltage, remaining) -> Battery:
+    """A 4S pack as the driver reads it from SYS_STATUS: "low" is the driver's rule, the panel only shows it."""
+    from collections import ChainMap
+    from pymavlink.dialects.v20 import ardupilotmega as mavlink
+    from driver import telemetry
+    msg = mavlink.MAVLink(None).sys_status_encode(
+        0, 0, 0, 0, 65535 if voltage is None else int(voltage * 1000), -1, -1 if remaining is None else int(remaining),
+        0, 0, 0, 0, 0, 0)
+    base = VehicleState(battery=Battery(cells=4, cells_source="configured"))
+    return telemetry.fold(ChainMap({}, base.__dict__), msg)["battery"]
+
+
 @pytest.mark.parametrize("voltage,remaining,low", [
-    (16.4, 90.0, False), (16.4, 19.0, True), (14.6, 60.0, True), (14.9, None, False), (None, 15.0, True)])
+    (16.4, 90.0, False), (16.4, 19.0, True), (14.6, 60.0, True), (15.6, None, False), (14.9, None, True),
+    (None, 15.0, True)])
 def test_battery_warning_colour(qtbot, voltage, remaining, low):
     t = make(TelemetryPanel, qtbot)
-    t.set_state(VehicleState(link=OK_LINK, mode="GUIDED",
-                             battery=Battery(voltage=voltage, remaining=remaining, cells=4)))
+    battery = battery_from_autopilot(voltage, remaining)
+    assert battery.low is low
+    t.set_state(VehicleState(link=OK_LINK, mode="GUIDED", battery=battery))
     assert t.color("battery") == (BAD if low else GOOD)
     if voltage is not None:
         assert f"{voltage:.2f} V" in t.text("battery")

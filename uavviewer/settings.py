@@ -8,6 +8,7 @@ from dataclasses import asdict, dataclass, fields
 from PyQt5.QtCore import QByteArray, QSettings
 
 from driver.api import CEILING
+from driver.rules import MAX_ALTITUDE, MIN_TAKEOFF_ALTITUDE
 
 from .sticks import MaxSpeeds, StickMode, StickShaping
 
@@ -15,7 +16,7 @@ __all__ = ["ViewerSettings", "load_settings", "save_settings", "default_qsetting
            "TAKEOFF_ALTITUDE_RANGE"]
 
 #: Takeoff altitudes a pilot may choose, in metres above home (Preferences and --takeoff-altitude).
-TAKEOFF_ALTITUDE_RANGE = (1.0, 50.0)
+TAKEOFF_ALTITUDE_RANGE = (max(1.0, MIN_TAKEOFF_ALTITUDE), min(50.0, MAX_ALTITUDE))   # within the driver's limits
 
 ORGANISATION = "JdeRobot"
 APPLICATION = "UavViewerPy"

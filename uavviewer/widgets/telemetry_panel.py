@@ -7,7 +7,7 @@ from PyQt5.QtWidgets import QFrame, QGridLayout, QLabel, QSizePolicy, QWidget
 from driver.state import LandedState, LinkStatus, VehicleState
 from ..units import fmt
 
-__all__ = ["TelemetryPanel", "battery_is_low"]
+__all__ = ["TelemetryPanel"]
 
 NORMAL = "#e6ebf0"
 GOOD = "#5fd068"
@@ -19,17 +19,6 @@ ROWS = [("mode", "Mode"), ("armed", "Armed"), ("landed", "Landed state"), ("batt
         ("gps", "GPS"), ("altitude", "Altitude (home)"), ("ground_speed", "Ground speed"),
         ("climb", "Climb rate"), ("heading", "Heading"), ("home", "From home"),
         ("heartbeat", "Heartbeat"), ("packets", "Packets/s"), ("loss", "Link loss")]
-
-LOW_PERCENT = 20.0
-LOW_CELL_VOLTS = 3.7
-
-
-def battery_is_low(voltage: float | None, cells: int, remaining: float | None) -> bool:
-    """Under 20 % or under 3.7 V a cell."""
-    if remaining is not None and remaining < LOW_PERCENT:
-        return True
-    return voltage is not None and cells > 0 and voltage / cells < LOW_CELL_VOLTS
-
 
 def _num(value: float | None, unit: str, digits: int = 1) -> str:
     return fmt(value, digits, unit)
@@ -138,5 +127,4 @@ class TelemetryPanel(QFrame):
             parts.append(f"{voltage:.2f} V")
         if remaining is not None:
             parts.append(f"{remaining:.0f} %" + ("*" if estimated else ""))
-        low = low or battery_is_low(voltage, cells, remaining)
         self._put("battery", "  ".join(parts), BAD if low else GOOD)
