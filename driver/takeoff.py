@@ -23,6 +23,7 @@ __all__ = ["TakeoffSequence", "climb_timeout", "is_climbing"]
 JUDGE_WINDOW = 3.0           # s a refused or unanswered NAV_TAKEOFF waits for signs of a climb
 CLIMB_EVIDENCE = 0.3         # m/s upwards that only a takeoff gives a vehicle on the pad
 SECONDS_PER_METRE = 2.0      # the climb timeout grows with the altitude (a slow 0.5 m/s climb still fits)
+ANSWER_RETRIES = 2           # GUIDED or arm asked again this often when the vehicle never answered
 
 
 class Pilotable(Protocol):
@@ -57,6 +58,7 @@ class TakeoffSequence:
         self._since = now
         self._pending: Future | None = None
         self._answer: CommandResult | None = None
+        self._retries = 0                   # commands asked again after no answer at all
         self.takeoff_sent = False           # NAV_TAKEOFF was issued (it may reach the vehicle after an abort)
         self.phase = SequencePhase.WAITING_READY
         self.detail = ""
@@ -89,9 +91,10 @@ class TakeoffSequence:
                 self._pending = self.drone.set_mode("GUIDED")
             r = self._result()
             if r is not None:
-                if not r.ok:
+                if not r.ok and not self._unanswered(r):
                     return r.status, f"GUIDED: {r.reason}", SequencePhase.FAILED
-                self._go("arm", now, SequencePhase.ARMING)
+                if r.ok or s.mode == "GUIDED":
+                    self._go("arm", now, SequencePhase.ARMING)
         elif stage == "arm":
             if s.armed:
                 return self._start_takeoff(now)
@@ -99,9 +102,10 @@ class TakeoffSequence:
                 self._pending = self.drone.arm()
             r = self._result()
             if r is not None:
-                if not r.ok:
+                if not r.ok and not self._unanswered(r):
                     return r.status, f"arming: {r.reason}", SequencePhase.FAILED
-                self._go("armed?", now)
+                if r.ok:
+                    self._go("armed?", now)
         elif stage == "armed?":
             if s.armed:
                 return self._start_takeoff(now)
@@ -135,6 +139,15 @@ class TakeoffSequence:
                 return (CommandStatus.TIMED_OUT, f"did not reach {self.altitude:.1f} m (at {s.altitude:.1f} m)",
                         SequencePhase.FAILED)
         return None
+
+    def _unanswered(self, r: CommandResult) -> bool:
+        """A command the vehicle never answered (lost both ways on a bad link) is asked again, up to
+        ANSWER_RETRIES times: no answer is not a refusal. The caller checks first whether the vehicle did it."""
+        if r.status is not CommandStatus.TIMED_OUT or self._retries >= ANSWER_RETRIES:
+            return False
+        self._retries += 1
+        self._pending = None
+        return True
 
     def _start_takeoff(self, now: float):
         self._go("takeoff", now, SequencePhase.TAKING_OFF, f"to {self.altitude:.1f} m")

@@ -357,3 +357,18 @@ def test_the_solo_flies_the_sticks_along_its_nose(sim_factory, vehicle_factory):
         vehicle.wait_for(lambda s: sim.truth().time >= end, 0.1)
     turned = math.degrees(sim.truth().yaw - moved.yaw) % 360.0
     assert 45.0 < turned < 120.0, turned                         # 3 s at ~29°/s, clockwise
+
+
+def test_a_takeoff_asks_again_when_arming_got_no_answer_at_all(vehicle, sim):
+    """On a bad link all three ARMs can be lost: no answer is not a refusal, so the sequence asks again
+    (a refusal still ends it, see test_driver_flight.py::test_takeoff_reports_a_refusal)."""
+    ready(vehicle)
+    arm = mavlink.MAV_CMD_COMPONENT_ARM_DISARM
+    sim.faults.ignore_commands = {arm}
+    future = vehicle.takeoff(2.0)
+    assert vehicle.wait_for(lambda s: list(sim.faults.ignored).count(arm) >= 3, 30)
+    sim.faults.ignore_commands = set()                       # the link gets better
+    result = future.result(timeout=60)
+    assert result.ok, str(result)
+    timed_out = [r for r in vehicle.state().results if r.command == "arm" and r.status is CommandStatus.TIMED_OUT]
+    assert timed_out and sim.truth().armed and -sim.truth().down > 1.5
