@@ -9,23 +9,18 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import os
 import re
 
 import pytest
 
 from driver.vehicle import Vehicle, VehicleConfig
 
-ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-RECORDINGS = os.path.normpath(os.path.join(ROOT, os.pardir, "shared", "recordings"))
-FLIGHT = os.path.join(RECORDINGS, "arducopter-4.7-sitl-flight")
-SIGNING = os.path.join(RECORDINGS, "arducopter-4.7-sitl-signing")
+from recordings import FLIGHT, SIGNING, need_recordings  # noqa: E402
 
 #: Where the recorded SITL vehicle stood (README.md: home -35.363261, 149.165230, 584 m).
 HOME = (-35.363261, 149.165230, 584.0)
 
-pytestmark = pytest.mark.skipif(not os.path.isfile(FLIGHT + ".tlog") or not os.path.isfile(SIGNING + ".tlog"),
-                                reason=f"the recordings are not in {RECORDINGS}")
+pytestmark = need_recordings()
 
 
 def statustexts(events: str) -> list[str]:

@@ -1,9 +1,9 @@
 """Firmware profiles: how one ArduCopter generation answers, so the sim is not only the driver's own notes.
 
-``copter-4`` follows /work/shared/recordings/arducopter-4.7-sitl-flight.tlog (ArduCopter
+``copter-4`` follows shared/recordings/arducopter-4.7-sitl-flight.tlog (ArduCopter
 4.7-dev SITL, read with pymavlink); ``solo`` is a stock 3DR Solo (ArduCopter 3.3 era),
 from 3DR's sources (github.com/3drobotics/ardupilot-solo: ArduCopter/GCS_Mavlink.pde,
-motors.pde, takeoff.pde, land_detector.pde) and /work/shared/reference/arducopter.md.
+motors.pde, takeoff.pde, land_detector.pde) and shared/reference/arducopter.md.
 
 The start-up of a 4.7 vehicle is replayed as :data:`COPTER4_BOOT`: what it says and why it
 refuses to arm while the EKF and GPS come up, stage by stage, at the recording's times
