@@ -114,6 +114,11 @@ def main(argv: list[str] | None = None) -> int:
     elif args.log_dir is None:
         args.log_dir = default_log_dir()
     _setup_logging(args.verbose, args.log_dir)
+    # Ctrl+C or kill while the driver and the window are still starting: remembered, and the window closes
+    # through its own close path as soon as it exists (a signal's default action would skip it)
+    stop_requested = []
+    for number in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(number, lambda *_: stop_requested.append(True))
     import time
 
     from PyQt5.QtCore import QTimer
@@ -168,6 +173,8 @@ def main(argv: list[str] | None = None) -> int:
     window.show()
     for number in (signal.SIGINT, signal.SIGTERM):              # Ctrl+C, kill: close cleanly, without asking
         signal.signal(number, lambda *_: window.quit_without_asking())
+    if stop_requested:
+        QTimer.singleShot(0, window.quit_without_asking)
     wake = QTimer()                                               # let Python see the signal
     wake.timeout.connect(lambda: None)
     wake.start(200)
