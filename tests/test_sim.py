@@ -11,6 +11,7 @@ import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from driver.sim import MODES, Autopilot, ManualClock, SimConfig, SimVehicle
+from driver.sim.gcs import first_message
 
 FAST = dict(tcp_port=0, speedup=10.0, ready_after=0.5, seed=7)
 PREARM = mavlink.MAV_SYS_STATUS_PREARM_CHECK
@@ -103,22 +104,7 @@ class GroundStation:
 
     def wait(self, predicate, timeout: float = 5.0, since: int = 0):
         """The first message from index ``since`` on that satisfies ``predicate`` (a type name works)."""
-        if isinstance(predicate, str):
-            kind = predicate
-            predicate = lambda m: m.get_type() == kind  # noqa: E731
-        deadline = time.monotonic() + timeout
-        with self.cond:
-            index = since
-            while True:
-                while index < len(self.frames):
-                    msg = self.frames[index][0]
-                    index += 1
-                    if predicate(msg):
-                        return msg
-                left = deadline - time.monotonic()
-                if left <= 0:
-                    return None
-                self.cond.wait(left)
+        return first_message(self.cond, self.frames, predicate, timeout, since, message=lambda frame: frame[0])
 
 
 def wait_until(condition, timeout: float = 10.0) -> bool:

@@ -22,7 +22,29 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from .server import parse_address
 
-__all__ = ["OtherGroundStation"]
+__all__ = ["OtherGroundStation", "first_message"]
+
+
+def first_message(cond: threading.Condition, heard: list, predicate, timeout: float, since: int = 0,
+                  message=lambda item: item):
+    """The first of ``heard`` (a list that grows under ``cond``) from index ``since`` on whose message satisfies
+    ``predicate`` (a type name works), waiting up to ``timeout`` seconds; None if none came."""
+    if isinstance(predicate, str):
+        kind = predicate
+        predicate = lambda m: m.get_type() == kind  # noqa: E731
+    deadline = time.monotonic() + timeout
+    with cond:
+        index = since
+        while True:
+            while index < len(heard):
+                msg = message(heard[index])
+                index += 1
+                if predicate(msg):
+                    return msg
+            left = deadline - time.monotonic()
+            if left <= 0:
+                return None
+            cond.wait(left)
 
 
 class OtherGroundStation:
@@ -117,22 +139,7 @@ class OtherGroundStation:
 
     def wait(self, predicate, timeout: float = 5.0, since: int = 0):
         """The first message from index ``since`` on that satisfies ``predicate`` (a type name works)."""
-        if isinstance(predicate, str):
-            kind = predicate
-            predicate = lambda m: m.get_type() == kind  # noqa: E731
-        deadline = time.monotonic() + timeout
-        with self._cond:
-            index = since
-            while True:
-                while index < len(self.messages):
-                    msg = self.messages[index]
-                    index += 1
-                    if predicate(msg):
-                        return msg
-                left = deadline - time.monotonic()
-                if left <= 0:
-                    return None
-                self._cond.wait(left)
+        return first_message(self._cond, self.messages, predicate, timeout, since)
 
     def _read(self) -> None:
         while not self._stop.is_set():
