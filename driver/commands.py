@@ -231,10 +231,8 @@ class CommandSender:
         cfg = self._cfg
         system, component = self._target()
         for c in list(self._pending.values()):
-            if c.refused is not None:
-                if c.mode is not None and state.mode and state.mode == _mode_name(c.mode):
-                    self._resolve(c, CommandStatus.ACCEPTED)
-                elif now >= c.refuse_at:
+            if c.refused is not None:                 # (a heartbeat showing a refused mode settles it: on_mode)
+                if now >= c.refuse_at:
                     self._resolve(c, CommandStatus.REFUSED, self._vehicle_reason(c, c.refused))
                 continue
             if c.deadline is not None and now >= c.deadline:
@@ -303,7 +301,3 @@ class CommandSender:
             c.settled = True
             self._notifier.settle(c.future, self._store.record_locked(c.name, status, reason, c.attempts))
 
-
-def _mode_name(number: int) -> str:
-    from .telemetry import COPTER_MODE_NAMES
-    return COPTER_MODE_NAMES.get(number, f"MODE({number})")

@@ -58,7 +58,6 @@ class LinkSupervisor:
 
     def heartbeat(self, now: float) -> str | None:
         """The autopilot's heartbeat; returns "first", "recovered" or None (no change of status)."""
-        first = self.last_heartbeat is None
         self.last_heartbeat = self._transport.clock()
         if self.status is LinkStatus.OK:
             return None
@@ -69,7 +68,7 @@ class LinkSupervisor:
             self._home_wanted_since = now
             self._param_tries = 0 if not self.param_known else PARAM_TRIES
             self._version_tries = 0 if not self.version_known else PARAM_TRIES
-        return "recovered" if recovered else ("first" if first else "up")
+        return "recovered" if recovered else "first"
 
     def armed_changed(self, armed: bool, now: float) -> None:
         if armed:                                 # arming sets home: ask for the new one

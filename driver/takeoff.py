@@ -91,7 +91,7 @@ class TakeoffSequence:
                 self._pending = self.drone.set_mode("GUIDED")
             r = self._result()
             if r is not None:
-                if not r.ok and not self._unanswered(r):
+                if not r.ok and not self._ask_again(r):
                     return r.status, f"GUIDED: {r.reason}", SequencePhase.FAILED
                 if r.ok or s.mode == "GUIDED":
                     self._go("arm", now, SequencePhase.ARMING)
@@ -102,7 +102,7 @@ class TakeoffSequence:
                 self._pending = self.drone.arm()
             r = self._result()
             if r is not None:
-                if not r.ok and not self._unanswered(r):
+                if not r.ok and not self._ask_again(r):
                     return r.status, f"arming: {r.reason}", SequencePhase.FAILED
                 if r.ok:
                     self._go("armed?", now)
@@ -140,7 +140,7 @@ class TakeoffSequence:
                         SequencePhase.FAILED)
         return None
 
-    def _unanswered(self, r: CommandResult) -> bool:
+    def _ask_again(self, r: CommandResult) -> bool:
         """A command the vehicle never answered (lost both ways on a bad link) is asked again, up to
         ANSWER_RETRIES times: no answer is not a refusal. The caller checks first whether the vehicle did it."""
         if r.status is not CommandStatus.TIMED_OUT or self._retries >= ANSWER_RETRIES:

@@ -36,7 +36,7 @@ from .link import LinkError, MavutilTransport, TlogWriter, Transport, open_trans
 from .rules import COPTER_MODES, MAX_ALTITUDE, MIN_TAKEOFF_ALTITUDE, go_to_problem, takeoff_altitude_problem
 from .setpoints import SetpointStreamer
 from .state import (
-    Battery, CommandResult, CommandStatus, LinkHealth, LinkStatus, SequencePhase, SequenceProgress, Setpoint,
+    Battery, CommandStatus, LinkHealth, LinkStatus, SequencePhase, SequenceProgress, Setpoint,
     Severity, VehicleState,
 )
 from .store import StateStore
@@ -418,7 +418,7 @@ class Vehicle(Drone):
             elif mtype == "ATTITUDE":
                 self._link.last_attitude = time.monotonic()
         store.fields["link"] = self._link.health(self._version)   # packet counts as current as the telemetry
-        if store.fields.get("rejected_values", 0) > store.state.rejected_values == 0:
+        if store.state.rejected_values == 0 and store.fields.get("rejected_values", 0) > 0:   # the first one
             store.add_message_locked(Severity.WARNING, "The vehicle sent impossible telemetry values (NaN, "
                                      "infinity or out of range): ignored, the last good values stay")
         store.publish()
@@ -471,8 +471,9 @@ class Vehicle(Drone):
             return
         store = self._store
         now = time.monotonic()
-        was_armed = store.view()["armed"]
-        changes = fold_heartbeat(store.view(), m)
+        view = store.view()
+        was_armed = view["armed"]
+        changes = fold_heartbeat(view, m)
         store.fields.update(changes)
         self._commands.on_mode(m.custom_mode)
         if changes["armed"] != was_armed:

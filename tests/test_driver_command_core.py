@@ -9,7 +9,7 @@ import pytest
 from pymavlink import mavutil
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-from driver.state import CommandStatus, LinkStatus
+from driver.state import CommandStatus
 
 SOLO = dict(profile="solo", mavlink2=False)
 
