@@ -2,7 +2,11 @@
 from __future__ import annotations
 
 import math
+import os
+import re
 import socket
+import stat
+import tempfile
 import threading
 
 import cv2
@@ -254,6 +258,56 @@ def test_solo_without_controller_explains(tmp_path):
         assert "unreachable" in src.status().reason
     finally:
         src.close(wait=3)
+
+
+def unreachable_port() -> int:
+    with socket.socket() as s:                # a port nobody listens on
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def test_solo_sdp_is_private_unpredictable_and_gone_on_close(tmp_path, monkeypatch):
+    """The SDP file is in our private runtime directory under a random name, 0600, never at the old fixed
+    name in /tmp; the video flows through it, and it is removed when the source closes."""
+    run = tmp_path / "run"
+    run.mkdir()
+    os.chmod(run, 0o700)
+    monkeypatch.setenv("XDG_RUNTIME_DIR", str(run))
+    data = write_ts(str(tmp_path / "solo.ts"))
+    video_port = free_udp_port()
+    fixed = os.path.join(tempfile.gettempdir(), f"uavviewer-solo-{video_port}.sdp")
+    controller = FakeController(data, video_port)
+    src = SoloSource("127.0.0.1", controller.port, video_port, encoding="MP2T/90000", payload=33,
+                     timeout_ms=1500).start()
+    try:
+        wait(lambda: src.status().frames >= 5, what="Solo video")
+        path = src.sdp_path
+        assert os.path.dirname(path) == str(run / "uavviewer")
+        assert re.fullmatch(rf"solo-{video_port}-[0-9a-f]{{16}}\.sdp", os.path.basename(path))
+        assert stat.S_IMODE(os.lstat(path).st_mode) == 0o600 and stat.S_IMODE(os.lstat(run / "uavviewer").st_mode) == 0o700
+        with open(path) as f:
+            assert f"m=video {video_port} RTP/AVP 33" in f.read()
+        assert not os.path.lexists(fixed)
+    finally:
+        src.close(wait=3)
+        controller.close()
+    assert src.closed
+    assert not os.path.lexists(path) and os.listdir(run / "uavviewer") == []
+
+
+def test_solo_sdp_at_a_given_path_replaces_a_planted_link_and_stays(tmp_path):
+    victim = tmp_path / "victim"
+    victim.write_text("precious")
+    os.symlink(victim, tmp_path / "solo.sdp")
+    port = free_udp_port()
+    src = SoloSource("127.0.0.1", unreachable_port(), port, str(tmp_path / "solo.sdp"), timeout_ms=500).start()
+    try:
+        wait(lambda: src.status().state == "retrying", what="failure")          # after the SDP was written
+    finally:
+        src.close(wait=3)
+    assert victim.read_text() == "precious"
+    assert not os.path.islink(tmp_path / "solo.sdp")
+    assert f"m=video {port} RTP/AVP 96" in (tmp_path / "solo.sdp").read_text()   # the caller's file: it stays
 
 
 def test_snapshot_and_recording_are_readable(tmp_path, sources):

@@ -4,15 +4,19 @@ The controller forwards the Solo's H.264 as RTP to UDP 5600 of the one app that
 holds a TCP connection open to 10.1.1.1:5502 (see arducopter.md, "Video on the
 Solo"). :class:`SoloLink` holds that connection and reconnects when it drops;
 :func:`write_sdp` describes the RTP stream so OpenCV's FFmpeg backend can open it.
+The SDP file lives in our private :func:`~driver.files.runtime_dir` under a random name
+(never a fixed name in /tmp that another user could plant a link at), and goes when the
+source closes.
 """
 from __future__ import annotations
 
 import logging
 import os
+import secrets
 import socket
-import tempfile
 import threading
 
+from ..files import runtime_dir, write_private
 from .source import OpenCVSource, SourceFailed
 
 log = logging.getLogger(__name__)
@@ -28,7 +32,10 @@ RTP_FFMPEG_OPTIONS = "protocol_whitelist;file,rtp,udp"
 
 def write_sdp(path: str, port: int = SOLO_VIDEO_UDP_PORT, encoding: str = "H264/90000", payload: int = 96,
               address: str = "127.0.0.1") -> str:
-    """Write an SDP file describing one RTP video stream arriving on UDP ``port``."""
+    """Write an SDP file describing one RTP video stream arriving on UDP ``port`` (mode 0600).
+
+    Written with :func:`~driver.files.write_private`: a link planted at ``path`` is replaced, not
+    followed, and a reader never sees half a file."""
     text = "\n".join([
         "v=0",
         f"o=- 0 0 IN IP4 {address}",
@@ -39,9 +46,7 @@ def write_sdp(path: str, port: int = SOLO_VIDEO_UDP_PORT, encoding: str = "H264/
         f"a=rtpmap:{int(payload)} {encoding}",
         "",
     ])
-    with open(path, "w", encoding="ascii") as f:
-        f.write(text)
-    return path
+    return write_private(path, text.encode("ascii"))
 
 
 class SoloLink:
@@ -89,14 +94,20 @@ class SoloLink:
 
 
 class SoloSource(OpenCVSource):
-    """``solo``: the Solo's RTP H.264 video, with the controller link kept open."""
+    """``solo``: the Solo's RTP H.264 video, with the controller link kept open.
+
+    Without ``sdp_path``, the SDP file is named on the first open, ``solo-PORT-RANDOM.sdp`` in
+    :func:`~driver.files.runtime_dir` (``sdp_path`` then tells where), and removed when the capture
+    thread ends; a file at a given ``sdp_path`` is the caller's and stays.
+    """
 
     def __init__(self, host: str = SOLO_HOST, tcp_port: int = SOLO_VIDEO_TCP_PORT,
                  udp_port: int = SOLO_VIDEO_UDP_PORT, sdp_path: str | None = None, encoding: str = "H264/90000",
                  payload: int = 96, name: str = "Solo camera", timeout_ms: int = 5000):
-        self.sdp_path = sdp_path or os.path.join(tempfile.gettempdir(), f"uavviewer-solo-{udp_port}.sdp")
+        self.sdp_path = sdp_path
+        self._own_sdp = sdp_path is None
         self._sdp = (udp_port, encoding, payload)
-        super().__init__(self.sdp_path, name, stream=True, ffmpeg_options=RTP_FFMPEG_OPTIONS, timeout_ms=timeout_ms)
+        super().__init__(sdp_path or "", name, stream=True, ffmpeg_options=RTP_FFMPEG_OPTIONS, timeout_ms=timeout_ms)
         self.uri = "solo"
         self.link = SoloLink(host, tcp_port)
 
@@ -116,13 +127,29 @@ class SoloSource(OpenCVSource):
 
     def _open(self) -> None:
         udp_port, encoding, payload = self._sdp
-        write_sdp(self.sdp_path, udp_port, encoding, payload)
+        if self.sdp_path is None:                   # on the capture thread: the caller never waits for a disk
+            self.sdp_path = os.path.join(runtime_dir(), f"solo-{udp_port}-{secrets.token_hex(8)}.sdp")
+            log.info("Solo video described in %s", self.sdp_path)
+        write_sdp(self.sdp_path, udp_port, encoding, payload)    # again each time: a cleaner may have removed it
+        self._target = self.sdp_path
         try:
             super()._open()
         except SourceFailed:
             if not self.link.connected:
                 raise SourceFailed(f"no Solo video: {self.link.reason}") from None
             raise SourceFailed(f"no RTP video on UDP {udp_port}") from None
+
+    def _run(self) -> None:
+        try:
+            super()._run()
+        finally:
+            if self._own_sdp and self.sdp_path:
+                try:
+                    os.unlink(self.sdp_path)
+                except FileNotFoundError:
+                    pass
+                except OSError as e:
+                    log.warning("cannot remove %s: %s", self.sdp_path, e)
 
     def _read(self):
         try:

@@ -139,7 +139,8 @@ class VideoSource:
 
     def remove_listener(self, callback: Callable[[Frame], None]) -> None:
         with self._lock:
-            self._listeners = [c for c in self._listeners if c is not callback]
+            # ==, not "is": ``recorder.push`` is a new bound method each time it is named
+            self._listeners = [c for c in self._listeners if c != callback]
 
     def restart(self) -> None:
         """Drop the current connection and open again at once."""

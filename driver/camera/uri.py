@@ -163,7 +163,7 @@ class CameraSet:
 
     def remove_listener(self, callback) -> None:
         with self._lock:
-            self._listeners = [c for c in self._listeners if c is not callback]
+            self._listeners = [c for c in self._listeners if c != callback]     # bound methods: ==, not is
             self._source.remove_listener(callback)
 
     def toggle(self) -> VideoSource:
