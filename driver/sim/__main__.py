@@ -3,6 +3,7 @@
     python -m driver.sim                          # tcp:127.0.0.1:5760 like SITL
     python -m driver.sim --udp-out 127.0.0.1:14550 --profile solo --gimbal   # like a stock 3DR Solo
     python -m driver.sim --uplink-loss 0.1 --downlink-loss 0.1 --latency 0.2 --jitter 0.05 --lose-replies
+    python -m driver.sim --usb-port 5761 --signing-passphrase secret   # signing on; unsigned only on 5761
 """
 from __future__ import annotations
 
@@ -14,10 +15,11 @@ import threading
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-from ..options import not_negative, number, positive
+from ..options import not_negative, number, positive, whole
 from .faults import LinkFaults
 from .profiles import PROFILES, speaks_mavlink2
 from .server import parse_address
+from .signing import passphrase_key
 from .vehicle import SimConfig, SimVehicle
 
 share = number(0.0, 1.0, "a share from 0 to 1 is needed")
@@ -88,6 +90,12 @@ def parser() -> argparse.ArgumentParser:
                         help="where the EKF origin is from home, metres (default %(default)s)")
     parser.add_argument("--gimbal", action="store_true", help="a gimbal (component 154) on the link, MAVLink 2")
     parser.add_argument("--companion", action="store_true", help="a companion computer (component 191)")
+    parser.add_argument("--usb-port", type=whole(0, 65535), metavar="PORT",
+                        help="also serve TCP on this port (on --tcp's host, 0 = any) as the USB port, SERIAL0: "
+                             "unsigned frames are accepted there even with signing on (--tcp is a telemetry port)")
+    parser.add_argument("--signing-passphrase", metavar="TEXT",
+                        help="start with MAVLink 2 signing on, key = SHA-256 of TEXT as MAVProxy's "
+                             "'signing setup' makes it (needs MAVLink 2: not with --profile solo or --mav1)")
     faults = parser.add_argument_group("link faults (real seconds; shares from 0 to 1)")
     faults.add_argument("--uplink-loss", type=share, default=0.0, metavar="SHARE",
                         help="share of frames from the ground station lost")
@@ -116,10 +124,12 @@ def parser() -> argparse.ArgumentParser:
 def configure(args: argparse.Namespace) -> SimVehicle:
     """The vehicle and its faults as the options say, not started yet."""
     host, port = parse_address(args.tcp)
+    key = passphrase_key(args.signing_passphrase) if args.signing_passphrase is not None else None
     config = SimConfig(tcp_host=host, tcp_port=port, udp_out=args.udp_out, udp_listen=args.udp_in,
                        speedup=args.speedup, ready_after=args.ready_after, home=args.home,
                        mavlink2=not args.mav1, seed=args.seed, profile=args.profile,
-                       origin_offset=args.origin_offset, gimbal=args.gimbal, companion=args.companion)
+                       origin_offset=args.origin_offset, gimbal=args.gimbal, companion=args.companion,
+                       usb_port=args.usb_port, signing_key=key)
     sim = SimVehicle(config)
     both = dict(burst_rate=args.burst_rate, burst_seconds=args.burst_seconds, duplicate=args.duplicate,
                 latency=args.latency, jitter=args.jitter, reorder=args.reorder)
@@ -131,7 +141,10 @@ def configure(args: argparse.Namespace) -> SimVehicle:
 
 
 def main(argv: list[str] | None = None) -> int:
-    args = parser().parse_args(argv)
+    p = parser()
+    args = p.parse_args(argv)
+    if args.signing_passphrase is not None and (args.mav1 or not PROFILES[args.profile].mavlink2):
+        p.error("--signing-passphrase needs MAVLink 2: not with --profile solo or --mav1")
     logging.basicConfig(level=logging.DEBUG if args.verbose else logging.INFO,
                         format="%(asctime)s %(name)s: %(message)s")
     sim = configure(args)
@@ -139,12 +152,17 @@ def main(argv: list[str] | None = None) -> int:
     try:
         sim.start()
     except OSError as exc:
-        tcp_failed = config.tcp_port is not None and not sim.tcp_port      # else the UDP socket failed
-        where = f"tcp:{args.tcp}" if tcp_failed else f"udp:{args.udp_in}"
+        tcp_failed = config.tcp_port is not None and not sim.tcp_port
+        usb_failed = config.usb_port is not None and sim.usb_port is None     # else the UDP socket failed
+        where = (f"tcp:{args.tcp}" if tcp_failed else f"tcp:{config.tcp_host}:{config.usb_port}" if usb_failed
+                 else f"udp:{args.udp_in}")
         log.error("cannot serve MAVLink on %s: %s", where, (exc.strerror or str(exc)).lower())
         return 1
     log.info("simulated ArduCopter (%s) at %.6f, %.6f (%s); Ctrl-C to stop", config.profile, config.home[0],
              config.home[1], "MAVLink 2" if speaks_mavlink2(config) else "MAVLink 1 only")
+    if sim.signing.enabled:
+        log.info("MAVLink 2 signing on: unsigned frames are dropped except on the USB port%s",
+                 f" (tcp:{config.tcp_host}:{sim.usb_port})" if sim.usb_port is not None else " (none: --usb-port)")
     if sim.faults.uplink.active or sim.faults.downlink.active or args.corrupt or args.lose_replies:
         log.info("link faults: uplink %s, downlink %s, corrupt %g, lose replies %s", sim.faults.uplink,
                  sim.faults.downlink, args.corrupt, args.lose_replies or "none")

@@ -80,11 +80,16 @@ class Autopilot(Telemetry, Commands, Messages, Flight):
     """One ArduCopter: state, flight modes, command handling and telemetry streams."""
 
     def __init__(self, config, faults: Faults | None = None,
-                 emit: Callable[[object], None] | None = None) -> None:
+                 emit: Callable[[object], None] | None = None,
+                 emit_to: Callable[[object, object], None] | None = None) -> None:
+        """``emit(msg)`` sends on every link; ``emit_to(msg, link)`` only on ``link`` (default: every link)."""
         self.config = config
         self.profile = profile_of(config)
         self.faults = faults if faults is not None else Faults()
         self.emit = emit or (lambda msg: None)
+        self.emit_to = emit_to or (lambda msg, link: self.emit(msg))
+        self.sender = None               # the link of the message being handled (ArduPilot: its GCS_MAVLINK)
+        self.signing = None              # the vehicle's Signing (signing.py); None: SETUP_SIGNING is not handled
         self.rng = random.Random(config.seed)
         self.factory = mavlink.MAVLink(None, srcSystem=config.system_id, srcComponent=config.component_id)
         lat, lon, alt, heading = config.home

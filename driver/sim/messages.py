@@ -229,6 +229,19 @@ class Messages:
     def _on_autopilot_version_request(self, msg) -> None:
         self._send_now("AUTOPILOT_VERSION")
 
+    def _on_setup_signing(self, msg) -> None:
+        """GCS_MAVLINK::handle_setup_signing: never while armed (a WARNING on the asking link only, nothing
+        changes); else the key goes to every link at once. A MAVLink 1 vehicle never gets here: message 256
+        does not fit a MAVLink 1 frame and the Solo's 3.3 firmware has no GCS_Signing at all."""
+        if self.signing is None:
+            return
+        if self.armed:
+            self.signing.counters.refused_armed += 1
+            self.emit_to(self.factory.statustext_encode(mavlink.MAV_SEVERITY_WARNING,
+                                                        b"ERROR: Won't setup signing when armed"), self.sender)
+            return
+        self.signing.setup(bytes(msg.secret_key), msg.initial_timestamp)
+
     def _on_timesync(self, msg) -> None:
         if msg.tc1 == 0:
             self.emit(self.factory.timesync_encode(int(self.t * 1e9), msg.ts1))

@@ -1,11 +1,14 @@
 """The simulated vehicle's links: a TCP server like SITL's 5760, UDP pushed like the Solo's controller.
 
 Every ground station ("peer") gets its own MAVLink sequence numbers (one series
-per component of the vehicle) and its own parser; everything the vehicle says
-goes to every peer. One I/O thread reads all sockets; writes come from the
-vehicle's clock thread and never block (a peer that stops reading loses frames,
-as over a saturated radio). Each peer's link has a :class:`~driver.sim.pipe.Pipe`
-each way, applying the uplink and downlink faults.
+per component of the vehicle), its own parser and its own signing channel
+(signing.py): the optional USB port's peers are channel 0, every other link a
+telemetry link numbered from 1. Everything the vehicle says goes to every peer,
+except the few answers ArduPilot sends only on the link that asked. One I/O
+thread reads all sockets; writes come from the vehicle's clock thread and never
+block (a peer that stops reading loses frames, as over a saturated radio). Each
+peer's link has a :class:`~driver.sim.pipe.Pipe` each way, applying the uplink
+and downlink faults.
 """
 from __future__ import annotations
 
@@ -21,6 +24,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink
 from .faults import Faults
 from .pipe import Pipe
 from .profiles import speaks_mavlink2
+from .signing import Channel, Signing
 
 log = logging.getLogger(__name__)
 
@@ -43,9 +47,11 @@ def parse_address(text: str) -> tuple[str, int]:
 class Peer:
     """One ground station on one link."""
 
-    def __init__(self, name: str, config) -> None:
+    def __init__(self, name: str, config, usb: bool = False) -> None:
         self.name = name
+        self.usb = usb                        # on the USB port (SERIAL0): unsigned frames pass even with a key
         self.system_id = config.system_id
+        self.channel: Channel | None = None   # set by the LinkServer; its signing state signs what is sent here
         self.encoder = mavlink.MAVLink(None, srcSystem=config.system_id, srcComponent=config.component_id)
         self.encoders = {config.component_id: self.encoder}
         self.parser = mavlink.MAVLink(None, srcSystem=config.system_id, srcComponent=config.component_id)
@@ -55,12 +61,24 @@ class Peer:
         self.up: Pipe | None = None          # set by the LinkServer
         self.down: Pipe | None = None
 
+    def attach(self, channel: Channel) -> None:
+        """Sign with ``channel``'s state from now on: every component's encoder on this link shares it."""
+        self.channel = channel
+        for encoder in self.encoders.values():
+            encoder.signing = channel.state
+
     def encoder_for(self, component: int):
-        """This peer's encoder (own sequence numbers) for one component of the vehicle."""
+        """This peer's encoder (own sequence numbers) for one component of the vehicle.
+
+        The gimbal and the companion sign with the autopilot's key and this link's id and timestamp: on a
+        real vehicle they are devices of their own, which would need the key set in them too.
+        """
         encoder = self.encoders.get(component)
         if encoder is None:
             encoder = self.encoders[component] = mavlink.MAVLink(None, srcSystem=self.system_id,
                                                                  srcComponent=component)
+            if self.channel is not None:
+                encoder.signing = self.channel.state
         return encoder
 
     def write(self, data: bytes) -> None:
@@ -68,8 +86,8 @@ class Peer:
 
 
 class TcpPeer(Peer):
-    def __init__(self, sock: socket.socket, address, config) -> None:
-        super().__init__(f"tcp {address[0]}:{address[1]}", config)
+    def __init__(self, sock: socket.socket, address, config, usb: bool = False) -> None:
+        super().__init__(f"{'usb' if usb else 'tcp'} {address[0]}:{address[1]}", config, usb)
         self.sock = sock
         self.pending = bytearray()
 
@@ -114,12 +132,18 @@ class UdpPeer(Peer):
 
 
 class LinkServer:
-    """Sockets and peers; hands decoded messages to ``on_message(msg, version)``."""
+    """Sockets and peers; hands decoded messages to ``on_message(msg, version, peer)``.
 
-    def __init__(self, config, faults: Faults, on_message: Callable[[object, int], None]) -> None:
+    Signatures are not checked here but where the vehicle takes the message (SimVehicle's clock thread,
+    with ``signing.admit``): a SETUP_SIGNING then governs the very next frame, as in ArduPilot's one loop.
+    """
+
+    def __init__(self, config, faults: Faults, on_message: Callable[[object, int, Peer], None],
+                 signing: Signing | None = None) -> None:
         self.config = config
         self.faults = faults
         self.on_message = on_message
+        self.signing = signing if signing is not None else Signing(config)
         self.rng = random.Random(None if config.seed is None else config.seed + 1)
         self.mavlink2 = speaks_mavlink2(config)
         self.peers_added = 0
@@ -129,9 +153,11 @@ class LinkServer:
         self.peers_lock = threading.Lock()
         self.selector = selectors.DefaultSelector()
         self.listener: socket.socket | None = None
+        self.usb_listener: socket.socket | None = None
         self.udp_out: UdpPeer | None = None
         self.udp_in: UdpPeer | None = None
         self.tcp_port = 0
+        self.usb_port: int | None = None
         self.udp_port: int | None = None
         self.ignored_v2 = 0
         self.bad_frames = 0
@@ -143,14 +169,15 @@ class LinkServer:
         cfg = self.config
         try:
             if cfg.tcp_port is not None and cfg.tcp_port >= 0:
-                self.listener = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
-                self.listener.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
-                self.listener.bind((cfg.tcp_host, cfg.tcp_port))
-                self.listener.listen(8)
-                self.listener.setblocking(False)
+                self.listener = self._listen(cfg.tcp_host, cfg.tcp_port, "accept")
                 self.tcp_port = self.listener.getsockname()[1]
-                self.selector.register(self.listener, selectors.EVENT_READ, "accept")
                 log.info("serving MAVLink on tcp:%s:%d", cfg.tcp_host, self.tcp_port)
+            usb_port = getattr(cfg, "usb_port", None)
+            if usb_port is not None and usb_port >= 0:
+                self.usb_listener = self._listen(cfg.tcp_host, usb_port, "accept-usb")
+                self.usb_port = self.usb_listener.getsockname()[1]
+                log.info("serving MAVLink as USB (SERIAL0: unsigned accepted) on tcp:%s:%d", cfg.tcp_host,
+                         self.usb_port)
             if cfg.udp_out:
                 target = parse_address(cfg.udp_out)
                 sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
@@ -178,6 +205,19 @@ class LinkServer:
         self._thread = threading.Thread(target=self._run, name="sim-link", daemon=True)
         self._thread.start()
 
+    def _listen(self, host: str, port: int, kind: str) -> socket.socket:
+        listener = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+        try:
+            listener.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+            listener.bind((host, port))
+            listener.listen(8)
+            listener.setblocking(False)
+            self.selector.register(listener, selectors.EVENT_READ, kind)
+        except OSError:
+            listener.close()
+            raise
+        return listener
+
     def stop(self) -> None:
         self._stop.set()
         if self._thread is not None and self._thread is not threading.current_thread():
@@ -187,9 +227,10 @@ class LinkServer:
             peers, self.peers = self.peers, []
         for peer in peers:
             self._close(peer, quiet=True)
-        if self.listener is not None:
-            self.listener.close()
-            self.listener = None
+        for listener in (self.listener, self.usb_listener):
+            if listener is not None:
+                listener.close()
+        self.listener = self.usb_listener = None
         try:
             self.selector.close()
         except (OSError, RuntimeError):
@@ -204,6 +245,7 @@ class LinkServer:
                            random.Random(None if base is None else base + 2), self.up_lock)
             peer.down = Pipe(faults, lambda: faults.downlink, faults.counters.downlink,
                              random.Random(None if base is None else base + 3), self.down_lock)
+            peer.attach(self.signing.open_channel(peer.usb))
             self.peers.append(peer)
 
     def _close(self, peer: Peer, quiet: bool = False) -> None:
@@ -217,6 +259,8 @@ class LinkServer:
         with self.peers_lock:
             if peer in self.peers:
                 self.peers.remove(peer)
+        if peer.channel is not None:
+            self.signing.close_channel(peer.channel)
         if not quiet:
             log.info("client disconnected: %s", peer.name)
 
@@ -226,11 +270,14 @@ class LinkServer:
             return sum(isinstance(p, TcpPeer) for p in self.peers)
 
     # -- sending ------------------------------------------------------------------------------------
-    def broadcast(self, msg, component: int | None = None, mavlink2: bool | None = None) -> None:
-        """Encode ``msg`` for every peer (own sequence numbers) and send it, faults applied.
+    def broadcast(self, msg, component: int | None = None, mavlink2: bool | None = None,
+                  to: Peer | None = None) -> None:
+        """Encode ``msg`` for every peer (own sequence numbers, signed while signing is on) and send it, faults
+        applied.
 
         ``component``: which part of the vehicle speaks (default the autopilot); ``mavlink2``: its framing
-        (default the autopilot's: a MAVLink-1 autopilot's gimbal may still speak MAVLink 2).
+        (default the autopilot's: a MAVLink-1 autopilot's gimbal may still speak MAVLink 2); ``to``: only
+        this peer (ArduPilot's GCS_MAVLINK::send_text answers on the asking link alone).
         """
         faults = self.faults
         mav1 = not (self.mavlink2 if mavlink2 is None else mavlink2)
@@ -238,8 +285,11 @@ class LinkServer:
             return
         component = self.config.component_id if component is None else component
         now = faults.clock()
-        with self.peers_lock:
-            peers = list(self.peers)
+        if to is not None:
+            peers = [to]
+        else:
+            with self.peers_lock:
+                peers = list(self.peers)
         for peer in peers:
             if peer.closed:
                 continue
@@ -265,8 +315,8 @@ class LinkServer:
                 for frame in peer.down.due(now):
                     peer.write(frame)
             if peer.up.pending:
-                for msg, version in peer.up.due(now):
-                    self._deliver(msg, version)
+                for item in peer.up.due(now):
+                    self._deliver(*item)
 
     def inject(self, raw: bytes) -> None:
         with self.peers_lock:
@@ -284,19 +334,19 @@ class LinkServer:
                     return
                 continue
             for key, _mask in events:
-                if key.data == "accept":
-                    self._accept()
+                if key.data in ("accept", "accept-usb"):
+                    self._accept(key.fileobj, usb=key.data == "accept-usb")
                 else:
                     self._read(key.data)
 
-    def _accept(self) -> None:
+    def _accept(self, listener: socket.socket, usb: bool = False) -> None:
         try:
-            sock, address = self.listener.accept()
+            sock, address = listener.accept()
         except OSError:
             return
         sock.setblocking(False)
         sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-        peer = TcpPeer(sock, address, self.config)
+        peer = TcpPeer(sock, address, self.config, usb)
         self._add(peer)
         self.selector.register(sock, selectors.EVENT_READ, peer)
         log.info("client connected: %s", peer.name)
@@ -339,12 +389,12 @@ class LinkServer:
                 self.bad_frames += 1
                 continue
             version = 2 if msg.get_msgbuf()[0] == V2_MARKER else 1
-            for item in peer.up.send((msg, version), now):
+            for item in peer.up.send((msg, version, peer), now):
                 self._deliver(*item)
 
-    def _deliver(self, msg, version: int) -> None:
+    def _deliver(self, msg, version: int, peer: Peer) -> None:
         """What reached the vehicle through the uplink's faults."""
         if version == 2 and not self.mavlink2:
             self.ignored_v2 += 1        # a MAVLink 1 autopilot does not see these frames at all
             return
-        self.on_message(msg, version)
+        self.on_message(msg, version, peer)

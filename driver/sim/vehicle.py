@@ -5,12 +5,15 @@ A clock thread advances the :class:`~driver.sim.autopilot.Autopilot` at
 feeds it what the :class:`~driver.sim.server.LinkServer` received since the
 last step (through the uplink's faults); what the vehicle says goes out through
 the downlink's faults. The same thread hands on frames the faults held back.
+It also checks each frame's MAVLink 2 signature just before the autopilot would
+see it (signing.py), so a SETUP_SIGNING governs the very next frame.
 """
 from __future__ import annotations
 
 import logging
 import queue
 import threading
+import time
 from collections import deque
 from dataclasses import dataclass
 
@@ -20,6 +23,7 @@ from .components import components_of
 from .faults import Faults
 from .profiles import profile_of
 from .server import LinkServer
+from .signing import Signing
 
 log = logging.getLogger(__name__)
 
@@ -29,7 +33,10 @@ __all__ = ["SimConfig", "SimVehicle"]
 @dataclass
 class SimConfig:
     tcp_host: str = "127.0.0.1"
-    tcp_port: int | None = 5760             # 0 = ephemeral (see SimVehicle.tcp_port), None = no TCP
+    tcp_port: int | None = 5760             # 0 = ephemeral (see SimVehicle.tcp_port), None = no TCP; a telemetry
+                                            # link (SERIAL1-like): unsigned frames dropped once signing is on
+    usb_port: int | None = None             # a TCP port acting as USB (SERIAL0): unsigned frames always accepted;
+                                            # 0 = ephemeral (SimVehicle.usb_port), None = none
     udp_out: str | None = None              # "HOST:PORT": push there like the Solo's controller to 14550
     udp_listen: str | None = None           # "HOST:PORT": serve whoever sent last, like SITL's UDP
     speedup: float = 1.0
@@ -49,6 +56,7 @@ class SimConfig:
     auto_disarm_after: float = 10.0
     rate_hz: int = 50
     seed: int | None = None
+    signing_key: bytes | None = None        # 32 bytes: a MAVLink 2 signing key already in storage at power-on
 
 
 class SimVehicle:
@@ -65,18 +73,24 @@ class SimVehicle:
         profile_of(self.config)                          # an unknown profile fails here
         if len(tuple(self.config.origin_offset)) != 3:
             raise ValueError("origin_offset is (north, east, down) in metres")
+        usb_port = getattr(self.config, "usb_port", None)
+        if usb_port is not None and not 0 <= usb_port <= 65535:
+            raise ValueError("usb_port is 0 (any free port) to 65535, or None")
         self.clock = clock if clock is not None else RealClock()
         self.faults = Faults(seed=self.config.seed, clock=self.clock.now)
         self.received_setpoints: deque = deque(maxlen=2000)
         self.received_messages: deque = deque(maxlen=2000)
         self.steps = 0                                   # physics steps taken so far
+        self.signing = Signing(self.config)              # key (None: off), counters, every link's channel
         self._inbox: queue.SimpleQueue = queue.SimpleQueue()
         self._lock = threading.Lock()
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
-        self.server = LinkServer(self.config, self.faults, self._received)
-        self._outbox: list = []
-        self.autopilot = Autopilot(self.config, self.faults, emit=self._outbox.append)
+        self.server = LinkServer(self.config, self.faults, self._received, self.signing)
+        self._outbox: list = []                          # (message, peer or None for every peer)
+        self.autopilot = Autopilot(self.config, self.faults, emit=lambda msg: self._outbox.append((msg, None)),
+                                   emit_to=lambda msg, peer: self._outbox.append((msg, peer)))
+        self.autopilot.signing = self.signing
         self.components = components_of(self.config)
         self._truth = self.autopilot.truth()
         self._started = False
@@ -115,6 +129,11 @@ class SimVehicle:
         return self.server.udp_port
 
     @property
+    def usb_port(self) -> int | None:
+        """The USB-like port (SERIAL0) once started, None without one."""
+        return self.server.usb_port
+
+    @property
     def clients(self) -> int:
         """TCP ground stations connected now."""
         return self.server.clients
@@ -132,29 +151,35 @@ class SimVehicle:
             self._step(dt or 1.0 / self.config.rate_hz)
 
     # -- internals -----------------------------------------------------------------------------------
-    def _received(self, msg, version: int) -> None:
-        self._inbox.put((msg, version))
+    def _received(self, msg, version: int, peer=None) -> None:
+        self._inbox.put((msg, version, peer))
 
     def _step(self, dt: float) -> None:
         self.server.pump()                 # uplink frames whose latency is over join the inbox
         autopilot = self.autopilot
         while True:
             try:
-                msg, version = self._inbox.get_nowait()
+                msg, version, peer = self._inbox.get_nowait()
             except queue.Empty:
                 break
+            if not self.signing.admit(msg, getattr(peer, "channel", None)):
+                continue                   # dropped by the link's parser: the autopilot never hears it
             kind = msg.get_type()
             self.received_messages.append((autopilot.t, kind, version))
             if kind == "SET_POSITION_TARGET_LOCAL_NED":
                 self.received_setpoints.append((autopilot.t, msg.coordinate_frame, msg.type_mask,
                                                 msg.vx, msg.vy, msg.vz, msg.yaw_rate))
+            autopilot.sender = peer
             autopilot.handle(msg, version)
+        autopilot.sender = None
         autopilot.step(dt)
+        if self.signing.enabled and autopilot.stage.gps_fix:
+            self.signing.update_timestamp(time.time())   # GPS time (AP_RTC), as SYSTEM_TIME says it
         self.steps += 1
         self._truth = autopilot.truth()
         # only now on the wire: nothing a peer hears is newer than truth()
-        for msg in self._outbox:
-            self.server.broadcast(msg)
+        for msg, peer in self._outbox:
+            self.server.broadcast(msg, to=peer)
         self._outbox.clear()
         for component in self.components:
             for msg in component.step(autopilot.t):
