@@ -86,7 +86,9 @@ class Drone(abc.ABC):
     def arm(self, force: bool = False) -> Future[CommandResult]: ...
 
     @abc.abstractmethod
-    def disarm(self, force: bool = False) -> Future[CommandResult]: ...
+    def disarm(self, force: bool = False, emergency: bool = False) -> Future[CommandResult]:
+        """Stop the motors. ``force`` skips the vehicle's checks; in the air that makes it fall, so a forced
+        disarm in flight is refused unless ``emergency`` says the pilot confirmed exactly that."""
 
     @abc.abstractmethod
     def set_mode(self, name: str) -> Future[CommandResult]:
@@ -113,10 +115,35 @@ class Drone(abc.ABC):
     # -- payload --------------------------------------------------------------------------
     def toggle_camera(self) -> Future[CommandResult]:
         """Ask the vehicle to show its next camera; a vehicle with one camera (the default) refuses at once."""
-        future: Future[CommandResult] = Future()
-        future.set_result(CommandResult("switch camera", CommandStatus.REJECTED, "this vehicle has no camera switch"))
-        return future
+        return _answered(CommandResult("switch camera", CommandStatus.REJECTED, "this vehicle has no camera switch"))
+
+    # -- link security (MAVLink 2 signing; driver.signing) -------------------------------------
+    # Only a driver that holds the MAVLink link can sign it; a remote one (Ice) is set up on its server.
+    def use_signing_key(self, key: bytes | None, allow_unsigned: bool | None = None) -> CommandResult:
+        """Sign with ``key`` from now on (None: stop), without telling the vehicle."""
+        return CommandResult("signing key", CommandStatus.REJECTED, _NO_SIGNING)
+
+    def allow_unsigned(self, on: bool) -> CommandResult:
+        """Let the vehicle's unsigned frames in while signing (a vehicle without the key yet), or stop."""
+        return CommandResult("signing unsigned", CommandStatus.REJECTED, _NO_SIGNING)
+
+    def setup_signing(self, key: bytes) -> Future[CommandResult]:
+        """Give the vehicle ``key`` (SETUP_SIGNING, in clear) and sign with it."""
+        return _answered(CommandResult("signing setup", CommandStatus.REJECTED, _NO_SIGNING))
+
+    def remove_signing(self) -> Future[CommandResult]:
+        """Tell the vehicle to stop signing, then stop here."""
+        return _answered(CommandResult("signing remove", CommandStatus.REJECTED, _NO_SIGNING))
 
     @abc.abstractmethod
     def close(self) -> None:
         """Stop streaming and release the link."""
+
+
+_NO_SIGNING = "the MAVLink link is signed where it is held: set signing up on the MAVLinkServer"
+
+
+def _answered(result: CommandResult) -> Future[CommandResult]:
+    future: Future[CommandResult] = Future()
+    future.set_result(result)
+    return future

@@ -190,13 +190,13 @@ class Console(cmd.Cmd):
             raise ValueError(f"usage: {ARM_USAGE}")
 
     def do_disarm(self, arg: str) -> None:
-        """disarm [force]: stop the motors (force skips the vehicle's checks, on the ground only: in the air it
-        would fall, so the driver refuses)"""
+        """disarm [force] | disarm force emergency: stop the motors. force skips the vehicle's checks, on the
+        ground only; in the air the vehicle would fall, so only "disarm force emergency" does that"""
         words = arg.split()
-        if words and words != ["force"]:
-            raise ValueError("usage: disarm [force]")
+        if words not in ([], ["force"], ["force", "emergency"]):
+            raise ValueError("usage: disarm [force] | disarm force emergency")
         self._cancel_velocity()
-        self._report(self.vehicle.disarm(bool(words)))
+        self._report(self.vehicle.disarm(bool(words), emergency=words == ["force", "emergency"]))
 
     def do_takeoff(self, arg: str) -> None:
         """takeoff [ALT]: the whole sequence (GUIDED, arm, take off, climb to ALT metres)"""
@@ -297,6 +297,36 @@ class Console(cmd.Cmd):
         amsl = f", {s.position.alt:.1f} m above sea level" if s.position else ""
         self.say(f"altitude {s.altitude:.2f} m above home{amsl}, {vertical_speed(s.velocity.climb)}")
 
+    def do_signing(self, arg: str) -> None:
+        """signing setup PASSPHRASE | key PASSPHRASE | keyfile FILE | remove | disable | unsigned on|off | status
+        MAVLink 2 signing, as MAVProxy's (key = SHA-256 of the passphrase). setup gives the vehicle the key
+        (in clear: over USB or a cable) and signs with it; key and keyfile sign without telling the vehicle;
+        remove tells the vehicle to stop; disable stops signing here only; unsigned on lets the vehicle's
+        unsigned frames in"""
+        from .signing import key_from_passphrase, read_key_file
+        sub, _, rest = arg.strip().partition(" ")
+        rest = rest.strip()
+        usage = "usage: signing setup PASSPHRASE | key PASSPHRASE | keyfile FILE | remove | disable | " \
+                "unsigned on|off | status"
+        if sub in ("setup", "key", "keyfile") and not rest:
+            raise ValueError(usage)
+        if sub == "setup":
+            self._report(self.vehicle.setup_signing(key_from_passphrase(rest)))
+        elif sub == "key":
+            self.say(result_line(self.vehicle.use_signing_key(key_from_passphrase(rest))))
+        elif sub == "keyfile":
+            self.say(result_line(self.vehicle.use_signing_key(read_key_file(rest))))
+        elif sub == "remove":
+            self._report(self.vehicle.remove_signing())
+        elif sub == "disable":
+            self.say(result_line(self.vehicle.use_signing_key(None)))
+        elif sub == "unsigned" and rest in ("on", "off"):
+            self.say(result_line(self.vehicle.allow_unsigned(rest == "on")))
+        elif sub in ("status", ""):
+            self.say("signing " + self.vehicle.state().signing.summary)
+        else:
+            raise ValueError(usage)
+
     def do_status(self, arg: str) -> None:
         """status: link, mode, armed, position, battery, GPS, takeoff"""
         for line in status_lines(self.vehicle.state()):
@@ -337,6 +367,9 @@ def status_lines(s: VehicleState) -> list[str]:
     lines.append(battery_line(s))
     lines.append(f"GPS {s.gps.fix_name}, {s.gps.satellites} satellites; "
                  f"{'ready to arm' if s.readiness.ready_to_arm else 'not ready to arm'}")
+    lines.append("signing " + s.signing.summary)
+    if ln.foreign_packets:
+        lines.append(f"{ln.foreign_packets} packets from other addresses ignored (pinned to {ln.pinned_to})")
     if s.takeoff.active:
         lines.append(takeoff_line(s))
     return lines

@@ -36,6 +36,17 @@ class Transport:
     def write(self, data: bytes) -> bool: ...           # True when handed to the link (and so logged)
     def close(self) -> None: ...
 
+    # UDP pins itself to the vehicle (see UdpTransport); other links reach only what they connect to
+    foreign = 0
+    pinned: tuple[str, int] | None = None
+
+    def heard_vehicle(self) -> None:
+        """The data just read carried the vehicle's heartbeat."""
+
+    def strangers(self) -> list:
+        """Senders ignored for the first time since the last call."""
+        return []
+
     def clock(self) -> float:
         """Time base for link supervision: real time, or the log's time when replaying."""
         return time.monotonic()
@@ -142,6 +153,134 @@ class MavutilTransport(Transport):
                 pass
 
 
+Address = tuple[str, int]
+
+
+def parse_sender(text: str) -> tuple[str, int | None]:
+    """"10.1.1.1" or "10.1.1.1:14550" → (ip, port or None); names are resolved once, here."""
+    host, sep, port = text.strip().rpartition(":")
+    if not sep:
+        host, port = text.strip(), ""
+    if port and not port.isdigit():
+        raise ValueError(f"{text!r}: expected ADDRESS or ADDRESS:PORT")
+    try:
+        ip = socket.gethostbyname(host)
+    except OSError as exc:
+        raise ValueError(f"{text!r}: cannot resolve {host}") from exc
+    return ip, int(port) if port else None
+
+
+class UdpTransport(Transport):
+    """UDP pinned to the vehicle: pymavlink's ``mavudp`` takes datagrams from anyone and sends every frame to
+    every address that ever sent one, so a laptop on the same Wi-Fi would receive our commands and could
+    speak for the vehicle. Here, once the vehicle is heard (:meth:`heard_vehicle`), datagrams from other
+    addresses are dropped and counted (``foreign``) and frames go to the vehicle's address only.
+
+    ``allowed`` names other senders whose datagrams are read (the Solo's controller, a second ground
+    station); they never receive our frames. ``udpout:`` is pinned to its destination from the start. If the
+    pinned vehicle falls silent for ``repin_after`` seconds (it rebooted onto another source port), the
+    same IP may take the pin again with its next heartbeat; any other address never can.
+    """
+
+    def __init__(self, connection: str, allowed: tuple[str, ...] = (), repin_after: float = 3.5):
+        self.description = connection
+        scheme, _, rest = connection.partition(":")
+        host, _, port = rest.rpartition(":")
+        self._listen = scheme.lower() in ("udp", "udpin")
+        self._address: Address = (host, int(port))
+        self._allowed = [parse_sender(a) for a in allowed]
+        self._repin_after = repin_after
+        self._sock: socket.socket | None = None
+        self.pinned: Address | None = None
+        self.last_source: Address | None = None
+        self._pinned_heard = 0.0
+        self.foreign = 0                                  # datagrams dropped from strangers
+        self._strangers: list[Address] = []               # each new one, for the pilot (read by the driver)
+
+    def open(self) -> None:
+        sock = socket.socket(socket.AF_INET, socket.SOCK_DGRAM)
+        try:
+            if self._listen:
+                sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+                sock.bind(self._address)
+            else:
+                self.pinned = (socket.gethostbyname(self._address[0]), self._address[1])
+            sock.setblocking(False)
+        except OSError as exc:
+            sock.close()
+            raise LinkError(f"cannot open {self.description}: {exc.strerror or exc}") from exc
+        self._sock = sock
+
+    def _accepts(self, source: Address, now: float) -> bool:
+        pinned = self.pinned
+        if pinned is None or source == pinned:
+            return True
+        if any(ip == source[0] and port in (None, source[1]) for ip, port in self._allowed):
+            return True
+        return (self._listen and source[0] == pinned[0] and now - self._pinned_heard > self._repin_after)
+
+    def read(self, timeout: float) -> bytes:
+        sock = self._sock
+        if sock is None:
+            raise LinkError("not open")
+        deadline = time.monotonic() + timeout
+        while True:
+            try:
+                ready, _, _ = select.select([sock], [], [], max(0.0, deadline - time.monotonic()))
+            except (OSError, ValueError) as exc:
+                raise LinkError(str(exc)) from exc
+            if not ready:
+                return b""
+            try:
+                data, source = sock.recvfrom(65536)
+            except (BlockingIOError, ConnectionRefusedError):   # ICMP refused from an earlier send
+                continue
+            except OSError as exc:
+                raise LinkError(str(exc)) from exc
+            now = time.monotonic()
+            if self._accepts(source, now):
+                self.last_source = source
+                if source == self.pinned:
+                    self._pinned_heard = now
+                return data
+            self.foreign += 1
+            if source not in self._strangers and len(self._strangers) < 64:
+                self._strangers.append(source)
+
+    def heard_vehicle(self) -> None:
+        """The datagram just read carried the vehicle's heartbeat: pin (or re-pin) its sender."""
+        source = self.last_source
+        if source is not None and source != self.pinned and self._listen:
+            if self.pinned is None or self._accepts(source, time.monotonic()):
+                log.info("vehicle link pinned to %s:%d", *source)
+                self.pinned = source
+        if source == self.pinned:
+            self._pinned_heard = time.monotonic()
+
+    def strangers(self) -> list[Address]:
+        """Senders dropped for the first time since the last call."""
+        out, self._strangers = self._strangers, []
+        return out
+
+    def write(self, data: bytes) -> bool:
+        sock, target = self._sock, self.pinned
+        if sock is None or target is None:              # nobody to speak to until the vehicle is heard
+            return False
+        try:
+            sock.sendto(data, target)
+            return True
+        except OSError as exc:                          # buffer full, unreachable: a lost datagram
+            log.debug("udp send failed: %s", exc)
+            return False
+
+    def close(self) -> None:
+        sock, self._sock = self._sock, None
+        if sock is not None:
+            sock.close()
+        if self._listen:
+            self.pinned = None
+
+
 def frame_length(buf: bytes | bytearray, offset: int) -> int:
     """Length of the MAVLink frame starting at ``offset`` (0 if not a frame start)."""
     magic = buf[offset]
@@ -163,7 +302,13 @@ class TlogWriter:
         self.path = path
         self._new = not (append and os.path.exists(path))
         self._written = False
-        self._file = open(path, "ab" if append else "wb")
+        # never through a symbolic link planted at the name (a shared log folder): O_NOFOLLOW
+        flags = os.O_WRONLY | os.O_CREAT | (os.O_APPEND if append else os.O_TRUNC) | getattr(os, "O_NOFOLLOW", 0)
+        try:
+            fd = os.open(path, flags, 0o644)
+        except OSError as exc:
+            raise OSError(exc.errno, f"cannot write the flight log {path}: {exc.strerror}") from None
+        self._file = os.fdopen(fd, "ab" if append else "wb")
         self._lock = threading.Lock()
         self.error = ""                       # why it stopped writing (disk full, ...); the link goes on
 
@@ -362,6 +507,43 @@ class TlogReplay(Transport):
             self._cond.notify_all()
 
 
+class ReplayControl:
+    """Play/pause/speed of a .tlog being replayed, for the viewer's replay bar."""
+
+    def __init__(self, transport):
+        self._t = transport
+
+    def pause(self) -> None:
+        self._t.pause()
+
+    def resume(self) -> None:
+        self._t.resume()
+
+    @property
+    def paused(self) -> bool:
+        return self._t.paused
+
+    @property
+    def speed(self) -> float:
+        return self._t.speed
+
+    @speed.setter
+    def speed(self, value: float) -> None:
+        self._t.speed = value
+
+    @property
+    def position(self) -> float:
+        return self._t.position
+
+    @property
+    def duration(self) -> float:
+        return self._t.duration
+
+    @property
+    def finished(self) -> bool:
+        return self._t.finished
+
+
 NETWORK_SCHEMES = ("udp", "udpin", "udpout", "udpbcast", "tcp", "tcpin")
 OTHER_SCHEMES = ("ws", "wss", "wsserver", "mcast")      # pymavlink takes these too; checked by it
 
@@ -397,7 +579,9 @@ def connection_problem(connection: str) -> str | None:
 
 
 def open_transport(connection: str, baud: int = 57600, source_system: int = 255, source_component: int = 190,
-                   replay_speed: float = 1.0) -> Transport:
+                   replay_speed: float = 1.0, allowed: tuple[str, ...] = ()) -> Transport:
     if connection.lower().endswith(".tlog") and os.path.isfile(connection):
         return TlogReplay(connection, replay_speed)
+    if connection.split(":", 1)[0].lower() in ("udp", "udpin", "udpout"):
+        return UdpTransport(connection, allowed)
     return MavutilTransport(connection, baud, source_system, source_component)

@@ -8,7 +8,8 @@ import argparse
 import math
 from typing import Callable
 
-__all__ = ["as_float", "number", "positive", "not_negative", "whole", "port", "connection", "takeoff_altitude"]
+__all__ = ["as_float", "number", "positive", "not_negative", "whole", "port", "connection", "takeoff_altitude",
+           "add_link_security", "link_security"]
 
 
 def as_float(text: str) -> float:
@@ -73,3 +74,42 @@ def connection(text: str) -> str:
     if problem:
         raise argparse.ArgumentTypeError(problem)
     return text.strip()
+
+
+def add_link_security(group) -> None:
+    """The vehicle link's protection, the same on ``main.py`` and ``python -m driver`` (docs/security.md)."""
+    key = group.add_mutually_exclusive_group()
+    key.add_argument("--signing-passphrase", metavar="TEXT",
+                     help="sign MAVLink 2 with the key SHA-256(TEXT), as MAVProxy's 'signing setup TEXT' "
+                          "(other users can read a command line: prefer --signing-key-file)")
+    key.add_argument("--signing-key-file", metavar="FILE",
+                     help="sign MAVLink 2 with the key in FILE (64 hex digits, or a passphrase on its first "
+                          "line; readable only by you, mode 600)")
+    group.add_argument("--signing-allow-unsigned", action="store_true",
+                       help="while signing, also accept the vehicle's unsigned frames (it has no key yet)")
+    group.add_argument("--allow", action="append", default=[], metavar="ADDR",
+                       help="UDP: also read this sender besides the vehicle (ADDRESS or ADDRESS:PORT, repeatable), "
+                            "e.g. the Solo's controller 10.1.1.1; it never receives our frames")
+
+
+def link_security(opts, parser: argparse.ArgumentParser):
+    """(SigningConfig or None, allowed senders) from :func:`add_link_security`'s options; a bad key file or
+    address is a usage error naming it."""
+    from .link import parse_sender
+    from .signing import SigningConfig, key_from_passphrase, read_key_file
+    for address in opts.allow:
+        try:
+            parse_sender(address)
+        except ValueError as exc:
+            parser.error(f"--allow {exc}")
+    key = None
+    if opts.signing_passphrase:
+        key = key_from_passphrase(opts.signing_passphrase)
+    elif opts.signing_key_file:
+        try:
+            key = read_key_file(opts.signing_key_file)
+        except ValueError as exc:
+            parser.error(f"--signing-key-file: {exc}")
+    if key is None and not opts.signing_allow_unsigned:
+        return None, tuple(opts.allow)
+    return SigningConfig(key=key, allow_unsigned=opts.signing_allow_unsigned), tuple(opts.allow)

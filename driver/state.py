@@ -16,7 +16,7 @@ from dataclasses import dataclass, field, replace
 
 __all__ = [
     "LandedState", "LinkStatus", "Severity", "CommandStatus", "Attitude", "GlobalPosition",
-    "LocalPosition", "Velocity", "Battery", "Gps", "Readiness", "LinkHealth", "Message",
+    "LocalPosition", "Velocity", "Battery", "Gps", "Readiness", "LinkHealth", "SigningStatus", "Signing", "Message",
     "CommandResult", "Setpoint", "SequencePhase", "SequenceProgress", "Environment",
     "VehicleState", "replace",
 ]
@@ -184,6 +184,48 @@ class LinkHealth:
     bad_crc: int = 0
     mavlink_version: int = 1             # what we send: 1 until the vehicle speaks 2
     lost_count: int = 0                  # how many times the link was declared lost
+    foreign_packets: int = 0             # UDP datagrams dropped because they did not come from the vehicle
+    pinned_to: str = ""                  # UDP: the vehicle's "ip:port", the only address we send to
+
+
+class SigningStatus(enum.Enum):
+    OFF = "off"                                    # no key, the vehicle does not sign either
+    SIGNING = "signing"                            # we sign everything we send (see Signing.detail)
+    REQUIRED = "vehicle requires signing"          # the vehicle signs and we have no key: it ignores us
+    MISMATCH = "key mismatch"                      # the vehicle's signatures fail with our key
+    UNAVAILABLE = "MAVLink 1: cannot sign"         # a MAVLink 1 link (stock Solo) has no signing at all
+    SETTING_UP = "setting up"                      # SETUP_SIGNING sent, waiting for the vehicle to sign
+
+
+@dataclass(frozen=True)
+class Signing:
+    """MAVLink 2 message signing on the vehicle link: state and what was accepted or dropped."""
+    status: SigningStatus = SigningStatus.OFF
+    detail: str = ""
+    link_id: int | None = None           # the link id our signatures carry; None without a key
+    allow_unsigned: bool = False         # the pilot lets unsigned frames from the vehicle in
+    vehicle_signs: bool | None = None    # the autopilot's last heartbeat was signed; None before one
+    signed_accepted: int = 0             # frames whose signature verified with our key
+    bad_signature: int = 0               # signed frames dropped: wrong key, replayed or too old
+    unsigned_rejected: int = 0           # unsigned frames dropped (MAVLink 1 frames among them)
+    unsigned_accepted: int = 0           # unsigned frames let in (RADIO_STATUS, or allowed by the pilot)
+
+    @property
+    def counts(self) -> str:
+        """What was verified and dropped, in a few words ("" while signing has counted nothing)."""
+        parts = [f"{n} {what}" for n, what in ((self.signed_accepted, "verified"),
+                                                (self.bad_signature, "bad signatures dropped"),
+                                                (self.unsigned_rejected, "unsigned dropped"),
+                                                (self.unsigned_accepted, "unsigned let in")) if n]
+        return ", ".join(parts)
+
+    @property
+    def summary(self) -> str:
+        """One line for the pilot: "signing (both ends sign; link id 7): 1200 verified, 3 unsigned dropped"."""
+        notes = [n for n in (self.detail, f"link id {self.link_id}" if self.link_id is not None else "",
+                             "unsigned frames from the vehicle allowed" if self.allow_unsigned else "") if n]
+        text = self.status.value + (f" ({'; '.join(notes)})" if notes else "")
+        return text + (f": {self.counts}" if self.counts else "")
 
 
 @dataclass(frozen=True)
@@ -292,6 +334,7 @@ class VehicleState:
     rejected_values: int = 0                         # telemetry messages dropped for impossible values
     gcs_failsafe: int | None = None                  # the vehicle's FS_GCS_ENABLE, None until read
     firmware: str = ""                               # AUTOPILOT_VERSION's flight software, "3.3.1"; "" until known
+    signing: Signing = field(default_factory=Signing)
 
     # -- derived views -----------------------------------------------------------------------
     @property

@@ -32,11 +32,13 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink
 from . import frames
 from .api import CEILING, Drone, Limits
 from .commands import CommandSender, Notifier, command_name
-from .link import LinkError, MavutilTransport, TlogWriter, Transport, open_transport
+from .forwarding import Forwarder
+from .link import LinkError, ReplayControl, TlogWriter, Transport, open_transport
 from .rules import COPTER_MODES, MAX_ALTITUDE, MIN_TAKEOFF_ALTITUDE, go_to_problem, takeoff_altitude_problem
 from .setpoints import SetpointStreamer
+from .signing import LinkSigning, SigningConfig
 from .state import (
-    Battery, CommandStatus, LinkHealth, LinkStatus, SequencePhase, SequenceProgress, Setpoint,
+    Battery, CommandResult, CommandStatus, LinkHealth, LinkStatus, SequencePhase, SequenceProgress, Setpoint,
     Severity, VehicleState,
 )
 from .store import StateStore
@@ -87,43 +89,8 @@ class VehicleConfig:
     battery_cells: int | None = None          # None: from the vehicle, or inferred from the first voltage
     replay_speed: float = 1.0
     heartbeat_interval: float = 1.0
-
-
-class ReplayControl:
-    """Play/pause/speed of a .tlog being replayed, for the viewer's replay bar."""
-
-    def __init__(self, transport):
-        self._t = transport
-
-    def pause(self) -> None:
-        self._t.pause()
-
-    def resume(self) -> None:
-        self._t.resume()
-
-    @property
-    def paused(self) -> bool:
-        return self._t.paused
-
-    @property
-    def speed(self) -> float:
-        return self._t.speed
-
-    @speed.setter
-    def speed(self, value: float) -> None:
-        self._t.speed = value
-
-    @property
-    def position(self) -> float:
-        return self._t.position
-
-    @property
-    def duration(self) -> float:
-        return self._t.duration
-
-    @property
-    def finished(self) -> bool:
-        return self._t.finished
+    signing: SigningConfig | None = None      # MAVLink 2 signing (driver.signing); None: off until a key is given
+    allowed_senders: tuple[str, ...] = ()     # UDP: other addresses read besides the vehicle's ("10.1.1.1")
 
 
 def _ground_only(s: VehicleState) -> str | None:
@@ -141,14 +108,16 @@ class Vehicle(Drone):
     def __init__(self, config: VehicleConfig | None = None):
         self.config = cfg = config or VehicleConfig()
         self._transport: Transport = open_transport(cfg.connection, cfg.baud, cfg.source_system,
-                                                    cfg.source_component, cfg.replay_speed)
+                                                    cfg.source_component, cfg.replay_speed, cfg.allowed_senders)
         self._replay = ReplayControl(self._transport) if self._transport.is_replay else None
-        self._codec_in = self._new_parser()
-        self._codec_out = mavlink.MAVLink(None, srcSystem=cfg.source_system, srcComponent=cfg.source_component)
+        self._signing = LinkSigning(cfg.signing, self._transport.description)
+        self._codec_in = self._signing.parser()
+        self._parser_generation = self._signing.generation
+        self._codec_out = self._new_encoder()
+        self._sender_generation = -1          # the encoder is (re)configured for signing on the next send
         self._tx_lock = threading.Lock()
         self._v2 = cfg.mavlink_version == 2
         self._tlog = TlogWriter(cfg.tlog_path, cfg.tlog_append) if cfg.tlog_path and not self._replay else None
-        self._outputs: list[MavutilTransport] = []
         battery = Battery(cells=cfg.battery_cells, cells_source="configured") if cfg.battery_cells else Battery()
         self._store = StateStore(VehicleState(link=LinkHealth(address=self._transport.description), battery=battery),
                                  self._transport.wall_time)
@@ -174,6 +143,8 @@ class Vehicle(Drone):
         self._threads: list[threading.Thread] = []
         self._ticker: threading.Thread | None = None
         self._started = False
+        self._forwarder = Forwarder(cfg.outputs, cfg.baud, self._forward_to_vehicle,
+                                    lambda text: self._store.add_message(Severity.WARNING, text), self._closing)
 
     # ------------------------------------------------------------------------------------------
     # lifecycle
@@ -207,10 +178,7 @@ class Vehicle(Drone):
             self._threads.append(t)
             if name == "mavlink-ticker":
                 self._ticker = t
-        for out in self.config.outputs:
-            t = threading.Thread(target=self._run_output, args=(out,), name=f"mavlink-out {out}", daemon=True)
-            t.start()
-            self._threads.append(t)
+        self._threads += self._forwarder.start()
         return self
 
     def close(self) -> None:
@@ -224,8 +192,7 @@ class Vehicle(Drone):
         self._closing.set()
         self._wake.set()
         self._transport.close()
-        for out in self._outputs:
-            out.close()
+        self._forwarder.close()
         for t in self._threads:
             t.join(timeout=2.0)
         with self._lock:
@@ -233,6 +200,7 @@ class Vehicle(Drone):
             self._store.set(link=self._link.health(self._version, LinkStatus.CLOSED))
             self._store.publish()
         self._notifier.close()
+        self._signing.save()
         if self._tlog:
             self._tlog.close()
 
@@ -263,12 +231,29 @@ class Vehicle(Drone):
     # sending: decided under the lock, written after it
     # ------------------------------------------------------------------------------------------
     def _send(self, msg) -> None:
+        """Pack and write one message; ``bytes`` are a frame packed already (SETUP_SIGNING)."""
         if self._transport.is_replay:
             return
         with self._tx_lock:
-            buf = msg.pack(self._codec_out, force_mavlink1=not self._v2)
-            self._codec_out.seq = (self._codec_out.seq + 1) % 256
+            if isinstance(msg, bytes):
+                self._write(msg)
+                return
+            signing, codec = self._signing, self._codec_out
+            if self._sender_generation != signing.generation:
+                self._sender_generation = signing.generation
+                signing.configure_sender(codec, signing.key)
+            signing.stamp(codec)
+            buf = msg.pack(codec, force_mavlink1=not self._v2)
+            codec.seq = (codec.seq + 1) % 256
+            signing.note_sent(codec)
             self._write(buf)
+
+    def _new_encoder(self):
+        return mavlink.MAVLink(None, srcSystem=self.config.source_system, srcComponent=self.config.source_component)
+
+    def _forward_to_vehicle(self, frame: bytes) -> None:
+        with self._tx_lock:
+            self._write(frame)
 
     def _post(self, msg) -> None:
         """Send from the ticker thread: callers (the UI among them) never touch the link themselves."""
@@ -316,10 +301,13 @@ class Vehicle(Drone):
     # ------------------------------------------------------------------------------------------
     # reader thread
     # ------------------------------------------------------------------------------------------
-    @staticmethod
-    def _new_parser():
-        codec = mavlink.MAVLink(None)
-        codec.robust_parsing = True
+    def _new_parser(self, carry=None):
+        """A fresh incoming codec, signing as configured now; ``carry``: the old one, whose unparsed bytes
+        (half a TCP frame) it takes over."""
+        codec = self._signing.parser()
+        self._parser_generation = self._signing.generation
+        if carry is not None:
+            codec.buf = bytearray(carry.buf[carry.buf_index:])
         return codec
 
     def _run_reader(self) -> None:
@@ -370,15 +358,16 @@ class Vehicle(Drone):
 
     def ingest(self, data: bytes) -> int:
         """Parse raw bytes as if read from the link and fold them into the state; returns messages parsed."""
+        if self._parser_generation != self._signing.generation:     # the key changed: check with the new one
+            self._codec_in = self._new_parser(self._codec_in)
         try:
             msgs = self._parse(data)
         except Exception as exc:                      # robust parsing should catch all; never let it escape
             log.debug("parser reset after %s", exc)
             self._codec_in = self._new_parser()
             msgs = None
-        if self._outputs:
-            for out in self._outputs:
-                out.write(data)
+        if self._forwarder.outputs:
+            self._forwarder.send(data)
         if not msgs:                                  # part of a frame (TCP, serial): nothing to fold yet
             return 0
         n = 0
@@ -428,8 +417,11 @@ class Vehicle(Drone):
         mtype = msg.get_type()
         link = self._link
         if mtype == "BAD_DATA":
-            if "CRC" in getattr(msg, "reason", ""):
+            reason = getattr(msg, "reason", "")
+            if "CRC" in reason:
                 link.bad_crc += 1
+            elif reason == "Invalid signature":
+                self._signing.rejected(msg)
             return 0
         header = msg.get_header()
         if self._tlog:
@@ -471,6 +463,8 @@ class Vehicle(Drone):
             return
         store = self._store
         now = time.monotonic()
+        self._transport.heard_vehicle()
+        self._settle_signing(self._signing.heartbeat(m))
         view = store.view()
         was_armed = view["armed"]
         changes = fold_heartbeat(view, m)
@@ -498,6 +492,7 @@ class Vehicle(Drone):
             except ValueError:
                 sev = Severity.INFO
             self._store.add_message_locked(sev, text, "vehicle")
+            self._settle_signing(self._signing.statustext(text))
 
     def _on_command_ack(self, m) -> None:
         self._commands.on_ack(m, time.monotonic())
@@ -550,6 +545,9 @@ class Vehicle(Drone):
                     if now >= next_health:
                         next_health = now + 0.1
                         out += self._supervise(now)
+                        frames_out, settled = self._signing.service(now, self._target_ids(), self._new_encoder)
+                        out += frames_out
+                        self._settle_signing(settled)
             except Exception:                         # heartbeat, setpoints and deadman must outlive any bug
                 log.exception("ticker step failed")
             for msg in out:                           # outside the lock: a slow link stalls nobody else
@@ -569,7 +567,11 @@ class Vehicle(Drone):
         out, event, reopen = self._link.tick(now)
         if reopen:
             self._reopen = True
-        store.set(link=self._link.health(self._version))
+        store.set(link=self._link.health(self._version), signing=self._signing.snapshot(self._version))
+        for ip, port in self._transport.strangers():
+            store.add_message_locked(Severity.WARNING, f"Ignored MAVLink from {ip}:{port}: the link is pinned to the "
+                                     f"vehicle at {self._link.health(self._version).pinned_to} (--allow {ip} "
+                                     "accepts that sender)")
         store.publish()
         if event == "lost":
             age = self._link.health(self._version).heartbeat_age or 0.0
@@ -651,7 +653,11 @@ class Vehicle(Drone):
             mavlink.MAV_CMD_COMPONENT_ARM_DISARM, (1, ARM_FORCE_MAGIC if force else 0),
             "arm (forced)" if force else "arm")
 
-    def disarm(self, force: bool = False) -> Future:
+    def disarm(self, force: bool = False, emergency: bool = False) -> Future:
+        if emergency and force:                       # the pilot confirmed it: the motors stop, even in the air
+            self._abort_takeoff("emergency motor stop")
+            return self._command_long(mavlink.MAV_CMD_COMPONENT_ARM_DISARM, (0, ARM_FORCE_MAGIC),
+                                      "emergency motor stop")
         if force:                                     # forced disarm in the air stops the motors: a crash
             problem = _not_in_flight(self.state())
             if problem:
@@ -726,6 +732,70 @@ class Vehicle(Drone):
             future = self._commands.submit_param(name, value, time.monotonic())
         self._wake.set()
         return future
+
+    # ------------------------------------------------------------------------------------------
+    # signing (driver.signing)
+    # ------------------------------------------------------------------------------------------
+    def use_signing_key(self, key: bytes | None, allow_unsigned: bool | None = None) -> CommandResult:
+        """Sign with ``key`` from now on, or stop (None), without telling the vehicle; ``allow_unsigned`` lets
+        the vehicle's unsigned frames in (a vehicle without the key yet)."""
+        if key is not None and len(key) != 32:
+            return self._store.record("signing key", CommandStatus.REJECTED, "a signing key is 32 bytes")
+        with self._lock:
+            self._signing.use_key(key, allow_unsigned)
+            self._store.set(signing=self._signing.snapshot(self._version))
+            result = self._store.record_locked("signing key", CommandStatus.ACCEPTED,
+                                               "signing with the new key" if key else "signing off")
+        self._wake.set()
+        return result
+
+    def allow_unsigned(self, on: bool) -> CommandResult:
+        """Let the vehicle's unsigned frames in while we sign (a vehicle that has no key yet), or stop."""
+        with self._lock:
+            self._signing.use_key(self._signing.key, allow_unsigned=on)
+            self._store.set(signing=self._signing.snapshot(self._version))
+            return self._store.record_locked("signing unsigned", CommandStatus.ACCEPTED,
+                                             "the vehicle's unsigned frames are let in" if on else
+                                             "the vehicle's unsigned frames are dropped")
+
+    def setup_signing(self, key: bytes) -> Future:
+        """Give the vehicle ``key`` with SETUP_SIGNING (in clear: a trusted link only) and sign with it;
+        resolves when the vehicle's heartbeats arrive signed with it."""
+        if len(key) != 32 or not any(key):
+            return self._finish("signing setup", CommandStatus.REJECTED, "a signing key is 32 bytes, not all zero")
+        return self._change_signing("signing setup", key)
+
+    def remove_signing(self) -> Future:
+        """Tell the vehicle to stop signing (a key of zeros); we stop once its heartbeats arrive unsigned."""
+        if self._signing.key is None:
+            return self._finish("signing remove", CommandStatus.REJECTED, "no signing key in use")
+        return self._change_signing("signing remove", None)
+
+    def _change_signing(self, name: str, key: bytes | None) -> Future:
+        s = self.state()
+        problem = ("replaying a recording: no vehicle to command" if self._replay is not None else
+                   "no vehicle connected" if not s.connected else
+                   "the vehicle refuses it while armed: disarm first" if s.armed else
+                   "the vehicle speaks MAVLink 1, which cannot be signed" if not self._v2 else None)
+        if problem:
+            return self._finish(name, CommandStatus.REJECTED, problem)
+        future: Future = Future()
+        with self._lock:
+            if key is not None:
+                self._store.add_message_locked(Severity.WARNING, "SETUP_SIGNING carries the key in clear: anyone "
+                                               "listening on this link learns it (use USB or a cable)")
+            self._settle_signing(self._signing.begin(name, key, future, time.monotonic()))
+            self._store.set(signing=self._signing.snapshot(self._version))
+            self._store.publish()
+        self._wake.set()
+        return future
+
+    def _settle_signing(self, settled) -> None:
+        """Record a finished SETUP_SIGNING exchange and settle its future (_lock held)."""
+        if settled is not None:
+            future, name, status, reason = settled
+            self._store.set(signing=self._signing.snapshot(self._version))
+            self._notifier.settle(future, self._store.record_locked(name, status, reason))
 
     # ------------------------------------------------------------------------------------------
     # velocity, position and yaw
@@ -851,35 +921,6 @@ class Vehicle(Drone):
             self._store.set(takeoff=SequenceProgress(SequencePhase.ABORTED, f"aborted: {why}", seq.altitude))
             self._notifier.settle(seq.future, self._store.record_locked(
                 "takeoff", CommandStatus.ABORTED, f"aborted by the pilot ({why})"))
-
-    # ------------------------------------------------------------------------------------------
-    # forwarding to other ground stations
-    # ------------------------------------------------------------------------------------------
-    def _run_output(self, connection: str) -> None:
-        """Forward vehicle traffic to another ground station and its commands back to the vehicle."""
-        target = "udpout:" + connection[4:] if connection.startswith("udp:") else connection
-        out = MavutilTransport(target, self.config.baud)
-        try:
-            out.open()
-        except LinkError as exc:
-            self._store.add_message(Severity.WARNING, f"Forwarding to {connection} failed: {exc}")
-            return
-        self._outputs.append(out)
-        parser = self._new_parser()                   # whole frames only: the log and the vehicle get no garbage
-        while not self._closing.is_set():
-            try:
-                data = out.read(0.2)
-            except LinkError:
-                self._closing.wait(0.5)
-                continue
-            try:
-                frames_in = parser.parse_buffer(data) or () if data else ()
-            except Exception:
-                parser, frames_in = self._new_parser(), ()
-            for msg in frames_in:
-                if msg.get_type() != "BAD_DATA":
-                    with self._tx_lock:
-                        self._write(bytes(msg.get_msgbuf()))
 
 
 #: Events: every one counts (mode/arming changes, the pilot's messages, command answers).

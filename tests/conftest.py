@@ -16,6 +16,12 @@ from driver.vehicle import Vehicle, VehicleConfig  # noqa: E402
 SPEEDUP = 4.0
 
 
+@pytest.fixture(autouse=True, scope="session")
+def _own_state_folder(tmp_path_factory):
+    """What the program keeps per user (the signing timestamp) goes to the test run's folder, not ~/.local."""
+    os.environ["XDG_STATE_HOME"] = str(tmp_path_factory.mktemp("state"))
+
+
 @pytest.fixture
 def sim_factory():
     """Start simulated vehicles on ephemeral ports; all are stopped after the test."""

@@ -326,3 +326,15 @@ def test_a_link_that_cannot_open_says_why(vehicle_factory):
     vehicle = vehicle_factory(f"tcp:127.0.0.1:{port}")
     s = vehicle.wait_for(lambda s: any("cannot open" in m.text for m in s.messages), 10)
     assert s is not None and s.link.status is LinkStatus.WAITING
+
+
+def test_the_flight_log_is_never_written_through_a_planted_symlink(tmp_path):
+    """A shared log folder: another user's link at our log's name must not make us truncate its target."""
+    from driver.link import TlogWriter
+    victim = tmp_path / "victim"
+    victim.write_bytes(b"someone else's file")
+    (tmp_path / "mav.tlog").symlink_to(victim)
+    for append in (False, True):
+        with pytest.raises(OSError, match="cannot write the flight log"):
+            TlogWriter(str(tmp_path / "mav.tlog"), append)
+    assert victim.read_bytes() == b"someone else's file"

@@ -305,3 +305,35 @@ def test_console_on_a_terminal_shows_extra_events_above_the_typed_line():
             proc.kill()
             proc.wait()
         os.close(master)
+
+
+def test_console_sets_up_signing_and_shows_it(vehicle, sim):
+    console, out = console_for(vehicle)
+    console.onecmd("signing status")
+    assert out.getvalue() == "signing off\n"
+    console.onecmd("signing setup uavviewer-test")
+    assert eventually(lambda: "signing setup: accepted (the vehicle now signs with the new key)" in out.getvalue(),
+                      20), out.getvalue()
+    assert sim.signing.key is not None
+    assert vehicle.wait_for(lambda s: s.signing.signed_accepted > 0, 10)
+    console.onecmd("signing status")
+    assert "signing signing (both ends sign; link id " in out.getvalue(), out.getvalue()
+    console.onecmd("status")
+    assert out.getvalue().count("signing signing (both ends sign") == 2
+    console.onecmd("signing frobnicate")
+    assert "error: usage: signing setup PASSPHRASE" in out.getvalue()
+    console.onecmd("signing remove")
+    assert eventually(lambda: "signing remove: accepted" in out.getvalue(), 20), out.getvalue()
+    assert sim.signing.key is None
+
+
+def test_console_stops_the_motors_in_flight_only_when_told_it_is_an_emergency(flying, sim):
+    console, out = console_for(flying)
+    console.onecmd("disarm force")
+    assert "disarm (forced): rejected (not while flying" in out.getvalue()
+    console.onecmd("disarm force now")
+    assert "error: usage: disarm [force] | disarm force emergency" in out.getvalue()
+    assert sim.truth().armed
+    console.onecmd("disarm force emergency")
+    assert eventually(lambda: "emergency motor stop: accepted" in out.getvalue(), 10), out.getvalue()
+    assert eventually(lambda: not sim.truth().armed, 10)

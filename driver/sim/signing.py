@@ -35,6 +35,7 @@ from dataclasses import dataclass
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
+from ..signing import EPOCH_2015, key_from_passphrase as passphrase_key    # the driver's: one key derivation
 from .profiles import speaks_mavlink2
 
 __all__ = ["Signing", "SigningCounters", "Channel", "passphrase_key", "signing_timestamp", "EPOCH_2015", "MINUTE",
@@ -42,16 +43,10 @@ __all__ = ["Signing", "SigningCounters", "Channel", "passphrase_key", "signing_t
 
 log = logging.getLogger(__name__)
 
-EPOCH_2015 = 1420070400             # signing timestamps count 10 µs units from 2015-01-01 UTC
 MINUTE = 60 * 100 * 1000            # one minute in those units
 MAX_STREAMS = 16                    # MAVLINK_MAX_SIGNING_STREAMS: a 17th stream is refused
 ACCEPT_UNSIGNED = frozenset((mavlink.MAVLINK_MSG_ID_RADIO_STATUS, mavlink.MAVLINK_MSG_ID_RADIO))
 KEY_BYTES = 32
-
-
-def passphrase_key(passphrase: str) -> bytes:
-    """The 32-byte key MAVProxy's ``signing setup PASSPHRASE`` makes: SHA-256 of the passphrase."""
-    return hashlib.sha256(passphrase.encode("utf-8")).digest()
 
 
 def signing_timestamp(unix_seconds: float) -> int:
