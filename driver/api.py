@@ -119,6 +119,11 @@ class Drone(abc.ABC):
 
     # -- link security (MAVLink 2 signing; driver.signing) -------------------------------------
     # Only a driver that holds the MAVLink link can sign it; a remote one (Ice) is set up on its server.
+    @property
+    def signing_unavailable(self) -> str:
+        """Why this drone's link cannot be signed from here; "" when it can."""
+        return _NO_SIGNING
+
     def use_signing_key(self, key: bytes | None, allow_unsigned: bool | None = None) -> CommandResult:
         """Sign with ``key`` from now on (None: stop), without telling the vehicle."""
         return CommandResult("signing key", CommandStatus.REJECTED, _NO_SIGNING)

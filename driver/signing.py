@@ -182,7 +182,7 @@ class LinkSigning:
         self.link_id = link_id_for(description) if config.link_id is None else config.link_id
         path = default_timestamp_path() if config.timestamp_path == "" else config.timestamp_path
         self._timestamps = TimestampFile(path)
-        self._floor = self._timestamps.load() + 1     # never below what an earlier run already sent
+        self._floor = self._timestamps.load()         # the highest timestamp sent, this run or an earlier one
         self._generation = 0                          # bumped when the incoming check must change
         self._change: _Change | None = None
         self._next_save = 0.0
@@ -236,7 +236,7 @@ class LinkSigning:
         sig.secret_key = key
         sig.sign_outgoing = key is not None
         sig.link_id = self.link_id
-        sig.timestamp = max(sig.timestamp, self._floor, signing_time())
+        sig.timestamp = max(sig.timestamp, self._floor + 1, signing_time())
 
     def stamp(self, codec) -> None:
         """Before packing: the timestamp follows the clock and never goes back (transmit lock held)."""
@@ -331,7 +331,7 @@ class LinkSigning:
         codec = codec_factory()
         self.configure_sender(codec, change.old_key)   # a signing telemetry port takes it only signed with that
         secret = change.key or bytes(32)
-        stamp = 0 if change.key is None else max(signing_time(), self._floor)
+        stamp = 0 if change.key is None else max(signing_time(), self._floor + 1)
         msg = mavlink.MAVLink_setup_signing_message(target[0], target[1], secret, stamp)
         buf = msg.pack(codec)
         self._floor = max(self._floor, codec.signing.timestamp)
@@ -339,10 +339,11 @@ class LinkSigning:
 
     def note_sent(self, codec) -> None:
         """The highest timestamp that went out (transmit lock held)."""
-        if codec.signing.timestamp > self._floor:
+        if codec.signing.sign_outgoing and codec.signing.timestamp > self._floor:
             self._floor = codec.signing.timestamp
 
     def save(self) -> None:
+        """Keep the highest timestamp sent (nothing is written until something was signed)."""
         self._timestamps.save(self._floor)
 
     # -- state -----------------------------------------------------------------------------------------

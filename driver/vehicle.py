@@ -749,6 +749,10 @@ class Vehicle(Drone):
         self._wake.set()
         return result
 
+    @property
+    def signing_unavailable(self) -> str:
+        return "a recording cannot be signed" if self._replay is not None else ""
+
     def allow_unsigned(self, on: bool) -> CommandResult:
         """Let the vehicle's unsigned frames in while we sign (a vehicle that has no key yet), or stop."""
         with self._lock:

@@ -141,3 +141,11 @@ def test_a_forged_frame_stamped_in_the_future_does_not_silence_the_vehicle():
         assert vehicle.wait_for(lambda s: s.mode == "GUIDED", 5)
     finally:
         vehicle.close()
+
+
+def test_nothing_is_kept_on_disk_for_a_link_that_never_signed(sim, vehicle_factory, tmp_path):
+    path = tmp_path / "signing-timestamp"
+    vehicle = vehicle_factory(f"tcp:127.0.0.1:{sim.tcp_port}", signing=SigningConfig(timestamp_path=str(path)))
+    assert vehicle.wait_for(lambda s: s.connected, 10)
+    vehicle.close()
+    assert not path.exists()

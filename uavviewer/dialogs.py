@@ -1,28 +1,47 @@
-"""Preferences, the key list, and the takeoff confirmation (non-blocking)."""
+"""Preferences, the key list, and the confirmations: takeoff, mode, signing set-up, emergency motor stop
+(all non-blocking)."""
 from __future__ import annotations
 
 import math
+import os
 from dataclasses import replace
 
 from PyQt5 import uic
-from PyQt5.QtCore import Qt
+from PyQt5.QtCore import Qt, pyqtSignal
 from PyQt5.QtWidgets import QDialog, QFileDialog, QMessageBox, QTableWidgetItem, QWidget
 
 from driver.api import CEILING
+from driver.signing import key_from_passphrase, read_key_file, write_key_file
+from driver.state import CommandResult, Signing, SigningStatus
 
 from . import RESOURCES
 from .camera_controller import default_media_folder
 from .keyboard import key_help
+from .link_security import SIGNING_WARNINGS
 from .settings import TAKEOFF_ALTITUDE_RANGE, ViewerSettings, split_uris
 from .sticks import StickMode
+from .widgets.telemetry_panel import GOOD, NORMAL, WARN
 
-__all__ = ["SettingsDialog", "KeysDialog", "takeoff_question", "mode_question"]
+__all__ = ["SettingsDialog", "KeysDialog", "takeoff_question", "mode_question", "signing_setup_question",
+           "emergency_stop_question"]
 
 
 class SettingsDialog(QDialog):
-    """Stick mode, maximum speeds, deadband, expo, takeoff altitude, and the camera: sources, media folder, HUD."""
+    """Stick mode, maximum speeds, deadband, expo, takeoff altitude; the camera: sources, media folder, HUD;
+    and Link security: MAVLink 2 signing.
 
-    def __init__(self, settings: ViewerSettings, parent: QWidget | None = None) -> None:
+    The Link security buttons act at once, through the signals below (the window carries them to the drone
+    and feeds back :meth:`set_signing` and :meth:`show_signing_result`); OK keeps only the key file's path.
+    ``signing_unavailable``: why this drone cannot be signed from here (a remote one); the page says it.
+    """
+
+    signingKeyRequested = pyqtSignal(object)      # bytes: sign with this key from now on; None: stop signing
+    signingSetupRequested = pyqtSignal(bytes)     # give the vehicle this key (the pilot confirmed: in clear)
+    signingRemoveRequested = pyqtSignal()         # tell the vehicle to stop signing
+    allowUnsignedRequested = pyqtSignal(bool)     # let the vehicle's unsigned frames in, or not
+
+    def __init__(self, settings: ViewerSettings, parent: QWidget | None = None,
+                 signing_unavailable: str = "") -> None:
         super().__init__(parent)
         uic.loadUi(str(RESOURCES / "ui" / "settings_dialog.ui"), self)
         self._settings = settings
@@ -45,6 +64,7 @@ class SettingsDialog(QDialog):
         self.hudDefault.setChecked(settings.hud)
         self.folder_dialog: QFileDialog | None = None
         self.browseMediaFolder.clicked.connect(self.browse_media_folder)
+        self._init_signing(settings, signing_unavailable)
 
     def browse_media_folder(self) -> QFileDialog:
         """Qt's own (non-native) folder chooser, opened without waiting on it."""
@@ -62,7 +82,164 @@ class SettingsDialog(QDialog):
                        max_yaw_deg_s=self.maxYaw.value(), deadband=self.deadband.value(),
                        expo=self.expo.value(), takeoff_altitude=self.takeoffAltitude.value(),
                        cameras="\n".join(split_uris(self.cameraUris.toPlainText())),
-                       media_folder=self.mediaFolder.text().strip(), hud=self.hudDefault.isChecked())
+                       media_folder=self.mediaFolder.text().strip(), hud=self.hudDefault.isChecked(),
+                       signing_key_file=self.signingKeyFile.text().strip())
+
+    # -- Link security ------------------------------------------------------------------------------
+    def _init_signing(self, settings: ViewerSettings, unavailable: str) -> None:
+        self._signing = Signing()
+        self._unavailable = unavailable
+        self.signing_status_color = ""            # the status line's colour (GOOD, WARN or NORMAL)
+        self.key_file_dialog: QFileDialog | None = None
+        self.save_key_dialog: QFileDialog | None = None
+        self.setup_box: QMessageBox | None = None
+        self.signingKeyFile.setText(settings.signing_key_file)
+        (self.keyFromFile if settings.signing_key_file else self.keyFromPassphrase).setChecked(True)
+        self.signingPassphrase.textEdited.connect(lambda _text: self.keyFromPassphrase.setChecked(True))
+        self.signingKeyFile.textEdited.connect(lambda _text: self.keyFromFile.setChecked(True))
+        self.signingPassphrase.textChanged.connect(self._update_signing_buttons)
+        self.signingKeyFile.textChanged.connect(self._update_signing_buttons)
+        self.keyFromPassphrase.toggled.connect(self._update_signing_buttons)
+        self.browseKeyFile.clicked.connect(self.browse_key_file)
+        self.signWithKey.clicked.connect(self._sign_with_key)
+        self.stopSigning.clicked.connect(lambda: self.signingKeyRequested.emit(None))
+        self.setupSigning.clicked.connect(self.ask_setup)
+        self.removeSigning.clicked.connect(lambda: self.signingRemoveRequested.emit())
+        self.allowUnsigned.clicked.connect(self.allowUnsignedRequested)   # the pilot's click, never set_signing
+        self.saveKeyFile.clicked.connect(self.choose_key_file_to_save)
+        if unavailable:
+            self.signingUnavailable.setText(f"Not available with this connection: {unavailable}.")
+            self.signingUnavailable.setStyleSheet(f"color: {WARN};")
+            self.signingUnavailable.setVisible(True)
+            for w in (self.signingStatusLabel, self.signingStatus, self.keyFromPassphrase, self.signingPassphrase,
+                      self.keyFromFile, self.signingKeyFile, self.browseKeyFile, self.signWithKey,
+                      self.stopSigning, self.setupSigning, self.removeSigning, self.allowUnsigned,
+                      self.saveKeyFile):
+                w.setEnabled(False)
+            self.signingStatus.setText("not known here")
+            return
+        self.set_signing(self._signing)
+
+    def set_signing(self, signing: Signing) -> None:
+        """The live state of signing on the link (from each snapshot)."""
+        if self._unavailable:
+            return
+        self._signing = signing
+        text = signing.summary
+        if self.signingStatus.text() != text:
+            self.signingStatus.setText(text)
+            self.signingStatus.setToolTip(text)
+        color = WARN if signing.status in SIGNING_WARNINGS else (
+            GOOD if signing.status is SigningStatus.SIGNING else NORMAL)
+        if color != self.signing_status_color:
+            self.signing_status_color = color
+            self.signingStatus.setStyleSheet(f"color: {color}; font-weight: bold;")
+        if self.allowUnsigned.isChecked() != signing.allow_unsigned:
+            self.allowUnsigned.setChecked(signing.allow_unsigned)
+        self._update_signing_buttons()
+
+    def show_signing_result(self, result: CommandResult) -> None:
+        """What came of a Link security button: accepted, or refused and why (the vehicle's words)."""
+        self._show_signing_text(str(result), GOOD if result.ok else WARN)
+
+    def _show_signing_text(self, text: str, color: str) -> None:
+        self.signingResult.setText(text)
+        self.signingResult.setStyleSheet(f"color: {color};")
+
+    def _update_signing_buttons(self) -> None:
+        if self._unavailable:
+            return
+        from_file = self.keyFromFile.isChecked()
+        phrase = bool(self.signingPassphrase.text())
+        named = bool(self.signingKeyFile.text().strip()) if from_file else phrase
+        in_use = self._signing.link_id is not None
+        busy = self._signing.status is SigningStatus.SETTING_UP
+        self.signWithKey.setEnabled(named)
+        self.setupSigning.setEnabled(named and not busy)
+        self.stopSigning.setEnabled(in_use)
+        self.removeSigning.setEnabled(in_use and not busy)
+        self.saveKeyFile.setEnabled(not from_file and phrase)
+
+    def chosen_key(self) -> bytes | None:
+        """The key the page names now (the passphrase's, or the key file's); None, with the reason shown."""
+        try:
+            if self.keyFromFile.isChecked():
+                path = self.signingKeyFile.text().strip()
+                if not path:
+                    raise ValueError("choose a key file")
+                return read_key_file(os.path.expanduser(path))
+            if not self.signingPassphrase.text():
+                raise ValueError("enter a passphrase")
+            return key_from_passphrase(self.signingPassphrase.text())
+        except ValueError as exc:
+            self._show_signing_text(f"No key: {exc}", WARN)
+            return None
+
+    def _sign_with_key(self) -> None:
+        key = self.chosen_key()
+        if key is not None:
+            self.signingKeyRequested.emit(key)
+
+    def ask_setup(self) -> QMessageBox | None:
+        """Confirm first (the key travels in clear), then ask for SETUP_SIGNING; nothing waits on the answer."""
+        key = self.chosen_key()
+        if key is None:
+            return None
+        box = signing_setup_question(self)
+        box.setWindowModality(Qt.WindowModal)
+        box.finished.connect(lambda _result, b=box, k=key: self._setup_answered(b, k))
+        self.setup_box = box
+        box.open()
+        return box
+
+    def _setup_answered(self, box: QMessageBox, key: bytes) -> None:
+        if box.clickedButton() is box.button(QMessageBox.Yes):
+            self._show_signing_text("Sending the key to the vehicle…", NORMAL)
+            self.signingSetupRequested.emit(key)
+        box.deleteLater()
+        if self.setup_box is box:
+            self.setup_box = None
+
+    def browse_key_file(self) -> QFileDialog:
+        """Qt's own (non-native) file chooser, opened without waiting on it."""
+        start = self.signingKeyFile.text().strip() or os.path.expanduser("~")
+        dialog = QFileDialog(self, "Signing key file", start)
+        dialog.setFileMode(QFileDialog.ExistingFile)
+        dialog.setOptions(QFileDialog.DontUseNativeDialog)
+        dialog.fileSelected.connect(self._key_file_chosen)
+        self.key_file_dialog = dialog
+        dialog.open()
+        return dialog
+
+    def _key_file_chosen(self, path: str) -> None:
+        self.signingKeyFile.setText(path)
+        self.keyFromFile.setChecked(True)
+
+    def choose_key_file_to_save(self) -> QFileDialog | None:
+        """Save the passphrase's key to a file only the pilot can read (0600), chosen without waiting."""
+        key = self.chosen_key()
+        if key is None:
+            return None
+        start = os.path.join(os.path.expanduser("~"), "uavviewer-signing.key")
+        dialog = QFileDialog(self, "Save the signing key", start)
+        dialog.setAcceptMode(QFileDialog.AcceptSave)
+        dialog.setOptions(QFileDialog.DontUseNativeDialog)
+        dialog.fileSelected.connect(lambda path, k=key: self._save_key(path, k))
+        self.save_key_dialog = dialog
+        dialog.open()
+        return dialog
+
+    def _save_key(self, path: str, key: bytes) -> None:
+        try:
+            write_key_file(path, key)
+        except OSError as exc:
+            self._show_signing_text(f"Key not saved: {exc}", WARN)
+            return
+        self.signingKeyFile.setText(path)
+        self.keyFromFile.setChecked(True)
+        self.signingPassphrase.clear()
+        self._show_signing_text(f"Key saved to {path}, readable only by you. OK remembers this file; the "
+                                "passphrase is not kept.", GOOD)
 
 
 class KeysDialog(QDialog):
@@ -110,6 +287,41 @@ def mode_question(parent: QWidget, mode: str, warning: str) -> QMessageBox:
     box.setObjectName("modeQuestion")
     go = box.button(QMessageBox.Yes)
     go.setText(f"Switch to {mode}")
+    go.setFocusPolicy(Qt.NoFocus)
+    go.setAutoDefault(False)
+    box.setDefaultButton(QMessageBox.Cancel)
+    box.setEscapeButton(QMessageBox.Cancel)
+    return box
+
+
+def signing_setup_question(parent: QWidget) -> QMessageBox:
+    """Before SETUP_SIGNING: the key travels in clear. Cancel is the focused default."""
+    box = QMessageBox(QMessageBox.Warning, "Set up signing on the vehicle",
+                      "Send the signing key to the vehicle?\n\n"
+                      "SETUP_SIGNING carries the key in clear: anyone listening on this link learns it. Send it only "
+                      "over USB or a cable, never over a radio or Wi-Fi link.\n\n"
+                      "The vehicle keeps the key, and from then on its telemetry links obey only frames signed "
+                      "with it. It must be disarmed.", QMessageBox.Yes | QMessageBox.Cancel, parent)
+    box.setObjectName("signingSetupQuestion")
+    go = box.button(QMessageBox.Yes)
+    go.setText("Send the key")
+    go.setFocusPolicy(Qt.NoFocus)
+    go.setAutoDefault(False)
+    box.setDefaultButton(QMessageBox.Cancel)
+    box.setEscapeButton(QMessageBox.Cancel)
+    return box
+
+
+def emergency_stop_question(parent: QWidget) -> QMessageBox:
+    """Disarm in the air stops the motors: the drone falls. Asked every time, Cancel the focused default;
+    only a click on "Stop the motors" does it (never Space or Enter)."""
+    box = QMessageBox(QMessageBox.Critical, "Emergency motor stop",
+                      "Stop the motors now? The drone will fall.\n\n"
+                      "Only for an emergency. To come down safely, use Land.",
+                      QMessageBox.Yes | QMessageBox.Cancel, parent)
+    box.setObjectName("emergencyStopQuestion")
+    go = box.button(QMessageBox.Yes)
+    go.setText("Stop the motors")
     go.setFocusPolicy(Qt.NoFocus)
     go.setAutoDefault(False)
     box.setDefaultButton(QMessageBox.Cancel)

@@ -92,7 +92,8 @@ class DroneAdapter(QObject):
 
     # -- commands -------------------------------------------------------------------------------
     def command(self, name: str, *args) -> None:
-        """Call ``drone.<name>(*args)``; the result arrives as ``commandFinished``."""
+        """Call ``drone.<name>(*args)``; the result arrives as ``commandFinished`` (at once from a call that
+        answers at once, such as ``use_signing_key``)."""
         self.commandSent.emit(name)
         try:
             future = getattr(self.drone, name)(*args)
@@ -100,7 +101,9 @@ class DroneAdapter(QObject):
             log.exception("command %s failed to start", name)
             self.commandFinished.emit(CommandResult(name, CommandStatus.REJECTED, str(exc)))
             return
-        if isinstance(future, Future):
+        if isinstance(future, CommandResult):
+            self.commandFinished.emit(future)
+        elif isinstance(future, Future):
             relay = self._relay              # the callback holds the relay, not this adapter (see _FutureRelay)
             future.add_done_callback(lambda f, n=name: relay.done.emit(n, f))
 

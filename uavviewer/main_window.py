@@ -20,11 +20,12 @@ from driver.rules import mode_warning
 from driver.state import LinkStatus, Severity, VehicleState
 
 from . import RESOURCES
-from .dialogs import KeysDialog, SettingsDialog, mode_question, takeoff_question
+from .dialogs import KeysDialog, SettingsDialog, emergency_stop_question, mode_question, takeoff_question
 from .camera_controller import CameraController, default_media_folder
 from .drone_adapter import DroneAdapter
 from .flight_phase import FlightPhase, flight_phase, readiness_text, stick_hint, takeoff_progress
 from .keyboard import ACTION_KEYS, AXIS_KEYS, KeyboardSticks
+from .link_security import signing_unavailable, signing_warning
 from .settings import ViewerSettings, default_qsettings, load_settings, load_window, save_settings, save_window
 from .sticks import Axes, MaxSpeeds, axes_from_pads, combine, pad_labels, velocity_from_axes
 from .widgets.camera_panel import CameraPanel
@@ -68,6 +69,7 @@ class MainWindow(QMainWindow):
         self._sticks_live = False
         self._takeoff_box: QMessageBox | None = None
         self._mode_box: QMessageBox | None = None
+        self._emergency_box: QMessageBox | None = None
         self._settings_dialog: SettingsDialog | None = None
         self._quit_box: QMessageBox | None = None
         self._quitting = False                   # closing without asking (answered, or a signal)
@@ -75,6 +77,8 @@ class MainWindow(QMainWindow):
         self._t0 = time.monotonic()
 
         self.setWindowTitle(f"UavViewerPy — {self.adapter.description}")
+        self._signing_unavailable = signing_unavailable(drone)     # a remote drone is signed on its server
+        self.telemetry.set_security_unknown(self._signing_unavailable)
         self.camera_panel = CameraPanel()             # video in the reserved camera area; cameras: --camera URIs
         self.instrumentSplitter.replaceWidget(self.instrumentSplitter.indexOf(self.cameraView), self.camera_panel)
         self.cameraView.deleteLater()
@@ -108,7 +112,7 @@ class MainWindow(QMainWindow):
         fc.stopRequested.connect(self.request_stop)
         fc.rtlRequested.connect(lambda: self._command("return_to_launch"))
         fc.armRequested.connect(lambda: self._command("arm"))
-        fc.disarmRequested.connect(lambda: self._command("disarm"))
+        fc.disarmRequested.connect(self.request_disarm)
         self.modeSelector.modeRequested.connect(self.request_mode)
         self.replayBar.pauseRequested.connect(self._replay_pause)
         self.replayBar.speedRequested.connect(self._replay_speed)
@@ -173,14 +177,26 @@ class MainWindow(QMainWindow):
             self._settings_dialog.activateWindow()
             return
         shown = self.takeoff_altitude
-        dialog = SettingsDialog(replace(self.settings, takeoff_altitude=shown), self)
+        dialog = SettingsDialog(replace(self.settings, takeoff_altitude=shown), self,
+                                signing_unavailable=self._signing_unavailable)
         dialog.setAttribute(Qt.WA_DeleteOnClose)
+        # Link security acts at once, through the adapter (never waiting); its results come back to the page.
+        dialog.signingKeyRequested.connect(lambda key: self._command("use_signing_key", key))
+        dialog.signingSetupRequested.connect(lambda key: self._command("setup_signing", key))
+        dialog.signingRemoveRequested.connect(lambda: self._command("remove_signing"))
+        dialog.allowUnsignedRequested.connect(lambda on: self._command("allow_unsigned", on))
+        dialog.set_signing(self.adapter.state.signing)
         dialog.accepted.connect(lambda: self._settings_chosen(dialog.chosen(), shown))
         # finished, not destroyed: a slot on ``destroyed`` would run while a garbage-collected window is being
         # torn down (its children go with it) and touch a half-deleted wrapper.
         dialog.finished.connect(lambda _result: setattr(self, "_settings_dialog", None))
         self._settings_dialog = dialog
         dialog.show()
+
+    @property
+    def settings_dialog(self) -> SettingsDialog | None:
+        """Preferences while open."""
+        return self._settings_dialog
 
     def _settings_chosen(self, settings: ViewerSettings, shown_altitude: float) -> None:
         if self._takeoff_override is not None and settings.takeoff_altitude == shown_altitude:
@@ -231,7 +247,11 @@ class MainWindow(QMainWindow):
         replay = self.adapter.replay
         finished = replay is not None and replay.finished
         self.linkBanner.set_link(link.status, link.address or self.adapter.description, link.heartbeat_age,
-                                 finished)
+                                 finished, "" if self._signing_unavailable else signing_warning(s.signing))
+        if self._settings_dialog is not None:
+            self._settings_dialog.set_signing(s.signing)
+        if self._emergency_box is not None and not s.armed:
+            self._emergency_box.reject()            # the motors have stopped: nothing left to ask
         have_vehicle = link.status is not LinkStatus.WAITING and bool(s.mode)
         if link.status in (LinkStatus.LOST, LinkStatus.CLOSED):
             if self.attitude.values["flag"] != "NO LINK":       # the last attitude is no longer the drone's
@@ -277,7 +297,8 @@ class MainWindow(QMainWindow):
             except Exception:               # noqa: BLE001 - a finished replay may drop its file
                 log.debug("replay progress unavailable", exc_info=True)
         pps = f"{link.packets_per_s:.0f} pkt/s" if link.status is LinkStatus.OK else link.status.value
-        self.link_status.setText(f"{self.adapter.description}  ·  {pps}")
+        pinned = f"  ·  vehicle at {link.pinned_to}" if link.pinned_to else ""
+        self.link_status.setText(f"{self.adapter.description}{pinned}  ·  {pps}")
 
     @staticmethod
     def _phase_text(s: VehicleState, phase: FlightPhase) -> str:
@@ -450,6 +471,32 @@ class MainWindow(QMainWindow):
         if self._takeoff_box is box:
             self._takeoff_box = None
 
+    def request_disarm(self) -> None:
+        """On the ground, a disarm. In the air, disarming stops the motors and the drone falls: the pilot is
+        asked every time, and only a confirmed emergency stop is sent."""
+        if not self.adapter.state.flying:
+            self._command("disarm")
+            return
+        if self._emergency_box is not None and self._emergency_box.isVisible():
+            return
+        box = emergency_stop_question(self)
+        box.setWindowModality(Qt.WindowModal)
+        box.finished.connect(lambda _result, b=box: self._emergency_answered(b))
+        self._emergency_box = box
+        box.open()
+
+    def _emergency_answered(self, box: QMessageBox) -> None:
+        if box.clickedButton() is box.button(QMessageBox.Yes):
+            self.centre_sticks()
+            self._command("disarm", True, True)          # force and emergency: the motors stop, even in the air
+        box.deleteLater()
+        if self._emergency_box is box:
+            self._emergency_box = None
+
+    @property
+    def emergency_box(self) -> QMessageBox | None:
+        return self._emergency_box
+
     def request_land(self) -> None:
         self.centre_sticks()
         self._command("land")
@@ -459,6 +506,8 @@ class MainWindow(QMainWindow):
         self._command("stop")
 
     def _show_result(self, result) -> None:
+        if result.command.startswith("signing") and self._settings_dialog is not None:
+            self._settings_dialog.show_signing_result(result)
         if result.index and result.index in self._shown_results:
             return
         if result.index:

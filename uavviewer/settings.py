@@ -1,4 +1,5 @@
-"""What the viewer remembers between runs (QSettings): sticks, speeds, last link, camera, window layout."""
+"""What the viewer remembers between runs (QSettings): sticks, speeds, last link, camera, the signing key file's
+path, window layout. Never a signing passphrase or key: only where the pilot keeps the key file."""
 from __future__ import annotations
 
 import math
@@ -35,6 +36,7 @@ class ViewerSettings:
     cameras: str = ""                # camera URIs, one a line or comma separated; "" = the mode's own camera
     media_folder: str = ""           # snapshots and recordings; "" = Movies/UavViewer
     hud: bool = True                 # HUD over the video when the viewer starts
+    signing_key_file: str = ""       # Link security: the key file's path, never the key or a passphrase
 
     @property
     def camera_uris(self) -> list[str]:

@@ -23,7 +23,7 @@ class FlightControls(QWidget):
     stopRequested = pyqtSignal()
     rtlRequested = pyqtSignal()
     armRequested = pyqtSignal()
-    disarmRequested = pyqtSignal()
+    disarmRequested = pyqtSignal()          # in the air too: the window asks before an emergency motor stop
 
     def __init__(self, parent: QWidget | None = None) -> None:
         super().__init__(parent)
@@ -97,9 +97,17 @@ class FlightControls(QWidget):
             self.progress.setFormat(detail or "taking off %p%")
         self.stop_button.setEnabled(phase.airborne)
         self.rtl_button.setEnabled(phase.airborne or (connected and armed))
-        self.arm_button.setText("Disarm" if armed else "Arm")
-        self.arm_button.setIcon(_icon("disarm" if armed else "arm"))
-        self.arm_button.setEnabled(connected and not phase.airborne)
+        a = self.arm_button
+        a.setText("Disarm" if armed else "Arm")
+        a.setIcon(_icon("disarm" if armed else "arm"))
+        a.setEnabled(connected and (armed or not phase.airborne))     # in the air: the emergency motor stop
+        emergency = armed and phase.airborne
+        if a.property("action") != ("emergency" if emergency else ""):
+            a.setProperty("action", "emergency" if emergency else "")
+            a.setToolTip("Emergency motor stop: the drone falls (asks first). To come down, use Land."
+                         if emergency else "")
+            a.style().unpolish(a)
+            a.style().polish(a)
 
     def _main_clicked(self) -> None:
         if self._phase is FlightPhase.ON_GROUND:

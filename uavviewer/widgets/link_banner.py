@@ -1,4 +1,4 @@
-"""A strip across the top that says when there is no vehicle to fly."""
+"""A strip across the top that says when there is no vehicle to fly, or when signing stands in the way."""
 from __future__ import annotations
 
 from PyQt5.QtCore import Qt
@@ -10,7 +10,7 @@ __all__ = ["LinkBanner"]
 
 
 class LinkBanner(QLabel):
-    """Hidden while the link is healthy; amber while waiting, red when lost."""
+    """Hidden while the link is healthy; amber while waiting or with a warning, red when lost."""
 
     def __init__(self, parent: QWidget | None = None) -> None:
         super().__init__(parent)
@@ -25,8 +25,9 @@ class LinkBanner(QLabel):
         return self._status
 
     def set_link(self, status: LinkStatus, address: str, heartbeat_age: float | None,
-                 replay_finished: bool = False) -> None:
-        """``replay_finished``: a recorded flight has played to its end; what is shown is its last moment."""
+                 replay_finished: bool = False, warning: str = "") -> None:
+        """``replay_finished``: a recorded flight has played to its end; what is shown is its last moment.
+        ``warning``: why the vehicle and the viewer may not hear each other (signing), shown with the rest."""
         if replay_finished:
             text, kind = "Replay finished — the instruments show the recording's last moment", "waiting"
         elif status is LinkStatus.OK:
@@ -38,6 +39,8 @@ class LinkBanner(QLabel):
             text, kind = f"Link lost{since}", "lost"
         else:
             text, kind = f"Link closed ({address})", "lost"
+        if warning and status is not LinkStatus.CLOSED and not replay_finished:
+            text, kind = (f"{text} — {warning}", kind) if text else (warning, "warning")
         if (status, kind) != (self._status, self.property("kind")):
             self._status = status
             self.setProperty("kind", kind)

@@ -1,10 +1,11 @@
-"""The numbers a pilot glances at: mode, battery, GPS, height, speeds, link health."""
+"""The numbers a pilot glances at: mode, battery, GPS, height, speeds, link health and its protection."""
 from __future__ import annotations
 
 from PyQt5.QtCore import Qt
 from PyQt5.QtWidgets import QFrame, QGridLayout, QLabel, QSizePolicy, QWidget
 
-from driver.state import LandedState, LinkStatus, VehicleState
+from driver.state import LandedState, LinkStatus, SigningStatus, VehicleState
+from ..link_security import SIGNING_WARNINGS, foreign_text, foreign_tooltip, signed_frames
 from ..units import fmt
 
 __all__ = ["TelemetryPanel"]
@@ -18,7 +19,8 @@ DIM = "#7d8792"
 ROWS = [("mode", "Mode"), ("armed", "Armed"), ("landed", "Landed state"), ("battery", "Battery"),
         ("gps", "GPS"), ("altitude", "Altitude (home)"), ("ground_speed", "Ground speed"),
         ("climb", "Climb rate"), ("heading", "Heading"), ("home", "From home"),
-        ("heartbeat", "Heartbeat"), ("packets", "Packets/s"), ("loss", "Link loss")]
+        ("heartbeat", "Heartbeat"), ("packets", "Packets/s"), ("loss", "Link loss"), ("signing", "Signing"),
+        ("signed", "Signed frames"), ("foreign", "Foreign packets")]
 
 def _num(value: float | None, unit: str, digits: int = 1) -> str:
     return fmt(value, digits, unit)
@@ -51,6 +53,7 @@ class TelemetryPanel(QFrame):
         grid.setRowStretch(len(ROWS) + 1, 1)
         self._colors: dict[str, str] = {}
         self._stale = False
+        self._security_unknown = ""
 
     # -- for tests and tooltips ----------------------------------------------------------------
     def text(self, key: str) -> str:
@@ -59,12 +62,21 @@ class TelemetryPanel(QFrame):
     def color(self, key: str) -> str:
         return self._colors.get(key, NORMAL)
 
-    def _put(self, key: str, text: str, color: str = NORMAL) -> None:
+    def tooltip(self, key: str) -> str:
+        return self._values[key].toolTip()
+
+    def set_security_unknown(self, reason: str) -> None:
+        """The link's protection cannot be seen from here (a remote drone): its rows say "--" and why."""
+        self._security_unknown = reason
+
+    def _put(self, key: str, text: str, color: str = NORMAL, tooltip: str | None = None) -> None:
         if self._stale:
             color = DIM
         label = self._values[key]
         if label.text() != text:
             label.setText(text)
+        if tooltip is not None and label.toolTip() != tooltip:
+            label.setToolTip(tooltip)
         if self._colors.get(key) != color:
             self._colors[key] = color
             label.setStyleSheet(f"color: {color};")
@@ -82,6 +94,7 @@ class TelemetryPanel(QFrame):
             self._vehicle_values(s)
         self._stale = False
         self._link_values(s)
+        self._security_values(s)
 
     def _vehicle_values(self, s: VehicleState) -> None:
         self._put("mode", s.mode)
@@ -116,6 +129,23 @@ class TelemetryPanel(QFrame):
             return
         loss = s.link.loss_percent
         self._put("loss", f"{loss:.1f} %", GOOD if loss < 2 else (WARN if loss < 10 else BAD))
+
+    def _security_values(self, s: VehicleState) -> None:
+        """Signing and the pinned link: amber where the vehicle ignores us or we ignore it, or a stranger
+        sent; the tooltips say it in full."""
+        if self._security_unknown:
+            for key in ("signing", "signed", "foreign"):
+                self._put(key, "--", DIM, self._security_unknown)
+            return
+        sig = s.signing
+        color = WARN if sig.status in SIGNING_WARNINGS else (GOOD if sig.status is SigningStatus.SIGNING
+                                                              else NORMAL)
+        self._put("signing", sig.status.value, color, sig.summary)
+        counts = signed_frames(sig)
+        self._put("signed", counts or "--", NORMAL if counts else DIM,
+                  sig.counts or "Nothing verified or dropped yet")
+        link = s.link
+        self._put("foreign", foreign_text(link), WARN if link.foreign_packets else NORMAL, foreign_tooltip(link))
 
     def set_battery(self, voltage: float | None, cells: int, remaining: float | None,
                     low: bool = False, estimated: bool = False) -> None:
