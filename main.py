@@ -55,7 +55,11 @@ def build_parser() -> argparse.ArgumentParser:
                              "Ice config with UAVViewer.<Interface>.Proxy keys (see config/viewer.cfg)")
     source.add_argument("--ice-host", metavar="HOST",
                         help="fly through a MAVLinkServer over ZeroC Ice at HOST, on the default ports")
+    link.add_argument("--ice-certs", metavar="DIR", type=Path,
+                      help="with --ice/--ice-host: connect over TLS with the pilot's certificate from DIR (made by "
+                           "python -m driver certs DIR); the server's is checked against DIR's CA and the host")
     link.add_argument("--baud", type=options.whole(1, 10_000_000), default=57600, help="serial baud rate (default: %(default)s)")
+    options.add_link_security(p.add_argument_group("link security (docs/security.md)"))
     flight = p.add_argument_group("flight")
     flight.add_argument("--takeoff-altitude", type=TAKEOFF_ALTITUDE, default=None, metavar="M",
                         help=f"takeoff altitude above home for this run, {TAKEOFF_ALTITUDE_RANGE[0]:g} to "
@@ -109,6 +113,8 @@ def default_log_dir() -> Path:
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
+    if args.ice_certs and args.ice is None and args.ice_host is None:
+        build_parser().error("--ice-certs needs --ice or --ice-host")
     if args.no_log:
         args.log_dir = None
     elif args.log_dir is None:
@@ -130,10 +136,19 @@ def main(argv: list[str] | None = None) -> int:
     from uavviewer.main_window import MainWindow, load_style
     from uavviewer.settings import default_qsettings, load_settings
 
+    signing, allowed = options.link_security(args, build_parser())
+    saved_key = load_settings(default_qsettings()).signing_key_file
+    if signing is None and saved_key:                             # Preferences › Link security's key file
+        from driver.signing import SigningConfig, read_key_file
+        try:
+            signing = SigningConfig(key=read_key_file(saved_key))
+        except ValueError as exc:
+            print(f"main.py: not signing: {exc}", file=sys.stderr)
     sim = None
     if args.sim:
         from driver.sim import SimConfig, SimVehicle
-        sim = SimVehicle(SimConfig(tcp_port=0, speedup=args.speedup, ready_after=args.ready_after))
+        sim = SimVehicle(SimConfig(tcp_port=0, speedup=args.speedup, ready_after=args.ready_after,
+                                   signing_key=signing.key if signing else None))   # a vehicle that has our key
         sim.start()
         connection = f"tcp:127.0.0.1:{sim.tcp_port}"
     elif args.replay is not None:
@@ -145,14 +160,19 @@ def main(argv: list[str] | None = None) -> int:
     tlog = None
     if args.log_dir is not None and args.replay is None:
         tlog = str(args.log_dir / time.strftime("flight-%Y%m%d-%H%M%S.tlog"))
-    config = VehicleConfig(connection=connection, baud=args.baud, tlog_path=tlog,
+    config = VehicleConfig(connection=connection, baud=args.baud, tlog_path=tlog, signing=signing,
+                           allowed_senders=allowed,
                            takeoff_altitude=args.takeoff_altitude or load_settings(default_qsettings()).takeoff_altitude)
     remote = args.ice is not None or args.ice_host is not None
     if remote:                                                    # the same window, through the Ice client
         from driver.ice.client import IceDrone
         if args.ice is not None and not args.ice.is_file():
             build_parser().error(f"no such file: {args.ice}")
-        drone = IceDrone.from_config(str(args.ice) if args.ice else None, host=args.ice_host).start()
+        certs = str(args.ice_certs) if args.ice_certs else None
+        try:
+            drone = IceDrone.from_config(str(args.ice) if args.ice else None, host=args.ice_host, certs=certs).start()
+        except Exception as exc:                                  # no certificates there, IceSSL refused them
+            build_parser().error(f"cannot start the Ice client: {' '.join(str(exc).split())}")
     else:
         drone = Vehicle(config).start()
 
@@ -163,9 +183,12 @@ def main(argv: list[str] | None = None) -> int:
     own_camera = ["sim"] if args.sim else []                      # used when Preferences name no camera
     if remote:                                                    # the server's camera, from the viewer's config
         from driver.ice.client import viewer_properties
-        proxy = viewer_properties(str(args.ice) if args.ice else None, args.ice_host).getProperty(
-            "UAVViewer.Camera.Proxy")
+        from driver.camera import ice_source
+        props = viewer_properties(str(args.ice) if args.ice else None, args.ice_host, certs=certs)
+        proxy = props.getProperty("UAVViewer.Camera.Proxy")
         own_camera = [f"ice:{proxy}"] if proxy else []
+        ice_source.client_properties.update(           # its camera over TLS too, with the pilot's certificate
+            {k: v for prefix in ("IceSSL.", "Ice.Plugin.IceSSL") for k, v in props.getPropertiesForPrefix(prefix).items()})
     window = MainWindow(drone, takeoff_altitude=args.takeoff_altitude, cameras=args.camera,  # --camera: this run
                         default_cameras=own_camera)
     if args.connect or not (args.sim or args.replay or remote):

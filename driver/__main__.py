@@ -5,6 +5,7 @@ and our extension over ZeroC Ice, and offers a console unless ``--daemon``::
 
     python -m driver --master udpin:0.0.0.0:14550 --Ice.Config=config/server.cfg
     python -m driver --sim --cmd "takeoff 3" --daemon
+    python -m driver certs DIR --host 10.1.1.10          # then: --host 10.1.1.10 --certs DIR
 """
 from __future__ import annotations
 
@@ -16,7 +17,9 @@ import sys
 import threading
 import time
 
-from .options import as_float, connection, not_negative, port, positive, takeoff_altitude, whole
+from .options import (
+    add_link_security, as_float, connection, link_security, not_negative, port, positive, takeoff_altitude, whole,
+)
 
 log = logging.getLogger("driver")
 
@@ -52,6 +55,7 @@ def parser() -> argparse.ArgumentParser:
     version = p.add_mutually_exclusive_group()
     version.add_argument("--mav10", action="store_true", help="speak MAVLink 1 only")
     version.add_argument("--mav20", action="store_true", help="speak MAVLink 2 from the start")
+    add_link_security(p.add_argument_group("link security (docs/security.md)"))
     p.add_argument("--sim", action="store_true", help="fly the built-in simulated ArduCopter (in-process)")
     p.add_argument("--sim-speedup", type=positive, default=1.0, help="simulated time speed-up (default 1)")
     p.add_argument("--camera", action="append", default=[], metavar="URI",
@@ -61,7 +65,14 @@ def parser() -> argparse.ArgumentParser:
                    help=f"simulated seconds until the vehicle is ready to arm (default {DEMO_READY_AFTER:g})")
     p.add_argument("--takeoff-alt", type=takeoff_altitude,
                    help="default takeoff altitude in metres above home (default 3)")
-    p.add_argument("--host", help="address the Ice interfaces bind (default 127.0.0.1; 0.0.0.0 for all)")
+    p.add_argument("--host", help="address the Ice interfaces bind (default 127.0.0.1); any other needs --certs "
+                                  "(or --insecure)")
+    p.add_argument("--certs", metavar="DIR", help="serve Ice over TLS on --host, clients need a certificate from DIR "
+                                                  "(python -m driver certs DIR); plain TCP stays on 127.0.0.1")
+    p.add_argument("--insecure", action="store_true",
+                   help="allow plain TCP/UDP off loopback: anyone on that network can fly the drone")
+    p.add_argument("--allow-emergency-disarm", action="store_true",
+                   help="let an Ice client stop the motors in flight (Vehicle.emergencyStop)")
     p.add_argument("--one-port", nargs="?", type=port, const=9000, metavar="PORT",
                    help="serve every interface on one port, JdeRobot's Gazebo style (default 9000)")
     p.add_argument("-v", "--verbose", action="count", default=0, help="more logging (-vv for debug)")
@@ -80,15 +91,19 @@ def log_path(opts) -> str | None:
 def main(argv: list[str] | None = None) -> int:
     import Ice
 
-    from .ice.server import IceServer, ServeError, default_properties, ice_problem
+    from .ice.server import IceServer, ServeError, check_exposure, default_endpoints, default_properties, ice_problem
 
     args = list(sys.argv[1:] if argv is None else argv)
+    if args[:1] == ["certs"]:
+        from .ice.certs import main as certs_main
+        return certs_main(args[1:])
     p = parser()
     try:
         props = default_properties(args)             # removes --Ice.* and --MAVLinkServer.* options
     except Ice.LocalException as exc:                # --Ice.Config=/missing.cfg, ...
         p.error(f"cannot read the Ice configuration {ice_problem(exc)}")
     opts = p.parse_args(args)
+    signing, allowed = link_security(opts, p)
     level = logging.DEBUG if opts.verbose > 1 else logging.INFO if (opts.verbose or opts.daemon) else logging.WARNING
     logging.basicConfig(level=level, format="%(asctime)s %(levelname)s %(name)s: %(message)s")
 
@@ -98,9 +113,17 @@ def main(argv: list[str] | None = None) -> int:
 
     if opts.host:
         props.setProperty("MAVLinkServer.Host", opts.host)
-    if opts.one_port is not None:
-        host = props.getPropertyWithDefault("MAVLinkServer.Host", "127.0.0.1")
-        props.setProperty("MAVLinkServer.Endpoints", f"default -h {host} -p {opts.one_port}")
+    for key, on in (("Certs", opts.certs), ("Insecure", opts.insecure and "1"),
+                    ("AllowEmergencyDisarm", opts.allow_emergency_disarm and "1")):
+        if on:
+            props.setProperty("MAVLinkServer." + key, on)
+    try:                                             # refused before the vehicle or the simulator starts
+        if opts.one_port is not None:
+            props.setProperty("MAVLinkServer.Endpoints", default_endpoints(props, opts.one_port))
+        check_exposure(props)
+    except ServeError as exc:
+        print(exc, file=sys.stderr)
+        return 1
     if opts.takeoff_alt is not None:
         props.setProperty("MAVLinkServer.TakeoffAltitude", str(opts.takeoff_alt))
     text = props.getPropertyWithDefault("MAVLinkServer.TakeoffAltitude", str(VehicleConfig.takeoff_altitude))
@@ -119,7 +142,8 @@ def main(argv: list[str] | None = None) -> int:
         master = opts.master
         if opts.sim:
             from .sim import SimConfig, SimVehicle
-            sim = SimVehicle(SimConfig(tcp_port=0, speedup=opts.sim_speedup, ready_after=opts.sim_ready_after))
+            sim = SimVehicle(SimConfig(tcp_port=0, speedup=opts.sim_speedup, ready_after=opts.sim_ready_after,
+                                       signing_key=signing.key if signing else None))
             sim.start()
             master = master or f"tcp:127.0.0.1:{sim.tcp_port}"
         master = master or SOLO_MASTER
@@ -128,6 +152,7 @@ def main(argv: list[str] | None = None) -> int:
             source_component=opts.source_component, target_system=opts.target_system,
             target_component=opts.target_component, stream_rate=opts.streamrate, takeoff_altitude=takeoff_alt,
             limits=Limits(), tlog_path=log_path(opts), tlog_append=opts.append_log, outputs=tuple(opts.out),
+            signing=signing, allowed_senders=allowed,
             mavlink_version=1 if opts.mav10 else 2 if opts.mav20 else None))
         vehicle.start()
         try:

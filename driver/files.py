@@ -107,8 +107,9 @@ def _ours_and_closed(path: str) -> bool:
     return stat.S_ISDIR(st.st_mode) and st.st_uid == os.geteuid() and not stat.S_IMODE(st.st_mode) & 0o077
 
 
-def write_private(path: str, data: bytes) -> str:
-    """Replace ``path``'s content with ``data`` at once; the file is 0600 (only we read it).
+def write_private(path: str, data: bytes, mode: int = 0o600) -> str:
+    """Replace ``path``'s content with ``data`` at once; the file is 0600 (only we read it), or ``mode``
+    for what others may read (a CA certificate).
 
     The data goes to a new temporary file in the same directory (random name, created with
     O_EXCL|O_NOFOLLOW, mode 0600), is flushed to disk, then renamed over ``path``. A rename
@@ -120,7 +121,7 @@ def write_private(path: str, data: bytes) -> str:
     try:
         with os.fdopen(fd, "wb") as f:
             if os.name == "posix":
-                os.fchmod(f.fileno(), 0o600)        # exactly 0600 whatever the umask
+                os.fchmod(f.fileno(), mode)         # exactly this mode whatever the umask
             f.write(data)
             f.flush()
             os.fsync(f.fileno())

@@ -367,6 +367,9 @@ class LinkSigning:
         if self._last_bad > self._last_good:
             return Signing(SigningStatus.MISMATCH, "the vehicle's frames do not verify with our key",
                            self.link_id, **counts)
+        if self.unsigned_rejected and not self.signed_accepted and not self.allow_unsigned:
+            return Signing(SigningStatus.MISMATCH, "the vehicle's frames are unsigned: it has no key yet (allow "
+                           "unsigned frames, then set the key up on it)", self.link_id, **counts)
         if self.vehicle_signs is False:
             return Signing(SigningStatus.SIGNING, "we sign; the vehicle's frames are unsigned (it has no key?)",
                            self.link_id, **counts)

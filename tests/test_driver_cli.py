@@ -46,8 +46,19 @@ def run(module: str, *args: str, cwd, timeout: float = 30) -> subprocess.Complet
     (["--master", "foo:bar"], "argument --master: 'foo:bar' is not a connection string: a link is udpin:HOST:PORT, "
      "udpout:HOST:PORT, tcp:HOST:PORT, a serial device such as /dev/ttyUSB0, or a .tlog file"),
     (["--sim", "--out", "udp:localhost"], "argument --out: 'udp:localhost': udp needs HOST:PORT"),
+    (["--sim", "--signing-key-file", "/nope.key"], "--signing-key-file: /nope.key: No such file or directory"),
+    (["--sim", "--signing-key-file", "OPEN"], "--signing-key-file: OPEN can be read by other users: chmod 600 OPEN"),
+    (["--sim", "--signing-passphrase", "a", "--signing-key-file", "b"],
+     "argument --signing-key-file: not allowed with argument --signing-passphrase"),
+    (["--sim", "--allow", "10.1.1.1:port"], "--allow '10.1.1.1:port': expected ADDRESS or ADDRESS:PORT"),
 ])
 def test_bad_options_are_one_usage_error(args, reason, tmp_path):
+    if "OPEN" in args:                                    # a key file every user of the machine can read
+        key = tmp_path / "open.key"
+        key.write_text("a passphrase\n")
+        os.chmod(key, 0o644)
+        args = [str(key) if a == "OPEN" else a for a in args]
+        reason = reason.replace("OPEN", str(key))
     done = run("driver", *args, "--daemon", cwd=tmp_path)
     assert done.returncode == 2, done.stderr
     assert "Traceback" not in done.stderr and "exception ::Ice" not in done.stderr, done.stderr

@@ -140,3 +140,15 @@ def test_a_restarted_driver_keeps_commanding_a_signing_vehicle(sim_factory, sign
     assert second.state().signing.link_id == link_id
     assert second.set_mode("GUIDED").result(timeout=10).ok
     assert sim.signing.counters.dropped_replay == 0
+
+
+def test_a_key_the_vehicle_does_not_have_yet_is_said_and_allowing_unsigned_lets_it_be_set_up(sim_factory, signed):
+    sim = sim_factory()
+    vehicle = signed(sim, key=KEY)
+    s = vehicle.wait_for(lambda s: s.signing.status is SigningStatus.MISMATCH, 10)
+    assert s is not None and "it has no key yet" in s.signing.detail and not s.connected
+    vehicle.allow_unsigned(True)
+    assert vehicle.wait_for(lambda s: s.connected, 10)
+    assert vehicle.setup_signing(KEY).result(timeout=15).ok
+    vehicle.allow_unsigned(False)
+    assert vehicle.wait_for(lambda s: s.signing.status is SigningStatus.SIGNING and s.signing.vehicle_signs, 10)

@@ -286,7 +286,10 @@ def test_record_on_usb_defaults_to_the_per_user_data_folder(vehicle, server_fact
     extra = jderobot.ArDroneExtraPrx.checkedCast(communicator.stringToProxy(server.proxy("Extra")))
     assert eventually(lambda: server.camera.source.latest() is not None, 10)
     extra.recordOnUsb(True)
-    assert eventually(lambda: os.path.isdir(folder) and os.listdir(folder), 10)
+    def encoded() -> bool:                    # the name is reserved at once; video goes to a private work folder
+        work = [os.path.join(folder, d) for d in os.listdir(folder) if d.startswith(".recording-")]
+        return any(os.path.getsize(os.path.join(d, f)) > 0 for d in work for f in os.listdir(d))
+    assert eventually(lambda: os.path.isdir(folder) and encoded(), 10)
     extra.recordOnUsb(False)
     files = os.listdir(folder)
     assert len(files) == 1 and files[0].endswith(".mp4") and os.path.getsize(os.path.join(folder, files[0])) > 0

@@ -14,7 +14,7 @@ def until(vehicle, sim, condition, timeout: float):
     return sim.truth()
 
 
-def test_arm_refused_then_forced_and_disarm(sim_factory, vehicle_factory, server_factory, communicator):
+def test_arm_refused_forced_refused_then_armed_and_disarmed(sim_factory, vehicle_factory, server_factory, communicator):
     sim = sim_factory(auto_disarm_after=0)          # only our commands change arming
     sim.faults.refuse_arm = "Check fence"
     vehicle = vehicle_factory(f"tcp:127.0.0.1:{sim.tcp_port}")
@@ -25,8 +25,12 @@ def test_arm_refused_then_forced_and_disarm(sim_factory, vehicle_factory, server
     refused = ext.arm(False)
     assert (refused.command, refused.status) == ("arm", "REFUSED") and "Check fence" in refused.reason, refused
     assert not sim.truth().armed
-    forced = ext.arm(True)
-    assert forced.status == "ACCEPTED", forced
+    forced = ext.arm(True)                          # skipping the pre-arm checks is not for an Ice client
+    assert (forced.command, forced.status) == ("arm (forced)", "REJECTED") and "pre-arm" in forced.reason, forced
+    assert not sim.truth().armed
+    sim.faults.refuse_arm = None                    # the fence fixed at the vehicle
+    armed = ext.arm(False)
+    assert armed.status == "ACCEPTED", armed
     assert sim.truth().armed
     disarmed = ext.disarm(False)
     assert (disarmed.command, disarmed.status) == ("disarm", "ACCEPTED"), disarmed

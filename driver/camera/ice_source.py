@@ -21,7 +21,9 @@ log = logging.getLogger(__name__)
 
 __all__ = ["IceSource"]
 
-IMAGE_MESSAGE_KB = 65536        # a 1280x720 RGB8 image is 2.7 MB; Ice's default limit is 1 MB
+#: Ice properties every ``ice:`` camera of this process adds to its own: main.py puts the IceSSL ones here when
+#: the viewer flies a MAVLinkServer over TLS (--ice-certs), so the server's camera is reached the same way.
+client_properties: dict[str, str] = {}
 LEAD = (0.5, 0.8, 0.95)         # the wait after a new image, as a fraction of the frame interval: min, start, max
 WAIT_S = (0.005, 0.2)           # bounds of any wait between asks
 
@@ -59,8 +61,11 @@ class IceSource(VideoSource):
         self._jderobot = jderobot
         init = Ice.InitializationData()
         init.properties = Ice.createProperties()
-        init.properties.setProperty("Ice.MessageSizeMax", str(IMAGE_MESSAGE_KB))
+        from ..ice.client import CLIENT_MESSAGE_KB          # a 1920x1080 RGB8 picture; Ice's default is 1 MB
+        init.properties.setProperty("Ice.MessageSizeMax", str(CLIENT_MESSAGE_KB))
         init.properties.setProperty("Ice.Warn.Connections", "0")
+        for key, value in client_properties.items():
+            init.properties.setProperty(key, value)
         self._communicator = Ice.initialize(init)
         try:
             base = self._communicator.stringToProxy(self.proxy).ice_invocationTimeout(self._timeout_ms)

@@ -30,20 +30,36 @@ log = logging.getLogger(__name__)
 _MAX_MESSAGES = 200
 _MAX_RESULTS = 50
 PREFIX = "UAVViewer"
+#: KB a reply may have: the largest picture a JdeRobot Camera sends the viewer, 1920x1080 RGB8 (6075 KB),
+#: and its header, with ~69 KB to spare. A larger one fails that one call (MemoryLimitException), nothing else.
+CLIENT_MESSAGE_KB = 6144
 
 
 def viewer_properties(config: str | None = None, host: str | None = None, args: list[str] | None = None,
-                      prefix: str = PREFIX) -> Ice.Properties:
-    """Client properties: a JdeRobot-style file (``UAVViewer.Pose3D.Proxy=...``) and/or a host on default ports."""
+                      prefix: str = PREFIX, certs: str | None = None) -> Ice.Properties:
+    """Client properties: a JdeRobot-style file (``UAVViewer.Pose3D.Proxy=...``) and/or a host on default ports.
+
+    ``certs``: a folder made by ``python -m driver certs``: the pilot's certificate, the server's checked
+    against our CA and the host dialled; ``host`` is then reached over ``ssl``. A config file's own
+    ``IceSSL.*`` keys win (and load the IceSSL plug-in).
+    """
     props = Ice.createProperties(list(args or []))
     if config:
         props.load(config)
+    if certs:
+        from .certs import ssl_properties
+        for key, value in ssl_properties(certs, "client").items():
+            if not props.getProperty(key):
+                props.setProperty(key, value)
+    if props.getPropertiesForPrefix("IceSSL.") and not props.getProperty("Ice.Plugin.IceSSL"):
+        props.setProperty("Ice.Plugin.IceSSL", "IceSSL:createIceSSL")
     if not props.getProperty("Ice.MessageSizeMax"):
-        props.setProperty("Ice.MessageSizeMax", "16384")       # KB: camera pictures
+        props.setProperty("Ice.MessageSizeMax", str(CLIENT_MESSAGE_KB))
+    transport = "ssl" if certs else "default"
     for name, port in DEFAULT_PORTS.items():
         key = f"{prefix}.{name}.Proxy"
         if host and not props.getProperty(key):
-            props.setProperty(key, f"{name}:default -h {host} -p {port}")
+            props.setProperty(key, f"{name}:{transport} -h {host} -p {port}")
     return props
 
 
@@ -89,8 +105,9 @@ class IceDrone(Drone):
         self._worker = ThreadPoolExecutor(max_workers=1, thread_name_prefix="ice-commands")
 
     @classmethod
-    def from_config(cls, config: str | None = None, host: str | None = None, **kwargs) -> "IceDrone":
-        return cls(viewer_properties(config, host), **kwargs)
+    def from_config(cls, config: str | None = None, host: str | None = None, certs: str | None = None,
+                    **kwargs) -> "IceDrone":
+        return cls(viewer_properties(config, host, certs=certs), **kwargs)
 
     # -- lifecycle ------------------------------------------------------------------------------
     @property
@@ -419,9 +436,11 @@ class IceDrone(Drone):
             return self._no_extension("arm")
         return self._command("arm", lambda p: p.armAsync(bool(force)))
 
-    def disarm(self, force: bool = False) -> Future:
+    def disarm(self, force: bool = False, emergency: bool = False) -> Future:
         if self._vehicle is None:
             return self._no_extension("disarm")
+        if force and emergency:                        # the server's explicit emergencyStop, if it allows it
+            return self._command("emergency motor stop", lambda p: p.emergencyStopAsync())
         return self._command("disarm", lambda p: p.disarmAsync(bool(force)))
 
     def set_mode(self, name: str) -> Future:

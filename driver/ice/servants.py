@@ -4,6 +4,13 @@ Every getter answers at once from the driver's latest snapshot (the 2017 server
 slept 50 ms in each); every command hands the driver a job and returns, so an
 Ice dispatch thread never waits for the vehicle. Nothing here raises into a
 JdeRobot client except the Camera's documented DataNotExistException.
+
+An Ice client is a program on the network, not the pilot at the vehicle: it gets
+less than the console. No forced arm (it skips the pre-arm checks), no forced
+disarm in flight (the drone falls) except the explicit ``emergencyStop`` when the
+server allows it, only the modes of ``ServerSettings.allowed_modes`` (LAND always),
+and go-to and takeoff targets within ``max_distance``/``max_altitude`` of home.
+Land and Stop are never refused here.
 """
 from __future__ import annotations
 
@@ -18,11 +25,20 @@ import Ice
 
 from ..api import Drone
 from ..frames import finite
+from ..rules import COPTER_MODES, MAX_ALTITUDE, go_to_problem, takeoff_altitude_problem
 from ..state import CommandResult, CommandStatus, LandedState
 from . import convert, load_slice
 
 jderobot, mavlinkserver = load_slice()
 log = logging.getLogger(__name__)
+
+
+#: Modes an Ice client may pick by default: those in which ArduCopter flies itself without an RC
+#: transmitter (none of rules.THROTTLE_MODES, nor POSHOLD, whose throttle is the stick too), that a
+#: ground station without mission upload can use: GUIDED (what our commands fly), LOITER (hold here),
+#: BRAKE (stop now), LAND, RTL and SMART_RTL (home by the way it came). Not AUTO (a mission nobody over
+#: Ice uploaded), CIRCLE, FLIP, AUTOTUNE, THROW, ...
+ICE_MODES = frozenset({"GUIDED", "LOITER", "BRAKE", "LAND", "RTL", "SMART_RTL"})
 
 
 @dataclass
@@ -32,7 +48,16 @@ class ServerSettings:
     cmdvel_max: tuple[float, float, float, float] = (2.0, 2.0, 1.0, 0.785)   # linearX, linearY, linearZ, angularZ
     cmdvel_refuse_above: float = 100.0     # a value beyond this is garbage, not a command: refuse it
     navdata_vehicle: int = 1               # JdeRobot: 0 ArDrone1, 1 ArDrone2 (10 = simulated)
-    max_takeoff_altitude: float = 100.0
+    max_altitude: float = MAX_ALTITUDE     # m above home: no takeoff or go-to target above it
+    max_distance: float = 100.0            # m from home: no go-to target beyond it (the driver's own is 500)
+    allowed_modes: frozenset = ICE_MODES   # LAND is always in
+    allow_emergency_disarm: bool = False   # emergencyStop may stop the motors in flight
+
+    def go_to_problem(self, north: float, east: float, altitude: float) -> str | None:
+        return go_to_problem(north, east, altitude, self.max_altitude, self.max_distance)
+
+    def takeoff_problem(self, altitude: float) -> str | None:
+        return takeoff_altitude_problem(altitude, self.max_altitude)
 
 
 def _resolved(result: CommandResult) -> Future:
@@ -58,9 +83,10 @@ def _log_failure(what: str):
 class Pose3DI(jderobot.Pose3D):
     """Pose in ENU from home; set = fly there (both the ``Pose3D`` and the waypoint ``WP`` servant)."""
 
-    def __init__(self, vehicle: Drone, name: str = "Pose3D"):
+    def __init__(self, vehicle: Drone, name: str = "Pose3D", settings: ServerSettings | None = None):
         self._vehicle = vehicle
         self._name = name
+        self._settings = settings if settings is not None else ServerSettings()
 
     def getPose3DData(self, current=None):
         x, y, z, h, q0, q1, q2, q3 = convert.pose_enu(self._vehicle.state())
@@ -72,6 +98,11 @@ class Pose3DI(jderobot.Pose3D):
             log.warning("%s: refused waypoint with a missing or non-finite coordinate", self._name)
             return -1
         north, east, altitude = target
+        problem = self._settings.go_to_problem(north, east, altitude)
+        if problem:
+            log.warning("%s: refused waypoint east %.1f north %.1f up %.1f: %s", self._name, east, north, altitude,
+                        problem)
+            return -1
         # DEBUG: a client may stream waypoints; the driver records each result ("go to ...") anyway
         log.debug("%s: go to east %.1f north %.1f up %.1f", self._name, east, north, altitude)
         answer = self._vehicle.go_to(north, east, altitude)
@@ -273,18 +304,44 @@ class VehicleI(mavlinkserver.Vehicle):
         return self._vehicle.description
 
     def setMode(self, name, current=None):
+        mode = str(name).strip().upper()
+        allowed = self._settings.allowed_modes
+        if mode in COPTER_MODES and mode not in allowed:        # an unknown name: the driver says so
+            log.warning("Vehicle.setMode %s refused: not allowed over Ice", mode)
+            return self._rejected(f"mode {mode}", f"not allowed over Ice (allowed: {', '.join(sorted(allowed))}; "
+                                                  "MAVLinkServer.Modes)")
         return self._answer(f"mode {name}", lambda: self._vehicle.set_mode(name))
 
     def arm(self, force, current=None):
-        return self._answer("arm", lambda: self._vehicle.arm(force))
+        if force:
+            log.warning("Vehicle.arm(force) refused: not over Ice")
+            return self._rejected("arm (forced)", "a forced arm skips the vehicle's pre-arm checks: not over Ice; "
+                                                  "arm normally, or force it at the vehicle's own console")
+        return self._answer("arm", lambda: self._vehicle.arm(False))
 
     def disarm(self, force, current=None):
-        return self._answer("disarm", lambda: self._vehicle.disarm(force))
+        if force and self._vehicle.state().flying:
+            log.warning("Vehicle.disarm(force) refused: flying")
+            return self._rejected("disarm (forced)", "a forced disarm in flight stops the motors and the drone falls: "
+                                                     "not over Ice (land, or emergencyStop if the server allows it)")
+        return self._answer("disarm", lambda: self._vehicle.disarm(bool(force)))
+
+    def emergencyStop(self, current=None):
+        """Motors off now, even in the air: only when the server was started to allow it."""
+        if not self._settings.allow_emergency_disarm:
+            log.warning("Vehicle.emergencyStop refused: not allowed by this server")
+            return self._rejected("emergency motor stop", "not allowed by this server (start it with "
+                                                          "--allow-emergency-disarm); land instead")
+        log.critical("Vehicle.emergencyStop: stopping the motors at an Ice client's request")
+        return self._answer("emergency motor stop", lambda: self._vehicle.disarm(force=True, emergency=True))
 
     def takeoff(self, altitude, current=None):
-        if not math.isfinite(altitude) or altitude > self._settings.max_takeoff_altitude:
-            return self._rejected("takeoff", f"altitude {altitude} out of range")
+        if not math.isfinite(altitude):
+            return self._rejected("takeoff", f"altitude {altitude} is not a number")
         target = altitude if altitude > 0 else self._settings.takeoff_altitude
+        problem = self._settings.takeoff_problem(target)
+        if problem:
+            return self._rejected("takeoff", problem)
         return self._answer("takeoff", lambda: self._vehicle.takeoff(target))
 
     def land(self, current=None):
@@ -294,11 +351,15 @@ class VehicleI(mavlinkserver.Vehicle):
         return self._answer("stop", self._vehicle.stop)
 
     def returnToLaunch(self, current=None):
+        if "RTL" not in self._settings.allowed_modes:            # the same mode as setMode("RTL")
+            return self._rejected("RTL", "RTL is not allowed over Ice (MAVLinkServer.Modes)")
         return self._answer("RTL", self._vehicle.return_to_launch)
 
     def goTo(self, north, east, altitude, current=None):
-        if not finite(north, east, altitude):
-            return self._rejected("go to", "non-finite coordinate")
+        problem = self._settings.go_to_problem(north, east, altitude)
+        if problem:
+            log.warning("Vehicle.goTo N%.1f E%.1f alt %.1f refused: %s", north, east, altitude, problem)
+            return self._rejected("go to", problem)
         return self._answer("go to", lambda: self._vehicle.go_to(north, east, altitude))
 
     def setYaw(self, degrees, relative, rateDegS, current=None):
@@ -310,7 +371,7 @@ class VehicleI(mavlinkserver.Vehicle):
         return self._settings.takeoff_altitude
 
     def setTakeoffAltitude(self, altitude, current=None):
-        if not math.isfinite(altitude) or not 0.5 <= altitude <= self._settings.max_takeoff_altitude:
+        if self._settings.takeoff_problem(altitude):
             return -1
         self._settings.takeoff_altitude = float(altitude)
         log.info("takeoff altitude set to %.1f m", altitude)

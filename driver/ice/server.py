@@ -12,20 +12,30 @@ Defaults are the 2017 server's: ``Camera`` 9999, ``Pose3D`` 9998, ``CMDVel``
   ``MAVLinkServer.Navdata.Vehicle``
 - ``MAVLinkServer.Camera.*``: handed to the camera servant (see :func:`make_camera_servant`);
   ``Camera.RecordDir`` defaults to :func:`default_record_dir`
+- ``MAVLinkServer.Certs``: a folder made by ``python -m driver certs``; every default endpoint is then
+  ``ssl -h <Host>`` (clients must show a certificate from that CA) plus plain ``tcp -h 127.0.0.1`` on the
+  same port for JdeRobot clients on this machine
+- ``MAVLinkServer.Insecure``: 1 lets plain TCP/UDP endpoints bind a non-loopback address (refused otherwise)
+- ``MAVLinkServer.Modes``, ``MaxDistance``, ``MaxAltitude``, ``AllowEmergencyDisarm``: what an Ice client may
+  ask (see :func:`settings_from`)
 """
 from __future__ import annotations
 
+import ipaddress
 import logging
 import os
 import re
+import shlex
+import socket
 import sys
 from dataclasses import dataclass
 
 import Ice
 
 from ..api import Drone
-from . import servants
-from .servants import ServerSettings
+from ..rules import COPTER_MODES, MAX_ALTITUDE
+from . import certs, servants
+from .servants import ICE_MODES, ServerSettings
 
 log = logging.getLogger(__name__)
 
@@ -33,6 +43,11 @@ PREFIX = "MAVLinkServer."
 DEFAULT_PORTS = {"Camera": 9999, "Pose3D": 9998, "CMDVel": 9997, "Navdata": 9996, "Extra": 9995, "WP": 9994,
                  "Vehicle": 9993}
 ONE_PORT = 9000                                         # JdeRobot's Gazebo drone served everything here
+SECURE_TRANSPORTS = ("ssl", "wss")
+WILDCARDS = ("", "*", "0.0.0.0", "::", "[::]")
+#: KB. The server only receives requests, the largest a setMode name or a Pose3DData (well under 1 KB); a
+#: client sending more loses its connection at once and the server goes on (replies, images too, are not limited)
+SERVER_MESSAGE_KB = 64
 
 
 class ServeError(RuntimeError):
@@ -67,12 +82,15 @@ def default_properties(args: list[str] | None = None) -> Ice.Properties:
     props = Ice.createProperties(args)
     rest = props.parseCommandLineOptions("MAVLinkServer", args)
     args[:] = rest
-    # Servants never block, but a slow client must not hold up the others.
     if not props.getProperty("Ice.MessageSizeMax"):
-        props.setProperty("Ice.MessageSizeMax", "16384")       # KB: a 720p RGB8 picture is 2.7 MB
+        props.setProperty("Ice.MessageSizeMax", str(SERVER_MESSAGE_KB))
+    # Servants never block (commands are AMD) and Python runs one dispatch at a time anyway: every extra
+    # thread only adds contention with the driver's flight threads. One thread, a second one while a dispatch
+    # is slow (a camera frame). bench/bench_ice_flood.py: with 2/8 a flood of 4 clients costs the setpoint
+    # stream 3 % of its rate and 12 % on the p95 interval; with 1/2 1 % and 5 %, and answers 60 % more calls.
     if not props.getProperty("Ice.ThreadPool.Server.SizeMax"):
-        props.setProperty("Ice.ThreadPool.Server.Size", "2")
-        props.setProperty("Ice.ThreadPool.Server.SizeMax", "8")
+        props.setProperty("Ice.ThreadPool.Server.Size", "1")
+        props.setProperty("Ice.ThreadPool.Server.SizeMax", "2")
     return props
 
 
@@ -91,13 +109,42 @@ def settings_from(props: Ice.Properties, limits=None) -> ServerSettings:
             log.warning("%s%s=%r is not a number; using %s", PREFIX, key, text, default)
             return default
 
+    max_altitude = number("MaxAltitude", d.max_altitude)
+    if not 0 < max_altitude <= MAX_ALTITUDE:
+        log.warning("%sMaxAltitude=%g: must be above 0 and at most %g m; using %g", PREFIX, max_altitude,
+                    MAX_ALTITUDE, min(d.max_altitude, MAX_ALTITUDE))
+        max_altitude = min(d.max_altitude, MAX_ALTITUDE)
+    max_distance = number("MaxDistance", d.max_distance)
+    if not max_distance > 0:
+        log.warning("%sMaxDistance=%g: must be above 0; using %g", PREFIX, max_distance, d.max_distance)
+        max_distance = d.max_distance
+    takeoff_altitude = number("TakeoffAltitude", d.takeoff_altitude)
+    if takeoff_altitude > max_altitude:
+        log.warning("%sTakeoffAltitude=%g is above %sMaxAltitude; taking off to %g m", PREFIX, takeoff_altitude,
+                    PREFIX, max_altitude)
+        takeoff_altitude = max_altitude
     return ServerSettings(
-        takeoff_altitude=number("TakeoffAltitude", d.takeoff_altitude),
+        takeoff_altitude=takeoff_altitude,
         cmdvel_max=(number("CMDVel.Xmax", h), number("CMDVel.Ymax", h), number("CMDVel.Zmax", v),
                     number("CMDVel.Yawmax", y)),
         cmdvel_refuse_above=number("CMDVel.RefuseAbove", d.cmdvel_refuse_above),
         navdata_vehicle=int(number("Navdata.Vehicle", d.navdata_vehicle)),
+        max_altitude=max_altitude,
+        max_distance=max_distance,
+        allowed_modes=allowed_modes(props.getProperty(PREFIX + "Modes")),
+        allow_emergency_disarm=props.getPropertyAsInt(PREFIX + "AllowEmergencyDisarm") > 0,
     )
+
+
+def allowed_modes(text: str) -> frozenset[str]:
+    """``MAVLinkServer.Modes`` ("GUIDED, LOITER ...") as mode names; LAND is always in (the way down)."""
+    if not text.strip():
+        return ICE_MODES
+    names = {n.upper() for n in re.split(r"[\s,]+", text) if n}
+    unknown = sorted(names - set(COPTER_MODES))
+    if unknown:
+        log.warning("%sModes: unknown mode %s ignored", PREFIX, ", ".join(unknown))
+    return frozenset((names & set(COPTER_MODES)) | {"LAND"})
 
 
 def default_record_dir() -> str:
@@ -138,13 +185,141 @@ def make_camera_servant(props: Ice.Properties, vehicle: Drone):
         return servants.NoCameraI(f"camera failed: {exc}")
 
 
+def default_endpoints(props: Ice.Properties, port: int) -> str:
+    """The endpoints of an interface on ``port`` at ``MAVLinkServer.Host``: plain ``default`` without
+    ``MAVLinkServer.Certs``; with it ``ssl`` there, plus plain TCP on 127.0.0.1 for JdeRobot clients on this
+    machine (unless the host is 127.0.0.1 itself, whose port the ``ssl`` endpoint then holds)."""
+    host = props.getPropertyWithDefault(PREFIX + "Host", "127.0.0.1").strip()
+    h = f'"{host}"' if ":" in host else host
+    if not props.getProperty(PREFIX + "Certs"):
+        return f"default -h {h} -p {port}"
+    if host in WILDCARDS:
+        raise ServeError(f"with --certs, --host names the address remote viewers reach (such as 10.1.1.10), not "
+                         f"{host or 'all interfaces'}: that would also take 127.0.0.1's ports, which stay plain TCP "
+                         "for JdeRobot clients on this machine")
+    ssl = f"ssl -h {h} -p {port}"
+    return ssl if host in ("127.0.0.1", "localhost") else f"{ssl}:tcp -h 127.0.0.1 -p {port}"
+
+
 def planned_endpoints(props: Ice.Properties) -> dict[str, tuple[str, str]]:
     """``{interface: (identity, endpoints)}`` from the properties; equal endpoints share one adapter."""
-    host = props.getPropertyWithDefault(PREFIX + "Host", "127.0.0.1")
     shared = props.getProperty(PREFIX + "Endpoints")
     return {name: (props.getPropertyWithDefault(f"{PREFIX}{name}.Name", name),
-                   shared or props.getPropertyWithDefault(f"{PREFIX}{name}.Endpoints", f"default -h {host} -p {port}"))
+                   shared or props.getProperty(f"{PREFIX}{name}.Endpoints") or default_endpoints(props, port))
             for name, port in DEFAULT_PORTS.items()}
+
+
+def _endpoint_parts(endpoints: str, props: Ice.Properties) -> list[tuple[str, str, str]]:
+    """``[(transport, host, text)]`` of an endpoint list; a part without ``-h`` binds Ice.Default.Host or,
+    without it, every interface ("")."""
+    parts, current, quoted = [], "", False
+    for c in endpoints:
+        if c == '"':
+            quoted = not quoted
+        if c == ":" and not quoted:
+            parts.append(current)
+            current = ""
+        else:
+            current += c
+    parts.append(current)
+    found = []
+    for text in (p.strip() for p in parts):
+        if not text:
+            continue
+        try:
+            words = shlex.split(text)
+        except ValueError:
+            words = text.split()
+        transport = words[0].lower() if words else ""
+        if transport == "default":
+            transport = props.getPropertyWithDefault("Ice.Default.Protocol", "tcp").lower()
+        host = props.getProperty("Ice.Default.Host")
+        for i, word in enumerate(words[:-1]):
+            if word == "-h":
+                host = words[i + 1]
+        found.append((transport, host.strip(), text))
+    return found
+
+
+def is_loopback(host: str) -> bool:
+    """Only this machine can reach ``host``: a loopback address, or a name that resolves to nothing else."""
+    if host in WILDCARDS:
+        return False
+    try:
+        return ipaddress.ip_address(host.strip("[]")).is_loopback
+    except ValueError:
+        pass
+    try:
+        infos = socket.getaddrinfo(host, None)
+    except OSError:
+        return False
+    return bool(infos) and all(ipaddress.ip_address(i[4][0].split("%")[0]).is_loopback for i in infos)
+
+
+def exposure_problem(what: str, endpoints: str, props: Ice.Properties, warnings: list[str] | None = None) -> str | None:
+    """Why serving ``endpoints`` would let anyone on a network fly the drone, or None.
+
+    Off loopback only ``ssl``/``wss`` that ask every client for a certificate from the configured CA
+    (IceSSL.VerifyPeer=2 and IceSSL.CAs, not the platform's CAs); plain transports only with
+    ``MAVLinkServer.Insecure=1`` (``--insecure``), and then with a warning added to ``warnings``.
+    """
+    insecure = props.getPropertyAsInt(PREFIX + "Insecure") > 0
+    for transport, host, text in _endpoint_parts(endpoints, props):
+        if is_loopback(host):
+            continue
+        where = _where(text) if host else f"every interface ({text})"
+        if transport not in SECURE_TRANSPORTS:
+            if not insecure:
+                return (f"refusing to serve {what} on {where} over plain {transport}: anyone on that network could "
+                        f"fly the drone; serve it over TLS with --certs DIR (python -m driver certs DIR --host "
+                        f"{'ADDRESS' if host in WILDCARDS else host}), or pass --insecure")
+            if warnings is not None:
+                warnings.append(f"serving Ice over plain {transport} on {host or 'every interface'} (--insecure): "
+                                "anyone who reaches it can fly the drone")
+            continue
+        verified = props.getPropertyAsIntWithDefault("IceSSL.VerifyPeer", 2) >= 2 and \
+            bool(props.getProperty("IceSSL.CAs")) and props.getPropertyAsInt("IceSSL.UsePlatformCAs") <= 0
+        if not verified:
+            if not insecure:
+                return (f"refusing to serve {what} on {where} over {transport} without requiring a client "
+                        "certificate from our CA (IceSSL.VerifyPeer=2, IceSSL.CAs): use --certs DIR, or pass "
+                        "--insecure")
+            if warnings is not None:
+                warnings.append(f"serving Ice over {transport} on {host or 'every interface'} without client "
+                                "certificates (--insecure): anyone who reaches it can fly the drone")
+    return None
+
+
+def check_exposure(props: Ice.Properties) -> None:
+    """ServeError unless every planned endpoint is loopback, authenticated TLS, or allowed by --insecure; with
+    ``MAVLinkServer.Certs``, the IceSSL keys are set first. Cheap: callers run it before starting anything."""
+    apply_certs(props)
+    planned = planned_endpoints(props)
+    warnings: list[str] = []
+    failing = [name for name, (_, endpoints) in planned.items() if exposure_problem(name, endpoints, props, warnings)]
+    if failing:
+        first = failing[0]
+        shared = len({e for _, e in planned.values()}) == 1
+        what = ("the Ice interfaces" if shared else first if len(failing) == 1
+                else f"{first} (and {len(failing) - 1} more interfaces)")
+        raise ServeError(exposure_problem(what, planned[first][1], props))
+    for text in dict.fromkeys(warnings):
+        log.warning("%s", text)
+
+
+def apply_certs(props: Ice.Properties) -> None:
+    """``MAVLinkServer.Certs=DIR``: IceSSL with the server's certificate, every client must show one of ours.
+    Keys already set (an Ice.Config file, --IceSSL.*) win."""
+    directory = props.getProperty(PREFIX + "Certs").strip()
+    if not directory:
+        return
+    try:
+        wanted = certs.ssl_properties(directory, "server")
+    except certs.CertError as exc:
+        raise ServeError(str(exc)) from None
+    for key, value in wanted.items():
+        if not props.getProperty(key):
+            props.setProperty(key, value)
 
 
 @dataclass(frozen=True)
@@ -171,16 +346,20 @@ class IceServer:
         if self.camera is None:
             self.camera = make_camera_servant(self.properties, self.vehicle)
         v, s = self.vehicle, self.settings
-        return {"Camera": self.camera, "Pose3D": servants.Pose3DI(v, "Pose3D"), "CMDVel": servants.CMDVelI(v, s),
+        return {"Camera": self.camera, "Pose3D": servants.Pose3DI(v, "Pose3D", s), "CMDVel": servants.CMDVelI(v, s),
                 "Navdata": servants.NavdataI(v, s), "Extra": servants.ArDroneExtraI(v, s, self.camera),
-                "WP": servants.Pose3DI(v, "WP"), "Vehicle": servants.VehicleI(v, s)}
+                "WP": servants.Pose3DI(v, "WP", s), "Vehicle": servants.VehicleI(v, s)}
 
     def start(self) -> "IceServer":
+        check_exposure(self.properties)
         init = Ice.InitializationData()
         init.properties = self.properties
-        self.communicator = Ice.initialize(init)
-        self._table = self._servants()
         try:
+            self.communicator = Ice.initialize(init)
+        except Ice.LocalException as exc:                     # IceSSL: a wrong password, an unreadable file
+            raise ServeError(f"cannot start Ice: {ice_problem(exc)}") from exc
+        try:
+            self._table = self._servants()
             self._serve(self._table)
         except Exception:
             self.close()
