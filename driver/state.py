@@ -384,9 +384,9 @@ class VehicleState:
             return "on the ground"
         if self.landed_state is LandedState.LANDING or self.mode == "LAND":
             return "landing"
-        if self.landed_state is LandedState.TAKEOFF:
-            return "taking off"
-        return "not GUIDED"
+        if self.landed_state is LandedState.TAKEOFF and self.mode == "GUIDED":
+            return "taking off"     # in another mode the mode is what stops velocity, whatever the last
+        return "not GUIDED"         # EXTENDED_SYS_STATE (slower than the heartbeat) still says
 
     @property
     def distance_from_home(self) -> float | None:
