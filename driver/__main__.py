@@ -1,4 +1,4 @@
-"""``python -m driver``: the MAVLinkServer on the companion computer.
+"""``python -m driver`` (installed: ``mavlinkserver``): the MAVLinkServer on the companion computer.
 
 Connects to the autopilot (MAVProxy's options), serves JdeRobot's interfaces
 and our extension over ZeroC Ice, and offers a console unless ``--daemon``::
@@ -20,18 +20,25 @@ import time
 from .options import (
     add_link_security, as_float, connection, link_security, not_negative, port, positive, takeoff_altitude, whole,
 )
+from .version import __version__
 
 log = logging.getLogger("driver")
 
 SOLO_MASTER = "udpin:0.0.0.0:14550"
 
 
+def command_name() -> str:
+    """What the pilot typed: ``mavlinkserver`` (the installed command) or ``python -m driver``."""
+    return "mavlinkserver" if os.path.basename(sys.argv[0]) == "mavlinkserver" else "python -m driver"
+
+
 def parser() -> argparse.ArgumentParser:
     from .sim import DEMO_READY_AFTER
     p = argparse.ArgumentParser(
-        prog="python -m driver",
+        prog=command_name(),
         description="MAVLinkServer: MAVLink driver serving JdeRobot's interfaces over ZeroC Ice. "
                     "Ice options: --Ice.Config=FILE, --Ice.*=VALUE, --MAVLinkServer.*=VALUE (see config/server.cfg).")
+    p.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
     p.add_argument("--master", type=connection,
                    help=f"MAVLink connection string (default {SOLO_MASTER}, the 3DR Solo; "
                         "tcp:HOST:PORT, udpin:, udpout:, a serial device, or a .tlog to replay)")
@@ -96,7 +103,7 @@ def main(argv: list[str] | None = None) -> int:
     args = list(sys.argv[1:] if argv is None else argv)
     if args[:1] == ["certs"]:
         from .ice.certs import main as certs_main
-        return certs_main(args[1:])
+        return certs_main(args[1:], prog=f"{command_name()} certs")
     p = parser()
     try:
         props = default_properties(args)             # removes --Ice.* and --MAVLinkServer.* options

@@ -128,7 +128,7 @@ def test_sigterm_stops_the_interactive_server_cleanly(tmp_path):
 def test_the_demo_simulator_is_ready_in_seconds():
     """``python -m driver --sim`` and the viewer's ``--sim`` share one demo readiness delay: a few seconds, not a
     real vehicle's GPS and EKF start-up (SimConfig's own default)."""
-    import main
+    from uavviewer import app as main
     from driver.sim import SimConfig
     server = parser().parse_args(["--sim"]).sim_ready_after
     viewer = main.build_parser().parse_args(["--sim"]).ready_after

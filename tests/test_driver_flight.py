@@ -73,7 +73,8 @@ def test_takeoff_fly_turn_fly_land(vehicle, sim):
     truth = sim.truth()
     assert truth.armed and truth.mode == "GUIDED" and truth.landed_state == LandedState.IN_AIR
     assert 2.8 < -truth.down < 3.4
-    assert vehicle.state().landed_state is LandedState.IN_AIR
+    # the vehicle says so in its next EXTENDED_SYS_STATE, which may come after the climb was seen to end
+    assert vehicle.wait_for(lambda s: s.landed_state is LandedState.IN_AIR, 5)
 
     fly_forward_and_check_heading(vehicle, sim)
     settle(vehicle, sim)

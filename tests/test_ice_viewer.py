@@ -6,7 +6,7 @@ import os
 import pytest
 from PyQt5.QtCore import Qt
 
-import main
+from uavviewer import app as main
 from driver.state import CommandStatus, LinkStatus
 
 from camera_media import write_clip

@@ -11,7 +11,7 @@ from pathlib import Path
 import pytest
 from PyQt5.QtCore import Qt
 
-import main
+from uavviewer import app as main
 from uavviewer.settings import TAKEOFF_ALTITUDE_RANGE
 
 from test_viewer_window import silent_vehicle  # noqa: F401  (fixture)

@@ -5,6 +5,11 @@ embedded driver and a remote (Ice) client are interchangeable.
 """
 from pathlib import Path
 
-RESOURCES = Path(__file__).resolve().parent.parent / "resources"
+from driver.version import __version__
 
-__all__ = ["RESOURCES"]
+_PACKAGE = Path(__file__).resolve().parent
+#: .ui files, style sheet and icons: package data when installed (uavviewer/resources, see pyproject.toml), in a
+#: checkout resources/ beside the package
+RESOURCES = _PACKAGE / "resources" if (_PACKAGE / "resources").is_dir() else _PACKAGE.parent / "resources"
+
+__all__ = ["RESOURCES", "__version__"]

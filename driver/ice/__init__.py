@@ -9,7 +9,11 @@ from __future__ import annotations
 import os
 import threading
 
-SLICE_DIR = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))), "slice")
+_PACKAGE = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+#: Installed, the Slice files are package data (driver/slice, see pyproject.toml); in a checkout, slice/ beside driver/
+SLICE_DIR = os.path.join(_PACKAGE, "slice")
+if not os.path.isdir(SLICE_DIR):
+    SLICE_DIR = os.path.join(os.path.dirname(_PACKAGE), "slice")
 JDEROBOT_FILES = ("datetime.ice", "exceptions.ice", "containers.ice", "common.ice", "pose3d.ice", "cmdvel.ice",
                   "ardroneextra.ice", "navdata.ice", "image.ice", "camera.ice")
 EXTENSION_FILE = "mavlinkserver.ice"

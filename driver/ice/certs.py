@@ -191,9 +191,9 @@ def ssl_properties(directory: str, role: str) -> dict[str, str]:
     return props
 
 
-def main(argv: list[str]) -> int:
+def main(argv: list[str], prog: str = "python -m driver certs") -> int:
     """``python -m driver certs``: one line per problem, exit 1; the files made, exit 0."""
-    p = argparse.ArgumentParser(prog="python -m driver certs",
+    p = argparse.ArgumentParser(prog=prog,
                                 description="Make the CA, the server's and the pilot's certificates for Ice over "
                                             "TLS (mutual authentication).")
     p.add_argument("directory", metavar="DIR", help="where to write them (created 0700)")
@@ -208,7 +208,7 @@ def main(argv: list[str]) -> int:
     try:
         made = make_certs(opts.directory, opts.host, opts.new_ca, opts.password)
     except (CertError, OSError) as exc:
-        print(f"python -m driver certs: {exc}", file=sys.stderr)
+        print(f"{prog}: {exc}", file=sys.stderr)
         return 1
     print(f"{'kept the CA' if made.ca_reused else 'new CA'} in {made.directory}; server certificate for "
           f"{', '.join(made.hosts)}")
