@@ -39,10 +39,13 @@ def hold_forward(qtbot, w, pad) -> None:
 
 
 def press(qtbot, w, pad, button: str) -> None:
-    """Press and release: a virtual pad reports its state when read, so the press is held until seen."""
+    """Press and release: a virtual pad reports its state when read, so each is held until seen."""
+    def held() -> bool:
+        return w.gamepad.reading is not None and button in w.gamepad.reading.held
     pad.set_button(button, True)
-    qtbot.waitUntil(lambda: w.gamepad.reading is not None and button in w.gamepad.reading.held, timeout=3000)
+    qtbot.waitUntil(held, timeout=3000)
     pad.set_button(button, False)
+    qtbot.waitUntil(lambda: not held(), timeout=3000)
 
 
 def shaped(value: float, deadband: float = 0.1, expo: float = 0.0) -> float:

@@ -347,6 +347,7 @@ class VirtualPad:
             raise RuntimeError(sdl2.SDL_GetError().decode(errors="replace"))
         self.controller = controller
         self._js = sdl2.SDL_JoystickOpen(index)
+        self.centre()
         self.instance = sdl2.SDL_JoystickInstanceID(self._js)
         self.guid = _guid_text(sdl2.SDL_JoystickGetGUID(self._js))
         self.name = name
@@ -363,6 +364,8 @@ class VirtualPad:
             flip = axis in ("lefty", "righty")
             axis = self._AXES[axis] if axis in self._AXES else int(axis.removeprefix("axis"))
             value = -value if flip else value
+        if self.controller and axis in (self._AXES["lefttrigger"], self._AXES["righttrigger"]):
+            value = 2.0 * value - 1.0          # a trigger's 0..1 is the device's whole range
         raw = int(round(max(-1.0, min(1.0, value)) * 32767))
         sdl2.SDL_JoystickSetVirtualAxis(self._js, axis, raw)
 
@@ -372,8 +375,10 @@ class VirtualPad:
         sdl2.SDL_JoystickSetVirtualButton(self._js, button, 1 if down else 0)
 
     def centre(self) -> None:
+        """Sticks to the centre, triggers released."""
         for axis in range(sdl2.SDL_JoystickNumAxes(self._js)):
-            sdl2.SDL_JoystickSetVirtualAxis(self._js, axis, 0)
+            trigger = self.controller and axis in (self._AXES["lefttrigger"], self._AXES["righttrigger"])
+            sdl2.SDL_JoystickSetVirtualAxis(self._js, axis, -32768 if trigger else 0)
 
     def detach(self) -> None:
         """Unplug it (the reader sees it removed)."""

@@ -46,6 +46,7 @@ class GamepadInput(QObject):
         self.pads: tuple[Pad, ...] = ()
         self.pad: Pad | None = None
         self.reading: PadReading | None = None
+        self.frame = GamepadFrame(time.monotonic())     # the latest from the reader
         self.mapping: GamepadMapping | None = None
         self.error = ""
         self._choice = "auto"
@@ -150,6 +151,7 @@ class GamepadInput(QObject):
     # -- frames ---------------------------------------------------------------------------------
     def _on_frame(self, frame: GamepadFrame) -> None:
         before = (self.pad, self.axes(), self.status)
+        self.frame = frame
         self._last_frame = frame.time
         if frame.error:
             if frame.error != self.error:

@@ -150,23 +150,28 @@ def mappings_from_json(text: str) -> dict[str, dict]:
     return {str(k): v for k, v in data.items() if isinstance(v, dict)} if isinstance(data, dict) else {}
 
 
-def mappings_to_json(mappings: dict[str, GamepadMapping]) -> str:
-    return json.dumps({guid: m.to_dict() for guid, m in sorted(mappings.items())}, sort_keys=True)
+def mappings_to_json(mappings: dict[str, dict]) -> str:
+    """GUID -> mapping (as :meth:`GamepadMapping.to_dict` gives it), for ViewerSettings.gamepad_mappings."""
+    return json.dumps(mappings, sort_keys=True)
 
 
 class AxisCapture:
-    """"Move the stick you want for climb": the first axis moved far from where it rested when asked; moved
-    the negative way, it is taken inverted."""
+    """"Move the stick you want for climb": the first axis moved far from its rest; moved the negative way, it
+    is taken inverted. An axis's rest is the value nearest the centre seen since asking, so a stick still
+    springing back from the last one mapped is not taken, and an RC throttle resting at the bottom is."""
 
     def __init__(self, rest: PadReading) -> None:
         self._pad = rest.pad
-        self._rest = rest.axes
+        self._rest = list(rest.axes)
 
     def feed(self, reading: PadReading) -> tuple[str, bool] | None:
         if reading.pad.instance != self._pad.instance:
             return None
         best, name = 0.0, ""
-        for axis, now, was in zip(reading.pad.axes, reading.axes, self._rest):
+        for i, (axis, now) in enumerate(zip(reading.pad.axes, reading.axes)):
+            if abs(now) < abs(self._rest[i]):
+                self._rest[i] = now
+            was = self._rest[i]
             if abs(now - was) > abs(best):
                 best, name = now - was, axis
         if abs(best) < CAPTURE_THRESHOLD:

@@ -31,6 +31,7 @@ from .pilot_input import Input, InputSelector
 from .settings import ViewerSettings, default_qsettings, load_settings, load_window, save_settings, save_window
 from .sticks import Axes, MaxSpeeds, axes_from_pads, combine, pad_labels, velocity_from_axes
 from .widgets.camera_panel import CameraPanel
+from .widgets.gamepad_page import GamepadPage
 
 __all__ = ["MainWindow", "load_style"]
 
@@ -194,7 +195,9 @@ class MainWindow(QMainWindow):
         dialog.signingRemoveRequested.connect(lambda: self._command("remove_signing"))
         dialog.allowUnsignedRequested.connect(lambda on: self._command("allow_unsigned", on))
         dialog.set_signing(self.adapter.state.signing)
-        dialog.accepted.connect(lambda: self._settings_chosen(dialog.chosen(), shown))
+        gamepad = GamepadPage(self.gamepad, self.settings)
+        dialog.add_page(gamepad, "Gamepad")
+        dialog.accepted.connect(lambda: self._settings_chosen(replace(dialog.chosen(), **gamepad.chosen()), shown))
         # finished, not destroyed: a slot on ``destroyed`` would run while a garbage-collected window is being
         # torn down (its children go with it) and touch a half-deleted wrapper.
         dialog.finished.connect(lambda _result: setattr(self, "_settings_dialog", None))
