@@ -28,7 +28,6 @@ __all__ = ["Pad", "PadReading", "GamepadFrame", "GamepadReader", "VirtualPad", "
 log = logging.getLogger(__name__)
 
 HEARTBEAT = 0.1           # s: the longest a listener waits for a frame while a pad is open
-RATE_HZ = 250.0           # polls per second while a pad is open (USB pads report at 125 to 1000 Hz)
 IDLE_PERIOD = 0.05        # s between polls with no pad: only hot-plug to notice
 MIN_INTERVAL = 0.02       # s: a moving stick gives at most 50 frames per second
 
@@ -174,8 +173,7 @@ def _hat_directions(value: int) -> list[str]:
 class GamepadReader:
     """SDL's joysticks on a thread: every pad, hot-plug, frames to the listeners (called on that thread)."""
 
-    def __init__(self, rate_hz: float = RATE_HZ, min_interval: float = MIN_INTERVAL) -> None:
-        self.period = 1.0 / rate_hz
+    def __init__(self, min_interval: float = MIN_INTERVAL) -> None:
         self.min_interval = min_interval
         self._listeners: list[Callable[[GamepadFrame], None]] = []
         self._lock = threading.Lock()
@@ -239,7 +237,8 @@ class GamepadReader:
                 p.close()
             sdl2.SDL_QuitSubSystem(_SUBSYSTEMS)
 
-    def _open(self, pads: dict[int, _Open], index: int, added: list[Pad]) -> None:
+    @staticmethod
+    def _open(pads: dict[int, _Open], index: int, added: list[Pad]) -> None:
         if sdl2.SDL_JoystickGetDeviceInstanceID(index) in pads:
             return
         try:
@@ -260,29 +259,12 @@ class GamepadReader:
             self._open(pads, i, added)
         last_publish = -1e9
         first = True
+        coalescing = False                               # a stick moved since the last frame, which is not due
         while not self._stop.is_set():
-            while sdl2.SDL_PollEvent(ctypes.byref(ev)):
-                kind = ev.type
-                if kind == sdl2.SDL_JOYDEVICEADDED:
-                    self._open(pads, ev.jdevice.which, added)
-                elif kind == sdl2.SDL_JOYDEVICEREMOVED:
-                    gone = pads.pop(ev.jdevice.which, None)
-                    if gone is not None:
-                        gone.close()
-                        removed.append(gone.pad)
-                        log.info("gamepad disconnected: %s", gone.pad.name)
-                elif kind == sdl2.SDL_CONTROLLERBUTTONDOWN:
-                    p = pads.get(ev.cbutton.which)
-                    if p is not None and p.controller:
-                        p.pressed.append(p.button_name(ev.cbutton.button))
-                elif kind == sdl2.SDL_JOYBUTTONDOWN:
-                    p = pads.get(ev.jbutton.which)
-                    if p is not None and not p.controller:
-                        p.pressed.append(p.button_name(ev.jbutton.button))
-                elif kind == sdl2.SDL_JOYHATMOTION:
-                    p = pads.get(ev.jhat.which)
-                    if p is not None and not p.controller:
-                        p.pressed += [f"hat{ev.jhat.hat}{d}" for d in _hat_directions(ev.jhat.value)]
+            got = self._wait(ev, pads, coalescing, last_publish)
+            while got:
+                self._event(ev, pads, added, removed)
+                got = sdl2.SDL_PollEvent(ctypes.byref(ev))
             now = time.monotonic()
             readings, changed, urgent = [], False, bool(added or removed or first)
             for p in pads.values():
@@ -293,7 +275,8 @@ class GamepadReader:
                 readings.append((p, axes, held))
             urgent = urgent or any(p.pressed for p in pads.values())
             due = now - last_publish
-            if urgent or (changed and due >= self.min_interval) or (pads and due >= HEARTBEAT):
+            coalescing = changed and not urgent and due < self.min_interval
+            if urgent or (changed and not coalescing) or (pads and due >= HEARTBEAT):
                 frame = GamepadFrame(now, tuple(PadReading(p.pad, axes, held, tuple(p.pressed))
                                                 for p, axes, held in readings), tuple(added), tuple(removed))
                 for p, axes, held in readings:
@@ -302,7 +285,43 @@ class GamepadReader:
                 added, removed, first = [], [], False
                 last_publish = now
                 self._publish(frame)
-            self._stop.wait(self.period if pads else IDLE_PERIOD)
+
+    def _wait(self, ev, pads: dict[int, _Open], coalescing: bool, last_publish: float) -> bool:
+        """Until an event (True: it is in ``ev``) or the next frame is due. With a pad open, SDL waits: it polls
+        the devices every millisecond in C, without holding Python's lock; a moving stick's frames are spaced
+        by ``min_interval`` (its events wait in SDL's queue meanwhile); with none, a slow poll for hot-plug."""
+        if not pads:
+            self._stop.wait(IDLE_PERIOD)
+            return bool(sdl2.SDL_PollEvent(ctypes.byref(ev)))
+        if coalescing:
+            self._stop.wait(max(0.0, last_publish + self.min_interval - time.monotonic()))
+            return bool(sdl2.SDL_PollEvent(ctypes.byref(ev)))
+        wait_ms = int(1000 * (last_publish + HEARTBEAT - time.monotonic()))
+        return bool(sdl2.SDL_WaitEventTimeout(ctypes.byref(ev), max(1, min(wait_ms, 50))))
+
+    @staticmethod
+    def _event(ev, pads: dict[int, _Open], added: list[Pad], removed: list[Pad]) -> None:
+        kind = ev.type
+        if kind == sdl2.SDL_JOYDEVICEADDED:
+            GamepadReader._open(pads, ev.jdevice.which, added)
+        elif kind == sdl2.SDL_JOYDEVICEREMOVED:
+            gone = pads.pop(ev.jdevice.which, None)
+            if gone is not None:
+                gone.close()
+                removed.append(gone.pad)
+                log.info("gamepad disconnected: %s", gone.pad.name)
+        elif kind == sdl2.SDL_CONTROLLERBUTTONDOWN:
+            p = pads.get(ev.cbutton.which)
+            if p is not None and p.controller:
+                p.pressed.append(p.button_name(ev.cbutton.button))
+        elif kind == sdl2.SDL_JOYBUTTONDOWN:
+            p = pads.get(ev.jbutton.which)
+            if p is not None and not p.controller:
+                p.pressed.append(p.button_name(ev.jbutton.button))
+        elif kind == sdl2.SDL_JOYHATMOTION:
+            p = pads.get(ev.jhat.which)
+            if p is not None and not p.controller:
+                p.pressed += [f"hat{ev.jhat.hat}{d}" for d in _hat_directions(ev.jhat.value)]
 
 
 _shared: GamepadReader | None = None

@@ -155,7 +155,7 @@ class GamepadPage(QWidget):
             self.padInfo.setText(f"{pad.name} — {kind}. Mapped for this controller only ({pad.guid}).")
             for i, axis in enumerate(pad.axes):
                 bar = QProgressBar()
-                bar.setRange(-100, 100)
+                bar.setRange(0 if axis.endswith("trigger") else -100, 100)     # a trigger rests at 0
                 bar.setFormat(f"{axis} %v")
                 bar.setMaximumHeight(14)
                 self.rawAxes.addWidget(bar, i // 2, i % 2)
