@@ -121,3 +121,22 @@ def test_the_input_moved_last_flies():
     assert s.choose(Axes(), Axes()) == Axes()
     assert s.choose(Axes(), pad) == pad                                         # centred, then out: it flies
     assert s.choose(screen, Axes()) == screen                                   # pad let go, screen held: screen
+
+
+def test_without_sdl_the_viewer_says_so_and_flies_on(qtbot, monkeypatch):
+    """SDL2 missing (its import failed): the reader reports why, the gamepad input stays empty."""
+    import uavviewer.gamepad as gamepad
+    from driver.state import Severity
+    from uavviewer.gamepad_input import GamepadInput
+    from uavviewer.settings import ViewerSettings
+    monkeypatch.setattr(gamepad, "sdl2", None)
+    monkeypatch.setattr(gamepad, "_IMPORT_ERROR", "SDL2 is not available (no libSDL2)")
+    messages = []
+    g = GamepadInput(ViewerSettings(), reader=GamepadReader())
+    g.message.connect(lambda text, severity: messages.append((text, severity)))
+    try:
+        qtbot.waitUntil(lambda: bool(messages), timeout=3000)
+        assert messages == [("Gamepads unavailable: SDL2 is not available (no libSDL2)", Severity.WARNING)]
+        assert g.pad is None and g.axes().is_zero and g.error
+    finally:
+        g.close()

@@ -10,6 +10,7 @@ import math
 from dataclasses import replace
 
 import pytest
+from PyQt5.QtCore import Qt
 from PyQt5.QtWidgets import QWidget
 
 from uavviewer.gamepad import sdl2
@@ -123,6 +124,9 @@ def test_buttons_stop_and_land_at_one_press(qtbot, sim, flying, window, pad):
     qtbot.waitUntil(lambda: reached(sim, n, forward=0.0), timeout=3000)
     pad.centre()
     qtbot.waitUntil(lambda: w.gamepad.status == "", timeout=3000)
+    press(qtbot, w, pad, "back")         # RTL, as its button
+    qtbot.waitUntil(lambda: "return_to_launch" in commands, timeout=3000)
+    qtbot.waitUntil(lambda: flying.state().mode == "RTL", timeout=5000)
     press(qtbot, w, pad, "b")            # Land: one press, no question
     qtbot.waitUntil(lambda: "land" in commands, timeout=3000)
     qtbot.waitUntil(lambda: flying.state().mode == "LAND", timeout=5000)
@@ -204,6 +208,9 @@ def test_the_gamepad_takes_over_from_the_screen_only_out_of_its_dead_zone(qtbot,
     w.rightStick.centre()                # let go; the pad is still held but must come back to centre first
     assert w.adapter.setpoint.is_zero
     pad.centre()
+    qtbot.keyPress(w, Qt.Key_W)          # the keys are the screen's too
+    assert w.inputLabel.text() == "Flying: keyboard" and w.adapter.setpoint.forward > 0
+    qtbot.keyRelease(w, Qt.Key_W)
 
 
 def test_focus_loss_hovers_unless_flying_in_background(qtbot, sim, flying, window, pad):
@@ -216,6 +223,11 @@ def test_focus_loss_hovers_unless_flying_in_background(qtbot, sim, flying, windo
     other.activateWindow()
     qtbot.waitUntil(lambda: not w.isActiveWindow(), timeout=3000)
     assert w.adapter.setpoint.is_zero and w.gamepad.status == "window not active"
+    commands = sent_commands(w)
+    press(qtbot, w, pad, "a")            # Stop acts whatever the focus...
+    press(qtbot, w, pad, "back")         # ...RTL does not
+    qtbot.waitUntil(lambda: "stop" in commands, timeout=3000)
+    assert "return_to_launch" not in commands
     w.activateWindow()
     qtbot.waitUntil(w.isActiveWindow, timeout=3000)
     assert w.gamepad.status == "centre its sticks"         # still held: not before it is centred
