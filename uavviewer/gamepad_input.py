@@ -52,7 +52,7 @@ class GamepadInput(QObject):
         self._choice = "auto"
         self.background = False
         self._saved: dict[str, dict] = {}
-        self._focused = True
+        self._focused = False                   # until the window says it is active
         self._centred = False
         self._capturing = False
         self._stalled = False
