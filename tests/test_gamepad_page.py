@@ -14,7 +14,7 @@ from uavviewer.widgets.gamepad_page import GamepadPage
 from gamepad_fixtures import pad, pad_factory  # noqa: F401  (fixtures)
 from test_viewer_gamepad import press, wait_pad
 from test_viewer_window import silent_vehicle  # noqa: F401  (fixture)
-from viewer_fixtures import viewer_settings, window_factory  # noqa: F401  (fixtures)
+from viewer_fixtures import pick_mode, viewer_settings, window_factory  # noqa: F401  (fixtures)
 
 pytestmark = pytest.mark.timeout(60)
 
@@ -89,10 +89,20 @@ def test_map_by_moving_and_pressing_saved_for_that_controller(qtbot, silent_vehi
     qtbot.waitUntil(lambda: w.gamepad.status == "", timeout=3000)
     pad.set_axis("righty", -1.0)
     qtbot.waitUntil(lambda: w.gamepad.axes().up == pytest.approx(1.0), timeout=3000)
-    # Opened again, the page shows what was saved.
+    # Opened again, the page shows what was saved; mode 1 from its list, this controller by name, in background.
     page = open_page(qtbot, w)
     assert page.findChild(QLabel, "landButton").text() == "y"
     assert page.findChild(QCheckBox, "upInvert").isChecked()
+    pick_mode(qtbot, page.padMode, page.padMode.itemText(page.padMode.findData("mode1")))
+    assert page.findChild(QComboBox, "forwardInput").currentData() == "lefty"
+    assert not page.findChild(QCheckBox, "upInvert").isChecked()
+    pick_mode(qtbot, page.controllerChoice, "Virtual gamepad")
+    page.flyInBackground.click()
+    ok(qtbot, w)
+    chosen = load_settings(viewer_settings)
+    assert chosen.gamepad == pad.guid and chosen.gamepad_background
+    assert json.loads(chosen.gamepad_mappings)[pad.guid]["axes"]["up"]["input"] == "righty"   # mode 1's climb
+    assert w.gamepad.background and w.gamepad.mapping.axis("forward").input == "lefty"
 
 
 def test_an_unknown_joystick_flies_only_once_mapped(qtbot, silent_vehicle, viewer_settings, window_factory,
