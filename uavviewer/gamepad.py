@@ -189,10 +189,11 @@ class GamepadReader:
             self._listeners.append(listener)
             start = self._thread is None
             if start:
-                self._stop.clear()
-                self._thread = threading.Thread(target=self._run, name="gamepads", daemon=True)
+                self._stop = threading.Event()   # each thread its own: one that outlived a join never resumes
+                thread = self._thread = threading.Thread(target=self._run, args=(self._stop,), name="gamepads",
+                                                         daemon=True)
         if start:
-            self._thread.start()
+            thread.start()
 
     def unsubscribe(self, listener: Callable[[GamepadFrame], None]) -> None:
         """Stop reading (and close SDL's joysticks) when the last listener leaves."""
@@ -217,7 +218,7 @@ class GamepadReader:
                 log.exception("gamepad listener failed")
 
     # -- the thread -----------------------------------------------------------------------------
-    def _run(self) -> None:
+    def _run(self, stop: threading.Event) -> None:
         if sdl2 is None:
             self._publish(GamepadFrame(time.monotonic(), error=self.error))
             return
@@ -229,7 +230,7 @@ class GamepadReader:
             return
         pads: dict[int, _Open] = {}
         try:
-            self._loop(pads)
+            self._loop(pads, stop)
         except Exception:                        # noqa: BLE001
             log.exception("the gamepad reader failed")
         finally:
@@ -251,7 +252,7 @@ class GamepadReader:
         log.info("gamepad connected: %s (%s, %s)", p.pad.name, p.pad.guid,
                  "game controller" if p.controller else "joystick")
 
-    def _loop(self, pads: dict[int, _Open]) -> None:
+    def _loop(self, pads: dict[int, _Open], stop: threading.Event) -> None:
         ev = sdl2.SDL_Event()
         added: list[Pad] = []
         removed: list[Pad] = []
@@ -260,8 +261,8 @@ class GamepadReader:
         last_publish = -1e9
         first = True
         coalescing = False                               # a stick moved since the last frame, which is not due
-        while not self._stop.is_set():
-            got = self._wait(ev, pads, coalescing, last_publish)
+        while not stop.is_set():
+            got = self._wait(stop, ev, pads, coalescing, last_publish)
             while got:
                 self._event(ev, pads, added, removed)
                 got = sdl2.SDL_PollEvent(ctypes.byref(ev))
@@ -286,15 +287,16 @@ class GamepadReader:
                 last_publish = now
                 self._publish(frame)
 
-    def _wait(self, ev, pads: dict[int, _Open], coalescing: bool, last_publish: float) -> bool:
+    def _wait(self, stop: threading.Event, ev, pads: dict[int, _Open], coalescing: bool,
+              last_publish: float) -> bool:
         """Until an event (True: it is in ``ev``) or the next frame is due. With a pad open, SDL waits: it polls
         the devices every millisecond in C, without holding Python's lock; a moving stick's frames are spaced
         by ``min_interval`` (its events wait in SDL's queue meanwhile); with none, a slow poll for hot-plug."""
         if not pads:
-            self._stop.wait(IDLE_PERIOD)
+            stop.wait(IDLE_PERIOD)
             return bool(sdl2.SDL_PollEvent(ctypes.byref(ev)))
         if coalescing:
-            self._stop.wait(max(0.0, last_publish + self.min_interval - time.monotonic()))
+            stop.wait(max(0.0, last_publish + self.min_interval - time.monotonic()))
             return bool(sdl2.SDL_PollEvent(ctypes.byref(ev)))
         wait_ms = int(1000 * (last_publish + HEARTBEAT - time.monotonic()))
         return bool(sdl2.SDL_WaitEventTimeout(ctypes.byref(ev), max(1, min(wait_ms, 50))))
