@@ -1,19 +1,22 @@
 """How instant the window stays while flying: UI event-loop lateness and the cost of each redraw.
 
-    .venv/bin/python bench/bench_viewer.py [--seconds 30] [--no-camera]
+    .venv/bin/python bench/bench_viewer.py [--seconds 30] [--no-camera] [--gamepad]
 
 Runs the real window (offscreen unless a display is set) on the embedded driver and the simulated vehicle,
 takes off, and holds both sticks as a pilot would, with the simulated camera playing (unless --no-camera).
 A 10 ms timer measures how late the UI thread answers: any lateness is input lag the pilot feels. It also
 times one telemetry update of every instrument (30 Hz) and one plot redraw (10 Hz), against the 33 ms of a
-30 fps frame.
+30 fps frame. With --gamepad, an SDL virtual gamepad flies instead: another thread sweeps both its sticks at
+100 Hz, as a pilot's thumbs would, and the SDL reader thread feeds the window.
 """
 from __future__ import annotations
 
 import argparse
 import os
+import math
 import sys
 import tempfile
+import threading
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
@@ -49,6 +52,7 @@ def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seconds", type=float, default=30.0)
     ap.add_argument("--no-camera", action="store_true", help="leave the simulated camera off")
+    ap.add_argument("--gamepad", action="store_true", help="fly with an SDL virtual gamepad, sticks sweeping")
     args = ap.parse_args()
 
     app = QApplication(sys.argv[:1])
@@ -85,6 +89,24 @@ def main() -> None:
     probe.timeout.connect(tick)
     probe.start(10)
 
+    pad = None
+    sweeping, stopping = threading.Event(), threading.Event()
+    if args.gamepad:
+        from uavviewer.gamepad import VirtualPad
+        pad = VirtualPad("Bench gamepad")
+
+        def thumbs() -> None:                       # both sticks sweep, 100 updates a second
+            t0 = time.monotonic()
+            while not stopping.is_set():
+                if not sweeping.wait(0.5):
+                    continue
+                t = time.monotonic() - t0
+                pad.set_axis("righty", 0.5 + 0.3 * math.sin(t))
+                pad.set_axis("rightx", 0.3 * math.sin(1.7 * t))
+                pad.set_axis("leftx", 0.4 * math.sin(0.7 * t))
+                time.sleep(0.01)
+        threading.Thread(target=thumbs, daemon=True).start()
+
     started = [False]
     camera: dict = {}
     flying_since: list[float] = []
@@ -98,8 +120,11 @@ def main() -> None:
             if not flying_since:
                 flying_since.append(time.monotonic())
                 measuring[0] = True
-            w.rightStick.hold(0.3, 0.8)
-            w.leftStick.hold(0.4, 0.1)
+            if pad is None:
+                w.rightStick.hold(0.3, 0.8)
+                w.leftStick.hold(0.4, 0.1)
+            elif w.gamepad.status == "":
+                sweeping.set()
             if time.monotonic() - flying_since[0] > args.seconds:
                 camera.update(w.camera.stats())
                 app.quit()
@@ -113,9 +138,14 @@ def main() -> None:
         if not lateness:
             print("the vehicle never flew: nothing measured")
             return
+        if pad is not None:
+            stopping.set()
+            pad.detach()
         seen = "off" if args.no_camera else (f"{camera['fps']:.0f} fps painted at {camera['resolution']}, "
                                               f"{camera['frames']} frames")
-        print(f"flying {args.seconds:.0f} s with both sticks held; camera {seen}; "
+        flown = f"the gamepad ({w.gamepad.pad.name if w.gamepad.pad else 'gone'}) sweeping" if pad is not None \
+            else "both sticks held"
+        print(f"flying {args.seconds:.0f} s with {flown}; camera {seen}; "
               f"{w.adapter.sent_setpoints} stick updates sent")
         describe("UI event-loop lateness (10 ms timer)", lateness)
         describe("instruments update (per snapshot)", instruments)

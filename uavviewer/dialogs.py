@@ -66,6 +66,10 @@ class SettingsDialog(QDialog):
         self.browseMediaFolder.clicked.connect(self.browse_media_folder)
         self._init_signing(settings, signing_unavailable)
 
+    def add_page(self, page: QWidget, title: str) -> None:
+        """A page with a widget of its own (Gamepad), after the others."""
+        self.pages.addTab(page, title)
+
     def browse_media_folder(self) -> QFileDialog:
         """Qt's own (non-native) folder chooser, opened without waiting on it."""
         dialog = QFileDialog(self, "Media folder", self.mediaFolder.text() or default_media_folder())

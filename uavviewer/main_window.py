@@ -24,11 +24,14 @@ from .dialogs import KeysDialog, SettingsDialog, emergency_stop_question, mode_q
 from .camera_controller import CameraController, default_media_folder
 from .drone_adapter import DroneAdapter
 from .flight_phase import FlightPhase, flight_phase, readiness_text, stick_hint, takeoff_progress
+from .gamepad_input import GamepadInput
 from .keyboard import ACTION_KEYS, AXIS_KEYS, KeyboardSticks
 from .link_security import signing_unavailable, signing_warning
+from .pilot_input import Input, InputSelector
 from .settings import ViewerSettings, default_qsettings, load_settings, load_window, save_settings, save_window
 from .sticks import Axes, MaxSpeeds, axes_from_pads, combine, pad_labels, velocity_from_axes
 from .widgets.camera_panel import CameraPanel
+from .widgets.gamepad_page import GamepadPage
 
 __all__ = ["MainWindow", "load_style"]
 
@@ -61,6 +64,8 @@ class MainWindow(QMainWindow):
         self.adapter = DroneAdapter(drone, rate_hz=rate_hz, parent=self)
         self._speeds = MaxSpeeds()
         self.keyboard = KeyboardSticks()
+        self.gamepad = GamepadInput(self.settings, parent=self)
+        self._inputs = InputSelector()
         self._last_message = -1
         self._shown_results: set[int] = set()
         self._last_result = -1
@@ -124,6 +129,9 @@ class MainWindow(QMainWindow):
         self.actionAbout.triggered.connect(self._about)
         self.adapter.stateChanged.connect(self.show_state)
         self.adapter.commandFinished.connect(self._show_result)
+        self.gamepad.changed.connect(self._fly)
+        self.gamepad.actionPressed.connect(self._key_action)
+        self.gamepad.message.connect(self._gamepad_message)
 
         self._apply_settings()
         geometry, state = load_window(self._qsettings)
@@ -142,6 +150,7 @@ class MainWindow(QMainWindow):
         self.leftStick.set_caption(left)
         self.rightStick.set_caption(right)
         self._speeds = self._set_limits(self.settings.speeds)
+        self.gamepad.apply_settings(self.settings)
         self.centre_sticks()
 
     def _set_limits(self, wish: MaxSpeeds) -> MaxSpeeds:
@@ -186,7 +195,9 @@ class MainWindow(QMainWindow):
         dialog.signingRemoveRequested.connect(lambda: self._command("remove_signing"))
         dialog.allowUnsignedRequested.connect(lambda on: self._command("allow_unsigned", on))
         dialog.set_signing(self.adapter.state.signing)
-        dialog.accepted.connect(lambda: self._settings_chosen(dialog.chosen(), shown))
+        gamepad = GamepadPage(self.gamepad, self.settings)
+        dialog.add_page(gamepad, "Gamepad")
+        dialog.accepted.connect(lambda: self._settings_chosen(replace(dialog.chosen(), **gamepad.chosen()), shown))
         # finished, not destroyed: a slot on ``destroyed`` would run while a garbage-collected window is being
         # torn down (its children go with it) and touch a half-deleted wrapper.
         dialog.finished.connect(lambda _result: setattr(self, "_settings_dialog", None))
@@ -321,6 +332,7 @@ class MainWindow(QMainWindow):
         if live != self._sticks_live:
             self._sticks_live = live
             self.keyboard.clear()           # a key held while inert needs a fresh press to fly
+            self.gamepad.release()          # and the gamepad a return to the centre
             self._fly()
 
     # -- sticks and keys -------------------------------------------------------------------------
@@ -328,16 +340,19 @@ class MainWindow(QMainWindow):
         self._fly()
 
     def demand(self) -> Axes:
-        """The pilot's combined demand from both pads and the keyboard (zero if sticks are inert)."""
+        """The pilot's demand: both pads and the keyboard combined, or the gamepad, whichever the pilot moved
+        last (zero if sticks are inert)."""
         if not self._sticks_live:
+            self._inputs.reset()
             return Axes()
         pads = axes_from_pads(self.settings.mode, self.leftStick.position, self.rightStick.position,
                               self.settings.shaping)
-        return combine(pads, self.keyboard.axes())
+        return self._inputs.choose(combine(pads, self.keyboard.axes()), self.gamepad.axes())
 
     def _fly(self) -> None:
         command = velocity_from_axes(self.demand(), self._speeds)
         self.adapter.fly(command)
+        self.inputLabel.setText(self._input_text())
         if command.is_zero:
             self.setpointLabel.setText("Setpoint: hover")
         else:
@@ -345,12 +360,35 @@ class MainWindow(QMainWindow):
                 f"fwd {command.forward:+.1f}  right {command.right:+.1f}  up {command.up:+.1f} m/s  "
                 f"yaw {math.degrees(command.yaw_rate):+.0f}°/s")
 
-    def centre_sticks(self) -> None:
-        """Both pads and every key back to the centre; one zero velocity goes out."""
+    def _input_text(self) -> str:
+        """Which input flies now, else which are there (and why the gamepad waits)."""
+        pad = self.gamepad.pad
+        owner = self._inputs.owner
+        if owner is Input.GAMEPAD and pad is not None:
+            return f"Flying: gamepad {pad.name}"
+        if owner is Input.SCREEN:
+            pads_held = self.leftStick.position != (0.0, 0.0) or self.rightStick.position != (0.0, 0.0)
+            held = [name for name, on in (("sticks", pads_held), ("keyboard", self.keyboard.active)) if on]
+            return "Flying: " + (" + ".join(held) or "sticks")
+        text = "Input: sticks, keyboard"
+        if pad is not None:
+            status = self.gamepad.status
+            text += f", gamepad {pad.name}" + (f" ({status})" if status else "")
+        return text
+
+    def centre_sticks(self, gamepad: bool = True) -> None:
+        """Both pads and every key back to the centre, and (``gamepad``) the gamepad waits for its centre;
+        the new demand goes out (zero, unless the gamepad flies on)."""
         self.keyboard.clear()
         self.leftStick.centre()
         self.rightStick.centre()
+        if gamepad:
+            self.gamepad.release()
         self._fly()
+
+    def _gamepad_message(self, text: str, severity: Severity) -> None:
+        self.log_message(text, severity)
+        self.statusbar.showMessage(text, 8000)
 
     def eventFilter(self, watched: QObject, event: QEvent) -> bool:  # noqa: N802
         """Keys fly only when aimed at this window, but a release counts wherever it lands, and a menu,
@@ -394,20 +432,26 @@ class MainWindow(QMainWindow):
         return True
 
     def _key_action(self, action: str) -> None:
-        """Space, T and L do what their button does, and only while it is enabled."""
+        """Space, T and L (and the gamepad's buttons) do what their button does, and only while it is enabled."""
         fc = self.flightControls
         if action == "stop":
             fc.stop_button.click()              # click() does nothing on a disabled button
+        elif action == "rtl":
+            fc.rtl_button.click()
         elif action == "takeoff" and fc.phase is FlightPhase.ON_GROUND:
             fc.main_button.click()
         elif action == "land" and fc.phase in (FlightPhase.TAKING_OFF, FlightPhase.FLYING):
             fc.main_button.click()
 
     def changeEvent(self, event: QEvent) -> None:  # noqa: N802
-        if event.type() == QEvent.ActivationChange and not self.isActiveWindow():
-            self.centre_sticks()            # focus lost: nobody is holding the sticks any more
+        # Focus lost or minimised: nobody holds the sticks or keys any more; the gamepad flies on only if the
+        # pilot chose "fly in background".
+        if event.type() == QEvent.ActivationChange:
+            self.gamepad.set_focus(self.isActiveWindow())
+            if not self.isActiveWindow():
+                self.centre_sticks(gamepad=False)
         elif event.type() == QEvent.WindowStateChange and self.isMinimized():
-            self.centre_sticks()            # minimised: the sticks are out of sight and out of hand
+            self.centre_sticks(gamepad=False)
         super().changeEvent(event)
 
     def hideEvent(self, event) -> None:  # noqa: N802
@@ -577,6 +621,7 @@ class MainWindow(QMainWindow):
         save_settings(self._qsettings, self.settings)
         save_window(self._qsettings, self.saveGeometry(), self.saveState())
         QApplication.instance().removeEventFilter(self)
+        self.gamepad.close()
         self.camera.close(wait=0.5)
         self.adapter.stop()
         super().closeEvent(event)

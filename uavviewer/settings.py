@@ -1,5 +1,6 @@
 """What the viewer remembers between runs (QSettings): sticks, speeds, last link, camera, the signing key file's
-path, window layout. Never a signing passphrase or key: only where the pilot keeps the key file."""
+path, gamepads (mapped per controller GUID), window layout. Never a signing passphrase or key: only where the
+pilot keeps the key file."""
 from __future__ import annotations
 
 import math
@@ -37,6 +38,9 @@ class ViewerSettings:
     media_folder: str = ""           # snapshots and recordings; "" = Movies/UavViewer
     hud: bool = True                 # HUD over the video when the viewer starts
     signing_key_file: str = ""       # Link security: the key file's path, never the key or a passphrase
+    gamepad: str = "auto"            # the gamepad that flies: "auto" (the first connected), "off", or its GUID
+    gamepad_background: bool = False  # the gamepad keeps flying while the window is not active
+    gamepad_mappings: str = ""       # JSON: controller GUID -> its mapping (uavviewer.gamepad_mapping)
 
     @property
     def camera_uris(self) -> list[str]:
