@@ -38,8 +38,8 @@ from .rules import COPTER_MODES, MAX_ALTITUDE, MIN_TAKEOFF_ALTITUDE, go_to_probl
 from .setpoints import SetpointStreamer
 from .signing import LinkSigning, SigningConfig
 from .state import (
-    Battery, CommandResult, CommandStatus, LinkHealth, LinkStatus, SequencePhase, SequenceProgress, Setpoint,
-    Severity, VehicleState,
+    FENCE_PARAMS, Battery, CommandResult, CommandStatus, LinkHealth, LinkStatus, SequencePhase, SequenceProgress,
+    Setpoint, Severity, VehicleState,
 )
 from .store import StateStore
 from .supervision import LinkSupervisor
@@ -515,8 +515,10 @@ class Vehicle(Drone):
         if not frames.finite(m.param_value):
             return
         self._commands.on_param_value(name, m.param_value)
-        if name == "FS_GCS_ENABLE":
-            self._link.param_known = True
+        self._link.param_received(name)
+        if name in FENCE_PARAMS:
+            self._store.set(fence=self._store.view()["fence"].with_param(name, m.param_value))
+        elif name == "FS_GCS_ENABLE":
             self._store.set(gcs_failsafe=int(m.param_value))
             if int(m.param_value) == 0 and not self._gcs_failsafe_warned:
                 self._gcs_failsafe_warned = True
@@ -823,7 +825,8 @@ class Vehicle(Drone):
             return self._finish("go to", CommandStatus.REJECTED, "coordinates are not finite numbers")
         name = f"go to N{north:.1f} E{east:.1f} alt {altitude:.1f}"
         cfg = self.config
-        problem = go_to_problem(north, east, altitude, cfg.max_altitude, cfg.max_distance)
+        problem = (go_to_problem(north, east, altitude, cfg.max_altitude, cfg.max_distance)
+                   or self.state().fence.destination_problem(north, east, altitude))
         if problem:
             return self._finish(name, CommandStatus.REJECTED, problem)
         busy = self._busy(name)

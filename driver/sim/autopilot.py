@@ -100,6 +100,7 @@ class Autopilot(Telemetry, Commands, Messages, Flight):
         self.params["SYSID_THISMAV"] = config.system_id
         self.params["BATT_CAPACITY"] = config.battery_capacity_mah
         self.params["DISARM_DELAY"] = config.auto_disarm_after
+        self.params["FENCE_TYPE"] = self.profile.fence_types
         self.param_names = list(DEFAULT_PARAMS)
         self.t = 0.0
         # vehicle state

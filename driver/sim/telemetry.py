@@ -15,7 +15,7 @@ import time
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-from .common import clamp
+from .common import clamp, wrap_lon
 from .profiles import speaks_mavlink2
 
 __all__ = ["Telemetry", "EARTH_RADIUS", "METRES_PER_DEG", "GRAVITY", "clamp"]
@@ -79,7 +79,7 @@ class Telemetry:
                                              base, self.mode, status, 3)
 
     def _lat_lon(self) -> tuple[float, float]:
-        return self.home_lat + self.n / METRES_PER_DEG, self.home_lon + self.e / self.m_per_deg_lon
+        return self.home_lat + self.n / METRES_PER_DEG, wrap_lon(self.home_lon + self.e / self.m_per_deg_lon)
 
     def _noise(self, size: float) -> float:
         return self.rng.gauss(0.0, size)
