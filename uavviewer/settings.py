@@ -37,6 +37,11 @@ class ViewerSettings:
     media_folder: str = ""           # snapshots and recordings; "" = Movies/UavViewer
     hud: bool = True                 # HUD over the video when the viewer starts
     signing_key_file: str = ""       # Link security: the key file's path, never the key or a passphrase
+    tile_url: str = ""               # Map: a {z}/{x}/{y} tile server; "" = the offline grid only
+    tile_attribution: str = ""       # shown on the map with its tiles
+    tile_cache_mb: float = 200.0     # the disk cache's limit
+    map_tiles: bool = False          # the Map shows tiles (else the offline grid), as the pilot last chose
+    map_offline: bool = False        # tiles from the cache only
 
     @property
     def camera_uris(self) -> list[str]:
@@ -94,6 +99,7 @@ def load_settings(qs: QSettings) -> ViewerSettings:
     low, high = TAKEOFF_ALTITUDE_RANGE
     out.takeoff_altitude = min(max(out.takeoff_altitude, low), high)
     out.stick_mode = out.mode.value
+    out.tile_cache_mb = min(max(out.tile_cache_mb, 10.0), 5000.0)
     return out
 
 

@@ -1,0 +1,151 @@
+"""The Map dock in the real window, on the real driver and simulated vehicle (or a real recording)."""
+from __future__ import annotations
+
+import math
+
+import pytest
+from PyQt5.QtCore import QPoint
+from PyQt5.QtGui import QColor, QContextMenuEvent
+from PyQt5.QtWidgets import QApplication, QMenu, QMessageBox
+from PyQt5.QtCore import Qt
+
+from driver import frames
+from driver.vehicle import Vehicle, VehicleConfig
+from uavviewer.widgets.map_view import FENCE
+
+from recordings import FLIGHT, need_recordings
+from viewer_fixtures import viewer_settings, window_factory  # noqa: F401  (fixtures)
+
+pytestmark = pytest.mark.timeout(120)
+
+#: Far north and 11 m east of the antimeridian, nose east: flying west crosses from -180 to +180 degrees.
+EDGE_HOME = (66.0, -179.9998, 20.0, 90.0)
+
+
+def right_click_fly_here(qtbot, view, east: float, north: float):
+    """Right-click the map at a point (view metres) and choose the menu's "Fly here" item."""
+    pos = view.to_screen(east, north).toPoint()
+    QApplication.postEvent(view, QContextMenuEvent(QContextMenuEvent.Mouse, pos, view.mapToGlobal(pos)))
+    qtbot.waitUntil(lambda: view.findChild(QMenu, "mapMenu") is not None
+                    and view.findChild(QMenu, "mapMenu").isVisible())
+    menu = view.findChild(QMenu, "mapMenu")
+    action = menu.actions()[0]
+    text = action.text()
+    qtbot.mouseClick(menu, Qt.LeftButton, pos=menu.actionGeometry(action).center())
+    menu.deleteLater()
+    return text
+
+
+def test_fly_here_across_the_antimeridian_and_escape_cancels(qtbot, sim_factory, vehicle_factory, window_factory):
+    sim = sim_factory(home=EDGE_HOME)
+    vehicle = vehicle_factory(f"tcp:127.0.0.1:{sim.tcp_port}")
+    w = window_factory(vehicle, takeoff_altitude=3.0)
+    view, ctl = w.mapPanel.mapView, w.map
+    qtbot.waitUntil(lambda: view.vehicle is not None and view.home_visible, timeout=15000)
+    assert vehicle.takeoff(3.0).result(timeout=60).ok
+    qtbot.waitUntil(lambda: view.fly_here_enabled, timeout=5000)
+
+    # 30 m west of home is across the antimeridian: the pilot right-clicks there and confirms
+    assert right_click_fly_here(qtbot, view, -30.0, 10.0) == "Fly here at 3 m"
+    qtbot.waitUntil(lambda: ctl.question is not None and ctl.question.isVisible())
+    box = ctl.question
+    assert "30 m west" in box.text() and "10 m north" in box.text() and "at 3 m above home" in box.text()
+    qtbot.mouseClick(box.button(QMessageBox.Yes), Qt.LeftButton)
+    qtbot.waitUntil(lambda: view.target is not None, timeout=5000)           # the driver accepted the go-to
+    assert view.target == pytest.approx((-30.0, 10.0), abs=0.6)
+
+    def there() -> bool:
+        s = vehicle.state()
+        return s.local is not None and math.hypot(s.local.north - 10.0, s.local.east + 30.0) < 1.0
+    qtbot.waitUntil(there, timeout=40000)                                      # the vehicle got there
+    truth = sim.truth()
+    assert math.hypot(truth.north - 10.0, truth.east + 30.0) < 1.5
+    s = w.adapter.state
+    assert s.position.lon > 179.99                                            # across: +180 side now
+    qtbot.waitUntil(lambda: view.target is None, timeout=5000)                # reached: the target goes
+
+    # the icon sits where the vehicle is, in ground metres from home, turned to its heading
+    s = w.adapter.state
+    north, east = frames.offset_ned(s.home.lat, s.home.lon, s.position.lat, s.position.lon)
+    assert view.vehicle[:2] == pytest.approx((east, north), abs=0.05)
+    assert view.vehicle[2] == s.heading_deg
+    newest = view._bands[-1][-1]
+    assert (newest.x(), newest.y()) == pytest.approx((east, north), abs=1.0) and view.trail_points > 10
+
+    # a second, farther point; Escape in the middle of the way stops it there
+    start = vehicle.state().local
+    right_click_fly_here(qtbot, view, 20.0, 10.0)
+    qtbot.waitUntil(lambda: ctl.question is not None and ctl.question.isVisible())
+    qtbot.mouseClick(ctl.question.button(QMessageBox.Yes), Qt.LeftButton)
+    qtbot.waitUntil(lambda: view.target is not None, timeout=5000)
+    qtbot.waitUntil(lambda: vehicle.state().local.east - start.east > 5.0, timeout=20000)
+    w.activateWindow()
+    qtbot.keyClick(w, Qt.Key_Escape)
+    assert view.target is None
+    qtbot.waitUntil(lambda: any(r.command == "stop" for r in vehicle.state().results), timeout=5000)
+    qtbot.waitUntil(lambda: vehicle.state().velocity.ground_speed < 0.3, timeout=20000)
+    assert vehicle.state().local.east < 15.0                                  # held short of the target
+
+
+def red_on_circle(view, radius: float) -> int:
+    """How many of 36 points on a circle of ``radius`` m around home are painted in the fence's red."""
+    image = view.grab().toImage()
+    hits = 0
+    for i in range(36):
+        a = math.radians(i * 10)
+        p = view.to_screen(radius * math.sin(a), radius * math.cos(a)).toPoint()
+        for dx in (-1, 0, 1):
+            for dy in (-1, 0, 1):
+                c = QColor(image.pixel(p + QPoint(dx, dy)))
+                if c.red() > 180 and c.green() < 120 and c.blue() < 120:
+                    hits += 1
+                    break
+            else:
+                continue
+            break
+    return hits
+
+
+def test_the_fence_is_drawn_from_the_vehicles_parameters(qtbot, vehicle, window_factory):
+    w = window_factory(vehicle, takeoff_altitude=3.0)
+    view = w.mapPanel.mapView
+    qtbot.waitUntil(lambda: vehicle.state().fence.known, timeout=15000)
+    view.set_follow(False)
+    view.centre = (0.0, 0.0)
+    view.zoom_to(2.5)                             # the 300 m circle is 120 px across the map
+    assert view.fence_radius is None and red_on_circle(view, 300.0) == 0          # FENCE_ENABLE=0: none
+
+    assert vehicle.set_parameter("FENCE_ENABLE", 1).result(timeout=10).ok
+    qtbot.waitUntil(lambda: view.fence_radius == 300.0, timeout=5000)
+    assert red_on_circle(view, 300.0) >= 18 and red_on_circle(view, 250.0) == 0
+    assert vehicle.set_parameter("FENCE_RADIUS", 200.0).result(timeout=10).ok     # moved by another GCS: follows
+    qtbot.waitUntil(lambda: view.fence_radius == 200.0, timeout=5000)
+    assert red_on_circle(view, 200.0) >= 18 and red_on_circle(view, 300.0) == 0
+
+
+@need_recordings()
+def test_a_replay_shows_the_whole_track_and_the_vehicle_moves_along_it(qtbot, window_factory):
+    replay = Vehicle(VehicleConfig(connection=FLIGHT + ".tlog", tlog_path=None, replay_speed=16.0)).start()
+    try:
+        w = window_factory(replay)
+        view, ctl = w.mapPanel.mapView, w.map
+        track = replay.replay.track().result(timeout=10)
+        assert len(track) > 300
+        qtbot.waitUntil(lambda: len(ctl.trail) == len(track) and view.frame is not None, timeout=30000)
+        assert view.trail_points >= len(track)                      # all of it, from the start, at once
+        assert view.fly_here_text == ""                             # nothing to fly in a recording
+        points = [ctl.trail.bands(1, 0.0, view.frame.to_view)[0][i] for i in range(0, len(track), 10)]
+        seen = []
+
+        def on_track() -> bool:
+            if view.vehicle is not None:
+                e, n = view.vehicle[:2]
+                seen.append(min(math.hypot(e - pe, n - pn) for pe, pn in points))
+            return len(seen) > 20
+        qtbot.waitUntil(on_track, timeout=30000)
+        assert max(seen) < 3.0                                      # the icon rides the recorded track
+        moved = {(round(view.vehicle[0], 1), round(view.vehicle[1], 1))}
+        qtbot.waitUntil(lambda: (round(view.vehicle[0], 1), round(view.vehicle[1], 1)) not in moved or
+                        replay.replay.finished, timeout=30000)
+    finally:
+        replay.close()
