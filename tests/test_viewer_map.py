@@ -4,14 +4,12 @@ from __future__ import annotations
 import math
 
 import pytest
-from PyQt5.QtCore import QPoint
-from PyQt5.QtGui import QColor, QContextMenuEvent
-from PyQt5.QtWidgets import QApplication, QMenu, QMessageBox
-from PyQt5.QtCore import Qt
+from PyQt5.QtCore import QEvent, QPoint, QPointF, Qt
+from PyQt5.QtGui import QColor, QContextMenuEvent, QMouseEvent
+from PyQt5.QtWidgets import QApplication, QDialogButtonBox, QMenu, QMessageBox
 
 from driver import frames
 from driver.vehicle import Vehicle, VehicleConfig
-from uavviewer.widgets.map_view import FENCE
 
 from recordings import FLIGHT, need_recordings
 from viewer_fixtures import viewer_settings, window_factory  # noqa: F401  (fixtures)
@@ -85,6 +83,44 @@ def test_fly_here_across_the_antimeridian_and_escape_cancels(qtbot, sim_factory,
     qtbot.waitUntil(lambda: any(r.command == "stop" for r in vehicle.state().results), timeout=5000)
     qtbot.waitUntil(lambda: vehicle.state().velocity.ground_speed < 0.3, timeout=20000)
     assert vehicle.state().local.east < 15.0                                  # held short of the target
+
+    # panning lets go of the drone; one click on Follow brings it back to the middle
+    drag(view, (200, 150), (260, 190))
+    qtbot.waitUntil(lambda: not view.follow and not w.mapPanel.followButton.isChecked())
+    assert view.centre != pytest.approx(view.vehicle[:2])
+    qtbot.mouseClick(w.mapPanel.followButton, Qt.LeftButton)
+    assert view.follow and view.centre == pytest.approx(view.vehicle[:2])
+
+
+def drag(view, start: tuple[int, int], end: tuple[int, int]) -> None:
+    """A left-button drag on the map, as mouse events through the event loop."""
+    post = QApplication.postEvent
+    post(view, QMouseEvent(QEvent.MouseButtonPress, QPointF(*start), Qt.LeftButton, Qt.LeftButton, Qt.NoModifier))
+    for i in range(1, 11):
+        x = start[0] + (end[0] - start[0]) * i / 10
+        y = start[1] + (end[1] - start[1]) * i / 10
+        post(view, QMouseEvent(QEvent.MouseMove, QPointF(x, y), Qt.NoButton, Qt.LeftButton, Qt.NoModifier))
+    post(view, QMouseEvent(QEvent.MouseButtonRelease, QPointF(*end), Qt.LeftButton, Qt.NoButton, Qt.NoModifier))
+
+
+def test_preferences_set_the_tile_server_and_the_choice_is_remembered(qtbot, vehicle, window_factory, tmp_path,
+                                                                         viewer_settings):
+    w = window_factory(vehicle, tile_cache_dir=str(tmp_path / "tiles"))
+    combo = w.mapPanel.layerCombo
+    assert combo.currentText() == "Grid" and not combo.model().item(1).isEnabled()   # offline grid by default
+    assert w.map.tiles is None                                                      # nothing on the network
+    w.edit_settings()
+    dialog = w.settings_dialog
+    dialog.tileUrl.setText("http://127.0.0.1:9/{z}/{x}/{y}.png")
+    dialog.tileAttribution.setText("© test")
+    dialog.tileCacheMb.setValue(50)
+    dialog.buttons.button(QDialogButtonBox.Ok).click()
+    assert w.settings.tile_url == "http://127.0.0.1:9/{z}/{x}/{y}.png" and w.settings.tile_cache_mb == 50
+    assert combo.model().item(1).isEnabled()
+    combo.setCurrentIndex(1)
+    assert w.map.tiles is not None and w.mapPanel.mapView.attribution == "© test"
+    assert w.map.tiles.cache_dir.rstrip("/") == str(tmp_path / "tiles")
+    assert viewer_settings.value("viewer/map_tiles") in (True, "true")               # kept for the next run
 
 
 def red_on_circle(view, radius: float) -> int:

@@ -22,6 +22,8 @@ TRAIL_BANDS = 8                      # the trail is drawn in this many bands, ol
 BACKGROUND = QColor("#1b222b")
 GRID = QColor(255, 255, 255, 28)
 RING = QColor(255, 255, 255, 90)
+RING_ON_TILES = QColor(0, 0, 0, 140)
+LABEL_BOX = QColor(20, 26, 34, 170)
 TRAIL = QColor("#38b6ff")
 FENCE = QColor("#ff4d4d")
 TARGET = QColor("#ffb020")
@@ -46,6 +48,7 @@ class MapView(QWidget):
         self.centre = (0.0, 0.0)                     # view metres (east, north) at the widget's centre
         self.follow = True
         self.vehicle: tuple[float, float, float] | None = None    # east, north, heading degrees
+        self._shown: tuple[float, float, float] | None = None     # ... as last painted
         self.home_visible = False
         self.target: tuple[float, float] | None = None
         self.fence_radius: float | None = None
@@ -61,10 +64,14 @@ class MapView(QWidget):
 
     # -- what to show ---------------------------------------------------------------------------
     def set_vehicle(self, where: tuple[float, float, float] | None) -> None:
-        if where != self.vehicle:
-            self.vehicle = where
-            if where is not None and self.follow:
-                self.centre = (where[0], where[1])
+        """East, north (view metres) and heading; repainted only when that shows (half a pixel, half a degree)."""
+        old, self.vehicle = self._shown, where
+        if where is not None and self.follow:
+            self.centre = (where[0], where[1])
+        if (old is None) != (where is None) or where is not None and (
+                math.hypot(where[0] - old[0], where[1] - old[1]) >= 0.5 * self.mpp
+                or abs((where[2] - old[2] + 180.0) % 360.0 - 180.0) >= 0.5):
+            self._shown = where
             self.update()
 
     def set_trail(self, bands: list[list[tuple[float, float]]]) -> None:
@@ -227,13 +234,12 @@ class MapView(QWidget):
         step = nice_scale(self.mpp, min(self.width(), self.height()) / 5.0)
         if step <= 0:
             return
-        p.setPen(QPen(RING, 1, Qt.DotLine))
-        p.setBrush(Qt.NoBrush)
         p.setFont(QFont(self.font().family(), 8))
         for i in range(1, 6):
+            p.setPen(QPen(RING if not self.drawn_tiles else RING_ON_TILES, 1, Qt.DotLine))
+            p.setBrush(Qt.NoBrush)
             self._circle(p, i * step)
-            label = self.to_screen(0.0, i * step)
-            p.drawText(label + QPointF(3, -3), _distance(i * step))
+            self._label(p, self.to_screen(0.0, i * step) + QPointF(3, -3), _distance(i * step))
 
     def _paint_trail(self, p: QPainter) -> None:
         for i, band in enumerate(self._bands):
@@ -286,12 +292,14 @@ class MapView(QWidget):
             return
         px = length / self.mpp
         x0, y0 = 12.0, self.height() - 14.0
+        p.setPen(QPen(Qt.black, 4))
+        p.drawLine(QPointF(x0, y0), QPointF(x0 + px, y0))
         p.setPen(QPen(QColor("#e6ebf0"), 2))
         p.drawLine(QPointF(x0, y0), QPointF(x0 + px, y0))
         p.drawLine(QPointF(x0, y0 - 5), QPointF(x0, y0))
         p.drawLine(QPointF(x0 + px, y0 - 5), QPointF(x0 + px, y0))
         p.setFont(QFont(self.font().family(), 8))
-        p.drawText(QPointF(x0 + 4, y0 - 5), _distance(length))
+        self._label(p, QPointF(x0 + 4, y0 - 5), _distance(length))
 
     def _paint_north(self, p: QPainter) -> None:
         x, y = self.width() - 22.0, 26.0
@@ -301,6 +309,13 @@ class MapView(QWidget):
         p.setPen(QColor("#e6ebf0"))
         p.setFont(QFont(self.font().family(), 8, QFont.Bold))
         p.drawText(QRectF(x - 8, y + 6, 16, 14), Qt.AlignCenter, "N")
+
+    def _label(self, p: QPainter, at: QPointF, text: str) -> None:
+        """Light text on a dark box: readable on the grid and on any tile."""
+        box = QRectF(p.fontMetrics().boundingRect(text)).translated(at).adjusted(-2, -1, 2, 1)
+        p.fillRect(box, LABEL_BOX)
+        p.setPen(QColor("#e6ebf0"))
+        p.drawText(at, text)
 
     def _paint_attribution(self, p: QPainter) -> None:
         p.setFont(QFont(self.font().family(), 7))
