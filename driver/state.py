@@ -320,6 +320,7 @@ class Fence:
     types: int | None = None                         # FENCE_TYPE bitmask
     radius: float | None = None                      # FENCE_RADIUS, m around home
     alt_max: float | None = None                     # FENCE_ALT_MAX, m above home
+    breached: bool | None = None                     # FENCE_STATUS (sent while it is enabled); None: not told
 
     @property
     def known(self) -> bool:

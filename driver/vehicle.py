@@ -25,7 +25,7 @@ import math
 import threading
 import time
 from concurrent.futures import Future
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
@@ -526,6 +526,18 @@ class Vehicle(Drone):
                     Severity.WARNING, "GCS failsafe is off on the vehicle (FS_GCS_ENABLE=0): if this link is lost "
                     "or you quit in flight, it keeps hovering until its battery failsafe")
 
+    def _on_fence_status(self, m) -> None:
+        """FENCE_STATUS, sent while the fence is enabled: a new breach is told once, with what it was."""
+        fence = self._store.view()["fence"]
+        breached = bool(m.breach_status)
+        if breached and not fence.breached:
+            what = {1: "below the minimum altitude", 2: "above FENCE_ALT_MAX",
+                    3: "outside FENCE_RADIUS"}.get(m.breach_type, "outside the fence")
+            self._store.add_message_locked(Severity.CRITICAL, f"Fence breached: {what}; the vehicle acts on its own "
+                                           "(FENCE_ACTION: RTL or land)")
+        if breached != fence.breached:
+            self._store.set(fence=replace(fence, breached=breached))
+
     # ------------------------------------------------------------------------------------------
     # ticker thread
     # ------------------------------------------------------------------------------------------
@@ -937,4 +949,5 @@ _EVENTS = {
     "COMMAND_ACK": Vehicle._on_command_ack,
     "PARAM_VALUE": Vehicle._on_param_value,
     "AUTOPILOT_VERSION": Vehicle._on_autopilot_version,
+    "FENCE_STATUS": Vehicle._on_fence_status,
 }

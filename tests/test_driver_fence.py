@@ -5,10 +5,10 @@ import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from driver import frames
-from driver.state import CommandStatus, Fence
+from driver.state import CommandStatus, Fence, Velocity
 from driver.vehicle import MASK_POSITION
 
-from ice_fixtures import drone_factory, ice_server, server_factory  # noqa: F401
+from ice_fixtures import drone_factory, eventually, ice_server, server_factory  # noqa: F401
 
 
 @pytest.mark.parametrize("profile, types", [("copter-4", 7), ("solo", 3)])
@@ -37,6 +37,19 @@ def test_go_to_outside_the_vehicles_fence_is_refused_with_its_reason_here_and_ov
     assert over_ice.status is CommandStatus.REJECTED and "FENCE_RADIUS 30 m" in over_ice.reason
     assert drone.go_to(0.0, -20.0, 5.0).result(timeout=10).ok
     assert flying.wait_for(lambda s: abs(s.local.east + 20.0) < 1.0 and abs(s.local.north) < 1.0, 30)
+
+    # the sticks can still push it out: the vehicle turns back by itself (FENCE_ACTION 1) and says so
+    def pushed_west() -> bool:
+        s = flying.state()
+        forward, right, _ = Velocity(0.0, -2.0, 0.0).body(s.attitude.yaw)
+        flying.set_velocity(forward, right, 0.0, 0.0)
+        return bool(s.fence.breached)
+    assert eventually(pushed_west, 30, interval=0.1)
+    s = flying.wait_for(lambda s: s.mode == "RTL", 5)
+    assert s is not None and sim.truth().mode == "RTL"
+    assert any(m.text.startswith("Fence breached: outside FENCE_RADIUS") for m in s.messages)
+    assert drone.wait_for(lambda s: s.fence.breached and s.mode == "RTL", 10)
+    assert flying.wait_for(lambda s: s.fence.breached is False, 60)          # back inside on its way home
 
 
 def test_the_simulated_vehicle_ignores_a_target_outside_its_fence(flying, sim):

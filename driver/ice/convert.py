@@ -178,7 +178,8 @@ def fence_to_ice(ms, fence: Fence):
     has_radius, radius = _opt(fence.radius)
     has_alt, alt_max = _opt(fence.alt_max)
     return ms.Fence(hasEnabled=has_enabled, enabled=bool(enabled), hasTypes=has_types, types=int(types),
-                    hasRadius=has_radius, radius=radius, hasAltMax=has_alt, altMax=alt_max)
+                    hasRadius=has_radius, radius=radius, hasAltMax=has_alt, altMax=alt_max,
+                    breached=bool(fence.breached))
 
 
 def fence_from_ice(f) -> Fence:
@@ -186,7 +187,8 @@ def fence_from_ice(f) -> Fence:
     def known(has: bool, value):
         return value if has and math.isfinite(value) else None
     return Fence(enabled=bool(f.enabled) if f.hasEnabled else None, types=int(f.types) if f.hasTypes else None,
-                 radius=known(f.hasRadius, f.radius), alt_max=known(f.hasAltMax, f.altMax))
+                 radius=known(f.hasRadius, f.radius), alt_max=known(f.hasAltMax, f.altMax),
+                 breached=bool(f.breached) if f.hasEnabled and f.enabled else None)
 
 
 def status_from_state(ms, s: VehicleState, messages_since: int = -1, results_since: int = -1):

@@ -133,6 +133,15 @@ class Telemetry:
             int(round((self.home_alt - self.d) * 1000)), int(round(-self.d * 1000)),
             int(round(self.vn * 100)), int(round(self.ve * 100)), int(round(self.vd * 100)), hdg)
 
+    def _msg_fence_status(self):
+        """Only while the fence is enabled (Copter::fence_send_mavlink_status)."""
+        if not self.params["FENCE_ENABLE"]:
+            return None
+        kind = (mavlink.FENCE_BREACH_BOUNDARY if self.fence_breaches & 2 else
+                mavlink.FENCE_BREACH_MAXALT if self.fence_breaches & 1 else mavlink.FENCE_BREACH_NONE)
+        return self.factory.fence_status_encode(int(bool(self.fence_breaches)), self.fence_breach_count, kind,
+                                                self.fence_breach_time)
+
     def _msg_local_position_ned(self):
         if not self.ready:
             return None

@@ -52,6 +52,7 @@ class MapView(QWidget):
         self.home_visible = False
         self.target: tuple[float, float] | None = None
         self.fence_radius: float | None = None
+        self.fence_breached = False                  # drawn solid and thick while the vehicle is outside it
         self.tiles = None                            # a TileSource, or None for the offline grid
         self.attribution = ""
         self.fly_here_text = ""                      # "Fly here at 5 m", or why not: "" hides the item
@@ -177,7 +178,7 @@ class MapView(QWidget):
             self._paint_grid(p)
         self._paint_rings(p)
         if self.fence_radius:
-            p.setPen(QPen(FENCE, 2, Qt.DashLine))
+            p.setPen(QPen(FENCE, 4, Qt.SolidLine) if self.fence_breached else QPen(FENCE, 2, Qt.DashLine))
             p.setBrush(Qt.NoBrush)
             self._circle(p, self.fence_radius)
         self._paint_trail(p)
