@@ -11,7 +11,9 @@ from PyQt5.QtWidgets import QApplication, QDialogButtonBox, QMenu, QMessageBox
 from driver import frames
 from driver.vehicle import Vehicle, VehicleConfig
 
+from ice_fixtures import drone_factory, server_factory  # noqa: F401  (fixtures)
 from recordings import FLIGHT, need_recordings
+from tile_server import TileServer
 from viewer_fixtures import viewer_settings, window_factory  # noqa: F401  (fixtures)
 
 pytestmark = pytest.mark.timeout(120)
@@ -103,24 +105,61 @@ def drag(view, start: tuple[int, int], end: tuple[int, int]) -> None:
     post(view, QMouseEvent(QEvent.MouseButtonRelease, QPointF(*end), Qt.LeftButton, Qt.NoButton, Qt.NoModifier))
 
 
-def test_preferences_set_the_tile_server_and_the_choice_is_remembered(qtbot, vehicle, window_factory, tmp_path,
-                                                                         viewer_settings):
-    w = window_factory(vehicle, tile_cache_dir=str(tmp_path / "tiles"))
-    combo = w.mapPanel.layerCombo
-    assert combo.currentText() == "Grid" and not combo.model().item(1).isEnabled()   # offline grid by default
-    assert w.map.tiles is None                                                      # nothing on the network
-    w.edit_settings()
-    dialog = w.settings_dialog
-    dialog.tileUrl.setText("http://127.0.0.1:9/{z}/{x}/{y}.png")
-    dialog.tileAttribution.setText("© test")
-    dialog.tileCacheMb.setValue(50)
-    dialog.buttons.button(QDialogButtonBox.Ok).click()
-    assert w.settings.tile_url == "http://127.0.0.1:9/{z}/{x}/{y}.png" and w.settings.tile_cache_mb == 50
-    assert combo.model().item(1).isEnabled()
-    combo.setCurrentIndex(1)
-    assert w.map.tiles is not None and w.mapPanel.mapView.attribution == "© test"
-    assert w.map.tiles.cache_dir.rstrip("/") == str(tmp_path / "tiles")
-    assert viewer_settings.value("viewer/map_tiles") in (True, "true")               # kept for the next run
+def test_preferences_set_the_tile_server_and_the_area_downloads(qtbot, vehicle, window_factory, tmp_path,
+                                                                  viewer_settings):
+    server = TileServer().start()
+    try:
+        w = window_factory(vehicle, tile_cache_dir=str(tmp_path / "tiles"))
+        panel = w.mapPanel
+        combo = panel.layerCombo
+        assert combo.currentText() == "Grid" and not combo.model().item(1).isEnabled()   # the offline grid first
+        assert w.map.tiles is None and not panel.downloadButton.isEnabled()            # nothing on the network
+        w.edit_settings()
+        dialog = w.settings_dialog
+        dialog.tileUrl.setText(server.url)
+        dialog.tileAttribution.setText("© test")
+        dialog.tileCacheMb.setValue(50)
+        dialog.buttons.button(QDialogButtonBox.Ok).click()
+        assert w.settings.tile_url == server.url and w.settings.tile_cache_mb == 50
+        assert combo.model().item(1).isEnabled()
+        combo.setCurrentIndex(1)
+        assert w.map.tiles is not None and panel.mapView.attribution == "© test"
+        assert w.map.tiles.cache_dir.rstrip("/") == str(tmp_path / "tiles")
+        assert viewer_settings.value("viewer/map_tiles") in (True, "true")             # kept for the next run
+        qtbot.waitUntil(lambda: vehicle.state().home is not None and panel.mapView.drawn_tiles > 0, timeout=15000)
+
+        w.mapDock.setFloating(True)                         # a big map: its four levels need too many tiles
+        w.mapDock.resize(1800, 1200)
+        qtbot.waitUntil(lambda: panel.mapView.width() > 1500)
+        panel.mapView.zoom_to(4.0)                          # levels 15 to 18 over 7 km
+        qtbot.mouseClick(panel.downloadButton, Qt.LeftButton)
+        assert "Area too large" in panel.statusLabel.text() and "1500" in panel.statusLabel.text()
+        w.mapDock.setFloating(False)
+        qtbot.waitUntil(lambda: panel.mapView.width() < 800)
+        panel.mapView.zoom_to(1.0)
+        hits = server.tile_hits
+        qtbot.mouseClick(panel.downloadButton, Qt.LeftButton)
+        assert panel.statusLabel.text().startswith("Downloading 0/")
+        qtbot.waitUntil(lambda: panel.statusLabel.text().startswith("Area kept for offline use"), timeout=20000)
+        assert "failed" not in panel.statusLabel.text()
+        assert server.tile_hits > hits
+    finally:
+        server.stop()
+
+
+def test_fly_here_through_ice_with_the_fence_shown(qtbot, sim, flying, server_factory, drone_factory,
+                                                   window_factory):
+    """The same map and the same Fly here on a vehicle reached through the MAVLinkServer."""
+    assert flying.set_parameter("FENCE_ENABLE", 1).result(timeout=10).ok
+    drone = drone_factory(server_factory(flying))
+    w = window_factory(drone, takeoff_altitude=3.0)
+    view, ctl = w.mapPanel.mapView, w.map
+    qtbot.waitUntil(lambda: view.fly_here_enabled and view.fence_radius == 300.0, timeout=15000)
+    right_click_fly_here(qtbot, view, 8.0, -6.0)
+    qtbot.waitUntil(lambda: ctl.question is not None and ctl.question.isVisible())
+    qtbot.mouseClick(ctl.question.button(QMessageBox.Yes), Qt.LeftButton)
+    qtbot.waitUntil(lambda: view.target is not None, timeout=10000)
+    qtbot.waitUntil(lambda: math.hypot(sim.truth().north + 6.0, sim.truth().east - 8.0) < 1.0, timeout=30000)
 
 
 def red_on_circle(view, radius: float) -> int:

@@ -60,6 +60,7 @@ class MapController(QObject):
         self._question: QMessageBox | None = None
         self.tiles: TileSource | None = None
         self._tile_settings = TileSettings()
+        self._area_text = ""                       # the last "Download area": its progress or outcome
         self._state: VehicleState | None = None
         self._pending_track: list | None = None     # the replay's track, read on its own thread
         panel.layerRequested.connect(self._layer)
@@ -124,16 +125,18 @@ class MapController(QObject):
                 break
             keys += [k for k, _ in more]
         if not keys or len(keys) > MAX_AREA_TILES or not self.tiles.download_area(keys):
-            self.panel.set_status(f"Area too large for offline use (at most {MAX_AREA_TILES} tiles): zoom in")
+            self._area_text = f"Area too large for offline use (at most {MAX_AREA_TILES} tiles): zoom in"
+            self._show_status()
             return 0
-        self.panel.set_status(f"Downloading {len(keys)} tiles…")
+        self._area_progress(0, 0, len(keys))
         return len(keys)
 
     def _area_progress(self, done: int, failed: int, total: int) -> None:
         if done + failed >= total:
-            self.panel.set_status(f"Area kept for offline use: {done} tiles" + (f", {failed} failed" if failed else ""))
+            self._area_text = f"Area kept for offline use: {done} tiles" + (f", {failed} failed" if failed else "")
         else:
-            self.panel.set_status(f"Downloading {done + failed}/{total} tiles…")
+            self._area_text = f"Downloading {done + failed}/{total} tiles…"
+        self._show_status()
 
     def _show_status(self) -> None:
         if self.view.tiles is None:
@@ -144,7 +147,7 @@ class MapController(QObject):
         text = ("Offline (cache only)" if self.tiles.offline else "Tiles") + f": {self.view.drawn_tiles} shown"
         if failures:
             text += f", {len(failures)} failed ({'; '.join(why[:2])})"
-        self.panel.set_status(text)
+        self.panel.set_status(f"{self._area_text} · {text}" if self._area_text else text)
 
     # -- state in ------------------------------------------------------------------------------
     def show_state(self, s: VehicleState) -> None:
