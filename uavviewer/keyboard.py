@@ -31,7 +31,8 @@ ACTION_KEYS: dict[int, tuple[str, str]] = {
     Qt.Key_L: ("land", "Land"),
 }
 
-_KEY_NAMES = {Qt.Key_Up: "↑", Qt.Key_Down: "↓", Qt.Key_Left: "←", Qt.Key_Right: "→", Qt.Key_Space: "Space", Qt.Key_Escape: "Esc"}
+_KEY_NAMES = {Qt.Key_Up: "↑", Qt.Key_Down: "↓", Qt.Key_Left: "←", Qt.Key_Right: "→", Qt.Key_Space: "Space",
+              Qt.Key_Escape: "Esc"}
 
 
 class KeyboardSticks:

@@ -153,8 +153,9 @@ class MainWindow(QMainWindow):
         self.rightStick.set_caption(right)
         self._speeds = self._set_limits(self.settings.speeds)
         self.centre_sticks()
-        self.map.set_tile_settings(TileSettings(self.settings.tile_url, self.settings.tile_attribution,
-                                                int(self.settings.tile_cache_mb), self.tile_cache_dir))
+        s = self.settings
+        self.map.set_tile_settings(TileSettings(s.tile_url.strip(), s.tile_attribution.strip(), int(s.tile_cache_mb),
+                                                self.tile_cache_dir))
         if self.settings.map_tiles and self.settings.tile_url:
             self.mapPanel.layerCombo.setCurrentIndex(1)
 

@@ -11,6 +11,7 @@ from __future__ import annotations
 import logging
 import math
 import time
+from dataclasses import dataclass
 
 from PyQt5.QtCore import QObject, Qt, pyqtSignal
 from PyQt5.QtWidgets import QMessageBox, QWidget
@@ -32,11 +33,13 @@ log = logging.getLogger(__name__)
 ARRIVED = 1.0                # m from the go-to target: reached, the target leaves the map
 
 
+@dataclass(frozen=True)
 class TileSettings:
-    """The tile server and cache as Preferences give them."""
-
-    def __init__(self, url: str = "", attribution: str = "", cache_mb: int = 200, cache_dir: str | None = None):
-        self.url, self.attribution, self.cache_mb, self.cache_dir = url.strip(), attribution.strip(), cache_mb, cache_dir
+    """The tile server and cache as Preferences give them ("" url: the offline grid only)."""
+    url: str = ""
+    attribution: str = ""
+    cache_mb: int = 200
+    cache_dir: str | None = None             # None: the per-user cache folder
 
 
 class MapController(QObject):

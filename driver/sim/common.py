@@ -6,8 +6,8 @@ import math
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 __all__ = ["MODES", "MODE_NAMES", "POSITION_MODES", "NOT_ARMABLE", "STREAMS", "STREAM_PARAMS", "DEFAULT_PARAMS",
-           "FORCE_ARM_MAGIC", "POS_IGNORE", "VEL_IGNORE", "YAW_IGNORE", "YAW_RATE_IGNORE", "wrap_pi", "wrap_lon", "finite",
-           "command_name", "clamp"]
+           "FORCE_ARM_MAGIC", "POS_IGNORE", "VEL_IGNORE", "YAW_IGNORE", "YAW_RATE_IGNORE", "wrap_pi",
+           "wrap_lon", "finite", "command_name", "clamp"]
 
 FORCE_ARM_MAGIC = 21196
 
