@@ -168,6 +168,7 @@ class MapController(QObject):
         self.view.home_visible = s.home is not None or s.local is not None
         self.view.fence_radius = s.fence.circle
         self.view.fence_breached = bool(s.fence.breached)
+        self.view.fence_ceiling = s.fence.ceiling
         self._follow_target(s, where)
         self._fly_here_item(s)
 

@@ -53,6 +53,7 @@ class MapView(QWidget):
         self.target: tuple[float, float] | None = None
         self.fence_radius: float | None = None
         self.fence_breached = False                  # drawn solid and thick while the vehicle is outside it
+        self.fence_ceiling: float | None = None      # written beside the circle
         self.tiles = None                            # a TileSource, or None for the offline grid
         self.attribution = ""
         self.fly_here_text = ""                      # "Fly here at 5 m", or why not: "" hides the item
@@ -181,6 +182,11 @@ class MapView(QWidget):
             p.setPen(QPen(FENCE, 4, Qt.SolidLine) if self.fence_breached else QPen(FENCE, 2, Qt.DashLine))
             p.setBrush(Qt.NoBrush)
             self._circle(p, self.fence_radius)
+            text = f"fence {_distance(self.fence_radius)}" + (
+                f", ceiling {_distance(self.fence_ceiling)}" if self.fence_ceiling else "") + (
+                " — BREACHED" if self.fence_breached else "")
+            p.setFont(QFont(self.font().family(), 8))
+            self._label(p, self.to_screen(0.0, -self.fence_radius) + QPointF(4, 12), text)
         self._paint_trail(p)
         if self.home_visible:
             self._paint_home(p)
@@ -307,9 +313,8 @@ class MapView(QWidget):
         p.setPen(QPen(Qt.black, 1))
         p.setBrush(QColor("#e6ebf0"))
         p.drawPolygon(QPolygonF([QPointF(x, y - 14), QPointF(x + 7, y + 6), QPointF(x, y + 2), QPointF(x - 7, y + 6)]))
-        p.setPen(QColor("#e6ebf0"))
         p.setFont(QFont(self.font().family(), 8, QFont.Bold))
-        p.drawText(QRectF(x - 8, y + 6, 16, 14), Qt.AlignCenter, "N")
+        self._label(p, QPointF(x - 4, y + 18), "N")
 
     def _label(self, p: QPainter, at: QPointF, text: str) -> None:
         """Light text on a dark box: readable on the grid and on any tile."""
