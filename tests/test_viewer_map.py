@@ -9,6 +9,7 @@ from PyQt5.QtGui import QColor, QContextMenuEvent, QMouseEvent
 from PyQt5.QtWidgets import QApplication, QDialogButtonBox, QMenu, QMessageBox
 
 from driver import frames
+from driver.ice.client import IceDrone, viewer_properties
 from driver.vehicle import Vehicle, VehicleConfig
 
 from ice_fixtures import drone_factory, server_factory  # noqa: F401  (fixtures)
@@ -147,19 +148,37 @@ def test_preferences_set_the_tile_server_and_the_area_downloads(qtbot, vehicle, 
         server.stop()
 
 
-def test_fly_here_through_ice_with_the_fence_shown(qtbot, sim, flying, server_factory, drone_factory,
-                                                   window_factory):
-    """The same map and the same Fly here on a vehicle reached through the MAVLinkServer."""
-    assert flying.set_parameter("FENCE_ENABLE", 1).result(timeout=10).ok
-    drone = drone_factory(server_factory(flying))
-    w = window_factory(drone, takeoff_altitude=3.0)
+def fly_here_and_arrive(qtbot, w, sim, east: float, north: float) -> None:
     view, ctl = w.mapPanel.mapView, w.map
-    qtbot.waitUntil(lambda: view.fly_here_enabled and view.fence_radius == 300.0, timeout=15000)
-    right_click_fly_here(qtbot, view, 8.0, -6.0)
+    qtbot.waitUntil(lambda: view.fly_here_enabled, timeout=15000)
+    right_click_fly_here(qtbot, view, east, north)
     qtbot.waitUntil(lambda: ctl.question is not None and ctl.question.isVisible())
     qtbot.mouseClick(ctl.question.button(QMessageBox.Yes), Qt.LeftButton)
-    qtbot.waitUntil(lambda: view.target is not None, timeout=10000)
-    qtbot.waitUntil(lambda: math.hypot(sim.truth().north + 6.0, sim.truth().east - 8.0) < 1.0, timeout=30000)
+    qtbot.waitUntil(lambda: view.target is not None, timeout=10000)          # the server said accepted
+    qtbot.waitUntil(lambda: math.hypot(sim.truth().north - north, sim.truth().east - east) < 1.0, timeout=30000)
+
+
+def test_fly_here_through_ice_with_the_fence_shown(qtbot, sim, flying, server_factory, drone_factory,
+                                                   window_factory):
+    """The same map and the same Fly here on a vehicle reached through the MAVLinkServer: our extension's goTo,
+    then a plain JdeRobot client (Pose3D, CMDVel, Navdata, Extra, WP only: metres from home, no fence)."""
+    assert flying.set_parameter("FENCE_ENABLE", 1).result(timeout=10).ok
+    server = server_factory(flying)
+    w = window_factory(drone_factory(server), takeoff_altitude=3.0)
+    qtbot.waitUntil(lambda: w.mapPanel.mapView.fence_radius == 300.0, timeout=15000)
+    fly_here_and_arrive(qtbot, w, sim, 8.0, -6.0)
+    w.quit_without_asking()
+
+    props = viewer_properties()
+    for name in ("Pose3D", "CMDVel", "Navdata", "Extra", "WP"):
+        props.setProperty(f"UAVViewer.{name}.Proxy", server.proxy(name))
+    plain = IceDrone(props).start()
+    try:
+        w = window_factory(plain, takeoff_altitude=3.0)
+        fly_here_and_arrive(qtbot, w, sim, -4.0, 5.0)
+        assert w.mapPanel.mapView.frame is None                               # no latitude: the metre grid
+    finally:
+        plain.close()
 
 
 def red_on_circle(view, radius: float) -> int:
