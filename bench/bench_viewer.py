@@ -1,13 +1,16 @@
 """How instant the window stays while flying: UI event-loop lateness and the cost of each redraw.
 
-    .venv/bin/python bench/bench_viewer.py [--seconds 30] [--no-camera] [--gamepad]
+    .venv/bin/python bench/bench_viewer.py [--seconds 30] [--no-camera] [--gamepad] [--dock map|plots] [--tiles]
 
 Runs the real window (offscreen unless a display is set) on the embedded driver and the simulated vehicle,
 takes off, and holds both sticks as a pilot would, with the simulated camera playing (unless --no-camera).
 A 10 ms timer measures how late the UI thread answers: any lateness is input lag the pilot feels. It also
-times one telemetry update of every instrument (30 Hz) and one plot redraw (10 Hz), against the 33 ms of a
-30 fps frame. With --gamepad, an SDL virtual gamepad flies instead: another thread sweeps both its sticks at
-100 Hz, as a pilot's thumbs would, and the SDL reader thread feeds the window.
+times one telemetry update of every instrument (30 Hz, the map included), one map update and one plot redraw
+(10 Hz), against the 33 ms of a 30 fps frame. ``--dock`` chooses which of the tabbed Map and Plots docks is
+in view (the map by default, as the window opens); ``--tiles`` shows map tiles from a local tile server
+(tests/tile_server.py) instead of the offline grid. With --gamepad, an SDL virtual gamepad flies instead:
+another thread sweeps both its sticks at 100 Hz, as a pilot's thumbs would, and the SDL reader thread feeds
+the window.
 """
 from __future__ import annotations
 
@@ -18,6 +21,7 @@ import sys
 import tempfile
 import threading
 import time
+from dataclasses import replace
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 if not os.environ.get("DISPLAY"):
@@ -53,6 +57,8 @@ def main() -> None:
     ap.add_argument("--seconds", type=float, default=30.0)
     ap.add_argument("--no-camera", action="store_true", help="leave the simulated camera off")
     ap.add_argument("--gamepad", action="store_true", help="fly with an SDL virtual gamepad, sticks sweeping")
+    ap.add_argument("--dock", choices=("map", "plots"), default="map", help="the tabbed dock in view")
+    ap.add_argument("--tiles", action="store_true", help="map tiles from a local tile server, not the grid")
     args = ap.parse_args()
 
     app = QApplication(sys.argv[:1])
@@ -66,9 +72,22 @@ def main() -> None:
     w.resize(1600, 1000)
     w.show()
     w.activateWindow()
+    (w.mapDock if args.dock == "map" else w.plotsDock).raise_()
+    tile_server = None
+    if args.tiles:
+        sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "tests"))
+        from tile_server import TileServer
+        tile_server = TileServer().start()
+        w.tile_cache_dir = tempfile.mkdtemp()
+        w.set_settings(replace(w.settings, tile_url=tile_server.url, tile_attribution="local tiles"))
+        w.mapPanel.layerCombo.setCurrentIndex(1)
 
     instruments: list[float] = []
     redraws: list[float] = []
+    map_updates: list[float] = []
+    map_paints: list[float] = []
+    w.map.show_state = timed(map_updates, w.map.show_state)
+    w.mapPanel.mapView.paintEvent = timed(map_paints, w.mapPanel.mapView.paintEvent)
     w.adapter.stateChanged.disconnect()
     w.adapter.stateChanged.connect(timed(instruments, w.show_state))
     w.plots._timer.timeout.disconnect()
@@ -149,6 +168,9 @@ def main() -> None:
               f"{w.adapter.sent_setpoints} stick updates sent")
         describe("UI event-loop lateness (10 ms timer)", lateness)
         describe("instruments update (per snapshot)", instruments)
+        describe(f"  of which the map ({'tiles' if args.tiles else 'grid'})", map_updates)
+        if map_paints:
+            describe("map paint", map_paints)
         describe("plots redraw (4 plots, 60 s)", redraws)
         late = np.asarray(lateness)
         print(f"UI answered within one 30 fps frame {100.0 * (late <= FRAME_MS).mean():.2f} % of the time; "
@@ -157,6 +179,8 @@ def main() -> None:
         w.close()
         drone.close()
         sim.stop()
+        if tile_server is not None:
+            tile_server.stop()
 
 
 if __name__ == "__main__":

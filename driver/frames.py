@@ -16,7 +16,7 @@ _M_PER_DEG = EARTH_RADIUS * math.pi / 180.0
 def offset_ned(home_lat: float, home_lon: float, lat: float, lon: float) -> tuple[float, float]:
     """(north, east) metres of (lat, lon) from home."""
     north = (lat - home_lat) * _M_PER_DEG
-    east = (lon - home_lon) * _M_PER_DEG * math.cos(math.radians(home_lat))
+    east = wrap_lon(lon - home_lon) * _M_PER_DEG * math.cos(math.radians(home_lat))   # across the antimeridian
     return north, east
 
 
@@ -24,7 +24,12 @@ def offset_latlon(home_lat: float, home_lon: float, north: float, east: float) -
     """(lat, lon) of a point north/east metres from home; inverse of :func:`offset_ned`."""
     lat = home_lat + north / _M_PER_DEG
     lon = home_lon + east / (_M_PER_DEG * math.cos(math.radians(home_lat)))
-    return lat, lon
+    return lat, wrap_lon(lon)
+
+
+def wrap_lon(degrees: float) -> float:
+    """A longitude (or a difference of two) in [-180, 180), as ArduPilot's wrap_longitude."""
+    return (degrees + 180.0) % 360.0 - 180.0
 
 
 def wrap_pi(angle: float) -> float:

@@ -16,6 +16,7 @@ import socket
 import struct
 import threading
 import time
+from concurrent.futures import Future
 
 log = logging.getLogger(__name__)
 
@@ -291,6 +292,11 @@ def frame_length(buf: bytes | bytearray, offset: int) -> int:
     return 0
 
 
+def _message_id(frame: bytes) -> int:
+    """The message id of a whole MAVLink 1 or 2 frame."""
+    return frame[5] if frame[0] == 0xFE else frame[7] | frame[8] << 8 | frame[9] << 16
+
+
 class TlogWriter:
     """Writes the MAVProxy/QGroundControl telemetry log: 8-byte big-endian µs timestamp, then the packet.
 
@@ -452,6 +458,22 @@ class TlogReplay(Transport):
     def finished(self) -> bool:
         return self._index >= len(self._packets)
 
+    def track(self) -> list[tuple[float, float, float]]:
+        """(seconds from the start, lat, lon) of every GLOBAL_POSITION_INT with a position: the whole flight,
+        for a map's trail. Reads the records already in memory; takes a moment on a long log (call it off the
+        UI thread)."""
+        from pymavlink.dialects.v20 import ardupilotmega as mavlink
+        parser = mavlink.MAVLink(None)
+        parser.robust_parsing = True
+        out = []
+        for stamp, frame in self._packets:
+            if _message_id(frame) != mavlink.MAVLINK_MSG_ID_GLOBAL_POSITION_INT:
+                continue
+            for m in parser.parse_buffer(frame) or ():
+                if m.get_type() == "GLOBAL_POSITION_INT" and (m.lat or m.lon):
+                    out.append((stamp - self.start_time, m.lat * 1e-7, m.lon * 1e-7))
+        return out
+
     def _now(self) -> float:
         if self._paused:
             return self._position
@@ -542,6 +564,18 @@ class ReplayControl:
     @property
     def finished(self) -> bool:
         return self._t.finished
+
+    def track(self) -> Future:
+        """The recording's whole track, (seconds, lat, lon) each, read on a thread of its own."""
+        future: Future = Future()
+
+        def read() -> None:
+            try:
+                future.set_result(self._t.track())
+            except Exception as exc:        # noqa: BLE001 - a damaged log: the map shows no trail
+                future.set_exception(exc)
+        threading.Thread(target=read, name="replay-track", daemon=True).start()
+        return future
 
 
 NETWORK_SCHEMES = ("udp", "udpin", "udpout", "udpbcast", "tcp", "tcpin")

@@ -17,7 +17,7 @@ from dataclasses import dataclass, field, replace
 __all__ = [
     "LandedState", "LinkStatus", "Severity", "CommandStatus", "Attitude", "GlobalPosition",
     "LocalPosition", "Velocity", "Battery", "Gps", "Readiness", "LinkHealth", "SigningStatus", "Signing", "Message",
-    "CommandResult", "Setpoint", "SequencePhase", "SequenceProgress", "Environment",
+    "CommandResult", "Setpoint", "SequencePhase", "SequenceProgress", "Environment", "Fence", "FENCE_PARAMS",
     "VehicleState", "replace",
 ]
 
@@ -304,6 +304,54 @@ class Environment:
     throttle: int | None = None                      # percent (VFR_HUD)
 
 
+#: The vehicle parameters :class:`Fence` is read from (AC_Fence), in the order the driver asks for them.
+FENCE_PARAMS = ("FENCE_ENABLE", "FENCE_TYPE", "FENCE_RADIUS", "FENCE_ALT_MAX")
+
+
+@dataclass(frozen=True)
+class Fence:
+    """ArduPilot's own geofence as its parameters say (AC_Fence); None for what the vehicle has not told yet."""
+    CEILING = 1                                      # FENCE_TYPE bits (AC_FENCE_TYPE_*)
+    CIRCLE = 2
+    POLYGON = 4
+    FLOOR = 8
+
+    enabled: bool | None = None                      # FENCE_ENABLE
+    types: int | None = None                         # FENCE_TYPE bitmask
+    radius: float | None = None                      # FENCE_RADIUS, m around home
+    alt_max: float | None = None                     # FENCE_ALT_MAX, m above home
+    breached: bool | None = None                     # FENCE_STATUS (sent while it is enabled); None: not told
+
+    @property
+    def known(self) -> bool:
+        return None not in (self.enabled, self.types, self.radius, self.alt_max)
+
+    @property
+    def circle(self) -> float | None:
+        """The radius of the circle around home the vehicle will not leave, when that fence is on."""
+        return self.radius if self.enabled and self.types and self.types & Fence.CIRCLE and self.radius else None
+
+    @property
+    def ceiling(self) -> float | None:
+        """The altitude above home the vehicle will not climb past, when that fence is on."""
+        return self.alt_max if self.enabled and self.types and self.types & Fence.CEILING and self.alt_max else None
+
+    def with_param(self, name: str, value: float) -> "Fence":
+        """This fence with one FENCE_* parameter's value (PARAM_VALUE)."""
+        field_name = {"FENCE_ENABLE": "enabled", "FENCE_TYPE": "types", "FENCE_RADIUS": "radius",
+                      "FENCE_ALT_MAX": "alt_max"}[name]
+        typed = {"enabled": lambda v: bool(int(v)), "types": lambda v: int(v)}.get(field_name, float)
+        return replace(self, **{field_name: typed(value)})
+
+    def destination_problem(self, north: float, east: float, altitude: float) -> str | None:
+        """Why the vehicle would ignore a go-to target there (AC_Fence::check_destination_within_fence), or None."""
+        if self.ceiling is not None and altitude > self.ceiling:
+            return f"above the vehicle's fence ceiling (FENCE_ALT_MAX {self.ceiling:g} m)"
+        if self.circle is not None and math.hypot(north, east) > self.circle:
+            return f"outside the vehicle's fence (FENCE_RADIUS {self.circle:g} m around home)"
+        return None
+
+
 @dataclass(frozen=True)
 class VehicleState:
     """Everything known about the vehicle at one instant."""
@@ -335,6 +383,7 @@ class VehicleState:
     gcs_failsafe: int | None = None                  # the vehicle's FS_GCS_ENABLE, None until read
     firmware: str = ""                               # AUTOPILOT_VERSION's flight software, "3.3.1"; "" until known
     signing: Signing = field(default_factory=Signing)
+    fence: Fence = field(default_factory=Fence)      # FENCE_* parameters, as they are read
 
     # -- derived views -----------------------------------------------------------------------
     @property

@@ -4,7 +4,8 @@ Counts frames and sequence gaps per component, ages the autopilot's heartbeat, d
 and recovered, decides when a half-open TCP link must be reopened, and asks the vehicle for what a
 ground station needs and does not get unasked: its streams (again when it forgets them, e.g. after a
 reboot), its firmware version (AUTOPILOT_VERSION), its home position (REQUEST_MESSAGE, or MAV_CMD_GET_HOME_POSITION on firmware without it, again
-after arming since arming sets home) and FS_GCS_ENABLE (is there a GCS failsafe if we go away?).
+after arming since arming sets home), FS_GCS_ENABLE (is there a GCS failsafe if we go away?) and the fence's
+parameters (FENCE_ENABLE, FENCE_TYPE, FENCE_RADIUS, FENCE_ALT_MAX: where the vehicle itself will not go).
 Runs with the driver's state lock held and returns the MAVLink messages to send; sends nothing itself.
 """
 from __future__ import annotations
@@ -14,15 +15,16 @@ import collections
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from .commands import Capabilities
-from .state import LinkHealth, LinkStatus
+from .state import FENCE_PARAMS, LinkHealth, LinkStatus
 
 __all__ = ["LinkSupervisor"]
 
 HOME_RETRY = 2.0             # s between home requests while the vehicle has not sent it
-PARAM_RETRY = 3.0            # s between FS_GCS_ENABLE reads while unanswered
+PARAM_RETRY = 3.0            # s between reads of the parameters below while some are unanswered
 PARAM_TRIES = 3
 STREAM_SILENCE = 3.0         # s without ATTITUDE before the streams are asked for again
 REOPEN_AFTER = 5.0           # s past the loss timeout before a reconnectable link is reopened
+WANTED_PARAMS = ("FS_GCS_ENABLE",) + FENCE_PARAMS
 
 
 class LinkSupervisor:
@@ -47,7 +49,7 @@ class LinkSupervisor:
         self._home_tries = 0
         self._param_tries = 0
         self._param_asked_at = -1e9
-        self.param_known = False
+        self.params_known: set[str] = set()
         self.version_known = False
         self._version_tries = 0
         self._version_asked_at = -1e9
@@ -66,7 +68,7 @@ class LinkSupervisor:
         if not self._transport.is_replay:
             self._streams_at = None               # ask at once, before anyone sees the link up
             self._home_wanted_since = now
-            self._param_tries = 0 if not self.param_known else PARAM_TRIES
+            self._param_tries = 0
             self._version_tries = 0 if not self.version_known else PARAM_TRIES
         return "recovered" if recovered else "first"
 
@@ -115,12 +117,18 @@ class LinkSupervisor:
                 system, component, mavlink.MAV_CMD_REQUEST_AUTOPILOT_CAPABILITIES, 0, 1, 0, 0, 0, 0, 0, 0))
             self._version_tries += 1
             self._version_asked_at = now
-        if not self.param_known and self._param_tries < PARAM_TRIES and now - self._param_asked_at >= PARAM_RETRY:
+        missing = [name for name in WANTED_PARAMS if name not in self.params_known]
+        if missing and self._param_tries < PARAM_TRIES and now - self._param_asked_at >= PARAM_RETRY:
             system, component = self._target()
-            out.append(mavlink.MAVLink_param_request_read_message(system, component, b"FS_GCS_ENABLE", -1))
+            out += [mavlink.MAVLink_param_request_read_message(system, component, name.encode(), -1)
+                    for name in missing]
             self._param_tries += 1
             self._param_asked_at = now
         return out
+
+    def param_received(self, name: str) -> None:
+        """A PARAM_VALUE for ``name``: not asked for again."""
+        self.params_known.add(name)
 
     def stream_requests(self) -> list:
         """REQUEST_DATA_STREAM as MAVProxy, plus per-message intervals where the firmware has them."""

@@ -25,7 +25,7 @@ import math
 import threading
 import time
 from concurrent.futures import Future
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
@@ -38,8 +38,8 @@ from .rules import COPTER_MODES, MAX_ALTITUDE, MIN_TAKEOFF_ALTITUDE, go_to_probl
 from .setpoints import SetpointStreamer
 from .signing import LinkSigning, SigningConfig
 from .state import (
-    Battery, CommandResult, CommandStatus, LinkHealth, LinkStatus, SequencePhase, SequenceProgress, Setpoint,
-    Severity, VehicleState,
+    FENCE_PARAMS, Battery, CommandResult, CommandStatus, LinkHealth, LinkStatus, SequencePhase, SequenceProgress,
+    Setpoint, Severity, VehicleState,
 )
 from .store import StateStore
 from .supervision import LinkSupervisor
@@ -515,14 +515,28 @@ class Vehicle(Drone):
         if not frames.finite(m.param_value):
             return
         self._commands.on_param_value(name, m.param_value)
-        if name == "FS_GCS_ENABLE":
-            self._link.param_known = True
+        self._link.param_received(name)
+        if name in FENCE_PARAMS:
+            self._store.set(fence=self._store.view()["fence"].with_param(name, m.param_value))
+        elif name == "FS_GCS_ENABLE":
             self._store.set(gcs_failsafe=int(m.param_value))
             if int(m.param_value) == 0 and not self._gcs_failsafe_warned:
                 self._gcs_failsafe_warned = True
                 self._store.add_message_locked(
                     Severity.WARNING, "GCS failsafe is off on the vehicle (FS_GCS_ENABLE=0): if this link is lost "
                     "or you quit in flight, it keeps hovering until its battery failsafe")
+
+    def _on_fence_status(self, m) -> None:
+        """FENCE_STATUS, sent while the fence is enabled: a new breach is told once, with what it was."""
+        fence = self._store.view()["fence"]
+        breached = bool(m.breach_status)
+        if breached and not fence.breached:
+            what = {1: "below the minimum altitude", 2: "above FENCE_ALT_MAX",
+                    3: "outside FENCE_RADIUS"}.get(m.breach_type, "outside the fence")
+            self._store.add_message_locked(Severity.CRITICAL, f"Fence breached: {what}; the vehicle acts on its own "
+                                           "(FENCE_ACTION: RTL or land)")
+        if breached != fence.breached:
+            self._store.set(fence=replace(fence, breached=breached))
 
     # ------------------------------------------------------------------------------------------
     # ticker thread
@@ -823,7 +837,8 @@ class Vehicle(Drone):
             return self._finish("go to", CommandStatus.REJECTED, "coordinates are not finite numbers")
         name = f"go to N{north:.1f} E{east:.1f} alt {altitude:.1f}"
         cfg = self.config
-        problem = go_to_problem(north, east, altitude, cfg.max_altitude, cfg.max_distance)
+        problem = (go_to_problem(north, east, altitude, cfg.max_altitude, cfg.max_distance)
+                   or self.state().fence.destination_problem(north, east, altitude))
         if problem:
             return self._finish(name, CommandStatus.REJECTED, problem)
         busy = self._busy(name)
@@ -934,4 +949,5 @@ _EVENTS = {
     "COMMAND_ACK": Vehicle._on_command_ack,
     "PARAM_VALUE": Vehicle._on_param_value,
     "AUTOPILOT_VERSION": Vehicle._on_autopilot_version,
+    "FENCE_STATUS": Vehicle._on_fence_status,
 }

@@ -65,7 +65,8 @@ def test_keys_dialog_lists_the_keys(qtbot, silent_vehicle, window_factory):
              for r in range(dialog.table.rowCount())]
     assert shown == [("W", "Forward"), ("S", "Back"), ("A", "Left"), ("D", "Right"),
                      ("↑", "Climb"), ("↓", "Descend"), ("←", "Yaw left"), ("→", "Yaw right"),
-                     ("Space", "Stop: hover where you are"), ("T", "Take off"), ("L", "Land"),
+                     ("Space", "Stop: hover where you are"), ("Esc", "Stop: cancel a Fly here, hover where you are"),
+                     ("T", "Take off"), ("L", "Land"),
                      ("(release)", "Releasing a key centres its axis")]
     dialog.reject()
 

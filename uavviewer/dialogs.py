@@ -22,8 +22,8 @@ from .settings import TAKEOFF_ALTITUDE_RANGE, ViewerSettings, split_uris
 from .sticks import StickMode
 from .widgets.telemetry_panel import GOOD, NORMAL, WARN
 
-__all__ = ["SettingsDialog", "KeysDialog", "takeoff_question", "mode_question", "signing_setup_question",
-           "emergency_stop_question"]
+__all__ = ["SettingsDialog", "KeysDialog", "takeoff_question", "fly_here_question", "mode_question",
+           "signing_setup_question", "emergency_stop_question"]
 
 
 class SettingsDialog(QDialog):
@@ -62,6 +62,9 @@ class SettingsDialog(QDialog):
         self.mediaFolder.setText(settings.media_folder)
         self.mediaFolder.setPlaceholderText(default_media_folder())
         self.hudDefault.setChecked(settings.hud)
+        self.tileUrl.setText(settings.tile_url)
+        self.tileAttribution.setText(settings.tile_attribution)
+        self.tileCacheMb.setValue(int(settings.tile_cache_mb))
         self.folder_dialog: QFileDialog | None = None
         self.browseMediaFolder.clicked.connect(self.browse_media_folder)
         self._init_signing(settings, signing_unavailable)
@@ -87,7 +90,9 @@ class SettingsDialog(QDialog):
                        expo=self.expo.value(), takeoff_altitude=self.takeoffAltitude.value(),
                        cameras="\n".join(split_uris(self.cameraUris.toPlainText())),
                        media_folder=self.mediaFolder.text().strip(), hud=self.hudDefault.isChecked(),
-                       signing_key_file=self.signingKeyFile.text().strip())
+                       signing_key_file=self.signingKeyFile.text().strip(), tile_url=self.tileUrl.text().strip(),
+                       tile_attribution=self.tileAttribution.text().strip(),
+                       tile_cache_mb=float(self.tileCacheMb.value()))
 
     # -- Link security ------------------------------------------------------------------------------
     def _init_signing(self, settings: ViewerSettings, unavailable: str) -> None:
@@ -267,13 +272,20 @@ def takeoff_question(parent: QWidget, altitude: float) -> QMessageBox:
 
     Cancel is the focused default: Space (Stop) or Enter must never start the motors; only a click does.
     """
-    box = QMessageBox(QMessageBox.Question, "Take off",
-                      f"Take off and climb to {altitude:.1f} m above home?\n\n"
-                      "The motors will start. Keep clear of the propellers.",
-                      QMessageBox.Yes | QMessageBox.Cancel, parent)
-    box.setObjectName("takeoffQuestion")
+    return _cautious_question(parent, "Take off", f"Take off and climb to {altitude:.1f} m above home?\n\n"
+                              "The motors will start. Keep clear of the propellers.", "Take off", "takeoffQuestion")
+
+
+def fly_here_question(parent: QWidget, text: str) -> QMessageBox:
+    """Confirm a go-to, saying how far and how high; like the takeoff question, Cancel is the default."""
+    return _cautious_question(parent, "Fly here", text, "Fly there", "flyHereQuestion")
+
+
+def _cautious_question(parent: QWidget, title: str, text: str, yes: str, name: str) -> QMessageBox:
+    box = QMessageBox(QMessageBox.Question, title, text, QMessageBox.Yes | QMessageBox.Cancel, parent)
+    box.setObjectName(name)
     go = box.button(QMessageBox.Yes)
-    go.setText("Take off")
+    go.setText(yes)
     go.setFocusPolicy(Qt.NoFocus)
     go.setAutoDefault(False)
     box.setDefaultButton(QMessageBox.Cancel)

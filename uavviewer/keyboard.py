@@ -26,11 +26,13 @@ AXIS_KEYS: dict[int, tuple[str, float, str]] = {
 # key -> (action name, what the pilot reads)
 ACTION_KEYS: dict[int, tuple[str, str]] = {
     Qt.Key_Space: ("stop", "Stop: hover where you are"),
+    Qt.Key_Escape: ("stop", "Stop: cancel a Fly here, hover where you are"),
     Qt.Key_T: ("takeoff", "Take off"),
     Qt.Key_L: ("land", "Land"),
 }
 
-_KEY_NAMES = {Qt.Key_Up: "↑", Qt.Key_Down: "↓", Qt.Key_Left: "←", Qt.Key_Right: "→", Qt.Key_Space: "Space"}
+_KEY_NAMES = {Qt.Key_Up: "↑", Qt.Key_Down: "↓", Qt.Key_Left: "←", Qt.Key_Right: "→", Qt.Key_Space: "Space",
+              Qt.Key_Escape: "Esc"}
 
 
 class KeyboardSticks:

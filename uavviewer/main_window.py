@@ -28,6 +28,7 @@ from .gamepad_input import GamepadInput
 from .keyboard import ACTION_KEYS, AXIS_KEYS, KeyboardSticks
 from .link_security import signing_unavailable, signing_warning
 from .pilot_input import Input, InputSelector
+from .map_controller import MapController, TileSettings
 from .settings import ViewerSettings, default_qsettings, load_settings, load_window, save_settings, save_window
 from .sticks import Axes, MaxSpeeds, axes_from_pads, combine, pad_labels, velocity_from_axes
 from .widgets.camera_panel import CameraPanel
@@ -49,14 +50,16 @@ class MainWindow(QMainWindow):
 
     Cameras: ``cameras`` (--camera) if given, else those saved in Preferences, else ``default_cameras``
     (the mode's own: the simulator's, the Ice server's). ``takeoff_altitude`` (--takeoff-altitude) holds
-    for this run only; it is never saved as the Preferences' value.
+    for this run only; it is never saved as the Preferences' value. ``tile_cache_dir``: where map tiles are
+    cached (tests keep their own).
     """
 
     def __init__(self, drone: Drone, qsettings: QSettings | None = None,
                  takeoff_altitude: float | None = None, rate_hz: float = 30.0,
                  cameras: list[str] | None = None, default_cameras: list[str] | None = None,
-                 parent: QWidget | None = None) -> None:
+                 tile_cache_dir: str | None = None, parent: QWidget | None = None) -> None:
         super().__init__(parent)
+        self.tile_cache_dir = tile_cache_dir              # None: the per-user cache folder
         uic.loadUi(str(RESOURCES / "ui" / "main_window.ui"), self)
         self._qsettings = qsettings if qsettings is not None else default_qsettings()
         self.settings: ViewerSettings = load_settings(self._qsettings)
@@ -98,11 +101,18 @@ class MainWindow(QMainWindow):
         self.camera_panel.hud_button.setChecked(self.settings.hud)
         self.menuView.addAction(self.telemetryDock.toggleViewAction())
         self.menuView.addAction(self.plotsDock.toggleViewAction())
+        self.menuView.addAction(self.mapDock.toggleViewAction())
+        self.map = MapController(self.mapPanel, self.adapter, self, lambda: self.takeoff_altitude, self)
+        self.tabifyDockWidget(self.plotsDock, self.mapDock)            # Map and Plots share the lower right
+        self.mapPanel.offlineCheck.setChecked(self.settings.map_offline)
+        self.mapPanel.layerRequested.connect(lambda on: self._remember(map_tiles=on))
+        self.mapPanel.offlineRequested.connect(lambda on: self._remember(map_offline=on))
         self.menuView.addAction(self.messagesDock.toggleViewAction())
         self.setCorner(Qt.BottomRightCorner, Qt.RightDockWidgetArea)   # plots run the full height
         self.resizeDocks([self.telemetryDock, self.plotsDock], [390, 560], Qt.Vertical)
         self.resizeDocks([self.telemetryDock], [400], Qt.Horizontal)
         self.resizeDocks([self.messagesDock], [170], Qt.Vertical)
+        self.mapDock.raise_()
         self.instrumentSplitter.setStretchFactor(0, 3)
         self.instrumentSplitter.setStretchFactor(1, 2)
         self.phaseLabel.setObjectName("phaseLabel")
@@ -115,7 +125,7 @@ class MainWindow(QMainWindow):
         fc.takeoffRequested.connect(self.request_takeoff)
         fc.landRequested.connect(self.request_land)
         fc.stopRequested.connect(self.request_stop)
-        fc.rtlRequested.connect(lambda: self._command("return_to_launch"))
+        fc.rtlRequested.connect(self.request_rtl)
         fc.armRequested.connect(lambda: self._command("arm"))
         fc.disarmRequested.connect(self.request_disarm)
         self.modeSelector.modeRequested.connect(self.request_mode)
@@ -152,6 +162,16 @@ class MainWindow(QMainWindow):
         self._speeds = self._set_limits(self.settings.speeds)
         self.gamepad.apply_settings(self.settings)
         self.centre_sticks()
+        s = self.settings
+        self.map.set_tile_settings(TileSettings(s.tile_url.strip(), s.tile_attribution.strip(), int(s.tile_cache_mb),
+                                                self.tile_cache_dir))
+        if self.settings.map_tiles and self.settings.tile_url:
+            self.mapPanel.layerCombo.setCurrentIndex(1)
+
+    def _remember(self, **choice) -> None:
+        """A choice made on the window itself (the Map's layer, offline), kept for the next run."""
+        self.settings = replace(self.settings, **choice)
+        save_settings(self._qsettings, self.settings)
 
     def _set_limits(self, wish: MaxSpeeds) -> MaxSpeeds:
         """The pilot's maximum speeds become the driver's clamps; the sticks scale by what is in force."""
@@ -271,6 +291,7 @@ class MainWindow(QMainWindow):
             self.attitude.set_attitude(s.attitude.roll, s.attitude.pitch, s.heading_deg)
             self.attitude.set_readouts(s.altitude, s.velocity.ground_speed, s.velocity.climb)
         self.telemetry.set_state(s)
+        self.map.show_state(s)
         phase = flight_phase(s)
         progress = takeoff_progress(s) if phase is FlightPhase.TAKING_OFF else None
         detail = s.takeoff.phase.value if s.takeoff.active else ""
@@ -353,6 +374,8 @@ class MainWindow(QMainWindow):
         command = velocity_from_axes(self.demand(), self._speeds)
         self.adapter.fly(command)
         self.inputLabel.setText(self._input_text())
+        if not command.is_zero:
+            self.map.cancel()                   # a stick overrides a go-to
         if command.is_zero:
             self.setpointLabel.setText("Setpoint: hover")
         else:
@@ -543,11 +566,18 @@ class MainWindow(QMainWindow):
 
     def request_land(self) -> None:
         self.centre_sticks()
+        self.map.cancel()
         self._command("land")
 
     def request_stop(self) -> None:
+        """Stop (button, Space, Escape): hover where it is; a go-to in progress ends there."""
         self.centre_sticks()
+        self.map.cancel()
         self._command("stop")
+
+    def request_rtl(self) -> None:
+        self.map.cancel()
+        self._command("return_to_launch")
 
     def _show_result(self, result) -> None:
         if result.command.startswith("signing") and self._settings_dialog is not None:

@@ -41,6 +41,11 @@ class ViewerSettings:
     gamepad: str = "auto"            # the gamepad that flies: "auto" (the first connected), "off", or its GUID
     gamepad_background: bool = False  # the gamepad keeps flying while the window is not active
     gamepad_mappings: str = ""       # JSON: controller GUID -> its mapping (uavviewer.gamepad_mapping)
+    tile_url: str = ""               # Map: a {z}/{x}/{y} tile server; "" = the offline grid only
+    tile_attribution: str = ""       # shown on the map with its tiles
+    tile_cache_mb: float = 200.0     # the disk cache's limit
+    map_tiles: bool = False          # the Map shows tiles (else the offline grid), as the pilot last chose
+    map_offline: bool = False        # tiles from the cache only
 
     @property
     def camera_uris(self) -> list[str]:
@@ -98,6 +103,7 @@ def load_settings(qs: QSettings) -> ViewerSettings:
     low, high = TAKEOFF_ALTITUDE_RANGE
     out.takeoff_altitude = min(max(out.takeoff_altitude, low), high)
     out.stick_mode = out.mode.value
+    out.tile_cache_mb = min(max(out.tile_cache_mb, 10.0), 5000.0)
     return out
 
 

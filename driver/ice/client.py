@@ -19,7 +19,7 @@ import Ice
 
 from ..api import CEILING, Drone, Limits
 from ..frames import clamp, finite
-from ..state import (CommandResult, CommandStatus, LinkHealth, LinkStatus, Message, Severity, VehicleState,
+from ..state import (CommandResult, CommandStatus, Fence, LinkHealth, LinkStatus, Message, Severity, VehicleState,
                      replace)
 from . import convert, load_slice
 from .server import DEFAULT_PORTS
@@ -29,6 +29,7 @@ log = logging.getLogger(__name__)
 
 _MAX_MESSAGES = 200
 _MAX_RESULTS = 50
+FENCE_EVERY = 20                       # polls between reads of the fence (2 s at the default 0.1 s poll)
 PREFIX = "UAVViewer"
 #: KB a reply may have: the largest picture a JdeRobot Camera sends the viewer, 1920x1080 RGB8 (6075 KB),
 #: and its header, with ~69 KB to spare. A larger one fails that one call (MemoryLimitException), nothing else.
@@ -97,6 +98,8 @@ class IceDrone(Drone):
         self._lost_count = 0
         self._resync = False                   # after a loss: the server may have restarted its numbering
         self._said_unreachable = False
+        self._fence = Fence()
+        self._fence_polls = 0                  # polls until the fence is read again; None: the server has none
 
         self._velocity: tuple[float, float, float, float] | None = None
         self._velocity_ready = threading.Condition(threading.Lock())
@@ -215,11 +218,27 @@ class IceDrone(Drone):
                     if first:
                         lim = self._vehicle.getLimits()
                         self._limits = self._clamps(Limits(lim.horizontal, lim.vertical, lim.yawRate))
+                    self._read_fence()
                     self._answered(self._vehicle.getStatus(self._server_message, self._server_result))
                 first = False
             except Ice.Exception as exc:
                 self._missed(exc)
             self._closing.wait(max(0.0, self._poll - (time.monotonic() - started)))
+
+    def _read_fence(self) -> None:
+        """Vehicle.getFence now and then (the fence changes only when someone sets its parameters)."""
+        if self._fence_polls is None:
+            return
+        if self._fence_polls > 0:
+            self._fence_polls -= 1
+            return
+        try:
+            self._fence = convert.fence_from_ice(self._vehicle.getFence())
+            self._fence_polls = FENCE_EVERY
+        except Ice.OperationNotExistException:
+            self._fence_polls = None
+            with self._lock:
+                self._note(Severity.NOTICE, "this MAVLinkServer does not serve the fence (an older version)")
 
     def _clamps(self, server: Limits) -> Limits:
         """The server's limits, tightened by JdeRobot's optional ``UAVViewer.CMDVel.Xmax/Ymax/Zmax/Yawmax``."""
@@ -269,7 +288,7 @@ class IceDrone(Drone):
             s = convert.state_from_status(status, tuple(self._messages), tuple(self._results))
             link = replace(s.link, address=f"{s.link.address} via {self._description}",
                            lost_count=s.link.lost_count + self._lost_count)
-            self._state = replace(s, link=link)
+            self._state = replace(s, link=link, fence=self._fence)
 
     def _result(self, outcome) -> CommandResult:
         """The server's outcome, numbered as in our results (the window pairs a Future's answer with it)."""

@@ -11,7 +11,7 @@ import math
 import time
 
 from ..frames import clamp, enu_quaternion, finite, wrap_pi
-from ..state import (Attitude, Battery, CommandResult, CommandStatus, Environment, GlobalPosition, Gps,
+from ..state import (Attitude, Battery, CommandResult, CommandStatus, Environment, Fence, GlobalPosition, Gps,
                      LandedState, LinkHealth, LinkStatus, LocalPosition, Message, Readiness, SequencePhase,
                      SequenceProgress, Setpoint, Severity, VehicleState, Velocity)
 
@@ -169,6 +169,26 @@ def result_from_outcome(outcome) -> CommandResult:
         status = CommandStatus.REJECTED
     return CommandResult(command=outcome.command, status=status, reason=outcome.reason,
                          attempts=outcome.attempts, index=outcome.index)
+
+
+def fence_to_ice(ms, fence: Fence):
+    """The ``mavlinkserver.Fence`` of the driver's fence."""
+    has_enabled, enabled = _opt(fence.enabled)
+    has_types, types = _opt(fence.types)
+    has_radius, radius = _opt(fence.radius)
+    has_alt, alt_max = _opt(fence.alt_max)
+    return ms.Fence(hasEnabled=has_enabled, enabled=bool(enabled), hasTypes=has_types, types=int(types),
+                    hasRadius=has_radius, radius=radius, hasAltMax=has_alt, altMax=alt_max,
+                    breached=bool(fence.breached))
+
+
+def fence_from_ice(f) -> Fence:
+    """The driver's fence from a ``mavlinkserver.Fence``; a value that is not finite counts as not read."""
+    def known(has: bool, value):
+        return value if has and math.isfinite(value) else None
+    return Fence(enabled=bool(f.enabled) if f.hasEnabled else None, types=int(f.types) if f.hasTypes else None,
+                 radius=known(f.hasRadius, f.radius), alt_max=known(f.hasAltMax, f.altMax),
+                 breached=bool(f.breached) if f.hasEnabled and f.enabled else None)
 
 
 def status_from_state(ms, s: VehicleState, messages_since: int = -1, results_since: int = -1):

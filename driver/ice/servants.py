@@ -296,6 +296,9 @@ class VehicleI(mavlinkserver.Vehicle):
     def getStatus(self, messagesSince, resultsSince, current=None):
         return convert.status_from_state(mavlinkserver, self._vehicle.state(), messagesSince, resultsSince)
 
+    def getFence(self, current=None):
+        return convert.fence_to_ice(mavlinkserver, self._vehicle.state().fence)
+
     def getLimits(self, current=None):
         lim = self._vehicle.limits
         return mavlinkserver.Limits(horizontal=lim.horizontal, vertical=lim.vertical, yawRate=lim.yaw_rate)

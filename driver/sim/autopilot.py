@@ -100,6 +100,7 @@ class Autopilot(Telemetry, Commands, Messages, Flight):
         self.params["SYSID_THISMAV"] = config.system_id
         self.params["BATT_CAPACITY"] = config.battery_capacity_mah
         self.params["DISARM_DELAY"] = config.auto_disarm_after
+        self.params["FENCE_TYPE"] = self.profile.fence_types
         self.param_names = list(DEFAULT_PARAMS)
         self.t = 0.0
         # vehicle state
@@ -158,6 +159,9 @@ class Autopilot(Telemetry, Commands, Messages, Flight):
         self.rtl_phase = None
         self.rtl_alt = 0.0
         self.rtl_loiter_until = 0.0
+        self.fence_breaches = 0           # AC_FENCE_TYPE bits breached now
+        self.fence_breach_count = 0
+        self.fence_breach_time = 0        # time_boot_ms of the last new breach
         self.chute_released = False
 
     def reboot(self) -> None:
@@ -182,6 +186,7 @@ class Autopilot(Telemetry, Commands, Messages, Flight):
         self._readiness()
         self._timers()
         self._physics(dt)
+        self._fence_check()
         self._battery(dt)
         self._send_due()
 

@@ -6,8 +6,8 @@ import math
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 __all__ = ["MODES", "MODE_NAMES", "POSITION_MODES", "NOT_ARMABLE", "STREAMS", "STREAM_PARAMS", "DEFAULT_PARAMS",
-           "FORCE_ARM_MAGIC", "POS_IGNORE", "VEL_IGNORE", "YAW_IGNORE", "YAW_RATE_IGNORE", "wrap_pi", "finite",
-           "command_name", "clamp"]
+           "FORCE_ARM_MAGIC", "POS_IGNORE", "VEL_IGNORE", "YAW_IGNORE", "YAW_RATE_IGNORE", "wrap_pi",
+           "wrap_lon", "finite", "command_name", "clamp"]
 
 FORCE_ARM_MAGIC = 21196
 
@@ -28,7 +28,7 @@ NOT_ARMABLE = {3, 6, 7, 9, 19, 21, 23}
 STREAMS = {
     mavlink.MAV_DATA_STREAM_RAW_SENSORS: ("RAW_IMU", "SCALED_IMU2", "SCALED_PRESSURE"),
     mavlink.MAV_DATA_STREAM_EXTENDED_STATUS: ("SYS_STATUS", "POWER_STATUS", "MEMINFO", "MISSION_CURRENT",
-                                              "GPS_RAW_INT", "NAV_CONTROLLER_OUTPUT"),
+                                              "GPS_RAW_INT", "NAV_CONTROLLER_OUTPUT", "FENCE_STATUS"),
     mavlink.MAV_DATA_STREAM_RC_CHANNELS: ("SERVO_OUTPUT_RAW", "RC_CHANNELS"),
     mavlink.MAV_DATA_STREAM_POSITION: ("GLOBAL_POSITION_INT", "LOCAL_POSITION_NED"),
     mavlink.MAV_DATA_STREAM_EXTRA1: ("ATTITUDE",),
@@ -70,7 +70,13 @@ DEFAULT_PARAMS = {
     "BATT_CAPACITY": (5200, mavlink.MAV_PARAM_TYPE_INT32),
     "BATT_LOW_VOLT": (0.0, mavlink.MAV_PARAM_TYPE_REAL32),
     "FS_GCS_ENABLE": (0, mavlink.MAV_PARAM_TYPE_INT8),
+    # AC_Fence (libraries/AC_Fence/AC_Fence.cpp): off by default; circle 300 m around home, ceiling 100 m
     "FENCE_ENABLE": (0, mavlink.MAV_PARAM_TYPE_INT8),
+    "FENCE_TYPE": (7, mavlink.MAV_PARAM_TYPE_INT8),      # ceiling | circle | polygon on 4.x (Profile.fence_types)
+    "FENCE_ACTION": (1, mavlink.MAV_PARAM_TYPE_INT8),    # RTL or land
+    "FENCE_ALT_MAX": (100.0, mavlink.MAV_PARAM_TYPE_REAL32),
+    "FENCE_RADIUS": (300.0, mavlink.MAV_PARAM_TYPE_REAL32),
+    "FENCE_MARGIN": (2.0, mavlink.MAV_PARAM_TYPE_REAL32),
     "CHUTE_ENABLED": (1, mavlink.MAV_PARAM_TYPE_INT8),
     "CHUTE_ALT_MIN": (10, mavlink.MAV_PARAM_TYPE_INT16),
     "SERIAL0_PROTOCOL": (2, mavlink.MAV_PARAM_TYPE_INT8),
@@ -97,6 +103,11 @@ def wrap_pi(angle: float) -> float:
     if a <= 0.0:
         a += 2.0 * math.pi
     return a - math.pi
+
+
+def wrap_lon(degrees: float) -> float:
+    """Longitude in [-180, 180) (Location::wrap_longitude): the vehicle may fly across the antimeridian."""
+    return (degrees + 180.0) % 360.0 - 180.0
 
 
 def finite(*values: float) -> bool:

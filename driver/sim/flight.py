@@ -247,6 +247,32 @@ class Flight:
             return self._pos_ctrl(self.pos_target, self._wp_speed(), self._speed_up(), self._speed_dn())
         return self._hold()
 
+    def _fence_check(self) -> None:
+        """Copter::fence_check with AC_Fence::check: a new breach of the ceiling or of the circle around home
+        sends FENCE_STATUS at once (AC_Fence::record_breach) and, armed, turns the vehicle back: FENCE_ACTION 1
+        RTL (LAND if RTL cannot be set or it is more than 100 m out), 2 LAND; on the ground it disarms."""
+        breaches = 0
+        if self.params["FENCE_ENABLE"]:
+            types = int(self.params["FENCE_TYPE"])
+            over = -self.d - float(self.params["FENCE_ALT_MAX"])
+            out = math.hypot(self.n, self.e) - float(self.params["FENCE_RADIUS"])
+            breaches = (1 if types & 1 and over >= 0 else 0) | (2 if types & 2 and out >= 0 else 0)
+        new = breaches & ~self.fence_breaches
+        self.fence_breaches = breaches
+        if not new:
+            return
+        self.fence_breach_count += 1
+        self.fence_breach_time = self.time_boot_ms()
+        self._send_now("FENCE_STATUS")
+        action = int(self.params["FENCE_ACTION"])
+        if not self.armed or action == 0:
+            return
+        if self.landed:
+            self._disarm("Disarming motors" if self.profile.arm_texts else None)
+        elif action == 2 or max(over if new & 1 else 0.0, out if new & 2 else 0.0) > 100.0 \
+                or not self.set_mode(MODES["RTL"]):
+            self.set_mode(MODES["LAND"])
+
     def _rtl(self) -> tuple[float, float, float]:
         rtl_alt = max(float(self.params["RTL_ALT"]) / 100.0, 1.0)
         if self.rtl_phase == "climb":

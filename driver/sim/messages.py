@@ -14,7 +14,7 @@ import math
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from .common import (DEFAULT_PARAMS, MODES, POS_IGNORE, STREAM_PARAMS, STREAMS, VEL_IGNORE, YAW_IGNORE,
-                     YAW_RATE_IGNORE, clamp as _clamp, finite, wrap_pi)
+                     YAW_RATE_IGNORE, clamp as _clamp, finite, wrap_lon, wrap_pi)
 from .telemetry import METRES_PER_DEG
 
 __all__ = ["Messages"]
@@ -124,7 +124,8 @@ class Messages:
                 z = z if profile.local_z_from_home else z + od
             else:
                 x, y, z = x + self.n, y + self.e, z + self.d
-            self._go_to(x, y, z)
+            if not self._go_to(x, y, z):
+                return
         elif use_vel:
             vx, vy, vz = msg.vx, msg.vy, msg.vz
             if body:
@@ -142,12 +143,13 @@ class Messages:
             return
         if not (mask & POS_IGNORE):
             north = (msg.lat_int / 1e7 - self.home_lat) * METRES_PER_DEG
-            east = (msg.lon_int / 1e7 - self.home_lon) * self.m_per_deg_lon
+            east = wrap_lon(msg.lon_int / 1e7 - self.home_lon) * self.m_per_deg_lon
             if msg.coordinate_frame in (mavlink.MAV_FRAME_GLOBAL, mavlink.MAV_FRAME_GLOBAL_INT):
                 down = -(msg.alt - self.home_alt)
             else:
                 down = -msg.alt
-            self._go_to(north, east, down)
+            if not self._go_to(north, east, down):
+                return
         elif not (mask & VEL_IGNORE):
             self._fly_velocity(msg.vx, msg.vy, msg.vz)
         else:
@@ -160,10 +162,23 @@ class Messages:
         self.guided = "velocity"
         self.hold_point = None
 
-    def _go_to(self, north: float, east: float, down: float) -> None:
+    def _go_to(self, north: float, east: float, down: float) -> bool:
+        if not self._within_fence(north, east, -down):
+            log.info("guided target N%.0f E%.0f alt %.0f outside the fence ignored", north, east, -down)
+            return False             # ModeGuided::set_destination returns false: no answer, nothing flies
         self.pos_target = (_clamp(north, -1e5, 1e5), _clamp(east, -1e5, 1e5), _clamp(down, -1000.0, 0.0))
         self.guided = "position"
         self.hold_point = None
+        return True
+
+    def _within_fence(self, north: float, east: float, up: float) -> bool:
+        """AC_Fence::check_destination_within_fence for the ceiling and the circle around home."""
+        if not self.params["FENCE_ENABLE"]:
+            return True
+        types = int(self.params["FENCE_TYPE"])
+        if types & 1 and up > float(self.params["FENCE_ALT_MAX"]):
+            return False
+        return not (types & 2 and math.hypot(north, east) > float(self.params["FENCE_RADIUS"]))
 
     def _target_yaw(self, mask: int, yaw: float, yaw_rate: float, relative: bool) -> None:
         self.yaw_cmds_enabled = True

@@ -15,7 +15,7 @@ import time
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-from .common import clamp
+from .common import clamp, wrap_lon
 from .profiles import speaks_mavlink2
 
 __all__ = ["Telemetry", "EARTH_RADIUS", "METRES_PER_DEG", "GRAVITY", "clamp"]
@@ -79,7 +79,7 @@ class Telemetry:
                                              base, self.mode, status, 3)
 
     def _lat_lon(self) -> tuple[float, float]:
-        return self.home_lat + self.n / METRES_PER_DEG, self.home_lon + self.e / self.m_per_deg_lon
+        return self.home_lat + self.n / METRES_PER_DEG, wrap_lon(self.home_lon + self.e / self.m_per_deg_lon)
 
     def _noise(self, size: float) -> float:
         return self.rng.gauss(0.0, size)
@@ -132,6 +132,15 @@ class Telemetry:
             self.time_boot_ms(), int(round(lat * 1e7)), int(round(lon * 1e7)),
             int(round((self.home_alt - self.d) * 1000)), int(round(-self.d * 1000)),
             int(round(self.vn * 100)), int(round(self.ve * 100)), int(round(self.vd * 100)), hdg)
+
+    def _msg_fence_status(self):
+        """Only while the fence is enabled (Copter::fence_send_mavlink_status)."""
+        if not self.params["FENCE_ENABLE"]:
+            return None
+        kind = (mavlink.FENCE_BREACH_BOUNDARY if self.fence_breaches & 2 else
+                mavlink.FENCE_BREACH_MAXALT if self.fence_breaches & 1 else mavlink.FENCE_BREACH_NONE)
+        return self.factory.fence_status_encode(int(bool(self.fence_breaches)), self.fence_breach_count, kind,
+                                                self.fence_breach_time)
 
     def _msg_local_position_ned(self):
         if not self.ready:
