@@ -165,7 +165,7 @@ def main(argv: list[str] | None = None) -> int:
         try:
             server = IceServer(vehicle, props).start()
         except ServeError as exc:                    # port in use, bad endpoint string, unknown host
-            print(exc, file=sys.stderr)
+            sys.stderr.write(f"{exc}\n")        # one write: the simulator's log lines (other threads) never split it
             return 1
         console = Console(vehicle, name=opts.aircraft or "")
         if not opts.daemon:                          # logs through the console: on a fresh line, each once
