@@ -1,0 +1,146 @@
+"""A fleet on ZeroC's own services: vehicles registered by name with a real IceGrid registry, their telemetry
+fanned out by a real IceStorm (IceBox), observers subscribed instead of polling, a stopped server seen."""
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import threading
+
+import Ice
+import pytest
+
+from driver.ice import load_slice
+from driver.ice.client import IceDrone
+from driver.ice.publisher import topic
+from driver.ice.registry import TOPIC_MANAGER, list_vehicles
+from driver.state import LinkStatus
+
+from fleet_fixtures import fleet, lab  # noqa: F401  (fixtures)
+from ice_fixtures import eventually
+
+jderobot, mavlinkserver = load_slice()
+pytestmark = pytest.mark.timeout(90)
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
+@pytest.fixture
+def client(lab):
+    """A plain client of the lab, as a JdeRobot application would have: only the registry's address."""
+    com = Ice.initialize([f"--Ice.Default.Locator={lab.locator}", "--Ice.Default.InvocationTimeout=5000"])
+    yield com
+    com.destroy()
+
+
+@pytest.fixture
+def drones():
+    made: list[IceDrone] = []
+    yield made
+    for d in made:
+        d.close()
+
+
+def test_vehicles_register_by_name_and_a_jderobot_client_reaches_each(fleet, client):
+    sims, vehicles, servers = fleet(3)
+    assert [s.config.system_id for s in sims] == [1, 2, 3]
+    assert len({s.config.home[:2] for s in sims}) == 3                  # homes of their own
+    assert list_vehicles(client) == ["solo-1", "solo-2", "solo-3"]
+    for i in (1, 2, 3):
+        assert vehicles[i - 1].wait_for(lambda s: s.connected, 10)
+        pose = jderobot.Pose3DPrx.checkedCast(client.stringToProxy(f"Pose3D@solo-{i}"))   # JdeRobot's Slice
+        assert pose is not None and pose.getPose3DData().h == 1.0
+        nav = jderobot.NavdataPrx.checkedCast(client.stringToProxy(f"Navdata@solo-{i}"))
+        assert nav.getNavdata().vehicle == 1
+        status = mavlinkserver.VehiclePrx.checkedCast(client.stringToProxy(f"Vehicle@solo-{i}")).getStatus(-1, -1)
+        assert status.systemId == i                                      # each name reaches its own vehicle
+    # steering one by name moves that one only
+    extra = jderobot.ArDroneExtraPrx.checkedCast(client.stringToProxy("Extra@solo-2"))
+    extra.takeoff()
+    assert vehicles[1].wait_for(lambda s: s.armed, 30)
+    assert not vehicles[0].state().armed and not vehicles[2].state().armed
+
+
+def test_a_server_stopped_cleanly_leaves_the_registry(fleet, client):
+    _, _, servers = fleet(2)
+    assert list_vehicles(client) == ["solo-1", "solo-2"]
+    servers[0].close()
+    assert list_vehicles(client) == ["solo-2"]
+    with pytest.raises(Ice.LocalException):                              # its adapter is gone too
+        client.stringToProxy("Pose3D@solo-1").ice_ping()
+    client.stringToProxy("Pose3D@solo-2").ice_ping()
+
+
+class Observer(mavlinkserver.Telemetry):
+    """A subscriber as a student's program would write it: it only collects what is published."""
+
+    def __init__(self):
+        self.statuses, self.poses, self.navdatas, self.events = [], [], [], []
+        self.lock = threading.Lock()
+
+    def status(self, vehicle, status, current=None):
+        with self.lock:
+            self.statuses.append((vehicle, status))
+
+    def pose(self, vehicle, published, pose, current=None):
+        with self.lock:
+            self.poses.append((vehicle, published, pose))
+
+    def navdata(self, vehicle, data, current=None):
+        with self.lock:
+            self.navdatas.append((vehicle, data))
+
+    def event(self, vehicle, e, current=None):
+        with self.lock:
+            self.events.append((vehicle, e))
+
+
+def test_observers_subscribe_instead_of_polling(fleet, lab, client, drones):
+    _, vehicles, servers = fleet(2)
+    extension = servers[0]._table["Vehicle"]
+    watchers = [IceDrone.for_vehicle(lab.address, "solo-1").start() for _ in range(3)]
+    drones.extend(watchers)
+    adapter = client.createObjectAdapterWithEndpoints("Observer", "tcp -h 127.0.0.1")
+    observer = Observer()
+    t = topic(client, TOPIC_MANAGER, "solo-1")
+    t.subscribeAndGetPublisher({}, adapter.addWithUUID(observer).ice_oneway())
+    adapter.activate()
+
+    assert eventually(lambda: all(w.publications > 2 and w.state().connected for w in watchers), 20)
+    polls = extension.status_calls
+    published = min(w.publications for w in watchers)
+    assert eventually(lambda: min(w.publications for w in watchers) > published + 10, 10)
+    assert extension.status_calls == polls                   # nobody polled the server meanwhile
+    assert all(w.state().system_id == 1 for w in watchers)
+
+    assert vehicles[0].set_mode("GUIDED").result(10).ok
+    assert eventually(lambda: any(e.kind == "mode" and e.text == "GUIDED" for _, e in observer.events), 10)
+    assert all(w.wait_for(lambda s: s.mode == "GUIDED", 5) for w in watchers)
+    with observer.lock:
+        assert {v for v, *_ in observer.statuses + observer.poses + observer.navdatas} == {"solo-1"}   # its topic
+        assert observer.poses and observer.navdatas and observer.statuses
+        assert observer.statuses[-1][1].link.status == "OK"
+
+
+def test_a_killed_server_goes_stale(lab, client, drones, tmp_path):
+    """A server that dies without a word (kill -9): the registry still lists it, its watchers see it LOST."""
+    server = subprocess.Popen([sys.executable, "-m", "driver", "--sim", "--sim-speedup", "4", "--daemon",
+                               "--no-log", "--registry", lab.address, "--name", "crash-1"],
+                              cwd=ROOT, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    try:
+        assert eventually(lambda: "crash-1" in list_vehicles(client), 30), server.stdout.read1() if \
+            server.poll() is not None else "not registered"
+        watcher = IceDrone.for_vehicle(lab.address, "crash-1").start()
+        drones.append(watcher)
+        assert eventually(lambda: watcher.publications > 0 and watcher.state().connected, 20)
+        server.send_signal(signal.SIGKILL)
+        server.wait(10)
+        assert eventually(lambda: watcher.state().link.status is LinkStatus.LOST, 10)
+        assert "crash-1" in list_vehicles(client)                      # what the registry cannot know
+        assert any("lost the server" in m.text for m in watcher.state().messages)
+    finally:
+        if server.poll() is None:
+            server.kill()
+            server.wait(10)
+        if server.stdout is not None:
+            server.stdout.close()
