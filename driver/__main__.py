@@ -20,7 +20,8 @@ import threading
 import time
 
 from .options import (
-    add_link_security, as_float, connection, link_security, not_negative, port, positive, takeoff_altitude, whole,
+    add_link_security, as_float, connection, link_security, not_negative, port, positive, registry, takeoff_altitude,
+    whole,
 )
 
 log = logging.getLogger("driver")
@@ -78,7 +79,7 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--one-port", nargs="?", type=port, const=9000, metavar="PORT",
                    help="serve every interface on one port, JdeRobot's Gazebo style (default 9000)")
     fleet = p.add_argument_group("fleet (docs/fleet.md)")
-    fleet.add_argument("--registry", metavar="HOST:PORT", type=_registry,
+    fleet.add_argument("--registry", metavar="HOST:PORT", type=registry,
                        help="register with a lab's IceGrid registry (python -m driver registry) and publish "
                             "telemetry on its IceStorm; every interface is then reached as Pose3D@NAME")
     fleet.add_argument("--name", help="the vehicle's name in the registry (its adapter id and IceStorm topic; "
@@ -88,14 +89,6 @@ def parser() -> argparse.ArgumentParser:
                             "(system ids 1 to N, homes 10 m apart); the console is off")
     p.add_argument("-v", "--verbose", action="count", default=0, help="more logging (-vv for debug)")
     return p
-
-
-def _registry(text: str) -> tuple[str, int]:
-    from .ice.registry import registry_address
-    try:
-        return registry_address(text)
-    except ValueError as exc:
-        raise argparse.ArgumentTypeError(str(exc)) from None
 
 
 def log_path(opts, name: str = "") -> str | None:
@@ -142,12 +135,12 @@ def main(argv: list[str] | None = None) -> int:
     if opts.count > 1 and not opts.sim:
         p.error("--count needs --sim (a real vehicle has one server each: start one per companion computer)")
     if opts.registry:
-        from .ice.registry import locator, vehicle_name_problem
+        from .ice.registry import locator, registry_address, vehicle_name_problem
         names = fleet_names(opts)
         problem = "--name is needed with --registry (or --aircraft)" if not names[0] else vehicle_name_problem(names[0])
         if problem:
             p.error(problem)
-        host, reg_port = opts.registry
+        host, reg_port = registry_address(opts.registry)
         secure = bool(opts.certs) and host not in ("127.0.0.1", "localhost", "::1")
         if not props.getProperty("Ice.Default.Locator"):
             props.setProperty("Ice.Default.Locator", locator(host, reg_port, secure))

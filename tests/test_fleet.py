@@ -144,3 +144,25 @@ def test_a_killed_server_goes_stale(lab, client, drones, tmp_path):
             server.wait(10)
         if server.stdout is not None:
             server.stdout.close()
+
+
+def test_sim_count_gives_vehicles_with_their_own_ids_homes_and_ports(vehicle_factory):
+    from driver.sim.__main__ import configure_fleet, parser
+    from ice_fixtures import free_port
+    port = free_port()
+    sims = configure_fleet(parser().parse_args(["--count", "3", "--tcp", f"127.0.0.1:{port}", "--speedup", "4"]))
+    try:
+        for sim in sims:
+            sim.start()
+        assert [s.tcp_port for s in sims] == [port, port + 1, port + 2]
+        drivers = [vehicle_factory(f"tcp:127.0.0.1:{s.tcp_port}") for s in sims]
+        for i, d in enumerate(drivers):
+            assert d.wait_for(lambda s: s.connected and s.home is not None, 15)
+            assert d.state().system_id == i + 1
+        lons = [d.state().home.lon for d in drivers]
+        assert lons[0] < lons[1] < lons[2]                                 # in a row, eastwards
+    finally:
+        for sim in sims:
+            sim.stop()
+    with pytest.raises(SystemExit):
+        parser().parse_args(["--count", "0"])
