@@ -15,6 +15,7 @@ from driver.ice import load_slice
 from driver.ice.client import IceDrone
 from driver.ice.publisher import topic
 from driver.ice.registry import TOPIC_MANAGER, list_vehicles
+from driver.ice.server import IceServer, ServeError, default_properties
 from driver.state import LinkStatus
 
 from fleet_fixtures import fleet, lab  # noqa: F401  (fixtures)
@@ -61,9 +62,15 @@ def test_vehicles_register_by_name_and_a_jderobot_client_reaches_each(fleet, cli
     assert not vehicles[0].state().armed and not vehicles[2].state().armed
 
 
-def test_a_server_stopped_cleanly_leaves_the_registry(fleet, client):
-    _, _, servers = fleet(2)
+def test_a_server_stopped_cleanly_leaves_the_registry_and_names_are_not_taken_over(fleet, lab, client):
+    _, vehicles, servers = fleet(2)
     assert list_vehicles(client) == ["solo-1", "solo-2"]
+    props = default_properties([f"--Ice.Default.Locator={lab.locator}", "--MAVLinkServer.Name=solo-2"])
+    with pytest.raises(ServeError, match="already registered and answering"):   # another drone, the same name
+        IceServer(vehicles[0], props).start()
+    assert vehicles[1].wait_for(lambda s: s.connected, 10)
+    assert mavlinkserver.VehiclePrx.checkedCast(client.stringToProxy("Vehicle@solo-2")).getStatus(-1, -1) \
+        .systemId == 2                                                   # still the second vehicle
     servers[0].close()
     assert list_vehicles(client) == ["solo-2"]
     with pytest.raises(Ice.LocalException):                              # its adapter is gone too
@@ -166,3 +173,36 @@ def test_sim_count_gives_vehicles_with_their_own_ids_homes_and_ports(vehicle_fac
             sim.stop()
     with pytest.raises(SystemExit):
         parser().parse_args(["--count", "0"])
+
+
+def test_a_lab_over_tls_serves_only_certificate_holders(tmp_path, vehicle, drones):
+    """The registry, IceStorm and the vehicle's server all ask for a certificate from our CA (docs/fleet.md)."""
+    from driver.ice import certs
+    from driver.ice.fleet import IceFleet
+    from driver.ice.lab import Lab
+    from driver.ice.registry import RegistryError
+    from driver.ice.server import IceServer, default_properties
+    from ice_fixtures import free_port
+    directory = str(tmp_path / "certs")
+    certs.make_certs(directory, ["127.0.0.1"])
+    with Lab(port=free_port(), certs=directory) as lab:
+        server = IceServer(vehicle, default_properties([
+            f"--Ice.Default.Locator={lab.locator}", "--MAVLinkServer.Name=tls-1",
+            f"--MAVLinkServer.Certs={directory}"])).start()
+        try:
+            fleet = IceFleet(lab.address, certs=directory).start()
+            try:
+                assert fleet.wait_listed(10) and eventually(lambda: fleet.names() == ("tls-1",), 10)
+                d = fleet.drone("tls-1")
+                assert eventually(lambda: d.publications > 2 and d.state().connected, 20)   # IceStorm over TLS
+            finally:
+                fleet.close()
+            stranger = Ice.initialize([f"--Ice.Default.Locator={lab.locator}", "--Ice.Plugin.IceSSL=IceSSL:createIceSSL",
+                                       "--IceSSL.VerifyPeer=0"])
+            try:
+                with pytest.raises(RegistryError):                      # no certificate: not even the list
+                    list_vehicles(stranger)
+            finally:
+                stranger.destroy()
+        finally:
+            server.close()

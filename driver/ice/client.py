@@ -348,7 +348,7 @@ class IceDrone(Drone):
             t = topic(self._com, self._props.getProperty(f"{self._prefix}.TopicManager.Proxy"), self.vehicle_name)
             adapter = self._com.createObjectAdapterWithEndpoints(
                 f"Telemetry-{self.vehicle_name}",
-                self._props.getPropertyWithDefault(f"{self._prefix}.Telemetry.Endpoints", "tcp -h 127.0.0.1"))
+                self._props.getProperty(f"{self._prefix}.Telemetry.Endpoints") or "tcp -h 127.0.0.1")
             subscriber = adapter.addWithUUID(_Subscriber(self)).ice_oneway()
             adapter.activate()
             t.subscribeAndGetPublisher({}, subscriber)
@@ -574,9 +574,10 @@ def fleet_properties(registry: str, certs: str | None = None) -> Ice.Properties:
     host, port = fleet.registry_address(registry)
     props = viewer_properties(certs=certs)
     loopback = host in ("127.0.0.1", "localhost", "::1")
-    props.setProperty("Ice.Default.Locator", fleet.locator(host, port, secure=bool(certs) and not loopback))
-    if not loopback and not props.getProperty(f"{PREFIX}.Telemetry.Endpoints"):
-        props.setProperty(f"{PREFIX}.Telemetry.Endpoints", "ssl" if certs else "tcp")   # IceStorm calls us back
+    props.setProperty("Ice.Default.Locator", fleet.locator(host, port, secure=bool(certs)))
+    if not props.getProperty(f"{PREFIX}.Telemetry.Endpoints"):      # where IceStorm calls us back
+        transport = "ssl" if certs else "tcp"                          # with certificates: IceStorm must show one
+        props.setProperty(f"{PREFIX}.Telemetry.Endpoints", f"{transport} -h 127.0.0.1" if loopback else transport)
     return props
 
 

@@ -72,9 +72,8 @@ class Lab:
 
     @property
     def locator(self) -> str:
-        """The locator a client on this machine uses (plain TCP on loopback, also with certificates)."""
-        host = self.host if not self.certs else "127.0.0.1"
-        return registry.locator(host, self.port)
+        """The registry's locator: over TLS with certificates (clients then need one from the same CA)."""
+        return registry.locator(self.host, self.port, secure=bool(self.certs))
 
     def _check_exposure(self) -> None:
         from .server import exposure_problem
@@ -121,7 +120,9 @@ class Lab:
                          f"--IceGrid.Registry.Client.Endpoints={_endpoint(self.host, self.port, secure)}",
                          f"--IceGrid.Registry.Server.Endpoints={_endpoint(self.host, None, secure)}",
                          f"--IceGrid.Registry.LMDB.Path={reg_dir}"], "registry")
-            com = Ice.initialize([f"--Ice.Default.Locator={self.locator}"])
+            probe = [f"--Ice.Default.Locator={self.locator}"] + [f"--{k}={v}" for k, v in
+                                                                   (self._ssl().items() if secure else ())]
+            com = Ice.initialize(probe)                  # (in this process: the password stays off command lines)
             try:
                 self._wait(lambda: com.getDefaultLocator().ice_ping(), "the IceGrid registry", timeout)
                 if self.icestorm:

@@ -66,6 +66,29 @@ def client_properties(prefix: str, name: str) -> dict[str, str]:
     return {f"{prefix}.{i}.Proxy": f"{i}@{name}" for i in INTERFACES}
 
 
+def serving_elsewhere(com: Ice.Communicator, name: str) -> str | None:
+    """The endpoints of another server registered as ``name`` and answering, or None (free, or a stale entry
+    left by a server that crashed, which the new one may take over). IceGrid's dynamic registration would let a
+    second server silently take the name: a pilot would then fly another drone than the one named."""
+    try:
+        found = com.getDefaultLocator().ice_invocationTimeout(3000).findAdapterById(name)
+    except Ice.AdapterNotFoundException:
+        return None
+    except Ice.LocalException as exc:
+        from .server import ice_problem
+        raise RegistryError(f"cannot reach the registry: {ice_problem(exc)}") from None
+    if found is None:
+        return None
+    try:
+        found.ice_identity(Ice.Identity(name, "")).ice_invocationTimeout(1000).ice_timeout(1000).ice_ping()
+    except Ice.ObjectNotExistException:
+        return com.proxyToString(found).split(":", 1)[-1]       # something answers there, but not a vehicle
+    except Ice.LocalException:
+        log.warning("vehicle %s was registered by a server that no longer answers: taking its name over", name)
+        return None
+    return com.proxyToString(found).split(":", 1)[-1]
+
+
 def _admin(com: Ice.Communicator):
     """``(session, admin)``: an admin session on the registry the communicator's locator names."""
     try:

@@ -405,6 +405,15 @@ class IceServer:
 
     def _serve(self, table: dict[str, Ice.Object]) -> None:
         com = self.communicator
+        if self.name:           # before any adapter has the id: destroying one would unregister the name
+            from .registry import RegistryError, serving_elsewhere
+            try:
+                other = serving_elsewhere(com, self.name)
+            except RegistryError as exc:
+                raise ServeError(f"cannot register {self.name}: {exc}") from None
+            if other:
+                raise ServeError(f"a vehicle named {self.name} is already registered and answering ({other}): "
+                                 "give this one another --name")
         adapters: dict[str, Ice.ObjectAdapter] = {}
         planned = planned_endpoints(self.properties)
         for name, (identity, endpoints) in planned.items():
@@ -425,6 +434,10 @@ class IceServer:
             self.served[name] = Served(name, identity, com.proxyToString(prx))
         if self.name:                               # what the registry lists: identity = the vehicle's name
             self._adapters[0].add(table["Vehicle"], Ice.Identity(self.name, ""))
+        if self.name and self.properties.getProperty(PREFIX + "Certs"):
+            # the registry hands these to clients on other machines: only the TLS ones, never 127.0.0.1's
+            adapter = self._adapters[0]
+            adapter.setPublishedEndpoints([e for e in adapter.getEndpoints() if e.getInfo().secure()])
         for adapter in self._adapters:
             try:
                 adapter.activate()                  # in a fleet: registers its endpoints under the adapter id
