@@ -165,6 +165,11 @@ class Fleet(abc.ABC):
         """Why the list may be out of date (the registry does not answer), or ""."""
         return ""
 
+    @property
+    def closed(self) -> bool:
+        """True once :meth:`close` was called: no drone is made any more."""
+        return False
+
     @abc.abstractmethod
     def drone(self, name: str) -> Drone:
         """The vehicle ``name``: made (and started) on first use, the same one afterwards."""

@@ -122,6 +122,9 @@ class FleetController(QObject):
             return None
 
     def refresh(self) -> None:
+        if self.fleet.closed:                  # the program is closing: nothing left to show
+            self._timer.stop()
+            return
         listed = set(self.fleet.names())
         rows = tuple(row_for(n, self._state(n), n == self._picked, n in listed) for n in self._known())
         problem = self.fleet.problem

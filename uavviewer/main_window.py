@@ -88,7 +88,7 @@ class MainWindow(QMainWindow):
         self._default_cameras = list(default_cameras or [])
         self.camera = CameraController(self.camera_panel, list(cameras or self.settings.camera_uris
                                                                or self._default_cameras),
-                                       state_fn=drone.state, drone=drone,
+                                       state_fn=lambda: self.adapter.drone.state(), drone=drone,  # the picked
                                        folder=self.settings.media_folder or None, parent=self)
         self.camera_panel.hud_button.setChecked(self.settings.hud)
         self.menuView.addAction(self.telemetryDock.toggleViewAction())

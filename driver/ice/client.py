@@ -191,12 +191,12 @@ class IceDrone(Drone):
         if self._closing.is_set():
             return
         self._closing.set()
-        self._unsubscribe()
         with self._velocity_ready:
             self._velocity = None
             self._velocity_ready.notify_all()
         for t in self._threads:
             t.join(timeout=3.0)
+        self._unsubscribe()                    # after the poller, which may be subscribing
         self._worker.shutdown(wait=False, cancel_futures=True)
         if self._com is not None:
             self._com.destroy()

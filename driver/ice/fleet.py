@@ -50,6 +50,10 @@ class IceFleet(Fleet):
     def problem(self) -> str:
         return self._problem
 
+    @property
+    def closed(self) -> bool:
+        return self._closing.is_set()
+
     def wait_listed(self, timeout: float) -> bool:
         """Until the registry has answered once (scripts and the command line, never the UI thread)."""
         return self._listed.wait(timeout)
