@@ -206,3 +206,28 @@ def test_a_lab_over_tls_serves_only_certificate_holders(tmp_path, vehicle, drone
                 stranger.destroy()
         finally:
             server.close()
+
+
+def test_python_m_driver_registry_runs_the_lab_until_sigterm(lab):
+    from ice_fixtures import free_port
+    port = free_port()
+    refused = subprocess.run([sys.executable, "-m", "driver", "registry", "--host", "10.1.1.5", "--port", str(port)],
+                             cwd=ROOT, capture_output=True, text=True, timeout=30)
+    assert refused.returncode == 1 and "refusing to serve the IceGrid registry on 10.1.1.5" in refused.stderr
+    proc = subprocess.Popen([sys.executable, "-m", "driver", "registry", "--port", str(port)], cwd=ROOT,
+                            stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True)
+    try:
+        assert f"IceGrid registry on 127.0.0.1:{port} with IceStorm" in proc.stdout.readline()
+        com = Ice.initialize([f"--Ice.Default.Locator=IceGrid/Locator:tcp -h 127.0.0.1 -p {port}"])
+        try:
+            assert list_vehicles(com) == []
+            com.stringToProxy(TOPIC_MANAGER).ice_ping()                   # IceStorm, found through the registry
+        finally:
+            com.destroy()
+        proc.send_signal(signal.SIGTERM)
+        assert proc.wait(15) == 0
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+            proc.wait(10)
+        proc.stdout.close()
