@@ -218,6 +218,15 @@ def main(argv: list[str] | None = None) -> int:
     app.setWindowIcon(QIcon(str(RESOURCES / "icons" / "app.svg")))
     app.setStyleSheet(load_style())
     own_camera = ["sim"] if args.sim else []                      # used when Preferences name no camera
+    if fleet is not None:                                         # the picked vehicle's camera, through the registry
+        from driver.camera import ice_source
+        from driver.ice.client import fleet_properties
+        from uavviewer.fleet import FleetController
+        props = fleet_properties(args.registry, str(args.ice_certs) if args.ice_certs else None)
+        own_camera = [FleetController.camera_uri(first)]
+        ice_source.client_properties.update(
+            {k: v for prefix in ("IceSSL.", "Ice.Plugin.IceSSL", "Ice.Default.Locator")
+             for k, v in props.getPropertiesForPrefix(prefix).items()})
     if remote:                                                    # the server's camera, from the viewer's config
         from driver.ice.client import viewer_properties
         from driver.camera import ice_source
@@ -229,7 +238,6 @@ def main(argv: list[str] | None = None) -> int:
     window = MainWindow(drone, takeoff_altitude=args.takeoff_altitude, cameras=args.camera,  # --camera: this run
                         default_cameras=own_camera)
     if fleet is not None:
-        from uavviewer.fleet import FleetController
         controller = FleetController(fleet, first, parent=window)
         window.attach_fleet(controller)
     elif args.connect or not (args.sim or args.replay or remote):

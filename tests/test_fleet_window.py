@@ -49,11 +49,13 @@ def test_rows_say_what_each_vehicle_does_and_when_it_is_stale():
     assert text == "The sticks, keys and buttons now fly solo-2" and severity is Severity.NOTICE
 
 
-def test_two_vehicles_flown_at_once_from_one_window(qtbot, fleet, ice_fleet, window_factory):
-    sims, vehicles, servers = fleet(2)
+def test_two_vehicles_flown_at_once_from_one_window(qtbot, fleet, lab, ice_fleet, window_factory, monkeypatch):
+    from driver.camera import ice_source
+    monkeypatch.setitem(ice_source.client_properties, "Ice.Default.Locator", lab.locator)
+    sims, vehicles, servers = fleet(2, **{"MAVLinkServer.Camera.Uri": "sim"})
     f = ice_fleet()
     assert f.wait_listed(10) and eventually(lambda: f.names() == ("solo-1", "solo-2"), 10)
-    w = window_factory(f.drone("solo-1"), takeoff_altitude=3.0)
+    w = window_factory(f.drone("solo-1"), takeoff_altitude=3.0, default_cameras=[FleetController.camera_uri("solo-1")])
     controller = FleetController(f, "solo-1", parent=w)
     w.attach_fleet(controller)
     panel = w.fleet_panel
@@ -74,6 +76,8 @@ def test_two_vehicles_flown_at_once_from_one_window(qtbot, fleet, ice_fleet, win
     qtbot.waitUntil(lambda: w.adapter.drone is f.drone("solo-2"), timeout=3000)
     assert any("solo-1 left hovering" in t for t in w.messages.texts()), w.messages.texts()
     assert panel.flyingLabel.text() == "Flying: <b>solo-2</b>" and "solo-2" in w.windowTitle()
+    assert w.camera.uris == ["ice:Camera@solo-2"]                         # its camera, through the registry
+    qtbot.waitUntil(lambda: w.camera.stats()["frames"] > 0, timeout=15000)
     release(w.rightStick)
     qtbot.waitUntil(lambda: speed(sims[0]) < 0.2, timeout=20000)           # the one left behind hovers
     assert vehicles[0].state().setpoint.is_zero and sims[0].truth().altitude > 2.0

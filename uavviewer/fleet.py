@@ -100,6 +100,11 @@ class FleetController(QObject):
     def rows(self) -> tuple[FleetRow, ...]:
         return self._rows
 
+    @staticmethod
+    def camera_uri(name: str) -> str:
+        """The vehicle's own camera, served by its MAVLinkServer and found through the registry."""
+        return f"ice:Camera@{name}"
+
     def start(self) -> None:
         self.refresh()
         self._timer.start()

@@ -614,6 +614,9 @@ class MainWindow(QMainWindow):
         self.plots.gap(time.monotonic() - self._t0)
         self.adapter.use(drone)
         self.setWindowTitle(f"UavViewerPy — {name} · {self.fleet.fleet.description}")
+        if self._default_cameras and self.camera.uris == self._default_cameras:   # not --camera nor Preferences'
+            self._default_cameras = [self.fleet.camera_uri(name)]                 # the picked vehicle's own
+            self.camera.set_sources(self._default_cameras)
 
     def request_all(self, command: str) -> None:
         """Take off, land or stop every vehicle, after one confirmation."""
