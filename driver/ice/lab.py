@@ -120,7 +120,8 @@ class Lab:
                          f"--IceGrid.Registry.Client.Endpoints={_endpoint(self.host, self.port, secure)}",
                          f"--IceGrid.Registry.Server.Endpoints={_endpoint(self.host, None, secure)}",
                          f"--IceGrid.Registry.LMDB.Path={reg_dir}"], "registry")
-            probe = [f"--Ice.Default.Locator={self.locator}"] + [f"--{k}={v}" for k, v in
+            probe = [f"--Ice.Default.Locator={self.locator}", "--Ice.Default.InvocationTimeout=1000",
+                     "--Ice.Default.Timeout=1000"] + [f"--{k}={v}" for k, v in
                                                                    (self._ssl().items() if secure else ())]
             com = Ice.initialize(probe)                  # (in this process: the password stays off command lines)
             try:
@@ -143,25 +144,34 @@ class Lab:
         return self
 
     def _spawn(self, argv: list[str], what: str) -> None:
-        proc = subprocess.Popen(argv, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
-                                text=True, start_new_session=True)
-        proc.what = what
+        """A service whose warnings go to ``<data>/<what>.log`` (a pipe nobody reads would fill up and stop it)."""
+        log_path = os.path.join(self._data, f"{what}.log")
+        with open(log_path, "ab") as out:
+            proc = subprocess.Popen(argv, stdin=subprocess.DEVNULL, stdout=out, stderr=subprocess.STDOUT,
+                                    start_new_session=True)
+        proc.what, proc.log = what, log_path
         self._procs.append(proc)
 
     def _wait(self, ping, what: str, timeout: float) -> None:
         deadline = time.monotonic() + timeout
         while True:
-            for proc in self._procs:
-                if proc.poll() is not None:
-                    said = " ".join((proc.stderr.read() or "").split())[-400:]
-                    raise LabError(f"{proc.what} exited ({proc.returncode}): {said or 'no message'}")
             try:
                 ping()
                 return
             except Ice.LocalException as exc:
+                self._check_exited()
                 if time.monotonic() > deadline:
-                    raise LabError(f"{what} did not answer within {timeout:g} s: {exc}") from None
+                    from .server import ice_problem
+                    raise LabError(f"{what} did not answer within {timeout:g} s: {ice_problem(exc)}") from None
             time.sleep(0.05)
+
+    def _check_exited(self) -> None:
+        """LabError with its last words if a service has exited (its port taken, a bad configuration)."""
+        for proc in self._procs:
+            if proc.poll() is not None:
+                with open(proc.log, errors="replace") as f:
+                    said = " ".join(f.read().split())[-400:]
+                raise LabError(f"{proc.what} exited ({proc.returncode}): {said or 'no message'}")
 
     def stop(self) -> None:
         """IceStorm first (its subscribers), then the registry; the data folder goes if it was ours."""
@@ -173,12 +183,14 @@ class Lab:
                 except subprocess.TimeoutExpired:
                     proc.kill()
                     proc.wait()
-            if proc.stderr is not None:
-                proc.stderr.close()
         self._procs.clear()
         if self._own_data and self._data is not None:
             shutil.rmtree(self._data, ignore_errors=True)
             self._data = None
+
+    def logs(self) -> list[str]:
+        """Where each service writes its warnings."""
+        return [p.log for p in self._procs]
 
     def running(self) -> bool:
         return bool(self._procs) and all(p.poll() is None for p in self._procs)
@@ -214,7 +226,7 @@ def main(argv: list[str]) -> int:
         return 1
     print(f"IceGrid registry on {lab.address}" + (" with IceStorm" if lab.icestorm else "") +
           f"; servers: python -m driver --registry {lab.address} --name NAME; "
-          f"viewers: python main.py --registry {lab.address}", flush=True)
+          f"viewers: python main.py --registry {lab.address}; their logs: {', '.join(lab.logs())}", flush=True)
     stop = []
     signal.signal(signal.SIGTERM, lambda *_: stop.append(1))
     try:
