@@ -236,3 +236,21 @@ def test_python_m_driver_registry_runs_the_lab_until_sigterm(lab):
             proc.kill()
             proc.wait(10)
         proc.stdout.close()
+
+
+def test_without_icestorm_the_registry_still_names_vehicles_and_watchers_poll(vehicle, drones):
+    from driver.ice.lab import Lab
+    from ice_fixtures import free_port
+    with Lab(port=free_port(), icestorm=False) as lab:
+        server = IceServer(vehicle, default_properties([f"--Ice.Default.Locator={lab.locator}",
+                                                        "--MAVLinkServer.Name=alone-1"])).start()
+        try:
+            assert server.publisher is not None and not server.publisher.connected   # said once, tries again
+            watcher = IceDrone.for_vehicle(lab.address, "alone-1").start()
+            drones.append(watcher)
+            assert eventually(lambda: watcher.state().connected and watcher.state().system_id == 1, 15)
+            calls = server._table["Vehicle"].status_calls
+            assert eventually(lambda: server._table["Vehicle"].status_calls > calls + 5, 10)   # it polls
+            assert watcher.publications == 0
+        finally:
+            server.close()

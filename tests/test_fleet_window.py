@@ -99,6 +99,18 @@ def test_two_vehicles_flown_at_once_from_one_window(qtbot, fleet, lab, ice_fleet
     qtbot.waitUntil(lambda: [r[2] for r in panel.row_texts()] == ["disarmed", "disarmed"], timeout=5000)
     assert any(t.startswith("solo-1: mode LAND") for t in w.messages.texts()), w.messages.texts()   # each answer
 
+    def answer_all(button, words: str) -> None:
+        qtbot.mouseClick(button, Qt.LeftButton)
+        qtbot.waitUntil(lambda: w.fleet_box is not None and w.fleet_box.isVisible(), timeout=3000)
+        assert words in w.fleet_box.text()
+        qtbot.mouseClick(w.fleet_box.button(QMessageBox.Yes), Qt.LeftButton)
+
+    answer_all(panel.takeoffAllButton, "Take off all 2 vehicles")
+    qtbot.waitUntil(lambda: all(s.truth().altitude > 2.5 for s in sims), timeout=60000)
+    answer_all(panel.stopAllButton, "Stop all 2 vehicles")
+    qtbot.waitUntil(lambda: any(t.startswith("solo-1: stop") for t in w.messages.texts()), timeout=10000)
+    assert all(v.state().setpoint.is_zero and v.state().mode == "GUIDED" for v in vehicles)   # both hold
+
     servers[0].close()                                                     # a vehicle's server stops: stale
     qtbot.waitUntil(lambda: panel.row_texts()[0][4].endswith("not in the registry"), timeout=15000)
     assert panel.row_texts()[0][0] == "solo-1" and panel.table.item(0, 0).foreground().color().name() == "#7f8791"
