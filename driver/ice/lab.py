@@ -18,6 +18,7 @@ import signal
 import subprocess
 import sys
 import tempfile
+import threading
 import time
 
 import Ice
@@ -146,6 +147,9 @@ class Lab:
     def _spawn(self, argv: list[str], what: str) -> None:
         """A service whose warnings go to ``<data>/<what>.log`` (a pipe nobody reads would fill up and stop it)."""
         log_path = os.path.join(self._data, f"{what}.log")
+        setpriv = shutil.which("setpriv")          # util-linux: the service ends with us, even if we are killed
+        if setpriv and threading.current_thread() is threading.main_thread():   # (the signal follows the thread)
+            argv = [setpriv, "--pdeathsig", "TERM", "--", *argv]
         with open(log_path, "ab") as out:
             proc = subprocess.Popen(argv, stdin=subprocess.DEVNULL, stdout=out, stderr=subprocess.STDOUT,
                                     start_new_session=True)
