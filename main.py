@@ -38,14 +38,17 @@ def choose_connection(args: argparse.Namespace, remembered: str) -> str:
     return SOLO_CONNECTION
 
 
-def open_fleet(args: argparse.Namespace, certs: str | None, wait: float = 30.0):
+def open_fleet(args: argparse.Namespace, certs: str | None, wait: float = 30.0, stop: list | None = None):
     """``(fleet, first vehicle's name)`` from --registry, waiting (in the terminal, before any window) until the
-    registry lists a vehicle; SystemExit with the reason if it never does."""
+    registry lists a vehicle; SystemExit with the reason if it never does, or at once on Ctrl+C (``stop``)."""
     from driver.ice.fleet import IceFleet
     fleet = IceFleet(args.registry, certs).start()
     deadline = time.monotonic() + wait
     said = False
     while True:
+        if stop:
+            fleet.close()
+            raise SystemExit(130)
         names = fleet.names()
         if args.vehicle and args.vehicle in names or not args.vehicle and names:
             return fleet, args.vehicle or names[0]
@@ -197,7 +200,7 @@ def main(argv: list[str] | None = None) -> int:
     fleet = None
     if args.registry is not None:                                 # a lab's fleet: the first vehicle, then the picked
         try:
-            fleet, first = open_fleet(args, str(args.ice_certs) if args.ice_certs else None)
+            fleet, first = open_fleet(args, str(args.ice_certs) if args.ice_certs else None, stop=stop_requested)
         except Exception as exc:                                  # no certificates there, IceSSL refused them
             build_parser().error(f"cannot reach the registry: {' '.join(str(exc).split())}")
         drone = fleet.drone(first)
