@@ -6,6 +6,8 @@ and our extension over ZeroC Ice, and offers a console unless ``--daemon``::
     python -m driver --master udpin:0.0.0.0:14550 --Ice.Config=config/server.cfg
     python -m driver --sim --cmd "takeoff 3" --daemon
     python -m driver certs DIR --host 10.1.1.10          # then: --host 10.1.1.10 --certs DIR
+    python -m driver registry                            # a lab's IceGrid registry and IceStorm (docs/fleet.md)
+    python -m driver --sim --count 3 --registry 127.0.0.1:4061 --name sim --daemon   # sim-1, sim-2, sim-3
 """
 from __future__ import annotations
 
@@ -18,7 +20,8 @@ import threading
 import time
 
 from .options import (
-    add_link_security, as_float, connection, link_security, not_negative, port, positive, takeoff_altitude, whole,
+    add_link_security, as_float, connection, link_security, not_negative, port, positive, registry, takeoff_altitude,
+    whole,
 )
 from .version import __version__
 
@@ -82,17 +85,39 @@ def parser() -> argparse.ArgumentParser:
                    help="let an Ice client stop the motors in flight (Vehicle.emergencyStop)")
     p.add_argument("--one-port", nargs="?", type=port, const=9000, metavar="PORT",
                    help="serve every interface on one port, JdeRobot's Gazebo style (default 9000)")
+    fleet = p.add_argument_group("fleet (docs/fleet.md)")
+    fleet.add_argument("--registry", metavar="HOST:PORT", type=registry,
+                       help="register with a lab's IceGrid registry (python -m driver registry) and publish "
+                            "telemetry on its IceStorm; every interface is then reached as Pose3D@NAME")
+    fleet.add_argument("--name", help="the vehicle's name in the registry (its adapter id and IceStorm topic; "
+                                      "default: sim with --sim, else the --aircraft name)")
+    fleet.add_argument("--count", type=whole(1, 50), default=1, metavar="N",
+                       help="with --sim: N simulated vehicles, each with its server, named NAME-1 to NAME-N "
+                            "(system ids 1 to N, homes 10 m apart); the console is off")
     p.add_argument("-v", "--verbose", action="count", default=0, help="more logging (-vv for debug)")
     return p
 
 
-def log_path(opts) -> str | None:
+def log_path(opts, name: str = "") -> str | None:
+    """The telemetry log; in a fleet of several each vehicle has its own (mav-sim-2.tlog)."""
     if opts.no_log:
         return None
-    if opts.aircraft and not os.path.isabs(opts.logfile):
+    logfile = opts.logfile
+    if name:
+        stem, ext = os.path.splitext(logfile)
+        logfile = f"{stem}-{name}{ext}"
+    if opts.aircraft and not os.path.isabs(logfile):
         os.makedirs(os.path.join(opts.aircraft, "logs"), exist_ok=True)
-        return os.path.join(opts.aircraft, "logs", opts.logfile)
-    return opts.logfile
+        return os.path.join(opts.aircraft, "logs", logfile)
+    return logfile
+
+
+def fleet_names(opts) -> list[str]:
+    """The vehicles' names in the registry ([""] without one): NAME, or NAME-1..NAME-N with --count."""
+    if not opts.registry:
+        return [""] * opts.count
+    name = opts.name or ("sim" if opts.sim else opts.aircraft or "")
+    return [name] if opts.count == 1 else [f"{name}-{i + 1}" for i in range(opts.count)]
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -104,6 +129,9 @@ def main(argv: list[str] | None = None) -> int:
     if args[:1] == ["certs"]:
         from .ice.certs import main as certs_main
         return certs_main(args[1:], prog=f"{command_name()} certs")
+    if args[:1] == ["registry"]:
+        from .ice.lab import main as lab_main
+        return lab_main(args[1:])
     p = parser()
     try:
         props = default_properties(args)             # removes --Ice.* and --MAVLinkServer.* options
@@ -111,6 +139,20 @@ def main(argv: list[str] | None = None) -> int:
         p.error(f"cannot read the Ice configuration {ice_problem(exc)}")
     opts = p.parse_args(args)
     signing, allowed = link_security(opts, p)
+    if opts.count > 1 and not opts.sim:
+        p.error("--count needs --sim (a real vehicle has one server each: start one per companion computer)")
+    if opts.registry:
+        from .ice.registry import locator, registry_address, vehicle_name_problem
+        names = fleet_names(opts)
+        problem = "--name is needed with --registry (or --aircraft)" if not names[0] else vehicle_name_problem(names[0])
+        if problem:
+            p.error(problem)
+        host, reg_port = registry_address(opts.registry)
+        if not props.getProperty("Ice.Default.Locator"):        # with --certs the lab's registry speaks TLS
+            props.setProperty("Ice.Default.Locator", locator(host, reg_port, secure=bool(opts.certs)))
+        if opts.count > 1 and opts.one_port is not None:
+            p.error("--one-port with --count: the vehicles would share one port; leave it out (the registry "
+                    "tells clients each one's port)")
     level = logging.DEBUG if opts.verbose > 1 else logging.INFO if (opts.verbose or opts.daemon) else logging.WARNING
     logging.basicConfig(level=level, format="%(asctime)s %(levelname)s %(name)s: %(message)s")
 
@@ -144,40 +186,52 @@ def main(argv: list[str] | None = None) -> int:
         props.setProperty("MAVLinkServer.Camera.Uri", "sim")
 
     _stop_on_sigterm()
-    sim = vehicle = server = None
+    names = fleet_names(opts)
+    sims, vehicles, servers = [], [], []
     try:
-        master = opts.master
+        masters = [opts.master] * len(names)
         if opts.sim:
             from .sim import SimConfig, SimVehicle
-            sim = SimVehicle(SimConfig(tcp_port=0, speedup=opts.sim_speedup, ready_after=opts.sim_ready_after,
-                                       signing_key=signing.key if signing else None))
-            sim.start()
-            master = master or f"tcp:127.0.0.1:{sim.tcp_port}"
-        master = master or SOLO_MASTER
-        vehicle = Vehicle(VehicleConfig(
-            connection=master, baud=opts.baudrate, source_system=opts.source_system,
-            source_component=opts.source_component, target_system=opts.target_system,
-            target_component=opts.target_component, stream_rate=opts.streamrate, takeoff_altitude=takeoff_alt,
-            limits=Limits(), tlog_path=log_path(opts), tlog_append=opts.append_log, outputs=tuple(opts.out),
-            signing=signing, allowed_senders=allowed,
-            mavlink_version=1 if opts.mav10 else 2 if opts.mav20 else None))
-        vehicle.start()
-        try:
-            server = IceServer(vehicle, props).start()
-        except ServeError as exc:                    # port in use, bad endpoint string, unknown host
-            sys.stderr.write(f"{exc}\n")        # one write: the simulator's log lines (other threads) never split it
-            return 1
-        console = Console(vehicle, name=opts.aircraft or "")
-        if not opts.daemon:                          # logs through the console: on a fresh line, each once
+            from .sim.fleet import fleet_configs
+            base = SimConfig(tcp_port=0, speedup=opts.sim_speedup, ready_after=opts.sim_ready_after,
+                             signing_key=signing.key if signing else None)
+            for i, config in enumerate(fleet_configs(len(names), base)):
+                sims.append(SimVehicle(config).start())
+                masters[i] = masters[i] or f"tcp:127.0.0.1:{sims[-1].tcp_port}"
+        for name, master in zip(names, masters):
+            master = master or SOLO_MASTER
+            vehicle = Vehicle(VehicleConfig(
+                connection=master, baud=opts.baudrate, source_system=opts.source_system,
+                source_component=opts.source_component, target_system=opts.target_system,
+                target_component=opts.target_component, stream_rate=opts.streamrate, takeoff_altitude=takeoff_alt,
+                limits=Limits(), tlog_path=log_path(opts, name if len(names) > 1 else ""),
+                tlog_append=opts.append_log, outputs=tuple(opts.out), signing=signing, allowed_senders=allowed,
+                mavlink_version=1 if opts.mav10 else 2 if opts.mav20 else None))
+            vehicles.append(vehicle)
+            vehicle.start()
+            own = props.clone()
+            if name:
+                own.setProperty("MAVLinkServer.Name", name)
+            try:
+                servers.append(IceServer(vehicle, own).start())
+            except ServeError as exc:                # port in use, bad endpoint string, unknown host, no registry
+                sys.stderr.write(f"{exc}\n")    # one write: the simulator's log lines (other threads) never split it
+                return 1
+        vehicle, server, master = vehicles[0], servers[0], masters[0] or SOLO_MASTER
+        console = Console(vehicle, name=opts.aircraft or names[0])
+        daemon = opts.daemon or len(names) > 1
+        if not daemon:                               # logs through the console: on a fresh line, each once
             show_logs(console, level)
-        console.say(f"MAVLink master {master}")
-        for s in server.served.values():
-            console.say(f"serving {s.name:8} {s.proxy}")
+        for name, server, master in zip(names, servers, masters):
+            console.say(f"MAVLink master {master}" + (f" ({name})" if name else ""))
+            for s in server.served.values():
+                console.say(f"serving {s.name:8} {s.proxy}" +
+                            (f"  ({server.indirect_proxy(s.name)})" if server.name else ""))
         if opts.cmd:
             wait_for_vehicle(console)
         for text in opts.cmd:
             run_commands(console, text)
-        if opts.daemon:
+        if daemon:
             _wait_for_signal()
         else:
             _console_loop(console)
@@ -185,11 +239,11 @@ def main(argv: list[str] | None = None) -> int:
         pass
     finally:
         _default_sigterm()                           # a SIGTERM during the clean-up ends the process at once
-        if server is not None:
+        for server in servers:
             server.close()
-        if vehicle is not None:
+        for vehicle in vehicles:
             vehicle.close()
-        if sim is not None:
+        for sim in sims:
             sim.stop()
     return 0
 

@@ -145,6 +145,40 @@ class Drone(abc.ABC):
         """Stop streaming and release the link."""
 
 
+class Fleet(abc.ABC):
+    """Several vehicles, each a :class:`Drone`, known by name (a lab's registry: docs/fleet.md).
+
+    Nothing here blocks: the names are a snapshot kept fresh in the background.
+    """
+
+    @property
+    @abc.abstractmethod
+    def description(self) -> str:
+        """Where the fleet is known ("registry 10.1.1.5:4061")."""
+
+    @abc.abstractmethod
+    def names(self) -> tuple[str, ...]:
+        """The vehicles known now, sorted."""
+
+    @property
+    def problem(self) -> str:
+        """Why the list may be out of date (the registry does not answer), or ""."""
+        return ""
+
+    @property
+    def closed(self) -> bool:
+        """True once :meth:`close` was called: no drone is made any more."""
+        return False
+
+    @abc.abstractmethod
+    def drone(self, name: str) -> Drone:
+        """The vehicle ``name``: made (and started) on first use, the same one afterwards."""
+
+    @abc.abstractmethod
+    def close(self) -> None:
+        """Close every drone made and stop following the list."""
+
+
 _NO_SIGNING = "the MAVLink link is signed where it is held: set signing up on the MAVLinkServer"
 
 

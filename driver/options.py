@@ -76,6 +76,16 @@ def connection(text: str) -> str:
     return text.strip()
 
 
+def registry(text: str) -> str:
+    """``HOST:PORT`` of a lab's IceGrid registry (docs/fleet.md), as given."""
+    from .ice.registry import registry_address
+    try:
+        registry_address(text)
+    except ValueError as exc:
+        raise argparse.ArgumentTypeError(str(exc)) from None
+    return text
+
+
 def add_link_security(group) -> None:
     """The vehicle link's protection, the same on ``main.py`` and ``python -m driver`` (docs/security.md)."""
     key = group.add_mutually_exclusive_group()

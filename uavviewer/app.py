@@ -5,6 +5,7 @@
     uavviewer --connect tcp:127.0.0.1:5760
     uavviewer --replay flight.tlog           # watch a recorded flight
     uavviewer --ice config/viewer.cfg        # fly through a MAVLinkServer (mavlinkserver) over Ice
+    uavviewer --registry 127.0.0.1:4061      # a lab's fleet: every vehicle registered there (docs/fleet.md)
     uavviewer --install-desktop              # put UavViewerPy in the desktop's application menu
 
 (``uavviewer`` once installed with pip; ``python main.py`` or ``python -m uavviewer`` in a checkout.)
@@ -15,6 +16,7 @@ import argparse
 import logging
 import signal
 import sys
+import time
 from pathlib import Path
 
 from driver import options
@@ -37,6 +39,32 @@ def choose_connection(args: argparse.Namespace, remembered: str) -> str:
     if remembered and connection_problem(remembered) is None:
         return remembered
     return SOLO_CONNECTION
+
+
+def open_fleet(args: argparse.Namespace, certs: str | None, wait: float = 30.0, stop: list | None = None):
+    """``(fleet, first vehicle's name)`` from --registry, waiting (in the terminal, before any window) until the
+    registry lists a vehicle; SystemExit with the reason if it never does, or at once on Ctrl+C (``stop``)."""
+    from driver.ice.fleet import IceFleet
+    fleet = IceFleet(args.registry, certs).start()
+    deadline = time.monotonic() + wait
+    said = False
+    while True:
+        if stop:
+            fleet.close()
+            raise SystemExit(130)
+        names = fleet.names()
+        if args.vehicle and args.vehicle in names or not args.vehicle and names:
+            return fleet, args.vehicle or names[0]
+        if time.monotonic() > deadline:
+            fleet.close()
+            wanted = f"vehicle {args.vehicle}" if args.vehicle else "any vehicle"
+            build_parser().error(f"the registry {args.registry} lists no {wanted} after {wait:g} s"
+                                 + (f" ({fleet.problem})" if fleet.problem else "")
+                                 + f": start one with python -m driver --sim --registry {args.registry} --name NAME")
+        if not said:
+            said = True
+            print(f"{build_parser().prog}: waiting for vehicles at {args.registry}...", file=sys.stderr, flush=True)
+        time.sleep(0.2)
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -64,9 +92,14 @@ def build_parser() -> argparse.ArgumentParser:
                              "Ice config with UAVViewer.<Interface>.Proxy keys (see config/viewer.cfg)")
     source.add_argument("--ice-host", metavar="HOST",
                         help="fly through a MAVLinkServer over ZeroC Ice at HOST, on the default ports")
+    source.add_argument("--registry", metavar="HOST:PORT", type=options.registry,
+                        help="a lab's fleet: list the vehicles registered with this IceGrid registry (python -m "
+                             "driver registry) and fly the one picked in the Fleet panel")
+    link.add_argument("--vehicle", metavar="NAME", help="with --registry: the vehicle to fly first (default: the "
+                                                        "first listed)")
     link.add_argument("--ice-certs", metavar="DIR", type=Path,
-                      help="with --ice/--ice-host: connect over TLS with the pilot's certificate from DIR (made by "
-                           "python -m driver certs DIR); the server's is checked against DIR's CA and the host")
+                      help="with --ice/--ice-host/--registry: connect over TLS with the pilot's certificate from DIR "
+                           "(made by python -m driver certs DIR); the server's is checked against DIR's CA and the host")
     link.add_argument("--baud", type=options.whole(1, 10_000_000), default=57600, help="serial baud rate (default: %(default)s)")
     options.add_link_security(p.add_argument_group("link security (docs/security.md)"))
     flight = p.add_argument_group("flight")
@@ -122,14 +155,16 @@ def default_log_dir() -> Path:
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
+    if args.ice_certs and args.ice is None and args.ice_host is None and args.registry is None:
+        build_parser().error("--ice-certs needs --ice, --ice-host or --registry")
+    if args.vehicle and args.registry is None:
+        build_parser().error("--vehicle needs --registry")
     if args.install_desktop or args.remove_desktop:
         from uavviewer import desktop
         done = desktop.install() if args.install_desktop else desktop.remove()
         for line in done:
             print(line)
         return 0
-    if args.ice_certs and args.ice is None and args.ice_host is None:
-        build_parser().error("--ice-certs needs --ice or --ice-host")
     if args.no_log:
         args.log_dir = None
     elif args.log_dir is None:
@@ -140,8 +175,6 @@ def main(argv: list[str] | None = None) -> int:
     stop_requested = []
     for number in (signal.SIGINT, signal.SIGTERM):
         signal.signal(number, lambda *_: stop_requested.append(True))
-    import time
-
     from PyQt5.QtCore import QTimer
     from PyQt5.QtGui import QIcon
     from PyQt5.QtWidgets import QApplication
@@ -180,7 +213,14 @@ def main(argv: list[str] | None = None) -> int:
                            allowed_senders=allowed,
                            takeoff_altitude=args.takeoff_altitude or load_settings(default_qsettings()).takeoff_altitude)
     remote = args.ice is not None or args.ice_host is not None
-    if remote:                                                    # the same window, through the Ice client
+    fleet = None
+    if args.registry is not None:                                 # a lab's fleet: the first vehicle, then the picked
+        try:
+            fleet, first = open_fleet(args, str(args.ice_certs) if args.ice_certs else None, stop=stop_requested)
+        except Exception as exc:                                  # no certificates there, IceSSL refused them
+            build_parser().error(f"cannot reach the registry: {' '.join(str(exc).split())}")
+        drone = fleet.drone(first)
+    elif remote:                                                  # the same window, through the Ice client
         from driver.ice.client import IceDrone
         if args.ice is not None and not args.ice.is_file():
             build_parser().error(f"no such file: {args.ice}")
@@ -199,6 +239,15 @@ def main(argv: list[str] | None = None) -> int:
     app.setWindowIcon(QIcon(str(RESOURCES / "icons" / "app.svg")))
     app.setStyleSheet(load_style())
     own_camera = ["sim"] if args.sim else []                      # used when Preferences name no camera
+    if fleet is not None:                                         # the picked vehicle's camera, through the registry
+        from driver.camera import ice_source
+        from driver.ice.client import fleet_properties
+        from uavviewer.fleet import FleetController
+        props = fleet_properties(args.registry, str(args.ice_certs) if args.ice_certs else None)
+        own_camera = [FleetController.camera_uri(first)]
+        ice_source.client_properties.update(
+            {k: v for prefix in ("IceSSL.", "Ice.Plugin.IceSSL", "Ice.Default.Locator")
+             for k, v in props.getPropertiesForPrefix(prefix).items()})
     if remote:                                                    # the server's camera, from the viewer's config
         from driver.ice.client import viewer_properties
         from driver.camera import ice_source
@@ -209,7 +258,10 @@ def main(argv: list[str] | None = None) -> int:
             {k: v for prefix in ("IceSSL.", "Ice.Plugin.IceSSL") for k, v in props.getPropertiesForPrefix(prefix).items()})
     window = MainWindow(drone, takeoff_altitude=args.takeoff_altitude, cameras=args.camera,  # --camera: this run
                         default_cameras=own_camera)
-    if args.connect or not (args.sim or args.replay or remote):
+    if fleet is not None:
+        controller = FleetController(fleet, first, parent=window)
+        window.attach_fleet(controller)
+    elif args.connect or not (args.sim or args.replay or remote):
         window.remember_connection_when_answered(connection)
     window.show()
     for number in (signal.SIGINT, signal.SIGTERM):              # Ctrl+C, kill: close cleanly, without asking
@@ -224,7 +276,11 @@ def main(argv: list[str] | None = None) -> int:
     try:
         return app.exec_()
     finally:
-        drone.close()
+        if fleet is not None:
+            controller.stop()
+            fleet.close()                                         # every vehicle's client, the picked one too
+        else:
+            drone.close()
         if sim is not None:
             sim.stop()
 

@@ -343,3 +343,26 @@ def emergency_stop_question(parent: QWidget) -> QMessageBox:
     box.setDefaultButton(QMessageBox.Cancel)
     box.setEscapeButton(QMessageBox.Cancel)
     return box
+
+
+def all_vehicles_question(parent: QWidget, command: str, names: list[str], altitude: float) -> QMessageBox:
+    """One confirmation for Take off / Land / Stop on every vehicle of the fleet (window-modal, not waited on).
+
+    For a takeoff Cancel is the focused default, as for one vehicle; for Land and Stop the action is."""
+    what = {"takeoff": (f"Take off all {len(names)} vehicles", f"Every vehicle takes off and climbs to "
+                        f"{altitude:.1f} m above its home. The motors will start: keep clear of all of them."),
+            "land": (f"Land all {len(names)} vehicles", "Every vehicle switches to LAND where it is."),
+            "stop": (f"Stop all {len(names)} vehicles", "Every vehicle stops and holds its position.")}[command]
+    box = QMessageBox(QMessageBox.Question, what[0], f"{what[0]}?\n\n{', '.join(names)}\n\n{what[1]}",
+                      QMessageBox.Yes | QMessageBox.Cancel, parent)
+    box.setObjectName("allVehiclesQuestion")
+    go = box.button(QMessageBox.Yes)
+    go.setText(what[0])
+    if command == "takeoff":
+        go.setFocusPolicy(Qt.NoFocus)
+        go.setAutoDefault(False)
+        box.setDefaultButton(QMessageBox.Cancel)
+    else:
+        box.setDefaultButton(QMessageBox.Yes)
+    box.setEscapeButton(QMessageBox.Cancel)
+    return box

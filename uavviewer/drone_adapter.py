@@ -76,6 +76,15 @@ class DroneAdapter(QObject):
         self._poll.start()
         self.poll()
 
+    def use(self, drone: Drone) -> None:
+        """Fly ``drone`` from now on (a fleet: the pilot picked another vehicle). The previous one was sent zero
+        velocity by the window first; nothing more goes to it from here."""
+        self._refresh.stop()
+        self._setpoint = VelocityCommand()
+        self.drone = drone
+        self._state = None
+        self.poll()
+
     def stop(self) -> None:
         self._poll.stop()
         self._refresh.stop()

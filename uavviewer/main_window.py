@@ -96,7 +96,7 @@ class MainWindow(QMainWindow):
         self._default_cameras = list(default_cameras or [])
         self.camera = CameraController(self.camera_panel, list(cameras or self.settings.camera_uris
                                                                or self._default_cameras),
-                                       state_fn=drone.state, drone=drone,
+                                       state_fn=lambda: self.adapter.drone.state(), drone=drone,  # the picked
                                        folder=self.settings.media_folder or None, parent=self)
         self.camera_panel.hud_button.setChecked(self.settings.hud)
         self.menuView.addAction(self.telemetryDock.toggleViewAction())
@@ -655,6 +655,66 @@ class MainWindow(QMainWindow):
         self.camera.close(wait=0.5)
         self.adapter.stop()
         super().closeEvent(event)
+
+    # -- fleet (docs/fleet.md): several vehicles; the sticks, keys, buttons and instruments follow the picked one --
+    def attach_fleet(self, fleet) -> None:
+        """A Fleet dock for ``fleet`` (:class:`uavviewer.fleet.FleetController`), already flying its picked vehicle."""
+        from PyQt5.QtWidgets import QDockWidget
+
+        from .widgets.fleet_panel import FleetPanel
+        self.fleet, self.fleet_box = fleet, None
+        self.fleet_panel = FleetPanel()
+        dock = QDockWidget("Fleet", self)
+        dock.setObjectName("fleetDock")
+        dock.setWidget(self.fleet_panel)
+        self.addDockWidget(Qt.LeftDockWidgetArea, dock)
+        self.resizeDocks([dock], [400], Qt.Horizontal)          # every column in sight, the link age too
+        self.menuView.addAction(dock.toggleViewAction())
+        self.fleet_panel.vehiclePicked.connect(fleet.pick)
+        self.fleet_panel.allRequested.connect(self.request_all)
+        fleet.rowsChanged.connect(self.fleet_panel.set_rows)
+        fleet.vehiclePicked.connect(self._fly_vehicle)
+        fleet.said.connect(self.log_message)
+        fleet.resultArrived.connect(self._show_result)
+        self.setWindowTitle(f"UavViewerPy — {fleet.picked} · {fleet.fleet.description}")
+        fleet.start()
+
+    def _fly_vehicle(self, name: str, drone: Drone) -> None:
+        self.centre_sticks()                    # the vehicle left behind gets zero velocity: it hovers
+        s = drone.state()                       # its log starts from now: older lines were another vehicle's
+        self._last_message = s.messages[-1].index if s.messages else -1
+        self._last_result = s.results[-1].index if s.results else -1
+        self._shown_results.clear()
+        self._plot_gap = True
+        self.plots.gap(time.monotonic() - self._t0)
+        self.adapter.use(drone)
+        self.setWindowTitle(f"UavViewerPy — {name} · {self.fleet.fleet.description}")
+        if self._default_cameras and self.camera.uris == self._default_cameras:   # not --camera nor Preferences'
+            self._default_cameras = [self.fleet.camera_uri(name)]                 # the picked vehicle's own
+            self.camera.set_sources(self._default_cameras)
+
+    def request_all(self, command: str) -> None:
+        """Take off, land or stop every vehicle, after one confirmation."""
+        from .dialogs import all_vehicles_question
+        names = [r.name for r in self.fleet.rows]
+        if not names or (self.fleet_box is not None and self.fleet_box.isVisible()):
+            return
+        if command != "takeoff":
+            self.centre_sticks()
+        box = all_vehicles_question(self, command, names, self.takeoff_altitude)
+        box.setWindowModality(Qt.WindowModal)
+        box.finished.connect(lambda _result, b=box, c=command: self._all_answered(b, c))
+        self.fleet_box = box
+        box.open()
+
+    def _all_answered(self, box: QMessageBox, command: str) -> None:
+        if box.clickedButton() is box.button(QMessageBox.Yes):
+            args = (self.takeoff_altitude,) if command == "takeoff" else ()
+            self.fleet.command_all(command, *args, skip=self.fleet.picked)
+            self._command(command, *args)       # the picked one through the window: its answer is shown once
+        box.deleteLater()
+        if self.fleet_box is box:
+            self.fleet_box = None
 
     def log_message(self, text: str, severity: Severity = Severity.INFO) -> None:
         """A line of the viewer's own in Messages (e.g. a refused setting)."""

@@ -139,7 +139,7 @@ def make_certs(directory: str, hosts: list[str] | tuple[str, ...] = (), new_ca: 
     password = password if password else secrets.token_urlsafe(18)
     encryption = serialization.BestAvailableEncryption(password.encode())
 
-    def leaf(common_name: str, purpose, sans: list[str]):
+    def leaf(common_name: str, purposes: list, sans: list[str]):
         key = ec.generate_private_key(ec.SECP256R1())
         builder = (x509.CertificateBuilder()
                    .subject_name(x509.Name([x509.NameAttribute(NameOID.COMMON_NAME, common_name),
@@ -152,15 +152,19 @@ def make_certs(directory: str, hosts: list[str] | tuple[str, ...] = (), new_ca: 
                                                 key_encipherment=False, data_encipherment=False,
                                                 key_agreement=True, key_cert_sign=False, crl_sign=False,
                                                 encipher_only=False, decipher_only=False), critical=True)
-                   .add_extension(x509.ExtendedKeyUsage([purpose]), critical=False)
+                   .add_extension(x509.ExtendedKeyUsage(purposes), critical=False)
                    .add_extension(x509.AuthorityKeyIdentifier.from_issuer_public_key(ca_key.public_key()),
                                   critical=False))
         if sans:
             builder = builder.add_extension(x509.SubjectAlternativeName([_san(h) for h in sans]), critical=False)
         return key, builder.sign(ca_key, hashes.SHA256())
 
-    server_key, server_cert = leaf(names[0], ExtendedKeyUsageOID.SERVER_AUTH, names)
-    client_key, client_cert = leaf("UavViewerPy pilot", ExtendedKeyUsageOID.CLIENT_AUTH, [])
+    # In a lab (docs/fleet.md) each certificate also serves the other way: a MAVLinkServer calls the IceGrid
+    # registry and IceStorm (as a client), and IceStorm calls the viewer back on its telemetry endpoint (the
+    # pilot's certificate, without host names, then answers as a server: IceStorm checks the CA, not a name).
+    both = [ExtendedKeyUsageOID.SERVER_AUTH, ExtendedKeyUsageOID.CLIENT_AUTH]
+    server_key, server_cert = leaf(names[0], both, names)
+    client_key, client_cert = leaf("UavViewerPy pilot", both, [])
 
     if not ca_reused:
         write_private(path(CA_KEY), ca_key.private_bytes(serialization.Encoding.PEM, serialization.PrivateFormat.PKCS8,

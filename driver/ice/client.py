@@ -6,6 +6,11 @@ immutable snapshot, a sender thread carries the newest velocity over JdeRobot's
 CMDVel (older ones are dropped, never queued), and a worker thread starts
 commands asynchronously, resolving each Future with the vehicle's own answer.
 A server that stops answering shows as a LOST link, and recovers by itself.
+
+In a fleet (:meth:`IceDrone.for_vehicle`, docs/fleet.md) the proxies are indirect (``Vehicle@solo-1``, found
+through the lab's IceGrid registry) and the status comes from the vehicle's IceStorm topic instead of polling;
+the poller only asks the server itself when no publication has arrived for a while (IceStorm gone, the server
+stopped), so a lost server still shows as LOST.
 """
 from __future__ import annotations
 
@@ -68,7 +73,8 @@ class IceDrone(Drone):
     """The remote vehicle; ``start()`` returns at once, the first status arrives in the background."""
 
     def __init__(self, properties: Ice.Properties, prefix: str = PREFIX, poll_interval: float = 0.1,
-                 loss_timeout: float = 2.0, call_timeout: float = 1.0, command_timeout: float = 120.0):
+                 loss_timeout: float = 2.0, call_timeout: float = 1.0, command_timeout: float = 120.0,
+                 vehicle_name: str = ""):
         self._props = properties
         self._prefix = prefix
         self._poll = poll_interval
@@ -79,7 +85,11 @@ class IceDrone(Drone):
         self._vehicle = self._cmdvel = self._commands = self._extra = None
         self._jde: dict = {}                   # without the extension: JdeRobot proxies by role
         proxy = properties.getProperty(f"{prefix}.Vehicle.Proxy") or properties.getProperty(f"{prefix}.Pose3D.Proxy")
-        self._description = f"Ice {_host_of(proxy)}"
+        self.vehicle_name = vehicle_name     # in a fleet: the name the registry knows, also its IceStorm topic
+        self._description = f"Ice {vehicle_name or _host_of(proxy)}"
+        self._subscription = None              # (topic, subscriber proxy) while subscribed
+        self._last_published: float | None = None
+        self.publications = 0                  # statuses received from IceStorm (tests, the fleet panel)
         self._limits = Limits()
         self._pilot_limits: Limits | None = None
 
@@ -111,6 +121,18 @@ class IceDrone(Drone):
     def from_config(cls, config: str | None = None, host: str | None = None, certs: str | None = None,
                     **kwargs) -> "IceDrone":
         return cls(viewer_properties(config, host, certs=certs), **kwargs)
+
+    @classmethod
+    def for_vehicle(cls, registry: str, name: str, certs: str | None = None, subscribe: bool = True,
+                    **kwargs) -> "IceDrone":
+        """The vehicle ``name`` of the lab whose IceGrid registry is at ``registry`` (``HOST:PORT``)."""
+        from . import registry as fleet
+        props = fleet_properties(registry, certs)
+        for key, value in fleet.client_properties(PREFIX, name).items():
+            props.setProperty(key, value)
+        if subscribe and not props.getProperty(f"{PREFIX}.TopicManager.Proxy"):
+            props.setProperty(f"{PREFIX}.TopicManager.Proxy", fleet.TOPIC_MANAGER)
+        return cls(props, vehicle_name=name, **kwargs)
 
     # -- lifecycle ------------------------------------------------------------------------------
     @property
@@ -177,6 +199,7 @@ class IceDrone(Drone):
             self._velocity_ready.notify_all()
         for t in self._threads:
             t.join(timeout=3.0)
+        self._unsubscribe()                    # after the poller, which may be subscribing
         self._worker.shutdown(wait=False, cancel_futures=True)
         if self._com is not None:
             self._com.destroy()
@@ -207,8 +230,16 @@ class IceDrone(Drone):
 
     def _run_poller(self) -> None:
         first = True
+        next_subscribe = 0.0
         while not self._closing.is_set():
             started = time.monotonic()
+            if self._wants_topic() and self._subscription is None and started >= next_subscribe:
+                next_subscribe = started + 3.0
+                self._subscribe()
+            published = self._last_published
+            if not first and published is not None and started - published < max(5 * self._poll, 0.5):
+                self._closing.wait(self._poll)      # IceStorm brings the status: no call to the server
+                continue
             try:
                 if self._vehicle is None:
                     navdata = self._jde.get("Navdata")
@@ -270,21 +301,25 @@ class IceDrone(Drone):
             self._heard()
             resync, self._resync = self._resync, False
             for m in status.messages:
+                if not resync and m.index <= self._server_message:
+                    continue                           # polled, then published as well (or the other way)
                 # after a loss we asked for everything: the clock says which lines are new
                 if not resync or m.time > self._last_message_time:
                     self._index += 1
                     self._messages.append(replace(convert.message_from_status(m), index=self._index))
                     self._last_message_time = max(self._last_message_time, m.time)
             if status.messages:
-                self._server_message = status.messages[-1].index
+                self._server_message = max(self._server_message, status.messages[-1].index)
             if resync:                                 # a restarted server numbers from 1 again
                 self._result_offset = self._result_high
             for r in status.results if not resync else ():
+                if r.index <= self._server_result:
+                    continue
                 result = self._result(r)
                 self._result_high = max(self._result_high, result.index)
                 self._results.append(result)
             if status.results:
-                self._server_result = status.results[-1].index
+                self._server_result = max(self._server_result, status.results[-1].index)
             s = convert.state_from_status(status, tuple(self._messages), tuple(self._results))
             link = replace(s.link, address=f"{s.link.address} via {self._description}",
                            lost_count=s.link.lost_count + self._lost_count)
@@ -319,6 +354,49 @@ class IceDrone(Drone):
             self._state = replace(self._state, messages=tuple(self._messages), link=replace(
                 link, status=LinkStatus.LOST, heartbeat_age=age, packets_per_s=0.0,
                 lost_count=link.lost_count + 1))
+
+    # -- telemetry from IceStorm (a fleet) -------------------------------------------------------
+    def _wants_topic(self) -> bool:
+        return bool(self.vehicle_name and self._vehicle is not None
+                    and self._props.getProperty(f"{self._prefix}.TopicManager.Proxy"))
+
+    def _subscribe(self) -> None:
+        """Subscribe to the vehicle's topic (on the poller thread); a failure is said once, then retried."""
+        from .publisher import topic
+        try:
+            t = topic(self._com, self._props.getProperty(f"{self._prefix}.TopicManager.Proxy"), self.vehicle_name)
+            adapter = self._com.createObjectAdapterWithEndpoints(
+                f"Telemetry-{self.vehicle_name}",
+                self._props.getProperty(f"{self._prefix}.Telemetry.Endpoints") or "tcp -h 127.0.0.1")
+            subscriber = adapter.addWithUUID(_Subscriber(self)).ice_oneway()
+            adapter.activate()
+            t.subscribeAndGetPublisher({}, subscriber)
+            self._subscription = (t, subscriber, adapter)
+            log.info("%s: telemetry from IceStorm topic %s", self._description, self.vehicle_name)
+        except (Ice.Exception, RuntimeError) as exc:
+            log.info("%s: no IceStorm telemetry (%s); polling the server", self._description, exc)
+            adapter = locals().get("adapter")
+            if adapter is not None:
+                adapter.destroy()
+
+    def _unsubscribe(self) -> None:
+        sub, self._subscription = self._subscription, None
+        if sub is None:
+            return
+        t, subscriber, adapter = sub
+        try:
+            t.ice_invocationTimeout(1000).unsubscribe(subscriber)
+        except Ice.Exception as exc:
+            log.debug("unsubscribing from %s failed: %s", self.vehicle_name, exc)
+        adapter.destroy()
+
+    def _published(self, status) -> None:
+        """A status from IceStorm (an Ice dispatch thread)."""
+        if self._closing.is_set():
+            return
+        self._last_published = time.monotonic()
+        self.publications += 1
+        self._answered(status)
 
     # -- velocity over JdeRobot's CMDVel --------------------------------------------------------
     def set_velocity(self, forward: float, right: float, up: float, yaw_rate: float) -> bool:
@@ -487,6 +565,39 @@ class IceDrone(Drone):
                                       f"no {self._prefix}.Extra.Proxy configured")
         return self._jderobot_command("switch camera", "Extra", lambda p: p.toggleCamAsync(),
                                       "the server shows its next camera")
+
+
+class _Subscriber(mavlinkserver.Telemetry):
+    """The IceDrone's servant on its vehicle's topic: the status replaces a poll; the rest is for observers
+    that want JdeRobot's shapes (pose, navdata) or only the events."""
+
+    def __init__(self, owner: IceDrone) -> None:
+        self._owner = owner
+
+    def status(self, vehicle, status, current=None):
+        self._owner._published(status)
+
+    def pose(self, vehicle, published, pose, current=None):
+        pass
+
+    def navdata(self, vehicle, data, current=None):
+        pass
+
+    def event(self, vehicle, e, current=None):
+        pass
+
+
+def fleet_properties(registry: str, certs: str | None = None) -> Ice.Properties:
+    """Client properties for a lab's registry at ``HOST:PORT`` (TLS with ``certs`` off loopback)."""
+    from . import registry as fleet
+    host, port = fleet.registry_address(registry)
+    props = viewer_properties(certs=certs)
+    loopback = host in ("127.0.0.1", "localhost", "::1")
+    props.setProperty("Ice.Default.Locator", fleet.locator(host, port, secure=bool(certs)))
+    if not props.getProperty(f"{PREFIX}.Telemetry.Endpoints"):      # where IceStorm calls us back
+        transport = "ssl" if certs else "tcp"                          # with certificates: IceStorm must show one
+        props.setProperty(f"{PREFIX}.Telemetry.Endpoints", f"{transport} -h 127.0.0.1" if loopback else transport)
+    return props
 
 
 def _host_of(proxy: str) -> str:

@@ -256,6 +256,7 @@ class VehicleI(mavlinkserver.Vehicle):
         self._settings = settings
         self._lock = threading.Lock()
         self._pending: dict[Ice.Future, str] = {}     # answers still waiting for the vehicle
+        self.status_calls = 0                         # getStatus dispatches: what polling observers cost
 
     def _reply(self, answer: Ice.Future, result: CommandResult) -> None:
         with self._lock:
@@ -294,6 +295,7 @@ class VehicleI(mavlinkserver.Vehicle):
             self._reply(answer, CommandResult(command, CommandStatus.ABORTED, reason))
 
     def getStatus(self, messagesSince, resultsSince, current=None):
+        self.status_calls += 1
         return convert.status_from_state(mavlinkserver, self._vehicle.state(), messagesSince, resultsSince)
 
     def getFence(self, current=None):

@@ -18,6 +18,11 @@ Defaults are the 2017 server's: ``Camera`` 9999, ``Pose3D`` 9998, ``CMDVel``
 - ``MAVLinkServer.Insecure``: 1 lets plain TCP/UDP endpoints bind a non-loopback address (refused otherwise)
 - ``MAVLinkServer.Modes``, ``MaxDistance``, ``MaxAltitude``, ``AllowEmergencyDisarm``: what an Ice client may
   ask (see :func:`settings_from`)
+- ``MAVLinkServer.Name`` with ``Ice.Default.Locator`` (``--registry HOST:PORT --name solo-1``): a fleet
+  (docs/fleet.md). Every interface on one adapter whose adapter id is the name (port 0 unless
+  ``MAVLinkServer.Endpoints``), registered with the IceGrid registry with a well-known object; telemetry
+  published on the IceStorm topic of that name (``MAVLinkServer.Publish.Rate``, Hz, default 10; 0: none;
+  ``MAVLinkServer.TopicManager.Proxy``)
 """
 from __future__ import annotations
 
@@ -201,9 +206,16 @@ def default_endpoints(props: Ice.Properties, port: int) -> str:
     return ssl if host in ("127.0.0.1", "localhost") else f"{ssl}:tcp -h 127.0.0.1 -p {port}"
 
 
+def fleet_name(props: Ice.Properties) -> str:
+    """The vehicle's name in a fleet: ``MAVLinkServer.Name`` when a locator (the lab's registry) is set, else ""."""
+    name = props.getProperty(PREFIX + "Name").strip()
+    return name if name and props.getProperty("Ice.Default.Locator") else ""
+
+
 def planned_endpoints(props: Ice.Properties) -> dict[str, tuple[str, str]]:
-    """``{interface: (identity, endpoints)}`` from the properties; equal endpoints share one adapter."""
-    shared = props.getProperty(PREFIX + "Endpoints")
+    """``{interface: (identity, endpoints)}`` from the properties; equal endpoints share one adapter (in a fleet
+    all share one, on a port of the system's choosing unless ``MAVLinkServer.Endpoints`` says)."""
+    shared = props.getProperty(PREFIX + "Endpoints") or (default_endpoints(props, 0) if fleet_name(props) else "")
     return {name: (props.getPropertyWithDefault(f"{PREFIX}{name}.Name", name),
                    shared or props.getProperty(f"{PREFIX}{name}.Endpoints") or default_endpoints(props, port))
             for name, port in DEFAULT_PORTS.items()}
@@ -341,6 +353,9 @@ class IceServer:
         self._adapters: list[Ice.ObjectAdapter] = []
         self._table: dict[str, Ice.Object] = {}
         self.served: dict[str, Served] = {}
+        self.name = fleet_name(self.properties)       # in a fleet: the vehicle's adapter id and topic
+        self.publisher = None
+        self._announced = False
 
     def _servants(self) -> dict[str, Ice.Object]:
         if self.camera is None:
@@ -361,18 +376,51 @@ class IceServer:
         try:
             self._table = self._servants()
             self._serve(self._table)
+            if self.name:
+                self._join_fleet()
         except Exception:
             self.close()
             raise
         return self
 
+    def _join_fleet(self) -> None:
+        """Announce the vehicle to the registry and publish it on IceStorm (docs/fleet.md)."""
+        from .publisher import TelemetryPublisher
+        from .registry import TOPIC_MANAGER, RegistryError, announce
+        adapter = self._adapters[0]
+        try:
+            announce(self.communicator, self.name, adapter.createProxy(Ice.Identity(self.name, "")))
+        except RegistryError as exc:
+            raise ServeError(f"cannot register {self.name}: {exc}") from None
+        self._announced = True
+        rate = self.properties.getPropertyWithDefault(PREFIX + "Publish.Rate", "10")
+        try:
+            hz = float(rate)
+        except ValueError:
+            raise ServeError(f"{PREFIX}Publish.Rate={rate!r} is not a number") from None
+        if hz > 0:
+            manager = self.properties.getPropertyWithDefault(PREFIX + "TopicManager.Proxy", TOPIC_MANAGER)
+            self.publisher = TelemetryPublisher(self.communicator, self.vehicle, self.name, manager, min(hz, 50.0),
+                                                self.settings.navdata_vehicle).start()
+
     def _serve(self, table: dict[str, Ice.Object]) -> None:
         com = self.communicator
+        if self.name:           # before any adapter has the id: destroying one would unregister the name
+            from .registry import RegistryError, serving_elsewhere
+            try:
+                other = serving_elsewhere(com, self.name)
+            except RegistryError as exc:
+                raise ServeError(f"cannot register {self.name}: {exc}") from None
+            if other:
+                raise ServeError(f"a vehicle named {self.name} is already registered and answering ({other}): "
+                                 "give this one another --name")
         adapters: dict[str, Ice.ObjectAdapter] = {}
         planned = planned_endpoints(self.properties)
         for name, (identity, endpoints) in planned.items():
             adapter = adapters.get(endpoints)
             if adapter is None:
+                if self.name:                       # a fleet: one adapter, the vehicle's name as its adapter id
+                    com.getProperties().setProperty(f"MAVLinkServer-{name}.AdapterId", self.name)
                 try:
                     adapter = com.createObjectAdapterWithEndpoints(f"MAVLinkServer-{name}", endpoints)
                 except Ice.LocalException as exc:
@@ -381,10 +429,21 @@ class IceServer:
                     raise ServeError(f"cannot serve {what} on {_where(endpoints)}: {ice_problem(exc)}") from exc
                 adapters[endpoints] = adapter
                 self._adapters.append(adapter)
-            prx = adapter.add(table[name], Ice.stringToIdentity(identity))
+            adapter.add(table[name], Ice.stringToIdentity(identity))
+            prx = adapter.createDirectProxy(Ice.stringToIdentity(identity))
             self.served[name] = Served(name, identity, com.proxyToString(prx))
+        if self.name:                               # what the registry lists: identity = the vehicle's name
+            self._adapters[0].add(table["Vehicle"], Ice.Identity(self.name, ""))
+        if self.name and self.properties.getProperty(PREFIX + "Certs"):
+            # the registry hands these to clients on other machines: only the TLS ones, never 127.0.0.1's
+            adapter = self._adapters[0]
+            adapter.setPublishedEndpoints([e for e in adapter.getEndpoints() if e.getInfo().secure()])
         for adapter in self._adapters:
-            adapter.activate()
+            try:
+                adapter.activate()                  # in a fleet: registers its endpoints under the adapter id
+            except Ice.LocalException as exc:
+                raise ServeError(f"cannot register {self.name} with the registry "
+                                 f"{self.properties.getProperty('Ice.Default.Locator')}: {ice_problem(exc)}") from exc
         for s in self.served.values():
             log.info("serving %s as %s", s.name, s.proxy)
 
@@ -396,7 +455,17 @@ class IceServer:
         """``<prefix>.<Interface>.Proxy`` keys a viewer config would hold for this server."""
         return {f"{prefix}.{name}.Proxy": s.proxy for name, s in self.served.items()}
 
+    def indirect_proxy(self, name: str) -> str:
+        """In a fleet: ``Pose3D@solo-1``, what any client of the registry uses."""
+        return f"{self.served[name].identity}@{self.name}"
+
     def close(self) -> None:
+        if self.publisher is not None:
+            self.publisher.stop()
+        if self._announced and self.communicator is not None:
+            from .registry import withdraw
+            withdraw(self.communicator, self.name)      # the adapter's endpoints go with destroy()
+            self._announced = False
         extension = self._table.get("Vehicle") if self._table else None
         if extension is not None:
             extension.abort_pending("server shutting down")   # AMD answers would hold destroy() back

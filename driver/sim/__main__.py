@@ -4,6 +4,7 @@
     python -m driver.sim --udp-out 127.0.0.1:14550 --profile solo --gimbal   # like a stock 3DR Solo
     python -m driver.sim --uplink-loss 0.1 --downlink-loss 0.1 --latency 0.2 --jitter 0.05 --lose-replies
     python -m driver.sim --usb-port 5761 --signing-passphrase secret   # signing on; unsigned only on 5761
+    python -m driver.sim --count 3                # three vehicles on tcp 5760, 5761, 5762: system ids 1-3, homes 10 m apart
 """
 from __future__ import annotations
 
@@ -116,6 +117,9 @@ def parser() -> argparse.ArgumentParser:
     faults.add_argument("--lose-replies", type=_replies, nargs="?", const=True, default=set(), metavar="WHICH",
                         help="the vehicle acts but its COMMAND_ACK is lost: all (default), a share like 0.3, "
                              "or MAV_CMD ids/names (NAV_TAKEOFF,400)")
+    parser.add_argument("--count", type=whole(1, 250), default=1, metavar="N",
+                        help="N vehicles on consecutive TCP ports from --tcp's, system ids 1 to N, homes 10 m apart "
+                             "eastwards (a fleet: docs/fleet.md)")
     parser.add_argument("--seed", type=int, default=None)
     parser.add_argument("-v", "--verbose", action="store_true")
     return parser
@@ -130,7 +134,19 @@ def configure(args: argparse.Namespace) -> SimVehicle:
                        mavlink2=not args.mav1, seed=args.seed, profile=args.profile,
                        origin_offset=args.origin_offset, gimbal=args.gimbal, companion=args.companion,
                        usb_port=args.usb_port, signing_key=key)
-    sim = SimVehicle(config)
+    return _with_faults(SimVehicle(config), args)
+
+
+def configure_fleet(args: argparse.Namespace) -> list[SimVehicle]:
+    """``--count`` vehicles as the options say (distinct system ids, homes and ports), not started yet."""
+    from .fleet import fleet_configs
+    first = configure(args)
+    if args.count == 1:
+        return [first]
+    return [_with_faults(SimVehicle(c), args) for c in fleet_configs(args.count, first.config)]
+
+
+def _with_faults(sim: SimVehicle, args: argparse.Namespace) -> SimVehicle:
     both = dict(burst_rate=args.burst_rate, burst_seconds=args.burst_seconds, duplicate=args.duplicate,
                 latency=args.latency, jitter=args.jitter, reorder=args.reorder)
     sim.faults.uplink = LinkFaults(loss=args.uplink_loss, **both)
@@ -145,21 +161,26 @@ def main(argv: list[str] | None = None) -> int:
     args = p.parse_args(argv)
     if args.signing_passphrase is not None and (args.mav1 or not PROFILES[args.profile].mavlink2):
         p.error("--signing-passphrase needs MAVLink 2: not with --profile solo or --mav1")
+    if args.count > 1 and (args.udp_out or args.udp_in or args.usb_port is not None):
+        p.error("--count serves each vehicle on its own TCP port only: not with --udp-out, --udp-in or --usb-port")
     logging.basicConfig(level=logging.DEBUG if args.verbose else logging.INFO,
                         format="%(asctime)s %(name)s: %(message)s")
-    sim = configure(args)
-    config = sim.config
-    try:
-        sim.start()
-    except OSError as exc:
-        tcp_failed = config.tcp_port is not None and not sim.tcp_port
-        usb_failed = config.usb_port is not None and sim.usb_port is None     # else the UDP socket failed
-        where = (f"tcp:{args.tcp}" if tcp_failed else f"tcp:{config.tcp_host}:{config.usb_port}" if usb_failed
-                 else f"udp:{args.udp_in}")
-        log.error("cannot serve MAVLink on %s: %s", where, (exc.strerror or str(exc)).lower())
-        return 1
-    log.info("simulated ArduCopter (%s) at %.6f, %.6f (%s); Ctrl-C to stop", config.profile, config.home[0],
-             config.home[1], "MAVLink 2" if speaks_mavlink2(config) else "MAVLink 1 only")
+    sims = configure_fleet(args)
+    started = []
+    for sim in sims:
+        config = sim.config
+        try:
+            sim.start()
+        except OSError as exc:
+            for other in started:
+                other.stop()
+            return _cannot_serve(args, sim, exc)
+        started.append(sim)
+        log.info("simulated ArduCopter (%s), system id %d, at %.6f, %.6f (%s) on tcp:%s:%s", config.profile,
+                 config.system_id, config.home[0], config.home[1],
+                 "MAVLink 2" if speaks_mavlink2(config) else "MAVLink 1 only", config.tcp_host, sim.tcp_port)
+    sim = sims[0]
+    log.info("Ctrl-C to stop")
     if sim.signing.enabled:
         log.info("MAVLink 2 signing on: unsigned frames are dropped except on the USB port%s",
                  f" (tcp:{config.tcp_host}:{sim.usb_port})" if sim.usb_port is not None else " (none: --usb-port)")
@@ -174,8 +195,19 @@ def main(argv: list[str] | None = None) -> int:
     except KeyboardInterrupt:
         pass
     finally:
-        sim.stop()
+        for sim in sims:
+            sim.stop()
     return 0
+
+
+def _cannot_serve(args: argparse.Namespace, sim: SimVehicle, exc: OSError) -> int:
+    config = sim.config
+    tcp_failed = config.tcp_port is not None and not sim.tcp_port
+    usb_failed = config.usb_port is not None and sim.usb_port is None     # else the UDP socket failed
+    where = (f"tcp:{config.tcp_host}:{config.tcp_port}" if tcp_failed
+             else f"tcp:{config.tcp_host}:{config.usb_port}" if usb_failed else f"udp:{args.udp_in}")
+    log.error("cannot serve MAVLink on %s: %s", where, (exc.strerror or str(exc)).lower())
+    return 1
 
 
 if __name__ == "__main__":

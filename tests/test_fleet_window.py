@@ -1,0 +1,116 @@
+"""The fleet in the window: two vehicles of a real lab (IceGrid registry, IceStorm) flown from one window."""
+from __future__ import annotations
+
+import pytest
+from PyQt5.QtCore import Qt
+from PyQt5.QtWidgets import QMessageBox
+
+from uavviewer import app as main
+from driver.ice.fleet import IceFleet
+from driver.state import LinkStatus, Severity, VehicleState
+from uavviewer.fleet import FleetController, row_for, switch_message
+
+from fleet_fixtures import fleet, lab  # noqa: F401  (fixtures)
+from ice_fixtures import eventually
+from test_viewer_flight import body_velocity, click_takeoff, press, release, speed, wait_flying
+from viewer_fixtures import viewer_settings, window_factory  # noqa: F401  (fixtures)
+
+pytestmark = pytest.mark.timeout(150)
+
+
+@pytest.fixture
+def ice_fleet(lab):
+    made = []
+
+    def make() -> IceFleet:
+        f = IceFleet(lab.address, refresh=0.3).start()
+        made.append(f)
+        return f
+    yield make
+    for f in made:
+        f.close()
+
+
+def test_command_line_takes_a_registry():
+    args = main.build_parser().parse_args(["--registry", "10.1.1.5:4061", "--vehicle", "solo-2"])
+    assert args.registry == "10.1.1.5:4061" and args.vehicle == "solo-2"
+    with pytest.raises(SystemExit):
+        main.build_parser().parse_args(["--registry", "10.1.1.5:4061", "--sim"])
+    with pytest.raises(SystemExit):
+        main.build_parser().parse_args(["--registry", "10.1.1.5:port"])
+
+
+def test_rows_say_what_each_vehicle_does_and_when_it_is_stale():
+    assert row_for("solo-1", None, False, True).link == "waiting"
+    fresh = VehicleState()
+    row = row_for("solo-1", fresh, True, True)
+    assert row.picked and row.stale and row.link == "waiting"          # no heartbeat yet
+    text, severity = switch_message("solo-1", fresh, "solo-2")
+    assert text == "The sticks, keys and buttons now fly solo-2" and severity is Severity.NOTICE
+
+
+def test_two_vehicles_flown_at_once_from_one_window(qtbot, fleet, lab, ice_fleet, window_factory, monkeypatch):
+    from driver.camera import ice_source
+    monkeypatch.setitem(ice_source.client_properties, "Ice.Default.Locator", lab.locator)
+    sims, vehicles, servers = fleet(2, **{"MAVLinkServer.Camera.Uri": "sim"})
+    f = ice_fleet()
+    assert f.wait_listed(10) and eventually(lambda: f.names() == ("solo-1", "solo-2"), 10)
+    w = window_factory(f.drone("solo-1"), takeoff_altitude=3.0, default_cameras=[FleetController.camera_uri("solo-1")])
+    controller = FleetController(f, "solo-1", parent=w)
+    w.attach_fleet(controller)
+    panel = w.fleet_panel
+    qtbot.waitUntil(lambda: len(panel.row_texts()) == 2 and all("–" not in r for r in panel.row_texts()),
+                    timeout=15000)
+    first, second = panel.row_texts()
+    assert first[0] == "▶ solo-1" and second[0] == "solo-2"              # name, mode, armed, battery, link age
+    assert first[2] == "disarmed" and first[3].endswith("%") and first[4].endswith(" s")
+    assert "Flying: <b>solo-1</b>" == panel.flyingLabel.text()
+
+    click_takeoff(qtbot, w)                                                # solo-1 through the window's button
+    wait_flying(qtbot, w, timeout=60000)
+    press(w.rightStick, 0.0, 1.0)                                          # forward
+    qtbot.waitUntil(lambda: body_velocity(sims[0])[0] > 0.8, timeout=15000)
+    assert speed(sims[1]) < 0.1 and not sims[1].truth().armed
+
+    qtbot.mouseClick(panel.table.viewport(), Qt.LeftButton, pos=panel.click_vehicle("solo-2"))   # switch in flight
+    qtbot.waitUntil(lambda: w.adapter.drone is f.drone("solo-2"), timeout=3000)
+    assert any("solo-1 left hovering" in t for t in w.messages.texts()), w.messages.texts()
+    assert panel.flyingLabel.text() == "Flying: <b>solo-2</b>" and "solo-2" in w.windowTitle()
+    assert w.camera.uris == ["ice:Camera@solo-2"]                         # its camera, through the registry
+    qtbot.waitUntil(lambda: w.camera.stats()["frames"] > 0, timeout=15000)
+    release(w.rightStick)
+    qtbot.waitUntil(lambda: speed(sims[0]) < 0.2, timeout=20000)           # the one left behind hovers
+    assert vehicles[0].state().setpoint.is_zero and sims[0].truth().altitude > 2.0
+
+    click_takeoff(qtbot, w)                                                # now the button takes off solo-2
+    wait_flying(qtbot, w, timeout=60000)
+    assert w.adapter.state.system_id == 2                                  # the instruments follow solo-2
+    press(w.rightStick, 0.0, 1.0)
+    qtbot.waitUntil(lambda: body_velocity(sims[1])[0] > 0.8, timeout=15000)
+    assert speed(sims[0]) < 0.2 and sims[0].truth().altitude > 2.0         # solo-1 still hovering
+    release(w.rightStick)
+
+    qtbot.mouseClick(panel.landAllButton, Qt.LeftButton)                   # one confirmation for all
+    qtbot.waitUntil(lambda: w.fleet_box is not None and w.fleet_box.isVisible(), timeout=3000)
+    assert "solo-1, solo-2" in w.fleet_box.text()
+    qtbot.mouseClick(w.fleet_box.button(QMessageBox.Yes), Qt.LeftButton)
+    qtbot.waitUntil(lambda: all(v.state().mode == "LAND" for v in vehicles), timeout=10000)
+    qtbot.waitUntil(lambda: not any(s.truth().armed for s in sims), timeout=60000)
+    qtbot.waitUntil(lambda: [r[2] for r in panel.row_texts()] == ["disarmed", "disarmed"], timeout=5000)
+    assert any(t.startswith("solo-1: mode LAND") for t in w.messages.texts()), w.messages.texts()   # each answer
+
+    def answer_all(button, words: str) -> None:
+        qtbot.mouseClick(button, Qt.LeftButton)
+        qtbot.waitUntil(lambda: w.fleet_box is not None and w.fleet_box.isVisible(), timeout=3000)
+        assert words in w.fleet_box.text()
+        qtbot.mouseClick(w.fleet_box.button(QMessageBox.Yes), Qt.LeftButton)
+
+    answer_all(panel.takeoffAllButton, "Take off all 2 vehicles")
+    qtbot.waitUntil(lambda: all(s.truth().altitude > 2.5 for s in sims), timeout=60000)
+    answer_all(panel.stopAllButton, "Stop all 2 vehicles")
+    qtbot.waitUntil(lambda: any(t.startswith("solo-1: stop") for t in w.messages.texts()), timeout=10000)
+    assert all(v.state().setpoint.is_zero and v.state().mode == "GUIDED" for v in vehicles)   # both hold
+
+    servers[0].close()                                                     # a vehicle's server stops: stale
+    qtbot.waitUntil(lambda: panel.row_texts()[0][4].endswith("not in the registry"), timeout=15000)
+    assert panel.row_texts()[0][0] == "solo-1" and panel.table.item(0, 0).foreground().color().name() == "#7f8791"
