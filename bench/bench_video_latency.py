@@ -48,7 +48,7 @@ BITS = 16
 BLOCK_W, BLOCK_H = 64, 60
 BAR_X, BAR_Y = (WIDTH - BITS * BLOCK_W) // 2, 300        # two rows: the number, then its inverse
 VIEW_SIZE = (960, 540)
-TOOLS = {"ffmpeg": "ffmpeg", "rtsp-server-perl": "rtsp-server-perl"}     # command -> Debian package
+TOOLS = {"ffmpeg": "ffmpeg", "rtsp-server-perl": "rtsp-server-perl", "xvfb-run": "xvfb"}   # command -> Debian package
 
 
 # -- the picture --------------------------------------------------------------------------------------------

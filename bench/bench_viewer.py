@@ -6,14 +6,15 @@
 Runs the real window (offscreen unless a display is set) on the embedded driver and the simulated vehicle,
 takes off, and holds both sticks as a pilot would, with the simulated camera playing (unless --no-camera).
 A 10 ms timer measures how late the UI thread answers: any lateness is input lag the pilot feels. It also
-times one telemetry update of every instrument (30 Hz) and one plot redraw (10 Hz), against the 33 ms of a
-30 fps frame.
+times following one snapshot (buttons, sticks, messages), one update of the attitude indicator (30 Hz), of the
+readouts (5 Hz) and one plot redraw (5 Hz), against the 33 ms of a 30 fps frame.
 
 ``--cpu``: the viewer process's CPU (all its threads, % of one core) while flying both sticks with the plots
 showing, the simulated vehicle in another process (``python -m driver.sim``), in three cases, each in a
 fresh viewer process: no camera; a 640×480 30 fps H.264 stream over RTP (SDP) from ffmpeg on 127.0.0.1
-(installed with apt-get when missing); the same with the window minimised. Run it under Xvfb: offscreen
-Qt has no window to minimise.
+(installed with apt-get when missing); the same with the window minimised. It runs under Xvfb (a real X
+server: offscreen Qt has no window to minimise); without a display it starts itself under ``xvfb-run``,
+installing Debian's xvfb when missing.
 """
 from __future__ import annotations
 
@@ -71,6 +72,11 @@ def cpu_main(seconds: float) -> None:
     import bench_video_latency as video
     here = os.path.abspath(__file__)
     root = os.path.dirname(os.path.dirname(here))
+    if not os.environ.get("DISPLAY"):
+        video.ensure_tools(["xvfb-run"])
+        env = {k: v for k, v in os.environ.items() if k != "QT_QPA_PLATFORM"}
+        sys.exit(subprocess.call(["xvfb-run", "-a", "-s", "-screen 0 1600x1000x24", sys.executable, here, "--cpu",
+                                  "--seconds", str(seconds)], env=env))
     video.ensure_tools(["ffmpeg"])
     print(f"viewer process CPU, % of one core, flying both sticks for {seconds:.0f} s "
           f"({os.environ.get('QT_QPA_PLATFORM') or 'display ' + os.environ.get('DISPLAY', '?')})", flush=True)
@@ -191,11 +197,16 @@ def main() -> None:
     w.show()
     w.activateWindow()
 
+    follow: list[float] = []
     instruments: list[float] = []
+    readouts: list[float] = []
     redraws: list[float] = []
     w.adapter.stateChanged.disconnect()
-    w.adapter.stateChanged.connect(timed(instruments, w.show_state))
-    w._plots_refresh._callback = timed(redraws, w.plots.redraw)      # the plots' refresh channel
+    w.adapter.stateChanged.connect(timed(follow, w.show_state))
+    # the views' refresh channels (uavviewer/refresh.py)
+    w._instruments._callback = timed(instruments, w._show_instruments)
+    w._readouts._callback = timed(readouts, w._show_readouts)
+    w._plots_refresh._callback = timed(redraws, w.plots.redraw)
 
     lateness: list[float] = []
     last = [time.perf_counter()]
@@ -245,8 +256,10 @@ def main() -> None:
         print(f"flying {args.seconds:.0f} s with both sticks held; camera {seen}; "
               f"{w.adapter.sent_setpoints} stick updates sent")
         describe("UI event-loop lateness (10 ms timer)", lateness)
-        describe("instruments update (per snapshot)", instruments)
-        describe("plots redraw (4 plots, 60 s)", redraws)
+        describe("following a snapshot (show_state)", follow)
+        describe("attitude indicator update (30 Hz)", instruments)
+        describe("readouts update (5 Hz)", readouts)
+        describe("plots redraw (4 plots, 60 s, 5 Hz)", redraws)
         late = np.asarray(lateness)
         print(f"UI answered within one 30 fps frame {100.0 * (late <= FRAME_MS).mean():.2f} % of the time; "
               f"{int((late > 50).sum())} stalls over 50 ms")
