@@ -165,6 +165,11 @@ def test_live_streams_open_with_the_low_latency_options_and_files_do_not(tmp_pat
     for uri in (sdp, "solo"):                       # what RTP needs stays
         assert RTP_FFMPEG_OPTIONS in open_source(uri, start=False).ffmpeg_options
     assert open_source(sdp, start=False, low_latency=False).ffmpeg_options == RTP_FFMPEG_OPTIONS
+    rtsp = open_source("rtsp://127.0.0.1:8554/live", start=False)   # TCP first (as OpenCV's default), then
+    transports = []                                                  # FFmpeg's own choice (UDP first), in turn
+    for rtsp._attempts in (1, 2, 3):
+        transports.append("rtsp_transport;tcp" in rtsp._options_now())
+    assert transports == [True, False, True]
     plain = open_source("udp://127.0.0.1:5600", start=False, low_latency=False)
     assert not plain.low_latency and plain.ffmpeg_options is None
     file = open_source(clip, start=False)

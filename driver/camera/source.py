@@ -30,9 +30,7 @@ _FFMPEG_ENV = "OPENCV_FFMPEG_CAPTURE_OPTIONS"
 #: FFmpeg's options for live video (OpenCV's OPENCV_FFMPEG_CAPTURE_OPTIONS, ``key;value|key;value``): hand each
 #: packet on as it arrives instead of buffering input (nobuffer), no wait to reorder packets (max_delay 0), the
 #: decoder's low-delay mode (low_delay), and a short look at the stream before the first picture (probesize,
-#: analyzeduration). bench/bench_video_latency.py measures what they save. Given any options, OpenCV no longer
-#: forces RTSP over TCP: FFmpeg asks for UDP first (lower delay; a server like rtsp-server-perl offers nothing
-#: else) and falls back to TCP when the server refuses it or no packet comes by UDP.
+#: analyzeduration). bench/bench_video_latency.py measures what they save.
 LOW_LATENCY_OPTIONS = "fflags;nobuffer|flags;low_delay|max_delay;0|probesize;32768|analyzeduration;200000"
 
 
@@ -40,6 +38,11 @@ LOW_LATENCY_OPTIONS = "fflags;nobuffer|flags;low_delay|max_delay;0|probesize;327
 #: picture back for each extra thread (33 ms at 30 fps on two cores, measured); one thread decodes 720p30
 #: H.264 at a fraction of a core (bench/bench_video_latency.py prints the viewer's CPU).
 LOW_LATENCY_THREADS = 1
+#: Given no options OpenCV asks for RTSP over TCP; given ours, FFmpeg would ask for UDP first and wait 10 s for
+#: a packet before trying TCP, longer than our open timeout. So a low-latency RTSP source asks for TCP (what
+#: worked before), and after a failed attempt lets FFmpeg choose (UDP first: a server such as rtsp-server-perl
+#: serves nothing else), alternating until one delivers.
+RTSP_OVER_TCP = "rtsp_transport;tcp"
 
 
 def join_options(*parts: str | None) -> str:
@@ -295,7 +298,14 @@ class OpenCVSource(VideoSource):
 
     @property
     def ffmpeg_options(self) -> str | None:
-        """What OPENCV_FFMPEG_CAPTURE_OPTIONS holds while this source opens (None: OpenCV's defaults)."""
+        """What OPENCV_FFMPEG_CAPTURE_OPTIONS holds while this source opens (None: OpenCV's defaults); a
+        low-latency RTSP source adds :data:`RTSP_OVER_TCP` on every other attempt, the first included."""
+        return self._ffmpeg_options
+
+    def _options_now(self) -> str | None:
+        """The options for this attempt: an RTSP source alternates between TCP and FFmpeg's own choice."""
+        if self.low_latency and self.uri.lower().startswith(("rtsp://", "rtsps://")) and self._attempts % 2 == 1:
+            return join_options(self._ffmpeg_options, RTSP_OVER_TCP)
         return self._ffmpeg_options
 
     def _open(self) -> None:
@@ -308,14 +318,15 @@ class OpenCVSource(VideoSource):
         params = [cv2.CAP_PROP_OPEN_TIMEOUT_MSEC, self._timeout_ms, cv2.CAP_PROP_READ_TIMEOUT_MSEC, self._timeout_ms]
         if self.low_latency:
             params += [cv2.CAP_PROP_N_THREADS, LOW_LATENCY_THREADS]
-        if self._ffmpeg_options is None:
+        options = self._options_now()
+        if options is None:
             cap = cv2.VideoCapture(self._target, self._api, params)
         else:
             # OpenCV's FFmpeg backend reads this variable when a capture opens; it is process-wide,
             # so it is set only for this open
             with _ENV_LOCK:
                 old = os.environ.get(_FFMPEG_ENV)
-                os.environ[_FFMPEG_ENV] = self._ffmpeg_options
+                os.environ[_FFMPEG_ENV] = options
                 try:
                     cap = cv2.VideoCapture(self._target, self._api, params)
                 finally:
