@@ -1,16 +1,21 @@
 #!/usr/bin/env python3
-"""Ice figures: Pose3D round trip beside an empty Ice call, and stick-to-wire latency through Ice, the
+"""Ice figures: every JdeRobot call beside an empty Ice call, and stick-to-wire latency through Ice, the
 embedded driver, and the window (on-screen stick, gamepad).
 
     python bench/bench_ice.py [--calls 2000] [--sticks 200] [--no-ice]
 
-The server runs as its own process (``python -m driver``), connected to a small
+The server runs as its own process (``python -m driver --camera sim``), connected to a small
 MAVLink probe here that plays a GUIDED, armed vehicle and timestamps every
 SET_POSITION_TARGET_LOCAL_NED the driver writes on the TCP link.
 
-1. Round trip: ``getPose3DData`` and ``ice_ping`` (the empty call) alternate on
-   the same proxy connection; median and 95th percentile, and their ratio
-   (the server's own work per Pose3D call, the 2017 server slept 50 ms here).
+1. Round trip: ``ice_ping`` (the empty call), ``Pose3D.getPose3DData``, ``Navdata.getNavdata``,
+   ``CMDVel.setCMDVelData`` (JdeRobot's CMDVel has no getter) and ``Camera.getImageData("RGB8")``
+   (the current 640×480 frame) take turns on one connection, all in one run; median and 95th
+   percentile, and each one's ratio to the empty call (the server's own work per call; the 2017
+   server slept 50 ms here). A frame is 921,600 bytes that Ice must copy whatever the servant does,
+   so getImageData is also set beside the floor for that reply: a second process whose Camera answers
+   with one prepared ImageData of the same size and does nothing else; likewise setCMDVelData beside a
+   CMDVel there that takes the same CMDVelData and answers 0.
 2. Stick to wire: ``IceDrone.set_velocity`` (what the viewer calls when a stick
    moves) → CMDVel → server → driver → MAVLink on the wire; beside the same for
    the embedded driver (``Vehicle.set_velocity``, no Ice).
@@ -117,8 +122,57 @@ def figures(name: str, samples: list[float]) -> float:
     samples = sorted(samples)
     median = statistics.median(samples)
     p95 = samples[int(0.95 * (len(samples) - 1))]
-    print(f"  {name:34} median {median * 1e6:8.0f} µs   p95 {p95 * 1e6:8.0f} µs   (n={len(samples)})")
+    print(f"  {name:38} median {median * 1e6:8.0f} µs   p95 {p95 * 1e6:8.0f} µs   (n={len(samples)})")
     return median
+
+
+IMAGE_SIZE = (640, 480)
+
+
+def serve_floor() -> int:
+    """The floor for a frame-sized reply: a Camera that answers one prepared 640×480 RGB8 ImageData."""
+    import Ice
+
+    from driver.ice import load_slice
+    jderobot, _ = load_slice()
+    w, h = IMAGE_SIZE
+    data = jderobot.ImageData(jderobot.Time(0, 0), jderobot.ImageDescription(w, h, w * h * 3, "RGB8", ""),
+                              bytes(w * h * 3))
+
+    class Floor(jderobot.Camera):
+        def getImageData(self, format, current=None):
+            return data
+
+    class FloorCMDVel(jderobot.CMDVel):
+        def setCMDVelData(self, data, current=None):
+            return 0
+
+    props = Ice.createProperties()
+    props.setProperty("Ice.MessageSizeMax", "4096")
+    props.setProperty("Ice.ThreadPool.Server.Size", "1")       # as the driver's server
+    props.setProperty("Ice.ThreadPool.Server.SizeMax", "2")
+    init = Ice.InitializationData()
+    init.properties = props
+    with Ice.initialize(init) as com:
+        adapter = com.createObjectAdapterWithEndpoints("Floor", "tcp -h 127.0.0.1")
+        print(com.proxyToString(adapter.add(Floor(), Ice.stringToIdentity("Camera"))), flush=True)
+        print(com.proxyToString(adapter.add(FloorCMDVel(), Ice.stringToIdentity("CMDVel"))), flush=True)
+        adapter.activate()
+        sys.stdin.read()                                        # until the bench closes our stdin
+    return 0
+
+
+def round_trips(calls: dict, count: int) -> dict[str, list[float]]:
+    """Each call in turn, ``count`` times (after a warm-up): every call sees the same moments of the machine."""
+    samples: dict[str, list[float]] = {name: [] for name in calls}
+    for i in range(count + 200):
+        for name, call in calls.items():
+            t0 = time.perf_counter()
+            call()
+            t1 = time.perf_counter()
+            if i >= 200:
+                samples[name].append(t1 - t0)
+    return samples
 
 
 def stick_to_wire(set_velocity, probe: WireProbe, count: int) -> list[float]:
@@ -210,7 +264,10 @@ def main() -> int:
     ap.add_argument("--calls", type=int, default=2000)
     ap.add_argument("--sticks", type=int, default=200)
     ap.add_argument("--no-ice", action="store_true", help="only the embedded driver and the window")
+    ap.add_argument("--serve-floor", action="store_true", help=argparse.SUPPRESS)
     opts = ap.parse_args()
+    if opts.serve_floor:
+        return serve_floor()
     if opts.no_ice:
         print(f"stick to wire, {opts.sticks} velocity changes at 20 Hz")
         embedded_and_window(opts.sticks)
@@ -226,40 +283,55 @@ def main() -> int:
     probe = WireProbe()
     port = free_port()
     server = subprocess.Popen([sys.executable, "-m", "driver", "--master", f"tcp:127.0.0.1:{probe.port}",
-                               "--daemon", "--no-log", "--one-port", str(port)], cwd=ROOT,
+                               "--daemon", "--no-log", "--one-port", str(port), "--camera", "sim"], cwd=ROOT,
                               stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-    com = Ice.initialize(["--Ice.Default.InvocationTimeout=5000"])
+    floor = subprocess.Popen([sys.executable, os.path.abspath(__file__), "--serve-floor"], cwd=ROOT,
+                             stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True)
+    com = Ice.initialize(["--Ice.Default.InvocationTimeout=5000", "--Ice.MessageSizeMax=4096"])
     drone = None
     try:
-        pose = jderobot.Pose3DPrx.uncheckedCast(com.stringToProxy(f"Pose3D:tcp -h 127.0.0.1 -p {port}"))
-        status = mavlinkserver.VehiclePrx.uncheckedCast(com.stringToProxy(f"Vehicle:tcp -h 127.0.0.1 -p {port}"))
+        def proxy(kind, name):
+            return kind.uncheckedCast(com.stringToProxy(f"{name}:tcp -h 127.0.0.1 -p {port}"))
+        pose = proxy(jderobot.Pose3DPrx, "Pose3D")
+        nav = proxy(jderobot.NavdataPrx, "Navdata")
+        cmdvel = proxy(jderobot.CMDVelPrx, "CMDVel")
+        camera = proxy(jderobot.CameraPrx, "Camera")
+        status = proxy(mavlinkserver.VehiclePrx, "Vehicle")
+        floor_camera = jderobot.CameraPrx.uncheckedCast(com.stringToProxy(floor.stdout.readline().strip()))
+        floor_cmdvel = jderobot.CMDVelPrx.uncheckedCast(com.stringToProxy(floor.stdout.readline().strip()))
         deadline = time.monotonic() + 20
         while True:
             try:
                 if status.getStatus(-1, -1).mode == "GUIDED":
+                    camera.getImageData("RGB8")
                     break
-            except Ice.ConnectionRefusedException:
+            except (Ice.ConnectionRefusedException, jderobot.DataNotExistException):
                 pass
             if time.monotonic() > deadline:
                 raise RuntimeError("server did not come up")
             time.sleep(0.1)
 
-        print(f"Ice {Ice.stringVersion()}, server process, loopback, {opts.calls} calls each")
-        empty, pose3d = [], []
-        for _ in range(200):                         # warm up
-            pose.ice_ping()
-            pose.getPose3DData()
-        for _ in range(opts.calls):
-            t0 = time.perf_counter()
-            pose.ice_ping()
-            t1 = time.perf_counter()
-            pose.getPose3DData()
-            t2 = time.perf_counter()
-            empty.append(t1 - t0)
-            pose3d.append(t2 - t1)
-        e = figures("ice_ping (empty call)", empty)
-        p = figures("Pose3D.getPose3DData", pose3d)
-        print(f"  ratio Pose3D / empty call: {p / e:.2f}")
+        hover = jderobot.CMDVelData(0.0, 0.0, 0.0, 0.0, 0.0, 0.0)
+        calls = {
+            "ice_ping (empty call)": pose.ice_ping,
+            "Pose3D.getPose3DData": pose.getPose3DData,
+            "Navdata.getNavdata": nav.getNavdata,
+            "CMDVel.setCMDVelData": lambda: cmdvel.setCMDVelData(hover),
+            "Camera.getImageData RGB8 640x480": lambda: camera.getImageData("RGB8"),
+            "floor: same-size ImageData, no work": lambda: floor_camera.getImageData("RGB8"),
+            "floor: CMDVelData in, 0 out, no work": lambda: floor_cmdvel.setCMDVelData(hover),
+        }
+        print(f"Ice {Ice.stringVersion()}, server process, loopback, {opts.calls} calls each, taking turns")
+        samples = round_trips(calls, opts.calls)
+        medians = {name: figures(name, values) for name, values in samples.items()}
+        empty = medians["ice_ping (empty call)"]
+        for name in ("Pose3D.getPose3DData", "Navdata.getNavdata", "CMDVel.setCMDVelData",
+                     "Camera.getImageData RGB8 640x480"):
+            print(f"  ratio {name} / empty call: {medians[name] / empty:.2f}")
+        image, floor_image = medians["Camera.getImageData RGB8 640x480"], medians["floor: same-size ImageData, no work"]
+        print(f"  ratio Camera.getImageData / the floor for a 921,600-byte reply: {image / floor_image:.2f}")
+        print(f"  ratio CMDVel.setCMDVelData / the floor for a CMDVelData call: "
+              f"{medians['CMDVel.setCMDVelData'] / medians['floor: CMDVelData in, 0 out, no work']:.2f}")
 
         print(f"stick to wire, {opts.sticks} velocity changes at 20 Hz")
         props = viewer_properties(host=None)
@@ -275,6 +347,8 @@ def main() -> int:
         com.destroy()
         server.terminate()
         server.wait(10)
+        floor.stdin.close()
+        floor.wait(10)
         probe.close()
 
     local = embedded_and_window(opts.sticks)

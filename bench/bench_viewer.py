@@ -1,16 +1,24 @@
-"""How instant the window stays while flying: UI event-loop lateness and the cost of each redraw.
+"""How instant the window stays while flying, and what the viewer costs: UI lateness, redraws, CPU.
 
     .venv/bin/python bench/bench_viewer.py [--seconds 30] [--no-camera] [--gamepad] [--dock map|plots] [--tiles]
+    xvfb-run -s "-screen 0 1600x1000x24" .venv/bin/python bench/bench_viewer.py --cpu [--seconds 30]
 
 Runs the real window (offscreen unless a display is set) on the embedded driver and the simulated vehicle,
 takes off, and holds both sticks as a pilot would, with the simulated camera playing (unless --no-camera).
 A 10 ms timer measures how late the UI thread answers: any lateness is input lag the pilot feels. It also
-times one telemetry update of every instrument (30 Hz, the map included), one map update and one plot redraw
-(10 Hz), against the 33 ms of a 30 fps frame. ``--dock`` chooses which of the tabbed Map and Plots docks is
-in view (the map by default, as the window opens); ``--tiles`` shows map tiles from a local tile server
-(tests/tile_server.py) instead of the offline grid. With --gamepad, an SDL virtual gamepad flies instead:
-another thread sweeps both its sticks at 100 Hz, as a pilot's thumbs would, and the SDL reader thread feeds
-the window.
+times following one snapshot (buttons, sticks, messages, the map's data), one update of the attitude indicator
+(30 Hz), of the readouts (5 Hz), one map paint and one plot redraw (5 Hz), against the 33 ms of a 30 fps frame.
+``--dock`` chooses which of the tabbed Map and Plots docks is in view (the map by default, as the window opens);
+``--tiles`` shows map tiles from a local tile server (tests/tile_server.py) instead of the offline grid. With
+--gamepad, an SDL virtual gamepad flies instead: another thread sweeps both its sticks at 100 Hz, as a pilot's
+thumbs would, and the SDL reader thread feeds the window.
+
+``--cpu``: the viewer process's CPU (all its threads, % of one core) while flying both sticks with the plots
+showing, the simulated vehicle in another process (``python -m driver.sim``), in three cases, each in a
+fresh viewer process: no camera; a 640×480 30 fps H.264 stream over RTP (SDP) from ffmpeg on 127.0.0.1
+(installed with apt-get when missing); the same with the window minimised. It runs under Xvfb (a real X
+server: offscreen Qt has no window to minimise); without a display it starts itself under ``xvfb-run``,
+installing Debian's xvfb when missing.
 """
 from __future__ import annotations
 
@@ -24,6 +32,7 @@ import time
 from dataclasses import replace
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))             # bench_video_latency's sender
 if not os.environ.get("DISPLAY"):
     os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
 
@@ -52,6 +61,123 @@ def describe(name: str, ms: list[float]) -> None:
           f"max {a.max():6.2f} ms  (p99 = {np.percentile(a, 99) / FRAME_MS:.2f} of a 30 fps frame)")
 
 
+CASES = ("no camera", "640x480 30 fps stream", "minimised, with the stream")
+
+
+def free_port() -> int:
+    import socket
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return s.getsockname()[1]
+
+
+def cpu_main(seconds: float) -> None:
+    """Each case in its own viewer process, against its own simulated vehicle process."""
+    import json
+    import subprocess
+
+    import bench_video_latency as video
+    here = os.path.abspath(__file__)
+    root = os.path.dirname(os.path.dirname(here))
+    if not os.environ.get("DISPLAY"):
+        video.ensure_tools(["xvfb-run"])
+        env = {k: v for k, v in os.environ.items() if k != "QT_QPA_PLATFORM"}
+        sys.exit(subprocess.call(["xvfb-run", "-a", "-s", "-screen 0 1600x1000x24", sys.executable, here, "--cpu",
+                                  "--seconds", str(seconds)], env=env))
+    video.ensure_tools(["ffmpeg"])
+    print(f"viewer process CPU, % of one core, flying both sticks for {seconds:.0f} s "
+          f"({os.environ.get('QT_QPA_PLATFORM') or 'display ' + os.environ.get('DISPLAY', '?')})", flush=True)
+    for case in CASES:
+        port = free_port()
+        sim = subprocess.Popen([sys.executable, "-m", "driver.sim", "--tcp", f"127.0.0.1:{port}",
+                                "--ready-after", "1"], cwd=root, stdout=subprocess.DEVNULL,
+                               stderr=subprocess.DEVNULL)
+        sender = None
+        with tempfile.TemporaryDirectory() as tmp:
+            try:
+                video.wait_for_port(port)
+                uri = ""
+                if case != "no camera":
+                    sender = video.Sender("rtp", tmp, size=(640, 480))
+                    uri = sender.uri
+                run = subprocess.run([sys.executable, here, "--cpu-case", case, "--port", str(port),
+                                      "--seconds", str(seconds), "--uri", uri], cwd=root, capture_output=True,
+                                     text=True, timeout=seconds + 150)
+            finally:
+                if sender is not None:
+                    sender.close()
+                sim.terminate()
+                sim.wait(10)
+        try:
+            r = json.loads(run.stdout.strip().splitlines()[-1])
+        except (IndexError, ValueError):
+            print(f"  {case}: failed: {run.stderr[-1500:]}", flush=True)
+            continue
+        print(f"  {case:28} {r['cpu']:5.1f} %   (UI thread {r['ui']:4.1f} %; {r['painted']} video frames painted, "
+              f"{r['shown']} snapshots "
+              f"shown, minimised {r['minimised']})", flush=True)
+
+
+def cpu_case(case: str, port: int, seconds: float, uri: str) -> None:
+    """One viewer: take off, hold both sticks, then measure this process's CPU over ``seconds``."""
+    import json
+    import resource
+
+    app = QApplication(sys.argv[:1])
+    app.setStyleSheet(load_style())
+    drone = Vehicle(VehicleConfig(connection=f"tcp:127.0.0.1:{port}", takeoff_altitude=3.0)).start()
+    settings = QSettings(os.path.join(tempfile.mkdtemp(), "bench.ini"), QSettings.IniFormat)
+    w = MainWindow(drone, qsettings=settings, takeoff_altitude=3.0, cameras=[uri] if uri else None,
+                   default_cameras=[])
+    w.resize(1600, 1000)
+    w.show()
+    w.activateWindow()
+    painted, shown = [0], [0]
+    w.camera_view.framePainted.connect(lambda *_: painted.__setitem__(0, painted[0] + 1))
+    w.adapter.stateChanged.connect(lambda *_: shown.__setitem__(0, shown[0] + 1))
+    result: dict = {}
+    phase = ["takeoff"]
+
+    def pilot() -> None:
+        s = drone.state()
+        if phase[0] == "takeoff" and s.readiness.ready_to_arm:
+            phase[0] = "climbing"
+            w.adapter.command("takeoff", 3.0)
+        if s.can_fly_velocity:
+            w.rightStick.hold(0.3, 0.8)
+            w.leftStick.hold(0.4, 0.1)
+            if phase[0] == "climbing":
+                phase[0] = "settling"
+                if case.startswith("minimised"):
+                    w.showMinimized()
+                QTimer.singleShot(3000, start)
+
+    def start() -> None:
+        r = resource.getrusage(resource.RUSAGE_SELF)
+        result.update(cpu0=r.ru_utime + r.ru_stime, t0=time.monotonic(), painted0=painted[0], shown0=shown[0],
+                      ui0=time.thread_time())
+        QTimer.singleShot(int(seconds * 1000), stop)
+
+    def stop() -> None:
+        r = resource.getrusage(resource.RUSAGE_SELF)
+        wall = time.monotonic() - result["t0"]
+        result.update(cpu=100.0 * (r.ru_utime + r.ru_stime - result["cpu0"]) / wall,
+                      ui=100.0 * (time.thread_time() - result["ui0"]) / wall,
+                      painted=painted[0] - result["painted0"], shown=shown[0] - result["shown0"],
+                      minimised=w.isMinimized())
+        app.quit()
+
+    driver = QTimer()
+    driver.timeout.connect(pilot)
+    driver.start(200)
+    QTimer.singleShot(int((seconds + 120) * 1000), app.quit)     # never hang
+    app.exec_()
+    w.centre_sticks()
+    w.close()
+    drone.close()
+    print(json.dumps({k: v for k, v in result.items() if k in ("cpu", "ui", "painted", "shown", "minimised")}))
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seconds", type=float, default=30.0)
@@ -59,7 +185,15 @@ def main() -> None:
     ap.add_argument("--gamepad", action="store_true", help="fly with an SDL virtual gamepad, sticks sweeping")
     ap.add_argument("--dock", choices=("map", "plots"), default="map", help="the tabbed dock in view")
     ap.add_argument("--tiles", action="store_true", help="map tiles from a local tile server, not the grid")
+    ap.add_argument("--cpu", action="store_true", help="the viewer's CPU: no camera, a stream, minimised")
+    ap.add_argument("--cpu-case", choices=CASES, help=argparse.SUPPRESS)
+    ap.add_argument("--port", type=int, help=argparse.SUPPRESS)
+    ap.add_argument("--uri", default="", help=argparse.SUPPRESS)
     args = ap.parse_args()
+    if args.cpu:
+        return cpu_main(args.seconds)
+    if args.cpu_case:
+        return cpu_case(args.cpu_case, args.port, args.seconds, args.uri)
 
     app = QApplication(sys.argv[:1])
     app.setStyleSheet(load_style())
@@ -82,16 +216,20 @@ def main() -> None:
         w.set_settings(replace(w.settings, tile_url=tile_server.url, tile_attribution="local tiles"))
         w.mapPanel.layerCombo.setCurrentIndex(1)
 
+    follow: list[float] = []
     instruments: list[float] = []
+    readouts: list[float] = []
     redraws: list[float] = []
     map_updates: list[float] = []
     map_paints: list[float] = []
     w.map.show_state = timed(map_updates, w.map.show_state)
     w.mapPanel.mapView.paintEvent = timed(map_paints, w.mapPanel.mapView.paintEvent)
     w.adapter.stateChanged.disconnect()
-    w.adapter.stateChanged.connect(timed(instruments, w.show_state))
-    w.plots._timer.timeout.disconnect()
-    w.plots._timer.timeout.connect(timed(redraws, w.plots.redraw))
+    w.adapter.stateChanged.connect(timed(follow, w.show_state))
+    # the views' refresh channels (uavviewer/refresh.py)
+    w._instruments._callback = timed(instruments, w._show_instruments)
+    w._readouts._callback = timed(readouts, w._show_readouts)
+    w._plots_refresh._callback = timed(redraws, w.plots.redraw)
 
     lateness: list[float] = []
     last = [time.perf_counter()]
@@ -167,11 +305,13 @@ def main() -> None:
         print(f"flying {args.seconds:.0f} s with {flown}; camera {seen}; "
               f"{w.adapter.sent_setpoints} stick updates sent")
         describe("UI event-loop lateness (10 ms timer)", lateness)
-        describe("instruments update (per snapshot)", instruments)
+        describe("following a snapshot (show_state)", follow)
         describe(f"  of which the map ({'tiles' if args.tiles else 'grid'})", map_updates)
         if map_paints:
             describe("map paint", map_paints)
-        describe("plots redraw (4 plots, 60 s)", redraws)
+        describe("attitude indicator update (30 Hz)", instruments)
+        describe("readouts update (5 Hz)", readouts)
+        describe("plots redraw (4 plots, 60 s, 5 Hz)", redraws)
         late = np.asarray(lateness)
         print(f"UI answered within one 30 fps frame {100.0 * (late <= FRAME_MS).mean():.2f} % of the time; "
               f"{int((late > 50).sum())} stalls over 50 ms")

@@ -273,3 +273,14 @@ def test_server_with_sim_serves_the_simulated_camera(tmp_path):
         src.close(wait=3)
         server.terminate()
         server.wait(10)
+
+
+def test_server_streams_open_for_latency_unless_configured_off():
+    """A live stream on the server opens with the low-latency options; LowLatency=0 keeps OpenCV's defaults
+    (several decoder threads) for a companion computer too slow to decode on one."""
+    for config, expected in (({}, True), ({"LowLatency": "0"}, False), ({"LowLatency": "1"}, True)):
+        servant = CameraI({"Uri": f"udp://127.0.0.1:{free_udp_port()}", "TimeoutMs": "500", **config})
+        try:
+            assert servant.source.low_latency is expected, config
+        finally:
+            servant.close()

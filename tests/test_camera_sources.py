@@ -134,15 +134,46 @@ def test_missing_camera_says_no_such_device_and_retries_quietly():
 
 
 def test_mpegts_over_udp(tmp_path, sources):
+    """Read slower than the stream (nobody takes a frame for a while), the source hands over the newest one:
+    each new frame replaced the last untaken (counted as dropped), none queued."""
     data = write_ts(str(tmp_path / "stream.ts"))
     port = free_udp_port()
     with UdpSender(data, port):
         src = sources(f"udp://127.0.0.1:{port}", timeout_ms=2000)
         wait(lambda: src.status().frames >= 10, what="UDP frames")
+        before = src.status()
         frame = src.latest()
+        after = src.status()
         src.close(wait=3)
         assert frame.image.shape == (240, 320, 3)
         assert any(close_to(frame.image[120, 160], c) for c in COLOURS)
+    assert before.frames <= frame.index <= after.frames
+    assert before.dropped >= before.frames - 1          # every frame but the newest was replaced untaken
+
+
+def test_live_streams_open_with_the_low_latency_options_and_files_do_not(tmp_path):
+    """Network streams, SDP and the Solo are opened for latency (FFmpeg's options, one decoder thread) by
+    default; a file, paced at its own rate, keeps OpenCV's defaults; low_latency=False is the old opening."""
+    from driver.camera.solo import RTP_FFMPEG_OPTIONS
+    from driver.camera.source import LOW_LATENCY_OPTIONS
+    clip = write_clip(str(tmp_path / "clip.mp4"))
+    sdp = write_sdp(str(tmp_path / "stream.sdp"), free_udp_port(), "H264/90000", 96)
+    for uri in ("udp://127.0.0.1:5600", "rtsp://127.0.0.1:8554/live", "rtp://127.0.0.1:5000", sdp, "solo"):
+        src = open_source(uri, start=False)
+        assert src.low_latency and LOW_LATENCY_OPTIONS in src.ffmpeg_options, uri
+        assert "nobuffer" in src.ffmpeg_options and "low_delay" in src.ffmpeg_options
+    for uri in (sdp, "solo"):                       # what RTP needs stays
+        assert RTP_FFMPEG_OPTIONS in open_source(uri, start=False).ffmpeg_options
+    assert open_source(sdp, start=False, low_latency=False).ffmpeg_options == RTP_FFMPEG_OPTIONS
+    rtsp = open_source("rtsp://127.0.0.1:8554/live", start=False)   # TCP first (as OpenCV's default), then
+    transports = []                                                  # FFmpeg's own choice (UDP first), in turn
+    for rtsp._attempts in (1, 2, 3):
+        transports.append("rtsp_transport;tcp" in rtsp._options_now())
+    assert transports == [True, False, True]
+    plain = open_source("udp://127.0.0.1:5600", start=False, low_latency=False)
+    assert not plain.low_latency and plain.ffmpeg_options is None
+    file = open_source(clip, start=False)
+    assert not file.low_latency and file.ffmpeg_options is None
 
 
 def test_stream_that_stops_reports_and_comes_back(tmp_path, sources):

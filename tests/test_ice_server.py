@@ -354,3 +354,26 @@ def test_client_generated_by_slice2py_from_jderobot_files_only(vehicle, sim, ice
     assert out["answers"][0] == 0 and out["answers"][1] != 0
     assert "no camera source" in out["camera"]
     assert out["wp"] == "::jderobot::Pose3D"
+
+
+def test_getters_share_one_conversion_per_snapshot_with_the_same_values(vehicle):
+    """Pose3D and WP (and Navdata) answer a prepared value converted once per driver snapshot: the very
+    object for every call until the driver publishes a new snapshot, holding what the conversion gives."""
+    from driver.ice import servants
+    settings = servants.ServerSettings()
+    shared = servants.Snapshots(vehicle, settings)
+    pose3d, wp = servants.Pose3DI(vehicle, "Pose3D", settings, shared), servants.Pose3DI(vehicle, "WP", settings, shared)
+    nav = servants.NavdataI(vehicle, settings, shared)
+
+    def one_snapshot():
+        state = vehicle.state()
+        answers = (pose3d.getPose3DData(), wp.getPose3DData(), nav.getNavdata(), nav.getNavdata())
+        return (state, answers) if vehicle.state() is state else None
+
+    state, (a, b, n1, n2) = eventually(one_snapshot, 5)
+    assert a is b and n1 is n2
+    assert (a.x, a.y, a.z, a.h, a.q0, a.q1, a.q2, a.q3) == convert.pose_enu(state)
+    expected = convert.navdata_fields(state, settings.navdata_vehicle, n1.tm)
+    assert {k: getattr(n1, k) for k in expected} == expected
+    assert vehicle.wait_for(lambda s: s is not state, 5)
+    assert pose3d.getPose3DData() is not a and nav.getNavdata() is not n1

@@ -235,8 +235,9 @@ def test_foreign_packets_are_counted_and_the_vehicles_address_shown(qtbot, sim_f
                                  and w.adapter.state.link.pinned_to), timeout=10000)
     pinned = w.adapter.state.link.pinned_to
     mode = w.adapter.state.mode
+    # the panel's numbers redraw at reading speed (refresh.TEXT_HZ), not with every snapshot
+    qtbot.waitUntil(lambda: pinned in w.telemetry.tooltip("foreign"), timeout=3000)
     assert w.telemetry.text("foreign") == "0" and w.telemetry.color("foreign") == NORMAL
-    assert pinned in w.telemetry.tooltip("foreign")
     qtbot.waitUntil(lambda: f"vehicle at {pinned}" in w.link_status.text(), timeout=3000)
     spoofer = Spoofer(port)
     try:
@@ -297,6 +298,7 @@ def test_a_remote_drone_says_why_link_security_is_set_up_on_its_server(qtbot, ve
                                                                        drone_factory, window_factory):
     w = window_factory(drone_factory(server_factory(vehicle)))
     qtbot.waitUntil(lambda: w.adapter.state.connected, timeout=15000)
+    qtbot.waitUntil(lambda: "MAVLinkServer" in w.telemetry.tooltip("signing"), timeout=3000)   # its next redraw
     for row in ("signing", "signed", "foreign"):
         assert w.telemetry.text(row) == "--" and "MAVLinkServer" in w.telemetry.tooltip(row)
     dialog = open_link_security(qtbot, w)

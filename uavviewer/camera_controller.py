@@ -58,6 +58,7 @@ class CameraController(QObject):
         self._open_options = dict(source_options, state_fn=state_fn)
         self._cameras = CameraSet(uris, **self._open_options) if uris else None
         self._wake_pending = False
+        self._shown = True                      # whether the pilot can see the window (not minimised)
         self._frameArrived.connect(self._on_frame_arrived, Qt.QueuedConnection)
         self._switchDone.connect(self._on_switch_done, Qt.QueuedConnection)
         if self._cameras is not None:
@@ -90,8 +91,24 @@ class CameraController(QObject):
     def source(self):
         return self._cameras.source if self._cameras else None
 
+    def set_shown(self, shown: bool) -> None:
+        """Whether the pilot can see the video (the window is not minimised). While not, nothing is painted and
+        the source is closed, so nothing is decoded either, unless it is recording (then it keeps capturing).
+        Back, the source opens again and its newest picture is shown."""
+        self._shown = shown
+        if self._cameras is not None:
+            if not shown and self._recorder is None:
+                self._cameras.suspend()
+            elif shown and self._cameras.suspended:
+                self._cameras.resume()
+                self._shown_index, self._shown_source = 0, None
+        if shown:
+            self.poll()
+
     def poll(self) -> None:
         """Show the newest frame if it is new, or why there is none; refresh the HUD."""
+        if not self._shown:
+            return
         if self._state_fn is not None:
             try:
                 self.view.set_state(self._state_fn())
@@ -111,8 +128,8 @@ class CameraController(QObject):
             self.view.set_frame(frame)
 
     def _wake(self, frame) -> None:
-        """Capture thread: ask the UI thread to look, unless it has not looked since the last ask."""
-        if not self._wake_pending:
+        """Capture thread: ask the UI thread to look, unless it has not looked since the last ask (or nobody sees)."""
+        if self._shown and not self._wake_pending:
             self._wake_pending = True
             self._frameArrived.emit()
 
@@ -141,6 +158,10 @@ class CameraController(QObject):
         }
 
     def _update_stats(self) -> None:
+        if self._recorder is not None and self._recorder.error:     # the encoder gave up on its thread
+            self.set_recording(False)
+        if not self._shown:
+            return
         s = self.stats()
         if s["resolution"] is None:
             self.view.set_stats("")
@@ -148,8 +169,6 @@ class CameraController(QObject):
             w, h = s["resolution"]
             latency = "--" if s["latency_median"] is None else f"{s['latency_median'] * 1000:.0f}"
             self.view.set_stats(f"{s['fps']:.0f} fps · {w}×{h} · {latency} ms · {s['dropped']} dropped")
-        if self._recorder is not None and self._recorder.error:     # the encoder gave up on its thread
-            self.set_recording(False)
         if self._recorder is not None:
             seconds = int(time.monotonic() - self._record_started)
             self.view.set_recording(f"REC {seconds // 60:02d}:{seconds % 60:02d}")
@@ -185,11 +204,15 @@ class CameraController(QObject):
                 return self._fail(f"Cannot record: {e}")
             self._recorder, self._record_started = recorder, time.monotonic()
             self._cameras.add_listener(recorder.push)
+            if self._cameras.suspended:                 # recording needs the frames, seen or not
+                self._cameras.resume()
             self.panel.set_note(f"Recording {recorder.path}")
         elif not on and self._recorder is not None:
             recorder, self._recorder = self._recorder, None
             self._cameras.remove_listener(recorder.push)
             recorder.stop()
+            if not self._shown:
+                self._cameras.suspend()                 # nobody watches and nothing records any more
             self.view.set_recording("")
             if recorder.error:
                 self._fail(f"Cannot record: {recorder.error}")
@@ -257,6 +280,8 @@ class CameraController(QObject):
             self._cameras.close()
         self._cameras = CameraSet(list(uris), **self._open_options) if uris else None
         self._shown_index, self._shown_source = 0, None
+        if self._cameras is not None and not self._shown:
+            self._cameras.suspend()
         self.panel.set_switch_enabled(self._can_switch())
         if self._cameras is None:
             self.view.set_message(NO_CAMERA)

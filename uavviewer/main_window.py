@@ -29,6 +29,7 @@ from .keyboard import ACTION_KEYS, AXIS_KEYS, KeyboardSticks
 from .link_security import signing_unavailable, signing_warning
 from .pilot_input import Input, InputSelector
 from .map_controller import MapController, TileSettings
+from .refresh import INSTRUMENTS_HZ, PLOTS_HZ, TEXT_HZ, Refresh
 from .settings import ViewerSettings, default_qsettings, load_settings, load_window, save_settings, save_window
 from .sticks import Axes, MaxSpeeds, axes_from_pads, combine, pad_labels, velocity_from_axes
 from .widgets.camera_panel import CameraPanel
@@ -83,6 +84,13 @@ class MainWindow(QMainWindow):
         self._quitting = False                   # closing without asking (answered, or a signal)
         self._connection_to_remember = ""
         self._t0 = time.monotonic()
+        self._shown_state: VehicleState | None = None   # the snapshot the views show next (refresh channels)
+        # Views redraw at the rate the eye needs and not while minimised (refresh.py); logic follows every snapshot.
+        self.refresh = Refresh(self)
+        self._instruments = self.refresh.add(INSTRUMENTS_HZ, self._show_instruments)
+        self._readouts = self.refresh.add(TEXT_HZ, self._show_readouts)
+        self._plots_refresh = self.refresh.add(PLOTS_HZ, self.plots.redraw)
+        self.plots.set_redraw_rate(0)                  # the refresh channel draws the plots
 
         self.setWindowTitle(f"UavViewerPy — {self.adapter.description}")
         self._signing_unavailable = signing_unavailable(drone)     # a remote drone is signed on its server
@@ -98,6 +106,7 @@ class MainWindow(QMainWindow):
                                                                or self._default_cameras),
                                        state_fn=lambda: self.adapter.drone.state(), drone=drone,  # the picked
                                        folder=self.settings.media_folder or None, parent=self)
+        self.refresh.shownChanged.connect(self.camera.set_shown)
         self.camera_panel.hud_button.setChecked(self.settings.hud)
         self.menuView.addAction(self.telemetryDock.toggleViewAction())
         self.menuView.addAction(self.plotsDock.toggleViewAction())
@@ -271,6 +280,8 @@ class MainWindow(QMainWindow):
 
     # -- state in --------------------------------------------------------------------------------
     def show_state(self, s: VehicleState) -> None:
+        """Every snapshot: what must follow the vehicle at once (buttons, sticks, questions, messages, the plots'
+        data); the views that only show it redraw through their refresh channels."""
         if self._connection_to_remember and s.connected:
             self.settings.last_connection, self._connection_to_remember = self._connection_to_remember, ""
             save_settings(self._qsettings, self.settings)
@@ -283,22 +294,13 @@ class MainWindow(QMainWindow):
             self._settings_dialog.set_signing(s.signing)
         if self._emergency_box is not None and not s.armed:
             self._emergency_box.reject()            # the motors have stopped: nothing left to ask
-        have_vehicle = link.status is not LinkStatus.WAITING and bool(s.mode)
-        if link.status in (LinkStatus.LOST, LinkStatus.CLOSED):
-            if self.attitude.values["flag"] != "NO LINK":       # the last attitude is no longer the drone's
-                self.attitude.clear("NO LINK")
-        elif have_vehicle:
-            self.attitude.set_attitude(s.attitude.roll, s.attitude.pitch, s.heading_deg)
-            self.attitude.set_readouts(s.altitude, s.velocity.ground_speed, s.velocity.climb)
-        self.telemetry.set_state(s)
-        self.map.show_state(s)
+        self.map.show_state(s)                      # cheap; it repaints only on a change it can show
         phase = flight_phase(s)
         progress = takeoff_progress(s) if phase is FlightPhase.TAKING_OFF else None
         detail = s.takeoff.phase.value if s.takeoff.active else ""
         self.flightControls.set_vehicle(phase, s.armed, s.connected, progress, detail)
         if self._takeoff_box is not None and not self._may_take_off(s):
             self._takeoff_box.reject()              # the question no longer fits the vehicle: withdraw it
-        self.phaseLabel.setText(self._phase_text(s, phase))
         self.modeSelector.set_mode(s.mode)
         self.modeSelector.setEnabled(s.connected)
         self._set_sticks_live(s)
@@ -310,10 +312,12 @@ class MainWindow(QMainWindow):
             if r.index not in self._shown_results:
                 self._shown_results.add(r.index)
                 self.messages.add_result(r)
+        have_vehicle = link.status is not LinkStatus.WAITING and bool(s.mode)
         if link.status is not LinkStatus.OK or (replay is not None and replay.paused):
             if not self._plot_gap:                  # no line drawn across the time nothing came in
                 self._plot_gap = True
                 self.plots.gap(time.monotonic() - self._t0)
+                self._plots_refresh.mark()
         elif have_vehicle and s.time != self._last_sample_time:
             self._plot_gap = False
             self._last_sample_time = s.time
@@ -322,6 +326,32 @@ class MainWindow(QMainWindow):
             self.plots.append(time.monotonic() - self._t0, altitude=s.altitude, forward=forward,
                               right=right, climb=s.velocity.climb, roll=math.degrees(s.attitude.roll),
                               pitch=math.degrees(s.attitude.pitch), heading=s.heading_deg)
+            self._plots_refresh.mark()
+        self._shown_state = s
+        self._instruments.mark()
+        self._readouts.mark()
+
+    def _show_instruments(self) -> None:
+        """The attitude indicator (INSTRUMENTS_HZ)."""
+        s = self._shown_state
+        if s is None:
+            return
+        if s.link.status in (LinkStatus.LOST, LinkStatus.CLOSED):
+            if self.attitude.values["flag"] != "NO LINK":       # the last attitude is no longer the drone's
+                self.attitude.clear("NO LINK")
+        elif s.link.status is not LinkStatus.WAITING and s.mode:
+            self.attitude.set_attitude(s.attitude.roll, s.attitude.pitch, s.heading_deg)
+            self.attitude.set_readouts(s.altitude, s.velocity.ground_speed, s.velocity.climb)
+
+    def _show_readouts(self) -> None:
+        """Numbers and status lines (TEXT_HZ): telemetry, the phase line, the status bar, the replay clock."""
+        s = self._shown_state
+        if s is None:
+            return
+        link = s.link
+        self.telemetry.set_state(s)
+        self.phaseLabel.setText(self._phase_text(s, flight_phase(s)))
+        replay = self.adapter.replay
         if replay is not None:
             try:
                 self.replayBar.set_progress(replay.position, replay.duration, replay.paused, replay.speed,

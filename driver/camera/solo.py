@@ -103,11 +103,12 @@ class SoloSource(OpenCVSource):
 
     def __init__(self, host: str = SOLO_HOST, tcp_port: int = SOLO_VIDEO_TCP_PORT,
                  udp_port: int = SOLO_VIDEO_UDP_PORT, sdp_path: str | None = None, encoding: str = "H264/90000",
-                 payload: int = 96, name: str = "Solo camera", timeout_ms: int = 5000):
+                 payload: int = 96, name: str = "Solo camera", timeout_ms: int = 5000, low_latency: bool = True):
         self.sdp_path = sdp_path
         self._own_sdp = sdp_path is None
         self._sdp = (udp_port, encoding, payload)
-        super().__init__(sdp_path or "", name, stream=True, ffmpeg_options=RTP_FFMPEG_OPTIONS, timeout_ms=timeout_ms)
+        super().__init__(sdp_path or "", name, stream=True, ffmpeg_options=RTP_FFMPEG_OPTIONS, timeout_ms=timeout_ms,
+                         low_latency=low_latency)
         self.uri = "solo"
         self.link = SoloLink(host, tcp_port)
 

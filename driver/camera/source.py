@@ -27,6 +27,27 @@ __all__ = ["Frame", "SourceStatus", "VideoSource", "OpenCVSource", "SourceEnded"
 FFMPEG_TIMEOUT_MS = 5000
 STALL_S = 2.0                   # no new frame for this long: the video is stalled, not live
 _FFMPEG_ENV = "OPENCV_FFMPEG_CAPTURE_OPTIONS"
+#: FFmpeg's options for live video (OpenCV's OPENCV_FFMPEG_CAPTURE_OPTIONS, ``key;value|key;value``): hand each
+#: packet on as it arrives instead of buffering input (nobuffer), no wait to reorder packets (max_delay 0), the
+#: decoder's low-delay mode (low_delay), and a short look at the stream before the first picture (probesize,
+#: analyzeduration). bench/bench_video_latency.py measures what they save.
+LOW_LATENCY_OPTIONS = "fflags;nobuffer|flags;low_delay|max_delay;0|probesize;32768|analyzeduration;200000"
+
+
+#: Decoder threads for live video. OpenCV gives FFmpeg one per core, and FFmpeg's frame threading holds a
+#: picture back for each extra thread (33 ms at 30 fps on two cores, measured); one thread decodes 720p30
+#: H.264 at a fraction of a core (bench/bench_video_latency.py prints the viewer's CPU).
+LOW_LATENCY_THREADS = 1
+#: Given no options OpenCV asks for RTSP over TCP; given ours, FFmpeg would ask for UDP first and wait 10 s for
+#: a packet before trying TCP, longer than our open timeout. So a low-latency RTSP source asks for TCP (what
+#: worked before), and after a failed attempt lets FFmpeg choose (UDP first: a server such as rtsp-server-perl
+#: serves nothing else), alternating until one delivers.
+RTSP_OVER_TCP = "rtsp_transport;tcp"
+
+
+def join_options(*parts: str | None) -> str:
+    """FFmpeg option strings joined for OPENCV_FFMPEG_CAPTURE_OPTIONS (empty parts left out)."""
+    return "|".join(p for p in parts if p)
 _ENV_LOCK = threading.Lock()
 
 
@@ -247,7 +268,8 @@ class OpenCVSource(VideoSource):
 
     def __init__(self, target: str | int, name: str | None = None, *, loop: bool = False,
                  api: int | None = None, stream: bool | None = None, ffmpeg_options: str | None = None,
-                 streaming_uri: str = "", timeout_ms: int = FFMPEG_TIMEOUT_MS):
+                 streaming_uri: str = "", timeout_ms: int = FFMPEG_TIMEOUT_MS, low_latency: bool = False):
+        """``low_latency`` (a live stream through FFmpeg): open it with :data:`LOW_LATENCY_OPTIONS`."""
         import cv2
         uri = str(target)
         super().__init__(uri, name)
@@ -259,6 +281,9 @@ class OpenCVSource(VideoSource):
         # a file is paced at its own frame rate, as a camera would deliver it, and may loop;
         # a stream (camera, network, SDP) is read as fast as it comes and reopened when it ends
         self._is_file = not stream
+        self.low_latency = bool(low_latency and stream)
+        if self.low_latency:
+            ffmpeg_options = join_options(LOW_LATENCY_OPTIONS, ffmpeg_options)
         self._ffmpeg_options = ffmpeg_options
         self._streaming_uri = streaming_uri
         self._timeout_ms = int(timeout_ms)
@@ -271,6 +296,18 @@ class OpenCVSource(VideoSource):
     def streaming_uri(self) -> str:
         return self._streaming_uri
 
+    @property
+    def ffmpeg_options(self) -> str | None:
+        """What OPENCV_FFMPEG_CAPTURE_OPTIONS holds while this source opens (None: OpenCV's defaults); a
+        low-latency RTSP source adds :data:`RTSP_OVER_TCP` on every other attempt, the first included."""
+        return self._ffmpeg_options
+
+    def _options_now(self) -> str | None:
+        """The options for this attempt: an RTSP source alternates between TCP and FFmpeg's own choice."""
+        if self.low_latency and self.uri.lower().startswith(("rtsp://", "rtsps://")) and self._attempts % 2 == 1:
+            return join_options(self._ffmpeg_options, RTSP_OVER_TCP)
+        return self._ffmpeg_options
+
     def _open(self) -> None:
         import cv2
         if isinstance(self._target, str) and self._looks_local_file() and not os.path.exists(self._target):
@@ -279,14 +316,17 @@ class OpenCVSource(VideoSource):
         if device and not os.path.exists(device):      # checked here: OpenCV would only log its own complaint
             raise SourceFailed(f"no such device: {device}")
         params = [cv2.CAP_PROP_OPEN_TIMEOUT_MSEC, self._timeout_ms, cv2.CAP_PROP_READ_TIMEOUT_MSEC, self._timeout_ms]
-        if self._ffmpeg_options is None:
+        if self.low_latency:
+            params += [cv2.CAP_PROP_N_THREADS, LOW_LATENCY_THREADS]
+        options = self._options_now()
+        if options is None:
             cap = cv2.VideoCapture(self._target, self._api, params)
         else:
             # OpenCV's FFmpeg backend reads this variable when a capture opens; it is process-wide,
             # so it is set only for this open
             with _ENV_LOCK:
                 old = os.environ.get(_FFMPEG_ENV)
-                os.environ[_FFMPEG_ENV] = self._ffmpeg_options
+                os.environ[_FFMPEG_ENV] = options
                 try:
                     cap = cv2.VideoCapture(self._target, self._api, params)
                 finally:

@@ -74,13 +74,15 @@ def describe_uri(uri: str) -> str:
 
 def open_source(uri: str, *, state_fn: Callable[[], VehicleState] | None = None, loop: bool = False,
                 image_format: str = "RGB8", timeout_ms: int = FFMPEG_TIMEOUT_MS,
-                sim_size: tuple[int, int] = (640, 480), stall_s: float = STALL_S, start: bool = True) -> VideoSource:
+                sim_size: tuple[int, int] = (640, 480), stall_s: float = STALL_S, start: bool = True,
+                low_latency: bool = True) -> VideoSource:
     """The source ``uri`` names (see the module table), started unless ``start`` is False.
 
     ``state_fn`` returns the latest vehicle state; the simulated camera needs it. ``timeout_ms``
     bounds how long opening or reading a stream may hang before it counts as failed; ``stall_s`` is
     how long without a new frame makes a live source "stalled" (0: never); ``sim_size``
-    is the simulated camera's width and height.
+    is the simulated camera's width and height; ``low_latency`` opens live FFmpeg streams (network, SDP,
+    the Solo) with :data:`~driver.camera.source.LOW_LATENCY_OPTIONS`.
     Opening happens on the source's own thread, so this never blocks.
     """
     import cv2
@@ -95,7 +97,7 @@ def open_source(uri: str, *, state_fn: Callable[[], VehicleState] | None = None,
         source: VideoSource = SimSource(state_fn, width=sim_size[0], height=sim_size[1])
     elif u == "solo" or u.startswith("solo:"):
         host = u.partition(":")[2]
-        source = SoloSource(host or SOLO_HOST, timeout_ms=timeout_ms)
+        source = SoloSource(host or SOLO_HOST, timeout_ms=timeout_ms, low_latency=low_latency)
     elif u.startswith("ice:"):
         from .ice_source import IceSource
         source = IceSource(u[4:].strip(), image_format, timeout_ms=timeout_ms)
@@ -105,12 +107,13 @@ def open_source(uri: str, *, state_fn: Callable[[], VehicleState] | None = None,
         source = OpenCVSource(u, f"camera {u}", stream=True, timeout_ms=timeout_ms)
     elif "://" in u and u.split("://", 1)[0].lower() in STREAM_SCHEMES:
         source = OpenCVSource(u, describe_uri(u), api=cv2.CAP_FFMPEG, stream=True,
-                              streaming_uri=u if _shareable(u) else "", timeout_ms=timeout_ms)
+                              streaming_uri=u if _shareable(u) else "", timeout_ms=timeout_ms,
+                              low_latency=low_latency)
     elif "://" in u:
         source = UnsupportedSource(u)
     elif u.lower().endswith(".sdp"):
         source = OpenCVSource(os.path.abspath(u), describe_uri(u), api=cv2.CAP_FFMPEG, stream=True,
-                              ffmpeg_options=RTP_FFMPEG_OPTIONS, timeout_ms=timeout_ms)
+                              ffmpeg_options=RTP_FFMPEG_OPTIONS, timeout_ms=timeout_ms, low_latency=low_latency)
     else:
         path, looped = _split_loop(u)
         source = OpenCVSource(os.path.abspath(path), describe_uri(u), api=cv2.CAP_FFMPEG, stream=False,
@@ -137,7 +140,7 @@ class CameraSet:
     """
 
     def __init__(self, uris: list[str], *, on_switch: Callable[[VideoSource], None] | None = None, **options):
-        """``options`` go to :func:`open_source` (state_fn, loop, image_format, timeout_ms, stall_s)."""
+        """``options`` go to :func:`open_source` (state_fn, loop, image_format, timeout_ms, stall_s, low_latency)."""
         if not uris:
             raise ValueError("no camera source configured")
         self.uris = list(uris)
@@ -146,6 +149,7 @@ class CameraSet:
         self._index = 0
         self._listeners: list[Callable] = []
         self._on_switch = on_switch
+        self._suspended = False
         self._source = open_source(self.uris[0], **self._opts)
 
     @property
@@ -179,12 +183,37 @@ class CameraSet:
                 for callback in self._listeners:
                     self._source.add_listener(callback)
                 self._source.start()
+                self._suspended = False
                 old.close()
                 log.info("camera switched to %s", self._source.uri)
             source = self._source
         if self._on_switch is not None:
             self._on_switch(source)
         return source
+
+    @property
+    def suspended(self) -> bool:
+        return self._suspended
+
+    def suspend(self) -> None:
+        """Stop capturing and decoding (nobody watches and nothing records): the source is closed, never blocking."""
+        with self._lock:
+            if not self._suspended:
+                self._suspended = True
+                self._source.close()
+                log.info("camera %s suspended", self._source.uri)
+
+    def resume(self) -> VideoSource:
+        """Open the current source again after :meth:`suspend` (a fresh capture: the newest picture, no backlog)."""
+        with self._lock:
+            if self._suspended:
+                self._suspended = False
+                self._source = open_source(self.uris[self._index], start=False, **self._opts)
+                for callback in self._listeners:
+                    self._source.add_listener(callback)
+                self._source.start()
+                log.info("camera %s resumed", self._source.uri)
+            return self._source
 
     def close(self, wait: float = 0.0) -> None:
         self._source.close(wait)

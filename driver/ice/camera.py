@@ -10,7 +10,9 @@ Configuration (``MAVLinkServer.Camera.*``, prefix removed): ``Uri`` (and ``Uri.2
 ``RecordMaxMB`` (the most one recording may hold, default 4000), ``RecordDirMaxMB`` (the most our
 recordings in ``RecordDir`` may hold together, default 20000), ``TimeoutMs`` (how long
 opening or reading a stream may hang, default 5000), ``StallMs`` (how long without a new frame
-counts as a failure, default 2000), ``Width``/``Height`` (the simulated camera's, 640×480).
+counts as a failure, default 2000), ``Width``/``Height`` (the simulated camera's, 640×480), ``LowLatency``
+(0 opens a live stream with OpenCV's defaults: several decoder threads, for a companion computer too slow to
+decode it on one; default 1).
 
 recordOnUsb is a network call anyone who reaches the port can make, so what it can write is
 bounded: files only in ``RecordDir``, named by us (date and the camera's ``Name``, reduced to
@@ -72,6 +74,8 @@ class CameraI(jderobot.Camera):
         options = dict(state_fn=state_fn, loop=config.get("Loop", "0").lower() in ("1", "true", "yes"))
         if config.get("TimeoutMs", "").strip().isdigit():
             options["timeout_ms"] = int(config["TimeoutMs"])
+        if config.get("LowLatency", "").strip().lower() in ("0", "false", "no"):
+            options["low_latency"] = False
         if config.get("StallMs", "").strip().isdigit():
             options["stall_s"] = int(config["StallMs"]) / 1000.0
         if config.get("Width", "").strip().isdigit() and config.get("Height", "").strip().isdigit():

@@ -80,17 +80,52 @@ def _log_failure(what: str):
     return done
 
 
+class Snapshots:
+    """What the JdeRobot getters answer, converted once per driver snapshot and shared by every servant.
+
+    The driver publishes a new immutable :class:`~driver.state.VehicleState` when telemetry changes; between
+    two snapshots every ``getPose3DData``/``getNavdata`` of every client gets the same prepared Ice value, so
+    a call costs a lookup, not a conversion. Ice only reads a value it marshals, so sharing one is safe; a
+    race between two dispatch threads at most converts the same snapshot twice.
+    """
+
+    def __init__(self, vehicle: Drone, settings: ServerSettings | None = None):
+        self._vehicle = vehicle
+        self._settings = settings if settings is not None else ServerSettings()
+        self._started = time.time()
+        self._pose: tuple[object, object] = (None, None)        # (snapshot, Pose3DData)
+        self._navdata: tuple[object, object] = (None, None)     # (snapshot, NavdataData)
+
+    def pose(self):
+        state = self._vehicle.state()
+        seen, pose = self._pose
+        if seen is not state:
+            pose = jderobot.Pose3DData(*convert.pose_enu(state))
+            self._pose = (state, pose)
+        return pose
+
+    def navdata(self):
+        state = self._vehicle.state()
+        seen, nav = self._navdata
+        if seen is not state:
+            clock = max(0.0, state.time - self._started) if state.time else 0.0    # when the snapshot was taken
+            nav = jderobot.NavdataData(**convert.navdata_fields(state, self._settings.navdata_vehicle, clock))
+            self._navdata = (state, nav)
+        return nav
+
+
 class Pose3DI(jderobot.Pose3D):
     """Pose in ENU from home; set = fly there (both the ``Pose3D`` and the waypoint ``WP`` servant)."""
 
-    def __init__(self, vehicle: Drone, name: str = "Pose3D", settings: ServerSettings | None = None):
+    def __init__(self, vehicle: Drone, name: str = "Pose3D", settings: ServerSettings | None = None,
+                 snapshots: Snapshots | None = None):
         self._vehicle = vehicle
         self._name = name
         self._settings = settings if settings is not None else ServerSettings()
+        self._snapshots = snapshots if snapshots is not None else Snapshots(vehicle, self._settings)
 
     def getPose3DData(self, current=None):
-        x, y, z, h, q0, q1, q2, q3 = convert.pose_enu(self._vehicle.state())
-        return jderobot.Pose3DData(x, y, z, h, q0, q1, q2, q3)
+        return self._snapshots.pose()
 
     def setPose3DData(self, data, current=None):
         target = None if data is None else convert.waypoint_from_enu(data.x, data.y, data.z)
@@ -123,10 +158,10 @@ class CMDVelI(jderobot.CMDVel):
         if data is None:
             return -1
         values = (data.linearX, data.linearY, data.linearZ, data.angularX, data.angularY, data.angularZ)
-        if not finite(*values):
+        if not all(map(math.isfinite, values)):          # Ice hands floats; a NaN or inf is refused
             log.warning("CMDVel refused: non-finite value in %s", values)
             return -1
-        if max(abs(v) for v in values) > self._settings.cmdvel_refuse_above:
+        if max(map(abs, values)) > self._settings.cmdvel_refuse_above:
             log.warning("CMDVel refused: value beyond %g in %s", self._settings.cmdvel_refuse_above, values)
             return -2
         flu = convert.clamp_cmdvel((data.linearX, data.linearY, data.linearZ, data.angularZ),
@@ -135,14 +170,11 @@ class CMDVelI(jderobot.CMDVel):
 
 
 class NavdataI(jderobot.Navdata):
-    def __init__(self, vehicle: Drone, settings: ServerSettings):
-        self._vehicle = vehicle
-        self._settings = settings
-        self._start = time.monotonic()
+    def __init__(self, vehicle: Drone, settings: ServerSettings, snapshots: Snapshots | None = None):
+        self._snapshots = snapshots if snapshots is not None else Snapshots(vehicle, settings)
 
     def getNavdata(self, current=None):
-        return jderobot.NavdataData(**convert.navdata_fields(
-            self._vehicle.state(), self._settings.navdata_vehicle, time.monotonic() - self._start))
+        return self._snapshots.navdata()
 
 
 class ArDroneExtraI(jderobot.ArDroneExtra):

@@ -361,9 +361,11 @@ class IceServer:
         if self.camera is None:
             self.camera = make_camera_servant(self.properties, self.vehicle)
         v, s = self.vehicle, self.settings
-        return {"Camera": self.camera, "Pose3D": servants.Pose3DI(v, "Pose3D", s), "CMDVel": servants.CMDVelI(v, s),
-                "Navdata": servants.NavdataI(v, s), "Extra": servants.ArDroneExtraI(v, s, self.camera),
-                "WP": servants.Pose3DI(v, "WP", s), "Vehicle": servants.VehicleI(v, s)}
+        shared = servants.Snapshots(v, s)               # each snapshot converted once for every servant
+        return {"Camera": self.camera, "Pose3D": servants.Pose3DI(v, "Pose3D", s, shared),
+                "CMDVel": servants.CMDVelI(v, s), "Navdata": servants.NavdataI(v, s, shared),
+                "Extra": servants.ArDroneExtraI(v, s, self.camera), "WP": servants.Pose3DI(v, "WP", s, shared),
+                "Vehicle": servants.VehicleI(v, s)}
 
     def start(self) -> "IceServer":
         check_exposure(self.properties)

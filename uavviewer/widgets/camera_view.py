@@ -95,7 +95,7 @@ class CameraView(QWidget):
     def set_state(self, state: VehicleState | None) -> None:
         if state is not self._state:
             self._state = state
-            if self._hud:
+            if self._hud and self._frame is not None:      # the HUD is drawn over a picture only
                 self.update()
 
     def set_hud_visible(self, visible: bool) -> None:

@@ -29,6 +29,7 @@ class FlightControls(QWidget):
         super().__init__(parent)
         self._phase = FlightPhase.NO_VEHICLE
         self._armed = False
+        self._shown: tuple | None = None        # the last set_vehicle arguments: nothing to redo when unchanged
         self.main_button = self._button("mainButton", "Take off", "takeoff")
         self.main_button.setMinimumHeight(52)
         self.progress = QProgressBar()
@@ -72,6 +73,9 @@ class FlightControls(QWidget):
     def set_vehicle(self, phase: FlightPhase, armed: bool, connected: bool,
                     progress: float | None = None, detail: str = "") -> None:
         self._phase, self._armed = phase, armed
+        if (phase, armed, connected, progress, detail) == self._shown:
+            return
+        self._shown = (phase, armed, connected, progress, detail)
         b = self.main_button
         if phase is FlightPhase.ON_GROUND or phase is FlightPhase.NO_VEHICLE:
             b.setText("Take off")

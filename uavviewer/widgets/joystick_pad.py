@@ -48,8 +48,9 @@ class JoystickPad(QWidget):
 
     def set_hint(self, text: str) -> None:
         """Why the pad is inert, shown over it while disabled."""
-        self._hint = text
-        self.update()
+        if text != self._hint:
+            self._hint = text
+            self.update()
 
     def centre(self) -> None:
         """Spring back: knob to the middle, one (0, 0) emitted if it was off-centre."""

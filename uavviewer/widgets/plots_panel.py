@@ -92,6 +92,14 @@ class PlotsPanel(QWidget):
         self._timer.timeout.connect(self.redraw)
         self._timer.start()
 
+    def set_redraw_rate(self, hz: float) -> None:
+        """Redraw on the panel's own timer at ``hz``; 0 stops it (the window's refresh channel draws instead)."""
+        if hz > 0:
+            self._timer.setInterval(int(1000 / hz))
+            self._timer.start()
+        else:
+            self._timer.stop()
+
     @property
     def sample_count(self) -> int:
         return min(self._n, self._cap)
