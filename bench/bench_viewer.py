@@ -71,8 +71,8 @@ def free_port() -> int:
         return s.getsockname()[1]
 
 
-def cpu_main(seconds: float) -> None:
-    """Each case in its own viewer process, against its own simulated vehicle process."""
+def cpu_main(seconds: float, dock: str) -> None:
+    """Each case in its own viewer process, against its own simulated vehicle process; ``dock`` in view."""
     import json
     import subprocess
 
@@ -83,9 +83,9 @@ def cpu_main(seconds: float) -> None:
         video.ensure_tools(["xvfb-run"])
         env = {k: v for k, v in os.environ.items() if k != "QT_QPA_PLATFORM"}
         sys.exit(subprocess.call(["xvfb-run", "-a", "-s", "-screen 0 1600x1000x24", sys.executable, here, "--cpu",
-                                  "--seconds", str(seconds)], env=env))
+                                  "--seconds", str(seconds), "--dock", dock], env=env))
     video.ensure_tools(["ffmpeg"])
-    print(f"viewer process CPU, % of one core, flying both sticks for {seconds:.0f} s "
+    print(f"viewer process CPU, % of one core, flying both sticks for {seconds:.0f} s, the {dock} dock in view "
           f"({os.environ.get('QT_QPA_PLATFORM') or 'display ' + os.environ.get('DISPLAY', '?')})", flush=True)
     for case in CASES:
         port = free_port()
@@ -101,7 +101,8 @@ def cpu_main(seconds: float) -> None:
                     sender = video.Sender("rtp", tmp, size=(640, 480))
                     uri = sender.uri
                 run = subprocess.run([sys.executable, here, "--cpu-case", case, "--port", str(port),
-                                      "--seconds", str(seconds), "--uri", uri], cwd=root, capture_output=True,
+                                      "--seconds", str(seconds), "--uri", uri, "--dock", dock], cwd=root,
+                                     capture_output=True,
                                      text=True, timeout=seconds + 150)
             finally:
                 if sender is not None:
@@ -118,7 +119,7 @@ def cpu_main(seconds: float) -> None:
               f"shown, minimised {r['minimised']})", flush=True)
 
 
-def cpu_case(case: str, port: int, seconds: float, uri: str) -> None:
+def cpu_case(case: str, port: int, seconds: float, uri: str, dock: str) -> None:
     """One viewer: take off, hold both sticks, then measure this process's CPU over ``seconds``."""
     import json
     import resource
@@ -132,6 +133,7 @@ def cpu_case(case: str, port: int, seconds: float, uri: str) -> None:
     w.resize(1600, 1000)
     w.show()
     w.activateWindow()
+    (w.mapDock if dock == "map" else w.plotsDock).raise_()
     painted, shown = [0], [0]
     w.camera_view.framePainted.connect(lambda *_: painted.__setitem__(0, painted[0] + 1))
     w.adapter.stateChanged.connect(lambda *_: shown.__setitem__(0, shown[0] + 1))
@@ -191,9 +193,9 @@ def main() -> None:
     ap.add_argument("--uri", default="", help=argparse.SUPPRESS)
     args = ap.parse_args()
     if args.cpu:
-        return cpu_main(args.seconds)
+        return cpu_main(args.seconds, args.dock)
     if args.cpu_case:
-        return cpu_case(args.cpu_case, args.port, args.seconds, args.uri)
+        return cpu_case(args.cpu_case, args.port, args.seconds, args.uri, args.dock)
 
     app = QApplication(sys.argv[:1])
     app.setStyleSheet(load_style())
