@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 import os
+from collections.abc import Callable
 from dataclasses import replace
 
 from PyQt5 import uic
@@ -194,12 +195,8 @@ class SettingsDialog(QDialog):
         key = self.chosen_key()
         if key is None:
             return None
-        box = signing_setup_question(self)
-        box.setWindowModality(Qt.WindowModal)
-        box.finished.connect(lambda _result, b=box, k=key: self._setup_answered(b, k))
-        self.setup_box = box
-        box.open()
-        return box
+        self.setup_box = ask(signing_setup_question(self), lambda box: self._setup_answered(box, key))
+        return self.setup_box
 
     def _setup_answered(self, box: QMessageBox, key: bytes) -> None:
         if box.clickedButton() is box.button(QMessageBox.Yes):
@@ -265,6 +262,15 @@ class KeysDialog(QDialog):
             self.table.setItem(i, 0, QTableWidgetItem(key))
             self.table.setItem(i, 1, QTableWidgetItem(text))
         self.table.resizeColumnToContents(0)
+
+
+def ask(box: QMessageBox, answered: Callable[[QMessageBox], None]) -> QMessageBox:
+    """Open a question window-modal without blocking (the window keeps flying meanwhile); ``answered(box)`` runs
+    once it closes, however it closes."""
+    box.setWindowModality(Qt.WindowModal)
+    box.finished.connect(lambda _result: answered(box))
+    box.open()
+    return box
 
 
 def takeoff_question(parent: QWidget, altitude: float) -> QMessageBox:

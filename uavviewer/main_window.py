@@ -20,7 +20,9 @@ from driver.rules import mode_warning
 from driver.state import LinkStatus, Severity, VehicleState
 
 from . import RESOURCES
-from .dialogs import KeysDialog, SettingsDialog, emergency_stop_question, mode_question, takeoff_question
+from .dialogs import (
+    KeysDialog, SettingsDialog, ask, emergency_stop_question, mode_question, takeoff_question,
+)
 from .camera_controller import CameraController, default_media_folder
 from .drone_adapter import DroneAdapter
 from .flight_phase import FlightPhase, flight_phase, readiness_text, stick_hint, takeoff_progress
@@ -521,11 +523,7 @@ class MainWindow(QMainWindow):
         if warning is None:
             self._command("set_mode", name)
             return
-        box = mode_question(self, name, warning)
-        box.setWindowModality(Qt.WindowModal)
-        box.finished.connect(lambda _result, b=box, n=name: self._mode_answered(b, n))
-        self._mode_box = box
-        box.open()
+        self._mode_box = ask(mode_question(self, name, warning), lambda box: self._mode_answered(box, name))
 
     def _mode_answered(self, box: QMessageBox, name: str) -> None:
         if box.clickedButton() is box.button(QMessageBox.Yes):
@@ -543,11 +541,7 @@ class MainWindow(QMainWindow):
         if self._takeoff_box is not None and self._takeoff_box.isVisible():
             return
         altitude = self.takeoff_altitude
-        box = takeoff_question(self, altitude)
-        box.setWindowModality(Qt.WindowModal)
-        box.finished.connect(lambda result, a=altitude, b=box: self._takeoff_answered(b, a))
-        self._takeoff_box = box
-        box.open()
+        self._takeoff_box = ask(takeoff_question(self, altitude), lambda box: self._takeoff_answered(box, altitude))
 
     @property
     def takeoff_box(self) -> QMessageBox | None:
@@ -576,11 +570,7 @@ class MainWindow(QMainWindow):
             return
         if self._emergency_box is not None and self._emergency_box.isVisible():
             return
-        box = emergency_stop_question(self)
-        box.setWindowModality(Qt.WindowModal)
-        box.finished.connect(lambda _result, b=box: self._emergency_answered(b))
-        self._emergency_box = box
-        box.open()
+        self._emergency_box = ask(emergency_stop_question(self), self._emergency_answered)
 
     def _emergency_answered(self, box: QMessageBox) -> None:
         if box.clickedButton() is box.button(QMessageBox.Yes):
@@ -654,10 +644,7 @@ class MainWindow(QMainWindow):
             leave = box.addButton("Quit anyway", QMessageBox.DestructiveRole)
             box.addButton(QMessageBox.Cancel)
             box.setDefaultButton(land)
-            box.setWindowModality(Qt.WindowModal)
-            box.finished.connect(lambda _r, b=box, l=land, q=leave: self._quit_answered(b, l, q))
-            self._quit_box = box
-            box.open()
+            self._quit_box = ask(box, lambda box: self._quit_answered(box, land, leave))
         return True
 
     def _quit_answered(self, box: QMessageBox, land, leave) -> None:
@@ -731,11 +718,8 @@ class MainWindow(QMainWindow):
             return
         if command != "takeoff":
             self.centre_sticks()
-        box = all_vehicles_question(self, command, names, self.takeoff_altitude)
-        box.setWindowModality(Qt.WindowModal)
-        box.finished.connect(lambda _result, b=box, c=command: self._all_answered(b, c))
-        self.fleet_box = box
-        box.open()
+        self.fleet_box = ask(all_vehicles_question(self, command, names, self.takeoff_altitude),
+                             lambda box: self._all_answered(box, command))
 
     def _all_answered(self, box: QMessageBox, command: str) -> None:
         if box.clickedButton() is box.button(QMessageBox.Yes):

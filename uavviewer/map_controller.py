@@ -13,13 +13,13 @@ import math
 import time
 from dataclasses import dataclass
 
-from PyQt5.QtCore import QObject, Qt, pyqtSignal
+from PyQt5.QtCore import QObject, pyqtSignal
 from PyQt5.QtWidgets import QMessageBox, QWidget
 
 from driver.rules import MAX_ALTITUDE, MIN_GOTO_ALTITUDE
 from driver.state import CommandResult, VehicleState
 
-from .dialogs import fly_here_question
+from .dialogs import ask, fly_here_question
 from .geo import MapFrame, tiles_covering, tile_zoom_for
 from .tiles import MAX_AREA_TILES, TileSource
 from .trail import Trail
@@ -246,12 +246,9 @@ class MapController(QObject):
         text = (f"Fly {far:.0f} m to {abs(north):.0f} m {'north' if north >= 0 else 'south'}, {abs(east):.0f} m "
                 f"{'east' if east >= 0 else 'west'} of home, at {altitude:g} m above home?\n\n"
                 "Stop or Escape halts it where it is.")
-        box = fly_here_question(self._window, text)
-        box.setWindowModality(Qt.WindowModal)
-        box.finished.connect(lambda _r, b=box, t=(north, east, altitude): self._answered(b, t))
-        self._question = box
-        box.open()
-        self.flyHereAsked.emit(box)
+        self._question = ask(fly_here_question(self._window, text),
+                             lambda box: self._answered(box, (north, east, altitude)))
+        self.flyHereAsked.emit(self._question)
 
     @property
     def question(self) -> QMessageBox | None:
