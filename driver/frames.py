@@ -48,16 +48,9 @@ def enu_quaternion(roll: float, pitch: float, yaw: float) -> tuple[float, float,
     the forward axis in FLU, pitching nose up is a negative rotation about the
     left axis, so pitch_enu = -pitch_ned.
     """
-    # pymavlink's QuaternionBase([roll, pitch_enu, yaw_enu]).q, the ZYX formula, in plain floats: the
-    # same numbers without numpy's per-call cost (every Pose3D snapshot goes through here)
-    half_r, half_p, half_y = roll / 2.0, -pitch / 2.0, wrap_pi(math.pi / 2.0 - yaw) / 2.0
-    cr, sr = math.cos(half_r), math.sin(half_r)
-    cp, sp = math.cos(half_p), math.sin(half_p)
-    cy, sy = math.cos(half_y), math.sin(half_y)
-    return (cr * cp * cy + sr * sp * sy,
-            sr * cp * cy - cr * sp * sy,
-            cr * sp * cy + sr * cp * sy,
-            cr * cp * sy - sr * sp * cy)
+    from pymavlink.quaternion import QuaternionBase
+    w, x, y, z = QuaternionBase([roll, -pitch, wrap_pi(math.pi / 2.0 - yaw)]).q
+    return float(w), float(x), float(y), float(z)
 
 
 def battery_percent_from_cell(cell_voltage: float) -> float:

@@ -156,13 +156,3 @@ def test_state_from_jderobot_pose_and_navdata():
     assert not landed.armed and landed.landed_state is LandedState.ON_GROUND
     unknown = convert.state_from_jderobot(jderobot.Pose3DData(0, 0, 0, 1, 0, 0, 0, 0), None)
     assert unknown.attitude == Attitude() and unknown.connected
-
-
-@pytest.mark.parametrize("roll,pitch,yaw", ANGLES + [(3.0, -1.5, 7.0), (-3.1, 1.5, -9.0)])
-def test_enu_quaternion_gives_pymavlinks_numbers(roll, pitch, yaw):
-    """The plain-float formula is pymavlink's QuaternionBase, which the servants used to build on every call."""
-    from driver.frames import enu_quaternion, wrap_pi
-    expected = QuaternionBase([roll, -pitch, wrap_pi(math.pi / 2.0 - yaw)]).q
-    got = enu_quaternion(roll, pitch, yaw)
-    assert all(type(v) is float for v in got)
-    np.testing.assert_allclose(got, expected, rtol=0, atol=1e-12)
