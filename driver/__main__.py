@@ -131,7 +131,7 @@ def main(argv: list[str] | None = None) -> int:
         return certs_main(args[1:], prog=f"{command_name()} certs")
     if args[:1] == ["registry"]:
         from .ice.lab import main as lab_main
-        return lab_main(args[1:])
+        return lab_main(args[1:], prog=f"{command_name()} registry")
     p = parser()
     try:
         props = default_properties(args)             # removes --Ice.* and --MAVLinkServer.* options

@@ -117,7 +117,8 @@ def run_installed(venv: Path, *argv: str, cwd: Path, timeout: float = 60, **env:
 
 def test_the_wheel_carries_the_files_the_program_loads(wheel):
     names = set(zipfile.ZipFile(wheel).namelist())
-    for folder, inside in ((ROOT / "resources", "uavviewer/resources"), (ROOT / "slice", "driver/slice")):
+    for folder, inside in ((ROOT / "resources", "uavviewer/resources"), (ROOT / "slice", "driver/slice"),
+                           (ROOT / "config", "driver/config")):
         files = [p.relative_to(folder).as_posix() for p in folder.rglob("*") if p.is_file()]
         assert files and all(f"{inside}/{f}" in names for f in files), sorted(names)
     assert not any("__pycache__" in n or n.startswith("tests/") for n in names)
@@ -134,11 +135,15 @@ def test_the_installed_commands_answer(installed, tmp_path):
         assert (version.returncode, version.stdout) == (0, f"{name} {__version__}\n"), version.stderr
         usage = run_installed(installed, *argv, "--help", cwd=tmp_path)
         assert usage.returncode == 0 and usage.stdout.startswith(f"usage: {name} "), usage.stderr
+    for sub in ("certs", "registry"):
+        usage = run_installed(installed, "mavlinkserver", sub, "--help", cwd=tmp_path)
+        assert usage.returncode == 0 and usage.stdout.startswith(f"usage: mavlinkserver {sub} "), usage.stderr
     where = run_installed(installed, str(installed / "bin" / "python"), "-c",
-                          "import driver.ice, uavviewer; print(driver.ice.SLICE_DIR); print(uavviewer.RESOURCES)",
-                          cwd=tmp_path)
+                          "import driver.ice.lab, uavviewer; print(driver.ice.SLICE_DIR); print(uavviewer.RESOURCES); "
+                          "print(driver.ice.lab.REGISTRY_CONFIG)", cwd=tmp_path)
     purelib = sysconfig.get_path("purelib", vars={"base": str(installed), "platbase": str(installed)})
-    assert where.stdout.split() == [f"{purelib}/driver/slice", f"{purelib}/uavviewer/resources"], where.stderr
+    assert where.stdout.split() == [f"{purelib}/driver/slice", f"{purelib}/uavviewer/resources",
+                                    f"{purelib}/driver/config/icegrid-registry.cfg"], where.stderr
 
 
 @pytest.mark.xdist_group("installed")

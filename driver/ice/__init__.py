@@ -10,10 +10,16 @@ import os
 import threading
 
 _PACKAGE = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-#: Installed, the Slice files are package data (driver/slice, see pyproject.toml); in a checkout, slice/ beside driver/
-SLICE_DIR = os.path.join(_PACKAGE, "slice")
-if not os.path.isdir(SLICE_DIR):
-    SLICE_DIR = os.path.join(os.path.dirname(_PACKAGE), "slice")
+
+
+def data_dir(name: str) -> str:
+    """``slice`` or ``config``: package data when installed (driver/NAME, see pyproject.toml), in a checkout the
+    folder of that name beside driver/."""
+    inside = os.path.join(_PACKAGE, name)
+    return inside if os.path.isdir(inside) else os.path.join(os.path.dirname(_PACKAGE), name)
+
+
+SLICE_DIR = data_dir("slice")
 JDEROBOT_FILES = ("datetime.ice", "exceptions.ice", "containers.ice", "common.ice", "pose3d.ice", "cmdvel.ice",
                   "ardroneextra.ice", "navdata.ice", "image.ice", "camera.ice")
 EXTENSION_FILE = "mavlinkserver.ice"

@@ -23,11 +23,11 @@ import time
 
 import Ice
 
-from . import registry
+from . import data_dir, registry
 
 log = logging.getLogger(__name__)
 
-CONFIG_DIR = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))), "config")
+CONFIG_DIR = data_dir("config")
 REGISTRY_CONFIG = os.path.join(CONFIG_DIR, "icegrid-registry.cfg")
 ICESTORM_CONFIG = os.path.join(CONFIG_DIR, "icestorm.cfg")
 #: program or library → the Debian package that ships it (3.7.8, like python3-zeroc-ice)
@@ -206,9 +206,9 @@ class Lab:
         self.stop()
 
 
-def main(argv: list[str]) -> int:
+def main(argv: list[str], prog: str = "python -m driver registry") -> int:
     """``python -m driver registry``: run the lab's registry and IceStorm until Ctrl-C or SIGTERM."""
-    p = argparse.ArgumentParser(prog="python -m driver registry",
+    p = argparse.ArgumentParser(prog=prog,
                                 description="Run a lab's IceGrid registry and IceStorm (ZeroC's, from Debian): "
                                             "MAVLinkServers register there (--registry HOST:PORT --name NAME), "
                                             "viewers list and fly them (main.py --registry HOST:PORT).")
