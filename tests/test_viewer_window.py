@@ -67,7 +67,10 @@ def test_keys_dialog_lists_the_keys(qtbot, silent_vehicle, window_factory):
                      ("↑", "Climb"), ("↓", "Descend"), ("←", "Yaw left"), ("→", "Yaw right"),
                      ("Space", "Stop: hover where you are"), ("Esc", "Stop: cancel a Fly here, hover where you are"),
                      ("T", "Take off"), ("L", "Land"),
-                     ("(release)", "Releasing a key centres its axis")]
+                     ("(release)", "Releasing a key centres its axis"),
+                     ("Gamepad A", "Stop (hover)"), ("Gamepad B", "Land"), ("Gamepad START", "Take off (asks)"),
+                     ("Gamepad BACK", "Return to launch"),
+                     ("Gamepad sticks", "As the on-screen sticks (mode and mapping: Preferences › Gamepad)")]
     dialog.reject()
 
 

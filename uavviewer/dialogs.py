@@ -17,6 +17,7 @@ from driver.state import CommandResult, Signing, SigningStatus
 
 from . import RESOURCES
 from .camera_controller import default_media_folder
+from .gamepad_mapping import ACTIONS, CONTROLLER_BUTTONS
 from .keyboard import key_help
 from .link_security import SIGNING_WARNINGS
 from .settings import TAKEOFF_ALTITUDE_RANGE, ViewerSettings, split_uris
@@ -249,12 +250,14 @@ class SettingsDialog(QDialog):
 
 
 class KeysDialog(QDialog):
-    """Help > Keys, filled from the same table the keyboard handler uses."""
+    """Help > Keys, filled from the same tables the keyboard and the gamepad use."""
 
     def __init__(self, parent: QWidget | None = None) -> None:
         super().__init__(parent)
         uic.loadUi(str(RESOURCES / "ui" / "keys_dialog.ui"), self)
-        rows = key_help()
+        rows = key_help() + [(f"Gamepad {button.upper()}", ACTIONS[action])
+                             for action, button in CONTROLLER_BUTTONS.items()]
+        rows.append(("Gamepad sticks", "As the on-screen sticks (mode and mapping: Preferences › Gamepad)"))
         self.table.setColumnCount(2)
         self.table.setHorizontalHeaderLabels(["Key", "Action"])
         self.table.setRowCount(len(rows))

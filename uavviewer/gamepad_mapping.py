@@ -14,7 +14,7 @@ from dataclasses import asdict, dataclass, field, replace
 from .gamepad import Pad, PadReading
 from .sticks import Axes, StickMode, StickShaping, shape
 
-__all__ = ["PILOT_AXES", "ACTIONS", "AxisMap", "GamepadMapping", "default_mapping", "AxisCapture",
+__all__ = ["PILOT_AXES", "ACTIONS", "CONTROLLER_BUTTONS", "AxisMap", "GamepadMapping", "default_mapping", "AxisCapture",
            "ButtonCapture", "mappings_from_json", "mappings_to_json"]
 
 #: pilot axis -> what the pilot reads, and which way to move the stick when mapping it
@@ -28,6 +28,8 @@ PILOT_AXES: dict[str, tuple[str, str]] = {
 ACTIONS: dict[str, str] = {"stop": "Stop (hover)", "land": "Land", "takeoff": "Take off (asks)",
                            "rtl": "Return to launch"}
 ALWAYS_MAPPED = ("stop", "land")
+#: a known game controller's buttons until the pilot maps others (SDL's names for the Xbox layout's places)
+CONTROLLER_BUTTONS = {"stop": "a", "land": "b", "takeoff": "start", "rtl": "back"}
 DEFAULT_DEADBAND = 0.10          # physical sticks rest a little off centre and drift with wear
 CAPTURE_THRESHOLD = 0.5          # how far a stick must move from where it rested to be taken
 
@@ -132,8 +134,8 @@ def _number(raw, default: float, low: float, high: float) -> float:
 def default_mapping(pad: Pad, mode: StickMode = StickMode.MODE2) -> GamepadMapping:
     """What a pad flies before the pilot maps it (see the module's note)."""
     if pad.controller:
-        buttons = {"stop": "a", "land": "b", "takeoff": "start", "rtl": "back"}
-        return GamepadMapping(buttons={a: b for a, b in buttons.items() if b in pad.buttons or a in ALWAYS_MAPPED}
+        return GamepadMapping(buttons={a: b for a, b in CONTROLLER_BUTTONS.items()
+                                       if b in pad.buttons or a in ALWAYS_MAPPED}
                               ).with_mode(mode, pad)
     first = list(pad.buttons[:2]) + ["", ""]
     return GamepadMapping(mode="custom", axes={n: AxisMap() for n in PILOT_AXES},
