@@ -1,14 +1,18 @@
 """The fleet in the window: two vehicles of a real lab (IceGrid registry, IceStorm) flown from one window."""
 from __future__ import annotations
 
+import math
+
 import pytest
 from PyQt5.QtCore import Qt
 from PyQt5.QtWidgets import QMessageBox
 
 from uavviewer import app as main
+from driver import frames
 from driver.ice.fleet import IceFleet
 from driver.state import LinkStatus, Severity, VehicleState
 from uavviewer.fleet import FleetController, row_for, switch_message
+from uavviewer.widgets.map_view import OTHER, STALE, VEHICLE
 
 from fleet_fixtures import fleet, lab  # noqa: F401  (fixtures)
 from ice_fixtures import eventually
@@ -49,6 +53,23 @@ def test_rows_say_what_each_vehicle_does_and_when_it_is_stale():
     assert text == "The sticks, keys and buttons now fly solo-2" and severity is Severity.NOTICE
 
 
+def on_the_map(w, name: str, drone) -> bool:
+    """Whether the map draws vehicle ``name`` (not the picked one) where its own state says: its latitude/longitude
+    in ground metres from the picked vehicle's home (however far apart the two homes), turned to its heading."""
+    view, home, s = w.mapPanel.mapView, w.adapter.state.home, drone.state()
+    mark = next((m for m in view.others if m.name == name), None)
+    if mark is None or home is None or (view.frame.lat, view.frame.lon) != (home.lat, home.lon):
+        return False
+    north, east = frames.offset_ned(home.lat, home.lon, s.position.lat, s.position.lon)
+    return (math.hypot(mark.east - east, mark.north - north) < 0.1
+            and abs((mark.heading - s.heading_deg + 180) % 360 - 180) < 1.0)
+
+
+def painted(view, east: float, north: float):
+    """The colour painted at a point of the map (view metres): the fill of the icon there."""
+    return view.grab().toImage().pixelColor(view.to_screen(east, north).toPoint()).name()
+
+
 def test_two_vehicles_flown_at_once_from_one_window(qtbot, fleet, lab, ice_fleet, window_factory, monkeypatch):
     from driver.camera import ice_source
     monkeypatch.setitem(ice_source.client_properties, "Ice.Default.Locator", lab.locator)
@@ -65,12 +86,20 @@ def test_two_vehicles_flown_at_once_from_one_window(qtbot, fleet, lab, ice_fleet
     assert first[0] == "▶ solo-1" and second[0] == "solo-2"              # name, mode, armed, battery, link age
     assert first[2] == "disarmed" and first[3].endswith("%") and first[4].endswith(" s")
     assert "Flying: <b>solo-1</b>" == panel.flyingLabel.text()
+    view = w.mapPanel.mapView
+    view.zoom_to(0.1)                                                      # 10 m apart: 100 px on the map
+    qtbot.waitUntil(lambda: on_the_map(w, "solo-2", f.drone("solo-2")), timeout=5000)
+    assert [m.name for m in view.others] == ["solo-2"] and view.vehicle_name == "solo-1"   # picked: the big one
+    assert (view.others[0].east, view.others[0].north) == pytest.approx((10.0, 0.0), abs=0.5)   # its home: 10 m east
+    assert painted(view, *view.vehicle[:2]) == VEHICLE.name() and painted(view, 10.0, 0.0) == OTHER.name()
 
     click_takeoff(qtbot, w)                                                # solo-1 through the window's button
     wait_flying(qtbot, w, timeout=60000)
     press(w.rightStick, 0.0, 1.0)                                          # forward
     qtbot.waitUntil(lambda: body_velocity(sims[0])[0] > 0.8, timeout=15000)
     assert speed(sims[1]) < 0.1 and not sims[1].truth().armed
+    solo1_trail = w.map.trail
+    assert len(solo1_trail) > 1
 
     qtbot.mouseClick(panel.table.viewport(), Qt.LeftButton, pos=panel.click_vehicle("solo-2"))   # switch in flight
     qtbot.waitUntil(lambda: w.adapter.drone is f.drone("solo-2"), timeout=3000)
@@ -81,6 +110,11 @@ def test_two_vehicles_flown_at_once_from_one_window(qtbot, fleet, lab, ice_fleet
     release(w.rightStick)
     qtbot.waitUntil(lambda: speed(sims[0]) < 0.2, timeout=20000)           # the one left behind hovers
     assert vehicles[0].state().setpoint.is_zero and sims[0].truth().altitude > 2.0
+    # the highlight moved: the map is solo-2's (its home, its trail), solo-1 is drawn where it hovers
+    assert view.vehicle_name == "solo-2" and w.map.trail is not solo1_trail
+    qtbot.waitUntil(lambda: on_the_map(w, "solo-1", f.drone("solo-1")), timeout=5000)
+    assert view.frame.lon > vehicles[0].state().home.lon                  # solo-2's home, east of solo-1's
+    assert [m.name for m in view.others] == ["solo-1"] and not view.others[0].stale
 
     click_takeoff(qtbot, w)                                                # now the button takes off solo-2
     wait_flying(qtbot, w, timeout=60000)
@@ -111,6 +145,17 @@ def test_two_vehicles_flown_at_once_from_one_window(qtbot, fleet, lab, ice_fleet
     qtbot.waitUntil(lambda: any(t.startswith("solo-1: stop") for t in w.messages.texts()), timeout=10000)
     assert all(v.state().setpoint.is_zero and v.state().mode == "GUIDED" for v in vehicles)   # both hold
 
-    servers[0].close()                                                     # a vehicle's server stops: stale
-    qtbot.waitUntil(lambda: panel.row_texts()[0][4].endswith("not in the registry"), timeout=15000)
-    assert panel.row_texts()[0][0] == "solo-1" and panel.table.item(0, 0).foreground().color().name() == "#7f8791"
+    # a click on solo-1's icon on the map picks it, as a click on its row does; its trail comes back
+    mark = view.others[0]
+    qtbot.mouseClick(view, Qt.LeftButton, pos=view.to_screen(mark.east, mark.north).toPoint())
+    qtbot.waitUntil(lambda: w.adapter.drone is f.drone("solo-1"), timeout=3000)
+    assert panel.flyingLabel.text() == "Flying: <b>solo-1</b>" and view.vehicle_name == "solo-1"
+    assert any("solo-2 left hovering" in t for t in w.messages.texts()), w.messages.texts()
+    assert w.map.trail is solo1_trail and len(solo1_trail) > 1
+    qtbot.waitUntil(lambda: on_the_map(w, "solo-2", f.drone("solo-2")), timeout=5000)
+
+    servers[1].close()                                                     # a vehicle's server stops: stale
+    qtbot.waitUntil(lambda: panel.row_texts()[1][4].endswith("not in the registry"), timeout=15000)
+    assert panel.row_texts()[1][0] == "solo-2" and panel.table.item(1, 0).foreground().color().name() == "#7f8791"
+    qtbot.waitUntil(lambda: view.others and view.others[0].stale, timeout=3000)     # greyed on the map too
+    assert view.others[0].name == "solo-2" and painted(view, view.others[0].east, view.others[0].north) == STALE.name()

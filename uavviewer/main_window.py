@@ -676,6 +676,9 @@ class MainWindow(QMainWindow):
         fleet.vehiclePicked.connect(self._fly_vehicle)
         fleet.said.connect(self.log_message)
         fleet.resultArrived.connect(self._show_result)
+        fleet.vehiclesRead.connect(self.map.show_fleet)                 # the map shows all of them
+        self.mapPanel.mapView.vehicleClicked.connect(fleet.pick)         # a click on one there picks it too
+        self.map.use_vehicle(fleet.picked)
         self.setWindowTitle(f"UavViewerPy — {fleet.picked} · {fleet.fleet.description}")
         fleet.start()
 
@@ -687,6 +690,7 @@ class MainWindow(QMainWindow):
         self._shown_results.clear()
         self._plot_gap = True
         self.plots.gap(time.monotonic() - self._t0)
+        self.map.use_vehicle(name)              # before its first snapshot: that belongs to its own trail
         self.adapter.use(drone)
         self.setWindowTitle(f"UavViewerPy — {name} · {self.fleet.fleet.description}")
         if self._default_cameras and self.camera.uris == self._default_cameras:   # not --camera nor Preferences'
