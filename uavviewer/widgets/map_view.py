@@ -31,7 +31,8 @@ FENCE = QColor("#ff4d4d")
 TARGET = QColor("#ffb020")
 HOME = QColor("#5fd068")
 VEHICLE = QColor("#ffffff")
-PICKED_HALO = QColor(255, 225, 77, 150)      # around the vehicle the sticks fly, in a fleet
+PICKED = QColor("#ffe14d")                   # the ring around the vehicle the sticks fly, in a fleet
+PICKED_HALO = QColor(255, 225, 77, 70)
 OTHER = QColor("#b48cff")                    # the fleet's other vehicles
 STALE = QColor("#7f8791")                    # a vehicle whose state may be old: as the Fleet panel greys it
 LABEL_TEXT = QColor("#e6ebf0")
@@ -324,7 +325,7 @@ class MapView(QWidget):
         east, north, heading = self.vehicle
         at = self.to_screen(east, north)
         if self.vehicle_name:                   # a fleet: a halo says which one the sticks fly
-            p.setPen(Qt.NoPen)
+            p.setPen(QPen(PICKED, 2))
             p.setBrush(PICKED_HALO)
             p.drawEllipse(at, 19, 19)
         self._arrow(p, at, heading, STALE if self.vehicle_stale else VEHICLE, 1.0)
