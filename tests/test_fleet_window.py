@@ -99,7 +99,7 @@ def test_two_vehicles_flown_at_once_from_one_window(qtbot, fleet, lab, ice_fleet
     qtbot.waitUntil(lambda: body_velocity(sims[0])[0] > 0.8, timeout=15000)
     assert speed(sims[1]) < 0.1 and not sims[1].truth().armed
     solo1_trail = w.map.trail
-    assert len(solo1_trail) > 1
+    qtbot.waitUntil(lambda: len(solo1_trail) > 1, timeout=5000)           # it draws its trail as it flies
 
     qtbot.mouseClick(panel.table.viewport(), Qt.LeftButton, pos=panel.click_vehicle("solo-2"))   # switch in flight
     qtbot.waitUntil(lambda: w.adapter.drone is f.drone("solo-2"), timeout=3000)
