@@ -17,6 +17,7 @@ from uavviewer.widgets.map_view import OTHER, STALE, VEHICLE
 from fleet_fixtures import fleet, lab  # noqa: F401  (fixtures)
 from ice_fixtures import eventually
 from test_viewer_flight import body_velocity, click_takeoff, press, release, speed, wait_flying
+from test_viewer_map import right_click_fly_here
 from viewer_fixtures import viewer_settings, window_factory  # noqa: F401  (fixtures)
 
 pytestmark = pytest.mark.timeout(150)
@@ -145,17 +146,34 @@ def test_two_vehicles_flown_at_once_from_one_window(qtbot, fleet, lab, ice_fleet
     qtbot.waitUntil(lambda: any(t.startswith("solo-1: stop") for t in w.messages.texts()), timeout=10000)
     assert all(v.state().setpoint.is_zero and v.state().mode == "GUIDED" for v in vehicles)   # both hold
 
-    # a click on solo-1's icon on the map picks it, as a click on its row does; its trail comes back
+    # solo-2 on its way to a Fly here; a click on solo-1's icon on the map picks solo-1, as a click on its row does:
+    # solo-1's trail comes back, solo-2's target leaves the map and solo-2 stops where it is (nobody flies it)
+    view.zoom_to(0.5)
+    qtbot.waitUntil(lambda: view.fly_here_enabled, timeout=10000)
+    start = vehicles[1].state().local
+    assert right_click_fly_here(qtbot, view, start.east, start.north + 25.0).startswith("Fly here at")
+    qtbot.waitUntil(lambda: w.map.question is not None and w.map.question.isVisible())
+    qtbot.mouseClick(w.map.question.button(QMessageBox.Yes), Qt.LeftButton)
+    qtbot.waitUntil(lambda: view.target is not None, timeout=5000)
+    qtbot.waitUntil(lambda: vehicles[1].state().local.north - start.north > 3.0, timeout=20000)
+    stops = sum(r.command == "stop" for r in vehicles[1].state().results)
     mark = view.others[0]
     qtbot.mouseClick(view, Qt.LeftButton, pos=view.to_screen(mark.east, mark.north).toPoint())
     qtbot.waitUntil(lambda: w.adapter.drone is f.drone("solo-1"), timeout=3000)
     assert panel.flyingLabel.text() == "Flying: <b>solo-1</b>" and view.vehicle_name == "solo-1"
     assert any("solo-2 left hovering" in t for t in w.messages.texts()), w.messages.texts()
-    assert w.map.trail is solo1_trail and len(solo1_trail) > 1
+    assert w.map.trail is solo1_trail and len(solo1_trail) > 1 and view.target is None
+    qtbot.waitUntil(lambda: sum(r.command == "stop" for r in vehicles[1].state().results) > stops, timeout=5000)
+    qtbot.waitUntil(lambda: speed(sims[1]) < 0.3, timeout=20000)
+    assert vehicles[1].state().local.north - start.north < 20.0              # held short of the target
     qtbot.waitUntil(lambda: on_the_map(w, "solo-2", f.drone("solo-2")), timeout=5000)
 
     servers[1].close()                                                     # a vehicle's server stops: stale
     qtbot.waitUntil(lambda: panel.row_texts()[1][4].endswith("not in the registry"), timeout=15000)
     assert panel.row_texts()[1][0] == "solo-2" and panel.table.item(1, 0).foreground().color().name() == "#7f8791"
     qtbot.waitUntil(lambda: view.others and view.others[0].stale, timeout=3000)     # greyed on the map too
-    assert view.others[0].name == "solo-2" and painted(view, view.others[0].east, view.others[0].north) == STALE.name()
+    mark = view.others[0]
+    view.set_follow(False)                                                 # a close look at it, nothing else over it
+    view.centre = (mark.east, mark.north)
+    view.zoom_to(0.1)
+    assert mark.name == "solo-2" and painted(view, mark.east, mark.north) == STALE.name()

@@ -684,13 +684,14 @@ class MainWindow(QMainWindow):
 
     def _fly_vehicle(self, name: str, drone: Drone) -> None:
         self.centre_sticks()                    # the vehicle left behind gets zero velocity: it hovers
+        if self.map.use_vehicle(name):          # ... and a Fly here on its way ends where it is, as Stop does
+            self._command("stop")               # (still the previous vehicle: adapter.use comes below)
         s = drone.state()                       # its log starts from now: older lines were another vehicle's
         self._last_message = s.messages[-1].index if s.messages else -1
         self._last_result = s.results[-1].index if s.results else -1
         self._shown_results.clear()
         self._plot_gap = True
         self.plots.gap(time.monotonic() - self._t0)
-        self.map.use_vehicle(name)              # before its first snapshot: that belongs to its own trail
         self.adapter.use(drone)
         self.setWindowTitle(f"UavViewerPy — {name} · {self.fleet.fleet.description}")
         if self._default_cameras and self.camera.uris == self._default_cameras:   # not --camera nor Preferences'

@@ -217,16 +217,19 @@ class MapController(QObject):
         self._show_fleet()
 
     # -- the fleet ------------------------------------------------------------------------------
-    def use_vehicle(self, name: str) -> None:
+    def use_vehicle(self, name: str) -> bool:
         """The pilot picked ``name`` (before its first snapshot arrives): its own trail comes back, the previous
-        one's is kept, and the previous one's go-to target and any open "Fly here" question go."""
+        one's is kept, and the previous one's go-to target and any open "Fly here" question go. Returns whether
+        a go-to was active or on its way (the window stops it: nobody flies the vehicle left behind)."""
         if name == self._name or self._replay_track:
-            return
+            return False
+        going = self.target is not None or self._sent is not None
         self._trails[self._name] = self.trail
         self.trail = self._trails.pop(name, None) or Trail()
         self._name = name
         self.cancel()
         self._redraw_trail()
+        return going
 
     def show_fleet(self, seen) -> None:
         """Every vehicle's (FleetRow, VehicleState or None), a few times a second: the others are drawn from
