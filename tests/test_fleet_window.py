@@ -10,8 +10,10 @@ from PyQt5.QtWidgets import QMessageBox
 from uavviewer import app as main
 from driver import frames
 from driver.ice.fleet import IceFleet
-from driver.state import LinkStatus, Severity, VehicleState
+from driver.state import GlobalPosition, LinkStatus, LocalPosition, Severity, VehicleState
 from uavviewer.fleet import FleetController, row_for, switch_message
+from uavviewer.geo import MapFrame
+from uavviewer.map_controller import fleet_marks, placed
 from uavviewer.widgets.map_view import OTHER, STALE, VEHICLE
 
 from fleet_fixtures import fleet, lab  # noqa: F401  (fixtures)
@@ -52,6 +54,27 @@ def test_rows_say_what_each_vehicle_does_and_when_it_is_stale():
     assert row.picked and row.stale and row.link == "waiting"          # no heartbeat yet
     text, severity = switch_message("solo-1", fresh, "solo-2")
     assert text == "The sticks, keys and buttons now fly solo-2" and severity is Severity.NOTICE
+
+
+def test_marks_place_each_vehicle_in_the_picked_vehicles_frame():
+    """Other vehicles by their own latitude/longitude, else their own home's plus their metres from it; the picked
+    one, a vehicle without a state and one that cannot be placed are left off (no Qt, no network)."""
+    frame = MapFrame(66.0, 179.9999)                                      # next to the antimeridian, far north
+    lat, lon = frames.offset_latlon(66.0, 179.9999, 30.0, 40.0)           # 30 m north, 40 m east: across it
+    lon = (lon + 180.0) % 360.0 - 180.0
+    assert lon < -179.99                                                  # as the vehicle reports it
+    far = VehicleState(position=GlobalPosition(lat, lon, 0.0), heading_deg=200.0)
+    home2 = frames.offset_latlon(66.0, 179.9999, 0.0, -10.0)
+    local_only = VehicleState(home=GlobalPosition(*home2, 0.0), local=LocalPosition(north=5.0, east=2.0))
+    lost = VehicleState(local=LocalPosition(north=5.0))                   # metres from a home we do not know
+    seen = ((row_for("a", far, False, True), far), (row_for("b", local_only, False, False), local_only),
+            (row_for("c", lost, False, True), lost), (row_for("d", None, False, True), None),
+            (row_for("e", far, True, True), far))
+    marks = fleet_marks(frame, seen)
+    assert [m.name for m in marks] == ["a", "b"]
+    assert (marks[0].east, marks[0].north, marks[0].heading) == pytest.approx((40.0, 30.0, 200.0), abs=0.05)
+    assert (marks[1].east, marks[1].north) == pytest.approx((-8.0, 5.0), abs=0.05) and marks[1].stale
+    assert fleet_marks(None, seen) == () and placed(None, lost) == (0.0, 5.0)    # its own metres: the picked one only
 
 
 def on_the_map(w, name: str, drone) -> bool:
