@@ -102,7 +102,9 @@ def test_two_vehicles_flown_at_once_from_one_window(qtbot, fleet, lab, ice_fleet
     assert f.wait_listed(10) and eventually(lambda: f.names() == ("solo-1", "solo-2"), 10)
     w = window_factory(f.drone("solo-1"), takeoff_altitude=3.0, default_cameras=[FleetController.camera_uri("solo-1")])
     controller = FleetController(f, "solo-1", parent=w)
+    first_trail = w.map.trail
     w.attach_fleet(controller)
+    assert w.map.trail is first_trail                                      # the vehicle flown so far keeps its trail
     panel = w.fleet_panel
     qtbot.waitUntil(lambda: len(panel.row_texts()) == 2 and all("–" not in r for r in panel.row_texts()),
                     timeout=15000)

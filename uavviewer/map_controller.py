@@ -223,6 +223,9 @@ class MapController(QObject):
         a go-to was active or on its way (the window stops it: nobody flies the vehicle left behind)."""
         if name == self._name or self._replay_track:
             return False
+        if not self._name:                         # the vehicle the window flew from the start: this trail is its
+            self._name = name
+            return False
         going = self.target is not None or self._sent is not None
         self._trails[self._name] = self.trail
         self.trail = self._trails.pop(name, None) or Trail()
