@@ -202,3 +202,9 @@ def test_two_vehicles_flown_at_once_from_one_window(qtbot, fleet, lab, ice_fleet
     view.centre = (mark.east, mark.north)
     view.zoom_to(0.1)
     assert mark.name == "solo-2" and painted(view, mark.east, mark.north) == STALE.name()
+    view.set_follow(True)
+    assert not view.vehicle_stale and painted(view, *view.vehicle[:2]) == VEHICLE.name()
+
+    servers[0].close()                                                     # the picked one's server too: grey as well
+    qtbot.waitUntil(lambda: view.vehicle_stale, timeout=15000)
+    assert painted(view, *view.vehicle[:2]) == STALE.name() and view.vehicle_name == "solo-1"
