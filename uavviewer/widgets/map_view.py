@@ -238,6 +238,8 @@ class MapView(QWidget):
             self._paint_other(p, mark)
         if self.vehicle is not None:
             self._paint_vehicle(p)
+        if self.vehicle_name or self.others:
+            self._paint_names(p)
         self._paint_scale(p)
         self._paint_north(p)
         if self.attribution and self.drawn_tiles:
@@ -329,16 +331,34 @@ class MapView(QWidget):
             p.setBrush(PICKED_HALO)
             p.drawEllipse(at, 19, 19)
         self._arrow(p, at, heading, STALE if self.vehicle_stale else VEHICLE, 1.0)
-        if self.vehicle_name:
-            p.setFont(QFont(self.font().family(), 9, QFont.Bold))
-            self._label(p, at + QPointF(20, -8), "▶ " + self.vehicle_name,
-                        STALE if self.vehicle_stale else LABEL_TEXT)
 
     def _paint_other(self, p: QPainter, mark: VehicleMark) -> None:
-        at = self.to_screen(mark.east, mark.north)
-        self._arrow(p, at, mark.heading, STALE if mark.stale else OTHER, 0.75)
-        p.setFont(QFont(self.font().family(), 8))
-        self._label(p, at + QPointF(13, -6), mark.name, STALE if mark.stale else LABEL_TEXT)
+        self._arrow(p, self.to_screen(mark.east, mark.north), mark.heading, STALE if mark.stale else OTHER, 0.75)
+
+    def _paint_names(self, p: QPainter) -> None:
+        """Each vehicle's name beside its arrow, the picked one's first and always; another name tries the right,
+        left, below and above, and is left out where it would cover a name or an arrow (zoom in to read it)."""
+        names = [(self.to_screen(m.east, m.north), m.name, False, m.stale, 12.0) for m in self.others]
+        if self.vehicle is not None and self.vehicle_name:
+            names.insert(0, (self.to_screen(self.vehicle[0], self.vehicle[1]), "▶ " + self.vehicle_name, True,
+                             self.vehicle_stale, 21.0))
+        arrows = [QRectF(at.x() - r, at.y() - r, 2 * r, 2 * r) for at, _, _, _, r in names]
+        taken: list[QRectF] = []
+        for i, (at, text, picked, stale, r) in enumerate(names):
+            font = QFont(self.font().family(), 9 if picked else 8, QFont.Bold if picked else QFont.Normal)
+            p.setFont(font)
+            w, h = p.fontMetrics().horizontalAdvance(text) + 6.0, p.fontMetrics().height() + 2.0
+            sides = [QRectF(at.x() + r, at.y() - h / 2, w, h), QRectF(at.x() - r - w, at.y() - h / 2, w, h),
+                     QRectF(at.x() - w / 2, at.y() + r, w, h), QRectF(at.x() - w / 2, at.y() - r - h, w, h)]
+            free = [box for box in sides if not any(box.intersects(o) for o in taken)
+                    and not any(box.intersects(a) for j, a in enumerate(arrows) if j != i)]
+            box = free[0] if free else sides[0] if picked else None
+            if box is None:
+                continue
+            taken.append(box)
+            p.fillRect(box, LABEL_BOX)
+            p.setPen(STALE if stale else LABEL_TEXT)
+            p.drawText(box, Qt.AlignCenter, text)
 
     @staticmethod
     def _arrow(p: QPainter, at: QPointF, heading: float, fill: QColor, size: float) -> None:
@@ -380,11 +400,11 @@ class MapView(QWidget):
         p.setFont(QFont(self.font().family(), 8, QFont.Bold))
         self._label(p, QPointF(x - 4, y + 18), "N")
 
-    def _label(self, p: QPainter, at: QPointF, text: str, colour: QColor = LABEL_TEXT) -> None:
+    def _label(self, p: QPainter, at: QPointF, text: str) -> None:
         """Light text on a dark box: readable on the grid and on any tile."""
         box = QRectF(p.fontMetrics().boundingRect(text)).translated(at).adjusted(-2, -1, 2, 1)
         p.fillRect(box, LABEL_BOX)
-        p.setPen(colour)
+        p.setPen(LABEL_TEXT)
         p.drawText(at, text)
 
     def _paint_attribution(self, p: QPainter) -> None:
