@@ -4,7 +4,7 @@ from __future__ import annotations
 import math
 
 import pytest
-from PyQt5.QtCore import Qt
+from PyQt5.QtCore import QPointF, QRectF, QSizeF, Qt
 from PyQt5.QtWidgets import QMessageBox
 
 from uavviewer import app as main
@@ -14,7 +14,7 @@ from driver.state import GlobalPosition, LinkStatus, LocalPosition, Severity, Ve
 from uavviewer.fleet import FleetController, row_for, switch_message
 from uavviewer.geo import MapFrame
 from uavviewer.map_controller import fleet_marks, placed
-from uavviewer.widgets.map_view import OTHER, STALE, VEHICLE
+from uavviewer.widgets.map_view import OTHER, STALE, VEHICLE, MapView, VehicleMark
 
 from fleet_fixtures import fleet, lab  # noqa: F401  (fixtures)
 from ice_fixtures import eventually
@@ -75,6 +75,23 @@ def test_marks_place_each_vehicle_in_the_picked_vehicles_frame():
     assert (marks[0].east, marks[0].north, marks[0].heading) == pytest.approx((40.0, 30.0, 200.0), abs=0.05)
     assert (marks[1].east, marks[1].north) == pytest.approx((-8.0, 5.0), abs=0.05) and marks[1].stale
     assert fleet_marks(None, seen) == () and placed(None, lost) == (0.0, 5.0)    # its own metres: the picked one only
+
+
+def test_names_on_the_map_never_cover_each_other_or_an_arrow(qtbot):
+    """Three vehicles 10 m apart in a row: zoomed out, the picked one's name is there and another's that has no room
+    is left out; zoomed in, every name is there; never two boxes over each other or over an arrow."""
+    view = MapView()
+    qtbot.addWidget(view)
+    view.resize(400, 300)
+    view.set_vehicle((0.0, 0.0, 0.0))
+    view.set_fleet("solo-1", False, (VehicleMark("solo-2", 10.0, 0.0, 0.0), VehicleMark("solo-3", 20.0, 0.0, 0.0, True)))
+    for mpp, shown in ((0.5, ["▶ solo-1", "solo-3"]), (0.1, ["▶ solo-1", "solo-2", "solo-3"])):
+        view.zoom_to(mpp)
+        arrows = [QRectF(view.to_screen(e, 0.0) - QPointF(9, 9), QSizeF(18, 18)) for e in (0.0, 10.0, 20.0)]
+        boxes = view.name_boxes()
+        assert [text for _, text, _ in boxes] == shown and [stale for _, _, stale in boxes][-1]
+        assert not any(a.intersects(b) for i, (a, _, _) in enumerate(boxes) for b, _, _ in boxes[i + 1:])
+        assert not any(box.intersects(arrow) for box, _, _ in boxes for arrow in arrows)
 
 
 def on_the_map(w, name: str, drone) -> bool:

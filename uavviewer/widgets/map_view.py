@@ -11,7 +11,7 @@ import math
 from dataclasses import dataclass
 
 from PyQt5.QtCore import QPointF, QRectF, Qt, pyqtSignal
-from PyQt5.QtGui import QColor, QFont, QPainter, QPainterPath, QPen, QPolygonF
+from PyQt5.QtGui import QColor, QFont, QFontMetricsF, QPainter, QPainterPath, QPen, QPolygonF
 from PyQt5.QtWidgets import QMenu, QSizePolicy, QWidget
 
 from ..geo import MAX_ZOOM, MapFrame, nice_scale, tile_zoom_for, tiles_covering
@@ -335,27 +335,33 @@ class MapView(QWidget):
     def _paint_other(self, p: QPainter, mark: VehicleMark) -> None:
         self._arrow(p, self.to_screen(mark.east, mark.north), mark.heading, STALE if mark.stale else OTHER, 0.75)
 
-    def _paint_names(self, p: QPainter) -> None:
-        """Each vehicle's name beside its arrow, the picked one's first and always; another name tries the right,
-        left, below and above, and is left out where it would cover a name or an arrow (zoom in to read it)."""
+    def name_boxes(self) -> list[tuple[QRectF, str, bool]]:
+        """Where each vehicle's name goes (box, text, stale), the picked one's first and always; another name tries
+        the right, left, below and above of its arrow, and is left out where it would cover a name or an arrow."""
         names = [(self.to_screen(m.east, m.north), m.name, False, m.stale, 12.0) for m in self.others]
         if self.vehicle is not None and self.vehicle_name:
             names.insert(0, (self.to_screen(self.vehicle[0], self.vehicle[1]), "▶ " + self.vehicle_name, True,
                              self.vehicle_stale, 21.0))
         arrows = [QRectF(at.x() - r, at.y() - r, 2 * r, 2 * r) for at, _, _, _, r in names]
-        taken: list[QRectF] = []
+        out: list[tuple[QRectF, str, bool]] = []
         for i, (at, text, picked, stale, r) in enumerate(names):
-            font = QFont(self.font().family(), 9 if picked else 8, QFont.Bold if picked else QFont.Normal)
-            p.setFont(font)
-            w, h = p.fontMetrics().horizontalAdvance(text) + 6.0, p.fontMetrics().height() + 2.0
+            metrics = QFontMetricsF(self._name_font(picked))
+            w, h = metrics.horizontalAdvance(text) + 6.0, metrics.height() + 2.0
             sides = [QRectF(at.x() + r, at.y() - h / 2, w, h), QRectF(at.x() - r - w, at.y() - h / 2, w, h),
                      QRectF(at.x() - w / 2, at.y() + r, w, h), QRectF(at.x() - w / 2, at.y() - r - h, w, h)]
-            free = [box for box in sides if not any(box.intersects(o) for o in taken)
+            free = [box for box in sides if not any(box.intersects(o) for o, _, _ in out)
                     and not any(box.intersects(a) for j, a in enumerate(arrows) if j != i)]
             box = free[0] if free else sides[0] if picked else None
-            if box is None:
-                continue
-            taken.append(box)
+            if box is not None:
+                out.append((box, text, stale))
+        return out
+
+    def _name_font(self, picked: bool) -> QFont:
+        return QFont(self.font().family(), 9 if picked else 8, QFont.Bold if picked else QFont.Normal)
+
+    def _paint_names(self, p: QPainter) -> None:
+        for box, text, stale in self.name_boxes():
+            p.setFont(self._name_font(text.startswith("▶ ")))
             p.fillRect(box, LABEL_BOX)
             p.setPen(STALE if stale else LABEL_TEXT)
             p.drawText(box, Qt.AlignCenter, text)
