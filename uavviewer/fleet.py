@@ -78,6 +78,7 @@ class FleetController(QObject):
     vehiclePicked = pyqtSignal(str, object)    # name, Drone: the window flies it from now on
     said = pyqtSignal(str, object)             # text, Severity: a line for the pilot
     resultArrived = pyqtSignal(object)         # CommandResult of a command for all ("solo-2: takeoff")
+    vehiclesRead = pyqtSignal(object)          # ((FleetRow, VehicleState | None), ...) on every refresh: the map
 
     def __init__(self, fleet: Fleet, picked: str, refresh_hz: float = 4.0, parent: QObject | None = None) -> None:
         super().__init__(parent)
@@ -131,7 +132,8 @@ class FleetController(QObject):
             self._timer.stop()
             return
         listed = set(self.fleet.names())
-        rows = tuple(row_for(n, self._state(n), n == self._picked, n in listed) for n in self._known())
+        states = [(n, self._state(n)) for n in self._known()]
+        rows = tuple(row_for(n, s, n == self._picked, n in listed) for n, s in states)
         problem = self.fleet.problem
         if problem != self._said_problem:
             self._said_problem = problem
@@ -140,6 +142,7 @@ class FleetController(QObject):
         if rows != self._rows:
             self._rows = rows
             self.rowsChanged.emit(rows)
+        self.vehiclesRead.emit(tuple(zip(rows, (s for _, s in states))))
 
     def pick(self, name: str) -> None:
         """The sticks, keys and buttons fly ``name`` from now on; the window is told, the pilot too."""

@@ -693,11 +693,16 @@ class MainWindow(QMainWindow):
         fleet.vehiclePicked.connect(self._fly_vehicle)
         fleet.said.connect(self.log_message)
         fleet.resultArrived.connect(self._show_result)
+        fleet.vehiclesRead.connect(self.map.show_fleet)                 # the map shows all of them
+        self.mapPanel.mapView.vehicleClicked.connect(fleet.pick)         # a click on one there picks it too
+        self.map.use_vehicle(fleet.picked)
         self.setWindowTitle(f"UavViewerPy — {fleet.picked} · {fleet.fleet.description}")
         fleet.start()
 
     def _fly_vehicle(self, name: str, drone: Drone) -> None:
         self.centre_sticks()                    # the vehicle left behind gets zero velocity: it hovers
+        if self.map.use_vehicle(name):          # ... and a Fly here on its way ends where it is, as Stop does
+            self._command("stop")               # (still the previous vehicle: adapter.use comes below)
         s = drone.state()                       # its log starts from now: older lines were another vehicle's
         self._last_message = s.messages[-1].index if s.messages else -1
         self._last_result = s.results[-1].index if s.results else -1

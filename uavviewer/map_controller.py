@@ -5,6 +5,10 @@ has one, else its metres from home (a plain JdeRobot server gives only those). T
 ten minutes, fading with age; a replay shows the whole recorded track at once. "Fly here" asks first
 (distance and altitude), then uses the driver's go-to, whose limits and refusals apply; Stop, Escape, Land,
 RTL, a stick or another mode end it on the map as they do on the vehicle.
+
+In a fleet (docs/fleet.md) the map also shows the other vehicles, each from its own snapshot and placed by its
+own latitude/longitude in the picked vehicle's frame, so vehicles with different homes stand where they are;
+each vehicle keeps its trail while another is picked, and a go-to target belongs to the vehicle it was sent to.
 """
 from __future__ import annotations
 
@@ -24,9 +28,9 @@ from .geo import MapFrame, tiles_covering, tile_zoom_for
 from .tiles import MAX_AREA_TILES, TileSource
 from .trail import Trail
 from .widgets.map_panel import MapPanel
-from .widgets.map_view import TRAIL_BANDS
+from .widgets.map_view import TRAIL_BANDS, VehicleMark
 
-__all__ = ["MapController", "TileSettings"]
+__all__ = ["MapController", "TileSettings", "fleet_marks", "placed"]
 
 log = logging.getLogger(__name__)
 
@@ -40,6 +44,34 @@ class TileSettings:
     attribution: str = ""
     cache_mb: int = 200
     cache_dir: str | None = None             # None: the per-user cache folder
+
+
+def placed(frame: MapFrame | None, s: VehicleState, own: bool = True) -> tuple[float, float] | None:
+    """A vehicle in view metres (east, north): from its latitude/longitude, else its home's plus its metres from
+    home. ``own``: the frame is this vehicle's home, so metres from home alone will do (a plain JdeRobot server
+    gives only those); another vehicle without a latitude cannot be placed."""
+    pos = s.position
+    if frame is not None and pos is not None and (pos.lat or pos.lon):
+        return frame.to_view(pos.lat, pos.lon)
+    if s.local is None:
+        return None
+    if frame is not None and s.home is not None:
+        east, north = frame.to_view(s.home.lat, s.home.lon)
+        return east + s.local.east, north + s.local.north
+    return (s.local.east, s.local.north) if own else None
+
+
+def fleet_marks(frame: MapFrame | None, seen) -> tuple[VehicleMark, ...]:
+    """The fleet's vehicles but the picked one, where their own snapshots put them in ``frame``.
+
+    ``seen``: (FleetRow, VehicleState or None) for each vehicle, as :class:`uavviewer.fleet.FleetController` reads
+    them; a vehicle without a state or a position is left off."""
+    marks = []
+    for row, s in seen:
+        where = None if row.picked or s is None else placed(frame, s, own=False)
+        if where is not None:
+            marks.append(VehicleMark(row.name, where[0], where[1], s.heading_deg, row.stale))
+    return tuple(marks)
 
 
 class MapController(QObject):
@@ -66,6 +98,9 @@ class MapController(QObject):
         self._area_text = ""                       # the last "Download area": its progress or outcome
         self._state: VehicleState | None = None
         self._pending_track: list | None = None     # the replay's track, read on its own thread
+        self._name = ""                            # in a fleet: the picked vehicle's name
+        self._trails: dict[str, Trail] = {}        # ... and the others' trails, kept while they are not picked
+        self._seen: tuple = ()                     # the fleet's (row, state) pairs last read
         panel.layerRequested.connect(self._layer)
         panel.offlineRequested.connect(self._offline)
         panel.downloadRequested.connect(self.download_area)
@@ -179,14 +214,46 @@ class MapController(QObject):
         self._frame = MapFrame(home.lat, home.lon)       # home moved (arming sets it): the trail follows
         self.view.frame = self._frame
         self._redraw_trail()
+        self._show_fleet()
+
+    # -- the fleet ------------------------------------------------------------------------------
+    def use_vehicle(self, name: str) -> bool:
+        """The pilot picked ``name`` (before its first snapshot arrives): its own trail comes back, the previous
+        one's is kept, and the previous one's go-to target and any open "Fly here" question go. Returns whether
+        a go-to was active or on its way (the window stops it: nobody flies the vehicle left behind)."""
+        if name == self._name or self._replay_track:
+            return False
+        if not self._name:                         # the vehicle the window flew from the start: this trail is its
+            self._name = name
+            return False
+        going = self.target is not None or self._sent is not None
+        self._trails[self._name] = self.trail
+        self.trail = self._trails.pop(name, None) or Trail()
+        self._name = name
+        self.cancel()
+        self._redraw_trail()
+        return going
+
+    def show_fleet(self, seen) -> None:
+        """Every vehicle's (FleetRow, VehicleState or None), a few times a second: the others are drawn from
+        their own snapshots, and their trails grow while they are not picked."""
+        self._seen = seen
+        now = self._clock()
+        states = {row.name: s for row, s in seen}
+        for mark in self._show_fleet():
+            pos = states[mark.name].position
+            latlon = (pos.lat, pos.lon) if pos is not None and (pos.lat or pos.lon) else None
+            self._trails.setdefault(mark.name, Trail()).add(now, mark.east, mark.north, latlon)
+
+    def _show_fleet(self) -> tuple[VehicleMark, ...]:
+        picked = next((row for row, _ in self._seen if row.picked), None)
+        marks = fleet_marks(self._frame, self._seen)
+        self.view.set_fleet(picked.name if picked else self._name, bool(picked and picked.stale), marks)
+        return marks
 
     def _where(self, s: VehicleState) -> tuple[float, float] | None:
-        """The vehicle in view metres: from its latitude/longitude, else its metres from home."""
-        if s.position is not None and self._frame is not None and (s.position.lat or s.position.lon):
-            return self._frame.to_view(s.position.lat, s.position.lon)
-        if s.local is not None:
-            return s.local.east, s.local.north
-        return None
+        """The picked vehicle in view metres: from its latitude/longitude, else its metres from home."""
+        return placed(self._frame, s)
 
     def _add_trail(self, where: tuple[float, float], s: VehicleState) -> None:
         latlon = (s.position.lat, s.position.lon) if s.position is not None and self._frame is not None else None

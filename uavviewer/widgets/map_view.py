@@ -2,20 +2,22 @@
 
 Everything is placed in view metres (:class:`uavviewer.geo.MapFrame`: east/north of home); the canvas only
 turns them into pixels. It pans with the mouse, zooms with the wheel about the cursor, and offers
-"Fly here" on a right click; what flying there means is decided elsewhere.
+"Fly here" on a right click; what flying there means is decided elsewhere. In a fleet it also draws the
+other vehicles (:class:`VehicleMark`), smaller and in their own colour, and says which one was clicked.
 """
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
 
 from PyQt5.QtCore import QPointF, QRectF, Qt, pyqtSignal
-from PyQt5.QtGui import QColor, QFont, QPainter, QPainterPath, QPen, QPolygonF
+from PyQt5.QtGui import QColor, QFont, QFontMetricsF, QPainter, QPainterPath, QPen, QPolygonF
 from PyQt5.QtWidgets import QMenu, QSizePolicy, QWidget
 
 from ..geo import MAX_ZOOM, MapFrame, nice_scale, tile_zoom_for, tiles_covering
 from ..units import fmt
 
-__all__ = ["MapView", "TRAIL_BANDS"]
+__all__ = ["MapView", "VehicleMark", "TRAIL_BANDS"]
 
 MIN_MPP, MAX_MPP = 0.05, 5000.0      # metres a pixel: street level to a whole region
 TRAIL_BANDS = 8                      # the trail is drawn in this many bands, older ones fainter
@@ -29,6 +31,22 @@ FENCE = QColor("#ff4d4d")
 TARGET = QColor("#ffb020")
 HOME = QColor("#5fd068")
 VEHICLE = QColor("#ffffff")
+PICKED = QColor("#ffe14d")                   # the ring around the vehicle the sticks fly, in a fleet
+PICKED_HALO = QColor(255, 225, 77, 70)
+OTHER = QColor("#b48cff")                    # the fleet's other vehicles
+STALE = QColor("#7f8791")                    # a vehicle whose state may be old: as the Fleet panel greys it
+LABEL_TEXT = QColor("#e6ebf0")
+HIT_PX = 16                                  # a click this near another vehicle's icon picks it
+
+
+@dataclass(frozen=True)
+class VehicleMark:
+    """Another vehicle of the fleet: where it is (view metres), its heading, its name; stale ones are greyed."""
+    name: str
+    east: float
+    north: float
+    heading: float
+    stale: bool = False
 
 
 class MapView(QWidget):
@@ -36,6 +54,7 @@ class MapView(QWidget):
 
     flyHereRequested = pyqtSignal(float, float)     # north, east: metres from home
     followChanged = pyqtSignal(bool)                # the pilot panned (False) or re-centred (True)
+    vehicleClicked = pyqtSignal(str)                # a click on another vehicle of the fleet: its name
 
     def __init__(self, parent: QWidget | None = None) -> None:
         super().__init__(parent)
@@ -49,6 +68,9 @@ class MapView(QWidget):
         self.follow = True
         self.vehicle: tuple[float, float, float] | None = None    # east, north, heading degrees
         self._shown: tuple[float, float, float] | None = None     # ... as last painted
+        self.vehicle_name = ""                       # in a fleet: the picked vehicle's name, written beside it
+        self.vehicle_stale = False
+        self.others: tuple[VehicleMark, ...] = ()    # the fleet's other vehicles
         self.home_visible = False
         self.target: tuple[float, float] | None = None
         self.fence_radius: float | None = None
@@ -60,6 +82,7 @@ class MapView(QWidget):
         self.fly_here_enabled = False
         self._bands: list[list[QPointF]] = [[] for _ in range(TRAIL_BANDS)]   # view metres, oldest band first
         self._drag: QPointF | None = None
+        self._dragged = False                        # the press became a pan: its release is no click
         self._drag_centre = self.centre
         self.paints = 0                              # paint events so far (tests see the UI keeps painting)
         self.drawn_tiles = 0                         # tiles drawn in the last paint
@@ -75,6 +98,19 @@ class MapView(QWidget):
                 or abs((where[2] - old[2] + 180.0) % 360.0 - 180.0) >= 0.5):
             self._shown = where
             self.update()
+
+    def set_fleet(self, name: str, stale: bool, others: tuple[VehicleMark, ...]) -> None:
+        """The picked vehicle's name and staleness, and the other vehicles; repainted only when that changed."""
+        if (name, stale, others) != (self.vehicle_name, self.vehicle_stale, self.others):
+            self.vehicle_name, self.vehicle_stale, self.others = name, stale, others
+            self.update()
+
+    def vehicle_at(self, point: QPointF) -> str:
+        """The other vehicle whose icon is under a widget point ("" for none): the nearest within HIT_PX."""
+        near = [(math.hypot(q.x() - point.x(), q.y() - point.y()), m.name)
+                for m in self.others for q in [self.to_screen(m.east, m.north)]]
+        best = min(near, default=(HIT_PX + 1.0, ""))
+        return best[1] if best[0] <= HIT_PX else ""
 
     def set_trail(self, bands: list[list[tuple[float, float]]]) -> None:
         """Trail points in view metres, in TRAIL_BANDS lists from the oldest to the newest."""
@@ -136,18 +172,24 @@ class MapView(QWidget):
         if event.button() == Qt.LeftButton:
             self._drag = QPointF(event.pos())
             self._drag_centre = self.centre
+            self._dragged = False
         super().mousePressEvent(event)
 
     def mouseMoveEvent(self, event) -> None:  # noqa: N802
         if self._drag is not None:
             d = QPointF(event.pos()) - self._drag
-            if abs(d.x()) + abs(d.y()) >= 3 or not self.follow:
+            self._dragged = self._dragged or abs(d.x()) + abs(d.y()) >= 3
+            if self._dragged or not self.follow:
                 self.set_follow(False)
                 self.centre = (self._drag_centre[0] - d.x() * self.mpp, self._drag_centre[1] + d.y() * self.mpp)
                 self.update()
 
     def mouseReleaseEvent(self, event) -> None:  # noqa: N802
+        clicked = event.button() == Qt.LeftButton and self._drag is not None and not self._dragged
         self._drag = None
+        name = self.vehicle_at(QPointF(event.pos())) if clicked else ""
+        if name:
+            self.vehicleClicked.emit(name)
 
     def wheelEvent(self, event) -> None:  # noqa: N802
         steps = event.angleDelta().y() / 120.0
@@ -192,8 +234,12 @@ class MapView(QWidget):
             self._paint_home(p)
         if self.target is not None:
             self._paint_target(p)
+        for mark in self.others:
+            self._paint_other(p, mark)
         if self.vehicle is not None:
             self._paint_vehicle(p)
+        if self.vehicle_name or self.others:
+            self._paint_names(p)
         self._paint_scale(p)
         self._paint_north(p)
         if self.attribution and self.drawn_tiles:
@@ -279,9 +325,53 @@ class MapView(QWidget):
 
     def _paint_vehicle(self, p: QPainter) -> None:
         east, north, heading = self.vehicle
+        at = self.to_screen(east, north)
+        if self.vehicle_name:                   # a fleet: a halo says which one the sticks fly
+            p.setPen(QPen(PICKED, 2))
+            p.setBrush(PICKED_HALO)
+            p.drawEllipse(at, 19, 19)
+        self._arrow(p, at, heading, STALE if self.vehicle_stale else VEHICLE, 1.0)
+
+    def _paint_other(self, p: QPainter, mark: VehicleMark) -> None:
+        self._arrow(p, self.to_screen(mark.east, mark.north), mark.heading, STALE if mark.stale else OTHER, 0.75)
+
+    def name_boxes(self) -> list[tuple[QRectF, str, bool]]:
+        """Where each vehicle's name goes (box, text, stale), the picked one's first and always; another name tries
+        the right, left, below and above of its arrow, and is left out where it would cover a name or an arrow."""
+        names = [(self.to_screen(m.east, m.north), m.name, False, m.stale, 12.0) for m in self.others]
+        if self.vehicle is not None and self.vehicle_name:
+            names.insert(0, (self.to_screen(self.vehicle[0], self.vehicle[1]), "▶ " + self.vehicle_name, True,
+                             self.vehicle_stale, 21.0))
+        arrows = [QRectF(at.x() - r, at.y() - r, 2 * r, 2 * r) for at, _, _, _, r in names]
+        out: list[tuple[QRectF, str, bool]] = []
+        for i, (at, text, picked, stale, r) in enumerate(names):
+            metrics = QFontMetricsF(self._name_font(picked))
+            w, h = metrics.horizontalAdvance(text) + 6.0, metrics.height() + 2.0
+            sides = [QRectF(at.x() + r, at.y() - h / 2, w, h), QRectF(at.x() - r - w, at.y() - h / 2, w, h),
+                     QRectF(at.x() - w / 2, at.y() + r, w, h), QRectF(at.x() - w / 2, at.y() - r - h, w, h)]
+            free = [box for box in sides if not any(box.intersects(o) for o, _, _ in out)
+                    and not any(box.intersects(a) for j, a in enumerate(arrows) if j != i)]
+            box = free[0] if free else sides[0] if picked else None
+            if box is not None:
+                out.append((box, text, stale))
+        return out
+
+    def _name_font(self, picked: bool) -> QFont:
+        return QFont(self.font().family(), 9 if picked else 8, QFont.Bold if picked else QFont.Normal)
+
+    def _paint_names(self, p: QPainter) -> None:
+        for box, text, stale in self.name_boxes():
+            p.setFont(self._name_font(text.startswith("▶ ")))
+            p.fillRect(box, LABEL_BOX)
+            p.setPen(STALE if stale else LABEL_TEXT)
+            p.drawText(box, Qt.AlignCenter, text)
+
+    @staticmethod
+    def _arrow(p: QPainter, at: QPointF, heading: float, fill: QColor, size: float) -> None:
         p.save()
-        p.translate(self.to_screen(east, north))
+        p.translate(at)
         p.rotate(heading)                       # clockwise on screen, like a heading
+        p.scale(size, size)
         arrow = QPainterPath()
         arrow.moveTo(0, -14)
         arrow.lineTo(9, 10)
@@ -289,7 +379,7 @@ class MapView(QWidget):
         arrow.lineTo(-9, 10)
         arrow.closeSubpath()
         p.setPen(QPen(Qt.black, 1.5))
-        p.setBrush(VEHICLE)
+        p.setBrush(fill)
         p.drawPath(arrow)
         p.restore()
 
@@ -320,7 +410,7 @@ class MapView(QWidget):
         """Light text on a dark box: readable on the grid and on any tile."""
         box = QRectF(p.fontMetrics().boundingRect(text)).translated(at).adjusted(-2, -1, 2, 1)
         p.fillRect(box, LABEL_BOX)
-        p.setPen(QColor("#e6ebf0"))
+        p.setPen(LABEL_TEXT)
         p.drawText(at, text)
 
     def _paint_attribution(self, p: QPainter) -> None:
