@@ -277,7 +277,6 @@ def main() -> int:
 
     from driver.ice import load_slice
     from driver.ice.client import IceDrone, viewer_properties
-    from driver.vehicle import Vehicle, VehicleConfig
     jderobot, mavlinkserver = load_slice()
 
     probe = WireProbe()
