@@ -9,7 +9,7 @@ import math
 from typing import Callable
 
 __all__ = ["as_float", "number", "positive", "not_negative", "whole", "port", "connection", "takeoff_altitude",
-           "add_link_security", "link_security"]
+           "registry", "accepted_by", "add_link_security", "link_security"]
 
 
 def as_float(text: str) -> float:
@@ -76,14 +76,21 @@ def connection(text: str) -> str:
     return text.strip()
 
 
+def accepted_by(parse: Callable[[str], object]) -> Callable[[str], str]:
+    """An option type: the text as given, once ``parse`` accepts it (its ValueError is the usage error)."""
+    def check(text: str) -> str:
+        try:
+            parse(text)
+        except ValueError as exc:
+            raise argparse.ArgumentTypeError(str(exc)) from None
+        return text
+    return check
+
+
 def registry(text: str) -> str:
     """``HOST:PORT`` of a lab's IceGrid registry (docs/fleet.md), as given."""
     from .ice.registry import registry_address
-    try:
-        registry_address(text)
-    except ValueError as exc:
-        raise argparse.ArgumentTypeError(str(exc)) from None
-    return text
+    return accepted_by(registry_address)(text)
 
 
 def add_link_security(group) -> None:

@@ -16,7 +16,7 @@ import threading
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-from ..options import not_negative, number, positive, whole
+from ..options import accepted_by, not_negative, number, positive, whole
 from .faults import LinkFaults
 from .profiles import PROFILES, speaks_mavlink2
 from .server import parse_address
@@ -64,12 +64,7 @@ def _replies(text: str):
     return ids
 
 
-def _address(text: str) -> str:
-    try:
-        parse_address(text)
-    except ValueError as exc:
-        raise argparse.ArgumentTypeError(str(exc)) from None
-    return text
+_address = accepted_by(parse_address)       # HOST:PORT, with the port's range checked
 
 
 def parser() -> argparse.ArgumentParser:
