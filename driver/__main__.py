@@ -141,6 +141,8 @@ def main(argv: list[str] | None = None) -> int:
     signing, allowed = link_security(opts, p)
     if opts.count > 1 and not opts.sim:
         p.error("--count needs --sim (a real vehicle has one server each: start one per companion computer)")
+    if opts.count > 1 and not opts.registry:
+        p.error("--count needs --registry (the vehicles are told apart by name: python -m driver registry)")
     if opts.registry:
         from .ice.registry import locator, registry_address, vehicle_name_problem
         names = fleet_names(opts)

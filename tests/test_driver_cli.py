@@ -51,6 +51,8 @@ def run(module: str, *args: str, cwd, timeout: float = 30) -> subprocess.Complet
     (["--sim", "--signing-passphrase", "a", "--signing-key-file", "b"],
      "argument --signing-key-file: not allowed with argument --signing-passphrase"),
     (["--sim", "--allow", "10.1.1.1:port"], "--allow '10.1.1.1:port': expected ADDRESS or ADDRESS:PORT"),
+    (["--sim", "--count", "2"], "--count needs --registry (the vehicles are told apart by name: "
+     "python -m driver registry)"),
 ])
 def test_bad_options_are_one_usage_error(args, reason, tmp_path):
     if "OPEN" in args:                                    # a key file every user of the machine can read

@@ -35,6 +35,7 @@ log = logging.getLogger(__name__)
 _MAX_MESSAGES = 200
 _MAX_RESULTS = 50
 FENCE_EVERY = 20                       # polls between reads of the fence (2 s at the default 0.1 s poll)
+RESUBSCRIBE_AFTER = 5.0                # s without a publication while the server answers: subscribe again
 PREFIX = "UAVViewer"
 #: KB a reply may have: the largest picture a JdeRobot Camera sends the viewer, 1920x1080 RGB8 (6075 KB),
 #: and its header, with ~69 KB to spare. A larger one fails that one call (MemoryLimitException), nothing else.
@@ -87,7 +88,8 @@ class IceDrone(Drone):
         proxy = properties.getProperty(f"{prefix}.Vehicle.Proxy") or properties.getProperty(f"{prefix}.Pose3D.Proxy")
         self.vehicle_name = vehicle_name     # in a fleet: the name the registry knows, also its IceStorm topic
         self._description = f"Ice {vehicle_name or _host_of(proxy)}"
-        self._subscription = None              # (topic, subscriber proxy) while subscribed
+        self._subscription = None              # (topic, subscriber proxy, adapter) while subscribed
+        self._subscribed_at = 0.0
         self._last_published: float | None = None
         self.publications = 0                  # statuses received from IceStorm (tests, the fleet panel)
         self._limits = Limits()
@@ -238,6 +240,11 @@ class IceDrone(Drone):
                 self._subscribe()
             published = self._last_published
             if not first and published is not None and started - published < max(5 * self._poll, 0.5):
+                if self._vehicle is not None:       # the fence is not published: asked now and then
+                    try:
+                        self._read_fence()
+                    except Ice.Exception:           # the status from IceStorm tells how the link is
+                        pass
                 self._closing.wait(self._poll)      # IceStorm brings the status: no call to the server
                 continue
             try:
@@ -251,6 +258,10 @@ class IceDrone(Drone):
                         self._limits = self._clamps(Limits(lim.horizontal, lim.vertical, lim.yawRate))
                     self._read_fence()
                     self._answered(self._vehicle.getStatus(self._server_message, self._server_result))
+                    if (self._subscription is not None
+                            and started - max(self._subscribed_at, published or 0.0) > RESUBSCRIBE_AFTER):
+                        self._unsubscribe()         # the server answers but its topic no longer reaches us
+                                                    # (IceStorm dropped a slow subscriber): subscribe again
                 first = False
             except Ice.Exception as exc:
                 self._missed(exc)
@@ -363,6 +374,7 @@ class IceDrone(Drone):
     def _subscribe(self) -> None:
         """Subscribe to the vehicle's topic (on the poller thread); a failure is said once, then retried."""
         from .publisher import topic
+        adapter = None
         try:
             t = topic(self._com, self._props.getProperty(f"{self._prefix}.TopicManager.Proxy"), self.vehicle_name)
             adapter = self._com.createObjectAdapterWithEndpoints(
@@ -372,10 +384,10 @@ class IceDrone(Drone):
             adapter.activate()
             t.subscribeAndGetPublisher({}, subscriber)
             self._subscription = (t, subscriber, adapter)
+            self._subscribed_at = time.monotonic()
             log.info("%s: telemetry from IceStorm topic %s", self._description, self.vehicle_name)
         except (Ice.Exception, RuntimeError) as exc:
             log.info("%s: no IceStorm telemetry (%s); polling the server", self._description, exc)
-            adapter = locals().get("adapter")
             if adapter is not None:
                 adapter.destroy()
 
@@ -590,9 +602,10 @@ class _Subscriber(mavlinkserver.Telemetry):
 def fleet_properties(registry: str, certs: str | None = None) -> Ice.Properties:
     """Client properties for a lab's registry at ``HOST:PORT`` (TLS with ``certs`` off loopback)."""
     from . import registry as fleet
+    from .server import is_loopback
     host, port = fleet.registry_address(registry)
     props = viewer_properties(certs=certs)
-    loopback = host in ("127.0.0.1", "localhost", "::1")
+    loopback = is_loopback(host)
     props.setProperty("Ice.Default.Locator", fleet.locator(host, port, secure=bool(certs)))
     if not props.getProperty(f"{PREFIX}.Telemetry.Endpoints"):      # where IceStorm calls us back
         transport = "ssl" if certs else "tcp"                          # with certificates: IceStorm must show one

@@ -64,18 +64,17 @@ def events_between(old: VehicleState | None, new: VehicleState) -> list:
 class TelemetryPublisher:
     """Publishes ``vehicle`` as ``name`` through the TopicManager ``manager``; ``start()``, ``stop()``."""
 
-    def __init__(self, com: Ice.Communicator, vehicle: Drone, name: str, manager: str, rate_hz: float = RATE_HZ,
-                 navdata_vehicle: int = 1, watch_hz: float = WATCH_HZ) -> None:
-        self._com, self._vehicle, self.name, self._manager = com, vehicle, name, manager
+    def __init__(self, com: Ice.Communicator, vehicle: Drone, snapshots, name: str, manager: str,
+                 rate_hz: float = RATE_HZ, watch_hz: float = WATCH_HZ) -> None:
+        """``snapshots``: the servants' :class:`~driver.ice.servants.Snapshots`, so a pose or navdata published
+        is the very value Pose3D and Navdata answer (one conversion, one clock)."""
+        self._com, self._vehicle, self._snapshots, self.name, self._manager = com, vehicle, snapshots, name, manager
         self._period = 1.0 / rate_hz
         self._watch = 1.0 / max(watch_hz, rate_hz)
-        self._navdata_vehicle = navdata_vehicle
         self._stop = threading.Event()
         self._thread = threading.Thread(target=self._run, name=f"publish-{name}", daemon=True)
         self._publisher = None
         self._said_missing = False
-        self._started = time.monotonic()
-        self.published = 0                      # status publications made (for tests and benches)
 
     def start(self) -> "TelemetryPublisher":
         self._thread.start()
@@ -119,25 +118,24 @@ class TelemetryPublisher:
                 if last is not None and s is not last:
                     for e in events_between(last, s):
                         self._publisher.event(self.name, e)
-                last = s
+                last = s                              # only once its events are out: a failure sends them again
                 now = time.monotonic()
                 if now >= next_status:
-                    next_status = max(next_status + self._period, now)
                     status = convert.status_from_state(mavlinkserver, s, last_message, last_result)
-                    if s.messages:
+                    self._publisher.status(self.name, status)
+                    self._publisher.pose(self.name, time.time(), self._snapshots.pose())
+                    self._publisher.navdata(self.name, self._snapshots.navdata())
+                    next_status = max(next_status + self._period, now)
+                    if s.messages:                    # published: the next status starts after them
                         last_message = s.messages[-1].index
                     if s.results:
                         last_result = s.results[-1].index
-                    x, y, z, h, q0, q1, q2, q3 = convert.pose_enu(s)
-                    self._publisher.status(self.name, status)
-                    self._publisher.pose(self.name, time.time(), jderobot.Pose3DData(x, y, z, h, q0, q1, q2, q3))
-                    self._publisher.navdata(self.name, jderobot.NavdataData(**convert.navdata_fields(
-                        s, self._navdata_vehicle, now - self._started)))
-                    self.published += 1
-            except Ice.Exception as exc:          # IceStorm went away: find it again
-                log.warning("publishing %s failed: %s", self.name, _problem(exc))
+            except Ice.Exception as exc:          # IceStorm went away: find it again, every RETRY_S
+                if not self._said_missing:
+                    log.warning("publishing %s failed: %s", self.name, _problem(exc))
                 self._publisher = None
                 self._said_missing = True
+                self._stop.wait(RETRY_S)
                 continue
             self._stop.wait(min(self._watch, max(0.0, next_status - time.monotonic())))
 

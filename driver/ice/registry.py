@@ -151,14 +151,6 @@ def _destroy(session) -> None:
         pass
 
 
-def vehicle_proxy(com: Ice.Communicator, name: str) -> Ice.ObjectPrx:
-    """The object the registry lists for ``name``: identity ``name`` on adapter ``name`` (an indirect proxy).
-
-    The server adds a servant under that identity as well (the extension's), so the listed proxy works itself.
-    """
-    return com.stringToProxy(f"{name} @ {name}")
-
-
 def list_vehicles(com: Ice.Communicator, timeout_ms: int = 2000) -> list[str]:
     """Names of the vehicles the registry knows, sorted; RegistryError if it does not answer."""
     try:

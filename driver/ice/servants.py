@@ -158,7 +158,7 @@ class CMDVelI(jderobot.CMDVel):
         if data is None:
             return -1
         values = (data.linearX, data.linearY, data.linearZ, data.angularX, data.angularY, data.angularZ)
-        if not all(map(math.isfinite, values)):          # Ice hands floats; a NaN or inf is refused
+        if not finite(*values):                           # Ice hands floats; a NaN or inf is refused
             log.warning("CMDVel refused: non-finite value in %s", values)
             return -1
         if max(map(abs, values)) > self._settings.cmdvel_refuse_above:

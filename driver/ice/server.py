@@ -356,12 +356,13 @@ class IceServer:
         self.name = fleet_name(self.properties)       # in a fleet: the vehicle's adapter id and topic
         self.publisher = None
         self._announced = False
+        # each snapshot converted once for every servant and the IceStorm publisher
+        self.snapshots = servants.Snapshots(self.vehicle, self.settings)
 
     def _servants(self) -> dict[str, Ice.Object]:
         if self.camera is None:
             self.camera = make_camera_servant(self.properties, self.vehicle)
-        v, s = self.vehicle, self.settings
-        shared = servants.Snapshots(v, s)               # each snapshot converted once for every servant
+        v, s, shared = self.vehicle, self.settings, self.snapshots
         return {"Camera": self.camera, "Pose3D": servants.Pose3DI(v, "Pose3D", s, shared),
                 "CMDVel": servants.CMDVelI(v, s), "Navdata": servants.NavdataI(v, s, shared),
                 "Extra": servants.ArDroneExtraI(v, s, self.camera), "WP": servants.Pose3DI(v, "WP", s, shared),
@@ -402,8 +403,8 @@ class IceServer:
             raise ServeError(f"{PREFIX}Publish.Rate={rate!r} is not a number") from None
         if hz > 0:
             manager = self.properties.getPropertyWithDefault(PREFIX + "TopicManager.Proxy", TOPIC_MANAGER)
-            self.publisher = TelemetryPublisher(self.communicator, self.vehicle, self.name, manager, min(hz, 50.0),
-                                                self.settings.navdata_vehicle).start()
+            self.publisher = TelemetryPublisher(self.communicator, self.vehicle, self.snapshots, self.name, manager,
+                                                min(hz, 50.0)).start()
 
     def _serve(self, table: dict[str, Ice.Object]) -> None:
         com = self.communicator
