@@ -45,10 +45,11 @@ class CameraController(QObject):
     _switchDone = pyqtSignal(object)           # a toggle_camera Future, emitted on a driver thread, delivered queued
 
     def __init__(self, panel: CameraPanel, uris: list[str], *, state_fn: Callable[[], VehicleState] | None = None,
-                 drone: Drone | None = None, folder: str | None = None, rate_hz: float = 30.0,
+                 drone: Callable[[], Drone] | None = None, folder: str | None = None, rate_hz: float = 30.0,
                  parent: QObject | None = None,
                  **source_options) -> None:
-        """``source_options`` go to :func:`driver.camera.open_source` (loop, timeout_ms, image_format)."""
+        """``source_options`` go to :func:`driver.camera.open_source` (loop, timeout_ms, image_format); ``drone``
+        says which vehicle to ask for its next camera (the one flown now: in a fleet it changes)."""
         super().__init__(parent)
         self.panel = panel
         self.view = panel.view
@@ -232,7 +233,7 @@ class CameraController(QObject):
                 self.panel.set_note("Cannot switch camera: no vehicle to ask")
                 return
             try:
-                future = self._drone.toggle_camera()
+                future = self._drone().toggle_camera()
             except Exception as exc:          # noqa: BLE001 - a remote drone may fail; the video goes on
                 log.exception("toggle_camera failed to start")
                 future = Future()

@@ -106,7 +106,8 @@ class MainWindow(QMainWindow):
         self._default_cameras = list(default_cameras or [])
         self.camera = CameraController(self.camera_panel, list(cameras or self.settings.camera_uris
                                                                or self._default_cameras),
-                                       state_fn=lambda: self.adapter.drone.state(), drone=drone,  # the picked
+                                       state_fn=lambda: self.adapter.drone.state(),     # the picked vehicle's
+                                       drone=lambda: self.adapter.drone,
                                        folder=self.settings.media_folder or None, parent=self)
         self.refresh.shownChanged.connect(self.camera.set_shown)
         self.camera_panel.hud_button.setChecked(self.settings.hud)
@@ -553,11 +554,7 @@ class MainWindow(QMainWindow):
 
     def _takeoff_answered(self, box: QMessageBox, altitude: float) -> None:
         if box.clickedButton() is box.button(QMessageBox.Yes):
-            if self._may_take_off(self.adapter.state):
-                self._command("takeoff", altitude)
-            else:
-                self.log_message("Takeoff not sent: the vehicle is no longer on the ground with a link",
-                                 Severity.WARNING)
+            self._take_off_if_still_fits(altitude)
         box.deleteLater()
         if self._takeoff_box is box:
             self._takeoff_box = None
@@ -583,6 +580,14 @@ class MainWindow(QMainWindow):
     @property
     def emergency_box(self) -> QMessageBox | None:
         return self._emergency_box
+
+    def _take_off_if_still_fits(self, altitude: float) -> None:
+        """A takeoff the pilot confirmed, sent only if the vehicle is still on the ground with a link."""
+        if self._may_take_off(self.adapter.state):
+            self._command("takeoff", altitude)
+        else:
+            self.log_message("Takeoff not sent: the vehicle is no longer on the ground with a link",
+                             Severity.WARNING)
 
     def request_land(self) -> None:
         self.centre_sticks()
@@ -730,7 +735,10 @@ class MainWindow(QMainWindow):
         if box.clickedButton() is box.button(QMessageBox.Yes):
             args = (self.takeoff_altitude,) if command == "takeoff" else ()
             self.fleet.command_all(command, *args, skip=self.fleet.picked)
-            self._command(command, *args)       # the picked one through the window: its answer is shown once
+            # the picked one through the window's own path (a Fly here ends, a takeoff is checked again);
+            # its answer is shown once
+            {"takeoff": lambda: self._take_off_if_still_fits(*args), "land": self.request_land,
+             "stop": self.request_stop}[command]()
         box.deleteLater()
         if self.fleet_box is box:
             self.fleet_box = None

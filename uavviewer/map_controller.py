@@ -336,6 +336,8 @@ class MapController(QObject):
 
     def cancel(self) -> None:
         """Stop, Escape, Land, RTL or a stick: the go-to is over (the driver holds or does what was asked)."""
+        if self.target is None and self._sent is None and self._question is None:
+            return                                # nothing to end (a stick moves many times a second)
         self.target = self._sent = None
         if self._question is not None:
             self._question.reject()

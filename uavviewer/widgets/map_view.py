@@ -201,6 +201,7 @@ class MapView(QWidget):
             return
         east, north = self.view_at(QPointF(event.pos()))
         menu = QMenu(self)
+        menu.setAttribute(Qt.WA_DeleteOnClose)            # one per right click: gone once closed
         menu.setObjectName("mapMenu")
         action = menu.addAction(self.fly_here_text)
         action.setEnabled(self.fly_here_enabled)
