@@ -24,6 +24,9 @@ class Trail:
         self.seconds = seconds
         # (time, east, north, (lat, lon) or None): east/north as first seen, lat/lon when there was one
         self._points: collections.deque[tuple[float, float, float, tuple[float, float] | None]] = collections.deque()
+        # each point in view metres, placed once for the view's frame (None: not placed yet)
+        self._placed: collections.deque[tuple[float, float] | None] = collections.deque()
+        self._placed_for: Callable | None = None
 
     def __len__(self) -> int:
         return len(self._points)
@@ -41,9 +44,11 @@ class Trail:
             if math.hypot(east - e, north - n) < TRAIL_STEP and now - t < TRAIL_IDLE:
                 return False
         self._points.append((now, east, north, latlon))
+        self._placed.append(None)
         if self.seconds is not None:
             while self._points and now - self._points[0][0] > self.seconds:
                 self._points.popleft()
+                self._placed.popleft()
         return True
 
     def bands(self, count: int, now: float, to_view: Callable[[float, float], tuple[float, float]] | None
@@ -54,12 +59,19 @@ class Trail:
         span = self.seconds if self.seconds is not None else max(self.span, 1e-6)
         end = now if self.seconds is not None else (self._points[-1][0] if self._points else 0.0)
         out: list[list[tuple[float, float]]] = [[] for _ in range(count)]
+        if to_view != self._placed_for:            # another frame (home moved, another vehicle): place again
+            self._placed = collections.deque([None] * len(self._points))
+            self._placed_for = to_view
+        placed: list[tuple[float, float]] = []
         last = None
-        for t, e, n, latlon in self._points:
-            where = to_view(*latlon) if latlon is not None and to_view is not None else (e, n)
+        for (t, e, n, latlon), where in zip(self._points, self._placed):
+            if where is None:                        # only the points added since the last call
+                where = to_view(*latlon) if latlon is not None and to_view is not None else (e, n)
+            placed.append(where)
             band = min(count - 1, max(0, int((1.0 - (end - t) / span) * count)))
             if last is not None and last[0] != band:
                 out[band].append(last[1])
             out[band].append(where)
             last = (band, where)
+        self._placed = collections.deque(placed)
         return out
