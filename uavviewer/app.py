@@ -186,7 +186,8 @@ def main(argv: list[str] | None = None) -> int:
     from uavviewer.settings import default_qsettings, load_settings
 
     signing, allowed = options.link_security(args, build_parser())
-    saved_key = load_settings(default_qsettings()).signing_key_file
+    saved = load_settings(default_qsettings())                    # read once: what Preferences keep
+    saved_key = saved.signing_key_file
     if signing is None and saved_key:                             # Preferences › Link security's key file
         from driver.signing import SigningConfig, read_key_file
         try:
@@ -205,13 +206,13 @@ def main(argv: list[str] | None = None) -> int:
             build_parser().error(f"no such file: {args.replay}")
         connection = str(args.replay)
     else:
-        connection = choose_connection(args, load_settings(default_qsettings()).last_connection)
+        connection = choose_connection(args, saved.last_connection)
     tlog = None
     if args.log_dir is not None and args.replay is None:
         tlog = str(args.log_dir / time.strftime("flight-%Y%m%d-%H%M%S.tlog"))
     config = VehicleConfig(connection=connection, baud=args.baud, tlog_path=tlog, signing=signing,
                            allowed_senders=allowed,
-                           takeoff_altitude=args.takeoff_altitude or load_settings(default_qsettings()).takeoff_altitude)
+                           takeoff_altitude=args.takeoff_altitude or saved.takeoff_altitude)
     remote = args.ice is not None or args.ice_host is not None
     fleet = None
     if args.registry is not None:                                 # a lab's fleet: the first vehicle, then the picked
@@ -239,23 +240,22 @@ def main(argv: list[str] | None = None) -> int:
     app.setWindowIcon(QIcon(str(RESOURCES / "icons" / "app.svg")))
     app.setStyleSheet(load_style())
     own_camera = ["sim"] if args.sim else []                      # used when Preferences name no camera
+    camera_props = None
     if fleet is not None:                                         # the picked vehicle's camera, through the registry
-        from driver.camera import ice_source
         from driver.ice.client import fleet_properties
         from uavviewer.fleet import FleetController
-        props = fleet_properties(args.registry, str(args.ice_certs) if args.ice_certs else None)
+        camera_props = fleet_properties(args.registry, str(args.ice_certs) if args.ice_certs else None)
         own_camera = [FleetController.camera_uri(first)]
-        ice_source.client_properties.update(
-            {k: v for prefix in ("IceSSL.", "Ice.Plugin.IceSSL", "Ice.Default.Locator")
-             for k, v in props.getPropertiesForPrefix(prefix).items()})
     if remote:                                                    # the server's camera, from the viewer's config
         from driver.ice.client import viewer_properties
-        from driver.camera import ice_source
-        props = viewer_properties(str(args.ice) if args.ice else None, args.ice_host, certs=certs)
-        proxy = props.getProperty("UAVViewer.Camera.Proxy")
+        camera_props = viewer_properties(str(args.ice) if args.ice else None, args.ice_host, certs=certs)
+        proxy = camera_props.getProperty("UAVViewer.Camera.Proxy")
         own_camera = [f"ice:{proxy}"] if proxy else []
-        ice_source.client_properties.update(           # its camera over TLS too, with the pilot's certificate
-            {k: v for prefix in ("IceSSL.", "Ice.Plugin.IceSSL") for k, v in props.getPropertiesForPrefix(prefix).items()})
+    if camera_props is not None:                    # its camera over TLS too, with the pilot's certificate; in a
+        from driver.camera import ice_source        # fleet, found through the registry
+        ice_source.client_properties.update(
+            {k: v for prefix in ("IceSSL.", "Ice.Plugin.IceSSL", "Ice.Default.Locator")
+             for k, v in camera_props.getPropertiesForPrefix(prefix).items()})
     window = MainWindow(drone, takeoff_altitude=args.takeoff_altitude, cameras=args.camera,  # --camera: this run
                         default_cameras=own_camera)
     if fleet is not None:

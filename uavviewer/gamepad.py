@@ -180,7 +180,6 @@ class GamepadReader:
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self.error = sdl_problem()
-        self.frames = 0                          # frames published (for benches)
 
     # -- listeners ------------------------------------------------------------------------------
     def subscribe(self, listener: Callable[[GamepadFrame], None]) -> None:
@@ -208,7 +207,6 @@ class GamepadReader:
             thread.join(2.0)
 
     def _publish(self, frame: GamepadFrame) -> None:
-        self.frames += 1
         with self._lock:
             listeners = list(self._listeners)
         for listener in listeners:
