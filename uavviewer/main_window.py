@@ -92,7 +92,6 @@ class MainWindow(QMainWindow):
         self._instruments = self.refresh.add(INSTRUMENTS_HZ, self._show_instruments)
         self._readouts = self.refresh.add(TEXT_HZ, self._show_readouts)
         self._plots_refresh = self.refresh.add(PLOTS_HZ, self.plots.redraw)
-        self.plots.set_redraw_rate(0)                  # the refresh channel draws the plots
 
         self.setWindowTitle(f"UavViewerPy — {self.adapter.description}")
         self._signing_unavailable = signing_unavailable(drone)     # a remote drone is signed on its server

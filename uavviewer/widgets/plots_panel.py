@@ -7,7 +7,6 @@ from __future__ import annotations
 
 import numpy as np
 import pyqtgraph as pg
-from PyQt5.QtCore import QTimer
 from PyQt5.QtGui import QFont
 from PyQt5.QtWidgets import QVBoxLayout, QWidget
 
@@ -51,8 +50,9 @@ def _connections(y: np.ndarray, wrap: float | None) -> np.ndarray | str:
 class PlotsPanel(QWidget):
     WINDOW_S = 60.0
 
-    def __init__(self, parent: QWidget | None = None, capacity: int = 60 * 30 + 64,
-                 redraw_hz: float = 8.0) -> None:
+    def __init__(self, parent: QWidget | None = None, capacity: int = 60 * 30 + 64) -> None:
+        """Samples go in with :meth:`append`; the owner calls :meth:`redraw` at the rate the eye needs (the
+        window's refresh channel), so nothing is drawn while nobody sees it."""
         super().__init__(parent)
         self.setObjectName("plotsPanel")
         pg.setConfigOptions(antialias=False, background="#12161c", foreground="#aab4be")
@@ -87,18 +87,6 @@ class PlotsPanel(QWidget):
         self.plots[-1].setYRange(0, 360)
         self.curves = {name: self.plots[row].plot(pen=pg.mkPen(color, width=1.5), name=legend)
                        for name, (row, color, legend) in SERIES.items()}
-        self._timer = QTimer(self)
-        self._timer.setInterval(int(1000 / redraw_hz))
-        self._timer.timeout.connect(self.redraw)
-        self._timer.start()
-
-    def set_redraw_rate(self, hz: float) -> None:
-        """Redraw on the panel's own timer at ``hz``; 0 stops it (the window's refresh channel draws instead)."""
-        if hz > 0:
-            self._timer.setInterval(int(1000 / hz))
-            self._timer.start()
-        else:
-            self._timer.stop()
 
     @property
     def sample_count(self) -> int:
