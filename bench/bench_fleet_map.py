@@ -38,9 +38,9 @@ def main() -> int:
     args = ap.parse_args()
     from PyQt5.QtWidgets import QApplication
     app = QApplication(sys.argv[:1])  # noqa: F841 - the widgets need it
-    from uavviewer.geo import MapFrame
-    from uavviewer.map_controller import fleet_marks
-    from uavviewer.widgets.map_view import MapView
+    from uavviewer.map.geometry import MapFrame
+    from uavviewer.map.controller import fleet_marks
+    from uavviewer.map.map_view import MapView
 
     frame = MapFrame(47.0, 8.0)
     view = MapView()

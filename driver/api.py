@@ -12,6 +12,7 @@ import abc
 from concurrent.futures import Future
 from dataclasses import dataclass
 
+from .mission.plan import Plan, PlanKind, TransferOutcome
 from .state import CommandResult, CommandStatus, VehicleState
 
 
@@ -117,6 +118,55 @@ class Drone(abc.ABC):
         """Ask the vehicle to show its next camera; a vehicle with one camera (the default) refuses at once."""
         return _answered(CommandResult("switch camera", CommandStatus.REJECTED, "this vehicle has no camera switch"))
 
+    # -- missions, fences, rally points (driver.mission) ----------------------------------------
+    # A transfer resolves only on the vehicle's word: an upload is ACCEPTED once MISSION_ACK accepted it *and*
+    # the plan read back matches in meaning; its outcome carries the plan read back. One transfer per kind at a
+    # time; progress is in ``state().mission.transfers``.
+    def upload_plan(self, plan: Plan) -> Future[TransferOutcome]:
+        """Check ``plan`` against the flight limits, write it to the vehicle, read it back and compare."""
+        return _answered(TransferOutcome(CommandResult(f"upload {plan.kind.label}", CommandStatus.REJECTED,
+                                                       _NO_MISSIONS)))
+
+    def download_plan(self, kind: PlanKind) -> Future[TransferOutcome]:
+        """Read the vehicle's plan of ``kind``."""
+        return _answered(TransferOutcome(CommandResult(f"download {kind.label}", CommandStatus.REJECTED,
+                                                       _NO_MISSIONS)))
+
+    def clear_plan(self, kind: PlanKind) -> Future[CommandResult]:
+        """MISSION_CLEAR_ALL for ``kind``, confirmed by its MISSION_ACK."""
+        return _answered(CommandResult(f"clear {kind.label}", CommandStatus.REJECTED, _NO_MISSIONS))
+
+    def cancel_transfer(self, kind: PlanKind) -> None:
+        """End the transfer of ``kind`` running now (its future resolves ABORTED); nothing when none runs."""
+
+    def start_mission(self) -> Future[CommandResult]:
+        """Fly the uploaded mission: AUTO + MISSION_START; from the ground through the takeoff's readiness and
+        arming path. Resolves when the heartbeat and MISSION_CURRENT say it runs."""
+        return _answered(CommandResult("mission start", CommandStatus.REJECTED, _NO_MISSIONS))
+
+    def pause_mission(self) -> Future[CommandResult]:
+        """Hold where it is (BRAKE); the current item is kept."""
+        return _answered(CommandResult("mission pause", CommandStatus.REJECTED, _NO_MISSIONS))
+
+    def resume_mission(self) -> Future[CommandResult]:
+        """Back to AUTO: the vehicle flies the current item again."""
+        return _answered(CommandResult("mission resume", CommandStatus.REJECTED, _NO_MISSIONS))
+
+    def set_mission_item(self, seq: int) -> Future[CommandResult]:
+        """Make item ``seq`` (1 = the first flyable item) current: DO_SET_MISSION_CURRENT, else MISSION_SET_CURRENT."""
+        return _answered(CommandResult(f"mission item {seq}", CommandStatus.REJECTED, _NO_MISSIONS))
+
+    # -- parameters (driver.params) ---------------------------------------------------------------
+    # The table is in ``state().parameters``; a set resolves ACCEPTED only on a PARAM_VALUE carrying the new
+    # value at the parameter's own precision.
+    def fetch_parameters(self, refresh: bool = False) -> Future[CommandResult]:
+        """Download every parameter (re-asking missing ones by index); ``refresh`` ignores what is cached."""
+        return _answered(CommandResult("parameters", CommandStatus.REJECTED, _NO_PARAMETERS))
+
+    def set_parameter(self, name: str, value: float) -> Future[CommandResult]:
+        """PARAM_SET ``name`` to ``value`` in the parameter's own type, confirmed by the vehicle's echo."""
+        return _answered(CommandResult(f"param {name}", CommandStatus.REJECTED, _NO_PARAMETERS))
+
     # -- link security (MAVLink 2 signing; driver.signing) -------------------------------------
     # Only a driver that holds the MAVLink link can sign it; a remote one (Ice) is set up on its server.
     @property
@@ -179,6 +229,8 @@ class Fleet(abc.ABC):
         """Close every drone made and stop following the list."""
 
 
+_NO_MISSIONS = "this vehicle connection cannot transfer or fly plans"
+_NO_PARAMETERS = "this vehicle connection cannot read or write parameters"
 _NO_SIGNING = "the MAVLink link is signed where it is held: set signing up on the MAVLinkServer"
 
 

@@ -14,6 +14,9 @@ import enum
 import math
 from dataclasses import dataclass, field, replace
 
+from .mission.plan import MissionProgress
+from .params.model import ParameterTable
+
 __all__ = [
     "LandedState", "LinkStatus", "Severity", "CommandStatus", "Attitude", "GlobalPosition",
     "LocalPosition", "Velocity", "Battery", "Gps", "Readiness", "LinkHealth", "SigningStatus", "Signing", "Message",
@@ -384,6 +387,8 @@ class VehicleState:
     firmware: str = ""                               # AUTOPILOT_VERSION's flight software, "3.3.1"; "" until known
     signing: Signing = field(default_factory=Signing)
     fence: Fence = field(default_factory=Fence)      # FENCE_* parameters, as they are read
+    mission: MissionProgress = field(default_factory=MissionProgress)   # driver.mission: progress, transfers
+    parameters: ParameterTable = field(default_factory=ParameterTable)  # driver.params: every value reported
 
     # -- derived views -----------------------------------------------------------------------
     @property

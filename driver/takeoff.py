@@ -6,7 +6,7 @@ vehicle's state and the futures of the commands it issued.
 
 It judges by the vehicle, not by replies: a NAV_TAKEOFF re-sent because its first reply was lost may be
 refused (ArduCopter's takeoff.cpp: "can't takeoff again" once it no longer counts as landed) or accepted
-(ArduCopter 4.7, see shared/recordings) while the vehicle is already climbing; either way, a vehicle that
+(ArduCopter 4.7, see tests/data/recordings) while the vehicle is already climbing; either way, a vehicle that
 reports taking off or climbing is climbing, and the sequence never reports FAILED while it does.
 """
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""Recordings of a real ArduCopter 4.7 (../shared/recordings/) replayed through the driver's telemetry path.
+"""Recordings of a real ArduCopter 4.7 (tests/data/recordings/) replayed through the driver's telemetry path.
 
 Each phase of the flight is checked against the ground station's own timeline (the recording's .events.txt),
 not against what the driver makes of it: the mode and arming it shows, the altitude, every STATUSTEXT reason,
@@ -15,12 +15,11 @@ import pytest
 
 from driver.vehicle import Vehicle, VehicleConfig
 
-from recordings import FLIGHT, SIGNING, need_recordings  # noqa: E402
+from recordings import FLIGHT, SIGNING  # noqa: E402
 
 #: Where the recorded SITL vehicle stood (README.md: home -35.363261, 149.165230, 584 m).
 HOME = (-35.363261, 149.165230, 584.0)
 
-pytestmark = need_recordings()
 
 
 def statustexts(events: str) -> list[str]:

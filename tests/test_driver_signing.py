@@ -14,7 +14,7 @@ from driver.signing import (
 )
 from driver.state import SigningStatus
 from driver.vehicle import Vehicle, VehicleConfig
-from recordings import SIGNING, need_recordings
+from recordings import SIGNING
 
 RECORDED_KEY = hashlib.sha256(b"uavviewer-test").digest()     # the recording's README
 
@@ -90,7 +90,6 @@ def signed_replay():
         v.close()
 
 
-@need_recordings()
 def test_the_recorded_vehicles_signed_frames_verify_with_the_recorded_key(signed_replay):
     replay = signed_replay(RECORDED_KEY)
     s = replay.wait_for(lambda s: replay.replay.finished and s.mode == "LOITER" and s.home is not None, 20)
@@ -101,7 +100,6 @@ def test_the_recorded_vehicles_signed_frames_verify_with_the_recorded_key(signed
     assert sig.unsigned_rejected > 0                 # its frames from before SETUP_SIGNING: not let in unasked
 
 
-@need_recordings()
 def test_with_another_key_every_signed_frame_is_dropped(signed_replay):
     replay = signed_replay(key_from_passphrase("not the key"))
     s = replay.wait_for(lambda s: replay.replay.finished and s.signing.bad_signature > 100, 20)
@@ -110,7 +108,6 @@ def test_with_another_key_every_signed_frame_is_dropped(signed_replay):
     assert s.mode != "LOITER" and s.home is None     # nothing it said after signing reached the state
 
 
-@need_recordings()
 def test_without_a_key_the_pilot_is_told_the_vehicle_requires_signing(signed_replay):
     replay = signed_replay(None)
     s = replay.wait_for(lambda s: replay.replay.finished and s.mode == "LOITER", 20)

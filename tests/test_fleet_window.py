@@ -12,9 +12,9 @@ from driver import frames
 from driver.ice.fleet import IceFleet
 from driver.state import GlobalPosition, LinkStatus, LocalPosition, Severity, VehicleState
 from uavviewer.fleet import FleetController, row_for, switch_message
-from uavviewer.geo import MapFrame
-from uavviewer.map_controller import fleet_marks, placed
-from uavviewer.widgets.map_view import OTHER, STALE, VEHICLE, MapView, VehicleMark
+from uavviewer.map.geometry import MapFrame
+from uavviewer.map.controller import fleet_marks, placed
+from uavviewer.map.map_view import OTHER, STALE, VEHICLE, MapView, VehicleMark
 
 from fleet_fixtures import fleet, lab  # noqa: F401  (fixtures)
 from ice_fixtures import eventually

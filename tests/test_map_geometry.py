@@ -1,4 +1,4 @@
-"""The map's geometry (uavviewer.geo) and trail (uavviewer.trail): numbers, no Qt."""
+"""The map's geometry (uavviewer.map.geometry) and trail (uavviewer.map.trail): numbers, no Qt."""
 from __future__ import annotations
 
 import math
@@ -6,9 +6,9 @@ import math
 import pytest
 
 from driver import frames
-from uavviewer.geo import (MapFrame, TileKey, ground_resolution, inverse_mercator, mercator, nice_scale, tile_at,
+from uavviewer.map.geometry import (MapFrame, TileKey, ground_resolution, inverse_mercator, mercator, nice_scale, tile_at,
                            tile_url, tile_zoom_for, tiles_covering)
-from uavviewer.trail import TRAIL_SECONDS, Trail
+from uavviewer.map.trail import TRAIL_SECONDS, Trail
 
 CANBERRA = (-35.363261, 149.165230)          # the recordings' home
 SVALBARD = (78.2232, 15.6267)                # high latitude: a Mercator metre is a fifth of a ground metre

@@ -8,9 +8,9 @@ from PyQt5.QtCore import QEvent, QPointF, Qt
 from PyQt5.QtGui import QMouseEvent
 from PyQt5.QtWidgets import QApplication
 
-from uavviewer.geo import MapFrame, tiles_covering
-from uavviewer.tiles import MAX_AREA_TILES, TileSource
-from uavviewer.widgets.map_view import MapView
+from uavviewer.map.geometry import MapFrame, tiles_covering
+from uavviewer.map.tiles import MAX_AREA_TILES, TileSource
+from uavviewer.map.map_view import MapView
 
 from tile_server import TileServer
 

@@ -1,6 +1,6 @@
 """The simulated ArduCopter against a real one: the 4.7 SITL flight recording, replayed command by command.
 
-The recording (shared/recordings/arducopter-4.7-sitl-flight.tlog beside the checkout) is parsed here,
+The recording (tests/data/recordings/arducopter-4.7-sitl-flight.tlog) is parsed here,
 never transcribed: each COMMAND_LONG the ground station (system 255) sent, the vehicle's
 COMMAND_ACK result, the STATUSTEXT lines that followed within 50 ms, and the vehicle's
 state (its last HEARTBEAT) when the command went out. The same commands then go to the
@@ -21,14 +21,13 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink
 from driver.sim import ManualClock, SimConfig, SimVehicle
 from test_sim import GroundStation, wait_until
 
-from recordings import FLIGHT, need_recordings  # noqa: E402
+from recordings import FLIGHT  # noqa: E402
 
 RECORDING = FLIGHT + ".tlog"
 WINDOW = 0.05            # s: the STATUSTEXT lines that follow an ACK this closely are its reasons
 READY_AFTER = 8.0        # sim s: the recording's 40.6 s start-up, compressed
 SPEEDUP = 10.0
 
-pytestmark = need_recordings()
 
 
 def read_tlog(path: str) -> list[tuple[float, object]]:

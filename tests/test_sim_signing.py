@@ -1,5 +1,5 @@
 """MAVLink 2 signing on the simulated ArduCopter, spoken to over real sockets by plain pymavlink (mavutil and its
-``setup_signing``, as MAVProxy does), replaying shared/recordings/arducopter-4.7-sitl-signing: SETUP_SIGNING on
+``setup_signing``, as MAVProxy does), replaying tests/data/recordings/arducopter-4.7-sitl-signing: SETUP_SIGNING on
 the USB port (SERIAL0), then on the telemetry port unsigned commands ignored and signed ones obeyed.
 
 An ignored command gets no answer at all, so its absence is proved by order, never by waiting: the vehicle
@@ -21,7 +21,7 @@ from driver.sim.signing import MAX_STREAMS, MINUTE, signing_timestamp
 from test_sim import GroundStation, wait_until
 from test_sim_recordings import read_tlog
 
-from recordings import SIGNING, need_recordings
+from recordings import SIGNING
 
 KEY = hashlib.sha256(b"uavviewer-test").digest()          # the recording's key
 WRONG = hashlib.sha256(b"not-the-key").digest()
@@ -375,7 +375,6 @@ def test_the_command_line_sets_the_key_and_the_usb_port(capsys):
 
 
 # -- against the recording -------------------------------------------------------------------------------
-@need_recordings()
 def test_signing_as_recorded(make_sim, station):
     """The real 4.7's signing, read from the tlog, and the sim's in the same scenario: not one unsigned vehicle
     frame once the first signed one came; link id 0 on SERIAL0, 1 on SERIAL1; a link opened after SETUP_SIGNING

@@ -13,7 +13,7 @@ from driver.ice.client import IceDrone, viewer_properties
 from driver.vehicle import Vehicle, VehicleConfig
 
 from ice_fixtures import drone_factory, server_factory  # noqa: F401  (fixtures)
-from recordings import FLIGHT, need_recordings
+from recordings import FLIGHT
 from tile_server import TileServer
 from viewer_fixtures import viewer_settings, window_factory  # noqa: F401  (fixtures)
 
@@ -217,7 +217,6 @@ def test_the_fence_is_drawn_from_the_vehicles_parameters(qtbot, vehicle, window_
     assert red_on_circle(view, 200.0) >= 18 and red_on_circle(view, 300.0) == 0
 
 
-@need_recordings()
 def test_a_replay_shows_the_whole_track_and_the_vehicle_moves_along_it(qtbot, window_factory):
     replay = Vehicle(VehicleConfig(connection=FLIGHT + ".tlog", tlog_path=None, replay_speed=16.0)).start()
     try:

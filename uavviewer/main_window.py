@@ -30,7 +30,7 @@ from .gamepad_input import GamepadInput
 from .keyboard import ACTION_KEYS, AXIS_KEYS, KeyboardSticks
 from .link_security import signing_unavailable, signing_warning
 from .pilot_input import Input, InputSelector
-from .map_controller import MapController, TileSettings
+from .map.controller import MapController, TileSettings
 from .refresh import INSTRUMENTS_HZ, PLOTS_HZ, TEXT_HZ, Refresh
 from .settings import ViewerSettings, default_qsettings, load_settings, load_window, save_settings, save_window
 from .sticks import Axes, MaxSpeeds, axes_from_pads, combine, pad_labels, velocity_from_axes

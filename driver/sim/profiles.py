@@ -1,6 +1,6 @@
 """Firmware profiles: how one ArduCopter generation answers, so the sim is not only the driver's own notes.
 
-``copter-4`` follows shared/recordings/arducopter-4.7-sitl-flight.tlog (ArduCopter
+``copter-4`` follows tests/data/recordings/arducopter-4.7-sitl-flight.tlog (ArduCopter
 4.7-dev SITL, read with pymavlink); ``solo`` is a stock 3DR Solo (ArduCopter 3.3 era),
 from 3DR's sources (github.com/3drobotics/ardupilot-solo: ArduCopter/GCS_Mavlink.pde,
 motors.pde, takeoff.pde, land_detector.pde) and shared/reference/arducopter.md.

@@ -2,7 +2,7 @@
 
 Follows libraries/GCS_MAVLink/GCS_Signing.cpp (ArduPilot 4.x) and the C library's
 mavlink_signature_check() (mavlink_helpers.h), checked against
-shared/recordings/arducopter-4.7-sitl-signing.tlog:
+tests/data/recordings/arducopter-4.7-sitl-signing.tlog:
 
 * SETUP_SIGNING stores key and initial_timestamp and loads them on every link at
   once (handle_setup_signing -> load_signing_key per channel). Each link signs

@@ -1,6 +1,6 @@
 """What the Map dock shows and what "Fly here" does, from the vehicle's snapshots.
 
-Positions go into view metres around home (:mod:`uavviewer.geo`): the vehicle's latitude/longitude when it
+Positions go into view metres around home (:mod:`uavviewer.map.geometry`): the vehicle's latitude/longitude when it
 has one, else its metres from home (a plain JdeRobot server gives only those). The trail keeps the last
 ten minutes, fading with age; a replay shows the whole recorded track at once. "Fly here" asks first
 (distance and altitude), then uses the driver's go-to, whose limits and refusals apply; Stop, Escape, Land,
@@ -23,12 +23,12 @@ from PyQt5.QtWidgets import QMessageBox, QWidget
 from driver.rules import MAX_ALTITUDE, MIN_GOTO_ALTITUDE
 from driver.state import CommandResult, VehicleState
 
-from .dialogs import ask, fly_here_question
-from .geo import MapFrame, tiles_covering, tile_zoom_for
+from ..dialogs import ask, fly_here_question
+from .geometry import MapFrame, tiles_covering, tile_zoom_for
 from .tiles import MAX_AREA_TILES, TileSource
 from .trail import Trail
-from .widgets.map_panel import MapPanel
-from .widgets.map_view import TRAIL_BANDS, VehicleMark
+from .map_panel import MapPanel
+from .map_view import TRAIL_BANDS, VehicleMark
 
 __all__ = ["MapController", "TileSettings", "fleet_marks", "placed"]
 

@@ -1,6 +1,6 @@
 """The map canvas: vehicle, home, trail, go-to target, fence, rings, scale and north, over tiles or a grid.
 
-Everything is placed in view metres (:class:`uavviewer.geo.MapFrame`: east/north of home); the canvas only
+Everything is placed in view metres (:class:`uavviewer.map.geometry.MapFrame`: east/north of home); the canvas only
 turns them into pixels. It pans with the mouse, zooms with the wheel about the cursor, and offers
 "Fly here" on a right click; what flying there means is decided elsewhere. In a fleet it also draws the
 other vehicles (:class:`VehicleMark`), smaller and in their own colour, and says which one was clicked.
@@ -14,7 +14,7 @@ from PyQt5.QtCore import QPointF, QRectF, Qt, pyqtSignal
 from PyQt5.QtGui import QColor, QFont, QFontMetricsF, QPainter, QPainterPath, QPen, QPolygonF
 from PyQt5.QtWidgets import QMenu, QSizePolicy, QWidget
 
-from ..geo import MAX_ZOOM, MapFrame, nice_scale, tile_zoom_for, tiles_covering
+from .geometry import MAX_ZOOM, MapFrame, nice_scale, tile_zoom_for, tiles_covering
 from ..units import fmt
 
 __all__ = ["MapView", "VehicleMark", "TRAIL_BANDS"]

@@ -18,7 +18,7 @@ from PyQt5.QtGui import QImage
 from PyQt5.QtNetwork import QNetworkAccessManager, QNetworkDiskCache, QNetworkReply, QNetworkRequest
 
 from driver.version import __version__
-from .geo import TileKey, tile_url
+from .geometry import TileKey, tile_url
 
 __all__ = ["TileSource", "USER_AGENT", "default_cache_dir", "MAX_AREA_TILES", "IN_FLIGHT"]
 

@@ -1,0 +1,63 @@
+"""The parameter model every layer shares.
+
+A :class:`ParameterTable` is immutable and is replaced as a whole when a value arrives; the snapshot
+(:class:`~driver.state.VehicleState`) holds a reference to it, so a state change that is not about
+parameters copies nothing.
+"""
+from __future__ import annotations
+
+import enum
+import types
+from dataclasses import dataclass, field
+from typing import Mapping
+
+from pymavlink.dialects.v20 import ardupilotmega as mavlink
+
+__all__ = ["ParamType", "Parameter", "ParameterTable"]
+
+
+class ParamType(enum.IntEnum):
+    """MAV_PARAM_TYPE as ArduPilot uses it."""
+    UINT8 = mavlink.MAV_PARAM_TYPE_UINT8
+    INT8 = mavlink.MAV_PARAM_TYPE_INT8
+    UINT16 = mavlink.MAV_PARAM_TYPE_UINT16
+    INT16 = mavlink.MAV_PARAM_TYPE_INT16
+    UINT32 = mavlink.MAV_PARAM_TYPE_UINT32
+    INT32 = mavlink.MAV_PARAM_TYPE_INT32
+    REAL32 = mavlink.MAV_PARAM_TYPE_REAL32
+
+    @property
+    def is_integer(self) -> bool:
+        return self is not ParamType.REAL32
+
+
+@dataclass(frozen=True)
+class Parameter:
+    name: str
+    value: float
+    type: ParamType = ParamType.REAL32
+    index: int = -1                              # the vehicle's param_index, -1 when not known
+
+
+def _frozen(mapping: Mapping[str, Parameter] | None = None) -> Mapping[str, Parameter]:
+    return types.MappingProxyType(dict(mapping or {}))
+
+
+@dataclass(frozen=True)
+class ParameterTable:
+    """Every parameter the vehicle has reported, by name, and how complete the set is."""
+    values: Mapping[str, Parameter] = field(default_factory=_frozen)
+    expected: int | None = None                  # PARAM_VALUE.param_count; None until the first one
+    downloading: bool = False
+    detail: str = ""                             # "re-asking 12 missing", "link lost: 1380 of 1392", ...
+
+    @property
+    def received(self) -> int:
+        return len(self.values)
+
+    @property
+    def complete(self) -> bool:
+        return self.expected is not None and self.received >= self.expected
+
+    def get(self, name: str) -> Parameter | None:
+        return self.values.get(name)
