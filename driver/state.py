@@ -19,7 +19,7 @@ from .params.model import ParameterTable
 
 __all__ = [
     "LandedState", "LinkStatus", "Severity", "CommandStatus", "Attitude", "GlobalPosition",
-    "LocalPosition", "Velocity", "Battery", "Gps", "Readiness", "LinkHealth", "SigningStatus", "Signing", "Message",
+    "LocalPosition", "Velocity", "BatteryAlarm", "Battery", "Gps", "Readiness", "LinkHealth", "SigningStatus", "Signing", "Message",
     "CommandResult", "Setpoint", "SequencePhase", "SequenceProgress", "Environment", "Fence", "FENCE_PARAMS",
     "VehicleState", "replace",
 ]
@@ -127,6 +127,14 @@ class Velocity:
         return (c * self.north + s * self.east, -s * self.north + c * self.east, self.down)
 
 
+class BatteryAlarm(enum.IntEnum):
+    """How the pack stands against the pilot's own thresholds (and the vehicle's failsafe): worse is higher."""
+    UNKNOWN = 0          # nothing to judge by yet
+    OK = 1
+    WARNING = 2
+    CRITICAL = 3
+
+
 @dataclass(frozen=True)
 class Battery:
     voltage: float | None = None         # V
@@ -138,6 +146,7 @@ class Battery:
     cells_source: str = ""               # "configured", "vehicle" (per-cell voltages) or "inferred" (from voltage)
     charge_state: int = 0                # MAV_BATTERY_CHARGE_STATE from the autopilot, 0 when it sends none
     reported_remaining: float | None = None   # the autopilot's own percentage, None when it gives none
+    alarm: BatteryAlarm = BatteryAlarm.UNKNOWN   # against the pilot's thresholds, whatever the vehicle's failsafe says
 
     @property
     def cell_voltage(self) -> float | None:
