@@ -54,6 +54,13 @@ class Payload:
         self.gimbal_outbox: list = []      # messages the gimbal (component 154) says; SimVehicle sends them
 
     @property
+    def _camera_kind(self) -> str | None:
+        """SimConfig.camera: True or "mavlink" (4.5+ AP_Camera: the camera protocol and CAMERA_FEEDBACK),
+        "trigger" (a servo/relay camera before 4.5: DO_DIGICAM_CONTROL and CAMERA_FEEDBACK only), or None."""
+        camera = getattr(self.config, "camera", False)
+        return None if not camera else "trigger" if camera == "trigger" else "mavlink"
+
+    @property
     def _solo_mount(self) -> bool:
         return getattr(self.profile, "mount", "servo") == "solo"
 
@@ -120,7 +127,7 @@ class Payload:
         return None                    # ACCEPTED and never sent by the recorded servo mount
 
     def _msg_camera_information(self):
-        if not getattr(self.config, "camera", False) or self._solo_mount:
+        if self._camera_kind != "mavlink" or self._solo_mount:
             return None                # the recording: ACCEPTED, nothing sent without a camera
         flags = mavlink.CAMERA_CAP_FLAGS_CAPTURE_IMAGE | mavlink.CAMERA_CAP_FLAGS_CAPTURE_VIDEO
         return mavlink.MAVLink_camera_information_message(
@@ -128,7 +135,7 @@ class Payload:
             6.17, 4.55, 1920, 1080, 0, flags, 0, b"", 1, 1)
 
     def _msg_camera_capture_status(self):
-        if not getattr(self.config, "camera", False):
+        if not self._camera_kind:
             return None
         return mavlink.MAVLink_camera_capture_status_message(self.time_boot_ms(), 0, 1 if self.video else 0, 0,
                                                              0, 1000.0, self.images, 1)
@@ -192,14 +199,14 @@ class Payload:
     def _cmd_do_digicam_control(self, p1, p2, p3, p4, p5, *_):
         if self._solo_mount:
             return mavlink.MAV_RESULT_UNSUPPORTED, None
-        if int(p5) == 1 and getattr(self.config, "camera", False):
+        if int(p5) == 1 and self._camera_kind:
             return mavlink.MAV_RESULT_ACCEPTED, self._picture
         return mavlink.MAV_RESULT_ACCEPTED, None   # the recording: ACCEPTED with no camera, nothing taken
 
     def _cmd_image_start_capture(self, *_):
-        if self._solo_mount:
+        if self._solo_mount or self._camera_kind == "trigger":
             return mavlink.MAV_RESULT_UNSUPPORTED, None
-        if not getattr(self.config, "camera", False):
+        if not self._camera_kind:
             return mavlink.MAV_RESULT_FAILED, None  # the recording, 101.52 s
         return mavlink.MAV_RESULT_ACCEPTED, lambda: self._picture(captured=True)
 
@@ -210,9 +217,9 @@ class Payload:
         return self._video(False)
 
     def _video(self, on: bool):
-        if self._solo_mount:
+        if self._solo_mount or self._camera_kind == "trigger":
             return mavlink.MAV_RESULT_UNSUPPORTED, None
-        if not getattr(self.config, "camera", False):
+        if not self._camera_kind:
             return mavlink.MAV_RESULT_FAILED, None
         self.video = on
         return mavlink.MAV_RESULT_ACCEPTED, lambda: self._send_now("CAMERA_CAPTURE_STATUS")

@@ -50,7 +50,7 @@ class SimConfig:
     mavlink2: bool = True                   # False: MAVLink 1 only (the "solo" profile implies it)
     gimbal: bool = False                    # a gimbal (component 154) says HEARTBEAT, in MAVLink 2 always
     companion: bool = False                 # a companion computer (component 191) says HEARTBEAT
-    camera: bool = False                    # a camera (CAM1_TYPE): triggers bring CAMERA_FEEDBACK (gimbal.py)
+    camera: bool | str = False              # a camera (CAM1_TYPE): True/"mavlink" or "trigger" (gimbal.py)
     system_id: int = 1
     component_id: int = 1
     battery_cells: int = 4
