@@ -197,7 +197,7 @@ def main(argv: list[str] | None = None) -> int:
     sim = None
     if args.sim:
         from driver.sim import SimConfig, SimVehicle
-        sim = SimVehicle(SimConfig(tcp_port=0, speedup=args.speedup, ready_after=args.ready_after,
+        sim = SimVehicle(SimConfig(tcp_port=0, speedup=args.speedup, ready_after=args.ready_after, camera=True,
                                    signing_key=signing.key if signing else None))   # a vehicle that has our key
         sim.start()
         connection = f"tcp:127.0.0.1:{sim.tcp_port}"

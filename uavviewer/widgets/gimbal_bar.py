@@ -1,0 +1,69 @@
+"""The row under the video for the camera ON THE VEHICLE: its gimbal and its own Photo and Record.
+
+Kept apart from the window's Snapshot/Record (which save the video this window receives) by its own row, the
+"On the drone" label and names, and it shows only what the vehicle confirmed.
+"""
+from __future__ import annotations
+
+from PyQt5.QtCore import pyqtSignal
+from PyQt5.QtWidgets import QHBoxLayout, QLabel, QSizePolicy, QToolButton, QWidget
+
+from driver.state import VehicleState
+
+__all__ = ["GimbalBar"]
+
+
+class GimbalBar(QWidget):
+    """Buttons say what the pilot wants; the gimbal controller does it."""
+
+    levelRequested = pyqtSignal()
+    downRequested = pyqtSignal()
+    photoRequested = pyqtSignal()
+    recordRequested = pyqtSignal(bool)          # the vehicle's camera: start (True) or stop
+
+    def __init__(self, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.title = QLabel("<b>On the drone:</b>", self)
+        self.pitch_label = QLabel("Gimbal unknown", self)
+        self.pitch_label.setToolTip("The gimbal's pitch as the vehicle reports it (0 level, -90 straight down)")
+        self.level_button = self._button("Level", "Point the camera level (gimbal pitch 0°)")
+        self.down_button = self._button("Down", "Point the camera straight down (gimbal pitch -90°)")
+        self.photo_button = self._button("Drone photo", "Take a picture with the vehicle's own camera; counted "
+                                         "only when the vehicle confirms it")
+        self.record_button = self._button("Drone video", "Start or stop video on the vehicle's own camera "
+                                          "(not this window's recording)")
+        self.record_button.setCheckable(True)
+        self.camera_label = QLabel("", self)
+        self.camera_label.setSizePolicy(QSizePolicy.Ignored, QSizePolicy.Preferred)
+        self.level_button.clicked.connect(self.levelRequested)
+        self.down_button.clicked.connect(self.downRequested)
+        self.photo_button.clicked.connect(self.photoRequested)
+        self.record_button.clicked.connect(lambda: self.recordRequested.emit(self.record_button.isChecked()))
+        row = QHBoxLayout(self)
+        row.setContentsMargins(0, 0, 0, 0)
+        for w in (self.title, self.pitch_label, self.level_button, self.down_button, self.photo_button,
+                  self.record_button):
+            row.addWidget(w)
+        row.addWidget(self.camera_label, 1)
+
+    def _button(self, text: str, tip: str) -> QToolButton:
+        b = QToolButton(self)
+        b.setText(text)
+        b.setToolTip(tip)
+        b.setAutoRaise(True)
+        return b
+
+    def show_state(self, s: VehicleState) -> None:
+        """What the vehicle says about its gimbal and camera; the Record button follows the camera, not the click."""
+        self.pitch_label.setText(f"Gimbal {s.gimbal.describe()}")
+        c = s.camera
+        parts = [f"{c.photos} photo{'s' if c.photos != 1 else ''} confirmed"]
+        if c.recording:
+            parts.append("● recording")
+        if c.kind.value != "unknown":
+            parts.insert(0, c.name or c.kind.value)
+        self.camera_label.setText(" · ".join(parts))
+        if self.record_button.isChecked() != bool(c.recording):
+            self.record_button.setChecked(bool(c.recording))
+        for b in (self.level_button, self.down_button, self.photo_button, self.record_button):
+            b.setEnabled(s.connected)
