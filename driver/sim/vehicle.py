@@ -187,7 +187,7 @@ class SimVehicle:
             for msg in component.step(autopilot.t):
                 self.server.broadcast(msg, component.component_id, component.mavlink2)
         for msg in autopilot.take_gimbal_messages():     # the Solo's gimbal (154) and its GoPro (gimbal.py)
-            self.server.broadcast(msg, GIMBAL_COMPONENT, True)
+            self.server.broadcast(msg, GIMBAL_COMPONENT, True if self.config.gimbal else None)
         self.server.pump()                 # downlink frames whose latency is over
 
     def _run(self) -> None:
