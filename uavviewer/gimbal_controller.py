@@ -32,6 +32,7 @@ class GimbalController(QObject):
         bar.downRequested.connect(lambda: self.point(-90.0))
         bar.photoRequested.connect(lambda: adapter.command("take_photo"))
         bar.recordRequested.connect(lambda on: adapter.command("record_video", on))
+        bar.stopLookingRequested.connect(lambda: adapter.command("stop_looking"))
 
     def show_state(self, s: VehicleState) -> None:
         self._bar.show_state(s)

@@ -20,6 +20,7 @@ class GimbalBar(QWidget):
     downRequested = pyqtSignal()
     photoRequested = pyqtSignal()
     recordRequested = pyqtSignal(bool)          # the vehicle's camera: start (True) or stop
+    stopLookingRequested = pyqtSignal()         # end the region of interest ("Look here" on the map)
 
     def __init__(self, parent: QWidget | None = None) -> None:
         super().__init__(parent)
@@ -33,16 +34,21 @@ class GimbalBar(QWidget):
         self.record_button = self._button("Drone video", "Start or stop video on the vehicle's own camera "
                                           "(not this window's recording)")
         self.record_button.setCheckable(True)
+        self.stop_looking_button = self._button("Stop looking", "The camera stops looking at the point chosen on "
+                                                "the map (DO_SET_ROI_NONE) and goes back to the pilot")
+        self.stop_looking_button.setStyleSheet("color: #ff6ad5; font-weight: bold")
+        self.stop_looking_button.hide()
         self.camera_label = QLabel("", self)
         self.camera_label.setSizePolicy(QSizePolicy.Ignored, QSizePolicy.Preferred)
         self.level_button.clicked.connect(self.levelRequested)
         self.down_button.clicked.connect(self.downRequested)
         self.photo_button.clicked.connect(self.photoRequested)
         self.record_button.clicked.connect(lambda: self.recordRequested.emit(self.record_button.isChecked()))
+        self.stop_looking_button.clicked.connect(self.stopLookingRequested)
         row = QHBoxLayout(self)
         row.setContentsMargins(0, 0, 0, 0)
         for w in (self.title, self.pitch_label, self.level_button, self.down_button, self.photo_button,
-                  self.record_button):
+                  self.record_button, self.stop_looking_button):
             row.addWidget(w)
         row.addWidget(self.camera_label, 1)
 
@@ -65,5 +71,7 @@ class GimbalBar(QWidget):
         self.camera_label.setText(" · ".join(parts))
         if self.record_button.isChecked() != bool(c.recording):
             self.record_button.setChecked(bool(c.recording))
-        for b in (self.level_button, self.down_button, self.photo_button, self.record_button):
+        self.stop_looking_button.setVisible(s.gimbal.roi is not None)
+        for b in (self.level_button, self.down_button, self.photo_button, self.record_button,
+                  self.stop_looking_button):
             b.setEnabled(s.connected)
