@@ -8,6 +8,7 @@ from PyQt5.QtGui import QWheelEvent
 from PyQt5.QtWidgets import QApplication
 
 from driver.camera.sim import SKY
+from gamepad_fixtures import pad, pad_factory  # noqa: F401  (fixtures)
 from viewer_fixtures import viewer_settings, window_factory  # noqa: F401  (fixtures)
 from driver.state import CommandStatus
 
@@ -67,3 +68,20 @@ def test_tilting_from_the_window_moves_the_simulated_picture(qtbot, vehicle, win
     qtbot.waitUntil(near(w, -90), timeout=10000)
     results = [r for r in vehicle.state().results if r.command.startswith("gimbal pitch")]
     assert results and all(r.status is CommandStatus.ACCEPTED for r in results), results
+
+
+def test_gamepad_buttons_mapped_to_the_camera_tilt(qtbot, vehicle, window_factory, pad):
+    """A paddle or shoulder button, mapped in the gamepad page's table, tilts the drone's camera 5° a press."""
+    from test_viewer_gamepad import press, use_mapping, wait_pad
+    w = window_factory(vehicle)
+    wait_pad(qtbot, w, "Virtual gamepad")
+    qtbot.waitUntil(near(w, -90), timeout=10000)
+    use_mapping(w, pad.guid, {"mode": "mode2", "buttons": {"tilt_up": "rightshoulder",
+                                                          "tilt_down": "leftshoulder"}})
+    assert w.gamepad.mapping.action_for("rightshoulder") == "tilt_up"
+    press(qtbot, w, pad, "rightshoulder")
+    qtbot.waitUntil(near(w, -85), timeout=10000)
+    press(qtbot, w, pad, "rightshoulder")
+    qtbot.waitUntil(near(w, -80), timeout=10000)
+    press(qtbot, w, pad, "leftshoulder")
+    qtbot.waitUntil(near(w, -85), timeout=10000)
