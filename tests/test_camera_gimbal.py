@@ -7,6 +7,7 @@ the ``solo`` profile 3DR's ArduCopter 3.3 (MOUNT_CONTROL, MOUNT_STATUS, the GoPr
 from __future__ import annotations
 
 import io
+import math
 
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
@@ -41,7 +42,7 @@ def test_gimbal_by_angle_by_rate_and_level_with_the_gimbal_manager(connected):
 
     result = vehicle.point_gimbal(-45).result(10)
     assert result.status is CommandStatus.ACCEPTED, str(result)
-    assert "(DO_GIMBAL_MANAGER_PITCHYAW)" in vehicle.state().results[-2].command
+    assert result.command == "gimbal pitch -45° (DO_GIMBAL_MANAGER_PITCHYAW)"
     s = vehicle.wait_for(pitch_near(-45), 10)
     assert s is not None, vehicle.state().gimbal
     assert s.gimbal.control is GimbalControl.ANGLE and s.gimbal.protocol == "gimbal manager"
@@ -136,7 +137,7 @@ def test_solo_gimbal_and_gopro_the_way_3dr_pointed_them(connected):
     assert vehicle.gimbal_rate(0).result(5).ok
 
     result = vehicle.look_at(sim.autopilot.home_lat + 0.0002, sim.autopilot.home_lon).result(10)
-    assert result.ok and "(DO_SET_ROI)" in vehicle.state().results[-2].command, vehicle.state().results[-3:]
+    assert result.ok and result.command.endswith("(DO_SET_ROI)"), str(result)
     assert sim.autopilot.mount_mode == mavlink.MAV_MOUNT_MODE_GPS_POINT
     assert vehicle.stop_looking().result(10).ok
     assert sim.autopilot.mount_roi is None and sim.autopilot.mount_mode == mavlink.MAV_MOUNT_MODE_RC_TARGETING
@@ -167,3 +168,15 @@ def test_console_verbs(connected):
     assert eventually(lambda: "1 pictures, not recording" in out.getvalue(), 5), out.getvalue()
     console.onecmd("gimbal sideways")
     assert "usage: gimbal pitch DEG" in out.getvalue()
+
+
+def test_flying_the_nose_turns_to_the_point_of_interest(sim, flying):
+    """The recorded mount has no yaw axis: ArduCopter's auto_yaw ROI mode turns the vehicle to face the point,
+    and the gimbal pitches down to it."""
+    s = flying.state()
+    east_point = (sim.autopilot.home_lat, sim.autopilot.home_lon + 30 / sim.autopilot.m_per_deg_lon)   # 30 m east
+    assert flying.look_at(*east_point).result(10).ok
+    assert flying.wait_for(lambda s: abs(s.heading_deg - 90.0) < 5.0, 20), flying.state().heading_deg
+    expected = -math.degrees(math.atan2(s.altitude, 30.0 - s.local.east))
+    assert flying.wait_for(lambda s: s.gimbal.pitch_deg is not None and abs(s.gimbal.pitch_deg - expected) < 2, 10)
+    assert flying.stop_looking().result(10).ok and not sim.autopilot.roi_yaw

@@ -333,8 +333,7 @@ class Payload:
                 g = self._gimbal()
                 self._store.set(gimbal=replace(g, control=control, protocol=protocol, roi=None))
                 self._store.publish()
-            return self._store.record_locked(name, result.status, result.reason or "the vehicle accepted it",
-                                             result.attempts)
+            return result                       # its own record says what went out and what came back
 
     def _mount_message(self, name: str, pitch: float, yaw: float | None) -> Future:
         """The Solo: MOUNT_CONFIGURE to MAVLink targeting, then MOUNT_CONTROL until MOUNT_STATUS shows it."""
@@ -405,8 +404,7 @@ class Payload:
                 self._store.set(gimbal=replace(self._gimbal(), control=GimbalControl.RATE, protocol=MANAGER,
                                                roi=None))
                 self._store.publish()
-            return self._store.record_locked(name, result.status, result.reason or "the vehicle accepted it",
-                                             result.attempts)
+            return result                       # its own record says what went out and what came back
 
     def _step_rate(self, now: float, state) -> list:
         dt = min(now - self._rate_last, 0.5)
@@ -448,7 +446,7 @@ class Payload:
                 if r.ok:
                     self._store.set(gimbal=replace(self._gimbal(), control=GimbalControl.ROI, roi=(lat, lon, alt)))
                     self._store.publish()
-                return self._store.record_locked(name, r.status, r.reason or "the vehicle accepted it", r.attempts)
+                return r
         return self._chain(inner, done)
 
     def stop_looking(self) -> Future:
@@ -467,7 +465,7 @@ class Payload:
                 if r.ok:      # the mount goes back to its default mode (the recording: RC targeting)
                     self._store.set(gimbal=replace(self._gimbal(), control=GimbalControl.RC, roi=None))
                     self._store.publish()
-                return self._store.record_locked(name, r.status, r.reason or "the vehicle accepted it", r.attempts)
+                return r
         return self._chain(inner, done)
 
     # -- camera -------------------------------------------------------------------------------------------

@@ -45,6 +45,7 @@ class Payload:
         self.mount_target = (RC_PITCH, 0.0)
         self.mount_rate: tuple[float, float] | None = None
         self.mount_roi: tuple[float, float, float] | None = None
+        self.roi_yaw = False               # the vehicle turns its nose to the ROI (the mount has no yaw axis)
         self.images = 0
         self.video = False
         self.gopro_mode = mavlink.GOPRO_CAPTURE_MODE_VIDEO
@@ -86,6 +87,7 @@ class Payload:
             target = (pitch, 0.0)
         else:
             target = self.mount_target
+        self._face_roi()
         pitch = min(max(target[0], PITCH_LIMITS[0]), PITCH_LIMITS[1])
         self.mount_target = (pitch, 0.0)          # neither mount has a yaw axis: the vehicle turns
         step = MOUNT_SLEW * dt
@@ -101,11 +103,32 @@ class Payload:
                 self.mount_status_next = self.t + extra3[0]
                 self.emit(self._msg_mount_status())
 
-    def _roi_angles(self) -> tuple[float, float]:
-        lat, lon, alt = self.mount_roi
+    def _face_roi(self) -> None:
+        """ArduCopter's auto_yaw ROI mode (set by the ROI commands when the mount cannot pan): in GUIDED and AUTO,
+        flying, the nose turns to the point; a pilot's yaw rate ends it (auto_yaw.set_rate)."""
+        if not self.roi_yaw or self.mount_roi is None:
+            return
+        if self.yaw_mode == "rate":
+            self.roi_yaw = False
+            return
+        if self.landed or not self.armed or self.mode_name not in ("GUIDED", "AUTO"):
+            return
+        north, east = self._roi_offset()
+        if math.hypot(north, east) < 1.0:
+            return
+        self.yaw_mode = "fixed"
+        self.yaw_remaining = math.remainder(math.atan2(east, north) - self.yaw, 2 * math.pi)
+        self.yaw_slew = math.radians(60.0)
+
+    def _roi_offset(self) -> tuple[float, float]:
+        lat, lon, _ = self.mount_roi
         north = (lat - self.home_lat) * (self.m_per_deg_lon / math.cos(math.radians(self.home_lat))) - self.n
         east = (lon - self.home_lon) * self.m_per_deg_lon - self.e
-        below = -self.d - alt                     # metres the vehicle is above the point
+        return north, east
+
+    def _roi_angles(self) -> tuple[float, float]:
+        north, east = self._roi_offset()
+        below = -self.d - self.mount_roi[2]                     # metres the vehicle is above the point
         return math.degrees(math.atan2(-below, max(math.hypot(north, east), 0.01))), 0.0
 
     # -- telemetry -------------------------------------------------------------------------------------------
@@ -181,11 +204,13 @@ class Payload:
         if self._solo_mount:
             return mavlink.MAV_RESULT_UNSUPPORTED, None
         self.mount_roi, self.mount_mode, self.mount_rate = None, mavlink.MAV_MOUNT_MODE_RC_TARGETING, None
+        self.roi_yaw = False
         return mavlink.MAV_RESULT_ACCEPTED, None
 
     def _cmd_do_set_roi(self, p1, p2, p3, p4, p5, p6, p7):
         if p5 == 0 and p6 == 0 and p7 == 0:      # 3.3's set_auto_yaw_roi: a zero location turns the ROI off
             self.mount_roi, self.mount_mode = None, mavlink.MAV_MOUNT_MODE_RC_TARGETING
+            self.roi_yaw = False
             return mavlink.MAV_RESULT_ACCEPTED, None
         return self._set_roi(p5, p6, p7)
 
@@ -194,6 +219,7 @@ class Payload:
             return mavlink.MAV_RESULT_FAILED, None
         self.mount_roi = (float(lat), float(lon), float(alt))
         self.mount_mode, self.mount_rate = mavlink.MAV_MOUNT_MODE_GPS_POINT, None
+        self.roi_yaw = True
         return mavlink.MAV_RESULT_ACCEPTED, None
 
     def _cmd_do_digicam_control(self, p1, p2, p3, p4, p5, *_):

@@ -85,7 +85,7 @@ class CameraOverlay(QObject):
                 p.setPen(QPen(ROI, 1, Qt.DotLine))
                 p.drawLine(view.to_screen(*self._where), c)
             p.setFont(QFont(view.font().family(), 8))
-            view._label(p, c + QPointF(13, 4), "looking here · right-click › Stop looking")
+            view._label(p, c + QPointF(13, 4), "looking here")
 
     # -- the menu -----------------------------------------------------------------------------------
     def add_to_menu(self, menu, north: float, east: float) -> None:

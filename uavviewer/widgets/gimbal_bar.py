@@ -6,7 +6,7 @@ Kept apart from the window's Snapshot/Record (which save the video this window r
 from __future__ import annotations
 
 from PyQt5.QtCore import pyqtSignal
-from PyQt5.QtWidgets import QHBoxLayout, QLabel, QSizePolicy, QToolButton, QWidget
+from PyQt5.QtWidgets import QHBoxLayout, QLabel, QToolButton, QWidget
 
 from driver.state import VehicleState
 
@@ -38,8 +38,6 @@ class GimbalBar(QWidget):
                                                 "the map (DO_SET_ROI_NONE) and goes back to the pilot")
         self.stop_looking_button.setStyleSheet("color: #ff6ad5; font-weight: bold")
         self.stop_looking_button.hide()
-        self.camera_label = QLabel("", self)
-        self.camera_label.setSizePolicy(QSizePolicy.Ignored, QSizePolicy.Preferred)
         self.level_button.clicked.connect(self.levelRequested)
         self.down_button.clicked.connect(self.downRequested)
         self.photo_button.clicked.connect(self.photoRequested)
@@ -50,7 +48,7 @@ class GimbalBar(QWidget):
         for w in (self.title, self.pitch_label, self.level_button, self.down_button, self.photo_button,
                   self.record_button, self.stop_looking_button):
             row.addWidget(w)
-        row.addWidget(self.camera_label, 1)
+        row.addStretch(1)
 
     def _button(self, text: str, tip: str) -> QToolButton:
         b = QToolButton(self)
@@ -63,12 +61,13 @@ class GimbalBar(QWidget):
         """What the vehicle says about its gimbal and camera; the Record button follows the camera, not the click."""
         self.pitch_label.setText(f"Gimbal {s.gimbal.describe()}")
         c = s.camera
-        parts = [f"{c.photos} photo{'s' if c.photos != 1 else ''} confirmed"]
-        if c.recording:
-            parts.append("● recording")
-        if c.kind.value != "unknown":
-            parts.insert(0, c.name or c.kind.value)
-        self.camera_label.setText(" · ".join(parts))
+        self.photo_button.setText(f"Drone photo ({c.photos})" if c.photos else "Drone photo")
+        self.record_button.setText("Drone video ●" if c.recording else "Drone video")
+        recording = "unknown" if c.recording is None else "yes" if c.recording else "no"
+        self.photo_button.setToolTip(f"A picture with the vehicle's camera ({c.name or c.kind.value}), counted only "
+                                     f"when it confirms it: {c.photos} so far")
+        self.record_button.setToolTip(f"Video on the vehicle's camera (not this window's recording); recording: "
+                                      f"{recording}")
         if self.record_button.isChecked() != bool(c.recording):
             self.record_button.setChecked(bool(c.recording))
         self.stop_looking_button.setVisible(s.gimbal.roi is not None)
