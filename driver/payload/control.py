@@ -92,8 +92,9 @@ class Payload:
 
     # -- what the vehicle says (reader thread) ---------------------------------------------------------
     def on_message(self, m, component: int) -> None:
+        """Into the pending fields; the reader publishes them with the telemetry it folds (not here: publishing
+        would hold the telemetry fold back, and the newest-of-each-kind would lose a message)."""
         getattr(self, "_on_" + m.get_type().lower())(m, component)
-        self._store.publish()
 
     def _gimbal(self) -> Gimbal:
         return self._store.view()["gimbal"]
@@ -122,14 +123,15 @@ class Payload:
         if not (-180.0 <= pitch <= 180.0 and -360.0 <= yaw <= 360.0):
             return
         g = self._gimbal()
-        mode = getattr(m, "mount_mode", 0)
+        mode = m.mount_mode if m.get_msgbuf()[0] == 0xFD else None    # an extension: MAVLink 2 frames only
         control = {mavlink.MAV_MOUNT_MODE_RETRACT: GimbalControl.RETRACTED,
                    mavlink.MAV_MOUNT_MODE_NEUTRAL: GimbalControl.NEUTRAL,
                    mavlink.MAV_MOUNT_MODE_RC_TARGETING: GimbalControl.RC,
                    mavlink.MAV_MOUNT_MODE_GPS_POINT: GimbalControl.ROI}.get(mode, g.control)
         if g.source == "GIMBAL_DEVICE_ATTITUDE_STATUS" and time.time() - g.updated < 2.0:
             return                              # the richer report is current
-        self._store.set(gimbal=replace(g, pitch_deg=pitch, yaw_deg=yaw, retracted=mode == 0 if mode else g.retracted,
+        retracted = g.retracted if mode is None else mode == mavlink.MAV_MOUNT_MODE_RETRACT
+        self._store.set(gimbal=replace(g, pitch_deg=pitch, yaw_deg=yaw, retracted=retracted,
                                        control=control, source="MOUNT_STATUS", component=component,
                                        updated=time.time()))
         for w in [w for w in self._waits if w.kind == "mount"]:
@@ -426,7 +428,7 @@ class Payload:
         if not frames.finite(lat, lon, alt) or not (-90 <= lat <= 90 and -180 <= lon <= 180) or abs(alt) > 10000:
             return self._answered("look at", CommandStatus.REJECTED, "not a place on Earth")
         state = self._v.state()
-        problem = self._problem(state, gimbal_needed=False)
+        problem = self._problem(state)
         if problem:
             return self._answered(name, CommandStatus.REJECTED, problem)
         with self._store.lock:
@@ -452,7 +454,7 @@ class Payload:
     def stop_looking(self) -> Future:
         name = "stop looking (ROI none)"
         state = self._v.state()
-        problem = self._problem(state, gimbal_needed=False)
+        problem = self._problem(state)
         if problem:
             return self._answered(name, CommandStatus.REJECTED, problem)
         if self._legacy(state) or self._roi_location is False:
@@ -471,7 +473,7 @@ class Payload:
     # -- camera -------------------------------------------------------------------------------------------
     def take_photo(self) -> Future:
         state = self._v.state()
-        problem = self._problem(state, gimbal_needed=False)
+        problem = self._problem(state)
         if problem:
             return self._answered("photo", CommandStatus.REJECTED, problem)
         cam = state.camera
@@ -509,7 +511,7 @@ class Payload:
     def record_video(self, on: bool) -> Future:
         name = f"record {'on' if on else 'off'}"
         state = self._v.state()
-        problem = self._problem(state, gimbal_needed=False)
+        problem = self._problem(state)
         if problem:
             return self._answered(name, CommandStatus.REJECTED, problem)
         cam = state.camera
@@ -545,7 +547,7 @@ class Payload:
             self._gopro_mode = value
         return [mavlink.MAVLink_gopro_set_request_message(system, GIMBAL_COMPONENT, cmd, [value, 0, 0, 0])]
 
-    def _problem(self, state, gimbal_needed: bool = True) -> str | None:
+    def _problem(self, state) -> str | None:
         if self._v._replay is not None:
             return "replaying a recording: no vehicle to command"
         if not state.connected:
