@@ -33,6 +33,7 @@ from . import frames
 from .api import CEILING, Drone, Limits
 from .commands import CommandSender, Notifier, command_name
 from .forwarding import Forwarder
+from .payload.control import PAYLOAD_MESSAGES, Payload
 from .link import LinkError, ReplayControl, TlogWriter, Transport, open_transport
 from .rules import COPTER_MODES, MAX_ALTITUDE, MIN_TAKEOFF_ALTITUDE, go_to_problem, takeoff_altitude_problem
 from .setpoints import SetpointStreamer
@@ -128,6 +129,7 @@ class Vehicle(Drone):
         self._commands = CommandSender(self._store, cfg, self._notifier, self._target_ids)
         self._link = LinkSupervisor(cfg, self._transport, self._commands.capabilities, self._target_ids)
         self._setpoints = SetpointStreamer(cfg.deadman, cfg.setpoint_rate)
+        self._payload = Payload(self)         # gimbal, region of interest, camera (driver.payload)
         self._takeoff: TakeoffSequence | None = None
         self._stepping_takeoff = False        # the ticker is stepping the sequence: its commands pass
         self._yaw_next = 0.0                  # old firmware: next CONDITION_YAW of a held yaw stick
@@ -442,6 +444,9 @@ class Vehicle(Drone):
                 link.rx_lost += gap
         link.last_seq[component] = seq
         link.rx_count += 1
+        if mtype in PAYLOAD_MESSAGES:                 # the gimbal and camera speak from any component
+            self._payload.on_message(msg, component)
+            return 1
         if component != self._autopilot and self._autopilot:   # a gimbal, camera or companion computer
             if mtype == "STATUSTEXT":
                 self._on_statustext(msg)
@@ -556,6 +561,7 @@ class Vehicle(Drone):
                     self._step_takeoff(now)
                     out += self._stream_setpoint(now)
                     out += self._commands.service(now, self._store.state)
+                    out += self._payload.service(now, self._store.state)
                     if now >= next_health:
                         next_health = now + 0.1
                         out += self._supervise(now)
@@ -746,6 +752,27 @@ class Vehicle(Drone):
             future = self._commands.submit_param(name, value, time.monotonic())
         self._wake.set()
         return future
+
+    # ------------------------------------------------------------------------------------------
+    # payload: gimbal, region of interest, camera (driver.payload)
+    # ------------------------------------------------------------------------------------------
+    def point_gimbal(self, pitch_deg: float, yaw_deg: float | None = None) -> Future:
+        return self._payload.point(pitch_deg, yaw_deg)
+
+    def gimbal_rate(self, pitch_deg_s: float, yaw_deg_s: float = 0.0) -> Future:
+        return self._payload.rate(pitch_deg_s, yaw_deg_s)
+
+    def look_at(self, lat: float, lon: float, alt: float = 0.0) -> Future:
+        return self._payload.look_at(lat, lon, alt)
+
+    def stop_looking(self) -> Future:
+        return self._payload.stop_looking()
+
+    def take_photo(self) -> Future:
+        return self._payload.take_photo()
+
+    def record_video(self, on: bool) -> Future:
+        return self._payload.record_video(on)
 
     # ------------------------------------------------------------------------------------------
     # signing (driver.signing)

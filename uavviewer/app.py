@@ -197,7 +197,7 @@ def main(argv: list[str] | None = None) -> int:
     sim = None
     if args.sim:
         from driver.sim import SimConfig, SimVehicle
-        sim = SimVehicle(SimConfig(tcp_port=0, speedup=args.speedup, ready_after=args.ready_after,
+        sim = SimVehicle(SimConfig(tcp_port=0, speedup=args.speedup, ready_after=args.ready_after, camera=True,
                                    signing_key=signing.key if signing else None))   # a vehicle that has our key
         sim.start()
         connection = f"tcp:127.0.0.1:{sim.tcp_port}"
@@ -252,7 +252,7 @@ def main(argv: list[str] | None = None) -> int:
         proxy = camera_props.getProperty("UAVViewer.Camera.Proxy")
         own_camera = [f"ice:{proxy}"] if proxy else []
     if camera_props is not None:                    # its camera over TLS too, with the pilot's certificate; in a
-        from driver.camera import ice_source        # fleet, found through the registry
+        from driver.ice import camera_source as ice_source        # fleet, found through the registry
         ice_source.client_properties.update(
             {k: v for prefix in ("IceSSL.", "Ice.Plugin.IceSSL", "Ice.Default.Locator")
              for k, v in camera_props.getPropertiesForPrefix(prefix).items()})

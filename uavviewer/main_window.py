@@ -34,7 +34,9 @@ from .map.controller import MapController, TileSettings
 from .refresh import INSTRUMENTS_HZ, PLOTS_HZ, TEXT_HZ, Refresh
 from .settings import ViewerSettings, default_qsettings, load_settings, load_window, save_settings, save_window
 from .sticks import Axes, MaxSpeeds, axes_from_pads, combine, pad_labels, velocity_from_axes
+from .gimbal_controller import KEY_STEP, GimbalController
 from .widgets.camera_panel import CameraPanel
+from .widgets.gimbal_bar import GimbalBar
 from .widgets.gamepad_page import GamepadPage
 
 __all__ = ["MainWindow", "load_style"]
@@ -109,6 +111,9 @@ class MainWindow(QMainWindow):
                                        drone=lambda: self.adapter.drone,
                                        folder=self.settings.media_folder or None, parent=self)
         self.refresh.shownChanged.connect(self.camera.set_shown)
+        self.gimbal_bar = GimbalBar()                 # the camera on the vehicle: tilt, its own photo and video
+        self.camera_panel.layout().addWidget(self.gimbal_bar)
+        self.gimbal = GimbalController(self.adapter, self.camera_view, self.gimbal_bar, self)
         self.camera_panel.hud_button.setChecked(self.settings.hud)
         self.menuView.addAction(self.telemetryDock.toggleViewAction())
         self.menuView.addAction(self.plotsDock.toggleViewAction())
@@ -297,6 +302,7 @@ class MainWindow(QMainWindow):
         if self._emergency_box is not None and not s.armed:
             self._emergency_box.reject()            # the motors have stopped: nothing left to ask
         self.map.show_state(s)                      # cheap; it repaints only on a change it can show
+        self.gimbal.show_state(s)
         phase = flight_phase(s)
         progress = takeoff_progress(s) if phase is FlightPhase.TAKING_OFF else None
         detail = s.takeoff.phase.value if s.takeoff.active else ""
@@ -497,6 +503,8 @@ class MainWindow(QMainWindow):
             fc.main_button.click()
         elif action == "land" and fc.phase in (FlightPhase.TAKING_OFF, FlightPhase.FLYING):
             fc.main_button.click()
+        elif action in ("tilt_up", "tilt_down"):      # the vehicle's camera (uavviewer.gimbal_controller)
+            self.gimbal.tilt_by(KEY_STEP if action == "tilt_up" else -KEY_STEP)
 
     def changeEvent(self, event: QEvent) -> None:  # noqa: N802
         # Focus lost or minimised: nobody holds the sticks or keys any more; the gamepad flies on only if the

@@ -27,6 +27,8 @@ from ..frames import clamp, finite
 from ..state import (CommandResult, CommandStatus, Fence, LinkHealth, LinkStatus, Message, Severity, VehicleState,
                      replace)
 from . import convert, load_slice
+from .payload import PayloadClient
+from ..payload.model import Gimbal, VehicleCamera
 from .server import DEFAULT_PORTS
 
 jderobot, mavlinkserver = load_slice()
@@ -70,7 +72,7 @@ def viewer_properties(config: str | None = None, host: str | None = None, args: 
     return props
 
 
-class IceDrone(Drone):
+class IceDrone(PayloadClient, Drone):
     """The remote vehicle; ``start()`` returns at once, the first status arrives in the background."""
 
     def __init__(self, properties: Ice.Properties, prefix: str = PREFIX, poll_interval: float = 0.1,
@@ -111,6 +113,7 @@ class IceDrone(Drone):
         self._resync = False                   # after a loss: the server may have restarted its numbering
         self._said_unreachable = False
         self._fence = Fence()
+        self._payload = (Gimbal(), VehicleCamera())  # the camera on the vehicle (driver.ice.payload)
         self._fence_polls = 0                  # polls until the fence is read again; None: the server has none
 
         self._velocity: tuple[float, float, float, float] | None = None
@@ -257,6 +260,7 @@ class IceDrone(Drone):
                         lim = self._vehicle.getLimits()
                         self._limits = self._clamps(Limits(lim.horizontal, lim.vertical, lim.yawRate))
                     self._read_fence()
+                    self._read_payload()
                     self._answered(self._vehicle.getStatus(self._server_message, self._server_result))
                     if (self._subscription is not None
                             and started - max(self._subscribed_at, published or 0.0) > RESUBSCRIBE_AFTER):
@@ -334,7 +338,8 @@ class IceDrone(Drone):
             s = convert.state_from_status(status, tuple(self._messages), tuple(self._results))
             link = replace(s.link, address=f"{s.link.address} via {self._description}",
                            lost_count=s.link.lost_count + self._lost_count)
-            self._state = replace(s, link=link, fence=self._fence)
+            gimbal, camera = self._payload
+            self._state = replace(s, link=link, fence=self._fence, gimbal=gimbal, camera=camera)
 
     def _result(self, outcome) -> CommandResult:
         """The server's outcome, numbered as in our results (the window pairs a Future's answer with it)."""
@@ -597,6 +602,9 @@ class _Subscriber(mavlinkserver.Telemetry):
 
     def event(self, vehicle, e, current=None):
         pass
+
+    def payload(self, vehicle, p, current=None):
+        self._owner._published_payload(p)
 
 
 def fleet_properties(registry: str, certs: str | None = None) -> Ice.Properties:

@@ -28,6 +28,7 @@ from ..frames import finite
 from ..rules import COPTER_MODES, MAX_ALTITUDE, go_to_problem, takeoff_altitude_problem
 from ..state import CommandResult, CommandStatus, LandedState
 from . import convert, load_slice
+from .payload import PayloadServant
 
 jderobot, mavlinkserver = load_slice()
 log = logging.getLogger(__name__)
@@ -280,7 +281,7 @@ class NoCameraI(jderobot.Camera):
         pass
 
 
-class VehicleI(mavlinkserver.Vehicle):
+class VehicleI(PayloadServant, mavlinkserver.Vehicle):
     """Our extension: status and commands with the vehicle's own answer."""
 
     def __init__(self, vehicle: Drone, settings: ServerSettings):

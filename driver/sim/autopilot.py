@@ -27,6 +27,7 @@ from .common import (DEFAULT_PARAMS, MODE_NAMES, MODES, NOT_ARMABLE, POSITION_MO
                      wrap_pi)
 from .faults import Faults
 from .flight import LAND_DISARM_DELAY, Flight
+from .gimbal import Payload
 from .messages import Messages
 from .profiles import POSITION_REASONS, profile_of
 from .telemetry import EARTH_RADIUS, GRAVITY, METRES_PER_DEG, Telemetry
@@ -76,7 +77,7 @@ class SimTruth:
         return math.hypot(self.vn, self.ve)
 
 
-class Autopilot(Telemetry, Commands, Messages, Flight):
+class Autopilot(Telemetry, Commands, Messages, Flight, Payload):
     """One ArduCopter: state, flight modes, command handling and telemetry streams."""
 
     def __init__(self, config, faults: Faults | None = None,
@@ -126,6 +127,7 @@ class Autopilot(Telemetry, Commands, Messages, Flight):
         self.rebooting_until: float | None = None
         self.deferred_texts: list | None = None   # STATUSTEXT held until a command's ACK is out
         self.mode_changed = False
+        self._payload_init()             # the mount and camera (gimbal.py)
         self._boot()
 
     # -- lifecycle -------------------------------------------------------------------------------
@@ -188,6 +190,7 @@ class Autopilot(Telemetry, Commands, Messages, Flight):
         self._physics(dt)
         self._fence_check()
         self._battery(dt)
+        self._payload_step(dt)
         self._send_due()
 
     @property

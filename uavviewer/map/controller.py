@@ -23,6 +23,7 @@ from PyQt5.QtWidgets import QMessageBox, QWidget
 from driver.rules import MAX_ALTITUDE, MIN_GOTO_ALTITUDE
 from driver.state import CommandResult, VehicleState
 
+from .camera_overlay import CameraOverlay
 from ..dialogs import ask, fly_here_question
 from .geometry import MapFrame, tiles_covering, tile_zoom_for
 from .tiles import MAX_AREA_TILES, TileSource
@@ -105,6 +106,7 @@ class MapController(QObject):
         panel.offlineRequested.connect(self._offline)
         panel.downloadRequested.connect(self.download_area)
         self.view.flyHereRequested.connect(self.ask_fly_here)
+        self.camera = CameraOverlay(self.view, adapter, self)     # footprint, look direction, Look here (ROI)
         adapter.commandFinished.connect(self._command_finished)
         self._show_status()
         replay = adapter.replay
@@ -206,6 +208,7 @@ class MapController(QObject):
         self.view.fence_ceiling = s.fence.ceiling
         self._follow_target(s, where)
         self._fly_here_item(s)
+        self.camera.show_state(s, where)
 
     def _set_frame(self, s: VehicleState) -> None:
         home = s.home
