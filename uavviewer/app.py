@@ -263,6 +263,13 @@ def main(argv: list[str] | None = None) -> int:
         window.attach_fleet(controller)
     elif args.connect or not (args.sim or args.replay or remote):
         window.remember_connection_when_answered(connection)
+    if fleet is None:                                             # File › Connect switches from this one
+        connections = window.connections
+        connections.base, connections.speedup = config, args.speedup
+        connections.log_dir = str(args.log_dir) if args.log_dir is not None else None
+        connections.certs = str(args.ice_certs) if args.ice_certs else None
+        connections.adopt(drone, sim=sim)
+        sim = None                                                # stopped with its drone, whenever that is
     window.show()
     for number in (signal.SIGINT, signal.SIGTERM):              # Ctrl+C, kill: close cleanly, without asking
         signal.signal(number, lambda *_: window.quit_without_asking())
@@ -280,7 +287,7 @@ def main(argv: list[str] | None = None) -> int:
             controller.stop()
             fleet.close()                                         # every vehicle's client, the picked one too
         else:
-            drone.close()
+            window.connections.close()                            # the vehicle flown last, and any left behind
         if sim is not None:
             sim.stop()
 

@@ -13,7 +13,7 @@ from dataclasses import replace
 
 from PyQt5 import uic
 from PyQt5.QtCore import QEvent, QObject, QSettings, Qt
-from PyQt5.QtWidgets import QApplication, QDialog, QLabel, QMainWindow, QMessageBox, QWidget
+from PyQt5.QtWidgets import QApplication, QDialog, QLabel, QMainWindow, QMenu, QMessageBox, QWidget
 
 from driver.api import Drone, Limits
 from driver.rules import mode_warning
@@ -153,6 +153,7 @@ class MainWindow(QMainWindow):
         self.gamepad.changed.connect(self._fly)
         self.gamepad.actionPressed.connect(self._key_action)
         self.gamepad.message.connect(self._gamepad_message)
+        self._install_pilot_tools()
 
         self._apply_settings()
         geometry, state = load_window(self._qsettings)
@@ -164,6 +165,122 @@ class MainWindow(QMainWindow):
         QApplication.instance().installEventFilter(self)
         self.show_state(VehicleState(link=self.adapter.state.link))
         self.adapter.start()
+
+    # -- connecting, alerts, preflight, guided actions, home arrow, replay (each its own part) -------------------
+    def _install_pilot_tools(self) -> None:
+        from PyQt5.QtWidgets import QAction, QDockWidget
+
+        from .alerts.controller import AlertController
+        from .connect.controller import ConnectionController
+        from .guided.controller import GuidedController
+        from .widgets.alert_banner import AlertBanner
+        from .widgets.home_arrow import HomeArrow
+        from .widgets.preflight_panel import PreflightPanel
+        self.alert_banner = AlertBanner()                           # under the link banner, above the instruments
+        self.centralwidget.layout().insertWidget(1, self.alert_banner)
+        self.actionMute = QAction("&Mute spoken alerts", self)
+        self.actionMute.setObjectName("actionMute")
+        self.actionMute.setShortcut("Ctrl+M")
+        self.alerts = AlertController(self.alert_banner, self.actionMute,
+                                      muted=self._qsettings.value("alerts/muted", False, type=bool), parent=self)
+        self.actionMute.toggled.connect(lambda on: self._qsettings.setValue("alerts/muted", on))
+        self.adapter.stateChanged.connect(self.alerts.show_state)
+        self.preflight_panel = PreflightPanel()
+        self.preflightDock = QDockWidget("Preflight", self)
+        self.preflightDock.setObjectName("preflightDock")
+        self.preflightDock.setWidget(self.preflight_panel)
+        self.addDockWidget(Qt.RightDockWidgetArea, self.preflightDock)
+        self.tabifyDockWidget(self.telemetryDock, self.preflightDock)   # a tab beside Telemetry, not in the way
+        self.telemetryDock.raise_()
+        self.menuView.addAction(self.preflightDock.toggleViewAction())
+        self.home_arrow = HomeArrow(self.attitude)
+        self.guided = GuidedController(self.adapter, self, self)
+        self.mapPanel.mapView.menu_extensions.append(self.guided.add_map_items)
+        self.flightControls.stopRequested.connect(self.guided.cancel)
+        self.flightControls.landRequested.connect(self.guided.cancel)
+        self.flightControls.rtlRequested.connect(self.guided.cancel)
+        self.menuFly = QMenu("F&ly", self)
+        self.menuFly.addActions([self.guided.change_altitude_action, self.guided.circle_action])
+        self.menuBar().insertMenu(self.menuSettings.menuAction(), self.menuFly)
+        self.refresh.add(TEXT_HZ, self._show_pilot_tools)
+        self.connections = ConnectionController(self._qsettings, parent=self)
+        self.connections.opened.connect(lambda opened: self.use_connection(opened.drone))
+        self.connections.failed.connect(lambda why: (self.log_message(f"Not connected: {why}", Severity.WARNING),
+                                                     self.statusbar.showMessage(f"Not connected: {why}", 8000)))
+        self.adapter.stateChanged.connect(self.connections.confirm)
+        self.actionConnect = QAction("&Connect…", self)
+        self.actionConnect.setShortcut("Ctrl+K")
+        self.actionConnect.triggered.connect(self.show_connect)
+        self.actionDisconnect = QAction("&Disconnect", self)
+        self.actionDisconnect.triggered.connect(self.connections.disconnect)
+        self.actionOpenLog = QAction("&Open flight log…", self)
+        self.actionOpenLog.setShortcut("Ctrl+O")
+        self.actionOpenLog.triggered.connect(self.open_flight_log)
+        first = self.menuFile.actions()[0] if self.menuFile.actions() else None
+        self.menuFile.insertActions(first, [self.actionConnect, self.actionDisconnect, self.actionOpenLog])
+        self.menuFile.insertSeparator(first)
+        self.menuFile.insertAction(first, self.actionMute)
+        self.menuFile.insertSeparator(first)
+        self.replayBar.seekRequested.connect(lambda t: self.adapter.replay and self.adapter.replay.seek(t))
+        self.replayBar.restartRequested.connect(lambda: self.adapter.replay and self.adapter.replay.restart())
+
+    def _show_pilot_tools(self) -> None:
+        """The preflight lines, the home arrow and what guided actions allow (TEXT_HZ)."""
+        from .preflight.model import overall, preflight
+        s = self._shown_state
+        if s is None:
+            return
+        checks = preflight(s)
+        self.preflight_panel.set_checks(checks, overall(checks))
+        self.home_arrow.set_state(s)
+        self.guided.update_actions(s)
+
+    def show_connect(self) -> None:
+        """File › Connect: not modal, so the vehicle flown now stays in reach until the new one answers."""
+        from .connect.dialog import ConnectDialog
+        if getattr(self, "fleet", None) is not None:
+            self.log_message("Flying a lab's fleet: restart without --registry to connect elsewhere", Severity.WARNING)
+            return
+        dialog = ConnectDialog(self.connections.recent(), self)
+        dialog.setAttribute(Qt.WA_DeleteOnClose)
+        dialog.chosenConnection.connect(self.connections.connect_to)
+        self.connect_dialog = dialog
+        dialog.show()
+
+    def open_flight_log(self, path: str | None = None) -> None:
+        """File › Open flight log: replay a .tlog in this window."""
+        from PyQt5.QtWidgets import QFileDialog
+
+        from .connect.choice import Choice, Kind
+        if not path:
+            folder = str(self._qsettings.value("connect/log_folder", "") or "")
+            path, _ = QFileDialog.getOpenFileName(self, "Open flight log", folder, "Flight logs (*.tlog);;All files (*)")
+        if path:
+            self._qsettings.setValue("connect/log_folder", str(__import__("os").path.dirname(path)))
+            self.connections.connect_to(Choice(Kind.REPLAY, path))
+
+    def use_connection(self, drone: Drone) -> None:
+        """Fly (or watch) ``drone`` from now on: File › Connect, Disconnect, Open flight log. The vehicle left
+        behind was sent zero velocity first, so it hovers."""
+        self.centre_sticks()
+        self.map.cancel()
+        self.guided.cancel()
+        self._last_message = self._last_result = -1
+        self._shown_results.clear()
+        self._plot_gap = True
+        self.plots.gap(time.monotonic() - self._t0)
+        self.adapter.use(drone)
+        self.alerts.reset()
+        self.map.use_connection()
+        self.setWindowTitle(f"UavViewerPy — {self.adapter.description}")
+        self._signing_unavailable = signing_unavailable(drone)
+        self.telemetry.set_security_unknown(self._signing_unavailable)
+        self._speeds = self._set_limits(self.settings.speeds)
+        replay = self.adapter.replay is not None
+        self.replayBar.setVisible(replay)
+        self.controlsRow.setEnabled(not replay)
+        self.attitude.clear("NO LINK")
+        self.show_state(self.adapter.state)
 
     # -- settings --------------------------------------------------------------------------------
     def _apply_settings(self) -> None:
@@ -672,6 +789,7 @@ class MainWindow(QMainWindow):
         save_settings(self._qsettings, self.settings)
         save_window(self._qsettings, self.saveGeometry(), self.saveState())
         QApplication.instance().removeEventFilter(self)
+        self.alerts.close()
         self.gamepad.close()
         self.camera.close(wait=0.5)
         self.adapter.stop()

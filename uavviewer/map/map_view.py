@@ -58,6 +58,7 @@ class MapView(QWidget):
 
     def __init__(self, parent: QWidget | None = None) -> None:
         super().__init__(parent)
+        self.menu_extensions: list = []                # (menu, north, east) -> None: items added to the right click
         self.setSizePolicy(QSizePolicy.Expanding, QSizePolicy.Expanding)
         self.setMinimumSize(200, 160)
         self.setMouseTracking(False)
@@ -206,6 +207,8 @@ class MapView(QWidget):
         action = menu.addAction(self.fly_here_text)
         action.setEnabled(self.fly_here_enabled)
         action.triggered.connect(lambda: self.flyHereRequested.emit(north, east))
+        for extend in self.menu_extensions:                 # other features' items at that point (guided actions)
+            extend(menu, north, east)
         menu.popup(event.globalPos())
 
     def _tile_ready(self, key) -> None:
