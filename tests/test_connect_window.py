@@ -1,0 +1,107 @@
+"""File › Connect, Disconnect and Open flight log in the window, against the real simulated vehicle over real
+sockets and a real ArduCopter recording: switching needs no restart, and a finished replay shows no live link."""
+from __future__ import annotations
+
+import pytest
+from PyQt5.QtCore import Qt
+
+from driver.state import LinkStatus
+from recordings import FLIGHT
+from uavviewer.connect.choice import Choice, Kind, parse_key
+from uavviewer.connect.dialog import KINDS
+from viewer_fixtures import viewer_settings, window_factory  # noqa: F401  (fixtures)
+
+pytestmark = pytest.mark.timeout(90)
+
+
+@pytest.fixture
+def connecting(window_factory):
+    """A window whose connection controller owns what it opens; everything it opened is closed afterwards."""
+    windows = []
+
+    def make(drone):
+        w = window_factory(drone)
+        w.connections.adopt(drone)
+        windows.append(w)
+        return w
+    yield make
+    for w in windows:
+        w.connections.close()
+
+
+def test_connect_from_the_dialog_switches_vehicle_then_disconnect(qtbot, sim_factory, vehicle_factory, connecting):
+    first, second = sim_factory(), sim_factory()
+    v1 = vehicle_factory(f"tcp:127.0.0.1:{first.tcp_port}")
+    w = connecting(v1)
+    qtbot.waitUntil(lambda: w.adapter.state.connected, timeout=10000)
+
+    w.actionConnect.trigger()                            # File › Connect…
+    dialog = w.connect_dialog
+    qtbot.waitExposed(dialog)
+    dialog.kind.setCurrentIndex(KINDS.index("TCP"))
+    dialog.tcp_host.setText("")                          # a typo is said in the dialog, nothing is opened
+    qtbot.mouseClick(dialog.connect_button, Qt.LeftButton)
+    assert "HOST:PORT" in dialog.problem.text() and w.adapter.drone is v1
+    dialog.tcp_host.setText("127.0.0.1")
+    dialog.tcp_port.setValue(second.tcp_port)
+    qtbot.mouseClick(dialog.connect_button, Qt.LeftButton)
+
+    qtbot.waitUntil(lambda: w.adapter.drone is not v1 and w.adapter.state.connected, timeout=10000)
+    assert str(second.tcp_port) in w.windowTitle()
+    qtbot.waitUntil(lambda: v1.state().link.status is LinkStatus.CLOSED, timeout=10000)   # the old link let go
+    qtbot.waitUntil(lambda: w.connections.recent()[:1] == [Choice(Kind.MAVLINK, f"tcp:127.0.0.1:{second.tcp_port}")],
+                    timeout=5000)                        # remembered once a vehicle answered on it
+    qtbot.waitUntil(lambda: w.flightControls.arm_button.isEnabled(), timeout=15000)     # and it can be flown
+
+    v2 = w.adapter.drone
+    w.actionDisconnect.trigger()
+    qtbot.waitUntil(lambda: w.adapter.description == "not connected", timeout=5000)
+    assert not w.flightControls.main_button.isEnabled() and not w.flightControls.arm_button.isEnabled()
+    assert w.linkBanner.isVisible() and "not connected" in w.linkBanner.text()
+    qtbot.waitUntil(lambda: v2.state().link.status is LinkStatus.CLOSED, timeout=10000)
+
+    w.show_connect()                                     # the recent connection is offered first
+    dialog = w.connect_dialog
+    assert dialog.recent_list.count() == 1 and dialog.chosen() == w.connections.recent()[0]
+
+
+def test_connect_to_the_built_in_simulator_and_a_bad_link_keeps_the_old_one(qtbot, sim, vehicle, connecting):
+    w = connecting(vehicle)
+    qtbot.waitUntil(lambda: w.adapter.state.connected, timeout=10000)
+    failures = []
+    w.connections.failed.connect(failures.append)
+    assert not w.connections.connect_to(Choice(Kind.MAVLINK, "tcp:127.0.0.1"))
+    assert failures and "HOST:PORT" in failures[0] and w.adapter.drone is vehicle
+
+    assert w.connections.connect_to(Choice(Kind.SIM, options={"speedup": 4.0, "ready_after": 1.0}))
+    qtbot.waitUntil(lambda: w.adapter.drone is not vehicle and w.adapter.state.connected, timeout=15000)
+    assert w.connections.current.sim is not None                      # started for it, stopped with it
+    qtbot.waitUntil(lambda: vehicle.state().link.status is LinkStatus.CLOSED, timeout=10000)
+    assert parse_key(Choice(Kind.SIM).key) == Choice(Kind.SIM)
+
+
+def test_open_flight_log_seeks_restarts_and_ends_without_a_live_heartbeat(qtbot, sim, vehicle, connecting):
+    w = connecting(vehicle)
+    w.open_flight_log(f"{FLIGHT}.tlog")                 # File › Open flight log…, the file picked
+    qtbot.waitUntil(lambda: w.adapter.replay is not None and w.adapter.state.connected, timeout=15000)
+    assert w.replayBar.isVisible() and not w.controlsRow.isEnabled()
+    replay = w.adapter.replay
+    assert [w.replayBar.speed.itemData(i) for i in range(w.replayBar.speed.count())] == [0.5, 1.0, 2.0, 4.0, 8.0]
+    w.replayBar.speed.setCurrentIndex(4)
+    w.replayBar.speed.activated.emit(4)
+    assert replay.speed == 8.0
+    qtbot.waitUntil(lambda: replay.duration > 0 and w.replayBar._duration > 0, timeout=5000)
+    w.replayBar.seek_to(replay.duration - 4.0)          # the seek bar, near the end
+    assert replay.position >= replay.duration - 4.5
+
+    qtbot.waitUntil(lambda: replay.finished, timeout=15000)
+    qtbot.waitUntil(lambda: w.adapter.state.link.status is LinkStatus.CLOSED, timeout=5000)   # no live heartbeat
+    qtbot.waitUntil(lambda: "Replay finished" in w.linkBanner.text(), timeout=5000)
+    qtbot.waitUntil(lambda: w.replayBar.play_button.text() == "Finished", timeout=5000)   # its own refresh
+    assert any("Replay finished" in t for t in w.messages.texts())
+    qtbot.waitUntil(lambda: w.telemetry.text("heartbeat") == "none (link closed)", timeout=5000)
+
+    qtbot.mouseClick(w.replayBar.restart_button, Qt.LeftButton)      # from the start again
+    assert not replay.finished and replay.position < 2.0
+    qtbot.waitUntil(lambda: w.adapter.state.link.status is LinkStatus.OK, timeout=10000)
+    qtbot.waitUntil(lambda: w.replayBar.play_button.text() == "Pause", timeout=5000)
