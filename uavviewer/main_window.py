@@ -202,7 +202,8 @@ class MainWindow(QMainWindow):
         self.menuFly = QMenu("F&ly", self)
         self.menuFly.addActions([self.guided.change_altitude_action, self.guided.circle_action])
         self.menuBar().insertMenu(self.menuSettings.menuAction(), self.menuFly)
-        self.refresh.add(TEXT_HZ, self._show_pilot_tools)
+        tools = self.refresh.add(TEXT_HZ, self._show_pilot_tools)
+        self.adapter.stateChanged.connect(lambda _s: tools.mark())
         self.connections = ConnectionController(self._qsettings, parent=self)
         self.connections.opened.connect(lambda opened: self.use_connection(opened.drone))
         self.connections.failed.connect(lambda why: (self.log_message(f"Not connected: {why}", Severity.WARNING),
