@@ -46,7 +46,7 @@ def circle_start(s: VehicleState, north: float, east: float, radius: float) -> t
         yaw = math.radians(s.heading_deg)
         dn, de, dist = -math.cos(yaw), -math.sin(yaw), 1.0
     start_n, start_e = north + dn / dist * radius, east + de / dist * radius
-    heading = math.degrees(math.atan2(east - start_e, north - start_n)) % 360.0
+    heading = round(math.degrees(math.atan2(east - start_e, north - start_n)) % 360.0, 1)
     return start_n, start_e, heading
 
 

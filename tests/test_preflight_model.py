@@ -39,7 +39,7 @@ def test_each_problem_says_why():
     assert found["EKF"][0] is Verdict.NO_GO
     assert found["Battery"] == (Verdict.NO_GO, "below the warning threshold: 14.20 V, 3.55 V a cell, 15 %")
     assert found["Signing"][0] is Verdict.NO_GO and "ignores our commands" in found["Signing"][1]
-    assert found["GCS failsafe"][0] is Verdict.CAUTION and "keeps hovering" in found["GCS failsafe"][1]
+    assert found["GCS failsafe"][0] is Verdict.CAUTION and "hovers on" in found["GCS failsafe"][1]
     assert found["Fence"] == (Verdict.NO_GO, "breached")
     assert found["Link"][0] is Verdict.NO_GO and "25 % lost" in found["Link"][1]
     assert overall(preflight(s)) is Verdict.NO_GO

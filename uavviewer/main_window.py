@@ -161,6 +161,9 @@ class MainWindow(QMainWindow):
             self.restoreGeometry(geometry)
         if state is not None:
             self.restoreState(state)
+            if "preflightDock".encode("utf-16-be") not in bytes(state):   # saved before the dock existed
+                self.tabifyDockWidget(self.telemetryDock, self.preflightDock)
+                self.telemetryDock.raise_()
         self.setFocusPolicy(Qt.StrongFocus)
         QApplication.instance().installEventFilter(self)
         self.show_state(VehicleState(link=self.adapter.state.link))

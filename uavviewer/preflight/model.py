@@ -101,7 +101,7 @@ def _battery(s: VehicleState) -> Check:
         return Check("Battery", Verdict.NO_GO, f"below the warning threshold: {detail}")
     if b.alarm is BatteryAlarm.OK:
         return Check("Battery", Verdict.GO, detail)
-    return Check("Battery", Verdict.UNKNOWN, f"not judged against your thresholds yet: {detail}")
+    return Check("Battery", Verdict.UNKNOWN, f"no thresholds applied yet: {detail}")
 
 
 def _signing(s: VehicleState) -> Check:
@@ -112,7 +112,7 @@ def _signing(s: VehicleState) -> Check:
         return Check("Signing", Verdict.NO_GO, f"{status.value}: the vehicle ignores our commands")
     if status is SigningStatus.SETTING_UP:
         return Check("Signing", Verdict.CAUTION, "setting up")
-    return Check("Signing", Verdict.CAUTION, f"{status.value}: anyone on this link can command the vehicle")
+    return Check("Signing", Verdict.CAUTION, f"{status.value}: anyone on the link can command it")
 
 
 def _gcs_failsafe(s: VehicleState) -> Check:
@@ -121,8 +121,8 @@ def _gcs_failsafe(s: VehicleState) -> Check:
         return Check("GCS failsafe", Verdict.UNKNOWN, "FS_GCS_ENABLE not read yet")
     if fs == 0:
         return Check("GCS failsafe", Verdict.CAUTION,
-                     "off (FS_GCS_ENABLE 0): if the link is lost the vehicle keeps hovering")
-    return Check("GCS failsafe", Verdict.GO, f"on (FS_GCS_ENABLE {fs}): it acts if the link is lost")
+                     "off (FS_GCS_ENABLE 0): it hovers on if the link is lost")
+    return Check("GCS failsafe", Verdict.GO, f"on (FS_GCS_ENABLE {fs}): it acts on link loss")
 
 
 def _fence(s: VehicleState) -> Check:

@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 from PyQt5.QtCore import Qt
-from PyQt5.QtWidgets import QGridLayout, QLabel, QVBoxLayout, QWidget
+from PyQt5.QtWidgets import QFrame, QGridLayout, QLabel, QScrollArea, QVBoxLayout, QWidget
 
 from ..preflight.model import Check, Verdict
 
@@ -24,11 +24,19 @@ class PreflightPanel(QWidget):
         self._grid.setColumnStretch(2, 1)
         self._grid.setHorizontalSpacing(8)
         self._rows: dict[str, tuple[QLabel, QLabel, QLabel]] = {}
+        lines = QWidget()                            # scrolls in a short dock rather than clipping a reason
+        inner = QVBoxLayout(lines)
+        inner.setContentsMargins(0, 0, 0, 0)
+        inner.addLayout(self._grid)
+        inner.addStretch(1)
+        scroll = QScrollArea()
+        scroll.setWidgetResizable(True)
+        scroll.setFrameShape(QFrame.NoFrame)
+        scroll.setWidget(lines)
         box = QVBoxLayout(self)
         box.setContentsMargins(6, 6, 6, 6)
         box.addWidget(self.headline)
-        box.addLayout(self._grid)
-        box.addStretch(1)
+        box.addWidget(scroll, 1)
         self._shown: tuple = ()
 
     def set_checks(self, checks: list[Check], verdict: Verdict) -> None:
