@@ -9,6 +9,7 @@ from driver.state import LinkStatus
 from recordings import FLIGHT
 from uavviewer.connect.choice import Choice, Kind, parse_key
 from uavviewer.connect.dialog import KINDS
+from fleet_fixtures import fleet, lab  # noqa: F401  (fixtures)
 from viewer_fixtures import viewer_settings, window_factory  # noqa: F401  (fixtures)
 
 pytestmark = pytest.mark.timeout(90)
@@ -105,3 +106,26 @@ def test_open_flight_log_seeks_restarts_and_ends_without_a_live_heartbeat(qtbot,
     assert not replay.finished and replay.position < 2.0
     qtbot.waitUntil(lambda: w.adapter.state.link.status is LinkStatus.OK, timeout=10000)
     qtbot.waitUntil(lambda: w.replayBar.play_button.text() == "Pause", timeout=5000)
+
+
+def test_connect_to_a_labs_registry_shows_its_fleet_and_leaving_it_closes_it(qtbot, sim, vehicle, connecting,
+                                                                            fleet, lab):
+    fleet(2)                                             # solo-1 and solo-2, each a simulated vehicle behind Ice
+    w = connecting(vehicle)
+    w.show_connect()
+    dialog = w.connect_dialog
+    dialog.kind.setCurrentIndex(KINDS.index("Lab registry"))
+    dialog.registry.setText(lab.address)
+    qtbot.mouseClick(dialog.connect_button, Qt.LeftButton)
+    qtbot.waitUntil(lambda: getattr(w, "fleet", None) is not None, timeout=30000)
+    panel = w.fleet_panel
+    qtbot.waitUntil(lambda: [r[0] for r in panel.row_texts()] == ["▶ solo-1", "solo-2"], timeout=15000)
+    qtbot.waitUntil(lambda: w.adapter.state.connected, timeout=15000)      # solo-1, through its MAVLinkServer
+    assert "solo-1" in w.windowTitle() and w.adapter.drone is not vehicle
+    ice_fleet = w.connections.current.fleet
+    qtbot.waitUntil(lambda: w.connections.recent()[:1] == [Choice(Kind.REGISTRY, lab.address)], timeout=5000)
+
+    assert w.connections.connect_to(Choice(Kind.MAVLINK, f"tcp:127.0.0.1:{sim.tcp_port}"))
+    qtbot.waitUntil(lambda: getattr(w, "fleet", None) is None and w.adapter.state.connected, timeout=15000)
+    assert w.findChild(type(panel)) is None or not w.findChild(type(panel)).isVisible()
+    qtbot.waitUntil(lambda: ice_fleet.closed, timeout=10000)                 # the fleet left behind is closed

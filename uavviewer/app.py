@@ -263,13 +263,12 @@ def main(argv: list[str] | None = None) -> int:
         window.attach_fleet(controller)
     elif args.connect or not (args.sim or args.replay or remote):
         window.remember_connection_when_answered(connection)
-    if fleet is None:                                             # File › Connect switches from this one
-        connections = window.connections
-        connections.base, connections.speedup = config, args.speedup
-        connections.log_dir = str(args.log_dir) if args.log_dir is not None else None
-        connections.certs = str(args.ice_certs) if args.ice_certs else None
-        connections.adopt(drone, sim=sim)
-        sim = None                                                # stopped with its drone, whenever that is
+    connections = window.connections                              # File › Connect switches from this one
+    connections.base, connections.speedup = config, args.speedup
+    connections.log_dir = str(args.log_dir) if args.log_dir is not None else None
+    connections.certs = str(args.ice_certs) if args.ice_certs else None
+    connections.adopt(drone, sim=sim, fleet=fleet, first=first if fleet is not None else "")
+    sim = None                                                    # stopped with its drone, whenever that is
     window.show()
     for number in (signal.SIGINT, signal.SIGTERM):              # Ctrl+C, kill: close cleanly, without asking
         signal.signal(number, lambda *_: window.quit_without_asking())
@@ -283,11 +282,9 @@ def main(argv: list[str] | None = None) -> int:
     try:
         return app.exec_()
     finally:
-        if fleet is not None:
-            controller.stop()
-            fleet.close()                                         # every vehicle's client, the picked one too
-        else:
-            window.connections.close()                            # the vehicle flown last, and any left behind
+        if getattr(window, "fleet", None) is not None:           # the fleet flown last (File › Connect may have
+            window.fleet.stop()                                   # left the first one)
+        window.connections.close()                                # the vehicle (or fleet) flown last, and any left
         if sim is not None:
             sim.stop()
 

@@ -208,7 +208,7 @@ class MainWindow(QMainWindow):
         tools = self.refresh.add(TEXT_HZ, self._show_pilot_tools)
         self.adapter.stateChanged.connect(lambda _s: tools.mark())
         self.connections = ConnectionController(self._qsettings, parent=self)
-        self.connections.opened.connect(lambda opened: self.use_connection(opened.drone))
+        self.connections.opened.connect(self._connected)
         self.connections.failed.connect(lambda why: (self.log_message(f"Not connected: {why}", Severity.WARNING),
                                                      self.statusbar.showMessage(f"Not connected: {why}", 8000)))
         self.adapter.stateChanged.connect(self.connections.confirm)
@@ -242,9 +242,6 @@ class MainWindow(QMainWindow):
     def show_connect(self) -> None:
         """File › Connect: not modal, so the vehicle flown now stays in reach until the new one answers."""
         from .connect.dialog import ConnectDialog
-        if getattr(self, "fleet", None) is not None:
-            self.log_message("Flying a lab's fleet: restart without --registry to connect elsewhere", Severity.WARNING)
-            return
         dialog = ConnectDialog(self.connections.recent(), self)
         dialog.setAttribute(Qt.WA_DeleteOnClose)
         dialog.chosenConnection.connect(self.connections.connect_to)
@@ -262,6 +259,29 @@ class MainWindow(QMainWindow):
         if path:
             self._qsettings.setValue("connect/log_folder", str(__import__("os").path.dirname(path)))
             self.connections.connect_to(Choice(Kind.REPLAY, path))
+
+    def _connected(self, opened) -> None:
+        """A connection opened by File › Connect (:class:`uavviewer.connect.opener.Opened`): a vehicle, or a lab's
+        fleet with its Fleet panel."""
+        self._leave_fleet()
+        self.use_connection(opened.drone)
+        if opened.fleet is not None:
+            from .fleet import FleetController
+            self.attach_fleet(FleetController(opened.fleet, opened.first, parent=self))
+
+    def _leave_fleet(self) -> None:
+        """Another connection replaces the fleet: its panel goes; the fleet itself is closed by the connections."""
+        fleet = getattr(self, "fleet", None)
+        if fleet is None:
+            return
+        fleet.stop()
+        self.mapPanel.mapView.vehicleClicked.disconnect(fleet.pick)
+        self.map.show_fleet(())
+        dock = self.fleet_panel.parentWidget()
+        self.removeDockWidget(dock)
+        dock.deleteLater()
+        fleet.deleteLater()
+        self.fleet = None
 
     def use_connection(self, drone: Drone) -> None:
         """Fly (or watch) ``drone`` from now on: File › Connect, Disconnect, Open flight log. The vehicle left

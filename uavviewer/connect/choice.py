@@ -1,7 +1,8 @@
 """What the pilot picked in File › Connect, as one value that opens a drone and is remembered as a line of text.
 
 No Qt here. A :class:`Choice` is a MAVLink link (UDP, TCP, serial: any mavutil connection string), the built-in
-simulated vehicle, an Ice server (a host, or a viewer config file), or a recorded flight (.tlog). Its
+simulated vehicle, an Ice server (a host, or a viewer config file), a lab's registry (a fleet), or a recorded
+flight (.tlog). Its
 :attr:`Choice.key` is what the recent-connections list keeps; :func:`parse_key` reads it back.
 """
 from __future__ import annotations
@@ -22,6 +23,7 @@ class Kind(enum.Enum):
     MAVLINK = "mavlink"                  # udpin/udpout/tcp/serial
     SIM = "sim"                          # the built-in simulated ArduCopter
     ICE = "ice"                          # a MAVLinkServer over ZeroC Ice: a host or a config file
+    REGISTRY = "registry"                # a lab's IceGrid registry: every vehicle registered there (docs/fleet.md)
     REPLAY = "replay"                    # a .tlog
 
 
@@ -39,6 +41,8 @@ class Choice:
             return "sim"
         if self.kind is Kind.ICE:
             return ("ice-config:" if self.target.endswith(".cfg") or os.sep in self.target else "ice:") + self.target
+        if self.kind is Kind.REGISTRY:
+            return f"registry:{self.target}"
         if self.kind is Kind.MAVLINK and self.is_serial:
             return f"{self.target},{self.baud}"
         return self.target
@@ -54,6 +58,8 @@ class Choice:
             return "Simulated vehicle (built in)"
         if self.kind is Kind.ICE:
             return f"Ice server {self.target}"
+        if self.kind is Kind.REGISTRY:
+            return f"Fleet at registry {self.target}"
         if self.kind is Kind.REPLAY:
             return f"Replay {os.path.basename(self.target)}"
         if self.is_serial:
@@ -65,14 +71,21 @@ class Choice:
         if self.kind is Kind.SIM:
             return None
         if not self.target.strip():
-            return {Kind.ICE: "name the Ice server's host or config file", Kind.REPLAY: "pick a flight log"}.get(
-                self.kind, "enter a connection")
+            return {Kind.ICE: "name the Ice server's host or config file", Kind.REPLAY: "pick a flight log",
+                    Kind.REGISTRY: "name the registry's HOST:PORT"}.get(self.kind, "enter a connection")
         if self.kind is Kind.ICE:
             if self.key.startswith("ice-config:") and not os.path.isfile(self.target):
                 return f"no such Ice config: {self.target}"
             return None
         if self.kind is Kind.REPLAY:
             return None if os.path.isfile(self.target) else f"no such flight log: {self.target}"
+        if self.kind is Kind.REGISTRY:
+            from driver.ice.registry import registry_address
+            try:
+                registry_address(self.target)
+            except ValueError as exc:
+                return str(exc)
+            return None
         return connection_problem(self.target)
 
 
@@ -87,6 +100,8 @@ def parse_key(key: str) -> Choice | None:
         return Choice(Kind.ICE, key[len("ice-config:"):])
     if key.startswith("ice:"):
         return Choice(Kind.ICE, key[len("ice:"):])
+    if key.startswith("registry:"):
+        return Choice(Kind.REGISTRY, key[len("registry:"):])
     if key.lower().endswith(".tlog"):
         return Choice(Kind.REPLAY, key)
     target, _, baud = key.rpartition(",")

@@ -47,9 +47,9 @@ class ConnectionController(QObject):
         self._arrived.connect(self._on_arrived)
 
     # -- what is flown now ------------------------------------------------------------------------------
-    def adopt(self, drone, choice: Choice | None = None, sim=None) -> None:
-        """The drone the window was started with (the command line's): closed like any other when left."""
-        self.current = Opened(drone, choice, sim)
+    def adopt(self, drone, choice: Choice | None = None, sim=None, fleet=None, first: str = "") -> None:
+        """The drone (or fleet) the window was started with (the command line's): closed like any other when left."""
+        self.current = Opened(drone, choice, sim, fleet, first)
 
     @property
     def busy(self) -> bool:

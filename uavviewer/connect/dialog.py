@@ -1,4 +1,5 @@
-"""File › Connect: pick a link (UDP, TCP, serial, the built-in simulator, an Ice server) or a recent one."""
+"""File › Connect: pick a link (UDP, TCP, serial, the built-in simulator, an Ice server, a lab's registry) or a
+recent one."""
 from __future__ import annotations
 
 from PyQt5.QtCore import Qt, pyqtSignal
@@ -11,7 +12,7 @@ from .choice import SITL_TCP, Choice, Kind, serial_ports
 
 __all__ = ["ConnectDialog", "KINDS"]
 
-KINDS = ("UDP", "TCP", "Serial", "Simulated vehicle", "Ice server")
+KINDS = ("UDP", "TCP", "Serial", "Simulated vehicle", "Ice server", "Lab registry")
 BAUDS = (57600, 115200, 921600, 38400, 9600)
 
 
@@ -85,6 +86,10 @@ class ConnectDialog(QDialog):
         line.addWidget(self.ice_host, 1)
         line.addWidget(browse)
         self.pages.addWidget(self._form(("MAVLinkServer", row)))
+        # a lab's IceGrid registry: every vehicle registered there, in the Fleet panel
+        self.registry = QLineEdit()
+        self.registry.setPlaceholderText("HOST:PORT, e.g. 10.1.1.5:4061")
+        self.pages.addWidget(self._form(("Registry", self.registry)))
         self.kind.currentIndexChanged.connect(self.pages.setCurrentIndex)
         self.problem = QLabel()
         self.problem.setObjectName("connectProblem")
@@ -145,6 +150,9 @@ class ConnectDialog(QDialog):
         elif choice.kind is Kind.ICE:
             self.kind.setCurrentIndex(KINDS.index("Ice server"))
             self.ice_host.setText(choice.target)
+        elif choice.kind is Kind.REGISTRY:
+            self.kind.setCurrentIndex(KINDS.index("Lab registry"))
+            self.registry.setText(choice.target)
         elif choice.is_serial:
             self.kind.setCurrentIndex(KINDS.index("Serial"))
             self.serial_port.setEditText(choice.target)
@@ -180,6 +188,8 @@ class ConnectDialog(QDialog):
             return Choice(Kind.MAVLINK, device, int(self.baud.currentData() or 57600))
         if kind == "Simulated vehicle":
             return Choice(Kind.SIM)
+        if kind == "Lab registry":
+            return Choice(Kind.REGISTRY, self.registry.text().strip())
         return Choice(Kind.ICE, self.ice_host.text().strip())
 
     def _accept(self) -> None:

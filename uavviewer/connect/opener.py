@@ -6,7 +6,7 @@ same settings the command line gives it: the flight log folder, signing, the tak
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 from driver.api import Drone
@@ -22,7 +22,8 @@ class Opened:
     drone: Drone
     choice: Choice | None
     sim: object = None                    # the built-in simulator started for it, stopped with it
-    owned: list = field(default_factory=list)
+    fleet: object = None                  # a lab's fleet (driver.api.Fleet): ``drone`` is its first vehicle
+    first: str = ""                       # ... and that vehicle's name
 
 
 class Disconnected(Drone):
@@ -83,13 +84,33 @@ class Disconnected(Drone):
         pass
 
 
+def open_fleet(registry: str, certs: str | None, wait: float) -> Opened:
+    """A lab's fleet, once the registry lists a vehicle (at most ``wait`` s): its first vehicle is flown first."""
+    from driver.ice.fleet import IceFleet
+    fleet = IceFleet(registry, certs).start()
+    try:
+        deadline = time.monotonic() + wait
+        while not fleet.names():
+            if time.monotonic() > deadline:
+                raise RuntimeError(f"the registry lists no vehicle after {wait:g} s"
+                                   + (f" ({fleet.problem})" if fleet.problem else ""))
+            time.sleep(0.2)
+        first = fleet.names()[0]
+        return Opened(fleet.drone(first), Choice(Kind.REGISTRY, registry), fleet=fleet, first=first)
+    except Exception:
+        fleet.close()
+        raise
+
+
 def open_choice(choice: Choice, vehicle_config, log_dir: str | None = None, certs: str | None = None,
-                speedup: float = 1.0) -> Opened:
+                speedup: float = 1.0, wait: float = 30.0) -> Opened:
     """Start the drone ``choice`` names. ``vehicle_config``: a :class:`driver.vehicle.VehicleConfig` whose
     signing, limits and takeoff altitude the new link keeps; ``log_dir``: where a live link records its .tlog."""
     problem = choice.problem()
     if problem:
         raise ValueError(problem)
+    if choice.kind is Kind.REGISTRY:
+        return open_fleet(choice.target, certs, wait)
     if choice.kind is Kind.ICE:
         from driver.ice.client import IceDrone
         config = choice.target if choice.key.startswith("ice-config:") else None
@@ -122,7 +143,10 @@ def open_choice(choice: Choice, vehicle_config, log_dir: str | None = None, cert
 def close_quietly(opened: Opened) -> None:
     """Close a drone (and its simulator) the pilot has left; on a worker thread: closing joins the link's threads."""
     try:
-        opened.drone.close()
+        if opened.fleet is not None:
+            opened.fleet.close()              # every vehicle's client, the picked one too
+        else:
+            opened.drone.close()
     finally:
         if opened.sim is not None:
             opened.sim.stop()

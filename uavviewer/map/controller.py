@@ -240,6 +240,7 @@ class MapController(QObject):
         self._frame = None
         self._state = None
         self.trail = Trail()
+        self._name, self._trails = "", {}
         self._replay_track = False
         self._pending_track = None
         self._redraw_trail()
