@@ -61,3 +61,11 @@ def test_without_a_link_nothing_is_go():
         found = lines(replace(READY, link=LinkHealth(status=status)))
         assert found["Link"] == (Verdict.NO_GO, why)
         assert all(v is Verdict.UNKNOWN for name, (v, _) in found.items() if name != "Link")
+
+
+def test_a_refused_arming_is_a_caution_while_the_checks_pass():
+    refused = Message(5, 1000.0, Severity.CRITICAL, "PreArm: Compass not calibrated")
+    found = lines(replace(READY, time=1010.0, messages=(refused,)))
+    assert found["Pre-arm"] == (Verdict.CAUTION, "checks pass, but arming was just refused: PreArm: Compass not "
+                                                 "calibrated")
+    assert lines(replace(READY, time=1100.0, messages=(refused,)))["Pre-arm"][0] is Verdict.GO   # long ago

@@ -265,6 +265,7 @@ class MainWindow(QMainWindow):
         fleet with its Fleet panel."""
         self._leave_fleet()
         self.use_connection(opened.drone)
+        self.actionDisconnect.setEnabled(self.connections.connected)
         if opened.fleet is not None:
             from .fleet import FleetController
             self.attach_fleet(FleetController(opened.fleet, opened.first, parent=self))

@@ -9,7 +9,7 @@ import time
 from dataclasses import dataclass, replace
 from pathlib import Path
 
-from driver.api import Drone
+from driver.api import CEILING, Drone, Limits
 from driver.state import CommandResult, CommandStatus, LinkHealth, LinkStatus, VehicleState
 
 from .choice import Choice, Kind
@@ -32,7 +32,9 @@ class Disconnected(Drone):
     _REASON = "not connected: File › Connect picks a vehicle"
 
     def __init__(self) -> None:
-        self._state = VehicleState(link=LinkHealth(status=LinkStatus.CLOSED, address="not connected"))
+        self._state = VehicleState(link=LinkHealth(status=LinkStatus.CLOSED,
+                                                   address="not connected — File › Connect picks a vehicle"))
+        self._limits = Limits()
 
     def state(self) -> VehicleState:
         return self._state
@@ -77,8 +79,13 @@ class Disconnected(Drone):
     def set_yaw(self, degrees, relative=False, rate_deg_s=30.0):
         return self._refuse("yaw")
 
-    def set_limits(self, limits):
-        return self.limits
+    @property
+    def limits(self) -> Limits:
+        return self._limits
+
+    def set_limits(self, limits: Limits) -> Limits:
+        self._limits = limits.within(CEILING)        # kept for nothing to fly, so the window's speeds stand
+        return self._limits
 
     def close(self) -> None:
         pass
