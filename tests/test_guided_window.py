@@ -74,6 +74,12 @@ def test_circle_a_point_from_the_map_flies_ardupilots_circle(qtbot, sim, flying,
     qtbot.waitUntil(around, timeout=60000)
     qtbot.waitUntil(lambda: any("circling" in t for t in w.messages.texts()), timeout=5000)
     assert w.adapter.state.mode == "CIRCLE"
+    north, east, radius = w.guided.circling                           # drawn on the map while it is flown
+    assert math.hypot(north - centre[0], east - centre[1]) < 0.5 and radius == 5.0   # (a pixel off: the click)
+    paints = view.paints
+    qtbot.waitUntil(lambda: view.paints > paints, timeout=3000)
+    w.request_mode("LOITER")                                           # any other mode leaves the circle
+    qtbot.waitUntil(lambda: w.guided.circling is None, timeout=10000)
 
 
 def test_stop_ends_a_circle_on_its_way(qtbot, sim, flying, window):

@@ -199,6 +199,8 @@ class MainWindow(QMainWindow):
         self.home_arrow = HomeArrow(self.attitude)
         self.guided = GuidedController(self.adapter, self, self)
         self.mapPanel.mapView.menu_extensions.append(self.guided.add_map_items)
+        self.mapPanel.mapView.paint_extensions.append(self.guided.paint_circle)
+        self.guided.view_changed.connect(self.mapPanel.mapView.update)
         self.flightControls.stopRequested.connect(self.guided.cancel)
         self.flightControls.landRequested.connect(self.guided.cancel)
         self.flightControls.rtlRequested.connect(self.guided.cancel)

@@ -64,8 +64,11 @@ class Speaker(QObject):
         try:
             from PyQt5.QtTextToSpeech import QTextToSpeech
             if QTextToSpeech.availableEngines():
-                self._tts = QTextToSpeech(self)
-                return "qt"
+                tts = QTextToSpeech(self)
+                if tts.state() != QTextToSpeech.BackendError:     # speechd listed, but no daemon: no voice
+                    self._tts = tts
+                    return "qt"
+                tts.deleteLater()
         except ImportError:
             pass
         return "beep"

@@ -8,7 +8,8 @@ from __future__ import annotations
 
 import math
 
-from PyQt5.QtCore import QObject, Qt, pyqtSignal
+from PyQt5.QtCore import QObject, QPointF, Qt, pyqtSignal
+from PyQt5.QtGui import QColor, QPen
 from PyQt5.QtWidgets import QAction, QInputDialog, QMenu, QWidget
 
 from driver.guided import MAX_CIRCLE_RADIUS, MIN_CIRCLE_RADIUS
@@ -17,15 +18,19 @@ from driver.state import VehicleState
 
 __all__ = ["GuidedController"]
 
+CIRCLE_COLOUR = QColor("#4fc3f7")
+
 
 class GuidedController(QObject):
     asked = pyqtSignal(object)               # the question just opened (a QInputDialog): tests answer it
+    view_changed = pyqtSignal()              # the circle drawn on the map came or went
 
     def __init__(self, adapter, window: QWidget, parent: QObject | None = None) -> None:
         super().__init__(parent)
         self.adapter = adapter
         self._window = window
         self._circle = None                  # the circle's Future while it is on its way
+        self.circling: tuple[float, float, float] | None = None   # north, east, radius of the circle being flown
         self.question: QInputDialog | None = None
         self.change_altitude_action = QAction("Change &altitude…", window)
         self.change_altitude_action.setObjectName("actionChangeAltitude")
@@ -51,6 +56,9 @@ class GuidedController(QObject):
         return ""
 
     def update_actions(self, s: VehicleState) -> None:
+        if self.circling is not None and s.mode != "CIRCLE" and s.mode:
+            self.circling = None                        # the pilot left the circle: it leaves the map
+            self.view_changed.emit()
         why = self.why_not(s) if self.adapter.replay is None else "a recording cannot be flown"
         for action, what in ((self.change_altitude_action, "Climb or descend where it is"),
                              (self.circle_action, "Circle a point ahead of the nose (CIRCLE mode)")):
@@ -129,7 +137,26 @@ class GuidedController(QObject):
             here = (s.local.north, s.local.east) if s.local is not None else (0.0, 0.0)
             yaw = math.radians(s.heading_deg)
             centre = (here[0] + radius * math.cos(yaw), here[1] + radius * math.sin(yaw))
-        self._circle = self.adapter.command("circle", centre[0], centre[1], float(radius))
+        self._circle = future = self.adapter.command("circle", centre[0], centre[1], float(radius))
+        self.circling = None
+        if future is not None:
+            wanted = (centre[0], centre[1], float(radius))
+            future.add_done_callback(lambda f: setattr(self, "circling", wanted)
+                                     if not f.cancelled() and f.exception() is None and f.result().ok else None)
+
+    def paint_circle(self, p, view) -> None:
+        """The map: the circle being flown (CIRCLE mode entered through Circle), its centre marked."""
+        if self.circling is None:
+            return
+        north, east, radius = self.circling
+        centre = view.to_screen(east, north)
+        r = abs(view.to_screen(east + radius, north).x() - centre.x())
+        p.setPen(QPen(CIRCLE_COLOUR, 2, Qt.DashLine))
+        p.setBrush(Qt.NoBrush)
+        p.drawEllipse(centre, r, r)
+        p.setPen(QPen(CIRCLE_COLOUR, 2))
+        p.drawLine(centre + QPointF(-5, 0), centre + QPointF(5, 0))
+        p.drawLine(centre + QPointF(0, -5), centre + QPointF(0, 5))
 
     def cancel(self) -> None:
         """Stop, Escape, Land, RTL: a circle on its way to the edge ends there."""

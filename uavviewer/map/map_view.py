@@ -59,6 +59,7 @@ class MapView(QWidget):
     def __init__(self, parent: QWidget | None = None) -> None:
         super().__init__(parent)
         self.menu_extensions: list = []                # (menu, north, east) -> None: items added to the right click
+        self.paint_extensions: list = []               # (painter, view) -> None: drawn over the trail (a circle flown)
         self.setSizePolicy(QSizePolicy.Expanding, QSizePolicy.Expanding)
         self.setMinimumSize(200, 160)
         self.setMouseTracking(False)
@@ -238,6 +239,8 @@ class MapView(QWidget):
             self._paint_home(p)
         if self.target is not None:
             self._paint_target(p)
+        for paint in self.paint_extensions:
+            paint(p, self)
         for mark in self.others:
             self._paint_other(p, mark)
         if self.vehicle is not None:
