@@ -1,22 +1,25 @@
 """Saying alerts out loud without ever blocking the window.
 
-:class:`Speaker` queues texts and says one at a time: through espeak-ng (a child process run by
-:class:`~PyQt5.QtCore.QProcess`, so the UI thread only starts it) when the system has it, else Qt's own
-QTextToSpeech when PyQt5 ships it with an engine, else the desktop's beep. A more urgent alert jumps the queue,
-and the queue never grows stale: at most a few alerts wait, the least urgent are dropped first.
+:class:`Speaker` queues texts and says one at a time: through espeak-ng when the system has it, else Qt's own
+QTextToSpeech when PyQt5 ships it with a working engine, else the desktop's beep. espeak-ng runs as a child
+process started and waited for by a speech thread of its own, so the UI thread only appends to a list (starting a
+process from the UI thread, as QProcess does, forks the whole viewer there: tens of milliseconds on a busy
+laptop). A more urgent alert jumps the queue, and the queue never grows stale: at most a few alerts wait, the least
+urgent are dropped first.
 """
 from __future__ import annotations
 
 import logging
 import shutil
 import subprocess
+import threading
 
-from PyQt5.QtCore import QObject, QProcess, pyqtSignal
+from PyQt5.QtCore import QObject, pyqtSignal
 from PyQt5.QtWidgets import QApplication
 
 from .model import Alert
 
-__all__ = ["Speaker", "espeak_command", "render_wav"]
+__all__ = ["Speaker", "espeak_command", "espeak_args", "render_wav"]
 
 log = logging.getLogger(__name__)
 
@@ -44,7 +47,7 @@ def render_wav(text: str, path: str, timeout: float = 20.0) -> bool:
 
 
 class Speaker(QObject):
-    spoken = pyqtSignal(str)              # a text handed to the engine (or beeped for)
+    spoken = pyqtSignal(str)              # a text handed to the engine (or beeped for); from the speech thread
     engineChanged = pyqtSignal(str)
 
     def __init__(self, parent: QObject | None = None, engine: str | None = None) -> None:
@@ -52,10 +55,17 @@ class Speaker(QObject):
         super().__init__(parent)
         self.muted = False
         self._queue: list[Alert] = []
-        self._process: QProcess | None = None
+        self._cond = threading.Condition()
+        self._process: subprocess.Popen | None = None
+        self._speaking = False
+        self._closed = False
         self._tts = None
         self._program = espeak_command()
         self.engine = engine or self._best_engine()
+        self._thread: threading.Thread | None = None
+        if self.engine == "espeak-ng":
+            self._thread = threading.Thread(target=self._run, name="speech", daemon=True)
+            self._thread.start()
         log.info("spoken alerts through %s", self.engine)
 
     def _best_engine(self) -> str:
@@ -75,63 +85,75 @@ class Speaker(QObject):
 
     @property
     def busy(self) -> bool:
-        return self._process is not None and self._process.state() != QProcess.NotRunning
+        """Something is being said now."""
+        return self._speaking
 
     @property
     def waiting(self) -> tuple[Alert, ...]:
-        return tuple(self._queue)
+        with self._cond:
+            return tuple(self._queue)
 
     def set_muted(self, muted: bool) -> None:
         """Mute: nothing more is said, what waits is dropped and what is being said stops."""
         self.muted = muted
         if muted:
-            self._queue.clear()
-            if self.busy:
-                self._process.kill()
+            with self._cond:
+                self._queue.clear()
+                process = self._process
+            if process is not None and process.poll() is None:
+                process.kill()
             if self._tts is not None:
                 self._tts.stop()
 
     def say(self, alert: Alert) -> None:
-        if self.muted:
+        """Queue ``alert``; returns at once."""
+        if self.muted or self._closed:
             return
-        self._queue.append(alert)
-        self._queue.sort(key=lambda a: a.severity)          # stable: the same urgency keeps its order
-        del self._queue[MAX_WAITING:]
-        self._next()
-
-    def _next(self) -> None:
-        if self.busy or not self._queue:
-            return
-        alert = self._queue.pop(0)
-        if self.engine == "espeak-ng":
-            process = QProcess(self)
-            process.finished.connect(lambda *_: self._done(process))
-            process.errorOccurred.connect(lambda error: self._failed(process, error))
-            self._process = process
-            process.start(self._program, espeak_args(alert.text))
-        elif self.engine == "qt" and self._tts is not None:
-            self._tts.say(alert.text)                        # QTextToSpeech queues and never blocks
-        else:
-            QApplication.beep()
-        self.spoken.emit(alert.text)
         if self.engine != "espeak-ng":
-            self._next()
+            if self.engine == "qt" and self._tts is not None:
+                self._tts.say(alert.text)                    # QTextToSpeech queues and never blocks
+            else:
+                QApplication.beep()
+            self.spoken.emit(alert.text)
+            return
+        with self._cond:
+            self._queue.append(alert)
+            self._queue.sort(key=lambda a: a.severity)      # stable: the same urgency keeps its order
+            del self._queue[MAX_WAITING:]
+            self._cond.notify()
 
-    def _done(self, process: QProcess) -> None:
-        if self._process is process:
-            self._process = None
-        process.deleteLater()
-        self._next()
-
-    def _failed(self, process: QProcess, error) -> None:
-        if error == QProcess.FailedToStart:                  # gone since we looked: beep from now on
-            log.warning("espeak-ng failed to start; alerts beep instead")
-            self.engine = "beep"
-            self.engineChanged.emit(self.engine)
-            self._done(process)
+    def _run(self) -> None:
+        """The speech thread: one espeak-ng process at a time, most urgent first."""
+        while True:
+            with self._cond:
+                while not self._queue and not self._closed:
+                    self._cond.wait()
+                if self._closed:
+                    return
+                alert = self._queue.pop(0)
+                self._speaking = True
+                try:
+                    self._process = subprocess.Popen([self._program, *espeak_args(alert.text)],
+                                                     stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+                                                     stderr=subprocess.DEVNULL)
+                except OSError:
+                    log.warning("espeak-ng failed to start; alerts beep instead", exc_info=True)
+                    self.engine, self._speaking = "beep", False
+                    self.engineChanged.emit(self.engine)
+                    return
+            self.spoken.emit(alert.text)
+            self._process.wait()
+            with self._cond:
+                self._process = None
+                self._speaking = False
 
     def close(self) -> None:
-        self._queue.clear()
-        if self.busy:
-            self._process.kill()
-            self._process.waitForFinished(500)
+        with self._cond:
+            self._closed = True
+            self._queue.clear()
+            process = self._process
+            self._cond.notify_all()
+        if process is not None and process.poll() is None:
+            process.kill()
+        if self._thread is not None:
+            self._thread.join(timeout=2.0)
