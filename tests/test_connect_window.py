@@ -77,6 +77,7 @@ def test_connect_to_the_built_in_simulator_and_a_bad_link_keeps_the_old_one(qtbo
     assert w.connections.connect_to(Choice(Kind.SIM, options={"speedup": 4.0, "ready_after": 1.0}))
     qtbot.waitUntil(lambda: w.adapter.drone is not vehicle and w.adapter.state.connected, timeout=15000)
     assert w.connections.current.sim is not None                      # started for it, stopped with it
+    assert w.camera.uris == ["sim"]                                    # and its camera shown, as with --sim
     qtbot.waitUntil(lambda: vehicle.state().link.status is LinkStatus.CLOSED, timeout=10000)
     assert parse_key(Choice(Kind.SIM).key) == Choice(Kind.SIM)
 
@@ -123,6 +124,7 @@ def test_connect_to_a_labs_registry_shows_its_fleet_and_leaving_it_closes_it(qtb
     qtbot.waitUntil(lambda: w.adapter.state.connected, timeout=15000)      # solo-1, through its MAVLinkServer
     assert "solo-1" in w.windowTitle() and w.adapter.drone is not vehicle
     ice_fleet = w.connections.current.fleet
+    assert w.camera.uris == ["ice:Camera@solo-1"]                      # its camera, found through the registry
     qtbot.waitUntil(lambda: w.connections.recent()[:1] == [Choice(Kind.REGISTRY, lab.address)], timeout=5000)
 
     assert w.connections.connect_to(Choice(Kind.MAVLINK, f"tcp:127.0.0.1:{sim.tcp_port}"))

@@ -253,9 +253,7 @@ def main(argv: list[str] | None = None) -> int:
         own_camera = [f"ice:{proxy}"] if proxy else []
     if camera_props is not None:                    # its camera over TLS too, with the pilot's certificate; in a
         from driver.camera import ice_source        # fleet, found through the registry
-        ice_source.client_properties.update(
-            {k: v for prefix in ("IceSSL.", "Ice.Plugin.IceSSL", "Ice.Default.Locator")
-             for k, v in camera_props.getPropertiesForPrefix(prefix).items()})
+        ice_source.use_client_properties(camera_props)
     window = MainWindow(drone, takeoff_altitude=args.takeoff_altitude, cameras=args.camera,  # --camera: this run
                         default_cameras=own_camera)
     if fleet is not None:

@@ -268,9 +268,18 @@ class MainWindow(QMainWindow):
         self._leave_fleet()
         self.use_connection(opened.drone)
         self.actionDisconnect.setEnabled(self.connections.connected)
-        if opened.fleet is not None:
+        own = ["sim"] if opened.sim is not None else []            # the new vehicle's own camera, if we know it
+        if opened.fleet is not None:                               # its cameras through the registry, as app.py
+            from driver.camera import ice_source
+            from driver.ice.client import fleet_properties
+
             from .fleet import FleetController
+            ice_source.use_client_properties(fleet_properties(opened.choice.target, self.connections.certs))
+            own = [FleetController.camera_uri(opened.first)]
             self.attach_fleet(FleetController(opened.fleet, opened.first, parent=self))
+        if self.camera.uris == self._default_cameras and own != self._default_cameras:   # not --camera's
+            self._default_cameras = own                                                  # nor Preferences'
+            self.camera.set_sources(own)
 
     def _leave_fleet(self) -> None:
         """Another connection replaces the fleet: its panel goes; the fleet itself is closed by the connections."""
