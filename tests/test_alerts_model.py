@@ -120,3 +120,12 @@ def test_the_speech_engine_makes_audible_sound_headless(tmp_path):
     loud = max(abs(v) for v in samples)
     rms = (sum(v * v for v in samples) / len(samples)) ** 0.5
     assert loud > 3000 and rms > 300                     # speech, not silence
+
+
+def test_an_alert_carries_the_time_of_its_event(model):
+    """A replay's banner shows the recording's clock, not the time it is watched."""
+    said = Message(7, 1234.5, Severity.CRITICAL, "GPS Glitch")
+    alert, = model.update(replace(LIVE, time=2000.0, messages=(said,)))
+    assert alert.time == 1234.5
+    alert, = model.update(replace(LIVE, time=2001.0, messages=(said,), link=LinkHealth(status=LinkStatus.LOST)))
+    assert alert.kind is AlertKind.LINK_LOST and alert.time == 2001.0

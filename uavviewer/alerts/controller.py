@@ -35,7 +35,7 @@ class AlertController(QObject):
     def raise_alert(self, alert: Alert) -> None:
         self.speaker.say(alert)
         if alert.critical:
-            self.banner.show_alert(alert.text, alert.severity)
+            self.banner.show_alert(alert.text, alert.severity, alert.time)
         elif alert.clears:
             self.banner.clear_if("Link lost")
         self.alerted.emit(alert)

@@ -9,7 +9,7 @@ vehicle only sets the baseline: connecting to a vehicle already armed in LOITER 
 from __future__ import annotations
 
 import enum
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 from driver.state import BatteryAlarm, LinkStatus, SequencePhase, Severity, VehicleState
 
@@ -43,6 +43,7 @@ class Alert:
     kind: AlertKind
     text: str                         # what is spoken and shown
     severity: Severity                # how urgent: lower is worse (MAV_SEVERITY)
+    time: float = 0.0                 # wall clock of the event (a replay's: the recording's), 0 when not known
 
     @property
     def critical(self) -> bool:
@@ -89,7 +90,7 @@ class AlertModel:
         for m in s.messages_since(self._last_message):
             self._last_message = m.index
             if m.source == "vehicle" and m.severity <= Severity.WARNING:
-                out.append(Alert(AlertKind.MESSAGE, m.text, m.severity))
+                out.append(Alert(AlertKind.MESSAGE, m.text, m.severity, m.time))
         if s.connected and prev.connected:
             if s.armed != prev.armed:
                 out.append(Alert(AlertKind.ARMED if s.armed else AlertKind.DISARMED,
@@ -98,7 +99,7 @@ class AlertModel:
                 out.append(Alert(AlertKind.MODE, _mode_words(s.mode), Severity.INFO))
         if s.takeoff.phase is SequencePhase.DONE and prev.takeoff.phase is not SequencePhase.DONE:
             out.append(Alert(AlertKind.TAKEOFF_COMPLETE, f"Takeoff complete, {s.altitude:.0f} metres", Severity.INFO))
-        return sorted(out, key=lambda a: a.severity)
+        return sorted((a if a.time else replace(a, time=s.time) for a in out), key=lambda a: a.severity)
 
     def _battery_alerts(self, s: VehicleState) -> list[Alert]:
         alarm, was = s.battery.alarm, self._battery

@@ -50,10 +50,11 @@ class AlertBanner(QWidget):
     def text(self) -> str:
         return self.label.text()
 
-    def show_alert(self, text: str, severity: Severity) -> None:
+    def show_alert(self, text: str, severity: Severity, when: float = 0.0) -> None:
+        """``when``: the event's wall clock (a replay's is the recording's); now when 0."""
         self._count = self._count + 1 if self.isVisible() else 1
         more = f"  (+{self._count - 1} more in Messages)" if self._count > 1 else ""
-        self.label.setText(f"{time.strftime('%H:%M:%S')}  {text}{more}")
+        self.label.setText(f"{time.strftime('%H:%M:%S', time.localtime(when or None))}  {text}{more}")
         self.label.setToolTip(text)
         level = "critical" if severity <= Severity.CRITICAL else "warning"
         if self.property("level") != level:
