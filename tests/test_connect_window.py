@@ -64,6 +64,11 @@ def test_connect_from_the_dialog_switches_vehicle_then_disconnect(qtbot, sim_fac
     w.show_connect()                                     # the recent connection is offered first
     dialog = w.connect_dialog
     assert dialog.recent_list.count() == 1 and dialog.chosen() == w.connections.recent()[0]
+    dialog.reject()
+    recent, = w.menuRecent.actions()                     # and in File › Recent connections: one click
+    assert recent.text() == f"tcp:127.0.0.1:{second.tcp_port}"
+    recent.trigger()
+    qtbot.waitUntil(lambda: w.adapter.state.connected and str(second.tcp_port) in w.windowTitle(), timeout=10000)
 
 
 def test_connect_to_the_built_in_simulator_and_a_bad_link_keeps_the_old_one(qtbot, sim, vehicle, connecting):
@@ -131,3 +136,17 @@ def test_connect_to_a_labs_registry_shows_its_fleet_and_leaving_it_closes_it(qtb
     qtbot.waitUntil(lambda: getattr(w, "fleet", None) is None and w.adapter.state.connected, timeout=15000)
     assert w.findChild(type(panel)) is None or not w.findChild(type(panel)).isVisible()
     qtbot.waitUntil(lambda: ice_fleet.closed, timeout=10000)                 # the fleet left behind is closed
+
+
+def test_the_command_lines_choice_is_a_recent_connection_too(tmp_path):
+    from uavviewer.app import build_parser
+    from uavviewer.connect.choice import from_command_line
+    parse = build_parser().parse_args
+    assert from_command_line(parse(["--sim"]), "tcp:127.0.0.1:1") == Choice(Kind.SIM)
+    assert from_command_line(parse(["--connect", "/dev/ttyACM0", "--baud", "115200"]), "/dev/ttyACM0") == \
+        Choice(Kind.MAVLINK, "/dev/ttyACM0", 115200)
+    assert from_command_line(parse(["--ice-host", "10.1.1.10"]), "") == Choice(Kind.ICE, "10.1.1.10")
+    assert from_command_line(parse(["--registry", "10.1.1.5:4061"]), "") == Choice(Kind.REGISTRY, "10.1.1.5:4061")
+    for choice in (Choice(Kind.MAVLINK, "/dev/ttyACM0", 115200), Choice(Kind.REGISTRY, "10.1.1.5:4061"),
+                   Choice(Kind.ICE, "10.1.1.10"), Choice(Kind.MAVLINK, "udpin:0.0.0.0:14550")):
+        assert parse_key(choice.key) == choice                       # kept as a line, read back the same

@@ -265,7 +265,9 @@ def main(argv: list[str] | None = None) -> int:
     connections.base, connections.speedup = config, args.speedup
     connections.log_dir = str(args.log_dir) if args.log_dir is not None else None
     connections.certs = str(args.ice_certs) if args.ice_certs else None
-    connections.adopt(drone, sim=sim, fleet=fleet, first=first if fleet is not None else "")
+    from uavviewer.connect.choice import from_command_line
+    connections.adopt(drone, from_command_line(args, connection), sim=sim, fleet=fleet,
+                      first=first if fleet is not None else "")
     sim = None                                                    # stopped with its drone, whenever that is
     window.show()
     for number in (signal.SIGINT, signal.SIGTERM):              # Ctrl+C, kill: close cleanly, without asking

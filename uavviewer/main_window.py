@@ -222,8 +222,13 @@ class MainWindow(QMainWindow):
         self.actionOpenLog = QAction("&Open flight log…", self)
         self.actionOpenLog.setShortcut("Ctrl+O")
         self.actionOpenLog.triggered.connect(self.open_flight_log)
+        self.menuRecent = QMenu("&Recent connections", self)
+        self.menuRecent.setObjectName("menuRecent")
+        self.connections.recentChanged.connect(self._show_recent)
+        self._show_recent()
         first = self.menuFile.actions()[0] if self.menuFile.actions() else None
-        self.menuFile.insertActions(first, [self.actionConnect, self.actionDisconnect, self.actionOpenLog])
+        self.menuFile.insertActions(first, [self.actionConnect, self.menuRecent.menuAction(), self.actionDisconnect,
+                                            self.actionOpenLog])
         self.menuFile.insertSeparator(first)
         self.menuFile.insertAction(first, self.actionMute)
         self.menuFile.insertSeparator(first)
@@ -240,6 +245,14 @@ class MainWindow(QMainWindow):
         self.preflight_panel.set_checks(checks, overall(checks))
         self.home_arrow.set_state(s)
         self.guided.update_actions(s)
+
+    def _show_recent(self) -> None:
+        """File › Recent connections: one click connects again."""
+        self.menuRecent.clear()
+        for choice in self.connections.recent():
+            action = self.menuRecent.addAction(choice.label)
+            action.triggered.connect(lambda _checked=False, c=choice: self.connections.connect_to(c))
+        self.menuRecent.setEnabled(not self.menuRecent.isEmpty())
 
     def show_connect(self) -> None:
         """File › Connect: not modal, so the vehicle flown now stays in reach until the new one answers."""

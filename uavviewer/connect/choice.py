@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 
 from driver.link import connection_problem
 
-__all__ = ["Kind", "Choice", "parse_key", "serial_ports", "SITL_TCP", "SOLO_UDP"]
+__all__ = ["Kind", "Choice", "parse_key", "from_command_line", "serial_ports", "SITL_TCP", "SOLO_UDP"]
 
 SITL_TCP = "tcp:127.0.0.1:5760"          # ArduPilot SITL's first serial port (sim_vehicle.py, Mission Planner)
 SOLO_UDP = "udpin:0.0.0.0:14550"         # a 3DR Solo, or any vehicle sending to the GCS port
@@ -108,6 +108,19 @@ def parse_key(key: str) -> Choice | None:
     if target and baud.isdigit() and not key.lower().startswith(("udp", "tcp")):
         return Choice(Kind.MAVLINK, target, int(baud))
     return Choice(Kind.MAVLINK, key)
+
+
+def from_command_line(args, connection: str) -> Choice:
+    """What the command line chose (uavviewer.app's options), as the recent-connections list keeps it."""
+    if args.sim:
+        return Choice(Kind.SIM)
+    if args.replay is not None:
+        return Choice(Kind.REPLAY, str(args.replay))
+    if args.registry is not None:
+        return Choice(Kind.REGISTRY, args.registry)
+    if args.ice is not None or args.ice_host is not None:
+        return Choice(Kind.ICE, str(args.ice) if args.ice is not None else args.ice_host)
+    return Choice(Kind.MAVLINK, connection, args.baud)
 
 
 def serial_ports() -> list[tuple[str, str]]:

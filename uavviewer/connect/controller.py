@@ -48,8 +48,10 @@ class ConnectionController(QObject):
 
     # -- what is flown now ------------------------------------------------------------------------------
     def adopt(self, drone, choice: Choice | None = None, sim=None, fleet=None, first: str = "") -> None:
-        """The drone (or fleet) the window was started with (the command line's): closed like any other when left."""
+        """The drone (or fleet) the window was started with (the command line's): closed like any other when left,
+        and ``choice`` joins the recent connections once a vehicle answers on it."""
         self.current = Opened(drone, choice, sim, fleet, first)
+        self._unconfirmed = choice
 
     @property
     def busy(self) -> bool:
