@@ -37,7 +37,7 @@ def test_connect_from_the_dialog_switches_vehicle_then_disconnect(qtbot, sim_fac
     qtbot.waitUntil(lambda: w.adapter.state.connected, timeout=10000)
 
     w.actionConnect.trigger()                            # File › Connect…
-    dialog = w.connect_dialog
+    dialog = w.tools.connect_dialog
     qtbot.waitExposed(dialog)
     dialog.kind.setCurrentIndex(KINDS.index("TCP"))
     dialog.tcp_host.setText("")                          # a typo is said in the dialog, nothing is opened
@@ -61,8 +61,8 @@ def test_connect_from_the_dialog_switches_vehicle_then_disconnect(qtbot, sim_fac
     assert w.linkBanner.isVisible() and "not connected" in w.linkBanner.text()
     qtbot.waitUntil(lambda: v2.state().link.status is LinkStatus.CLOSED, timeout=10000)
 
-    w.show_connect()                                     # the recent connection is offered first
-    dialog = w.connect_dialog
+    w.tools.show_connect()                                     # the recent connection is offered first
+    dialog = w.tools.connect_dialog
     assert dialog.recent_list.count() == 1 and dialog.chosen() == w.connections.recent()[0]
     dialog.reject()
     recent, = w.menuRecent.actions()                     # and in File › Recent connections: one click
@@ -89,7 +89,7 @@ def test_connect_to_the_built_in_simulator_and_a_bad_link_keeps_the_old_one(qtbo
 
 def test_open_flight_log_seeks_restarts_and_ends_without_a_live_heartbeat(qtbot, sim, vehicle, connecting):
     w = connecting(vehicle)
-    w.open_flight_log(f"{FLIGHT}.tlog")                 # File › Open flight log…, the file picked
+    w.tools.open_flight_log(f"{FLIGHT}.tlog")                 # File › Open flight log…, the file picked
     qtbot.waitUntil(lambda: w.adapter.replay is not None and w.adapter.state.connected, timeout=15000)
     assert w.replayBar.isVisible() and not w.controlsRow.isEnabled()
     replay = w.adapter.replay
@@ -118,8 +118,8 @@ def test_connect_to_a_labs_registry_shows_its_fleet_and_leaving_it_closes_it(qtb
                                                                             fleet, lab):
     fleet(2)                                             # solo-1 and solo-2, each a simulated vehicle behind Ice
     w = connecting(vehicle)
-    w.show_connect()
-    dialog = w.connect_dialog
+    w.tools.show_connect()
+    dialog = w.tools.connect_dialog
     dialog.kind.setCurrentIndex(KINDS.index("Lab registry"))
     dialog.registry.setText(lab.address)
     qtbot.mouseClick(dialog.connect_button, Qt.LeftButton)

@@ -13,7 +13,7 @@ from dataclasses import replace
 
 from PyQt5 import uic
 from PyQt5.QtCore import QEvent, QObject, QSettings, Qt
-from PyQt5.QtWidgets import QApplication, QDialog, QLabel, QMainWindow, QMenu, QMessageBox, QWidget
+from PyQt5.QtWidgets import QApplication, QDialog, QLabel, QMainWindow, QMessageBox, QWidget
 
 from driver.api import Drone, Limits
 from driver.rules import mode_warning
@@ -30,6 +30,7 @@ from .gamepad_input import GamepadInput
 from .keyboard import ACTION_KEYS, AXIS_KEYS, KeyboardSticks
 from .link_security import signing_unavailable, signing_warning
 from .pilot_input import Input, InputSelector
+from .pilot_tools import PilotTools
 from .map.controller import MapController, TileSettings
 from .refresh import INSTRUMENTS_HZ, PLOTS_HZ, TEXT_HZ, Refresh
 from .settings import ViewerSettings, default_qsettings, load_settings, load_window, save_settings, save_window
@@ -153,7 +154,7 @@ class MainWindow(QMainWindow):
         self.gamepad.changed.connect(self._fly)
         self.gamepad.actionPressed.connect(self._key_action)
         self.gamepad.message.connect(self._gamepad_message)
-        self._install_pilot_tools()
+        self.tools = PilotTools(self)                 # connecting, alerts, preflight, guided actions, home arrow
 
         self._apply_settings()
         geometry, state = load_window(self._qsettings)
@@ -162,119 +163,13 @@ class MainWindow(QMainWindow):
         if state is not None:
             self.restoreState(state)
             if "preflightDock".encode("utf-16-be") not in bytes(state):   # saved before the dock existed
-                self.tabifyDockWidget(self.telemetryDock, self.preflightDock)
-                self.telemetryDock.raise_()
+                self.tools.tab_preflight()
         self.setFocusPolicy(Qt.StrongFocus)
         QApplication.instance().installEventFilter(self)
         self.show_state(VehicleState(link=self.adapter.state.link))
         self.adapter.start()
 
-    # -- connecting, alerts, preflight, guided actions, home arrow, replay (each its own part) -------------------
-    def _install_pilot_tools(self) -> None:
-        from PyQt5.QtWidgets import QAction, QDockWidget
-
-        from .alerts.controller import AlertController
-        from .connect.controller import ConnectionController
-        from .guided.controller import GuidedController
-        from .widgets.alert_banner import AlertBanner
-        from .widgets.home_arrow import HomeArrow
-        from .widgets.preflight_panel import PreflightPanel
-        self.alert_banner = AlertBanner()                           # under the link banner, above the instruments
-        self.centralwidget.layout().insertWidget(1, self.alert_banner)
-        self.actionMute = QAction("&Mute spoken alerts", self)
-        self.actionMute.setObjectName("actionMute")
-        self.actionMute.setShortcut("Ctrl+M")
-        self.alerts = AlertController(self.alert_banner, self.actionMute,
-                                      muted=self._qsettings.value("alerts/muted", False, type=bool), parent=self)
-        self.actionMute.toggled.connect(lambda on: self._qsettings.setValue("alerts/muted", on))
-        self.adapter.stateChanged.connect(self.alerts.show_state)
-        self.preflight_panel = PreflightPanel()
-        self.preflightDock = QDockWidget("Preflight", self)
-        self.preflightDock.setObjectName("preflightDock")
-        self.preflightDock.setWidget(self.preflight_panel)
-        self.addDockWidget(Qt.RightDockWidgetArea, self.preflightDock)
-        self.tabifyDockWidget(self.telemetryDock, self.preflightDock)   # a tab beside Telemetry, not in the way
-        self.telemetryDock.raise_()
-        self.menuView.addAction(self.preflightDock.toggleViewAction())
-        self.home_arrow = HomeArrow(self.attitude)
-        self.guided = GuidedController(self.adapter, self, self)
-        self.mapPanel.mapView.menu_extensions.append(self.guided.add_map_items)
-        self.mapPanel.mapView.paint_extensions.append(self.guided.paint_circle)
-        self.guided.view_changed.connect(self.mapPanel.mapView.update)
-        self.flightControls.stopRequested.connect(self.guided.cancel)
-        self.flightControls.landRequested.connect(self.guided.cancel)
-        self.flightControls.rtlRequested.connect(self.guided.cancel)
-        self.menuFly = QMenu("F&ly", self)
-        self.menuFly.addActions([self.guided.change_altitude_action, self.guided.circle_action])
-        self.menuBar().insertMenu(self.menuSettings.menuAction(), self.menuFly)
-        tools = self.refresh.add(TEXT_HZ, self._show_pilot_tools)
-        self.adapter.stateChanged.connect(lambda _s: tools.mark())
-        self.connections = ConnectionController(self._qsettings, parent=self)
-        self.connections.opened.connect(self._connected)
-        self.connections.failed.connect(lambda why: (self.log_message(f"Not connected: {why}", Severity.WARNING),
-                                                     self.statusbar.showMessage(f"Not connected: {why}", 8000)))
-        self.adapter.stateChanged.connect(self.connections.confirm)
-        self.actionConnect = QAction("&Connect…", self)
-        self.actionConnect.setShortcut("Ctrl+K")
-        self.actionConnect.triggered.connect(self.show_connect)
-        self.actionDisconnect = QAction("&Disconnect", self)
-        self.actionDisconnect.triggered.connect(self.connections.disconnect)
-        self.actionOpenLog = QAction("&Open flight log…", self)
-        self.actionOpenLog.setShortcut("Ctrl+O")
-        self.actionOpenLog.triggered.connect(self.open_flight_log)
-        self.menuRecent = QMenu("&Recent connections", self)
-        self.menuRecent.setObjectName("menuRecent")
-        self.connections.recentChanged.connect(self._show_recent)
-        self._show_recent()
-        first = self.menuFile.actions()[0] if self.menuFile.actions() else None
-        self.menuFile.insertActions(first, [self.actionConnect, self.menuRecent.menuAction(), self.actionDisconnect,
-                                            self.actionOpenLog])
-        self.menuFile.insertSeparator(first)
-        self.menuFile.insertAction(first, self.actionMute)
-        self.menuFile.insertSeparator(first)
-        self.replayBar.seekRequested.connect(lambda t: self.adapter.replay and self.adapter.replay.seek(t))
-        self.replayBar.restartRequested.connect(lambda: self.adapter.replay and self.adapter.replay.restart())
-
-    def _show_pilot_tools(self) -> None:
-        """The preflight lines, the home arrow and what guided actions allow (TEXT_HZ)."""
-        from .preflight.model import overall, preflight
-        s = self._shown_state
-        if s is None:
-            return
-        checks = preflight(s)
-        self.preflight_panel.set_checks(checks, overall(checks))
-        self.home_arrow.set_state(s)
-        self.guided.update_actions(s)
-
-    def _show_recent(self) -> None:
-        """File › Recent connections: one click connects again."""
-        self.menuRecent.clear()
-        for choice in self.connections.recent():
-            action = self.menuRecent.addAction(choice.label)
-            action.triggered.connect(lambda _checked=False, c=choice: self.connections.connect_to(c))
-        self.menuRecent.setEnabled(not self.menuRecent.isEmpty())
-
-    def show_connect(self) -> None:
-        """File › Connect: not modal, so the vehicle flown now stays in reach until the new one answers."""
-        from .connect.dialog import ConnectDialog
-        dialog = ConnectDialog(self.connections.recent(), self)
-        dialog.setAttribute(Qt.WA_DeleteOnClose)
-        dialog.chosenConnection.connect(self.connections.connect_to)
-        self.connect_dialog = dialog
-        dialog.show()
-
-    def open_flight_log(self, path: str | None = None) -> None:
-        """File › Open flight log: replay a .tlog in this window."""
-        from PyQt5.QtWidgets import QFileDialog
-
-        from .connect.choice import Choice, Kind
-        if not path:
-            folder = str(self._qsettings.value("connect/log_folder", "") or "")
-            path, _ = QFileDialog.getOpenFileName(self, "Open flight log", folder, "Flight logs (*.tlog);;All files (*)")
-        if path:
-            self._qsettings.setValue("connect/log_folder", str(__import__("os").path.dirname(path)))
-            self.connections.connect_to(Choice(Kind.REPLAY, path))
-
+    # -- connecting (File › Connect, Disconnect, Open flight log: uavviewer/pilot_tools.py wires them) ----------
     def _connected(self, opened) -> None:
         """A connection opened by File › Connect (:class:`uavviewer.connect.opener.Opened`): a vehicle, or a lab's
         fleet with its Fleet panel."""
