@@ -8,7 +8,7 @@ import wave
 import pytest
 
 from driver.state import (
-    Battery, BatteryAlarm, LinkHealth, LinkStatus, Message, SequencePhase, SequenceProgress, Severity, VehicleState,
+    Battery, BatteryAlarm, Fence, LinkHealth, LinkStatus, Message, SequencePhase, SequenceProgress, Severity, VehicleState,
     replace,
 )
 from uavviewer.alerts.model import MAV_STATE_CRITICAL, AlertKind, AlertModel
@@ -58,9 +58,9 @@ def test_battery_warning_then_critical_once_each(model):
 
 
 def test_failsafe_and_critical_messages_but_not_info(model):
-    failsafe = replace(LIVE, system_status=MAV_STATE_CRITICAL, mode="RTL")
+    failsafe = replace(LIVE, system_status=MAV_STATE_CRITICAL, mode="RTL", fence=Fence(enabled=True, breached=True))
     found = kinds(model, failsafe)
-    assert AlertKind.FAILSAFE in found and AlertKind.MODE in found
+    assert AlertKind.FAILSAFE in found and AlertKind.FENCE in found and AlertKind.MODE in found
     messages = (Message(1, 0.0, Severity.INFO, "EKF3 IMU0 is using GPS"),
                 Message(2, 0.0, Severity.CRITICAL, "Radio Failsafe"),
                 Message(3, 0.0, Severity.WARNING, "Crash: Disarming"),

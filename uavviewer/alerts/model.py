@@ -2,9 +2,9 @@
 
 :class:`AlertModel` compares each snapshot with the one before and says what changed that a pilot
 would want spoken: the link lost and back, the battery at warning and at critical (``Battery.alarm``, the pilot's
-own thresholds), a failsafe (the autopilot's heartbeat state CRITICAL/EMERGENCY) and the autopilot's messages of
-severity WARNING or worse, arming and disarming, mode changes and a finished takeoff. The first snapshot with a
-vehicle only sets the baseline: connecting to a vehicle already armed in LOITER says "Connected", not "Armed".
+own thresholds), a failsafe (the autopilot's heartbeat state CRITICAL/EMERGENCY; a fence breach, FENCE_STATUS) and
+the autopilot's messages of severity WARNING or worse, arming and disarming, mode changes and a finished takeoff.
+The first snapshot with a vehicle only sets the baseline: connecting to a vehicle already armed in LOITER says "Connected", not "Armed".
 """
 from __future__ import annotations
 
@@ -25,6 +25,7 @@ class AlertKind(enum.Enum):
     BATTERY_WARNING = "battery warning"
     BATTERY_CRITICAL = "battery critical"
     FAILSAFE = "failsafe"
+    FENCE = "fence breached"
     MESSAGE = "autopilot message"
     ARMED = "armed"
     DISARMED = "disarmed"
@@ -35,7 +36,7 @@ class AlertKind(enum.Enum):
 
 #: Kinds that also go to the banner in the pilot's eye line (the rest are spoken only)
 CRITICAL_KINDS = {AlertKind.LINK_LOST, AlertKind.BATTERY_WARNING, AlertKind.BATTERY_CRITICAL, AlertKind.FAILSAFE,
-                  AlertKind.MESSAGE}
+                  AlertKind.FENCE, AlertKind.MESSAGE}
 
 
 @dataclass(frozen=True)
@@ -87,6 +88,8 @@ class AlertModel:
         if s.system_status in (MAV_STATE_CRITICAL, MAV_STATE_EMERGENCY) and \
                 prev.system_status not in (MAV_STATE_CRITICAL, MAV_STATE_EMERGENCY) and s.connected:
             out.append(Alert(AlertKind.FAILSAFE, f"Failsafe. Mode {_mode_words(s.mode)}", Severity.CRITICAL))
+        if s.fence.breached and not prev.fence.breached:
+            out.append(Alert(AlertKind.FENCE, "Fence breached", Severity.CRITICAL))
         for m in s.messages_since(self._last_message):
             self._last_message = m.index
             if m.source == "vehicle" and m.severity <= Severity.WARNING:
