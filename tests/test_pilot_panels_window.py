@@ -74,8 +74,10 @@ def test_preflight_dock_turns_from_no_go_to_go_with_reasons(qtbot, sim_factory, 
     assert panel.headline.text() != "NO GO"
 
 
-def test_home_arrow_points_home_from_the_nose(qtbot, sim, flying, window):
-    w = window
+def test_home_arrow_points_home_from_the_nose(qtbot, sim, vehicle_factory, window_factory):
+    v = vehicle_factory(f"tcp:127.0.0.1:{sim.tcp_port}", loss_timeout=1.0)
+    assert v.wait_for(lambda s: s.connected, 10) and v.takeoff(3.0).result(timeout=60).ok
+    w = window_factory(v)
     arrow = w.home_arrow
     assert arrow.parentWidget() is w.attitude and arrow.isVisible()
     assert w.adapter.command("go_to", 12.0, 0.0, 3.0) is not None       # 12 m north, nose to the north

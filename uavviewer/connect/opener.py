@@ -83,6 +83,10 @@ class Disconnected(Drone):
     def limits(self) -> Limits:
         return self._limits
 
+    @property
+    def signing_unavailable(self) -> str:
+        return "not connected"
+
     def set_limits(self, limits: Limits) -> Limits:
         self._limits = limits.within(CEILING)        # kept for nothing to fly, so the window's speeds stand
         return self._limits
