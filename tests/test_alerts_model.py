@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import array
+import os
 import shutil
 import wave
 
@@ -110,8 +111,11 @@ def test_speaker_never_waits_and_mute_silences(qtbot):
     speaker.close()
 
 
-@pytest.mark.skipif(shutil.which("espeak-ng") is None, reason="espeak-ng is not installed (scripts/bootstrap adds it)")
 def test_the_speech_engine_makes_audible_sound_headless(tmp_path):
+    if shutil.which("espeak-ng") is None:                # scripts/bootstrap installs it wherever apt can
+        if os.path.exists("/etc/debian_version"):
+            pytest.fail("espeak-ng is missing: run scripts/bootstrap")
+        pytest.skip("espeak-ng comes from the distribution's packages; this is not Debian")
     path = tmp_path / "alert.wav"
     assert render_wav("Battery critical. Land now", str(path))
     with wave.open(str(path)) as w:
