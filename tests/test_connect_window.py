@@ -150,3 +150,22 @@ def test_the_command_lines_choice_is_a_recent_connection_too(tmp_path):
     for choice in (Choice(Kind.MAVLINK, "/dev/ttyACM0", 115200), Choice(Kind.REGISTRY, "10.1.1.5:4061"),
                    Choice(Kind.ICE, "10.1.1.10"), Choice(Kind.MAVLINK, "udpin:0.0.0.0:14550")):
         assert parse_key(choice.key) == choice                       # kept as a line, read back the same
+
+
+def test_the_dialog_offers_the_systems_serial_ports_and_the_sitl_preset(qtbot):
+    from uavviewer.connect.choice import serial_ports
+    from uavviewer.connect.dialog import ConnectDialog
+    dialog = ConnectDialog([])
+    qtbot.addWidget(dialog)
+    dialog.kind.setCurrentIndex(KINDS.index("Serial"))
+    ports = serial_ports()                               # pyserial's list, through mavutil
+    assert [dialog.serial_port.itemData(i) for i in range(dialog.serial_port.count())] == [p for p, _ in ports]
+    dialog.serial_port.setEditText("/dev/ttyUSB7")       # a radio plugged in later: typed, the link retries
+    dialog.baud.setCurrentIndex(dialog.baud.findData(115200))
+    assert dialog.chosen() == Choice(Kind.MAVLINK, "/dev/ttyUSB7", 115200) and dialog.chosen().problem() is None
+    dialog.kind.setCurrentIndex(KINDS.index("TCP"))
+    dialog.tcp_host.setText("10.0.0.9")
+    qtbot.mouseClick(dialog.sitl_button, Qt.LeftButton)
+    assert dialog.chosen() == Choice(Kind.MAVLINK, "tcp:127.0.0.1:5760")
+    dialog.kind.setCurrentIndex(KINDS.index("UDP"))
+    assert dialog.chosen() == Choice(Kind.MAVLINK, "udpin:0.0.0.0:14550")   # a Solo, or any vehicle sending to us
