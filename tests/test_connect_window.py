@@ -169,3 +169,21 @@ def test_the_dialog_offers_the_systems_serial_ports_and_the_sitl_preset(qtbot):
     assert dialog.chosen() == Choice(Kind.MAVLINK, "tcp:127.0.0.1:5760")
     dialog.kind.setCurrentIndex(KINDS.index("UDP"))
     assert dialog.chosen() == Choice(Kind.MAVLINK, "udpin:0.0.0.0:14550")   # a Solo, or any vehicle sending to us
+
+
+def test_leaving_a_flying_vehicle_is_asked_first(qtbot, sim, flying, connecting):
+    w = connecting(flying)
+    qtbot.waitUntil(lambda: w.adapter.state.flying and w.adapter.state.connected, timeout=10000)
+    w.actionDisconnect.trigger()
+    qtbot.waitUntil(lambda: w.tools.leave_box is not None and w.tools.leave_box.isVisible(), timeout=3000)
+    box = w.tools.leave_box
+    assert "in GUIDED" in box.text() and box.defaultButton() is box.button(box.Cancel)
+    box.button(box.Cancel).click()                       # Cancel: still flying it
+    assert w.adapter.drone is flying and w.connections.connected
+    w.actionDisconnect.trigger()
+    box = w.tools.leave_box
+    qtbot.waitUntil(box.isVisible, timeout=3000)
+    leave = next(b for b in box.buttons() if b.text() == "Leave it flying")
+    leave.click()
+    qtbot.waitUntil(lambda: w.adapter.description == "not connected", timeout=5000)
+    assert sim.truth().armed and -sim.truth().down > 1.0   # let go of, still in the air: it hovers in GUIDED

@@ -12,7 +12,7 @@ from __future__ import annotations
 import os
 
 from PyQt5.QtCore import QObject, Qt
-from PyQt5.QtWidgets import QAction, QDockWidget, QFileDialog, QMenu
+from PyQt5.QtWidgets import QAction, QDockWidget, QFileDialog, QMenu, QMessageBox
 
 from driver.state import Severity
 
@@ -20,6 +20,8 @@ from .alerts.controller import AlertController
 from .connect.choice import Choice, Kind
 from .connect.controller import ConnectionController
 from .connect.dialog import ConnectDialog
+from .dialogs import ask
+from .flight_phase import flight_phase
 from .guided.controller import GuidedController
 from .preflight.model import overall, preflight
 from .refresh import TEXT_HZ
@@ -35,6 +37,7 @@ class PilotTools(QObject):
         super().__init__(window)
         self.window = w = window
         self.connect_dialog: ConnectDialog | None = None
+        self.leave_box: QMessageBox | None = None      # "leave the vehicle flying?" while open
         self._alerts(w)
         self._preflight(w)
         w.home_arrow = HomeArrow(w.attitude)
@@ -93,7 +96,7 @@ class PilotTools(QObject):
         w.actionConnect.setShortcut("Ctrl+K")
         w.actionConnect.triggered.connect(self.show_connect)
         w.actionDisconnect = QAction("&Disconnect", w)
-        w.actionDisconnect.triggered.connect(w.connections.disconnect)
+        w.actionDisconnect.triggered.connect(lambda: self.leave_then(w.connections.disconnect))
         w.actionOpenLog = QAction("&Open flight log…", w)
         w.actionOpenLog.setShortcut("Ctrl+O")
         w.actionOpenLog.triggered.connect(lambda: self.open_flight_log())
@@ -125,13 +128,43 @@ class PilotTools(QObject):
         self.window.log_message(f"Not connected: {why}", Severity.WARNING)
         self.window.statusbar.showMessage(f"Not connected: {why}", 8000)
 
+    def connect_to(self, choice: Choice) -> None:
+        self.leave_then(lambda: self.window.connections.connect_to(choice))
+
+    def leave_then(self, act) -> None:
+        """Connect elsewhere or disconnect: ``act()`` at once on the ground, after the pilot's yes in the air."""
+        w = self.window
+        s = w.adapter.state
+        if w.adapter.replay is not None or not flight_phase(s).airborne:
+            act()
+            return
+        if self.leave_box is not None:
+            self.leave_box.reject()
+        box = QMessageBox(QMessageBox.Warning, "The vehicle is flying",
+                          f"The vehicle is in the air, in {s.mode or 'an unknown mode'}. Once this window lets go of "
+                          f"it, it is sent zero velocity and nobody commands it: it goes on in {s.mode or 'that mode'} "
+                          "until its own failsafe acts (FS_GCS_ENABLE).", QMessageBox.NoButton, w)
+        box.setObjectName("leaveQuestion")
+        leave = box.addButton("Leave it flying", QMessageBox.DestructiveRole)
+        box.addButton(QMessageBox.Cancel)
+        box.setDefaultButton(QMessageBox.Cancel)
+        box.setEscapeButton(QMessageBox.Cancel)
+
+        def answered(b: QMessageBox) -> None:
+            if b.clickedButton() is leave:
+                act()
+            b.deleteLater()
+            if self.leave_box is b:
+                self.leave_box = None
+        self.leave_box = ask(box, answered)
+
     def show_recent(self) -> None:
         """File › Recent connections: one click connects again."""
         menu, connections = self.window.menuRecent, self.window.connections
         menu.clear()
         for choice in connections.recent():
             action = menu.addAction(choice.label)
-            action.triggered.connect(lambda _checked=False, c=choice: connections.connect_to(c))
+            action.triggered.connect(lambda _checked=False, c=choice: self.connect_to(c))
         menu.setEnabled(not menu.isEmpty())
 
     def show_connect(self) -> None:
@@ -143,7 +176,7 @@ class PilotTools(QObject):
             return
         dialog = ConnectDialog(w.connections.recent(), w)
         dialog.setAttribute(Qt.WA_DeleteOnClose)
-        dialog.chosenConnection.connect(w.connections.connect_to)
+        dialog.chosenConnection.connect(self.connect_to)
         dialog.finished.connect(lambda _r: setattr(self, "connect_dialog", None))
         self.connect_dialog = dialog
         dialog.show()
@@ -157,4 +190,4 @@ class PilotTools(QObject):
                                                   "Flight logs (*.tlog);;All files (*)")
         if path:
             settings.setValue("connect/log_folder", os.path.dirname(path))
-            self.window.connections.connect_to(Choice(Kind.REPLAY, path))
+            self.connect_to(Choice(Kind.REPLAY, path))
