@@ -7,6 +7,7 @@ from PyQt5.QtCore import Qt
 
 from driver.state import LinkStatus
 from recordings import FLIGHT
+from uavviewer.alerts.model import AlertKind
 from uavviewer.connect.choice import Choice, Kind, parse_key
 from uavviewer.connect.dialog import KINDS
 from fleet_fixtures import fleet, lab  # noqa: F401  (fixtures)
@@ -130,6 +131,11 @@ def test_connect_to_a_labs_registry_shows_its_fleet_and_leaving_it_closes_it(qtb
     assert "solo-1" in w.windowTitle() and w.adapter.drone is not vehicle
     ice_fleet = w.connections.current.fleet
     assert w.camera.uris == ["ice:Camera@solo-1"]                      # its camera, found through the registry
+    raised = []
+    w.alerts.alerted.connect(lambda a: raised.append(a.kind))
+    w.fleet.pick("solo-2")                                # another vehicle: its state is a baseline, not news
+    qtbot.waitUntil(lambda: AlertKind.CONNECTED in raised, timeout=15000)
+    assert set(raised) == {AlertKind.CONNECTED}
     qtbot.waitUntil(lambda: w.connections.recent()[:1] == [Choice(Kind.REGISTRY, lab.address)], timeout=5000)
 
     assert w.connections.connect_to(Choice(Kind.MAVLINK, f"tcp:127.0.0.1:{sim.tcp_port}"))

@@ -38,6 +38,7 @@ class DroneAdapter(QObject):
     stateChanged = pyqtSignal(object)        # VehicleState
     commandFinished = pyqtSignal(object)     # CommandResult, on the UI thread
     commandSent = pyqtSignal(str)            # a command handed to the drone (its name)
+    droneChanged = pyqtSignal(object)        # another drone is flown from now on (a fleet's pick, File › Connect)
 
     def __init__(self, drone: Drone, rate_hz: float = 30.0, refresh_hz: float = 10.0,
                  parent: QObject | None = None) -> None:
@@ -83,6 +84,7 @@ class DroneAdapter(QObject):
         self._setpoint = VelocityCommand()
         self.drone = drone
         self._state = None
+        self.droneChanged.emit(drone)
         self.poll()
 
     def stop(self) -> None:

@@ -214,7 +214,6 @@ class MainWindow(QMainWindow):
         self._plot_gap = True
         self.plots.gap(time.monotonic() - self._t0)
         self.adapter.use(drone)
-        self.alerts.reset()
         self.map.use_connection()
         self.setWindowTitle(f"UavViewerPy — {self.adapter.description}")
         self._signing_unavailable = signing_unavailable(drone)

@@ -59,6 +59,7 @@ class PilotTools(QObject):
                                    parent=w)
         w.actionMute.toggled.connect(lambda on: settings.setValue("alerts/muted", on))
         w.adapter.stateChanged.connect(w.alerts.show_state)
+        w.adapter.droneChanged.connect(lambda _d: w.alerts.reset())   # another vehicle: its state is no news
 
     def _preflight(self, w) -> None:
         w.preflight_panel = PreflightPanel()
