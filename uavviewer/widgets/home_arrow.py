@@ -15,7 +15,8 @@ from driver.state import LinkStatus, VehicleState
 
 __all__ = ["HomeArrow", "home_direction"]
 
-SIZE = 84
+SIZE = 84                    # the dial's diameter on a roomy indicator; smaller on a small one, never under MIN
+MIN = 52
 
 
 def home_direction(s: VehicleState) -> tuple[float, float] | None:
@@ -33,7 +34,7 @@ class HomeArrow(QWidget):
         super().__init__(instrument)
         self.setObjectName("homeArrow")
         self.setAttribute(Qt.WA_TransparentForMouseEvents)
-        self.setFixedSize(SIZE, SIZE + 18)
+        self._dial = SIZE
         self.relative: float | None = None         # degrees, positive: home is to the right of the nose
         self.distance: float | None = None
         self.stale = False
@@ -48,6 +49,8 @@ class HomeArrow(QWidget):
 
     def _place(self) -> None:
         parent = self.parentWidget()
+        self._dial = int(max(MIN, min(SIZE, 0.26 * min(parent.width(), parent.height()))))
+        self.setFixedSize(SIZE, self._dial + 18)           # as wide as the distance needs, the dial centred
         self.move(max(0, parent.width() - self.width() - 6), 6)
         self.raise_()
 
@@ -71,7 +74,8 @@ class HomeArrow(QWidget):
         p = QPainter(self)
         p.setRenderHint(QPainter.Antialiasing)
         colour = QColor("#8a8f98") if self.stale or self.relative is None else QColor("#ffd54f")
-        dial = QRectF(4, 4, SIZE - 8, SIZE - 8)
+        size = self._dial
+        dial = QRectF((SIZE - size) / 2 + 4, 4, size - 8, size - 8)
         p.setPen(QPen(QColor(255, 255, 255, 90), 1.5))
         p.setBrush(QColor(0, 0, 0, 110))
         p.drawEllipse(dial)
@@ -95,6 +99,7 @@ class HomeArrow(QWidget):
         p.setPen(colour)
         font = QFont(self.font())
         font.setBold(True)
+        font.setPixelSize(11)                              # "home 120 m" fits the corner on any screen
         p.setFont(font)
-        p.drawText(QRectF(0, SIZE - 2, SIZE, 18), Qt.AlignCenter, self.text)
+        p.drawText(QRectF(0, size - 2, SIZE, 18), Qt.AlignCenter, self.text)
         p.end()
