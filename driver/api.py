@@ -12,6 +12,7 @@ import abc
 from concurrent.futures import Future
 from dataclasses import dataclass
 
+from . import guided
 from .mission.plan import Plan, PlanKind, TransferOutcome
 from .state import CommandResult, CommandStatus, VehicleState
 
@@ -112,6 +113,15 @@ class Drone(abc.ABC):
     @abc.abstractmethod
     def set_yaw(self, degrees: float, relative: bool = False, rate_deg_s: float = 30.0) -> Future[CommandResult]:
         """Turn to a heading (clockwise from north) or by an angle (relative, positive = right)."""
+
+    # -- guided actions (driver.guided: built on the calls above, so every Drone has them) --------------
+    def change_altitude(self, altitude: float) -> Future[CommandResult]:
+        """Climb or descend to ``altitude`` m above home where the vehicle is, in GUIDED."""
+        return guided.change_altitude(self, altitude)
+
+    def circle(self, north: float, east: float, radius: float) -> Future[CommandResult]:
+        """Circle the point (north, east) m from home at ``radius`` m, the way ArduCopter's CIRCLE mode can."""
+        return guided.circle_point(self, north, east, radius)
 
     # -- payload --------------------------------------------------------------------------
     def toggle_camera(self) -> Future[CommandResult]:

@@ -597,6 +597,8 @@ class Vehicle(Drone):
             age = self._link.health(self._version).heartbeat_age or 0.0
             store.add_message_locked(Severity.CRITICAL, f"Link lost: no heartbeat for {age:.1f} s")
             self._commands.link_lost()
+        elif event == "finished":
+            store.add_message_locked(Severity.NOTICE, "Replay finished: the recording has ended")
         return out
 
     def _stream_setpoint(self, now: float) -> list:

@@ -32,6 +32,13 @@ LEAD = (0.5, 0.8, 0.95)         # the wait after a new image, as a fraction of t
 WAIT_S = (0.005, 0.2)           # bounds of any wait between asks
 
 
+def use_client_properties(props) -> None:
+    """Reach Ice cameras as this Ice client is set up (``props``, Ice.Properties): over TLS with its certificate,
+    through its registry's locator (a lab's fleet)."""
+    client_properties.update({k: v for prefix in ("IceSSL.", "Ice.Plugin.IceSSL", "Ice.Default.Locator")
+                              for k, v in props.getPropertiesForPrefix(prefix).items()})
+
+
 class IceSource(VideoSource):
     """``ice:<proxy>``: asks ``getImageData(format)`` in a loop, keeping each new image.
 

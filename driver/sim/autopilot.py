@@ -23,6 +23,7 @@ from typing import Callable
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from .commands import Commands
+from .circle import CircleNav
 from .common import (DEFAULT_PARAMS, MODE_NAMES, MODES, NOT_ARMABLE, POSITION_MODES, STREAMS, command_name,
                      wrap_pi)
 from .faults import Faults
@@ -320,6 +321,9 @@ class Autopilot(Telemetry, Commands, Messages, Flight, Payload):
         elif number == MODES["RTL"]:
             self.rtl_phase = "land" if self.landed else "climb"
             self.yaw_mode = "hold"
+        elif number == MODES["CIRCLE"]:
+            self.circle = CircleNav.entering(self)       # centre CIRCLE_RADIUS ahead of the nose
+            self.yaw_mode = "rate"
         else:
             self.yaw_mode = "hold"
         log.info("mode %s", MODE_NAMES[number])

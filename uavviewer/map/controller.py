@@ -237,6 +237,20 @@ class MapController(QObject):
         self._redraw_trail()
         return going
 
+    def use_connection(self) -> None:
+        """Another connection (File › Connect, Open flight log): its own frame, trail and, for a replay, track."""
+        self.cancel()
+        self._frame = None
+        self._state = None
+        self.trail = Trail()
+        self._name, self._trails = "", {}
+        self._replay_track = False
+        self._pending_track = None
+        self._redraw_trail()
+        replay = self.adapter.replay
+        if replay is not None:
+            replay.track().add_done_callback(self._track_read)
+
     def show_fleet(self, seen) -> None:
         """Every vehicle's (FleetRow, VehicleState or None), a few times a second: the others are drawn from
         their own snapshots, and their trails grow while they are not picked."""
