@@ -2,11 +2,12 @@
 
 Which protocol, decided from what the vehicle has shown (and learnt again from an UNSUPPORTED):
 
-* **gimbal manager** (ArduCopter 4.1+, the gimbal recording): DO_GIMBAL_MANAGER_PITCHYAW by angle, or by
-  rate with the two angles "not used" (NaN, the protocol's own marker: the only NaN the driver ever sends,
-  and only there); attitude from GIMBAL_DEVICE_ATTITUDE_STATUS, asked at 5 Hz as the recording's GCS did.
+* **gimbal manager** (ArduCopter 4.1+, the gimbal recording): DO_GIMBAL_MANAGER_PITCHYAW by angle; a rate
+  is stepped here as angles every 0.1 s, because the protocol's own rate form needs NaN in the angle fields
+  ("not used") and no NaN ever goes on the wire; attitude from GIMBAL_DEVICE_ATTITUDE_STATUS, asked at 5 Hz
+  as the recording's GCS did.
 * **DO_MOUNT_CONTROL** (MAV_MOUNT_MODE_MAVLINK_TARGETING) on firmware that answers MOUNT_STATUS only; a rate
-  there is stepped here as angles.
+  there is stepped as angles too.
 * **MOUNT_CONTROL message** on 3DR's Solo (ArduCopter 3.3, AP_Mount_MAVLink on component 154): its
   COMMAND_LONG knows no mount command, so MOUNT_CONFIGURE(MAVLINK_TARGETING) + MOUNT_CONTROL (centidegrees)
   as the Solo's shotmanager did, confirmed by MOUNT_STATUS showing the angle; a rate is stepped at 10 Hz.
@@ -23,7 +24,6 @@ never written here.
 from __future__ import annotations
 
 import logging
-import math
 import time
 from concurrent.futures import Future
 from dataclasses import dataclass, replace
@@ -371,17 +371,6 @@ class Payload:
         if problem:
             return self._answered(name, CommandStatus.REJECTED, problem)
         protocol = self.protocol(state)
-        if protocol == MANAGER:
-            with self._store.lock:
-                self._rate = None
-            # angles NaN: "not used", so the vehicle takes the rates (the recording, 23.36 s)
-            with self._store.lock:
-                inner = self._v._commands.submit(f"{name} (DO_GIMBAL_MANAGER_PITCHYAW)",
-                                                 mavlink.MAV_CMD_DO_GIMBAL_MANAGER_PITCHYAW,
-                                                 [math.nan, math.nan, pitch_rate, yaw_rate, 0.0, 0.0, 0.0],
-                                                 time.monotonic())
-            self._v._wake.set()
-            return self._chain(inner, lambda r: self._rate_done(r, name, pitch_rate, yaw_rate))
         g = state.gimbal
         with self._store.lock:
             if pitch_rate == 0.0 and yaw_rate == 0.0:
@@ -394,7 +383,7 @@ class Payload:
                 self._store.set(gimbal=replace(self._gimbal(), control=GimbalControl.RATE, protocol=protocol))
             self._v._wake.set()
             return self._v._finish(name, CommandStatus.ACCEPTED,
-                                   f"{protocol} has no rate: stepping the angle every {STEP_INTERVAL:g} s")
+                                   f"stepping the {protocol} angle every {STEP_INTERVAL:g} s")
 
     def _rate_done(self, result: CommandResult, name: str, pitch_rate: float, yaw_rate: float):
         if self._unsupported(result):
@@ -416,8 +405,13 @@ class Payload:
         yaw = (self._rate_target[1] + self._rate[1] * dt + 180.0) % 360.0 - 180.0
         self._rate_target = (pitch, yaw)
         system, component = self._v._target_ids()
-        if self.protocol(state) == MOUNT_MSG:
+        protocol = self.protocol(state)
+        if protocol == MOUNT_MSG:
             return [self._mount_control(pitch, yaw)]
+        if protocol == MANAGER:                 # an angle, never the protocol's NaN "not used" for a rate
+            return [mavlink.MAVLink_command_long_message(system, component,
+                                                         mavlink.MAV_CMD_DO_GIMBAL_MANAGER_PITCHYAW, 0,
+                                                         pitch, yaw, 0, 0, 0, 0, 0)]
         return [mavlink.MAVLink_command_long_message(system, component, mavlink.MAV_CMD_DO_MOUNT_CONTROL, 0,
                                                      pitch, 0, yaw, 0, 0, 0,
                                                      mavlink.MAV_MOUNT_MODE_MAVLINK_TARGETING)]
