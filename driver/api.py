@@ -13,7 +13,7 @@ from concurrent.futures import Future
 from dataclasses import dataclass
 
 from .mission.plan import Plan, PlanKind, TransferOutcome
-from .state import CommandResult, CommandStatus, VehicleState
+from .state import BatteryThresholds, CommandResult, CommandStatus, VehicleState
 
 
 @dataclass(frozen=True)
@@ -56,6 +56,11 @@ class Drone(abc.ABC):
 
         Returns the limits now in force. Thread-safe; takes effect on the next setpoint.
         """
+        raise NotImplementedError
+
+    def set_battery_thresholds(self, thresholds: BatteryThresholds) -> BatteryThresholds:
+        """The pilot's own battery limits (warning and critical, per cell and in percent) that
+        ``state().battery.alarm`` is judged by from now on. Returns those in force."""
         raise NotImplementedError
 
     @property

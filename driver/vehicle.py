@@ -31,6 +31,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from . import frames
 from .api import CEILING, Drone, Limits
+from .battery import battery_alarm
 from .commands import CommandSender, Notifier, command_name
 from .forwarding import Forwarder
 from .link import LinkError, ReplayControl, TlogWriter, Transport, open_transport
@@ -38,7 +39,7 @@ from .rules import COPTER_MODES, MAX_ALTITUDE, MIN_TAKEOFF_ALTITUDE, go_to_probl
 from .setpoints import SetpointStreamer
 from .signing import LinkSigning, SigningConfig
 from .state import (
-    FENCE_PARAMS, Battery, CommandResult, CommandStatus, LinkHealth, LinkStatus, SequencePhase, SequenceProgress,
+    FENCE_PARAMS, Battery, BatteryThresholds, CommandResult, CommandStatus, LinkHealth, LinkStatus, SequencePhase, SequenceProgress,
     Setpoint, Severity, VehicleState,
 )
 from .store import StateStore
@@ -87,6 +88,7 @@ class VehicleConfig:
     climb_timeout: float = 20.0               # s for the climb to 95 % of the target, plus 2 s a metre
     mavlink_version: int | None = None        # None: start on 1, follow the autopilot to 2
     battery_cells: int | None = None          # None: from the vehicle, or inferred from the first voltage
+    battery_thresholds: BatteryThresholds = field(default_factory=BatteryThresholds)   # the pilot's own alarm
     replay_speed: float = 1.0
     heartbeat_interval: float = 1.0
     signing: SigningConfig | None = None      # MAVLink 2 signing (driver.signing); None: off until a key is given
@@ -119,6 +121,7 @@ class Vehicle(Drone):
         self._v2 = cfg.mavlink_version == 2
         self._tlog = TlogWriter(cfg.tlog_path, cfg.tlog_append) if cfg.tlog_path and not self._replay else None
         battery = Battery(cells=cfg.battery_cells, cells_source="configured") if cfg.battery_cells else Battery()
+        battery = replace(battery, thresholds=cfg.battery_thresholds)
         self._store = StateStore(VehicleState(link=LinkHealth(address=self._transport.description), battery=battery),
                                  self._transport.wall_time)
         self._lock = self._store.lock
@@ -160,6 +163,16 @@ class Vehicle(Drone):
     def set_limits(self, limits: Limits) -> Limits:
         self._limits = limits.within(CEILING)         # one reference swap: safe from any thread
         return self._limits
+
+    def set_battery_thresholds(self, thresholds: BatteryThresholds) -> BatteryThresholds:
+        problem = thresholds.problem()
+        if problem:
+            raise ValueError(problem)
+        with self._lock:
+            judged = replace(self._store.view()["battery"], thresholds=thresholds)
+            self._store.set(battery=replace(judged, alarm=battery_alarm(judged)))
+            self._store.publish()
+        return thresholds
 
     @property
     def replay(self) -> ReplayControl | None:

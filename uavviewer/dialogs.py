@@ -57,8 +57,13 @@ class SettingsDialog(QDialog):
         self.maxHorizontal.setValue(settings.max_horizontal)
         self.maxVertical.setValue(settings.max_vertical)
         self.maxYaw.setValue(settings.max_yaw_deg_s)
-        self.deadband.setValue(settings.deadband)
-        self.expo.setValue(settings.expo)
+        self.deadband.setValue(100.0 * settings.deadband)        # a fraction of the travel, shown in %
+        self.expo.setValue(100.0 * settings.expo)
+        t = settings.battery_thresholds
+        self.batteryWarningCell.setValue(t.warning_cell)
+        self.batteryWarningPercent.setValue(t.warning_percent)
+        self.batteryCriticalCell.setValue(t.critical_cell)
+        self.batteryCriticalPercent.setValue(t.critical_percent)
         self.takeoffAltitude.setValue(settings.takeoff_altitude)
         self.cameraUris.setPlainText("\n".join(settings.camera_uris))
         self.mediaFolder.setText(settings.media_folder)
@@ -88,8 +93,13 @@ class SettingsDialog(QDialog):
     def chosen(self) -> ViewerSettings:
         return replace(self._settings, stick_mode=self.stickMode.currentData(),
                        max_horizontal=self.maxHorizontal.value(), max_vertical=self.maxVertical.value(),
-                       max_yaw_deg_s=self.maxYaw.value(), deadband=self.deadband.value(),
-                       expo=self.expo.value(), takeoff_altitude=self.takeoffAltitude.value(),
+                       max_yaw_deg_s=self.maxYaw.value(), deadband=self.deadband.value() / 100.0,
+                       expo=self.expo.value() / 100.0, takeoff_altitude=self.takeoffAltitude.value(),
+                       battery_warning_cell=max(self.batteryWarningCell.value(), self.batteryCriticalCell.value()),
+                       battery_critical_cell=self.batteryCriticalCell.value(),
+                       battery_warning_percent=max(self.batteryWarningPercent.value(),
+                                                   self.batteryCriticalPercent.value()),
+                       battery_critical_percent=self.batteryCriticalPercent.value(),
                        cameras="\n".join(split_uris(self.cameraUris.toPlainText())),
                        media_folder=self.mediaFolder.text().strip(), hud=self.hudDefault.isChecked(),
                        signing_key_file=self.signingKeyFile.text().strip(), tile_url=self.tileUrl.text().strip(),

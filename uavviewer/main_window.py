@@ -25,6 +25,7 @@ from .dialogs import (
 )
 from .camera_controller import CameraController, default_media_folder
 from .drone_adapter import DroneAdapter
+from .flight_timer import FlightTimer
 from .flight_phase import FlightPhase, flight_phase, readiness_text, stick_hint, takeoff_progress
 from .gamepad_input import GamepadInput
 from .keyboard import ACTION_KEYS, AXIS_KEYS, KeyboardSticks
@@ -86,6 +87,7 @@ class MainWindow(QMainWindow):
         self._quitting = False                   # closing without asking (answered, or a signal)
         self._connection_to_remember = ""
         self._t0 = time.monotonic()
+        self.flight_timer = FlightTimer()
         self._shown_state: VehicleState | None = None   # the snapshot the views show next (refresh channels)
         # Views redraw at the rate the eye needs and not while minimised (refresh.py); logic follows every snapshot.
         self.refresh = Refresh(self)
@@ -171,6 +173,7 @@ class MainWindow(QMainWindow):
         self.leftStick.set_caption(left)
         self.rightStick.set_caption(right)
         self._speeds = self._set_limits(self.settings.speeds)
+        self._set_battery_thresholds()
         self.gamepad.apply_settings(self.settings)
         self.centre_sticks()
         s = self.settings
@@ -199,6 +202,15 @@ class MainWindow(QMainWindow):
             self.log_message(f"Maximum speeds in force: {limits.horizontal:g} m/s, {limits.vertical:g} m/s, "
                              f"{math.degrees(limits.yaw_rate):.0f}°/s", Severity.WARNING)
         return MaxSpeeds(limits.horizontal, limits.vertical, math.degrees(limits.yaw_rate))
+
+    def _set_battery_thresholds(self) -> None:
+        """The pilot's battery thresholds become the driver's alarm (a remote drone keeps its own judge)."""
+        try:
+            self.adapter.drone.set_battery_thresholds(self.settings.battery_thresholds)
+        except NotImplementedError:
+            pass
+        except Exception:                       # noqa: BLE001 - a bad value or a remote failure: keep the alarm
+            log.exception("setting the battery thresholds failed")
 
     @property
     def speeds(self) -> MaxSpeeds:
@@ -352,6 +364,7 @@ class MainWindow(QMainWindow):
             return
         link = s.link
         self.telemetry.set_state(s)
+        self.statusStrip.set_state(s, self.flight_timer.update(s))
         self.phaseLabel.setText(self._phase_text(s, flight_phase(s)))
         replay = self.adapter.replay
         if replay is not None:
@@ -714,6 +727,7 @@ class MainWindow(QMainWindow):
         self._plot_gap = True
         self.plots.gap(time.monotonic() - self._t0)
         self.adapter.use(drone)
+        self._set_battery_thresholds()          # every vehicle flown is judged by the same thresholds
         self.setWindowTitle(f"UavViewerPy — {name} · {self.fleet.fleet.description}")
         if self._default_cameras and self.camera.uris == self._default_cameras:   # not --camera nor Preferences'
             self._default_cameras = [self.fleet.camera_uri(name)]                 # the picked vehicle's own
