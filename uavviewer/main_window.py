@@ -35,6 +35,7 @@ from .map.controller import MapController, TileSettings
 from .refresh import INSTRUMENTS_HZ, PLOTS_HZ, TEXT_HZ, Refresh
 from .settings import ViewerSettings, default_qsettings, load_settings, load_window, save_settings, save_window
 from .sticks import Axes, MaxSpeeds, axes_from_pads, combine, pad_labels, velocity_from_axes
+from .layout import fit_screen
 from .widgets.camera_panel import CameraPanel
 from .widgets.gamepad_page import GamepadPage
 
@@ -124,11 +125,15 @@ class MainWindow(QMainWindow):
         self.setCorner(Qt.BottomRightCorner, Qt.RightDockWidgetArea)   # plots run the full height
         self.resizeDocks([self.telemetryDock, self.plotsDock], [390, 560], Qt.Vertical)
         self.resizeDocks([self.telemetryDock], [400], Qt.Horizontal)
-        self.resizeDocks([self.messagesDock], [170], Qt.Vertical)
+        self.resizeDocks([self.messagesDock], [110], Qt.Vertical)     # the latest line is in the status strip
         self.mapDock.raise_()
         self.instrumentSplitter.setStretchFactor(0, 3)
         self.instrumentSplitter.setStretchFactor(1, 2)
         self.phaseLabel.setObjectName("phaseLabel")
+        # two lines always: a long phase ("waiting for GPS fix, EKF, pre-arm checks") wraps without
+        # squeezing the buttons below it (layouts do not ask a wrapping label its height for a width)
+        self.phaseLabel.ensurePolished()          # the style sheet's font, not the default one
+        self.phaseLabel.setMinimumHeight(2 * self.phaseLabel.fontMetrics().lineSpacing() + 2)
         self.link_status = QLabel()
         self.statusbar.addPermanentWidget(self.link_status)
 
@@ -160,6 +165,8 @@ class MainWindow(QMainWindow):
         geometry, state = load_window(self._qsettings)
         if geometry is not None:
             self.restoreGeometry(geometry)
+        else:
+            fit_screen(self)
         if state is not None:
             self.restoreState(state)
         self.setFocusPolicy(Qt.StrongFocus)

@@ -31,7 +31,7 @@ class FlightControls(QWidget):
         self._armed = False
         self._shown: tuple | None = None        # the last set_vehicle arguments: nothing to redo when unchanged
         self.main_button = self._button("mainButton", "Take off", "takeoff")
-        self.main_button.setMinimumHeight(52)
+        self.main_button.setMinimumHeight(44)
         self.progress = QProgressBar()
         self.progress.setObjectName("takeoffProgress")
         self.progress.setRange(0, 100)

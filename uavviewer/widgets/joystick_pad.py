@@ -27,7 +27,7 @@ class JoystickPad(QWidget):
         self._dragging = False
         self._caption = ""
         self._hint = ""
-        self.setMinimumSize(150, 150)
+        self.setMinimumSize(120, 120)          # room for both at 1024×600
         self.setSizePolicy(QSizePolicy.Expanding, QSizePolicy.Expanding)
         self.setFocusPolicy(Qt.NoFocus)
         self.setMouseTracking(False)

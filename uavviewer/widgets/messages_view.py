@@ -40,7 +40,7 @@ class MessagesView(QTreeWidget):
         self.setUniformRowHeights(True)
         self.setSelectionMode(QAbstractItemView.NoSelection)
         self.setFocusPolicy(Qt.NoFocus)
-        self.setMinimumHeight(120)             # a few lines always visible
+        self.setMinimumHeight(44)              # a few lines always visible; the latest is in the status strip
         header = self.header()
         header.setSectionResizeMode(0, QHeaderView.ResizeToContents)
         header.setSectionResizeMode(1, QHeaderView.ResizeToContents)

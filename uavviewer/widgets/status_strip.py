@@ -5,8 +5,9 @@ from __future__ import annotations
 
 import time
 
-from PyQt5.QtCore import Qt
-from PyQt5.QtWidgets import QFrame, QHBoxLayout, QLabel, QSizePolicy, QWidget
+from PyQt5.QtCore import QSize, Qt
+from PyQt5.QtGui import QPainter
+from PyQt5.QtWidgets import QFrame, QHBoxLayout, QLabel, QSizePolicy, QVBoxLayout, QWidget
 
 from driver.battery import time_left
 from driver.state import BatteryAlarm, LinkStatus, Message, Severity, VehicleState
@@ -25,16 +26,16 @@ _SEVERITY_COLOURS = {Severity.EMERGENCY: BAD, Severity.ALERT: BAD, Severity.CRIT
 
 
 def battery_text(s: VehicleState) -> str:
-    """"14.80 V (3.70 V/cell) 45 % · 1234 mAh used · 6 min left", what is known of it."""
+    """"14.80 V (3.70/cell) 45 % · 1234 mAh · 6 min left", what is known of it."""
     b = s.battery
     parts = []
     if b.voltage is not None:
-        parts.append(f"{b.voltage:.2f} V" + (f" ({b.cell_voltage:.2f} V/cell)" if b.cell_voltage is not None else ""))
+        parts.append(f"{b.voltage:.2f} V" + (f" ({b.cell_voltage:.2f}/cell)" if b.cell_voltage is not None else ""))
     if b.remaining is not None:
         parts.append(f"{b.remaining:.0f} %" + ("*" if b.remaining_estimated else ""))
     text = " ".join(parts) or "--"
     if b.consumed_mah is not None:
-        text += f" · {b.consumed_mah:.0f} mAh used"
+        text += f" · {b.consumed_mah:.0f} mAh"
     left = time_left(b)
     if left is not None:
         text += f" · {left / 60:.0f} min left" if left >= 60 else f" · {left:.0f} s left"
@@ -45,6 +46,25 @@ def battery_text(s: VehicleState) -> str:
     return text
 
 
+class ElidedLabel(QLabel):
+    """One line that ends in "…" when the window is too narrow for it; the whole text is its tooltip."""
+
+    def __init__(self, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.setTextFormat(Qt.PlainText)
+        self.setSizePolicy(QSizePolicy.Ignored, QSizePolicy.Fixed)
+        self.setMinimumHeight(self.fontMetrics().height())
+
+    def minimumSizeHint(self) -> QSize:  # noqa: N802
+        return QSize(0, self.fontMetrics().height())
+
+    def paintEvent(self, _event) -> None:  # noqa: N802
+        p = QPainter(self)
+        shown = self.fontMetrics().elidedText(self.text(), Qt.ElideRight, self.width())
+        p.setPen(self.palette().color(self.foregroundRole()))
+        p.drawText(self.rect(), int(Qt.AlignLeft | Qt.AlignVCenter), shown)
+
+
 class StatusStrip(QFrame):
     """Battery · flight time · link · latest message; ``set_state`` each text refresh."""
 
@@ -52,18 +72,25 @@ class StatusStrip(QFrame):
         super().__init__(parent)
         self.setObjectName("statusStrip")
         self.setSizePolicy(QSizePolicy.Ignored, QSizePolicy.Fixed)
-        row = QHBoxLayout(self)
-        row.setContentsMargins(8, 2, 8, 2)
-        row.setSpacing(14)
+        lines = QVBoxLayout(self)
+        lines.setContentsMargins(8, 2, 8, 2)
+        lines.setSpacing(1)
+        first, second = QHBoxLayout(), QHBoxLayout()
+        first.setSpacing(14)
+        second.setSpacing(14)
+        lines.addLayout(first)
+        lines.addLayout(second)
         self.battery = self._label("stripBattery", "Battery against our own thresholds (Settings › Preferences › "
                                    "Flying), whatever the vehicle's battery failsafe says")
         self.flight_time = self._label("stripFlightTime", "Flight time: time armed")
         self.link = self._label("stripLink", "The link to the vehicle: heartbeat age and packets a second")
-        self.message = self._label("stripMessage", "The autopilot's latest message (all of them in Messages)")
-        self.message.setSizePolicy(QSizePolicy.Ignored, QSizePolicy.Preferred)
-        for label in (self.battery, self.flight_time, self.link):
-            row.addWidget(label)
-        row.addWidget(self.message, 1)
+        self.message = ElidedLabel()            # a line of its own: never squeezed out on a narrow window
+        self.message.setObjectName("stripMessage")
+        first.addWidget(self.battery)
+        first.addStretch(1)
+        first.addWidget(self.link)
+        second.addWidget(self.flight_time)
+        second.addWidget(self.message, 1)
         self.colours: dict[str, str] = {}
         self._last_message: Message | None = None
 
@@ -105,10 +132,11 @@ class StatusStrip(QFrame):
         vehicle_lines = [m for m in s.messages if m.source == "vehicle"]
         latest = vehicle_lines[-1] if vehicle_lines else None
         if latest is None:
-            self._put(self.message, "", DIM)
+            self._put(self.message, "No message from the autopilot yet", DIM)
             return
         ago = max(0.0, now - latest.time)
         when = time.strftime("%H:%M:%S", time.localtime(latest.time))
         self._put(self.message, f"{when} {latest.text}", _SEVERITY_COLOURS.get(latest.severity,
                                                                               DIM if ago > 60 else NORMAL))
-        self.message.setToolTip(f"The autopilot's latest message, {ago:.0f} s ago (all of them in Messages)")
+        self.message.setToolTip(f"{latest.text}\n\nThe autopilot's latest message, {ago:.0f} s ago "
+                                "(all of them in Messages)")
