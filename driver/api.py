@@ -84,6 +84,11 @@ class Drone(abc.ABC):
     def stop(self) -> Future[CommandResult]:
         """Hold position: zero velocity in GUIDED, else BRAKE. Aborts a takeoff."""
 
+    def cancel_takeoff(self) -> Future[CommandResult]:
+        """End a takeoff that has not left the ground and give the vehicle back as it was (its mode, disarmed
+        if it was); once NAV_TAKEOFF went out, the same as :meth:`stop`. Never switches to LAND."""
+        return self.stop()
+
     @abc.abstractmethod
     def return_to_launch(self) -> Future[CommandResult]:
         """Switch to RTL."""

@@ -10,7 +10,7 @@ from pymavlink import mavutil
 from . import frames
 
 __all__ = ["COPTER_MODES", "MIN_TAKEOFF_ALTITUDE", "MAX_ALTITUDE", "MIN_GOTO_ALTITUDE", "THROTTLE_MODES",
-           "takeoff_altitude_problem", "go_to_problem", "mode_warning"]
+           "takeoff_altitude_problem", "go_to_problem", "mode_warning", "arming_consequence", "DISARM_DELAY"]
 
 #: ArduCopter custom_mode numbers by name, from pymavlink's own table.
 COPTER_MODES: dict[str, int] = {name: number for number, name in mavutil.mode_mapping_acm.items()}
@@ -46,6 +46,20 @@ def go_to_problem(north: float, east: float, altitude: float, max_altitude: floa
         return (f"outside the limits: {MIN_GOTO_ALTITUDE:g} to {max_altitude:g} m above home, at most "
                 f"{max_distance:g} m from it")
     return None
+
+
+DISARM_DELAY = 10.0                # s: ArduCopter's default DISARM_DELAY, armed on the ground without a takeoff
+
+
+def arming_consequence(mode: str) -> str:
+    """What arming on the ground in ``mode`` does, in a pilot's words (one wording for every front end)."""
+    why = THROTTLE_MODES.get(mode.upper())
+    if why is not None:
+        return (f"The motors start and idle. {mode.upper()} takes its throttle from an RC transmitter: without one "
+                f"nothing lifts off, and ArduCopter disarms again after about {DISARM_DELAY:.0f} s (DISARM_DELAY). "
+                "To fly from here, use Take off instead: it arms in GUIDED and climbs.")
+    return (f"The motors start and idle. Without a takeoff within about {DISARM_DELAY:.0f} s ArduCopter disarms "
+            "again (DISARM_DELAY). Take off arms by itself: you rarely need Arm.")
 
 
 def mode_warning(mode: str, flying: bool) -> str | None:

@@ -697,6 +697,25 @@ class Vehicle(Drone):
         self._abort_takeoff("landing")
         return self._set_mode("LAND")
 
+    def cancel_takeoff(self) -> Future:
+        """The pilot's Cancel before liftoff: the sequence ends, and what it changed is undone (disarm if it
+        armed, back to the mode it left); once NAV_TAKEOFF went out it is Stop (hold where it is). Never LAND."""
+        seq = self._takeoff
+        if seq is None or not seq.nothing_flown:
+            return self.stop()
+        self._abort_takeoff("cancelled before liftoff")
+        s = self.state()
+        undone = []
+        if s.armed and not seq.armed_before:
+            self._command_long(mavlink.MAV_CMD_COMPONENT_ARM_DISARM, (0, 0), "disarm (takeoff cancelled)",
+                               guard=_not_in_flight)
+            undone.append("disarming")
+        if seq.mode_before and s.mode != seq.mode_before:
+            self._set_mode(seq.mode_before)
+            undone.append(f"back to {seq.mode_before}")
+        return self._finish("cancel takeoff", CommandStatus.ACCEPTED,
+                            "cancelled before liftoff: " + (", ".join(undone) or "the vehicle was not changed"))
+
     def return_to_launch(self) -> Future:
         return self._busy("RTL") or self._set_mode("RTL")
 

@@ -24,7 +24,7 @@ from .settings import TAKEOFF_ALTITUDE_RANGE, ViewerSettings, split_uris
 from .sticks import StickMode
 from .widgets.telemetry_panel import GOOD, NORMAL, WARN
 
-__all__ = ["SettingsDialog", "KeysDialog", "takeoff_question", "fly_here_question", "mode_question",
+__all__ = ["SettingsDialog", "KeysDialog", "takeoff_question", "arm_question", "fly_here_question", "mode_question",
            "signing_setup_question", "emergency_stop_question"]
 
 
@@ -286,13 +286,32 @@ def ask(box: QMessageBox, answered: Callable[[QMessageBox], None]) -> QMessageBo
     return box
 
 
-def takeoff_question(parent: QWidget, altitude: float) -> QMessageBox:
-    """A window-modal question, opened with ``open()`` so nothing waits on it.
+def takeoff_question(parent: QWidget, altitude: float, waiting_for: tuple[str, ...] = (),
+                     wait_limit: float = 60.0) -> QMessageBox:
+    """A window-modal question, opened with ``open()`` so nothing waits on it. ``waiting_for``: what the vehicle
+    still lacks (GPS fix, EKF, pre-arm checks): the question says the takeoff waits for it, and how to cancel.
 
     Cancel is the focused default: Space (Stop) or Enter must never start the motors; only a click does.
     """
-    return _cautious_question(parent, "Take off", f"Take off and climb to {altitude:.1f} m above home?\n\n"
-                              "The motors will start. Keep clear of the propellers.", "Take off", "takeoffQuestion")
+    if not waiting_for:
+        return _cautious_question(parent, "Take off", f"Take off and climb to {altitude:.1f} m above home?\n\n"
+                                  "The motors will start. Keep clear of the propellers.", "Take off",
+                                  "takeoffQuestion")
+    return _cautious_question(
+        parent, "Take off when ready",
+        f"The vehicle is not ready yet: waiting for {', '.join(waiting_for)}.\n\n"
+        f"Take off as soon as it is (up to {wait_limit:.0f} s), and climb to {altitude:.1f} m above home?\n\n"
+        "Until then nothing starts; \"Cancel takeoff\" on the main button ends the wait and leaves the vehicle as "
+        "it is. Then the motors will start: keep clear of the propellers.", "Take off when ready", "takeoffQuestion")
+
+
+def arm_question(parent: QWidget, mode: str, consequence: str) -> QMessageBox:
+    """Before Arm: the motors start; say what happens next in this mode (the driver's words). Cancel is the
+    focused default, as for a takeoff."""
+    box = _cautious_question(parent, "Arm the motors", f"Arm the motors in {mode or 'the current mode'}?\n\n"
+                             f"{consequence}\n\nKeep clear of the propellers.", "Arm", "armQuestion")
+    box.setIcon(QMessageBox.Warning)
+    return box
 
 
 def fly_here_question(parent: QWidget, text: str) -> QMessageBox:

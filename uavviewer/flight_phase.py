@@ -5,7 +5,7 @@ import enum
 
 from driver.state import LandedState, LinkStatus, VehicleState
 
-__all__ = ["FlightPhase", "flight_phase", "takeoff_progress", "stick_hint", "readiness_text"]
+__all__ = ["FlightPhase", "flight_phase", "takeoff_progress", "takeoff_cancellable", "stick_hint", "readiness_text"]
 
 
 class FlightPhase(enum.Enum):
@@ -32,6 +32,12 @@ def flight_phase(s: VehicleState) -> FlightPhase:
     if s.landed_state is LandedState.TAKEOFF:
         return FlightPhase.TAKING_OFF
     return FlightPhase.FLYING
+
+
+def takeoff_cancellable(s: VehicleState) -> bool:
+    """A takeoff under way that has not asked the vehicle to leave the ground yet: Cancel gives it back."""
+    from driver.state import SequencePhase
+    return s.takeoff.phase in (SequencePhase.WAITING_READY, SequencePhase.SETTING_GUIDED, SequencePhase.ARMING)
 
 
 def takeoff_progress(s: VehicleState) -> float:

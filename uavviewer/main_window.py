@@ -16,17 +16,19 @@ from PyQt5.QtCore import QEvent, QObject, QSettings, Qt
 from PyQt5.QtWidgets import QApplication, QDialog, QLabel, QMainWindow, QMessageBox, QWidget
 
 from driver.api import Drone, Limits
-from driver.rules import mode_warning
-from driver.state import LinkStatus, Severity, VehicleState
+from driver.rules import arming_consequence, mode_warning
+from driver.state import LinkStatus, SequencePhase, Severity, VehicleState
 
 from . import RESOURCES
 from .dialogs import (
-    KeysDialog, SettingsDialog, ask, emergency_stop_question, mode_question, takeoff_question,
+    KeysDialog, SettingsDialog, arm_question, ask, emergency_stop_question, mode_question, takeoff_question,
 )
 from .camera_controller import CameraController, default_media_folder
 from .drone_adapter import DroneAdapter
 from .flight_timer import FlightTimer
-from .flight_phase import FlightPhase, flight_phase, readiness_text, stick_hint, takeoff_progress
+from .flight_phase import (
+    FlightPhase, flight_phase, readiness_text, stick_hint, takeoff_cancellable, takeoff_progress,
+)
 from .gamepad_input import GamepadInput
 from .keyboard import ACTION_KEYS, AXIS_KEYS, KeyboardSticks
 from .link_security import signing_unavailable, signing_warning
@@ -83,6 +85,7 @@ class MainWindow(QMainWindow):
         self._takeoff_box: QMessageBox | None = None
         self._mode_box: QMessageBox | None = None
         self._emergency_box: QMessageBox | None = None
+        self._arm_box: QMessageBox | None = None
         self._settings_dialog: SettingsDialog | None = None
         self._quit_box: QMessageBox | None = None
         self._quitting = False                   # closing without asking (answered, or a signal)
@@ -144,7 +147,8 @@ class MainWindow(QMainWindow):
         fc.landRequested.connect(self.request_land)
         fc.stopRequested.connect(self.request_stop)
         fc.rtlRequested.connect(self.request_rtl)
-        fc.armRequested.connect(lambda: self._command("arm"))
+        fc.armRequested.connect(self.request_arm)
+        fc.cancelTakeoffRequested.connect(self.request_cancel_takeoff)
         fc.disarmRequested.connect(self.request_disarm)
         self.modeSelector.modeRequested.connect(self.request_mode)
         self.replayBar.pauseRequested.connect(self._replay_pause)
@@ -319,7 +323,9 @@ class MainWindow(QMainWindow):
         phase = flight_phase(s)
         progress = takeoff_progress(s) if phase is FlightPhase.TAKING_OFF else None
         detail = s.takeoff.phase.value if s.takeoff.active else ""
-        self.flightControls.set_vehicle(phase, s.armed, s.connected, progress, detail)
+        self.flightControls.set_vehicle(phase, s.armed, s.connected, progress, detail,
+                                        waiting_for=s.readiness.missing if s.connected else (),
+                                        cancellable=takeoff_cancellable(s))
         if self._takeoff_box is not None and not self._may_take_off(s):
             self._takeoff_box.reject()              # the question no longer fits the vehicle: withdraw it
         self.modeSelector.set_mode(s.mode)
@@ -388,6 +394,9 @@ class MainWindow(QMainWindow):
     def _phase_text(s: VehicleState, phase: FlightPhase) -> str:
         if phase is FlightPhase.NO_VEHICLE:
             return "No vehicle"
+        if phase is FlightPhase.TAKING_OFF and s.takeoff.phase is SequencePhase.WAITING_READY:
+            return (f"Take off to {s.takeoff.target_altitude:.1f} m when ready — "
+                    + (readiness_text(s) if s.connected and s.readiness.missing else "waiting for the vehicle"))
         if phase is FlightPhase.TAKING_OFF and s.takeoff.active:
             return f"Taking off to {s.takeoff.target_altitude:.1f} m — {s.takeoff.phase.value}"
         if phase is FlightPhase.ON_GROUND:
@@ -561,7 +570,10 @@ class MainWindow(QMainWindow):
         if self._takeoff_box is not None and self._takeoff_box.isVisible():
             return
         altitude = self.takeoff_altitude
-        self._takeoff_box = ask(takeoff_question(self, altitude), lambda box: self._takeoff_answered(box, altitude))
+        waiting = self.adapter.state.readiness.missing
+        wait_limit = getattr(getattr(self.adapter.drone, "config", None), "ready_timeout", 60.0)   # embedded: its own
+        self._takeoff_box = ask(takeoff_question(self, altitude, waiting, wait_limit),
+                                lambda box: self._takeoff_answered(box, altitude))
 
     @property
     def takeoff_box(self) -> QMessageBox | None:
@@ -577,6 +589,31 @@ class MainWindow(QMainWindow):
         box.deleteLater()
         if self._takeoff_box is box:
             self._takeoff_box = None
+
+    def request_cancel_takeoff(self) -> None:
+        """Cancel a takeoff that has not left the ground: the driver gives the vehicle back as it was."""
+        self.centre_sticks()
+        self._command("cancel_takeoff")
+
+    def request_arm(self) -> None:
+        """Arm only after a question that says what happens next in this mode (the driver's words)."""
+        if self._arm_box is not None and self._arm_box.isVisible():
+            return
+        mode = self.adapter.state.mode
+        self._arm_box = ask(arm_question(self, mode, arming_consequence(mode)), self._arm_answered)
+
+    def _arm_answered(self, box: QMessageBox) -> None:
+        if box.clickedButton() is box.button(QMessageBox.Yes):
+            s = self.adapter.state
+            if s.connected and not s.armed and not flight_phase(s).airborne:
+                self._command("arm")
+        box.deleteLater()
+        if self._arm_box is box:
+            self._arm_box = None
+
+    @property
+    def arm_box(self) -> QMessageBox | None:
+        return self._arm_box
 
     def request_disarm(self) -> None:
         """On the ground, a disarm. In the air, disarming stops the motors and the drone falls: the pilot is

@@ -24,11 +24,13 @@ class FlightControls(QWidget):
     rtlRequested = pyqtSignal()
     armRequested = pyqtSignal()
     disarmRequested = pyqtSignal()          # in the air too: the window asks before an emergency motor stop
+    cancelTakeoffRequested = pyqtSignal()   # a takeoff that has not left the ground: give the vehicle back
 
     def __init__(self, parent: QWidget | None = None) -> None:
         super().__init__(parent)
         self._phase = FlightPhase.NO_VEHICLE
         self._armed = False
+        self._cancellable = False
         self._shown: tuple | None = None        # the last set_vehicle arguments: nothing to redo when unchanged
         self.main_button = self._button("mainButton", "Take off", "takeoff")
         self.main_button.setMinimumHeight(44)
@@ -71,17 +73,29 @@ class FlightControls(QWidget):
         return self._phase
 
     def set_vehicle(self, phase: FlightPhase, armed: bool, connected: bool,
-                    progress: float | None = None, detail: str = "") -> None:
-        self._phase, self._armed = phase, armed
-        if (phase, armed, connected, progress, detail) == self._shown:
+                    progress: float | None = None, detail: str = "", waiting_for: tuple[str, ...] = (),
+                    cancellable: bool = False) -> None:
+        """``waiting_for``: what the vehicle still lacks before it can arm (the button says the takeoff will
+        wait); ``cancellable``: a takeoff under way that has not left the ground (the button cancels it)."""
+        self._phase, self._armed, self._cancellable = phase, armed, cancellable
+        if (phase, armed, connected, progress, detail, waiting_for, cancellable) == self._shown:
             return
-        self._shown = (phase, armed, connected, progress, detail)
+        self._shown = (phase, armed, connected, progress, detail, waiting_for, cancellable)
         b = self.main_button
         if phase is FlightPhase.ON_GROUND or phase is FlightPhase.NO_VEHICLE:
-            b.setText("Take off")
+            wait = bool(waiting_for) and phase is FlightPhase.ON_GROUND
+            b.setText("Take off when ready" if wait else "Take off")
             b.setIcon(_icon("takeoff"))
             b.setEnabled(connected and phase is FlightPhase.ON_GROUND)
-            b.setProperty("action", "takeoff")
+            b.setProperty("action", "takeoff-wait" if wait else "takeoff")
+            b.setToolTip(f"Waiting for {', '.join(waiting_for)}: the takeoff starts once the vehicle is ready"
+                         if wait else "Take off (T)")
+        elif phase is FlightPhase.TAKING_OFF and cancellable:
+            b.setText("Cancel takeoff")
+            b.setIcon(_icon("stop"))
+            b.setEnabled(True)
+            b.setProperty("action", "cancel")
+            b.setToolTip("Nothing has left the ground: end the takeoff and leave the vehicle as it was")
         elif phase is FlightPhase.LANDING:
             b.setText("Landing…")
             b.setIcon(_icon("land"))
@@ -92,6 +106,7 @@ class FlightControls(QWidget):
             b.setIcon(_icon("land"))
             b.setEnabled(True)                  # Land is always available in the air
             b.setProperty("action", "land")
+            b.setToolTip("Land where it is (L)")
         b.style().unpolish(b)
         b.style().polish(b)
         taking_off = phase is FlightPhase.TAKING_OFF and progress is not None
@@ -116,6 +131,8 @@ class FlightControls(QWidget):
     def _main_clicked(self) -> None:
         if self._phase is FlightPhase.ON_GROUND:
             self.takeoffRequested.emit()
+        elif self._phase is FlightPhase.TAKING_OFF and self._cancellable:
+            self.cancelTakeoffRequested.emit()
         elif self._phase in (FlightPhase.TAKING_OFF, FlightPhase.FLYING):
             self.landRequested.emit()
 
