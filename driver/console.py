@@ -215,7 +215,7 @@ class Console(cmd.Cmd):
         self._report(self.vehicle.land())
 
     def do_stop(self, arg: str) -> None:
-        """stop: hold position (zero velocity in GUIDED, else BRAKE)"""
+        """stop: hold position in GUIDED with zero velocity (the sticks fly again; BRAKE if GUIDED is refused)"""
         self._cancel_velocity()
         self._report(self.vehicle.stop())
 

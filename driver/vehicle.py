@@ -720,7 +720,9 @@ class Vehicle(Drone):
         return self._busy("RTL") or self._set_mode("RTL")
 
     def stop(self) -> Future:
-        """Hold position: zero velocity in GUIDED (which also cancels a go-to), BRAKE otherwise."""
+        """Hold position, and the sticks fly again: zero velocity in GUIDED (which also cancels a go-to); in
+        flight in another mode (RTL, LOITER, LAND...), GUIDED with zero velocity, where ArduCopter brakes to its
+        stopping point and holds it (ModeGuided::init); BRAKE if the vehicle refuses GUIDED (no position)."""
         taking_off = self.state().takeoff.active
         self._abort_takeoff("stop")
         s = self.state()
@@ -734,7 +736,27 @@ class Vehicle(Drone):
                 self._store.publish()
             self._wake.set()
             return self._finish("stop", CommandStatus.ACCEPTED, "holding position (zero velocity in GUIDED)")
-        return self._set_mode("BRAKE")
+        return self._hold_in_guided(s.mode)
+
+    def _hold_in_guided(self, was: str) -> Future:
+        """Stop outside GUIDED: zeros wait to stream, GUIDED is asked; if refused, BRAKE (the sticks then stay
+        inert until GUIDED is possible, and the result says why)."""
+        with self._lock:
+            self._setpoints.stop(time.monotonic())
+            self._store.set(setpoint=self._setpoints.setpoint)
+        outcome: Future = Future()
+
+        def guided_answered(f: Future) -> None:
+            r = f.result()
+            if r.ok:
+                outcome.set_result(self._store.record("stop", CommandStatus.ACCEPTED,
+                                                      f"holding position in GUIDED (was {was}): the sticks fly"))
+                return
+            brake = self._set_mode("BRAKE")
+            brake.add_done_callback(lambda b: outcome.set_result(self._store.record(
+                "stop", b.result().status, f"GUIDED refused ({r.reason}): BRAKE, {b.result().reason}")))
+        self._set_mode("GUIDED").add_done_callback(guided_answered)
+        return outcome
 
     def reboot(self) -> Future:
         problem = _ground_only(self.state())
