@@ -5,7 +5,10 @@ import enum
 
 from driver.state import LandedState, LinkStatus, VehicleState
 
-__all__ = ["FlightPhase", "flight_phase", "takeoff_progress", "takeoff_cancellable", "stick_hint", "readiness_text"]
+#: The one wording, everywhere in the window, for "nothing heard from a vehicle yet".
+NO_VEHICLE = "No vehicle yet"
+
+__all__ = ["NO_VEHICLE", "FlightPhase", "flight_phase", "takeoff_progress", "takeoff_cancellable", "stick_hint", "readiness_text"]
 
 
 class FlightPhase(enum.Enum):
@@ -63,6 +66,8 @@ _STICK_HINTS = {"no link": "No link", "on the ground": "Take off to fly", "takin
 def stick_hint(s: VehicleState) -> str:
     """Why the sticks are inert, or "" when they fly the vehicle."""
     why = s.velocity_blocker
+    if why == "no link" and s.link.status is LinkStatus.WAITING:
+        return NO_VEHICLE
     if why == "not GUIDED":
         return f"Sticks fly in GUIDED\n(mode is {s.mode or '?'})"
     return _STICK_HINTS.get(why, why)

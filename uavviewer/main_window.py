@@ -27,7 +27,7 @@ from .camera_controller import CameraController, default_media_folder
 from .drone_adapter import DroneAdapter
 from .flight_timer import FlightTimer
 from .flight_phase import (
-    FlightPhase, flight_phase, readiness_text, stick_hint, takeoff_cancellable, takeoff_progress,
+    NO_VEHICLE, FlightPhase, flight_phase, readiness_text, stick_hint, takeoff_cancellable, takeoff_progress,
 )
 from .gamepad_input import GamepadInput
 from .keyboard import ACTION_KEYS, AXIS_KEYS, KeyboardSticks
@@ -366,7 +366,10 @@ class MainWindow(QMainWindow):
         if s.link.status in (LinkStatus.LOST, LinkStatus.CLOSED):
             if self.attitude.values["flag"] != "NO LINK":       # the last attitude is no longer the drone's
                 self.attitude.clear("NO LINK")
-        elif s.link.status is not LinkStatus.WAITING and s.mode:
+        elif s.link.status is LinkStatus.WAITING or not s.mode:
+            if self.attitude.values["flag"] != NO_VEHICLE.upper():
+                self.attitude.clear(NO_VEHICLE.upper())
+        else:
             self.attitude.set_attitude(s.attitude.roll, s.attitude.pitch, s.heading_deg)
             self.attitude.set_readouts(s.altitude, s.velocity.ground_speed, s.velocity.climb)
 
@@ -393,7 +396,12 @@ class MainWindow(QMainWindow):
     @staticmethod
     def _phase_text(s: VehicleState, phase: FlightPhase) -> str:
         if phase is FlightPhase.NO_VEHICLE:
-            return "No vehicle"
+            return NO_VEHICLE
+        if s.link.status in (LinkStatus.LOST, LinkStatus.CLOSED):
+            age = s.link.heartbeat_age
+            last = {FlightPhase.ON_GROUND: "on the ground", FlightPhase.TAKING_OFF: "taking off",
+                    FlightPhase.FLYING: f"flying in {s.mode}", FlightPhase.LANDING: "landing"}[phase]
+            return f"Link lost{f' {age:.0f} s ago' if age is not None else ''} · last heard {last}"
         if phase is FlightPhase.TAKING_OFF and s.takeoff.phase is SequencePhase.WAITING_READY:
             return (f"Take off to {s.takeoff.target_altitude:.1f} m when ready — "
                     + (readiness_text(s) if s.connected and s.readiness.missing else "waiting for the vehicle"))

@@ -11,12 +11,11 @@ from PyQt5.QtWidgets import QFrame, QHBoxLayout, QLabel, QSizePolicy, QVBoxLayou
 
 from driver.battery import time_left
 from driver.state import BatteryAlarm, LinkStatus, Message, Severity, VehicleState
+from ..flight_phase import NO_VEHICLE
 from ..flight_timer import clock_text
 
 __all__ = ["StatusStrip", "ALARM_COLOURS", "battery_text", "NO_VEHICLE"]
 
-#: The one wording for "nothing heard from a vehicle yet", everywhere in the window.
-NO_VEHICLE = "No vehicle yet"
 
 GOOD, WARN, BAD, DIM, NORMAL = "#5fd068", "#ffb020", "#ff4d4d", "#7d8792", "#e6ebf0"
 ALARM_COLOURS = {BatteryAlarm.UNKNOWN: DIM, BatteryAlarm.OK: GOOD, BatteryAlarm.WARNING: WARN,
@@ -128,7 +127,7 @@ class StatusStrip(QFrame):
         elif lost:
             self._put(self.link, "LINK LOST" + (f" · {age:.0f} s" if age is not None else ""), BAD)
         else:
-            self._put(self.link, f"Link: {NO_VEHICLE}", DIM)
+            self._put(self.link, NO_VEHICLE, DIM)
         vehicle_lines = [m for m in s.messages if m.source == "vehicle"]
         latest = vehicle_lines[-1] if vehicle_lines else None
         if latest is None:
