@@ -10,7 +10,8 @@ from pymavlink import mavutil
 from . import frames
 
 __all__ = ["COPTER_MODES", "MIN_TAKEOFF_ALTITUDE", "MAX_ALTITUDE", "MIN_GOTO_ALTITUDE", "THROTTLE_MODES",
-           "takeoff_altitude_problem", "go_to_problem", "mode_warning", "arming_consequence", "DISARM_DELAY"]
+           "takeoff_altitude_problem", "go_to_problem", "mode_warning", "arming_consequence", "DISARM_DELAY",
+           "unattended", "GCS_FAILSAFE_ACTIONS"]
 
 #: ArduCopter custom_mode numbers by name, from pymavlink's own table.
 COPTER_MODES: dict[str, int] = {name: number for number, name in mavutil.mode_mapping_acm.items()}
@@ -60,6 +61,37 @@ def arming_consequence(mode: str) -> str:
                 "To fly from here, use Take off instead: it arms in GUIDED and climbs.")
     return (f"The motors start and idle. Without a takeoff within about {DISARM_DELAY:.0f} s ArduCopter disarms "
             "again (DISARM_DELAY). Take off arms by itself: you rarely need Arm.")
+
+
+#: FS_GCS_ENABLE: what ArduCopter does once the ground station's heartbeats stop (GCS failsafe, after
+#: FS_GCS_TIMEOUT, 5 s by default), from its parameter documentation.
+GCS_FAILSAFE_ACTIONS = {1: "returns home (RTL)", 2: "continues its mission in AUTO, else returns home (RTL)",
+                        3: "returns along its path (SmartRTL), else RTL", 4: "returns along its path (SmartRTL), "
+                        "else lands", 5: "lands", 6: "jumps to its mission's landing (DO_LAND_START), else RTL"}
+_UNATTENDED = {
+    "GUIDED": "holds position in GUIDED", "LOITER": "holds position in LOITER", "POSHOLD": "holds position in "
+    "POSHOLD", "BRAKE": "holds position in BRAKE", "RTL": "goes on returning home and lands there (RTL)",
+    "SMART_RTL": "goes on returning along its path and lands (SmartRTL)", "LAND": "goes on landing where it is",
+    "AUTO": "flies on with its mission (AUTO)", "CIRCLE": "goes on circling (CIRCLE)",
+}
+
+
+def unattended(mode: str, gcs_failsafe: int | None) -> str:
+    """What the vehicle does in ``mode`` once nobody commands it from here, in a pilot's words: the mode's own
+    behaviour, then what its GCS failsafe (FS_GCS_ENABLE, None: not read yet) makes of it."""
+    mode = mode.upper()
+    now = _UNATTENDED.get(mode)
+    if now is None:
+        why = THROTTLE_MODES.get(mode)
+        now = f"stays in {mode or 'its mode'}" + (f", where its {why}" if why else "")
+    if gcs_failsafe is None:
+        then = "until its own failsafes act (its GCS failsafe setting is not known yet)"
+    elif gcs_failsafe == 0:
+        then = "until its battery failsafe acts: its GCS failsafe is off (FS_GCS_ENABLE 0)"
+    else:
+        action = GCS_FAILSAFE_ACTIONS.get(gcs_failsafe, f"acts as FS_GCS_ENABLE {gcs_failsafe} says")
+        then = f"until its GCS failsafe notices the silence (FS_GCS_TIMEOUT, 5 s by default) and {action}"
+    return f"it {now} {then}"
 
 
 def mode_warning(mode: str, flying: bool) -> str | None:

@@ -16,7 +16,7 @@ from PyQt5.QtCore import QEvent, QObject, QSettings, Qt
 from PyQt5.QtWidgets import QApplication, QDialog, QLabel, QMainWindow, QMessageBox, QWidget
 
 from driver.api import Drone, Limits
-from driver.rules import arming_consequence, mode_warning
+from driver.rules import arming_consequence, mode_warning, unattended
 from driver.state import LinkStatus, SequencePhase, Severity, VehicleState
 
 from . import RESOURCES
@@ -693,8 +693,8 @@ class MainWindow(QMainWindow):
     def quit_without_asking(self) -> None:
         """Ctrl+C or kill in the terminal: close now, even in flight (said in the log)."""
         if flight_phase(self.adapter.state).airborne and self.adapter.replay is None:
-            log.warning("closing while the vehicle is in the air: it keeps hovering in GUIDED until its "
-                        "own failsafe acts")
+            s = self.adapter.state
+            log.warning("closing while the vehicle is in the air: %s", unattended(s.mode, s.gcs_failsafe))
         self._quitting = True
         if self._quit_box is not None:
             self._quit_box.reject()
@@ -705,9 +705,10 @@ class MainWindow(QMainWindow):
         if self._quitting or self.adapter.replay is not None or not flight_phase(self.adapter.state).airborne:
             return False
         if self._quit_box is None:
+            s = self.adapter.state
             box = QMessageBox(QMessageBox.Warning, "The vehicle is flying",
-                              "The vehicle is in the air. Without this window nobody commands it; it hovers in "
-                              "GUIDED until its own failsafe acts.", QMessageBox.NoButton, self)
+                              f"The vehicle is in the air in {s.mode}. Without this window nobody commands it: "
+                              f"{unattended(s.mode, s.gcs_failsafe)}.", QMessageBox.NoButton, self)
             box.setObjectName("quitQuestion")
             land = box.addButton("Land", QMessageBox.AcceptRole)
             leave = box.addButton("Quit anyway", QMessageBox.DestructiveRole)
