@@ -142,7 +142,12 @@ class Console(cmd.Cmd):
             self.say(f"error: {exc}")
             return False
 
+    def get_names(self) -> list[str]:
+        """The commands help lists: Ctrl+D (EOF) is a key, not a command to type."""
+        return [name for name in super().get_names() if name != "do_EOF"]
+
     def do_help(self, arg: str) -> None:
+        """help [COMMAND]: the commands, or what one does"""
         doc = getattr(getattr(self, "do_" + arg.strip(), None), "__doc__", None) if arg.strip() else None
         if doc:
             self.say(inspect.cleandoc(doc))             # multi-line help without the source's indentation

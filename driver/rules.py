@@ -9,15 +9,18 @@ from pymavlink import mavutil
 
 from . import frames
 
-__all__ = ["COPTER_MODES", "MIN_TAKEOFF_ALTITUDE", "MAX_ALTITUDE", "MIN_GOTO_ALTITUDE", "THROTTLE_MODES",
+__all__ = ["COPTER_MODES", "MIN_TAKEOFF_ALTITUDE", "MAX_TAKEOFF_ALTITUDE", "TAKEOFF_ALTITUDE_RANGE", "MAX_ALTITUDE", "MIN_GOTO_ALTITUDE", "THROTTLE_MODES",
            "takeoff_altitude_problem", "go_to_problem", "mode_warning", "arming_consequence", "DISARM_DELAY",
            "unattended", "GCS_FAILSAFE_ACTIONS"]
 
 #: ArduCopter custom_mode numbers by name, from pymavlink's own table.
 COPTER_MODES: dict[str, int] = {name: number for number, name in mavutil.mode_mapping_acm.items()}
 
-MIN_TAKEOFF_ALTITUDE = 0.5         # m above home: lower is no takeoff
-MAX_ALTITUDE = 120.0               # m above home: no takeoff or go-to target above it (EU open category)
+MIN_TAKEOFF_ALTITUDE = 1.0         # m above home: lower is no takeoff (ground effect, a prop wash in the grass)
+MAX_TAKEOFF_ALTITUDE = 50.0        # m above home: a takeoff climbs straight up; higher is a go-to's job
+MAX_ALTITUDE = 120.0               # m above home: no go-to target above it (EU open category)
+#: The one takeoff altitude range: window (Preferences, --takeoff-altitude), driver CLI, console and Ice.
+TAKEOFF_ALTITUDE_RANGE = (MIN_TAKEOFF_ALTITUDE, MAX_TAKEOFF_ALTITUDE)
 MIN_GOTO_ALTITUDE = 1.0            # m above home
 
 #: Modes in which ArduCopter takes the throttle (and so the altitude) from the RC transmitter: a pilot
@@ -33,10 +36,12 @@ THROTTLE_MODES = {
 
 
 def takeoff_altitude_problem(altitude: float, ceiling: float = MAX_ALTITUDE) -> str | None:
-    """Why ``altitude`` cannot be a takeoff target, or None: one rule for the driver, its CLI and console."""
-    if frames.finite(altitude) and MIN_TAKEOFF_ALTITUDE <= altitude <= ceiling:
+    """Why ``altitude`` cannot be a takeoff target, or None: one rule for the window, the driver, its CLI,
+    console and Ice (``ceiling``: a lower configured maximum altitude)."""
+    top = min(MAX_TAKEOFF_ALTITUDE, ceiling)
+    if frames.finite(altitude) and MIN_TAKEOFF_ALTITUDE <= altitude <= top:
         return None
-    return f"altitude must be {MIN_TAKEOFF_ALTITUDE:g} to {ceiling:g} m"
+    return f"altitude must be {MIN_TAKEOFF_ALTITUDE:g} to {top:g} m"
 
 
 def go_to_problem(north: float, east: float, altitude: float, max_altitude: float, max_distance: float) -> str | None:

@@ -66,7 +66,7 @@ def test_keys_dialog_lists_the_keys(qtbot, silent_vehicle, window_factory):
     assert shown == [("W", "Forward"), ("S", "Back"), ("A", "Left"), ("D", "Right"),
                      ("↑", "Climb"), ("↓", "Descend"), ("←", "Yaw left"), ("→", "Yaw right"),
                      ("Space", "Stop: hover where you are"), ("Esc", "Stop: cancel a Fly here, hover where you are"),
-                     ("T", "Take off"), ("L", "Land"),
+                     ("T", "Take off"), ("L", "Land"), ("R", "Return to launch (RTL)"),
                      ("(release)", "Releasing a key centres its axis"),
                      ("Gamepad A", "Stop (hover)"), ("Gamepad B", "Land"), ("Gamepad START", "Take off (asks)"),
                      ("Gamepad BACK", "Return to launch"),

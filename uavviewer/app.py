@@ -258,6 +258,9 @@ def main(argv: list[str] | None = None) -> int:
              for k, v in camera_props.getPropertiesForPrefix(prefix).items()})
     window = MainWindow(drone, takeoff_altitude=args.takeoff_altitude, cameras=args.camera,  # --camera: this run
                         default_cameras=own_camera)
+    if sim is not None:                                           # not a raw tcp:127.0.0.1:port in the title
+        window.name_vehicle(f"simulated ArduCopter (built in, {sim.config.speedup:g}× time)"
+                            if sim.config.speedup != 1 else "simulated ArduCopter (built in)")
     if fleet is not None:
         controller = FleetController(fleet, first, parent=window)
         window.attach_fleet(controller)

@@ -275,6 +275,21 @@ class KeysDialog(QDialog):
             self.table.setItem(i, 0, QTableWidgetItem(key))
             self.table.setItem(i, 1, QTableWidgetItem(text))
         self.table.resizeColumnToContents(0)
+        self._fit_rows()
+
+    def _fit_rows(self) -> None:
+        """Tall enough for every row, the last one too (as far as the screen allows; then it scrolls)."""
+        t = self.table
+        t.setWordWrap(False)                    # one line a row; the dialog is as wide as the longest
+        t.resizeColumnsToContents()
+        t.setMinimumWidth(sum(t.columnWidth(c) for c in range(t.columnCount())) + 2 * t.frameWidth() + 4)
+        t.verticalHeader().setDefaultSectionSize(t.fontMetrics().height() + 6)   # compact rows: all in view
+        needed = t.horizontalHeader().sizeHint().height() + 2 * t.frameWidth() + \
+            sum(t.rowHeight(i) for i in range(t.rowCount())) + 6      # + the header's border
+        screen = self.screen() if hasattr(self, "screen") else None
+        limit = screen.availableGeometry().height() - 110 if screen is not None else needed   # intro, buttons
+        t.setMinimumHeight(max(120, min(needed, limit)))
+        self.adjustSize()
 
 
 def ask(box: QMessageBox, answered: Callable[[QMessageBox], None]) -> QMessageBox:

@@ -29,6 +29,7 @@ ACTION_KEYS: dict[int, tuple[str, str]] = {
     Qt.Key_Escape: ("stop", "Stop: cancel a Fly here, hover where you are"),
     Qt.Key_T: ("takeoff", "Take off"),
     Qt.Key_L: ("land", "Land"),
+    Qt.Key_R: ("rtl", "Return to launch (RTL)"),
 }
 
 _KEY_NAMES = {Qt.Key_Up: "↑", Qt.Key_Down: "↓", Qt.Key_Left: "←", Qt.Key_Right: "→", Qt.Key_Space: "Space",

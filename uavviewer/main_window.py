@@ -36,7 +36,7 @@ from .pilot_input import Input, InputSelector
 from .map.controller import MapController, TileSettings
 from .refresh import INSTRUMENTS_HZ, PLOTS_HZ, TEXT_HZ, Refresh
 from .settings import ViewerSettings, default_qsettings, load_settings, load_window, save_settings, save_window
-from .sticks import Axes, MaxSpeeds, axes_from_pads, combine, pad_labels, velocity_from_axes
+from .sticks import Axes, MaxSpeeds, axes_from_pads, combine, pad_labels, pads_from_axes, velocity_from_axes
 from .layout import fit_screen
 from .widgets.camera_panel import CameraPanel
 from .widgets.gamepad_page import GamepadPage
@@ -90,6 +90,7 @@ class MainWindow(QMainWindow):
         self._quit_box: QMessageBox | None = None
         self._quitting = False                   # closing without asking (answered, or a signal)
         self._connection_to_remember = ""
+        self._vehicle_name = ""
         self._t0 = time.monotonic()
         self.flight_timer = FlightTimer()
         self._shown_state: VehicleState | None = None   # the snapshot the views show next (refresh channels)
@@ -290,13 +291,28 @@ class MainWindow(QMainWindow):
 
     def _about(self) -> None:
         """Not modal and no nested event loop: flying goes on while it is open."""
-        box = QMessageBox(QMessageBox.Information, "UavViewerPy",
-                          "UavViewerPy — fly a MAVLink drone from a laptop.\n"
-                          f"Vehicle: {self.adapter.description}", QMessageBox.Ok, self)
+        from PyQt5.QtCore import PYQT_VERSION_STR, QT_VERSION_STR
+        from pymavlink import __version__ as pymavlink_version
+
+        from driver.version import __version__
+        firmware = self.adapter.state.firmware
+        box = QMessageBox(QMessageBox.Information, "About UavViewerPy",
+                          f"UavViewerPy {__version__} — fly a MAVLink drone from a laptop.\n\n"
+                          f"Vehicle: {self.window_name()}" + (f", ArduCopter {firmware}" if firmware else "") +
+                          f"\nPyQt {PYQT_VERSION_STR}, Qt {QT_VERSION_STR}, pymavlink {pymavlink_version}",
+                          QMessageBox.Ok, self)
         box.setObjectName("aboutBox")
         box.setWindowModality(Qt.NonModal)
         box.setAttribute(Qt.WA_DeleteOnClose)
         box.show()
+
+    def name_vehicle(self, name: str) -> None:
+        """A name for the title and About in place of the raw connection string (--sim: the built-in one)."""
+        self._vehicle_name = name
+        self.setWindowTitle(f"UavViewerPy — {name}")
+
+    def window_name(self) -> str:
+        return self._vehicle_name or self.adapter.description
 
     def remember_connection_when_answered(self, connection: str) -> None:
         """Save ``connection`` as the next run's default once a vehicle answers on it (not before: a typo
@@ -442,6 +458,7 @@ class MainWindow(QMainWindow):
     def _fly(self) -> None:
         command = velocity_from_axes(self.demand(), self._speeds)
         self.adapter.fly(command)
+        self._echo_on_pads()
         self.inputLabel.setText(self._input_text())
         if not command.is_zero:
             self.map.cancel()                   # a stick overrides a go-to
@@ -451,6 +468,15 @@ class MainWindow(QMainWindow):
             self.setpointLabel.setText(
                 f"fwd {command.forward:+.1f}  right {command.right:+.1f}  up {command.up:+.1f} m/s  "
                 f"yaw {math.degrees(command.yaw_rate):+.0f}°/s")
+
+    def _echo_on_pads(self) -> None:
+        """Held keys (or the gamepad, while it flies) move the on-screen knobs: the pilot sees what flies."""
+        echo = Axes()
+        if self._sticks_live:
+            echo = self.gamepad.axes() if self._inputs.owner is Input.GAMEPAD else self.keyboard.axes()
+        left, right = pads_from_axes(self.settings.mode, echo)
+        self.leftStick.set_echo(*left)
+        self.rightStick.set_echo(*right)
 
     def _input_text(self) -> str:
         """Which input flies now, else which are there (and why the gamepad waits)."""

@@ -11,15 +11,14 @@ from PyQt5.QtCore import QByteArray, QSettings
 
 from driver.api import CEILING
 from driver.state import BatteryThresholds
-from driver.rules import MAX_ALTITUDE, MIN_TAKEOFF_ALTITUDE
+from driver.rules import TAKEOFF_ALTITUDE_RANGE
 
 from .sticks import MaxSpeeds, StickMode, StickShaping
 
 __all__ = ["ViewerSettings", "load_settings", "save_settings", "default_qsettings", "split_uris",
            "TAKEOFF_ALTITUDE_RANGE"]
 
-#: Takeoff altitudes a pilot may choose, in metres above home (Preferences and --takeoff-altitude).
-TAKEOFF_ALTITUDE_RANGE = (max(1.0, MIN_TAKEOFF_ALTITUDE), min(50.0, MAX_ALTITUDE))   # within the driver's limits
+#: Takeoff altitudes a pilot may choose (Preferences and --takeoff-altitude): the driver's rule, driver.rules.
 
 ORGANISATION = "JdeRobot"
 APPLICATION = "UavViewerPy"

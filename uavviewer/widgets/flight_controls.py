@@ -5,14 +5,14 @@ from PyQt5.QtCore import QSize, Qt, pyqtSignal
 from PyQt5.QtGui import QIcon
 from PyQt5.QtWidgets import QGridLayout, QProgressBar, QPushButton, QSizePolicy, QWidget
 
-from .. import RESOURCES
+from .icons import icon
 from ..flight_phase import FlightPhase
 
 __all__ = ["FlightControls"]
 
 
 def _icon(name: str) -> QIcon:
-    return QIcon(str(RESOURCES / "icons" / f"{name}.svg"))
+    return icon(name)
 
 
 class FlightControls(QWidget):
