@@ -296,6 +296,9 @@ def _schedule_screenshot(window, path: Path, after: float, fly: bool) -> None:
 
     from driver.state import SequencePhase
 
+    screen = window.screen().availableGeometry()         # the documentation shows the whole screen (Xvfb: no
+    window.setGeometry(screen)                           # window manager, so no title bar to allow for)
+
     def shoot():
         path.parent.mkdir(parents=True, exist_ok=True)
         window.grab().save(str(path))
