@@ -87,7 +87,7 @@ class PlotsPanel(QWidget):
                 plot.getAxis("bottom").setStyle(showValues=False)
             self.plots.append(plot)
         self.plots[-1].setYRange(0, 360)
-        self.plots[-1].setLabel("bottom", "time before now", units="s")    # the shared time axis, with its unit
+        self.plots[-1].setLabel("bottom", "time before now", units="s", **{"font-size": "9pt"})   # with its unit
         self.plots[-1].getAxis("bottom").enableAutoSIPrefix(False)
         self.curves = {name: self.plots[row].plot(pen=pg.mkPen(color, width=1.5), name=legend)
                        for name, (row, color, legend) in SERIES.items()}
