@@ -71,6 +71,9 @@ def test_everything_a_pilot_needs_is_in_view_at_laptop_sizes(qtbot, sim, flying,
     w = window_factory(flying, takeoff_altitude=3.0)
     qtbot.waitUntil(lambda: w.adapter.state.can_fly_velocity and w.leftStick.isEnabled(), timeout=20000)
     qtbot.waitUntil(lambda: "mAh" in w.statusStrip.battery.text(), timeout=10000)
+    w.rightStick.hold(-0.6, -0.75)                           # the longest setpoint line: every axis, signs
+    w.leftStick.hold(-0.7, -0.6)
+    qtbot.waitUntil(lambda: "yaw -" in w.setpointLabel.text(), timeout=3000)
     for width, height in SIZES:
         settle(qtbot, w, width, height)
         problems = layout_problems(w)

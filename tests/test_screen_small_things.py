@@ -87,7 +87,7 @@ def test_the_mode_list_is_not_clipped(qtbot, app_style, silent_vehicle, window_f
     right = combo.mapTo(frame, QPoint(combo.width(), 0)).x()
     assert right <= frame.contentsRect().right() + 1
     for name in ("STABILIZE", "SMART_RTL", "POSHOLD"):         # the longest names fit beside the arrow
-        assert combo.fontMetrics().horizontalAdvance(name) + 24 + 16 <= combo.width(), name
+        assert combo.fontMetrics().horizontalAdvance(name) + 20 + 16 <= combo.width(), name
 
 
 def test_disabled_buttons_grey_their_icons(qtbot, silent_vehicle, window_factory):

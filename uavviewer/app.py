@@ -298,6 +298,7 @@ def _schedule_screenshot(window, path: Path, after: float, fly: bool) -> None:
 
     screen = window.screen().availableGeometry()         # the documentation shows the whole screen (Xvfb: no
     window.setGeometry(screen)                           # window manager, so no title bar to allow for)
+    QTimer.singleShot(1000, lambda: window.setGeometry(screen))   # again once the first snapshot is laid out
 
     def shoot():
         path.parent.mkdir(parents=True, exist_ok=True)

@@ -13,7 +13,7 @@ from dataclasses import replace
 
 from PyQt5 import uic
 from PyQt5.QtCore import QEvent, QObject, QSettings, Qt
-from PyQt5.QtWidgets import QApplication, QDialog, QLabel, QMainWindow, QMessageBox, QWidget
+from PyQt5.QtWidgets import QApplication, QDialog, QLabel, QMainWindow, QMessageBox, QSizePolicy, QWidget
 
 from driver.api import Drone, Limits
 from driver.rules import arming_consequence, mode_warning, unattended
@@ -136,6 +136,8 @@ class MainWindow(QMainWindow):
         self.phaseLabel.setObjectName("phaseLabel")
         # two lines always: a long phase ("waiting for GPS fix, EKF, pre-arm checks") wraps without
         # squeezing the buttons below it (layouts do not ask a wrapping label its height for a width)
+        # the setpoint line never widens the window: at worst it is cut at the end (it repeats the sticks)
+        self.setpointLabel.setSizePolicy(QSizePolicy.Ignored, self.setpointLabel.sizePolicy().verticalPolicy())
         self.phaseLabel.ensurePolished()          # the style sheet's font, not the default one
         self.phaseLabel.setMinimumHeight(2 * self.phaseLabel.fontMetrics().lineSpacing() + 2)
         self.link_status = QLabel()
@@ -465,8 +467,8 @@ class MainWindow(QMainWindow):
         if command.is_zero:
             self.setpointLabel.setText("Setpoint: hover")
         else:
-            self.setpointLabel.setText(
-                f"fwd {command.forward:+.1f}  right {command.right:+.1f}  up {command.up:+.1f} m/s  "
+            self.setpointLabel.setText(         # short enough for the controls' column at 1024×600
+                f"fwd {command.forward:+.1f} rt {command.right:+.1f} up {command.up:+.1f} m/s "
                 f"yaw {math.degrees(command.yaw_rate):+.0f}°/s")
 
     def _echo_on_pads(self) -> None:

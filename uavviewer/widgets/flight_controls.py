@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 from PyQt5.QtCore import QSize, Qt, pyqtSignal
-from PyQt5.QtGui import QIcon
+from PyQt5.QtGui import QFontMetrics, QIcon
 from PyQt5.QtWidgets import QGridLayout, QProgressBar, QPushButton, QSizePolicy, QWidget
 
 from .icons import icon
@@ -43,6 +43,8 @@ class FlightControls(QWidget):
         self.stop_button = self._button("stopButton", "Stop", "stop")
         self.rtl_button = self._button("rtlButton", "RTL", "rtl")
         self.arm_button = self._button("armButton", "Arm", "arm")
+        for button, longest in ((self.stop_button, "Stop"), (self.rtl_button, "RTL"), (self.arm_button, "Disarm")):
+            button.setMinimumWidth(self._width_for(button, longest))   # "Disarm" fits whatever the font
         self.stop_button.setToolTip("Hold position (Space)")
         self.rtl_button.setToolTip("Return to launch and land")
         grid = QGridLayout(self)
@@ -67,6 +69,14 @@ class FlightControls(QWidget):
         b.setSizePolicy(QSizePolicy.Expanding, QSizePolicy.Fixed)
         b.setMinimumHeight(36)
         return b
+
+    @staticmethod
+    def _width_for(button: QPushButton, text: str) -> int:
+        """Icon, spacing, the text in bold and the style sheet's padding and border (6 px 6 px, 1 px)."""
+        button.ensurePolished()                 # the style sheet's font, not the default one
+        font = button.font()
+        font.setBold(True)
+        return QFontMetrics(font).horizontalAdvance(text) + button.iconSize().width() + 6 + 2 * 6 + 2 + 4
 
     @property
     def phase(self) -> FlightPhase:

@@ -43,8 +43,10 @@ class JoystickPad(QWidget):
         return self._dragging
 
     def set_caption(self, text: str) -> None:
-        """What the pad flies, shown under the ring (e.g. "Climb · Yaw")."""
+        """What the pad flies, shown under the ring (e.g. "Climb · Yaw"); the pad is never narrower than it."""
         self._caption = text
+        self.ensurePolished()                   # the style sheet's font, not the default one
+        self.setMinimumWidth(max(120, self.fontMetrics().horizontalAdvance(text) + 8))
         self.update()
 
     def set_hint(self, text: str) -> None:

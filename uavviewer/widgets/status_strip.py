@@ -98,6 +98,9 @@ class StatusStrip(QFrame):
         label.setObjectName(name)
         label.setToolTip(tip)
         label.setTextFormat(Qt.PlainText)
+        font = label.font()
+        font.setBold(True)                      # set here, not by style sheet: the size hint knows it at once
+        label.setFont(font)
         return label
 
     def _put(self, label: QLabel, text: str, colour: str) -> None:
@@ -106,6 +109,7 @@ class StatusStrip(QFrame):
         if self.colours.get(label.objectName()) != colour:
             self.colours[label.objectName()] = colour
             label.setStyleSheet(f"color: {colour}; font-weight: bold;")
+            label.updateGeometry()
 
     def colour(self, label: QLabel) -> str:
         return self.colours.get(label.objectName(), NORMAL)
