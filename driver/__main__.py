@@ -20,7 +20,8 @@ import threading
 import time
 
 from .options import (
-    add_link_security, as_float, battery_threshold, battery_thresholds, connection, link_security, not_negative, port, positive, registry, takeoff_altitude,
+    add_link_security, as_float, battery_threshold, battery_thresholds, connection, link_security, not_negative,
+    port, positive, registry, takeoff_altitude,
     whole,
 )
 from .version import __version__

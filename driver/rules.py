@@ -9,9 +9,9 @@ from pymavlink import mavutil
 
 from . import frames
 
-__all__ = ["COPTER_MODES", "MIN_TAKEOFF_ALTITUDE", "MAX_TAKEOFF_ALTITUDE", "TAKEOFF_ALTITUDE_RANGE", "MAX_ALTITUDE", "MIN_GOTO_ALTITUDE", "THROTTLE_MODES",
-           "takeoff_altitude_problem", "go_to_problem", "mode_warning", "arming_consequence", "DISARM_DELAY",
-           "unattended", "GCS_FAILSAFE_ACTIONS"]
+__all__ = ["COPTER_MODES", "MIN_TAKEOFF_ALTITUDE", "MAX_TAKEOFF_ALTITUDE", "TAKEOFF_ALTITUDE_RANGE", "MAX_ALTITUDE",
+           "MIN_GOTO_ALTITUDE", "THROTTLE_MODES", "takeoff_altitude_problem", "go_to_problem", "mode_warning",
+           "arming_consequence", "DISARM_DELAY", "unattended", "GCS_FAILSAFE_ACTIONS"]
 
 #: ArduCopter custom_mode numbers by name, from pymavlink's own table.
 COPTER_MODES: dict[str, int] = {name: number for number, name in mavutil.mode_mapping_acm.items()}

@@ -39,8 +39,8 @@ from .rules import COPTER_MODES, MAX_ALTITUDE, MIN_TAKEOFF_ALTITUDE, go_to_probl
 from .setpoints import SetpointStreamer
 from .signing import LinkSigning, SigningConfig
 from .state import (
-    FENCE_PARAMS, Battery, BatteryThresholds, CommandResult, CommandStatus, LinkHealth, LinkStatus, SequencePhase, SequenceProgress,
-    Setpoint, Severity, VehicleState,
+    FENCE_PARAMS, Battery, BatteryThresholds, CommandResult, CommandStatus, LinkHealth, LinkStatus, SequencePhase,
+    SequenceProgress, Setpoint, Severity, VehicleState,
 )
 from .store import StateStore
 from .supervision import LinkSupervisor

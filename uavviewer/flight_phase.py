@@ -8,7 +8,8 @@ from driver.state import LandedState, LinkStatus, VehicleState
 #: The one wording, everywhere in the window, for "nothing heard from a vehicle yet".
 NO_VEHICLE = "No vehicle yet"
 
-__all__ = ["NO_VEHICLE", "FlightPhase", "flight_phase", "takeoff_progress", "takeoff_cancellable", "stick_hint", "readiness_text"]
+__all__ = ["NO_VEHICLE", "FlightPhase", "flight_phase", "takeoff_progress", "takeoff_cancellable", "stick_hint",
+           "readiness_text"]
 
 
 class FlightPhase(enum.Enum):
