@@ -18,7 +18,8 @@ import threading
 import time
 from concurrent.futures import Future
 
-from .state import CommandResult, CommandStatus, SequencePhase, VehicleState
+from .battery import time_left
+from .state import BatteryAlarm, CommandResult, CommandStatus, SequencePhase, VehicleState
 from .rules import COPTER_MODES, mode_warning
 
 ARM_USAGE = ("arm [throttle] [force] | arm check [all|none|MASK] | arm safetyon | arm safetyoff | arm list")
@@ -357,7 +358,16 @@ def battery_line(s: VehicleState) -> str:
         parts.append(f"{b.current:.1f} A")
     if b.remaining is not None:
         parts.append(f"{b.remaining:.0f} %" + (" (from cell voltage)" if b.remaining_estimated else ""))
-    return "battery " + ", ".join(parts) + (" LOW" if b.low else "")
+    if b.consumed_mah is not None:
+        parts.append(f"{b.consumed_mah:.0f} mAh used")
+    left = time_left(b)
+    if left is not None:
+        parts.append(f"about {left / 60:.0f} min left" if left > 0 else "down to the reserve")
+    alarm = {BatteryAlarm.WARNING: " WARNING", BatteryAlarm.CRITICAL: " CRITICAL: land now"}.get(b.alarm, "")
+    t = b.thresholds
+    why = (f" (ours: warning {t.warning_cell:g} V/cell or {t.warning_percent:g} %, critical {t.critical_cell:g} V/cell "
+           f"or {t.critical_percent:g} %)") if alarm else ""
+    return "battery " + ", ".join(parts) + (alarm + why if alarm else " LOW" if b.low else "")
 
 
 def status_lines(s: VehicleState) -> list[str]:

@@ -37,7 +37,8 @@ def battery_text(s: VehicleState) -> str:
         text += f" · {b.consumed_mah:.0f} mAh"
     left = time_left(b)
     if left is not None:
-        text += f" · {left / 60:.0f} min left" if left >= 60 else f" · {left:.0f} s left"
+        text += (f" · {left / 60:.0f} min left" if left >= 60 else f" · {left:.0f} s left" if left > 0
+                 else " · down to the reserve")
     if b.alarm is BatteryAlarm.CRITICAL:
         text = "CRITICAL " + text
     elif b.alarm is BatteryAlarm.WARNING:
