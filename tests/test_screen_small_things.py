@@ -152,3 +152,12 @@ def test_the_plots_have_a_time_unit_and_one_line_legends(qtbot, silent_vehicle, 
     assert bottom.labelText == "time before now" and bottom.labelUnits == "s"
     for plot in w.plots.plots:
         assert plot.legend.columnCount == 3
+
+
+def test_the_sim_is_named_not_its_socket(qtbot, sim, vehicle, window_factory):
+    from uavviewer.app import sim_name
+    w = window_factory(vehicle)
+    assert "tcp:127.0.0.1" in w.windowTitle()                 # what the driver calls its link
+    w.name_vehicle(sim_name(2.0))                              # what main.py --sim --speedup 2 does
+    assert w.windowTitle() == "UavViewerPy — simulated ArduCopter (built in), 2× time"
+    assert "tcp:" not in w.windowTitle()

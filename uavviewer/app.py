@@ -259,8 +259,7 @@ def main(argv: list[str] | None = None) -> int:
     window = MainWindow(drone, takeoff_altitude=args.takeoff_altitude, cameras=args.camera,  # --camera: this run
                         default_cameras=own_camera)
     if sim is not None:                                           # not a raw tcp:127.0.0.1:port in the title
-        window.name_vehicle(f"simulated ArduCopter (built in, {sim.config.speedup:g}× time)"
-                            if sim.config.speedup != 1 else "simulated ArduCopter (built in)")
+        window.name_vehicle(sim_name(sim.config.speedup))
     if fleet is not None:
         controller = FleetController(fleet, first, parent=window)
         window.attach_fleet(controller)
@@ -286,6 +285,11 @@ def main(argv: list[str] | None = None) -> int:
             drone.close()
         if sim is not None:
             sim.stop()
+
+
+def sim_name(speedup: float) -> str:
+    """What the window calls the built-in simulator (its title, About)."""
+    return "simulated ArduCopter (built in)" + (f", {speedup:g}× time" if speedup != 1 else "")
 
 
 def _schedule_screenshot(window, path: Path, after: float, fly: bool) -> None:
