@@ -704,6 +704,8 @@ class Vehicle(Drone):
         if seq is None or not seq.nothing_flown:
             return self.stop()
         self._abort_takeoff("cancelled before liftoff")
+        if seq.takeoff_sent:                          # NAV_TAKEOFF went out meanwhile: hold, never disarm
+            return self.stop()
         s = self.state()
         undone = []
         if s.armed and not seq.armed_before:
@@ -722,7 +724,11 @@ class Vehicle(Drone):
     def stop(self) -> Future:
         """Hold position, and the sticks fly again: zero velocity in GUIDED (which also cancels a go-to); in
         flight in another mode (RTL, LOITER, LAND...), GUIDED with zero velocity, where ArduCopter brakes to its
-        stopping point and holds it (ModeGuided::init); BRAKE if the vehicle refuses GUIDED (no position)."""
+        stopping point and holds it (ModeGuided::init); BRAKE if the vehicle refuses GUIDED (no position).
+        During a takeoff that has not left the ground it is :meth:`cancel_takeoff`: the vehicle as it was."""
+        seq = self._takeoff
+        if seq is not None and seq.nothing_flown:
+            return self.cancel_takeoff()
         taking_off = self.state().takeoff.active
         self._abort_takeoff("stop")
         s = self.state()
