@@ -196,6 +196,7 @@ def _readouts(p: QPainter, rect: QRectF, state: VehicleState, size: int) -> None
     alarm = ALARM.get(b.alarm, WARN if b.low and b.alarm is BatteryAlarm.UNKNOWN else HUD_COLOUR)
     _text(p, top_right, Qt.AlignRight | Qt.AlignVCenter, "BAT " + (" ".join(parts) or "--"),
           colour if stale else alarm)
-    if stale:                                   # under the heading tape, where the pilot looks first
-        _text(p, QRectF(rect.left(), _top_band(rect, size).bottom(), rect.width(), line),
-              Qt.AlignHCenter | Qt.AlignVCenter, stale, WARN)
+    if stale:                                   # along the bottom, clear of the scales, on a dark band
+        band = QRectF(rect.left(), rect.bottom() - line - MARGIN, rect.width(), line + MARGIN)
+        p.fillRect(band, SHADOW)
+        _text(p, band, Qt.AlignHCenter | Qt.AlignVCenter, stale, WARN)
