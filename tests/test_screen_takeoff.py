@@ -72,3 +72,20 @@ def test_arm_asks_first_and_says_what_happens_without_rc(qtbot, sim, vehicle_fac
     qtbot.mouseClick(w.arm_box.button(QMessageBox.Cancel), Qt.LeftButton)
     qtbot.waitUntil(lambda: w.arm_box is None, timeout=3000)
     assert not sim.truth().armed and not vehicle.state().armed
+
+
+def test_launch_to_airborne_is_one_click_and_its_confirmation(qtbot, sim_factory, vehicle_factory, window_factory):
+    """As a new user on --sim: the window opens before the vehicle is ready; one click on the main button, one on
+    the question's "Take off when ready", and it flies (the sticks live) once the vehicle is ready."""
+    sim = sim_factory(ready_after=6.0)
+    vehicle = vehicle_factory(f"tcp:127.0.0.1:{sim.tcp_port}")
+    w = window_factory(vehicle, takeoff_altitude=3.0)
+    b = w.flightControls.main_button
+    clicks = 0
+    qtbot.waitUntil(lambda: b.isEnabled() and b.text() == "Take off when ready", timeout=10000)
+    qtbot.mouseClick(b, Qt.LeftButton)
+    clicks += 1
+    qtbot.waitUntil(lambda: w.takeoff_box is not None and w.takeoff_box.isVisible(), timeout=3000)
+    qtbot.mouseClick(w.takeoff_box.button(QMessageBox.Yes), Qt.LeftButton)      # its confirmation
+    qtbot.waitUntil(lambda: w.leftStick.isEnabled() and vehicle.state().can_fly_velocity, timeout=60000)
+    assert clicks == 1 and sim.truth().altitude > 2.5
