@@ -20,7 +20,8 @@ import threading
 import time
 
 from .options import (
-    add_link_security, as_float, connection, link_security, not_negative, port, positive, registry, takeoff_altitude,
+    add_link_security, as_float, battery_threshold, battery_thresholds, connection, link_security, not_negative,
+    port, positive, registry, takeoff_altitude,
     whole,
 )
 from .version import __version__
@@ -75,6 +76,11 @@ def parser() -> argparse.ArgumentParser:
                    help=f"simulated seconds until the vehicle is ready to arm (default {DEMO_READY_AFTER:g})")
     p.add_argument("--takeoff-alt", type=takeoff_altitude,
                    help="default takeoff altitude in metres above home (default 3)")
+    p.add_argument("--battery-warning", type=battery_threshold, metavar="VOLTS,PERCENT",
+                   help="our own battery warning: volts a cell under load, percent remaining, whichever comes "
+                        "first, whatever the vehicle's failsafe says (default 3.6,30)")
+    p.add_argument("--battery-critical", type=battery_threshold, metavar="VOLTS,PERCENT",
+                   help="our own battery critical alarm, as --battery-warning (default 3.5,15)")
     p.add_argument("--host", help="address the Ice interfaces bind (default 127.0.0.1); any other needs --certs "
                                   "(or --insecure)")
     p.add_argument("--certs", metavar="DIR", help="serve Ice over TLS on --host, clients need a certificate from DIR "
@@ -139,6 +145,10 @@ def main(argv: list[str] | None = None) -> int:
         p.error(f"cannot read the Ice configuration {ice_problem(exc)}")
     opts = p.parse_args(args)
     signing, allowed = link_security(opts, p)
+    try:
+        thresholds = battery_thresholds(opts.battery_warning, opts.battery_critical)
+    except ValueError as exc:
+        p.error(f"--battery-warning/--battery-critical: {exc}")
     if opts.count > 1 and not opts.sim:
         p.error("--count needs --sim (a real vehicle has one server each: start one per companion computer)")
     if opts.count > 1 and not opts.registry:
@@ -208,7 +218,7 @@ def main(argv: list[str] | None = None) -> int:
                 target_component=opts.target_component, stream_rate=opts.streamrate, takeoff_altitude=takeoff_alt,
                 limits=Limits(), tlog_path=log_path(opts, name if len(names) > 1 else ""),
                 tlog_append=opts.append_log, outputs=tuple(opts.out), signing=signing, allowed_senders=allowed,
-                mavlink_version=1 if opts.mav10 else 2 if opts.mav20 else None))
+                mavlink_version=1 if opts.mav10 else 2 if opts.mav20 else None, battery_thresholds=thresholds))
             vehicles.append(vehicle)
             vehicle.start()
             own = props.clone()

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 
 from . import guided
 from .mission.plan import Plan, PlanKind, TransferOutcome
-from .state import CommandResult, CommandStatus, VehicleState
+from .state import BatteryThresholds, CommandResult, CommandStatus, VehicleState
 
 
 @dataclass(frozen=True)
@@ -59,6 +59,11 @@ class Drone(abc.ABC):
         """
         raise NotImplementedError
 
+    def set_battery_thresholds(self, thresholds: BatteryThresholds) -> BatteryThresholds:
+        """The pilot's own battery limits (warning and critical, per cell and in percent) that
+        ``state().battery.alarm`` is judged by from now on. Returns those in force."""
+        raise NotImplementedError
+
     @property
     def replay(self):
         """Play/pause/speed control when the 'vehicle' is a recorded flight, else None."""
@@ -79,6 +84,11 @@ class Drone(abc.ABC):
     @abc.abstractmethod
     def stop(self) -> Future[CommandResult]:
         """Hold position: zero velocity in GUIDED, else BRAKE. Aborts a takeoff."""
+
+    def cancel_takeoff(self) -> Future[CommandResult]:
+        """End a takeoff that has not left the ground and give the vehicle back as it was (its mode, disarmed
+        if it was); once NAV_TAKEOFF went out, the same as :meth:`stop`. Never switches to LAND."""
+        return self.stop()
 
     @abc.abstractmethod
     def return_to_launch(self) -> Future[CommandResult]:

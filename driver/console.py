@@ -18,7 +18,8 @@ import threading
 import time
 from concurrent.futures import Future
 
-from .state import CommandResult, CommandStatus, SequencePhase, VehicleState
+from .battery import time_left
+from .state import BatteryAlarm, CommandResult, CommandStatus, SequencePhase, VehicleState
 from .rules import COPTER_MODES, mode_warning
 from .payload.console import PayloadCommands
 
@@ -143,7 +144,12 @@ class Console(PayloadCommands, cmd.Cmd):
             self.say(f"error: {exc}")
             return False
 
+    def get_names(self) -> list[str]:
+        """The commands help lists: Ctrl+D (EOF) is a key, not a command to type."""
+        return [name for name in super().get_names() if name != "do_EOF"]
+
     def do_help(self, arg: str) -> None:
+        """help [COMMAND]: the commands, or what one does"""
         doc = getattr(getattr(self, "do_" + arg.strip(), None), "__doc__", None) if arg.strip() else None
         if doc:
             self.say(inspect.cleandoc(doc))             # multi-line help without the source's indentation
@@ -216,7 +222,7 @@ class Console(PayloadCommands, cmd.Cmd):
         self._report(self.vehicle.land())
 
     def do_stop(self, arg: str) -> None:
-        """stop: hold position (zero velocity in GUIDED, else BRAKE)"""
+        """stop: hold position in GUIDED with zero velocity (the sticks fly again; BRAKE if GUIDED is refused)"""
         self._cancel_velocity()
         self._report(self.vehicle.stop())
 
@@ -353,7 +359,16 @@ def battery_line(s: VehicleState) -> str:
         parts.append(f"{b.current:.1f} A")
     if b.remaining is not None:
         parts.append(f"{b.remaining:.0f} %" + (" (from cell voltage)" if b.remaining_estimated else ""))
-    return "battery " + ", ".join(parts) + (" LOW" if b.low else "")
+    if b.consumed_mah is not None:
+        parts.append(f"{b.consumed_mah:.0f} mAh used")
+    left = time_left(b)
+    if left is not None:
+        parts.append(f"about {left / 60:.0f} min left" if left > 0 else "down to the reserve")
+    alarm = {BatteryAlarm.WARNING: " WARNING", BatteryAlarm.CRITICAL: " CRITICAL: land now"}.get(b.alarm, "")
+    t = b.thresholds
+    why = (f" (ours: warning {t.warning_cell:g} V/cell or {t.warning_percent:g} %, critical {t.critical_cell:g} V/cell "
+           f"or {t.critical_percent:g} %)") if alarm else ""
+    return "battery " + ", ".join(parts) + (alarm + why if alarm else " LOW" if b.low else "")
 
 
 def status_lines(s: VehicleState) -> list[str]:

@@ -130,3 +130,27 @@ def link_security(opts, parser: argparse.ArgumentParser):
     if key is None and not opts.signing_allow_unsigned:
         return None, tuple(opts.allow)
     return SigningConfig(key=key, allow_unsigned=opts.signing_allow_unsigned), tuple(opts.allow)
+
+
+def battery_threshold(text: str) -> tuple[float, float]:
+    """"3.6,30": a battery threshold, volts a cell and percent remaining (driver.battery)."""
+    try:
+        cell, percent = (float(part) for part in text.split(","))
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"{text!r}: give volts a cell and percent, e.g. 3.6,30") from None
+    if not (2.5 <= cell <= 4.4 and 0.0 <= percent <= 100.0):
+        raise argparse.ArgumentTypeError(f"{text!r}: 2.5 to 4.4 V a cell and 0 to 100 %")
+    return cell, percent
+
+
+def battery_thresholds(warning: tuple[float, float] | None, critical: tuple[float, float] | None):
+    """The --battery-warning/--battery-critical pair as thresholds (defaults where not given); ValueError if
+    critical is above warning."""
+    from .state import BatteryThresholds
+    d = BatteryThresholds()
+    wc, wp = warning or (d.warning_cell, d.warning_percent)
+    cc, cp = critical or (d.critical_cell, d.critical_percent)
+    t = BatteryThresholds(wc, cc, wp, cp)
+    if t.problem():
+        raise ValueError(t.problem())
+    return t

@@ -9,14 +9,18 @@ from pymavlink import mavutil
 
 from . import frames
 
-__all__ = ["COPTER_MODES", "MIN_TAKEOFF_ALTITUDE", "MAX_ALTITUDE", "MIN_GOTO_ALTITUDE", "THROTTLE_MODES",
-           "takeoff_altitude_problem", "go_to_problem", "mode_warning"]
+__all__ = ["COPTER_MODES", "MIN_TAKEOFF_ALTITUDE", "MAX_TAKEOFF_ALTITUDE", "TAKEOFF_ALTITUDE_RANGE", "MAX_ALTITUDE",
+           "MIN_GOTO_ALTITUDE", "THROTTLE_MODES", "takeoff_altitude_problem", "go_to_problem", "mode_warning",
+           "arming_consequence", "DISARM_DELAY", "unattended", "GCS_FAILSAFE_ACTIONS"]
 
 #: ArduCopter custom_mode numbers by name, from pymavlink's own table.
 COPTER_MODES: dict[str, int] = {name: number for number, name in mavutil.mode_mapping_acm.items()}
 
-MIN_TAKEOFF_ALTITUDE = 0.5         # m above home: lower is no takeoff
-MAX_ALTITUDE = 120.0               # m above home: no takeoff or go-to target above it (EU open category)
+MIN_TAKEOFF_ALTITUDE = 1.0         # m above home: lower is no takeoff (ground effect, a prop wash in the grass)
+MAX_TAKEOFF_ALTITUDE = 50.0        # m above home: a takeoff climbs straight up; higher is a go-to's job
+MAX_ALTITUDE = 120.0               # m above home: no go-to target above it (EU open category)
+#: The one takeoff altitude range: window (Preferences, --takeoff-altitude), driver CLI, console and Ice.
+TAKEOFF_ALTITUDE_RANGE = (MIN_TAKEOFF_ALTITUDE, MAX_TAKEOFF_ALTITUDE)
 MIN_GOTO_ALTITUDE = 1.0            # m above home
 
 #: Modes in which ArduCopter takes the throttle (and so the altitude) from the RC transmitter: a pilot
@@ -32,10 +36,12 @@ THROTTLE_MODES = {
 
 
 def takeoff_altitude_problem(altitude: float, ceiling: float = MAX_ALTITUDE) -> str | None:
-    """Why ``altitude`` cannot be a takeoff target, or None: one rule for the driver, its CLI and console."""
-    if frames.finite(altitude) and MIN_TAKEOFF_ALTITUDE <= altitude <= ceiling:
+    """Why ``altitude`` cannot be a takeoff target, or None: one rule for the window, the driver, its CLI,
+    console and Ice (``ceiling``: a lower configured maximum altitude)."""
+    top = min(MAX_TAKEOFF_ALTITUDE, ceiling)
+    if frames.finite(altitude) and MIN_TAKEOFF_ALTITUDE <= altitude <= top:
         return None
-    return f"altitude must be {MIN_TAKEOFF_ALTITUDE:g} to {ceiling:g} m"
+    return f"altitude must be {MIN_TAKEOFF_ALTITUDE:g} to {top:g} m"
 
 
 def go_to_problem(north: float, east: float, altitude: float, max_altitude: float, max_distance: float) -> str | None:
@@ -46,6 +52,51 @@ def go_to_problem(north: float, east: float, altitude: float, max_altitude: floa
         return (f"outside the limits: {MIN_GOTO_ALTITUDE:g} to {max_altitude:g} m above home, at most "
                 f"{max_distance:g} m from it")
     return None
+
+
+DISARM_DELAY = 10.0                # s: ArduCopter's default DISARM_DELAY, armed on the ground without a takeoff
+
+
+def arming_consequence(mode: str) -> str:
+    """What arming on the ground in ``mode`` does, in a pilot's words (one wording for every front end)."""
+    why = THROTTLE_MODES.get(mode.upper())
+    if why is not None:
+        return (f"The motors start and idle. {mode.upper()} takes its throttle from an RC transmitter: without one "
+                f"nothing lifts off, and ArduCopter disarms again after about {DISARM_DELAY:.0f} s (DISARM_DELAY). "
+                "To fly from here, use Take off instead: it arms in GUIDED and climbs.")
+    return (f"The motors start and idle. Without a takeoff within about {DISARM_DELAY:.0f} s ArduCopter disarms "
+            "again (DISARM_DELAY). Take off arms by itself: you rarely need Arm.")
+
+
+#: FS_GCS_ENABLE: what ArduCopter does once the ground station's heartbeats stop (GCS failsafe, after
+#: FS_GCS_TIMEOUT, 5 s by default), from its parameter documentation.
+GCS_FAILSAFE_ACTIONS = {1: "returns home (RTL)", 2: "continues its mission in AUTO, else returns home (RTL)",
+                        3: "returns along its path (SmartRTL), else RTL", 4: "returns along its path (SmartRTL), "
+                        "else lands", 5: "lands", 6: "jumps to its mission's landing (DO_LAND_START), else RTL"}
+_UNATTENDED = {
+    "GUIDED": "holds position in GUIDED", "LOITER": "holds position in LOITER", "POSHOLD": "holds position in "
+    "POSHOLD", "BRAKE": "holds position in BRAKE", "RTL": "goes on returning home and lands there (RTL)",
+    "SMART_RTL": "goes on returning along its path and lands (SmartRTL)", "LAND": "goes on landing where it is",
+    "AUTO": "flies on with its mission (AUTO)", "CIRCLE": "goes on circling (CIRCLE)",
+}
+
+
+def unattended(mode: str, gcs_failsafe: int | None) -> str:
+    """What the vehicle does in ``mode`` once nobody commands it from here, in a pilot's words: the mode's own
+    behaviour, then what its GCS failsafe (FS_GCS_ENABLE, None: not read yet) makes of it."""
+    mode = mode.upper()
+    now = _UNATTENDED.get(mode)
+    if now is None:
+        why = THROTTLE_MODES.get(mode)
+        now = f"stays in {mode or 'its mode'}" + (f", where its {why}" if why else "")
+    if gcs_failsafe is None:
+        then = "until its own failsafes act (its GCS failsafe setting is not known yet)"
+    elif gcs_failsafe == 0:
+        then = "until its battery failsafe acts: its GCS failsafe is off (FS_GCS_ENABLE 0)"
+    else:
+        action = GCS_FAILSAFE_ACTIONS.get(gcs_failsafe, f"acts as FS_GCS_ENABLE {gcs_failsafe} says")
+        then = f"until its GCS failsafe notices the silence (FS_GCS_TIMEOUT, 5 s by default) and {action}"
+    return f"it {now} {then}"
 
 
 def mode_warning(mode: str, flying: bool) -> str | None:

@@ -20,7 +20,7 @@ from .payload.model import Gimbal, VehicleCamera
 
 __all__ = [
     "LandedState", "LinkStatus", "Severity", "CommandStatus", "Attitude", "GlobalPosition",
-    "LocalPosition", "Velocity", "BatteryAlarm", "Battery", "Gps", "Readiness", "LinkHealth", "SigningStatus", "Signing", "Message",
+    "LocalPosition", "Velocity", "BatteryAlarm", "BatteryThresholds", "Battery", "Gps", "Readiness", "LinkHealth", "SigningStatus", "Signing", "Message",
     "CommandResult", "Setpoint", "SequencePhase", "SequenceProgress", "Environment", "Fence", "FENCE_PARAMS",
     "VehicleState", "replace",
 ]
@@ -137,6 +137,27 @@ class BatteryAlarm(enum.IntEnum):
 
 
 @dataclass(frozen=True)
+class BatteryThresholds:
+    """The pilot's own battery limits, per cell (loaded voltage) and in percent: whichever is crossed first
+    counts. Judged by the driver (driver.battery) whatever the vehicle's own battery failsafe says."""
+    warning_cell: float = 3.6            # V a cell
+    critical_cell: float = 3.5           # V a cell
+    warning_percent: float = 30.0        # % remaining
+    critical_percent: float = 15.0       # % remaining
+
+    def problem(self) -> str | None:
+        """Why these thresholds cannot be used, or None."""
+        values = (self.warning_cell, self.critical_cell, self.warning_percent, self.critical_percent)
+        if not all(isinstance(v, (int, float)) and math.isfinite(v) for v in values):
+            return "battery thresholds must be finite numbers"
+        if not 2.5 <= self.critical_cell <= self.warning_cell <= 4.4:
+            return "battery cell thresholds: 2.5 V <= critical <= warning <= 4.4 V"
+        if not 0.0 <= self.critical_percent <= self.warning_percent <= 100.0:
+            return "battery percent thresholds: 0 <= critical <= warning <= 100 %"
+        return None
+
+
+@dataclass(frozen=True)
 class Battery:
     voltage: float | None = None         # V
     current: float | None = None         # A
@@ -148,6 +169,8 @@ class Battery:
     charge_state: int = 0                # MAV_BATTERY_CHARGE_STATE from the autopilot, 0 when it sends none
     reported_remaining: float | None = None   # the autopilot's own percentage, None when it gives none
     alarm: BatteryAlarm = BatteryAlarm.UNKNOWN   # against the pilot's thresholds, whatever the vehicle's failsafe says
+    consumed_mah: float | None = None    # BATTERY_STATUS.current_consumed, None when the vehicle does not count it
+    thresholds: BatteryThresholds = field(default_factory=BatteryThresholds)   # what ``alarm`` is judged by
 
     @property
     def cell_voltage(self) -> float | None:

@@ -62,6 +62,8 @@ class TakeoffSequence:
         self.takeoff_sent = False           # NAV_TAKEOFF was issued (it may reach the vehicle after an abort)
         self.phase = SequencePhase.WAITING_READY
         self.detail = ""
+        before = drone.state()                      # what a cancel before liftoff gives back
+        self.mode_before, self.armed_before = before.mode, before.armed
 
     def _go(self, stage: str, now: float, phase: SequencePhase | None = None, detail: str = "") -> None:
         self._stage, self._since, self._pending = stage, now, None
@@ -86,6 +88,8 @@ class TakeoffSequence:
         elif stage == "ready":
             if s.readiness.ready_to_arm or elapsed > cfg.ready_timeout:   # then let the vehicle decide
                 self._go("guided", now, SequencePhase.SETTING_GUIDED)
+            elif s.connected:                       # say what is still awaited, as it arrives
+                self.detail = "waiting for " + ", ".join(s.readiness.missing)
         elif stage == "guided":
             if self._pending is None:
                 self._pending = self.drone.set_mode("GUIDED")
@@ -139,6 +143,11 @@ class TakeoffSequence:
                 return (CommandStatus.TIMED_OUT, f"did not reach {self.altitude:.1f} m (at {s.altitude:.1f} m)",
                         SequencePhase.FAILED)
         return None
+
+    @property
+    def nothing_flown(self) -> bool:
+        """Before NAV_TAKEOFF: the vehicle may have been switched or armed, but nothing has left the ground."""
+        return not self.takeoff_sent
 
     def _ask_again(self, r: CommandResult) -> bool:
         """A command the vehicle never answered (lost both ways on a bad link) is asked again, up to

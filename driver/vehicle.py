@@ -31,6 +31,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from . import frames
 from .api import CEILING, Drone, Limits
+from .battery import battery_alarm
 from .commands import CommandSender, Notifier, command_name
 from .forwarding import Forwarder
 from .payload.control import PAYLOAD_MESSAGES, Payload
@@ -39,8 +40,8 @@ from .rules import COPTER_MODES, MAX_ALTITUDE, MIN_TAKEOFF_ALTITUDE, go_to_probl
 from .setpoints import SetpointStreamer
 from .signing import LinkSigning, SigningConfig
 from .state import (
-    FENCE_PARAMS, Battery, CommandResult, CommandStatus, LinkHealth, LinkStatus, SequencePhase, SequenceProgress,
-    Setpoint, Severity, VehicleState,
+    FENCE_PARAMS, Battery, BatteryThresholds, CommandResult, CommandStatus, LinkHealth, LinkStatus, SequencePhase,
+    SequenceProgress, Setpoint, Severity, VehicleState,
 )
 from .store import StateStore
 from .supervision import LinkSupervisor
@@ -88,6 +89,7 @@ class VehicleConfig:
     climb_timeout: float = 20.0               # s for the climb to 95 % of the target, plus 2 s a metre
     mavlink_version: int | None = None        # None: start on 1, follow the autopilot to 2
     battery_cells: int | None = None          # None: from the vehicle, or inferred from the first voltage
+    battery_thresholds: BatteryThresholds = field(default_factory=BatteryThresholds)   # the pilot's own alarm
     replay_speed: float = 1.0
     heartbeat_interval: float = 1.0
     signing: SigningConfig | None = None      # MAVLink 2 signing (driver.signing); None: off until a key is given
@@ -120,6 +122,7 @@ class Vehicle(Drone):
         self._v2 = cfg.mavlink_version == 2
         self._tlog = TlogWriter(cfg.tlog_path, cfg.tlog_append) if cfg.tlog_path and not self._replay else None
         battery = Battery(cells=cfg.battery_cells, cells_source="configured") if cfg.battery_cells else Battery()
+        battery = replace(battery, thresholds=cfg.battery_thresholds)
         self._store = StateStore(VehicleState(link=LinkHealth(address=self._transport.description), battery=battery),
                                  self._transport.wall_time)
         self._lock = self._store.lock
@@ -162,6 +165,16 @@ class Vehicle(Drone):
     def set_limits(self, limits: Limits) -> Limits:
         self._limits = limits.within(CEILING)         # one reference swap: safe from any thread
         return self._limits
+
+    def set_battery_thresholds(self, thresholds: BatteryThresholds) -> BatteryThresholds:
+        problem = thresholds.problem()
+        if problem:
+            raise ValueError(problem)
+        with self._lock:
+            judged = replace(self._store.view()["battery"], thresholds=thresholds)
+            self._store.set(battery=replace(judged, alarm=battery_alarm(judged)))
+            self._store.publish()
+        return thresholds
 
     @property
     def replay(self) -> ReplayControl | None:
@@ -692,11 +705,38 @@ class Vehicle(Drone):
         self._abort_takeoff("landing")
         return self._set_mode("LAND")
 
+    def cancel_takeoff(self) -> Future:
+        """The pilot's Cancel before liftoff: the sequence ends, and what it changed is undone (disarm if it
+        armed, back to the mode it left); once NAV_TAKEOFF went out it is Stop (hold where it is). Never LAND."""
+        seq = self._takeoff
+        if seq is None or not seq.nothing_flown:
+            return self.stop()
+        self._abort_takeoff("cancelled before liftoff")
+        if seq.takeoff_sent:                          # NAV_TAKEOFF went out meanwhile: hold, never disarm
+            return self.stop()
+        s = self.state()
+        undone = []
+        if s.armed and not seq.armed_before:
+            self._command_long(mavlink.MAV_CMD_COMPONENT_ARM_DISARM, (0, 0), "disarm (takeoff cancelled)",
+                               guard=_not_in_flight)
+            undone.append("disarming")
+        if seq.mode_before and s.mode != seq.mode_before:
+            self._set_mode(seq.mode_before)
+            undone.append(f"back to {seq.mode_before}")
+        return self._finish("cancel takeoff", CommandStatus.ACCEPTED,
+                            "cancelled before liftoff: " + (", ".join(undone) or "the vehicle was not changed"))
+
     def return_to_launch(self) -> Future:
         return self._busy("RTL") or self._set_mode("RTL")
 
     def stop(self) -> Future:
-        """Hold position: zero velocity in GUIDED (which also cancels a go-to), BRAKE otherwise."""
+        """Hold position, and the sticks fly again: zero velocity in GUIDED (which also cancels a go-to); in
+        flight in another mode (RTL, LOITER, LAND...), GUIDED with zero velocity, where ArduCopter brakes to its
+        stopping point and holds it (ModeGuided::init); BRAKE if the vehicle refuses GUIDED (no position).
+        During a takeoff that has not left the ground it is :meth:`cancel_takeoff`: the vehicle as it was."""
+        seq = self._takeoff
+        if seq is not None and seq.nothing_flown:
+            return self.cancel_takeoff()
         taking_off = self.state().takeoff.active
         self._abort_takeoff("stop")
         s = self.state()
@@ -710,7 +750,27 @@ class Vehicle(Drone):
                 self._store.publish()
             self._wake.set()
             return self._finish("stop", CommandStatus.ACCEPTED, "holding position (zero velocity in GUIDED)")
-        return self._set_mode("BRAKE")
+        return self._hold_in_guided(s.mode)
+
+    def _hold_in_guided(self, was: str) -> Future:
+        """Stop outside GUIDED: zeros wait to stream, GUIDED is asked; if refused, BRAKE (the sticks then stay
+        inert until GUIDED is possible, and the result says why)."""
+        with self._lock:
+            self._setpoints.stop(time.monotonic())
+            self._store.set(setpoint=self._setpoints.setpoint)
+        outcome: Future = Future()
+
+        def guided_answered(f: Future) -> None:
+            r = f.result()
+            if r.ok:
+                outcome.set_result(self._store.record("stop", CommandStatus.ACCEPTED,
+                                                      f"holding position in GUIDED (was {was}): the sticks fly"))
+                return
+            brake = self._set_mode("BRAKE")
+            brake.add_done_callback(lambda b: outcome.set_result(self._store.record(
+                "stop", b.result().status, f"GUIDED refused ({r.reason}): BRAKE, {b.result().reason}")))
+        self._set_mode("GUIDED").add_done_callback(guided_answered)
+        return outcome
 
     def reboot(self) -> Future:
         problem = _ground_only(self.state())

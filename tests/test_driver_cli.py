@@ -39,9 +39,9 @@ def run(module: str, *args: str, cwd, timeout: float = 30) -> subprocess.Complet
     (["--sim", "--Ice.Config=/nope.cfg"], "cannot read the Ice configuration /nope.cfg: no such file or directory"),
     (["--sim", "--streamrate", "-1"], "argument --streamrate: '-1': a whole number from 1 to 50 is needed"),
     (["--sim", "--one-port", "99999"], "argument --one-port: '99999': a whole number from 1 to 65535 is needed"),
-    (["--sim", "--takeoff-alt", "-3"], "argument --takeoff-alt: '-3': altitude must be 0.5 to 120 m"),
+    (["--sim", "--takeoff-alt", "-3"], "argument --takeoff-alt: '-3': altitude must be 1 to 50 m"),
     (["--sim", "--MAVLinkServer.TakeoffAltitude=500"],
-     "MAVLinkServer.TakeoffAltitude=500: altitude must be 0.5 to 120 m"),
+     "MAVLinkServer.TakeoffAltitude=500: altitude must be 1 to 50 m"),
     (["--master", "/nope.tlog"], "argument --master: no such flight log: /nope.tlog"),
     (["--master", "foo:bar"], "argument --master: 'foo:bar' is not a connection string: a link is udpin:HOST:PORT, "
      "udpout:HOST:PORT, tcp:HOST:PORT, a serial device such as /dev/ttyUSB0, or a .tlog file"),

@@ -83,22 +83,22 @@ def test_disarm_in_flight_is_refused_even_forced(flying, sim):
     assert flying.state().armed
 
 
-def test_stop_outside_guided_brakes_and_holds(vehicle, sim):
+def test_stop_outside_guided_holds_in_guided(vehicle, sim):
     assert vehicle.takeoff(6.0).result(timeout=60).ok
     assert vehicle.land().result(timeout=10).ok
     assert until(vehicle, sim, lambda t: t.mode == "LAND" and t.vd > 0.3, 20), sim.truth()   # coming down
 
     result = vehicle.stop().result(timeout=10)
     assert result.status is CommandStatus.ACCEPTED, str(result)
-    assert sim.truth().mode == "BRAKE"
+    assert sim.truth().mode == "GUIDED" and "the sticks fly" in result.reason   # issue 21: sticks live again
     stopped = until(vehicle, sim, lambda t: abs(t.vd) < 0.05 and t.ground_speed < 0.1, 20)
     assert stopped is not None, sim.truth()
     assert stopped.armed and stopped.altitude > 1.0
     later = until(vehicle, sim, lambda t: t.time >= stopped.time + 2.0, 10)
-    assert later is not None and later.mode == "BRAKE" and later.armed
+    assert later is not None and later.mode == "GUIDED" and later.armed
     assert abs(later.altitude - stopped.altitude) < 0.2, (stopped.altitude, later.altitude)   # held, not landing
     assert later.landed_state == LandedState.IN_AIR
-    assert vehicle.wait_for(lambda s: s.mode == "BRAKE", 5)
+    assert vehicle.wait_for(lambda s: s.mode == "GUIDED" and s.can_fly_velocity, 5)
 
 
 def test_set_yaw_turns_to_absolute_headings(flying, sim):

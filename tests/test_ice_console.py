@@ -102,7 +102,7 @@ def test_console_refuses_at_once_what_cannot_fly(vehicle):
     """On the ground: an out-of-range takeoff and a velocity are refused with the reason, nothing "started"."""
     console, out = console_for(vehicle)
     console.onecmd("takeoff -3")
-    assert out.getvalue() == "takeoff: rejected (altitude must be 0.5 to 120 m)\n"
+    assert out.getvalue() == "takeoff: rejected (altitude must be 1 to 50 m)\n"
     console.onecmd("velocity 1 0 0")
     assert out.getvalue().endswith("velocity not sent: take off to fly\n"), out.getvalue()
     assert not any(t.name == "console-velocity" for t in threading.enumerate())     # no 3 s hold

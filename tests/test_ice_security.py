@@ -276,7 +276,7 @@ def test_forced_arm_and_modes_outside_the_list_are_refused(vehicle, sim, server_
     assert until(vehicle, sim, lambda t: t.mode == "LAND", 5)
 
     high = only_guided.takeoff(12.0)                                            # MaxAltitude 10
-    assert high.status == "REJECTED" and "0.5 to 10 m" in high.reason, high
+    assert high.status == "REJECTED" and "1 to 10 m" in high.reason, high
     assert only_guided.setTakeoffAltitude(12.0) == -1 and only_guided.setTakeoffAltitude(8.0) == 0
     assert ext.takeoff(121.0).status == "REJECTED"                             # the rules' 120 m by default
     assert not sim.truth().armed

@@ -169,6 +169,8 @@ def test_refused_arming_shows_the_reason(qtbot, sim, window):
     sim.faults.refuse_arm = "Compass not calibrated"
     qtbot.waitUntil(lambda: w.flightControls.arm_button.isEnabled(), timeout=15000)
     qtbot.mouseClick(w.flightControls.arm_button, Qt.LeftButton)
+    qtbot.waitUntil(lambda: w.arm_box is not None and w.arm_box.isVisible(), timeout=3000)   # it asks first
+    qtbot.mouseClick(w.arm_box.button(QMessageBox.Yes), Qt.LeftButton)
 
     def refused():
         return any("refused" in t and "Compass not calibrated" in t for t in w.messages.texts())

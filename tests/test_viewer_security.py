@@ -208,6 +208,8 @@ def test_a_refused_setup_shows_why_and_disarm_on_the_ground_asks_nothing(qtbot, 
     qtbot.waitUntil(lambda: fc.arm_button.isEnabled() and w.adapter.state.readiness.ready_to_arm, timeout=15000)
     sent = sent_commands(w)
     qtbot.mouseClick(fc.arm_button, Qt.LeftButton)
+    qtbot.waitUntil(lambda: w.arm_box is not None and w.arm_box.isVisible(), timeout=3000)   # Arm asks first
+    qtbot.mouseClick(w.arm_box.button(QMessageBox.Yes), Qt.LeftButton)
     qtbot.waitUntil(lambda: w.adapter.state.armed and fc.arm_button.text() == "Disarm", timeout=10000)
 
     dialog = open_link_security(qtbot, w)

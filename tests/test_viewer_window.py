@@ -36,7 +36,7 @@ def silent_vehicle():
 def test_waiting_banner_and_inert_controls(qtbot, silent_vehicle, window_factory):
     w = window_factory(silent_vehicle)
     qtbot.waitUntil(lambda: w.linkBanner.isVisible(), timeout=3000)
-    assert w.linkBanner.text() == f"Waiting for vehicle on {silent_vehicle.description}…"
+    assert w.linkBanner.text() == f"No vehicle yet — listening on {silent_vehicle.description}…"
     assert not w.flightControls.main_button.isEnabled()
     assert not w.leftStick.isEnabled() and not w.rightStick.isEnabled()
     assert not w.attitude.values["valid"]
@@ -66,7 +66,7 @@ def test_keys_dialog_lists_the_keys(qtbot, silent_vehicle, window_factory):
     assert shown == [("W", "Forward"), ("S", "Back"), ("A", "Left"), ("D", "Right"),
                      ("↑", "Climb"), ("↓", "Descend"), ("←", "Yaw left"), ("→", "Yaw right"),
                      ("Space", "Stop: hover where you are"), ("Esc", "Stop: cancel a Fly here, hover where you are"),
-                     ("T", "Take off"), ("L", "Land"),
+                     ("T", "Take off"), ("L", "Land"), ("R", "Return to launch (RTL)"),
                      ("PgUp", "Tilt the drone's camera up 5° (or the mouse wheel / drag on the video)"),
                      ("PgDn", "Tilt the drone's camera down 5°"),
                      ("(release)", "Releasing a key centres its axis"),

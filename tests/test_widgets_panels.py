@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from PyQt5.QtCore import Qt
 
-from driver.state import (Battery, CommandResult, CommandStatus, Gps, LandedState, LinkHealth, LinkStatus,
+from driver.state import (Battery, BatteryAlarm, CommandResult, CommandStatus, Gps, LandedState, LinkHealth, LinkStatus,
                           SequencePhase, SequenceProgress, Severity, VehicleState)
 from uavviewer.flight_phase import FlightPhase, flight_phase, stick_hint
 from uavviewer.widgets.flight_controls import FlightControls
@@ -17,7 +17,7 @@ from uavviewer.widgets.messages_view import MessagesView, severity_color
 from uavviewer.widgets.mode_selector import ModeSelector
 from uavviewer.widgets.plots_panel import MIN_SPAN, PlotsPanel
 from uavviewer.widgets.replay_bar import ReplayBar
-from uavviewer.widgets.telemetry_panel import BAD, DIM, GOOD, TelemetryPanel
+from uavviewer.widgets.telemetry_panel import BAD, DIM, GOOD, WARN, TelemetryPanel
 
 OK_LINK = LinkHealth(status=LinkStatus.OK, address="tcp:x", heartbeat_age=0.3, packets_per_s=42.0)
 
@@ -48,7 +48,8 @@ def test_battery_warning_colour(qtbot, voltage, remaining, low):
     battery = battery_from_autopilot(voltage, remaining)
     assert battery.low is low
     t.set_state(VehicleState(link=OK_LINK, mode="GUIDED", battery=battery))
-    assert t.color("battery") == (BAD if low else GOOD)
+    colours = {BatteryAlarm.OK: GOOD, BatteryAlarm.WARNING: WARN, BatteryAlarm.CRITICAL: BAD}
+    assert t.color("battery") == colours[battery.alarm]      # our thresholds, not the vehicle's "low"
     if voltage is not None:
         assert f"{voltage:.2f} V" in t.text("battery")
 
@@ -97,7 +98,7 @@ def test_telemetry_with_the_link_lost_is_stale(qtbot):
 def test_link_banner_text(qtbot):
     b = make(LinkBanner, qtbot)
     b.set_link(LinkStatus.WAITING, "udpin:0.0.0.0:14550", None)
-    assert not b.isHidden() and b.text() == "Waiting for vehicle on udpin:0.0.0.0:14550…"
+    assert not b.isHidden() and b.text() == "No vehicle yet — listening on udpin:0.0.0.0:14550…"
     b.set_link(LinkStatus.LOST, "udpin:0.0.0.0:14550", 7.4)
     assert not b.isHidden() and b.text().startswith("Link lost") and "7 s" in b.text()
     assert b.property("kind") == "lost"

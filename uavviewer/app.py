@@ -256,6 +256,8 @@ def main(argv: list[str] | None = None) -> int:
         ice_source.use_client_properties(camera_props)
     window = MainWindow(drone, takeoff_altitude=args.takeoff_altitude, cameras=args.camera,  # --camera: this run
                         default_cameras=own_camera)
+    if sim is not None:                                           # not a raw tcp:127.0.0.1:port in the title
+        window.name_vehicle(sim_name(sim.config.speedup))
     if fleet is not None:
         controller = FleetController(fleet, first, parent=window)
         window.attach_fleet(controller)
@@ -289,6 +291,11 @@ def main(argv: list[str] | None = None) -> int:
             sim.stop()
 
 
+def sim_name(speedup: float) -> str:
+    """What the window calls the built-in simulator (its title, About)."""
+    return "simulated ArduCopter (built in)" + (f", {speedup:g}× time" if speedup != 1 else "")
+
+
 def _schedule_screenshot(window, path: Path, after: float, fly: bool) -> None:
     """Documentation helper (and the installed form's flight test): optionally take off and fly with both sticks;
     ``after`` seconds later (counted from the first stick push when flying, else from the start) save the window
@@ -296,6 +303,10 @@ def _schedule_screenshot(window, path: Path, after: float, fly: bool) -> None:
     from PyQt5.QtCore import QTimer
 
     from driver.state import SequencePhase
+
+    screen = window.screen().availableGeometry()         # the documentation shows the whole screen (Xvfb: no
+    window.setGeometry(screen)                           # window manager, so no title bar to allow for)
+    QTimer.singleShot(1000, lambda: window.setGeometry(screen))   # again once the first snapshot is laid out
 
     def shoot():
         path.parent.mkdir(parents=True, exist_ok=True)

@@ -218,6 +218,10 @@ class CameraController(QObject):
             self.view.set_recording("")
             if recorder.error:
                 self._fail(f"Cannot record: {recorder.error}")
+            elif not recorder.frames_written or not os.path.isfile(recorder.path):
+                status = self._cameras.source.status() if self._cameras is not None else None
+                why = status.reason if status is not None and status.reason else "the camera gave no frames"
+                self._fail(f"Nothing recorded: {why}")          # no file was left behind
             else:
                 self.panel.set_note(f"Recorded {recorder.path} ({recorder.frames_written} frames)")
         else:

@@ -24,7 +24,7 @@ from .settings import TAKEOFF_ALTITUDE_RANGE, ViewerSettings, split_uris
 from .sticks import StickMode
 from .widgets.telemetry_panel import GOOD, NORMAL, WARN
 
-__all__ = ["SettingsDialog", "KeysDialog", "takeoff_question", "fly_here_question", "mode_question",
+__all__ = ["SettingsDialog", "KeysDialog", "takeoff_question", "arm_question", "fly_here_question", "mode_question",
            "signing_setup_question", "emergency_stop_question"]
 
 
@@ -57,8 +57,13 @@ class SettingsDialog(QDialog):
         self.maxHorizontal.setValue(settings.max_horizontal)
         self.maxVertical.setValue(settings.max_vertical)
         self.maxYaw.setValue(settings.max_yaw_deg_s)
-        self.deadband.setValue(settings.deadband)
-        self.expo.setValue(settings.expo)
+        self.deadband.setValue(100.0 * settings.deadband)        # a fraction of the travel, shown in %
+        self.expo.setValue(100.0 * settings.expo)
+        t = settings.battery_thresholds
+        self.batteryWarningCell.setValue(t.warning_cell)
+        self.batteryWarningPercent.setValue(t.warning_percent)
+        self.batteryCriticalCell.setValue(t.critical_cell)
+        self.batteryCriticalPercent.setValue(t.critical_percent)
         self.takeoffAltitude.setValue(settings.takeoff_altitude)
         self.cameraUris.setPlainText("\n".join(settings.camera_uris))
         self.mediaFolder.setText(settings.media_folder)
@@ -88,8 +93,13 @@ class SettingsDialog(QDialog):
     def chosen(self) -> ViewerSettings:
         return replace(self._settings, stick_mode=self.stickMode.currentData(),
                        max_horizontal=self.maxHorizontal.value(), max_vertical=self.maxVertical.value(),
-                       max_yaw_deg_s=self.maxYaw.value(), deadband=self.deadband.value(),
-                       expo=self.expo.value(), takeoff_altitude=self.takeoffAltitude.value(),
+                       max_yaw_deg_s=self.maxYaw.value(), deadband=self.deadband.value() / 100.0,
+                       expo=self.expo.value() / 100.0, takeoff_altitude=self.takeoffAltitude.value(),
+                       battery_warning_cell=max(self.batteryWarningCell.value(), self.batteryCriticalCell.value()),
+                       battery_critical_cell=self.batteryCriticalCell.value(),
+                       battery_warning_percent=max(self.batteryWarningPercent.value(),
+                                                   self.batteryCriticalPercent.value()),
+                       battery_critical_percent=self.batteryCriticalPercent.value(),
                        cameras="\n".join(split_uris(self.cameraUris.toPlainText())),
                        media_folder=self.mediaFolder.text().strip(), hud=self.hudDefault.isChecked(),
                        signing_key_file=self.signingKeyFile.text().strip(), tile_url=self.tileUrl.text().strip(),
@@ -265,6 +275,21 @@ class KeysDialog(QDialog):
             self.table.setItem(i, 0, QTableWidgetItem(key))
             self.table.setItem(i, 1, QTableWidgetItem(text))
         self.table.resizeColumnToContents(0)
+        self._fit_rows()
+
+    def _fit_rows(self) -> None:
+        """Tall enough for every row, the last one too (as far as the screen allows; then it scrolls)."""
+        t = self.table
+        t.setWordWrap(False)                    # one line a row; the dialog is as wide as the longest
+        t.resizeColumnsToContents()
+        t.setMinimumWidth(sum(t.columnWidth(c) for c in range(t.columnCount())) + 2 * t.frameWidth() + 4)
+        t.verticalHeader().setDefaultSectionSize(t.fontMetrics().height() + 6)   # compact rows: all in view
+        needed = t.horizontalHeader().sizeHint().height() + 2 * t.frameWidth() + \
+            sum(t.rowHeight(i) for i in range(t.rowCount())) + 6      # + the header's border
+        screen = self.screen() if hasattr(self, "screen") else None
+        limit = screen.availableGeometry().height() - 110 if screen is not None else needed   # intro, buttons
+        t.setMinimumHeight(max(120, min(needed, limit)))
+        self.adjustSize()
 
 
 def ask(box: QMessageBox, answered: Callable[[QMessageBox], None]) -> QMessageBox:
@@ -276,13 +301,32 @@ def ask(box: QMessageBox, answered: Callable[[QMessageBox], None]) -> QMessageBo
     return box
 
 
-def takeoff_question(parent: QWidget, altitude: float) -> QMessageBox:
-    """A window-modal question, opened with ``open()`` so nothing waits on it.
+def takeoff_question(parent: QWidget, altitude: float, waiting_for: tuple[str, ...] = (),
+                     wait_limit: float = 60.0) -> QMessageBox:
+    """A window-modal question, opened with ``open()`` so nothing waits on it. ``waiting_for``: what the vehicle
+    still lacks (GPS fix, EKF, pre-arm checks): the question says the takeoff waits for it, and how to cancel.
 
     Cancel is the focused default: Space (Stop) or Enter must never start the motors; only a click does.
     """
-    return _cautious_question(parent, "Take off", f"Take off and climb to {altitude:.1f} m above home?\n\n"
-                              "The motors will start. Keep clear of the propellers.", "Take off", "takeoffQuestion")
+    if not waiting_for:
+        return _cautious_question(parent, "Take off", f"Take off and climb to {altitude:.1f} m above home?\n\n"
+                                  "The motors will start. Keep clear of the propellers.", "Take off",
+                                  "takeoffQuestion")
+    return _cautious_question(
+        parent, "Take off when ready",
+        f"The vehicle is not ready yet: waiting for {', '.join(waiting_for)}.\n\n"
+        f"Take off as soon as it is (up to {wait_limit:.0f} s), and climb to {altitude:.1f} m above home?\n\n"
+        "Until then nothing starts; \"Cancel takeoff\" on the main button ends the wait and leaves the vehicle as "
+        "it is. Then the motors will start: keep clear of the propellers.", "Take off when ready", "takeoffQuestion")
+
+
+def arm_question(parent: QWidget, mode: str, consequence: str) -> QMessageBox:
+    """Before Arm: the motors start; say what happens next in this mode (the driver's words). Cancel is the
+    focused default, as for a takeoff."""
+    box = _cautious_question(parent, "Arm the motors", f"Arm the motors in {mode or 'the current mode'}?\n\n"
+                             f"{consequence}\n\nKeep clear of the propellers.", "Arm", "armQuestion")
+    box.setIcon(QMessageBox.Warning)
+    return box
 
 
 def fly_here_question(parent: QWidget, text: str) -> QMessageBox:

@@ -5,7 +5,11 @@ import enum
 
 from driver.state import LandedState, LinkStatus, VehicleState
 
-__all__ = ["FlightPhase", "flight_phase", "takeoff_progress", "stick_hint", "readiness_text"]
+#: The one wording, everywhere in the window, for "nothing heard from a vehicle yet".
+NO_VEHICLE = "No vehicle yet"
+
+__all__ = ["NO_VEHICLE", "FlightPhase", "flight_phase", "takeoff_progress", "takeoff_cancellable", "stick_hint",
+           "readiness_text"]
 
 
 class FlightPhase(enum.Enum):
@@ -34,6 +38,12 @@ def flight_phase(s: VehicleState) -> FlightPhase:
     return FlightPhase.FLYING
 
 
+def takeoff_cancellable(s: VehicleState) -> bool:
+    """A takeoff under way that has not asked the vehicle to leave the ground yet: Cancel gives it back."""
+    from driver.state import SequencePhase
+    return s.takeoff.phase in (SequencePhase.WAITING_READY, SequencePhase.SETTING_GUIDED, SequencePhase.ARMING)
+
+
 def takeoff_progress(s: VehicleState) -> float:
     """0..1 of the takeoff sequence: arming counts a little, the climb the rest."""
     from driver.state import SequencePhase
@@ -57,6 +67,8 @@ _STICK_HINTS = {"no link": "No link", "on the ground": "Take off to fly", "takin
 def stick_hint(s: VehicleState) -> str:
     """Why the sticks are inert, or "" when they fly the vehicle."""
     why = s.velocity_blocker
+    if why == "no link" and s.link.status is LinkStatus.WAITING:
+        return NO_VEHICLE
     if why == "not GUIDED":
         return f"Sticks fly in GUIDED\n(mode is {s.mode or '?'})"
     return _STICK_HINTS.get(why, why)

@@ -29,6 +29,7 @@ ACTION_KEYS: dict[int, tuple[str, str]] = {
     Qt.Key_Escape: ("stop", "Stop: cancel a Fly here, hover where you are"),
     Qt.Key_T: ("takeoff", "Take off"),
     Qt.Key_L: ("land", "Land"),
+    Qt.Key_R: ("rtl", "Return to launch (RTL)"),
     Qt.Key_PageUp: ("tilt_up", "Tilt the drone's camera up 5° (or the mouse wheel / drag on the video)"),
     Qt.Key_PageDown: ("tilt_down", "Tilt the drone's camera down 5°"),
 }

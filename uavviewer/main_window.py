@@ -13,19 +13,22 @@ from dataclasses import replace
 
 from PyQt5 import uic
 from PyQt5.QtCore import QEvent, QObject, QSettings, Qt
-from PyQt5.QtWidgets import QApplication, QDialog, QLabel, QMainWindow, QMessageBox, QWidget
+from PyQt5.QtWidgets import QApplication, QDialog, QLabel, QMainWindow, QMessageBox, QSizePolicy, QWidget
 
 from driver.api import Drone, Limits
-from driver.rules import mode_warning
-from driver.state import LinkStatus, Severity, VehicleState
+from driver.rules import arming_consequence, mode_warning, unattended
+from driver.state import LinkStatus, SequencePhase, Severity, VehicleState
 
 from . import RESOURCES
 from .dialogs import (
-    KeysDialog, SettingsDialog, ask, emergency_stop_question, mode_question, takeoff_question,
+    KeysDialog, SettingsDialog, arm_question, ask, emergency_stop_question, mode_question, takeoff_question,
 )
 from .camera_controller import CameraController, default_media_folder
 from .drone_adapter import DroneAdapter
-from .flight_phase import FlightPhase, flight_phase, readiness_text, stick_hint, takeoff_progress
+from .flight_timer import FlightTimer
+from .flight_phase import (
+    NO_VEHICLE, FlightPhase, flight_phase, readiness_text, stick_hint, takeoff_cancellable, takeoff_progress,
+)
 from .gamepad_input import GamepadInput
 from .keyboard import ACTION_KEYS, AXIS_KEYS, KeyboardSticks
 from .link_security import signing_unavailable, signing_warning
@@ -34,8 +37,9 @@ from .pilot_tools import PilotTools
 from .map.controller import MapController, TileSettings
 from .refresh import INSTRUMENTS_HZ, PLOTS_HZ, TEXT_HZ, Refresh
 from .settings import ViewerSettings, default_qsettings, load_settings, load_window, save_settings, save_window
-from .sticks import Axes, MaxSpeeds, axes_from_pads, combine, pad_labels, velocity_from_axes
+from .sticks import Axes, MaxSpeeds, axes_from_pads, combine, pad_labels, pads_from_axes, velocity_from_axes
 from .gimbal_controller import KEY_STEP, GimbalController
+from .layout import fit_screen
 from .widgets.camera_panel import CameraPanel
 from .widgets.gimbal_bar import GimbalBar
 from .widgets.gamepad_page import GamepadPage
@@ -84,11 +88,14 @@ class MainWindow(QMainWindow):
         self._takeoff_box: QMessageBox | None = None
         self._mode_box: QMessageBox | None = None
         self._emergency_box: QMessageBox | None = None
+        self._arm_box: QMessageBox | None = None
         self._settings_dialog: SettingsDialog | None = None
         self._quit_box: QMessageBox | None = None
         self._quitting = False                   # closing without asking (answered, or a signal)
         self._connection_to_remember = ""
+        self._vehicle_name = ""
         self._t0 = time.monotonic()
+        self.flight_timer = FlightTimer()
         self._shown_state: VehicleState | None = None   # the snapshot the views show next (refresh channels)
         # Views redraw at the rate the eye needs and not while minimised (refresh.py); logic follows every snapshot.
         self.refresh = Refresh(self)
@@ -128,11 +135,17 @@ class MainWindow(QMainWindow):
         self.setCorner(Qt.BottomRightCorner, Qt.RightDockWidgetArea)   # plots run the full height
         self.resizeDocks([self.telemetryDock, self.plotsDock], [390, 560], Qt.Vertical)
         self.resizeDocks([self.telemetryDock], [400], Qt.Horizontal)
-        self.resizeDocks([self.messagesDock], [170], Qt.Vertical)
+        self.resizeDocks([self.messagesDock], [110], Qt.Vertical)     # the latest line is in the status strip
         self.mapDock.raise_()
         self.instrumentSplitter.setStretchFactor(0, 3)
         self.instrumentSplitter.setStretchFactor(1, 2)
         self.phaseLabel.setObjectName("phaseLabel")
+        # two lines always: a long phase ("waiting for GPS fix, EKF, pre-arm checks") wraps without
+        # squeezing the buttons below it (layouts do not ask a wrapping label its height for a width)
+        # the setpoint line never widens the window: at worst it is cut at the end (it repeats the sticks)
+        self.setpointLabel.setSizePolicy(QSizePolicy.Ignored, self.setpointLabel.sizePolicy().verticalPolicy())
+        self.phaseLabel.ensurePolished()          # the style sheet's font, not the default one
+        self.phaseLabel.setMinimumHeight(2 * self.phaseLabel.fontMetrics().lineSpacing() + 2)
         self.link_status = QLabel()
         self.statusbar.addPermanentWidget(self.link_status)
 
@@ -143,7 +156,8 @@ class MainWindow(QMainWindow):
         fc.landRequested.connect(self.request_land)
         fc.stopRequested.connect(self.request_stop)
         fc.rtlRequested.connect(self.request_rtl)
-        fc.armRequested.connect(lambda: self._command("arm"))
+        fc.armRequested.connect(self.request_arm)
+        fc.cancelTakeoffRequested.connect(self.request_cancel_takeoff)
         fc.disarmRequested.connect(self.request_disarm)
         self.modeSelector.modeRequested.connect(self.request_mode)
         self.replayBar.pauseRequested.connect(self._replay_pause)
@@ -165,6 +179,8 @@ class MainWindow(QMainWindow):
         geometry, state = load_window(self._qsettings)
         if geometry is not None:
             self.restoreGeometry(geometry)
+        else:
+            fit_screen(self)
         if state is not None:
             self.restoreState(state)
             if "preflightDock".encode("utf-16-be") not in bytes(state):   # saved before the dock existed
@@ -236,6 +252,7 @@ class MainWindow(QMainWindow):
         self.leftStick.set_caption(left)
         self.rightStick.set_caption(right)
         self._speeds = self._set_limits(self.settings.speeds)
+        self._set_battery_thresholds()
         self.gamepad.apply_settings(self.settings)
         self.centre_sticks()
         s = self.settings
@@ -264,6 +281,15 @@ class MainWindow(QMainWindow):
             self.log_message(f"Maximum speeds in force: {limits.horizontal:g} m/s, {limits.vertical:g} m/s, "
                              f"{math.degrees(limits.yaw_rate):.0f}°/s", Severity.WARNING)
         return MaxSpeeds(limits.horizontal, limits.vertical, math.degrees(limits.yaw_rate))
+
+    def _set_battery_thresholds(self) -> None:
+        """The pilot's battery thresholds become the driver's alarm (a remote drone keeps its own judge)."""
+        try:
+            self.adapter.drone.set_battery_thresholds(self.settings.battery_thresholds)
+        except NotImplementedError:
+            pass
+        except Exception:                       # noqa: BLE001 - a bad value or a remote failure: keep the alarm
+            log.exception("setting the battery thresholds failed")
 
     @property
     def speeds(self) -> MaxSpeeds:
@@ -332,13 +358,28 @@ class MainWindow(QMainWindow):
 
     def _about(self) -> None:
         """Not modal and no nested event loop: flying goes on while it is open."""
-        box = QMessageBox(QMessageBox.Information, "UavViewerPy",
-                          "UavViewerPy — fly a MAVLink drone from a laptop.\n"
-                          f"Vehicle: {self.adapter.description}", QMessageBox.Ok, self)
+        from PyQt5.QtCore import PYQT_VERSION_STR, QT_VERSION_STR
+        from pymavlink import __version__ as pymavlink_version
+
+        from driver.version import __version__
+        firmware = self.adapter.state.firmware
+        box = QMessageBox(QMessageBox.Information, "About UavViewerPy",
+                          f"UavViewerPy {__version__} — fly a MAVLink drone from a laptop.\n\n"
+                          f"Vehicle: {self.window_name()}" + (f", ArduCopter {firmware}" if firmware else "") +
+                          f"\nPyQt {PYQT_VERSION_STR}, Qt {QT_VERSION_STR}, pymavlink {pymavlink_version}",
+                          QMessageBox.Ok, self)
         box.setObjectName("aboutBox")
         box.setWindowModality(Qt.NonModal)
         box.setAttribute(Qt.WA_DeleteOnClose)
         box.show()
+
+    def name_vehicle(self, name: str) -> None:
+        """A name for the title and About in place of the raw connection string (--sim: the built-in one)."""
+        self._vehicle_name = name
+        self.setWindowTitle(f"UavViewerPy — {name}")
+
+    def window_name(self) -> str:
+        return self._vehicle_name or self.adapter.description
 
     def remember_connection_when_answered(self, connection: str) -> None:
         """Save ``connection`` as the next run's default once a vehicle answers on it (not before: a typo
@@ -366,7 +407,9 @@ class MainWindow(QMainWindow):
         phase = flight_phase(s)
         progress = takeoff_progress(s) if phase is FlightPhase.TAKING_OFF else None
         detail = s.takeoff.phase.value if s.takeoff.active else ""
-        self.flightControls.set_vehicle(phase, s.armed, s.connected, progress, detail)
+        self.flightControls.set_vehicle(phase, s.armed, s.connected, progress, detail,
+                                        waiting_for=s.readiness.missing if s.connected else (),
+                                        cancellable=takeoff_cancellable(s))
         if self._takeoff_box is not None and not self._may_take_off(s):
             self._takeoff_box.reject()              # the question no longer fits the vehicle: withdraw it
         self.modeSelector.set_mode(s.mode)
@@ -407,7 +450,10 @@ class MainWindow(QMainWindow):
         if s.link.status in (LinkStatus.LOST, LinkStatus.CLOSED):
             if self.attitude.values["flag"] != "NO LINK":       # the last attitude is no longer the drone's
                 self.attitude.clear("NO LINK")
-        elif s.link.status is not LinkStatus.WAITING and s.mode:
+        elif s.link.status is LinkStatus.WAITING or not s.mode:
+            if self.attitude.values["flag"] != NO_VEHICLE.upper():
+                self.attitude.clear(NO_VEHICLE.upper())
+        else:
             self.attitude.set_attitude(s.attitude.roll, s.attitude.pitch, s.heading_deg)
             self.attitude.set_readouts(s.altitude, s.velocity.ground_speed, s.velocity.climb)
 
@@ -418,6 +464,7 @@ class MainWindow(QMainWindow):
             return
         link = s.link
         self.telemetry.set_state(s)
+        self.statusStrip.set_state(s, self.flight_timer.update(s))
         self.phaseLabel.setText(self._phase_text(s, flight_phase(s)))
         replay = self.adapter.replay
         if replay is not None:
@@ -433,7 +480,15 @@ class MainWindow(QMainWindow):
     @staticmethod
     def _phase_text(s: VehicleState, phase: FlightPhase) -> str:
         if phase is FlightPhase.NO_VEHICLE:
-            return "No vehicle"
+            return NO_VEHICLE
+        if s.link.status in (LinkStatus.LOST, LinkStatus.CLOSED):
+            age = s.link.heartbeat_age
+            last = {FlightPhase.ON_GROUND: "on the ground", FlightPhase.TAKING_OFF: "taking off",
+                    FlightPhase.FLYING: f"flying in {s.mode}", FlightPhase.LANDING: "landing"}[phase]
+            return f"Link lost{f' {age:.0f} s ago' if age is not None else ''} · last heard {last}"
+        if phase is FlightPhase.TAKING_OFF and s.takeoff.phase is SequencePhase.WAITING_READY:
+            return (f"Take off to {s.takeoff.target_altitude:.1f} m when ready — "
+                    + (readiness_text(s) if s.connected and s.readiness.missing else "waiting for the vehicle"))
         if phase is FlightPhase.TAKING_OFF and s.takeoff.active:
             return f"Taking off to {s.takeoff.target_altitude:.1f} m — {s.takeoff.phase.value}"
         if phase is FlightPhase.ON_GROUND:
@@ -471,15 +526,25 @@ class MainWindow(QMainWindow):
     def _fly(self) -> None:
         command = velocity_from_axes(self.demand(), self._speeds)
         self.adapter.fly(command)
+        self._echo_on_pads()
         self.inputLabel.setText(self._input_text())
         if not command.is_zero:
             self.map.cancel()                   # a stick overrides a go-to
         if command.is_zero:
             self.setpointLabel.setText("Setpoint: hover")
         else:
-            self.setpointLabel.setText(
-                f"fwd {command.forward:+.1f}  right {command.right:+.1f}  up {command.up:+.1f} m/s  "
+            self.setpointLabel.setText(         # short enough for the controls' column at 1024×600
+                f"fwd {command.forward:+.1f} rt {command.right:+.1f} up {command.up:+.1f} m/s "
                 f"yaw {math.degrees(command.yaw_rate):+.0f}°/s")
+
+    def _echo_on_pads(self) -> None:
+        """Held keys (or the gamepad, while it flies) move the on-screen knobs: the pilot sees what flies."""
+        echo = Axes()
+        if self._sticks_live:
+            echo = self.gamepad.axes() if self._inputs.owner is Input.GAMEPAD else self.keyboard.axes()
+        left, right = pads_from_axes(self.settings.mode, echo)
+        self.leftStick.set_echo(*left)
+        self.rightStick.set_echo(*right)
 
     def _input_text(self) -> str:
         """Which input flies now, else which are there (and why the gamepad waits)."""
@@ -609,7 +674,10 @@ class MainWindow(QMainWindow):
         if self._takeoff_box is not None and self._takeoff_box.isVisible():
             return
         altitude = self.takeoff_altitude
-        self._takeoff_box = ask(takeoff_question(self, altitude), lambda box: self._takeoff_answered(box, altitude))
+        waiting = self.adapter.state.readiness.missing
+        wait_limit = getattr(getattr(self.adapter.drone, "config", None), "ready_timeout", 60.0)   # embedded: its own
+        self._takeoff_box = ask(takeoff_question(self, altitude, waiting, wait_limit),
+                                lambda box: self._takeoff_answered(box, altitude))
 
     @property
     def takeoff_box(self) -> QMessageBox | None:
@@ -625,6 +693,31 @@ class MainWindow(QMainWindow):
         box.deleteLater()
         if self._takeoff_box is box:
             self._takeoff_box = None
+
+    def request_cancel_takeoff(self) -> None:
+        """Cancel a takeoff that has not left the ground: the driver gives the vehicle back as it was."""
+        self.centre_sticks()
+        self._command("cancel_takeoff")
+
+    def request_arm(self) -> None:
+        """Arm only after a question that says what happens next in this mode (the driver's words)."""
+        if self._arm_box is not None and self._arm_box.isVisible():
+            return
+        mode = self.adapter.state.mode
+        self._arm_box = ask(arm_question(self, mode, arming_consequence(mode)), self._arm_answered)
+
+    def _arm_answered(self, box: QMessageBox) -> None:
+        if box.clickedButton() is box.button(QMessageBox.Yes):
+            s = self.adapter.state
+            if s.connected and not s.armed and not flight_phase(s).airborne:
+                self._command("arm")
+        box.deleteLater()
+        if self._arm_box is box:
+            self._arm_box = None
+
+    @property
+    def arm_box(self) -> QMessageBox | None:
+        return self._arm_box
 
     def request_disarm(self) -> None:
         """On the ground, a disarm. In the air, disarming stops the motors and the drone falls: the pilot is
@@ -696,8 +789,8 @@ class MainWindow(QMainWindow):
     def quit_without_asking(self) -> None:
         """Ctrl+C or kill in the terminal: close now, even in flight (said in the log)."""
         if flight_phase(self.adapter.state).airborne and self.adapter.replay is None:
-            log.warning("closing while the vehicle is in the air: it keeps hovering in GUIDED until its "
-                        "own failsafe acts")
+            s = self.adapter.state
+            log.warning("closing while the vehicle is in the air: %s", unattended(s.mode, s.gcs_failsafe))
         self._quitting = True
         if self._quit_box is not None:
             self._quit_box.reject()
@@ -708,9 +801,10 @@ class MainWindow(QMainWindow):
         if self._quitting or self.adapter.replay is not None or not flight_phase(self.adapter.state).airborne:
             return False
         if self._quit_box is None:
+            s = self.adapter.state
             box = QMessageBox(QMessageBox.Warning, "The vehicle is flying",
-                              "The vehicle is in the air. Without this window nobody commands it; it hovers in "
-                              "GUIDED until its own failsafe acts.", QMessageBox.NoButton, self)
+                              f"The vehicle is in the air in {s.mode}. Without this window nobody commands it: "
+                              f"{unattended(s.mode, s.gcs_failsafe)}.", QMessageBox.NoButton, self)
             box.setObjectName("quitQuestion")
             land = box.addButton("Land", QMessageBox.AcceptRole)
             leave = box.addButton("Quit anyway", QMessageBox.DestructiveRole)
@@ -783,6 +877,7 @@ class MainWindow(QMainWindow):
         self._plot_gap = True
         self.plots.gap(time.monotonic() - self._t0)
         self.adapter.use(drone)
+        self._set_battery_thresholds()          # every vehicle flown is judged by the same thresholds
         self.setWindowTitle(f"UavViewerPy — {name} · {self.fleet.fleet.description}")
         if self._default_cameras and self.camera.uris == self._default_cameras:   # not --camera nor Preferences'
             self._default_cameras = [self.fleet.camera_uri(name)]                 # the picked vehicle's own

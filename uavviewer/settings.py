@@ -10,15 +10,15 @@ from dataclasses import asdict, dataclass, fields
 from PyQt5.QtCore import QByteArray, QSettings
 
 from driver.api import CEILING
-from driver.rules import MAX_ALTITUDE, MIN_TAKEOFF_ALTITUDE
+from driver.state import BatteryThresholds
+from driver.rules import TAKEOFF_ALTITUDE_RANGE
 
 from .sticks import MaxSpeeds, StickMode, StickShaping
 
 __all__ = ["ViewerSettings", "load_settings", "save_settings", "default_qsettings", "split_uris",
            "TAKEOFF_ALTITUDE_RANGE"]
 
-#: Takeoff altitudes a pilot may choose, in metres above home (Preferences and --takeoff-altitude).
-TAKEOFF_ALTITUDE_RANGE = (max(1.0, MIN_TAKEOFF_ALTITUDE), min(50.0, MAX_ALTITUDE))   # within the driver's limits
+#: Takeoff altitudes a pilot may choose (Preferences and --takeoff-altitude): the driver's rule, driver.rules.
 
 ORGANISATION = "JdeRobot"
 APPLICATION = "UavViewerPy"
@@ -46,6 +46,10 @@ class ViewerSettings:
     tile_cache_mb: float = 200.0     # the disk cache's limit
     map_tiles: bool = False          # the Map shows tiles (else the offline grid), as the pilot last chose
     map_offline: bool = False        # tiles from the cache only
+    battery_warning_cell: float = BatteryThresholds.warning_cell       # V a cell: our own alarm (driver.battery)
+    battery_critical_cell: float = BatteryThresholds.critical_cell
+    battery_warning_percent: float = BatteryThresholds.warning_percent
+    battery_critical_percent: float = BatteryThresholds.critical_percent
 
     @property
     def camera_uris(self) -> list[str]:
@@ -61,6 +65,11 @@ class ViewerSettings:
     @property
     def speeds(self) -> MaxSpeeds:
         return MaxSpeeds(self.max_horizontal, self.max_vertical, self.max_yaw_deg_s)
+
+    @property
+    def battery_thresholds(self) -> BatteryThresholds:
+        return BatteryThresholds(self.battery_warning_cell, self.battery_critical_cell,
+                                 self.battery_warning_percent, self.battery_critical_percent)
 
     @property
     def shaping(self) -> StickShaping:
@@ -104,6 +113,10 @@ def load_settings(qs: QSettings) -> ViewerSettings:
     out.takeoff_altitude = min(max(out.takeoff_altitude, low), high)
     out.stick_mode = out.mode.value
     out.tile_cache_mb = min(max(out.tile_cache_mb, 10.0), 5000.0)
+    if out.battery_thresholds.problem():                  # a corrupt file: the defaults, never no alarm
+        default = BatteryThresholds()
+        out.battery_warning_cell, out.battery_critical_cell = default.warning_cell, default.critical_cell
+        out.battery_warning_percent, out.battery_critical_percent = default.warning_percent, default.critical_percent
     return out
 
 

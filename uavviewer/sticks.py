@@ -97,6 +97,16 @@ def axes_from_pads(mode: StickMode, left: tuple[float, float], right: tuple[floa
     return Axes(forward=ry, right=rx, up=ly, yaw=lx)
 
 
+def pads_from_axes(mode: StickMode, axes: Axes) -> tuple[tuple[float, float], tuple[float, float]]:
+    """Where pilot axes put the two pads' knobs in a stick mode: (left, right), each (x, y); the inverse of
+    :func:`axes_from_pads` without shaping (keys and a gamepad shown on the screen's sticks)."""
+    if mode is StickMode.MODE1:
+        return (axes.yaw, axes.forward), (axes.right, axes.up)
+    if mode is StickMode.VIEWER2017:
+        return (axes.right, axes.forward), (axes.yaw, axes.up)
+    return (axes.yaw, axes.up), (axes.right, axes.forward)
+
+
 def pad_labels(mode: StickMode) -> tuple[str, str]:
     """What each pad flies, for the caption under it: (left, right)."""
     return {StickMode.MODE2: ("Climb · Yaw", "Forward · Sideways"),

@@ -97,7 +97,8 @@ class VideoSource:
     """
 
     retry_initial = 0.5
-    retry_max = 5.0
+    retry_max = 5.0             # a source that has delivered frames comes back soon (a replugged camera)
+    retry_max_unheard = 120.0   # one that never delivered any (unsupported, wrong address): back off further
     retry_on_end = True         # network streams come back; a file that ended may not
 
     def __init__(self, uri: str, name: str | None = None, stall_s: float = STALL_S):
@@ -259,7 +260,7 @@ class VideoSource:
             self._set_status("retrying", f"{reason} (retrying in {delay:.1f} s)")
             self._wake.wait(delay)
             self._wake.clear()
-            delay = min(delay * 2, self.retry_max)
+            delay = min(delay * 2, self.retry_max if self._frames else max(self.retry_max, self.retry_max_unheard))
         self._set_status("closed", "closed")
 
 

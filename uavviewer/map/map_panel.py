@@ -28,6 +28,7 @@ class MapPanel(QWidget):
         self.homeButton.clicked.connect(self._show_home)
         self.layerCombo.currentIndexChanged.connect(lambda i: self.layerRequested.emit(i == 1))
         self.offlineCheck.toggled.connect(self.offlineRequested.emit)
+        self.layerCombo.currentIndexChanged.connect(lambda _i: self._explain_disabled())
         self.downloadButton.clicked.connect(self.downloadRequested.emit)
         self.set_tiles_available(False)
 
@@ -50,6 +51,17 @@ class MapPanel(QWidget):
         tiles = self.layerCombo.currentIndex() == 1
         self.offlineCheck.setEnabled(tiles)
         self.downloadButton.setEnabled(tiles and not self.offlineCheck.isChecked())
+        # a disabled control says why, and what enables it
+        needs = ("Needs the Tiles layer: " + (why or "pick Tiles in the list") if not tiles else "")
+        self.offlineCheck.setToolTip(needs or "Tiles from the cache only: no network")
+        self.downloadButton.setToolTip(needs or ("Offline: untick Offline to download" if self.offlineCheck.isChecked()
+                                                 else "Keep the tiles of this area (this zoom and three closer) "
+                                                      "for offline use"))
+
+    def _explain_disabled(self) -> None:
+        """The layer changed: Offline and Download follow it, saying why when they cannot be used."""
+        model = self.layerCombo.model()
+        self.set_tiles_available(model.item(1).isEnabled(), model.item(1).toolTip())
 
     def set_status(self, text: str) -> None:
         self.statusLabel.setText(text)

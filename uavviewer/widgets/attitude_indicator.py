@@ -40,7 +40,7 @@ class AttitudeIndicator(QWidget):
         self._valid = False
         self._flag = "NO ATTITUDE"
         self.setAttribute(Qt.WA_OpaquePaintEvent)
-        self.setMinimumSize(260, 220)
+        self.setMinimumSize(200, 150)          # still readable at 1024×600
         self.setSizePolicy(QSizePolicy.Expanding, QSizePolicy.Expanding)
 
     # -- values in ---------------------------------------------------------------------------

@@ -168,6 +168,9 @@ class GamepadPage(QWidget):
                 self._raw_lights[button] = light
         for w in (self.padMode, self.axesBox, self.buttonsBox):
             w.setEnabled(pad is not None)
+        for *_, live, _map in self._rows.values():     # no controller: no bar that looks like a reading
+            live.setVisible(pad is not None)
+            live.setValue(0)
         self._show_mapping()
 
     def _show_mapping(self) -> None:

@@ -25,9 +25,10 @@ class JoystickPad(QWidget):
         self._x = 0.0
         self._y = 0.0
         self._dragging = False
+        self._echo = (0.0, 0.0)                 # another input's demand on this pad's axes (keys, gamepad)
         self._caption = ""
         self._hint = ""
-        self.setMinimumSize(150, 150)
+        self.setMinimumSize(120, 120)          # room for both at 1024×600
         self.setSizePolicy(QSizePolicy.Expanding, QSizePolicy.Expanding)
         self.setFocusPolicy(Qt.NoFocus)
         self.setMouseTracking(False)
@@ -42,8 +43,10 @@ class JoystickPad(QWidget):
         return self._dragging
 
     def set_caption(self, text: str) -> None:
-        """What the pad flies, shown under the ring (e.g. "Climb · Yaw")."""
+        """What the pad flies, shown under the ring (e.g. "Climb · Yaw"); the pad is never narrower than it."""
         self._caption = text
+        self.ensurePolished()                   # the style sheet's font, not the default one
+        self.setMinimumWidth(max(120, self.fontMetrics().horizontalAdvance(text) + 8))
         self.update()
 
     def set_hint(self, text: str) -> None:
@@ -64,6 +67,21 @@ class JoystickPad(QWidget):
             if norm > 1.0:
                 x, y = x / norm, y / norm
             self._set(x, y)
+
+    def set_echo(self, x: float, y: float) -> None:
+        """Show where the keyboard or gamepad holds this pad's axes: the knob moves, nothing is emitted (the
+        pilot sees the demand that flies, whatever gives it)."""
+        if (x, y) != self._echo:
+            self._echo = (x, y)
+            self.update()
+
+    @property
+    def shown_position(self) -> tuple[float, float]:
+        """Where the knob is drawn: the finger's position plus the other inputs' echo, inside the ring."""
+        x = max(-1.0, min(1.0, self._x + self._echo[0]))
+        y = max(-1.0, min(1.0, self._y + self._echo[1]))
+        norm = math.hypot(x, y)
+        return (x / norm, y / norm) if norm > 1.0 else (x, y)
 
     # -- geometry ------------------------------------------------------------------------------
     def _ring(self) -> tuple[QPointF, float]:
@@ -141,7 +159,7 @@ class JoystickPad(QWidget):
         p.setPen(QPen(QColor(255, 255, 255, 40 if enabled else 20), 1, Qt.DashLine))
         p.drawLine(QPointF(c.x() - r, c.y()), QPointF(c.x() + r, c.y()))
         p.drawLine(QPointF(c.x(), c.y() - r), QPointF(c.x(), c.y() + r))
-        k = self.knob_centre()
+        k = self.point_for(*self.shown_position)
         kr = r * 0.28
         grad = QRadialGradient(k, kr)
         if enabled:

@@ -40,7 +40,7 @@ class MessagesView(QTreeWidget):
         self.setUniformRowHeights(True)
         self.setSelectionMode(QAbstractItemView.NoSelection)
         self.setFocusPolicy(Qt.NoFocus)
-        self.setMinimumHeight(120)             # a few lines always visible
+        self.setMinimumHeight(30)              # its header on 1024×600: the latest line is in the status strip
         header = self.header()
         header.setSectionResizeMode(0, QHeaderView.ResizeToContents)
         header.setSectionResizeMode(1, QHeaderView.ResizeToContents)

@@ -78,13 +78,17 @@ class PlotsPanel(QWidget):
             plot.setMouseEnabled(x=False, y=False)
             plot.hideButtons()
             plot.setMenuEnabled(False)
-            plot.addLegend(offset=(5, 5), labelTextSize="8pt")
+            legend = plot.addLegend(offset=(5, 2), labelTextSize="8pt", verSpacing=-6)
+            legend.setColumnCount(3)            # one line across the top: a narrow dock's short plots stay readable
+            plot.getAxis("bottom").setTickSpacing(20, 10)    # -60 -40 -20 0: no labels run into each other
             if row:
                 plot.setXLink(self.plots[0])
             if row < len(_TITLES) - 1:
                 plot.getAxis("bottom").setStyle(showValues=False)
             self.plots.append(plot)
         self.plots[-1].setYRange(0, 360)
+        self.plots[-1].setLabel("bottom", "time before now", units="s", **{"font-size": "9pt"})   # with its unit
+        self.plots[-1].getAxis("bottom").enableAutoSIPrefix(False)
         self.curves = {name: self.plots[row].plot(pen=pg.mkPen(color, width=1.5), name=legend)
                        for name, (row, color, legend) in SERIES.items()}
 

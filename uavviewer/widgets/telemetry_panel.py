@@ -4,7 +4,7 @@ from __future__ import annotations
 from PyQt5.QtCore import Qt
 from PyQt5.QtWidgets import QFrame, QGridLayout, QLabel, QSizePolicy, QWidget
 
-from driver.state import LandedState, LinkStatus, SigningStatus, VehicleState
+from driver.state import BatteryAlarm, LandedState, LinkStatus, SigningStatus, VehicleState
 from ..link_security import SIGNING_WARNINGS, foreign_text, foreign_tooltip, signed_frames
 from ..units import fmt
 
@@ -36,9 +36,13 @@ class TelemetryPanel(QFrame):
         grid = QGridLayout(self)
         grid.setContentsMargins(10, 10, 10, 10)
         grid.setVerticalSpacing(6)
-        title = QLabel("TELEMETRY")
-        title.setObjectName("panelTitle")
-        grid.addWidget(title, 0, 0, 1, 2)
+        # the dock's title says TELEMETRY; this line only speaks when the values are stale
+        self.stale_label = QLabel("")
+        self.stale_label.setObjectName("staleLabel")
+        self.stale_label.setStyleSheet(f"color: {BAD}; font-weight: bold;")
+        self.stale_label.setWordWrap(True)
+        self.stale_label.setVisible(False)
+        grid.addWidget(self.stale_label, 0, 0, 1, 2)
         self._values: dict[str, QLabel] = {}
         for row, (key, text) in enumerate(ROWS, start=1):
             name = QLabel(text)
@@ -85,7 +89,13 @@ class TelemetryPanel(QFrame):
     def set_state(self, s: VehicleState) -> None:
         """Before the first heartbeat nothing is known ("--"); with the link lost the last values are
         shown dimmed, as stale, and the link rows say so."""
-        self._stale = s.link.status is LinkStatus.LOST
+        self._stale = s.link.status in (LinkStatus.LOST, LinkStatus.CLOSED)
+        age = s.link.heartbeat_age
+        stale_text = ("Link lost: the values below are the last heard" +
+                      (f", {age:.0f} s old" if age is not None else "")) if self._stale and s.mode else ""
+        if self.stale_label.text() != stale_text:
+            self.stale_label.setText(stale_text)
+            self.stale_label.setVisible(bool(stale_text))
         if s.link.status is LinkStatus.WAITING or not s.mode:
             for key in ("mode", "armed", "landed", "battery", "gps", "altitude", "ground_speed", "climb",
                         "heading", "home"):
@@ -106,7 +116,7 @@ class TelemetryPanel(QFrame):
                 LinkStatus.OK else "--"
         self._put("landed", landed)
         self.set_battery(s.battery.voltage, s.battery.cells, s.battery.remaining,
-                         s.battery.low, s.battery.remaining_estimated)
+                         s.battery.low, s.battery.remaining_estimated, s.battery.alarm)
         fix_color = GOOD if s.gps.fix_type >= 3 else (WARN if s.gps.fix_type == 2 else BAD)
         self._put("gps", f"{s.gps.fix_name}, {s.gps.satellites} sats", fix_color)
         self._put("altitude", _num(s.altitude, "m", 2))
@@ -150,7 +160,8 @@ class TelemetryPanel(QFrame):
         self._put("foreign", foreign_text(link), WARN if link.foreign_packets else NORMAL, foreign_tooltip(link))
 
     def set_battery(self, voltage: float | None, cells: int, remaining: float | None,
-                    low: bool = False, estimated: bool = False) -> None:
+                    low: bool = False, estimated: bool = False, alarm: BatteryAlarm | None = None) -> None:
+        """Coloured by ``alarm`` (our own thresholds) when given, else by the vehicle's ``low``."""
         if voltage is None and remaining is None:
             self._put("battery", "--", DIM)
             return
@@ -159,4 +170,8 @@ class TelemetryPanel(QFrame):
             parts.append(f"{voltage:.2f} V")
         if remaining is not None:
             parts.append(f"{remaining:.0f} %" + ("*" if estimated else ""))
-        self._put("battery", "  ".join(parts), BAD if low else GOOD)
+        if alarm is None or alarm is BatteryAlarm.UNKNOWN:
+            color = BAD if low else GOOD
+        else:
+            color = {BatteryAlarm.OK: GOOD, BatteryAlarm.WARNING: WARN}.get(alarm, BAD)
+        self._put("battery", "  ".join(parts), color)

@@ -1,0 +1,97 @@
+"""Issue 21, problem 2: the window fits a laptop. At 1366×768, 1280×720 and 1024×600 every essential widget
+(uavviewer.layout.essential_widgets) lies inside the window, is shown whole (not clipped by its parents, not
+narrower than its own content needs) and is not covered by anything else: the widget under its centre and under
+each corner is itself or one of its children.
+
+Real window on the real driver and simulator, in flight (the longest texts: battery with mAh and time left).
+"""
+from __future__ import annotations
+
+import pytest
+from PyQt5.QtCore import QPoint, QRect
+from PyQt5.QtWidgets import QApplication, QWidget
+
+from uavviewer.layout import MIN_SIZE, essential_widgets
+from uavviewer.main_window import load_style
+
+from viewer_fixtures import viewer_settings, window, window_factory  # noqa: F401  (fixtures)
+
+pytestmark = pytest.mark.timeout(90)
+
+SIZES = [(1366, 768), (1280, 720), (1024, 600)]
+
+
+@pytest.fixture(autouse=True)
+def app_style(qapp):
+    """The style the app runs with (main.py sets it): its fonts and paddings decide what fits."""
+    before = qapp.styleSheet()
+    qapp.setStyleSheet(load_style())
+    yield
+    qapp.setStyleSheet(before)
+
+
+def _within(child: QWidget | None, widget: QWidget) -> bool:
+    while child is not None:
+        if child is widget:
+            return True
+        child = child.parentWidget()
+    return False
+
+
+def layout_problems(w) -> list[str]:
+    problems = []
+    inside = w.rect()
+    for name, widget in essential_widgets(w).items():
+        if not widget.isVisible():
+            problems.append(f"{name}: hidden")
+            continue
+        rect = QRect(widget.mapTo(w, QPoint(0, 0)), widget.size())
+        if not inside.contains(rect):
+            problems.append(f"{name}: {rect} outside the window {inside}")
+        if widget.visibleRegion().boundingRect() != widget.rect():
+            problems.append(f"{name}: clipped, only {widget.visibleRegion().boundingRect()} of {widget.rect()} shown")
+        need = widget.minimumSizeHint()
+        if widget.width() < need.width() or widget.height() < need.height():
+            problems.append(f"{name}: {widget.size()} is smaller than its content needs ({need})")
+        r = rect.adjusted(2, 2, -3, -3)
+        for point in (r.center(), r.topLeft(), r.topRight(), r.bottomLeft(), r.bottomRight()):
+            top = w.childAt(point)
+            if not _within(top, widget):
+                problems.append(f"{name}: covered at {point} by {type(top).__name__} {top.objectName() if top else ''}")
+    return problems
+
+
+def settle(qtbot, w, width: int, height: int) -> None:
+    w.resize(width, height)
+    qtbot.waitUntil(lambda: (w.width(), w.height()) == (width, height), timeout=3000)
+    QApplication.processEvents()
+
+
+def test_everything_a_pilot_needs_is_in_view_at_laptop_sizes(qtbot, sim, flying, window_factory):
+    w = window_factory(flying, takeoff_altitude=3.0)
+    qtbot.waitUntil(lambda: w.adapter.state.can_fly_velocity and w.leftStick.isEnabled(), timeout=20000)
+    qtbot.waitUntil(lambda: "mAh" in w.statusStrip.battery.text(), timeout=10000)
+    w.rightStick.hold(-0.6, -0.75)                           # the longest setpoint line: every axis, signs
+    w.leftStick.hold(-0.7, -0.6)
+    qtbot.waitUntil(lambda: "yaw -" in w.setpointLabel.text(), timeout=3000)
+    for width, height in SIZES:
+        settle(qtbot, w, width, height)
+        problems = layout_problems(w)
+        assert not problems, f"at {width}×{height}:\n" + "\n".join(problems)
+
+
+def test_the_window_shrinks_to_a_netbook(qtbot, window):
+    w = window
+    assert w.minimumSizeHint().width() <= MIN_SIZE.width() and w.minimumSizeHint().height() <= MIN_SIZE.height()
+    settle(qtbot, w, MIN_SIZE.width(), MIN_SIZE.height())
+    problems = layout_problems(w)
+    assert not problems, "\n".join(problems)
+
+
+def test_the_first_size_fits_the_screen(qtbot, sim, vehicle, viewer_settings):
+    from uavviewer.main_window import MainWindow
+    w = MainWindow(vehicle, qsettings=viewer_settings)         # no saved geometry: it fits the screen
+    qtbot.addWidget(w, before_close_func=MainWindow.quit_without_asking)
+    free = QApplication.primaryScreen().availableGeometry()
+    assert w.width() <= max(free.width(), MIN_SIZE.width()) and w.height() <= max(free.height(), MIN_SIZE.height())
+    assert w.width() <= 1366 and w.height() <= 768

@@ -1,0 +1,41 @@
+"""The flight timer: time armed, as every ground station shows it (QGroundControl's "Flight time")."""
+from __future__ import annotations
+
+import time
+
+from driver.state import VehicleState
+
+__all__ = ["FlightTimer", "clock_text"]
+
+
+def clock_text(seconds: float | None) -> str:
+    """``754`` -> "12:34", ``3725`` -> "1:02:05", None -> "--:--"."""
+    if seconds is None or seconds != seconds or seconds < 0:
+        return "--:--"
+    whole = int(seconds)
+    hours, rest = divmod(whole, 3600)
+    return f"{hours}:{rest // 60:02d}:{rest % 60:02d}" if hours else f"{rest // 60:02d}:{rest % 60:02d}"
+
+
+class FlightTimer:
+    """Runs while the vehicle reports armed; keeps the last flight's time once disarmed, restarts at the next arm.
+    ``clock``: a monotonic clock (tests may pass their own)."""
+
+    def __init__(self, clock=time.monotonic) -> None:
+        self._clock = clock
+        self._since: float | None = None       # the clock when the vehicle armed, None while disarmed
+        self._last = 0.0                        # the previous flight's seconds, shown while disarmed
+        self.started = False                    # armed at least once
+
+    def update(self, s: VehicleState) -> float:
+        """The flight time now, following ``s.armed`` (never a flag of ours)."""
+        now = self._clock()
+        if s.armed and self._since is None:
+            self._since, self.started = now, True
+        elif not s.armed and self._since is not None:
+            self._last, self._since = now - self._since, None
+        return self.seconds
+
+    @property
+    def seconds(self) -> float:
+        return self._clock() - self._since if self._since is not None else self._last
