@@ -289,7 +289,9 @@ class KeysDialog(QDialog):
         screen = self.screen() if hasattr(self, "screen") else None
         limit = screen.availableGeometry().height() - 110 if screen is not None else needed   # intro, buttons
         t.setMinimumHeight(max(120, min(needed, limit)))
-        self.adjustSize()
+        self.adjustSize()                       # (Qt caps this at 2/3 of the screen: grow to what the rows need)
+        if screen is not None:
+            self.resize(self.sizeHint().boundedTo(screen.availableGeometry().size()))
 
 
 def ask(box: QMessageBox, answered: Callable[[QMessageBox], None]) -> QMessageBox:

@@ -50,7 +50,7 @@ class PilotTools(QObject):
 
     def _alerts(self, w) -> None:
         w.alert_banner = AlertBanner()                              # under the link banner, above the instruments
-        w.centralwidget.layout().insertWidget(1, w.alert_banner)
+        w.alertSlot.addWidget(w.alert_banner)
         w.actionMute = QAction("&Mute spoken alerts", w)
         w.actionMute.setObjectName("actionMute")
         w.actionMute.setShortcut("Ctrl+M")

@@ -1,12 +1,12 @@
 """The row under the video for the camera ON THE VEHICLE: its gimbal and its own Photo and Record.
 
 Kept apart from the window's Snapshot/Record (which save the video this window receives) by its own row, the
-"On the drone" label and names, and it shows only what the vehicle confirmed.
+"Drone cam" label and names, and it shows only what the vehicle confirmed.
 """
 from __future__ import annotations
 
 from PyQt5.QtCore import pyqtSignal
-from PyQt5.QtWidgets import QHBoxLayout, QLabel, QToolButton, QWidget
+from PyQt5.QtWidgets import QHBoxLayout, QLabel, QSizePolicy, QToolButton, QWidget
 
 from driver.state import VehicleState
 
@@ -24,14 +24,15 @@ class GimbalBar(QWidget):
 
     def __init__(self, parent: QWidget | None = None) -> None:
         super().__init__(parent)
-        self.title = QLabel("<b>On the drone:</b>", self)
-        self.pitch_label = QLabel("Gimbal unknown", self)
+        self.pitch_label = QLabel("<b>Drone cam</b> · Gimbal unknown", self)
         self.pitch_label.setToolTip("The gimbal's pitch as the vehicle reports it (0 level, -90 straight down)")
+        self.pitch_label.setSizePolicy(QSizePolicy.Ignored, QSizePolicy.Preferred)   # a long reading is cut, never
+        self.pitch_label.setMinimumWidth(90)                                        # widening a laptop's window
         self.level_button = self._button("Level", "Point the camera level (gimbal pitch 0°)")
         self.down_button = self._button("Down", "Point the camera straight down (gimbal pitch -90°)")
-        self.photo_button = self._button("Drone photo", "Take a picture with the vehicle's own camera; counted "
+        self.photo_button = self._button("Photo", "Take a picture with the vehicle's own camera; counted "
                                          "only when the vehicle confirms it")
-        self.record_button = self._button("Drone video", "Start or stop video on the vehicle's own camera "
+        self.record_button = self._button("Video", "Start or stop video on the vehicle's own camera "
                                           "(not this window's recording)")
         self.record_button.setCheckable(True)
         self.stop_looking_button = self._button("Stop looking", "The camera stops looking at the point chosen on "
@@ -45,7 +46,7 @@ class GimbalBar(QWidget):
         self.stop_looking_button.clicked.connect(self.stopLookingRequested)
         row = QHBoxLayout(self)
         row.setContentsMargins(0, 0, 0, 0)
-        for w in (self.title, self.pitch_label, self.level_button, self.down_button, self.photo_button,
+        for w in (self.pitch_label, self.level_button, self.down_button, self.photo_button,
                   self.record_button, self.stop_looking_button):
             row.addWidget(w)
         row.addStretch(1)
@@ -59,10 +60,12 @@ class GimbalBar(QWidget):
 
     def show_state(self, s: VehicleState) -> None:
         """What the vehicle says about its gimbal and camera; the Record button follows the camera, not the click."""
-        self.pitch_label.setText(f"Gimbal {s.gimbal.describe()}")
+        self.pitch_label.setText(f"<b>Drone cam</b> · Gimbal {s.gimbal.describe()}")
+        self.pitch_label.setToolTip(f"Gimbal {s.gimbal.describe()}: the pitch as the vehicle reports it "
+                                    "(0 level, -90 straight down)")
         c = s.camera
-        self.photo_button.setText(f"Drone photo ({c.photos})" if c.photos else "Drone photo")
-        self.record_button.setText("Drone video ●" if c.recording else "Drone video")
+        self.photo_button.setText(f"Photo ({c.photos})" if c.photos else "Photo")
+        self.record_button.setText("Video ●" if c.recording else "Video")
         recording = "unknown" if c.recording is None else "yes" if c.recording else "no"
         self.photo_button.setToolTip(f"A picture with the vehicle's camera ({c.name or c.kind.value}), counted only "
                                      f"when it confirms it: {c.photos} so far")
