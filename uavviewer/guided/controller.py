@@ -31,6 +31,7 @@ class GuidedController(QObject):
         self._window = window
         self._circle = None                  # the circle's Future while it is on its way
         self.circling: tuple[float, float, float] | None = None   # north, east, radius of the circle being flown
+        self._circle_seen = False                                  # the vehicle has reported CIRCLE since
         self.question: QInputDialog | None = None
         self.change_altitude_action = QAction("Change &altitude…", window)
         self.change_altitude_action.setObjectName("actionChangeAltitude")
@@ -56,8 +57,11 @@ class GuidedController(QObject):
         return ""
 
     def update_actions(self, s: VehicleState) -> None:
-        if self.circling is not None and s.mode != "CIRCLE" and s.mode:
-            self.circling = None                        # the pilot left the circle: it leaves the map
+        if self.circling is not None and s.mode == "CIRCLE":
+            self._circle_seen = True                    # the vehicle reports the circle: from now on, leaving it
+        elif self.circling is not None and self._circle_seen and s.mode:   # (a snapshot older than the mode
+            self.circling = None                        # change says nothing) takes the circle off the map
+            self._circle_seen = False
             self.view_changed.emit()
         why = self.why_not(s) if self.adapter.replay is None else "a recording cannot be flown"
         for action, what in ((self.change_altitude_action, "Climb or descend where it is"),
@@ -139,6 +143,7 @@ class GuidedController(QObject):
             centre = (here[0] + radius * math.cos(yaw), here[1] + radius * math.sin(yaw))
         self._circle = future = self.adapter.command("circle", centre[0], centre[1], float(radius))
         self.circling = None
+        self._circle_seen = False
         if future is not None:
             wanted = (centre[0], centre[1], float(radius))
             future.add_done_callback(lambda f: setattr(self, "circling", wanted)
