@@ -3,7 +3,8 @@
 As QGroundControl's ParameterManager: the list is asked for once; while the vehicle streams it, gaps (frames
 lost on the radio) are only noted. Once the stream has gone quiet, every index still missing is asked for
 with PARAM_REQUEST_READ, a few at a time (ArduPilot queues only a handful of reads), each asked again when its
-answer does not come. Unlike QGroundControl, which gives up on an index after a few tries, this goes on while
+answer does not come: at once when a read sent after it has been answered (the vehicle answers its queue in
+order, so the earlier one or its answer was lost), else after a few round trips. Unlike QGroundControl, which gives up on an index after a few tries, this goes on while
 the link is up: a radio at 30 % loss still ends with every parameter. It ends when the set is complete, or
 when the link is lost (the table keeps what arrived; the next fetch asks only for what is missing).
 
@@ -39,7 +40,8 @@ class Download:
     list_tries: int = 0
     last_new: float = 0.0                # when the last new index arrived
     gap: float = 0.05                    # smoothed time between new indexes while the list streams
-    asked: dict[int, float] = field(default_factory=dict)     # index -> when it was asked
+    asked: dict[int, tuple[float, int]] = field(default_factory=dict)   # index -> (when, order), oldest first
+    sequence: int = 0                    # reads sent so far, to order them
     tries: dict[int, int] = field(default_factory=dict)       # index -> reads sent for it
     reads: int = 0                       # PARAM_REQUEST_READs sent
     rtt: float = 0.1                     # smoothed round trip of a read
@@ -65,9 +67,13 @@ class Download:
             self.expected = count
         if index in self.have or index >= count:
             return False
-        sent = self.asked.pop(index, None)
-        if sent is not None and self.tries.get(index) == 1:   # a re-asked one cannot say which read it answers
-            self.rtt = 0.8 * self.rtt + 0.2 * max(0.0, now - sent)
+        asked = self.asked.pop(index, None)
+        if asked is not None:
+            sent, order = asked
+            if self.tries.get(index) == 1:           # a re-asked one cannot say which read it answers
+                self.rtt = 0.8 * self.rtt + 0.2 * max(0.0, now - sent)
+            for earlier in [i for i, (_, o) in self.asked.items() if o < order]:
+                del self.asked[earlier]              # answered in order: those were lost, ask again now
         elif self.listing and self.have:
             self.gap = 0.9 * self.gap + 0.1 * max(0.0, now - self.last_new)
         self.have.add(index)
@@ -89,7 +95,7 @@ class Download:
                 return [], None
             self.listing = False                             # the stream is over: ask for the gaps
         timeout = max(READ_TIMEOUT_MIN, 3.0 * self.rtt)
-        for index, sent in list(self.asked.items()):
+        for index, (sent, _) in list(self.asked.items()):
             if now - sent >= timeout:
                 del self.asked[index]
         out = []
@@ -97,7 +103,8 @@ class Download:
             if len(self.asked) >= READ_WINDOW:
                 break
             if index not in self.have and index not in self.asked:
-                self.asked[index] = now
+                self.sequence += 1
+                self.asked[index] = (now, self.sequence)
                 self.tries[index] = self.tries.get(index, 0) + 1
                 out.append(mavlink.MAVLink_param_request_read_message(system, component, b"", index))
         self.reads += len(out)
