@@ -96,6 +96,7 @@ class VehicleConfig:
     allowed_senders: tuple[str, ...] = ()     # UDP: other addresses read besides the vehicle's ("10.1.1.1")
     param_metadata: str | None = None         # apm.pdef.xml; None: the per-user cache's, else the shipped copy
     param_cache: str | None = ""              # folder of tables per vehicle; "": the per-user cache, None: none
+    param_ftp: bool = True                    # read all parameters over MAVLink FTP where the vehicle offers it
 
 
 def _ground_only(s: VehicleState) -> str | None:
@@ -135,6 +136,7 @@ class Vehicle(Drone):
         self._params = ParameterManager(self._store, self._notifier, self._target_ids, 2 * cfg.loss_timeout)
         self._param_cache = ParameterCache(cfg.param_cache or None) if cfg.param_cache is not None else None
         self._params.on_complete = self._cache_parameters
+        self._params.use_ftp = cfg.param_ftp
         self._metadata = None                 # loaded by start() in the background (half a second of XML)
         self._metadata_loaded = threading.Event()
         self._metadata_lock = threading.Lock()
@@ -516,6 +518,7 @@ class Vehicle(Drone):
         v = m.flight_sw_version
         major, minor, patch = (v >> 24) & 0xFF, (v >> 16) & 0xFF, (v >> 8) & 0xFF
         self._link.version_known = True
+        self._params.ftp_capable = bool(m.capabilities & mavlink.MAV_PROTOCOL_CAPABILITY_FTP)
         if major:
             self._commands.capabilities.setpoint_yaw = (major, minor) >= (3, 5)
             self._store.set(firmware=f"{major}.{minor}.{patch}")
@@ -541,6 +544,12 @@ class Vehicle(Drone):
                 self._store.add_message_locked(
                     Severity.WARNING, "GCS failsafe is off on the vehicle (FS_GCS_ENABLE=0): if this link is lost "
                     "or you quit in flight, it keeps hovering until its battery failsafe")
+
+    def _on_file_transfer_protocol(self, m) -> None:
+        """MAVLink FTP: the parameters' file (driver.params.ftp)."""
+        if m.target_system in (0, self.config.source_system) and m.target_component in (0, self.config.source_component):
+            self._params.on_ftp(m, time.monotonic())
+            self._wake.set()
 
     def _on_fence_status(self, m) -> None:
         """FENCE_STATUS, sent while the fence is enabled: a new breach is told once, with what it was."""
@@ -1012,4 +1021,5 @@ _EVENTS = {
     "PARAM_VALUE": Vehicle._on_param_value,
     "AUTOPILOT_VERSION": Vehicle._on_autopilot_version,
     "FENCE_STATUS": Vehicle._on_fence_status,
+    "FILE_TRANSFER_PROTOCOL": Vehicle._on_file_transfer_protocol,
 }

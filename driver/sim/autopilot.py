@@ -29,6 +29,7 @@ from .faults import Faults
 from .flight import LAND_DISARM_DELAY, Flight
 from .messages import Messages
 from .failsafe import GcsFailsafe
+from .ftp import FtpServer
 from .params import ParamProtocol, SimParams
 from .profiles import POSITION_REASONS, profile_of
 from .telemetry import EARTH_RADIUS, GRAVITY, METRES_PER_DEG, Telemetry
@@ -78,7 +79,7 @@ class SimTruth:
         return math.hypot(self.vn, self.ve)
 
 
-class Autopilot(Telemetry, Commands, ParamProtocol, GcsFailsafe, Messages, Flight):
+class Autopilot(Telemetry, Commands, ParamProtocol, FtpServer, GcsFailsafe, Messages, Flight):
     """One ArduCopter: state, flight modes, command handling and telemetry streams."""
 
     def __init__(self, config, faults: Faults | None = None,
