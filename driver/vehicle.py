@@ -33,6 +33,7 @@ from . import frames
 from .api import CEILING, Drone, Limits
 from .commands import CommandSender, Notifier, command_name
 from .forwarding import Forwarder
+from .payload.control import PAYLOAD_MESSAGES, Payload
 from .link import LinkError, ReplayControl, TlogWriter, Transport, open_transport
 from .params.cache import ParameterCache
 from .params.manager import ParameterManager
@@ -142,6 +143,7 @@ class Vehicle(Drone):
         self._metadata_lock = threading.Lock()
         self._metadata_warned = False
         self._setpoints = SetpointStreamer(cfg.deadman, cfg.setpoint_rate)
+        self._payload = Payload(self)         # gimbal, region of interest, camera (driver.payload)
         self._takeoff: TakeoffSequence | None = None
         self._stepping_takeoff = False        # the ticker is stepping the sequence: its commands pass
         self._yaw_next = 0.0                  # old firmware: next CONDITION_YAW of a held yaw stick
@@ -458,6 +460,9 @@ class Vehicle(Drone):
                 link.rx_lost += gap
         link.last_seq[component] = seq
         link.rx_count += 1
+        if mtype in PAYLOAD_MESSAGES:                 # the gimbal and camera speak from any component
+            self._payload.on_message(msg, component)
+            return 1
         if component != self._autopilot and self._autopilot:   # a gimbal, camera or companion computer
             if mtype == "STATUSTEXT":
                 self._on_statustext(msg)
@@ -582,6 +587,7 @@ class Vehicle(Drone):
                     out += self._stream_setpoint(now)
                     out += self._commands.service(now, self._store.state)
                     out += self._params.service(now, self._link.status)
+                    out += self._payload.service(now, self._store.state)
                     if now >= next_health:
                         next_health = now + 0.1
                         out += self._supervise(now)
@@ -618,6 +624,8 @@ class Vehicle(Drone):
             store.add_message_locked(Severity.CRITICAL, f"Link lost: no heartbeat for {age:.1f} s")
             self._commands.link_lost()
             self._params.link_lost()
+        elif event == "finished":
+            store.add_message_locked(Severity.NOTICE, "Replay finished: the recording has ended")
         return out
 
     def _stream_setpoint(self, now: float) -> list:
@@ -817,6 +825,27 @@ class Vehicle(Drone):
             except (OSError, ValueError) as e:
                 self._store.add_message(Severity.WARNING, f"Parameter metadata not read: {e}")
             self._metadata_loaded.set()
+
+    # ------------------------------------------------------------------------------------------
+    # payload: gimbal, region of interest, camera (driver.payload)
+    # ------------------------------------------------------------------------------------------
+    def point_gimbal(self, pitch_deg: float, yaw_deg: float | None = None) -> Future:
+        return self._payload.point(pitch_deg, yaw_deg)
+
+    def gimbal_rate(self, pitch_deg_s: float, yaw_deg_s: float = 0.0) -> Future:
+        return self._payload.rate(pitch_deg_s, yaw_deg_s)
+
+    def look_at(self, lat: float, lon: float, alt: float = 0.0) -> Future:
+        return self._payload.look_at(lat, lon, alt)
+
+    def stop_looking(self) -> Future:
+        return self._payload.stop_looking()
+
+    def take_photo(self) -> Future:
+        return self._payload.take_photo()
+
+    def record_video(self, on: bool) -> Future:
+        return self._payload.record_video(on)
 
     # ------------------------------------------------------------------------------------------
     # signing (driver.signing)

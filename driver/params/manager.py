@@ -17,7 +17,7 @@ from ..state import CommandStatus, LinkStatus, Severity
 from .cache import changed_names
 from .download import Download
 from .ftp import FtpDownload
-from .model import Parameter, ParameterTable, ParamType
+from .model import Parameter, ParameterTable, ParameterValues, ParamType
 from .setter import SET_RETRY, PendingSet
 from .values import as_stored, format_value, type_problem
 
@@ -305,7 +305,7 @@ class ParameterManager:
         values, expected = self._values, self._expected
         if self._cached is not None:              # the cache's values until the vehicle's own arrive
             values, expected = {**self._cached.values, **values}, expected or self._cached.expected
-        self._store.set(parameters=ParameterTable(dict(values), expected, self._download is not None,
+        self._store.set(parameters=ParameterTable(ParameterValues(values), expected, self._download is not None,
                                                   self._detail))
         self._store.publish()
 
