@@ -36,6 +36,9 @@ from .commands import CommandSender, Notifier, command_name
 from .forwarding import Forwarder
 from .payload.control import PAYLOAD_MESSAGES, Payload
 from .link import LinkError, ReplayControl, TlogWriter, Transport, open_transport
+from .params.cache import ParameterCache
+from .params.manager import ParameterManager
+from .params.metadata import load_metadata, set_problem
 from .rules import COPTER_MODES, MAX_ALTITUDE, MIN_TAKEOFF_ALTITUDE, go_to_problem, takeoff_altitude_problem
 from .setpoints import SetpointStreamer
 from .signing import LinkSigning, SigningConfig
@@ -94,6 +97,9 @@ class VehicleConfig:
     heartbeat_interval: float = 1.0
     signing: SigningConfig | None = None      # MAVLink 2 signing (driver.signing); None: off until a key is given
     allowed_senders: tuple[str, ...] = ()     # UDP: other addresses read besides the vehicle's ("10.1.1.1")
+    param_metadata: str | None = None         # apm.pdef.xml; None: the per-user cache's, else the shipped copy
+    param_cache: str | None = ""              # folder of tables per vehicle; "": the per-user cache, None: none
+    param_ftp: bool = True                    # read all parameters over MAVLink FTP where the vehicle offers it
 
 
 def _ground_only(s: VehicleState) -> str | None:
@@ -131,6 +137,14 @@ class Vehicle(Drone):
         self._notifier = Notifier()
         self._commands = CommandSender(self._store, cfg, self._notifier, self._target_ids)
         self._link = LinkSupervisor(cfg, self._transport, self._commands.capabilities, self._target_ids)
+        self._params = ParameterManager(self._store, self._notifier, self._target_ids, 2 * cfg.loss_timeout)
+        self._param_cache = ParameterCache(cfg.param_cache or None) if cfg.param_cache is not None else None
+        self._params.on_complete = self._cache_parameters
+        self._params.use_ftp = cfg.param_ftp
+        self._metadata = None                 # loaded by start() in the background (half a second of XML)
+        self._metadata_loaded = threading.Event()
+        self._metadata_lock = threading.Lock()
+        self._metadata_warned = False
         self._setpoints = SetpointStreamer(cfg.deadman, cfg.setpoint_rate)
         self._payload = Payload(self)         # gimbal, region of interest, camera (driver.payload)
         self._takeoff: TakeoffSequence | None = None
@@ -194,6 +208,7 @@ class Vehicle(Drone):
             if name == "mavlink-ticker":
                 self._ticker = t
         self._threads += self._forwarder.start()
+        threading.Thread(target=self._load_metadata, name="param-metadata", daemon=True).start()
         return self
 
     def close(self) -> None:
@@ -212,6 +227,7 @@ class Vehicle(Drone):
             t.join(timeout=2.0)
         with self._lock:
             self._commands.abort_all("driver closed")
+            self._params.abort_all("driver closed")
             self._store.set(link=self._link.health(self._version, LinkStatus.CLOSED))
             self._store.publish()
         self._notifier.close()
@@ -520,6 +536,7 @@ class Vehicle(Drone):
         v = m.flight_sw_version
         major, minor, patch = (v >> 24) & 0xFF, (v >> 16) & 0xFF, (v >> 8) & 0xFF
         self._link.version_known = True
+        self._params.ftp_capable = bool(m.capabilities & mavlink.MAV_PROTOCOL_CAPABILITY_FTP)
         if major:
             self._commands.capabilities.setpoint_yaw = (major, minor) >= (3, 5)
             self._store.set(firmware=f"{major}.{minor}.{patch}")
@@ -532,7 +549,9 @@ class Vehicle(Drone):
         name = m.param_id.rstrip("\x00") if isinstance(m.param_id, str) else bytes(m.param_id).decode(errors="replace")
         if not frames.finite(m.param_value):
             return
-        self._commands.on_param_value(name, m.param_value)
+        self._params.on_param_value(m, time.monotonic())
+        if self._params.reasking:
+            self._wake.set()                          # the next read goes out now, not on the next tick
         self._link.param_received(name)
         if name in FENCE_PARAMS:
             self._store.set(fence=self._store.view()["fence"].with_param(name, m.param_value))
@@ -543,6 +562,12 @@ class Vehicle(Drone):
                 self._store.add_message_locked(
                     Severity.WARNING, "GCS failsafe is off on the vehicle (FS_GCS_ENABLE=0): if this link is lost "
                     "or you quit in flight, it keeps hovering until its battery failsafe")
+
+    def _on_file_transfer_protocol(self, m) -> None:
+        """MAVLink FTP: the parameters' file (driver.params.ftp)."""
+        if m.target_system in (0, self.config.source_system) and m.target_component in (0, self.config.source_component):
+            self._params.on_ftp(m, time.monotonic())
+            self._wake.set()
 
     def _on_fence_status(self, m) -> None:
         """FENCE_STATUS, sent while the fence is enabled: a new breach is told once, with what it was."""
@@ -574,6 +599,7 @@ class Vehicle(Drone):
                     self._step_takeoff(now)
                     out += self._stream_setpoint(now)
                     out += self._commands.service(now, self._store.state)
+                    out += self._params.service(now, self._link.status)
                     out += self._payload.service(now, self._store.state)
                     if now >= next_health:
                         next_health = now + 0.1
@@ -610,6 +636,7 @@ class Vehicle(Drone):
             age = self._link.health(self._version).heartbeat_age or 0.0
             store.add_message_locked(Severity.CRITICAL, f"Link lost: no heartbeat for {age:.1f} s")
             self._commands.link_lost()
+            self._params.link_lost()
         elif event == "finished":
             store.add_message_locked(Severity.NOTICE, "Replay finished: the recording has ended")
         return out
@@ -801,19 +828,63 @@ class Vehicle(Drone):
             self._target_ids()[0], mavlink.MAV_MODE_FLAG_DECODE_POSITION_SAFETY, 1 if on else 0))
         return self._finish(f"safety {'on' if on else 'off'}", CommandStatus.ACCEPTED, "sent (not acknowledged)")
 
-    def set_parameter(self, name: str, value: float, timeout: float = 3.0) -> Future:
-        """PARAM_SET, confirmed by the PARAM_VALUE echo."""
-        if not frames.finite(value) or not name or len(name) > 16:
-            return self._finish(f"param {name}", CommandStatus.REJECTED, "bad name or value")
-        busy = self._busy(f"param {name}")
-        if busy:
-            return busy
+    # -- parameters (driver.params) ------------------------------------------------------------------------
+    def fetch_parameters(self, refresh: bool = False) -> Future:
+        """Download every parameter into ``state().parameters`` (driver.params.download)."""
         if self._replay is not None:
-            return self._finish(f"param {name}", CommandStatus.REJECTED, "replaying a recording: no vehicle to command")
+            return self._finish("parameters", CommandStatus.REJECTED, "replaying a recording: no vehicle to ask")
+        s = self.state()
+        cached = None if refresh or self._param_cache is None else self._param_cache.load(s.system_id, s.firmware)
         with self._lock:
-            future = self._commands.submit_param(name, value, time.monotonic())
+            future = self._params.fetch(refresh, time.monotonic(), cached)
         self._wake.set()
         return future
+
+    def _cache_parameters(self, table) -> None:
+        """A complete table: kept per vehicle for its next connection (written off the reader's lock)."""
+        if self._param_cache is not None:
+            s = self._store.view()
+            threading.Thread(target=self._param_cache.save, args=(s["system_id"], s["firmware"], table),
+                             name="param-cache", daemon=True).start()
+
+    def set_parameter(self, name: str, value: float, allow_out_of_bounds: bool = False) -> Future:
+        """PARAM_SET in the parameter's own type, confirmed by the vehicle's echo (driver.params.setter); outside
+        ArduPilot's documented bounds only when ``allow_out_of_bounds`` (driver.params.metadata)."""
+        name = name.upper() if isinstance(name, str) else ""
+        if not name or len(name) > 16 or not name.isascii():
+            return self._finish(f"param {name}", CommandStatus.REJECTED, "a parameter name is 1 to 16 ASCII characters")
+        if self._replay is not None:
+            return self._finish(f"param {name}", CommandStatus.REJECTED, "replaying a recording: no vehicle to command")
+        metadata = self.parameter_metadata
+        with self._lock:
+            problem = self._params.value_problem(name, float(value))
+        problem = problem or set_problem(metadata, name, float(value), allow_out_of_bounds)
+        if problem:
+            return self._finish(f"param {name}", CommandStatus.REJECTED, problem)
+        if metadata is None and not self._metadata_warned:
+            self._metadata_warned = True
+            self._store.add_message(Severity.WARNING, "No parameter metadata (ArduPilot's apm.pdef.xml): values are "
+                                    "written without checking their bounds")
+        with self._lock:
+            future = self._params.set(name, float(value), time.monotonic())
+        self._wake.set()
+        return future
+
+    @property
+    def parameter_metadata(self):
+        if not self._metadata_loaded.is_set():
+            self._load_metadata()
+        return self._metadata
+
+    def _load_metadata(self) -> None:
+        with self._metadata_lock:
+            if self._metadata_loaded.is_set():
+                return
+            try:
+                self._metadata = load_metadata(self.config.param_metadata)
+            except (OSError, ValueError) as e:
+                self._store.add_message(Severity.WARNING, f"Parameter metadata not read: {e}")
+            self._metadata_loaded.set()
 
     # ------------------------------------------------------------------------------------------
     # payload: gimbal, region of interest, camera (driver.payload)
@@ -1039,4 +1110,5 @@ _EVENTS = {
     "PARAM_VALUE": Vehicle._on_param_value,
     "AUTOPILOT_VERSION": Vehicle._on_autopilot_version,
     "FENCE_STATUS": Vehicle._on_fence_status,
+    "FILE_TRANSFER_PROTOCOL": Vehicle._on_file_transfer_protocol,
 }

@@ -1,0 +1,314 @@
+"""The vehicle's parameters inside the driver: the table, its download and every write, for one vehicle.
+
+:class:`ParameterManager` is the part :class:`~driver.vehicle.Vehicle` wires in (as QGroundControl's
+ParameterManager is to its Vehicle): every PARAM_VALUE goes to :meth:`on_param_value` (reader thread), the
+ticker calls :meth:`service`; both with the state lock held, and :meth:`service` only *returns* the messages
+to send. The table is published in ``VehicleState.parameters`` as an immutable
+:class:`~driver.params.model.ParameterTable`, rebuilt at most every :data:`PUBLISH_EVERY` while a list streams.
+"""
+from __future__ import annotations
+
+import logging
+import math
+from concurrent.futures import Future
+from typing import Callable
+
+from ..state import CommandStatus, LinkStatus, Severity
+from .cache import changed_names
+from .download import Download
+from .ftp import FtpDownload
+from .model import Parameter, ParameterTable, ParameterValues, ParamType
+from .setter import SET_RETRY, PendingSet
+from .values import as_stored, format_value, type_problem
+
+log = logging.getLogger(__name__)
+
+__all__ = ["ParameterManager", "PUBLISH_EVERY"]
+
+PUBLISH_EVERY = 0.1          # s between tables published while a download streams
+NO_INDEX = 65535             # param_index of a reply to a read by name or to a set
+
+
+def param_name(m) -> str:
+    raw = m.param_id
+    name = raw if isinstance(raw, str) else bytes(raw).decode("ascii", "replace")
+    return name.split("\x00", 1)[0]
+
+
+class ParameterManager:
+    """Parameters of one vehicle; every method runs with the driver's state lock held."""
+
+    def __init__(self, store, notifier, target: Callable[[], tuple[int, int]], give_up_after: float = 7.0) -> None:
+        self._store = store
+        self._give_up_after = give_up_after      # s of a lost link before a download ends (it waits until then)
+        self._lost_since: float | None = None
+        self._notifier = notifier
+        self._target = target
+        self._values: dict[str, Parameter] = {}
+        self._expected: int | None = None
+        self._download: Download | None = None
+        self._waiting: list[Future] = []         # fetches that end with this download
+        self._sets: dict[str, PendingSet] = {}
+        self._dirty = False
+        self._published = -math.inf
+        self._detail = ""
+        self._cached: ParameterTable | None = None   # shown while the vehicle's own list is read
+        self._ftp: FtpDownload | None = None         # @PARAM/param.pck on its way (driver.params.ftp)
+        self.use_ftp = True                          # read the whole table over MAVLink FTP where it is offered
+        self.ftp_capable: bool | None = None         # AUTOPILOT_VERSION's MAV_PROTOCOL_CAPABILITY_FTP
+        self.on_complete: Callable[[ParameterTable], None] | None = None   # the cache's hook
+
+    # -- what callers ask (any thread, under the lock) ------------------------------------------------
+    @property
+    def table(self) -> ParameterTable:
+        return self._store.view()["parameters"]
+
+    def fetch(self, refresh: bool, now: float, cached: ParameterTable | None = None) -> Future:
+        """Download every parameter; without ``refresh`` a complete table is answered at once and a partial one
+        only has its missing indexes asked for. ``cached``: this vehicle's table from the cache, shown (and
+        compared at the end) while the list is read when nothing is known yet."""
+        future: Future = Future()
+        if self._download is not None:
+            self._waiting.append(future)         # one download at a time: this one ends with it
+            return future
+        if not refresh and self._expected is not None and self._complete():
+            self._settle(future, CommandStatus.ACCEPTED, f"{len(self._values)} parameters (already complete)")
+            return future
+        download = Download(started=now)
+        if refresh:
+            self._values = {name: p for name, p in self._values.items() if p.index < 0}
+            self._expected = None
+        elif self._expected is not None:         # a partial table: ask only for what is missing
+            download.expected, download.listing = self._expected, False
+            download.have = {p.index for p in self._values.values() if 0 <= p.index < self._expected}
+        self._download = download
+        self._waiting.append(future)
+        self._detail = "asking for the list" if download.listing else f"asking for {download.missing} missing"
+        if download.listing and self.use_ftp and self.ftp_capable:
+            self._ftp = FtpDownload(now)
+            self._detail = "reading @PARAM/param.pck over MAVLink FTP"
+        if download.listing and cached is not None and cached.complete and self._expected is None:
+            self._cached = cached
+            self._detail = "from the cache: checking with the vehicle"
+        self._publish(now, force=True)
+        return future
+
+    def value_problem(self, name: str, value: float) -> str:
+        """Why ``name`` cannot hold ``value`` in the type the vehicle reported ("" when it can, or is not known)."""
+        known = self._values.get(name)
+        if known is None:
+            return "" if math.isfinite(value) else "not a finite number"
+        problem = type_problem(known.type, value)
+        return f"{format_value(None, value)}: {problem}" if problem else ""
+
+    def set(self, name: str, value: float, now: float) -> Future:
+        """PARAM_SET ``name``; the future resolves on the vehicle's echo (driver.params.setter)."""
+        future: Future = Future()
+        command = f"param {name}={format_value(None, value)}"
+        known = self._values.get(name)
+        ptype = known.type if known is not None else None
+        if ptype is not None:
+            problem = type_problem(ptype, value)
+            if problem:
+                self._settle(future, CommandStatus.REJECTED, f"{format_value(None, value)}: {problem}", command)
+                return future
+            value = as_stored(ptype, value)
+        elif not math.isfinite(value):
+            self._settle(future, CommandStatus.REJECTED, "not a finite number", command)
+            return future
+        old = self._sets.pop(name, None)
+        if old is not None:
+            self._settle(old.future, CommandStatus.ABORTED, f"superseded by {name}={format_value(ptype, value)}",
+                         command, old.attempts)
+        listed = known is not None and known.index >= 0
+        self._sets[name] = PendingSet(name, value, ptype, future, known=known is not None,
+                                      listed_complete=self._complete() and not listed)
+        return future
+
+    def abort_all(self, reason: str) -> None:
+        for pending in list(self._sets.values()):
+            self._settle(pending.future, CommandStatus.ABORTED, reason, pending.command, pending.attempts)
+        self._sets.clear()
+        if self._download is not None:
+            self._end_download(CommandStatus.ABORTED, reason)
+
+    def link_lost(self) -> None:
+        """Writes keep their tries for when the link is back (none is spent on a dead link)."""
+        for pending in self._sets.values():
+            pending.attempts = min(pending.attempts, max(0, pending.tries - 2))
+
+    @property
+    def reasking(self) -> bool:
+        """Reads by index are out: each answer frees a place for the next (the ticker is woken for it)."""
+        return self._download is not None and not self._download.listing
+
+    # -- the vehicle's word (reader thread) -----------------------------------------------------------
+    def on_ftp(self, m, now: float) -> None:
+        """A FILE_TRANSFER_PROTOCOL message addressed to us."""
+        ftp = self._ftp
+        if ftp is None:
+            return
+        failure = ftp.on_message(m, now)
+        if failure:
+            self._ftp_failed(failure)
+
+    def on_param_value(self, m, now: float) -> Parameter | None:
+        """A PARAM_VALUE from the autopilot: into the table; it may confirm a write or advance the download."""
+        if not math.isfinite(m.param_value):
+            return None
+        name = param_name(m)
+        try:
+            ptype = ParamType(m.param_type)
+        except ValueError:
+            return None
+        old = self._values.get(name)
+        index = m.param_index
+        if index == NO_INDEX or index >= m.param_count:
+            index = old.index if old is not None else -1
+        param = Parameter(name, as_stored(ptype, m.param_value), ptype, index)
+        self._values[name] = param
+        if index >= 0:
+            if self._expected != m.param_count:
+                self._expected = m.param_count
+            download = self._download
+            if download is not None:
+                download.arrived(index, m.param_count, now)
+        pending = self._sets.get(name)
+        if pending is not None and pending.attempts:
+            pending.ptype = ptype                 # the vehicle's own type, whatever we assumed
+            if pending.confirms(ptype, param.value):
+                del self._sets[name]
+                self._settle(pending.future, CommandStatus.ACCEPTED, "", pending.command, pending.attempts)
+                self._publish(now, force=True)
+                return param
+        self._dirty = True
+        if self._download is not None and self._download.complete:
+            self._end_download(CommandStatus.ACCEPTED, f"{len(self._values)} parameters", now)
+        elif self._download is None or index < 0:
+            self._publish(now, force=True)        # one value changed: the pilot sees it at once
+        else:
+            self._publish(now)
+        return param
+
+    # -- the ticker ---------------------------------------------------------------------------------------
+    def service(self, now: float, link: LinkStatus) -> list:
+        """Messages to send now (the caller sends them after releasing the lock)."""
+        out: list = []
+        if link is LinkStatus.LOST or link is LinkStatus.CLOSED:
+            # a few lost heartbeats on a bad radio pause the download; a link gone for longer ends it
+            self._lost_since = now if self._lost_since is None else self._lost_since
+            if self._download is not None and (link is LinkStatus.CLOSED
+                                               or now - self._lost_since >= self._give_up_after):
+                d = self._download
+                got = f"{len(d.have)} of {d.expected}" if d.expected else "none"
+                self._end_download(CommandStatus.TIMED_OUT, f"link lost: {got} parameters received", now)
+            return out
+        self._lost_since = None
+        if link is not LinkStatus.OK:
+            return out                            # no vehicle yet: its answers would go nowhere
+        target = self._target()
+        download = self._download
+        if download is not None and self._ftp is not None:
+            out += self._service_ftp(now, target)
+        elif download is not None:
+            msgs, failure = download.service(now, target)
+            out += msgs
+            if failure:
+                self._end_download(CommandStatus.TIMED_OUT, failure, now)
+            else:
+                detail = (f"{len(download.have)} of {download.expected}" if download.listing and download.expected
+                          else f"re-asking {download.missing} missing" if download.expected else "asking for the list")
+                if detail != self._detail:
+                    self._detail = detail
+                    self._dirty = True
+        for pending in list(self._sets.values()):
+            if not pending.due(now) and not pending.answered_otherwise:
+                continue
+            if pending.attempts >= pending.tries or pending.answered_otherwise:
+                del self._sets[pending.name]
+                self._settle(pending.future, CommandStatus.TIMED_OUT if pending.reported is None
+                             else CommandStatus.REFUSED, pending.failure(), pending.command, pending.attempts)
+                continue
+            out.append(pending.message(target))
+            pending.attempts += 1
+            pending.next_send = now + SET_RETRY
+        if self._dirty:
+            self._publish(now)
+        return out
+
+    # -- inside -------------------------------------------------------------------------------------------
+    def _service_ftp(self, now: float, target: tuple[int, int]) -> list:
+        ftp = self._ftp
+        msgs, failure = ftp.service(now, target)
+        if failure:
+            self._ftp_failed(failure)
+            return msgs
+        if ftp.done:
+            got = ftp.parameters()
+            if isinstance(got, str):
+                self._ftp_failed(got)
+                return msgs
+            values, count = got
+            self._ftp = None
+            self._values = {**{n: p for n, p in self._values.items() if p.index < 0 and n not in values}, **values}
+            self._expected = count
+            self._end_download(CommandStatus.ACCEPTED, f"{len(values)} parameters over MAVLink FTP ({ftp.size} bytes in "
+                               f"{ftp.frames} frames)", now)
+            return msgs
+        detail = f"FTP: {ftp.received} of {ftp.size} bytes" if ftp.size else "opening @PARAM/param.pck (FTP)"
+        if detail != self._detail and not self._detail.startswith("from the cache"):
+            self._detail = detail
+            self._dirty = True
+        return msgs
+
+    def _ftp_failed(self, reason: str) -> None:
+        """FTP did not work: the classic list from here on (and for this vehicle from now on)."""
+        log.info("parameters over FTP: %s; reading the list", reason)
+        self._ftp = None
+        self.ftp_capable = False
+        self._detail = f"FTP: {reason}; reading the list"
+        self._dirty = True
+
+    def _complete(self) -> bool:
+        if self._expected is None:
+            return False
+        return sum(1 for p in self._values.values() if 0 <= p.index < self._expected) >= self._expected
+
+    def _end_download(self, status: CommandStatus, reason: str, now: float = 0.0) -> None:
+        d, self._download = self._download, None
+        self._ftp = None
+        waiting, self._waiting = self._waiting, []
+        cached, self._cached = self._cached, None
+        if d is not None and d.reads:
+            reason += f" ({d.reads} asked again by index)"
+        self._detail = "" if status is CommandStatus.ACCEPTED else reason
+        self._publish(now, force=True)
+        if cached is not None and status is CommandStatus.ACCEPTED:
+            changed = changed_names(cached, self.table)
+            names = ", ".join(changed[:8]) + (", ..." if len(changed) > 8 else "")
+            self._store.add_message_locked(Severity.INFO, f"Parameters: {len(changed)} changed since this vehicle was "
+                                           f"last seen{': ' + names if changed else ''}")
+        for future in waiting:
+            self._settle(future, status, reason, "parameters")
+        if status is CommandStatus.ACCEPTED and self.on_complete is not None:
+            try:
+                self.on_complete(self.table)
+            except Exception:
+                log.exception("parameter cache")
+
+    def _publish(self, now: float, force: bool = False) -> None:
+        if not force and now - self._published < PUBLISH_EVERY:
+            self._dirty = True
+            return
+        self._dirty = False
+        self._published = now
+        values, expected = self._values, self._expected
+        if self._cached is not None:              # the cache's values until the vehicle's own arrive
+            values, expected = {**self._cached.values, **values}, expected or self._cached.expected
+        self._store.set(parameters=ParameterTable(ParameterValues(values), expected, self._download is not None,
+                                                  self._detail))
+        self._store.publish()
+
+    def _settle(self, future: Future, status: CommandStatus, reason: str, command: str = "parameters",
+                attempts: int = 0) -> None:
+        self._notifier.settle(future, self._store.record_locked(command, status, reason, attempts))
