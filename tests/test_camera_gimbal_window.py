@@ -41,7 +41,7 @@ def test_tilting_from_the_window_moves_the_simulated_picture(qtbot, vehicle, win
                     and w.adapter.state.gimbal.known, timeout=10000)
     qtbot.waitUntil(near(w, -90), timeout=5000)                   # the mount's default: straight down
     qtbot.waitUntil(lambda: row_now(w) == 0, timeout=5000)        # nothing but ground
-    assert "Gimbal -90°" in w.gimbal_bar.pitch_label.text()
+    assert "-90°" in w.gimbal_bar.pitch_label.text() and "gimbal -90°" in w.gimbal_bar.pitch_label.toolTip()
 
     w.gimbal_bar.level_button.click()
     qtbot.waitUntil(near(w, 0), timeout=10000)

@@ -6,7 +6,7 @@ Kept apart from the window's Snapshot/Record (which save the video this window r
 from __future__ import annotations
 
 from PyQt5.QtCore import pyqtSignal
-from PyQt5.QtWidgets import QHBoxLayout, QLabel, QSizePolicy, QToolButton, QWidget
+from PyQt5.QtWidgets import QHBoxLayout, QLabel, QToolButton, QWidget
 
 from driver.state import VehicleState
 
@@ -24,10 +24,8 @@ class GimbalBar(QWidget):
 
     def __init__(self, parent: QWidget | None = None) -> None:
         super().__init__(parent)
-        self.pitch_label = QLabel("<b>Drone cam</b> · Gimbal unknown", self)
+        self.pitch_label = QLabel("<b>Drone cam</b> ?°", self)   # short: the row fits a 1024-pixel window;
         self.pitch_label.setToolTip("The gimbal's pitch as the vehicle reports it (0 level, -90 straight down)")
-        self.pitch_label.setSizePolicy(QSizePolicy.Ignored, QSizePolicy.Preferred)   # a long reading is cut, never
-        self.pitch_label.setMinimumWidth(90)                                        # widening a laptop's window
         self.level_button = self._button("Level", "Point the camera level (gimbal pitch 0°)")
         self.down_button = self._button("Down", "Point the camera straight down (gimbal pitch -90°)")
         self.photo_button = self._button("Photo", "Take a picture with the vehicle's own camera; counted "
@@ -60,8 +58,9 @@ class GimbalBar(QWidget):
 
     def show_state(self, s: VehicleState) -> None:
         """What the vehicle says about its gimbal and camera; the Record button follows the camera, not the click."""
-        self.pitch_label.setText(f"<b>Drone cam</b> · Gimbal {s.gimbal.describe()}")
-        self.pitch_label.setToolTip(f"Gimbal {s.gimbal.describe()}: the pitch as the vehicle reports it "
+        pitch = s.gimbal.pitch_deg
+        self.pitch_label.setText("<b>Drone cam</b> " + ("?°" if pitch is None else f"{pitch:.0f}°"))
+        self.pitch_label.setToolTip(f"The vehicle's camera: gimbal {s.gimbal.describe()}, the pitch as the vehicle reports it "
                                     "(0 level, -90 straight down)")
         c = s.camera
         self.photo_button.setText(f"Photo ({c.photos})" if c.photos else "Photo")
