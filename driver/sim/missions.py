@@ -25,6 +25,7 @@ from dataclasses import dataclass
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
+from ..mission.limits import fence_shapes
 from .common import wrap_lon
 from .telemetry import METRES_PER_DEG
 
@@ -59,6 +60,18 @@ class StoredItem:
     @property
     def north_east(self) -> tuple[float, float]:
         return self.x / 1e7, self.y / 1e7
+
+    @property
+    def param1(self) -> float:
+        return self.params[0]
+
+    @property
+    def lat(self) -> float:
+        return self.x / 1e7
+
+    @property
+    def lon(self) -> float:
+        return self.y / 1e7
 
 
 def _f32(value: float) -> float:
@@ -100,7 +113,8 @@ class Missions:
         self.plans: dict[int, list[StoredItem]] = {MISSION: [], FENCE: [], RALLY: []}
         self.uploads: dict[int, _Upload] = {}
         self.warned_float_item = False
-        self.plan_changes = 0          # bumped on every change of a plan (the AUTO part restarts from it)
+        self.plan_changes = 0          # bumped on every change of a plan
+        self._fence_shapes = None      # (plan_changes, FenceShapes) of the stored fence
 
     # -- what the profile speaks -------------------------------------------------------------------
     @property
@@ -331,6 +345,12 @@ class Missions:
                                                      item.x, item.y, int(item.z), 0, 0, 0), self.sender)
 
     # -- geometry the AUTO part and the fence use ------------------------------------------------------
+    def polygon_fence_breach(self, north: float, east: float) -> str:
+        """AC_PolyFence_loader: outside an inclusion shape or inside an exclusion ("" inside the fence)."""
+        if self._fence_shapes is None or self._fence_shapes[0] != self.plan_changes:
+            self._fence_shapes = (self.plan_changes, fence_shapes(self.plans[FENCE], self.home_lat, self.home_lon))
+        return self._fence_shapes[1].outside(north, east)
+
     def ned_of(self, item: StoredItem) -> tuple[float, float] | None:
         """North/east metres from home of an item's place; None for 0, 0 (ArduPilot: here)."""
         if item.x == 0 and item.y == 0:
