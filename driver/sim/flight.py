@@ -205,7 +205,7 @@ class Flight:
         if mode == MODES["BRAKE"]:
             return (*self._hold(), ACC_XY_BRAKE)
         if mode == MODES["AUTO"]:
-            return (*self._auto(), ACC_XY)
+            return (*self._auto(), self._auto_acceleration())
         # LOITER, POSHOLD, ALT_HOLD and the rest: hold, nudged by MANUAL_CONTROL sticks.
         manual = self._manual()
         if manual is not None and any(abs(v) > 1e-3 for v in manual):

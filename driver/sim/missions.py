@@ -42,6 +42,7 @@ _NAV_LAST = 95               # MAV_CMDs up to here (and 5000s fence/rally) are n
 _LOCATED_DO = {mavlink.MAV_CMD_DO_SET_HOME, mavlink.MAV_CMD_DO_LAND_START, mavlink.MAV_CMD_DO_SET_ROI,
                mavlink.MAV_CMD_DO_SET_ROI_LOCATION}
 _NO_PLACE = {mavlink.MAV_CMD_NAV_RETURN_TO_LAUNCH, mavlink.MAV_CMD_NAV_GUIDED_ENABLE, mavlink.MAV_CMD_NAV_DELAY}
+_LOITERS = {mavlink.MAV_CMD_NAV_LOITER_UNLIM, mavlink.MAV_CMD_NAV_LOITER_TURNS, mavlink.MAV_CMD_NAV_LOITER_TIME}
 _RELATIVE = {mavlink.MAV_FRAME_GLOBAL_RELATIVE_ALT, mavlink.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT}
 _TERRAIN = {mavlink.MAV_FRAME_GLOBAL_TERRAIN_ALT, mavlink.MAV_FRAME_GLOBAL_TERRAIN_ALT_INT}
 
@@ -86,6 +87,8 @@ def stored_as(kind: int, command: int, frame: int, params, x: int, y: int, z: fl
         return StoredItem(command, mavlink.MAV_FRAME_GLOBAL, params, x, y, 0.0, 0)
     if kind == RALLY:
         return StoredItem(command, mavlink.MAV_FRAME_GLOBAL_RELATIVE_ALT, params, x, y, _f32(z), 0)
+    if command in _LOITERS:                 # the direction is kept as a flag: read back as 1 or -1 (recording)
+        params = (params[0], params[1], -1.0 if params[2] < 0 else 1.0, params[3])
     if (command <= _NAV_LAST and command not in _NO_PLACE) or command in _LOCATED_DO:
         out = (mavlink.MAV_FRAME_GLOBAL_RELATIVE_ALT if frame in _RELATIVE else
                mavlink.MAV_FRAME_GLOBAL_TERRAIN_ALT if frame in _TERRAIN else mavlink.MAV_FRAME_GLOBAL)
@@ -182,15 +185,20 @@ class Missions:
         self._mission_item(msg, msg.x, msg.y)
 
     def _on_mission_item(self, msg) -> None:
+        self._float_item(msg)
         if self.profile.mavlink2 and not self.warned_float_item:
-            self.warned_float_item = True           # 4.x converts it and asks, once, for the _INT form
-            self._text(mavlink.MAV_SEVERITY_WARNING, "got MISSION_ITEM; GCS should send MISSION_ITEM_INT")
+            self.warned_float_item = True           # 4.x converts it and asks, once, for the _INT form (its text
+            self._text(mavlink.MAV_SEVERITY_WARNING,   # is queued: it follows the next request, as recorded)
+                       "got MISSION_ITEM; GCS should send MISSION_ITEM_INT")
+
+    def _float_item(self, msg) -> None:
         if not (math.isfinite(msg.x) and math.isfinite(msg.y)):
             kind = self._kind(msg)
             if kind in self.uploads:
                 self._ack(msg, mavlink.MAV_MISSION_INVALID, kind)
             return
-        self._mission_item(msg, int(round(msg.x * 1e7)), int(round(msg.y * 1e7)))
+        # AP_Mission::convert_MISSION_ITEM_to_MISSION_ITEM_INT: x * 1.0e7f in float32 (recording: y 1491655552)
+        self._mission_item(msg, int(_f32(_f32(msg.x) * _f32(1e7))), int(_f32(_f32(msg.y) * _f32(1e7))))
 
     def _mission_item(self, msg, x: int, y: int) -> None:
         kind = self._kind(msg)
