@@ -35,6 +35,7 @@ MIN_RETRY = 0.1              # s: the shortest re-ask time, whatever the link
 MAX_RETRY = 1.5              # s: the longest (QGroundControl's ack timeout)
 START_ATTEMPTS = 8           # MISSION_COUNT / MISSION_REQUEST_LIST / MISSION_CLEAR_ALL sent this often
 ITEM_ATTEMPTS = 12           # a download's item asked this often before the transfer fails
+WINDOW = 4                   # a download's requests in flight at once (the vehicle answers each at once)
 SILENCE = 10.0               # s without a word from the vehicle during an upload (it gives up after 8 s)
 FINAL_ACK_WAIT = 3           # re-ask times after the last item before the read-back decides alone
 
@@ -49,7 +50,8 @@ class _Transfer:
     stage: str = "start"                      # start | items | readback | done
     count: int | None = None
     received: dict = field(default_factory=dict)
-    asked: int = -1                           # download: the item asked now; upload: the highest sent
+    asked: int = -1                           # upload: the highest item sent
+    waiting: dict = field(default_factory=dict)   # download: item -> [asked at, times asked], in flight
     attempts: int = 0
     next_send: float = 0.0
     heard: float = 0.0                        # the last time the vehicle said something about this transfer
@@ -153,6 +155,16 @@ class PlanTransfers:
         return MAX_RETRY if t.rtt is None else min(MAX_RETRY, max(MIN_RETRY, 3.0 * t.rtt))
 
     def _service(self, t: _Transfer, now: float) -> None:
+        if t.stage == "items" and t.direction is TransferDirection.DOWNLOAD:
+            for seq, entry in list(t.waiting.items()):
+                if now - entry[0] < self._retry(t):
+                    continue
+                if entry[1] >= ITEM_ATTEMPTS:
+                    self._end(t, CommandStatus.TIMED_OUT, f"item {seq} never came ({entry[1]} requests); "
+                              f"{len(t.received)} of {t.count} received")
+                    return
+                self._ask_item(t, seq, now)
+            return
         if now < t.next_send:
             return
         if t.stage == "start":
@@ -162,12 +174,6 @@ class PlanTransfers:
                 self._end(t, CommandStatus.TIMED_OUT, f"no answer to {what} after {t.attempts} attempts")
                 return
             self._send_start(t, now)
-        elif t.stage == "items" and t.direction is TransferDirection.DOWNLOAD:
-            if t.attempts >= ITEM_ATTEMPTS:
-                self._end(t, CommandStatus.TIMED_OUT, f"item {t.asked} never came ({t.attempts} requests); "
-                          f"{len(t.received)} of {t.count} received")
-                return
-            self._ask_item(t, now)
         elif t.stage == "items":                                  # upload: the vehicle leads
             if now - t.heard > SILENCE:
                 self._end(t, CommandStatus.TIMED_OUT, f"the vehicle stopped asking for items "
@@ -196,16 +202,23 @@ class PlanTransfers:
         t.next_send = now + self._retry(t)
         self._out.append(msg)
 
-    def _ask_item(self, t: _Transfer, now: float) -> None:
+    def _ask_item(self, t: _Transfer, seq: int, now: float) -> None:
         system, component = self._target()
         args = dict(mission_type=int(t.kind)) if self._mavlink2() else {}
         c = self._codec
-        msg = (c.mission_request_int_encode(system, component, t.asked, **args) if self.integer else
-               c.mission_request_encode(system, component, t.asked, **args))
-        t.attempts += 1
-        t.sent_at = now
-        t.next_send = now + self._retry(t)
+        msg = (c.mission_request_int_encode(system, component, seq, **args) if self.integer else
+               c.mission_request_encode(system, component, seq, **args))
+        entry = t.waiting.setdefault(seq, [now, 0])
+        entry[0], entry[1] = now, entry[1] + 1
         self._out.append(msg)
+
+    def _ask_more(self, t: _Transfer, now: float) -> None:
+        """Keep WINDOW requests in flight, lowest missing items first."""
+        for seq in range(t.count or 0):
+            if len(t.waiting) >= WINDOW:
+                return
+            if seq not in t.received and seq not in t.waiting:
+                self._ask_item(t, seq, now)
 
     def _send_item(self, t: _Transfer, seq: int, now: float, again: bool = False) -> None:
         item = t.wire[seq]
@@ -267,24 +280,24 @@ class PlanTransfers:
         if count == 0:
             self._downloaded(t, now)
             return
-        t.stage, t.asked, t.attempts = "items", 0, 0
-        self._ask_item(t, now)
+        t.stage, t.attempts = "items", 0
+        self._ask_more(t, now)
 
     def _on_item(self, t: _Transfer, m, now: float) -> None:
         if t.direction is not TransferDirection.DOWNLOAD or t.stage != "items" or m.seq in t.received:
             return
         if not 0 <= m.seq < t.count:
             return
-        if m.seq == t.asked:
+        entry = t.waiting.pop(m.seq, None)
+        if entry is not None and entry[1] == 1:               # asked once: a clean round-trip sample
+            t.sent_at = entry[0]
             self._measure(t, now)
         t.received[m.seq] = from_wire(m)
         self.changed = True
-        missing = next((i for i in range(t.count) if i not in t.received), None)
-        if missing is None:
+        if len(t.received) == t.count:
             self._downloaded(t, now)
             return
-        t.asked, t.attempts = missing, 0
-        self._ask_item(t, now)
+        self._ask_more(t, now)
 
     def _on_ack(self, t: _Transfer, result: int, now: float) -> None:
         if t.direction is TransferDirection.DOWNLOAD:
