@@ -522,6 +522,7 @@ class Vehicle(Drone):
             return
         self._commands.on_param_value(name, m.param_value)
         self._link.param_received(name)
+        self._missions.on_param(name, m.param_value)
         if name in FENCE_PARAMS:
             self._store.set(fence=self._store.view()["fence"].with_param(name, m.param_value))
         elif name == "FS_GCS_ENABLE":
@@ -1000,5 +1001,5 @@ _EVENTS = {
     "FENCE_STATUS": Vehicle._on_fence_status,
     **{name: Vehicle._on_mission for name in ("MISSION_CURRENT", "MISSION_ITEM_REACHED", "MISSION_REQUEST",
                                               "MISSION_REQUEST_INT", "MISSION_COUNT", "MISSION_ITEM",
-                                              "MISSION_ITEM_INT", "MISSION_ACK")},
+                                              "MISSION_ITEM_INT", "MISSION_ACK", "RALLY_POINT")},
 }

@@ -7,7 +7,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from driver.mission.plan import MissionItem, MissionRunState, Plan, PlanKind
 from driver.state import CommandStatus
-from test_mission_transfer import waypoint
+from test_mission_transfer import place, waypoint
 
 
 def recorded_mission(vehicle) -> Plan:
@@ -77,6 +77,15 @@ def test_the_solo_flies_a_mission_with_float_items_and_the_legacy_jump(sim_facto
     assert "MISSION_ITEM_INT" not in {kind for _, kind, _ in sim.received_messages}
     refused = drone.upload_plan(Plan(PlanKind.FENCE)).result(5).result
     assert refused.status is CommandStatus.REJECTED and "FENCE_RADIUS" in refused.reason
+    # rally points as 3.3 takes them: RALLY_TOTAL, RALLY_POINT each, fetched back with RALLY_FETCH_POINT
+    lat, lon = place(drone, 20, 10)
+    rally = Plan(PlanKind.RALLY, (MissionItem(mavlink.MAV_CMD_NAV_RALLY_POINT, lat=lat, lon=lon, alt=15),
+                                  MissionItem(mavlink.MAV_CMD_NAV_RALLY_POINT, lat=lat, lon=lon, alt=25)))
+    sent = drone.upload_plan(rally).result(30)
+    assert sent.result.status is CommandStatus.ACCEPTED and "RALLY_POINT" in sent.result.reason, str(sent.result)
+    assert [(p.x, p.z) for p in sim.autopilot.plans[PlanKind.RALLY]] == [(round(lat * 1e7), 15), (round(lat * 1e7), 25)]
+    assert drone.download_plan(PlanKind.RALLY).result(30).plan == sent.plan
+    assert drone.clear_plan(PlanKind.RALLY).result(10).ok and sim.autopilot.params["RALLY_TOTAL"] == 0
     assert drone.start_mission().result(60).ok
     assert drone.wait_for(lambda s: s.mission.last_reached == 2, 60)
     jumped = drone.set_mission_item(2).result(10)

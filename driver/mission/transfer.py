@@ -24,6 +24,7 @@ from typing import Callable
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from ..state import CommandResult, CommandStatus
+from .legacy_rally import LegacyRally
 from .plan import Plan, PlanKind, TransferDirection, TransferOutcome, TransferProgress
 from .wire import difference, from_wire, home_slot, result_meaning, to_wire
 
@@ -61,9 +62,11 @@ class _Transfer:
     last_sent_at: float = 0.0                 # upload: when the last item went out
     upload: "_Transfer | None" = None         # a read-back: the upload it checks
     detail: str = ""
+    legacy: bool = False                      # rally points by RALLY_POINT (ArduCopter 3.3: legacy_rally.py)
+    resent: int = 0
 
 
-class PlanTransfers:
+class PlanTransfers(LegacyRally):
     """The transfers of one vehicle. ``record(name, status, reason)`` stores a result (lock held)."""
 
     def __init__(self, codec, source: tuple[int, int], target: Callable[[], tuple[int, int]],
@@ -92,12 +95,9 @@ class PlanTransfers:
         """Why this vehicle cannot transfer ``kind`` here ("" when it can)."""
         if kind is PlanKind.MISSION:
             return ""
-        if self.mission_int is False or not self._mavlink2():
-            if kind is PlanKind.FENCE:
-                return ("this vehicle's firmware has no polygon fence (ArduCopter 3.3, as on the Solo, fences only "
-                        "with FENCE_RADIUS around home and FENCE_ALT_MAX: set those parameters)")
-            return ("this vehicle's firmware has no rally points over the mission protocol (MAVLink 2 mission_type; "
-                    "ArduCopter 3.3, as on the Solo, takes them only as RALLY_POINT messages)")
+        if (self.mission_int is False or not self._mavlink2()) and kind is PlanKind.FENCE:
+            return ("this vehicle's firmware has no polygon fence (ArduCopter 3.3, as on the Solo, fences only with "
+                    "FENCE_RADIUS around home and FENCE_ALT_MAX: set those parameters)")
         return ""
 
     # -- starting (any thread, lock held) ----------------------------------------------------------------
@@ -120,6 +120,7 @@ class PlanTransfers:
 
     def _begin(self, t: _Transfer, now: float) -> Future:
         t.heard = now
+        t.legacy = self.legacy_rally(t.kind)
         self._running[t.kind] = t
         self.changed = True
         return t.future
@@ -155,6 +156,9 @@ class PlanTransfers:
         return MAX_RETRY if t.rtt is None else min(MAX_RETRY, max(MIN_RETRY, 3.0 * t.rtt))
 
     def _service(self, t: _Transfer, now: float) -> None:
+        if t.legacy:
+            self._legacy_service(t, now)
+            return
         if t.stage == "items" and t.direction is TransferDirection.DOWNLOAD:
             for seq, entry in list(t.waiting.items()):
                 if now - entry[0] < self._retry(t):
@@ -237,6 +241,12 @@ class PlanTransfers:
         if getattr(m, "target_system", 0) not in (0, self._source[0]) or \
                 getattr(m, "target_component", 0) not in (0, self._source[1]):
             return []                                             # another ground station's transfer
+        if m.get_type() == "RALLY_POINT":
+            t = self._running.get(PlanKind.RALLY)
+            if t is not None and t.legacy:
+                self._legacy_point(t, m, now)
+            out, self._out = self._out, []
+            return out
         kind = PlanKind(getattr(m, "mission_type", 0)) if getattr(m, "mission_type", 0) in (0, 1, 2) else None
         t = self._running.get(kind) if kind is not None else None
         if t is None:
