@@ -70,7 +70,8 @@ def driver_run(items: int, latency: float, loss: float, seed: int) -> dict:
         outcome = future.result(timeout=600)
         total = time.monotonic() - t0
         exact = same(held(sim, PlanKind.MISSION), as_held(plan), 1)
-        return dict(ok=outcome.result.ok and exact, told=outcome.result.status.value, total=total, upload=upload)
+        told = outcome.result.status.value if outcome.result.ok else str(outcome.result)
+        return dict(ok=outcome.result.ok and exact, told=told, total=total, upload=upload)
     finally:
         vehicle.close()
         sim.stop()

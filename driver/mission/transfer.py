@@ -38,7 +38,8 @@ START_ATTEMPTS = 8           # MISSION_COUNT / MISSION_REQUEST_LIST / MISSION_CL
 ITEM_ATTEMPTS = 12           # a download's item asked this often before the transfer fails
 WINDOW = 4                   # a download's requests in flight at once (the vehicle answers each at once)
 SILENCE = 10.0               # s without a word from the vehicle during an upload (it gives up after 8 s)
-FINAL_ACK_WAIT = 3           # re-ask times after the last item before the read-back decides alone
+FINAL_ACK_WAIT = 3           # re-ask times after the last item before the read-back decides alone ...
+FINAL_ACK_MIN = 1.5          # s, and at least this: the vehicle asks a lost last item again after 1 s
 
 
 @dataclass(eq=False)
@@ -183,7 +184,8 @@ class PlanTransfers(LegacyRally):
                 self._end(t, CommandStatus.TIMED_OUT, f"the vehicle stopped asking for items "
                           f"({t.asked + 1} of {t.count} sent)")
                 return
-            if t.asked == t.count - 1 and not t.acked and now - t.last_sent_at > FINAL_ACK_WAIT * self._retry(t):
+            final_wait = max(FINAL_ACK_WAIT * self._retry(t), FINAL_ACK_MIN)
+            if t.asked == t.count - 1 and not t.acked and now - t.last_sent_at > final_wait:
                 t.detail = "the vehicle's MISSION_ACK was lost: reading back"
                 self._read_back(t, now)
                 return
@@ -310,6 +312,16 @@ class PlanTransfers(LegacyRally):
         self._ask_more(t, now)
 
     def _on_ack(self, t: _Transfer, result: int, now: float) -> None:
+        upload = t.upload
+        if upload is not None and not upload.acked and result == mavlink.MAV_MISSION_DENIED and t.stage == "start":
+            # a read-back begun on a lost final ACK, DENIED: the vehicle is still receiving (our last item was
+            # lost, not its ACK): back to the upload, the last item again
+            self._running[t.kind] = upload
+            upload.stage, upload.detail, upload.heard = "items", "", now
+            self._send_item(upload, upload.count - 1, now)
+            upload.last_sent_at = now
+            self.changed = True
+            return
         if t.direction is TransferDirection.DOWNLOAD:
             if t.stage == "start" and result != mavlink.MAV_MISSION_ACCEPTED:
                 self._end(t, CommandStatus.REFUSED, result_meaning(result))
