@@ -965,7 +965,7 @@ class Vehicle(Drone):
         self._takeoff = None
         self._store.set(takeoff=SequenceProgress(phase, reason, seq.altitude))
         log.info("takeoff: %s %s", phase.value, reason)
-        self._notifier.settle(seq.future, self._store.record_locked(getattr(seq, "name", "takeoff"), status, reason))
+        self._notifier.settle(seq.future, self._store.record_locked(seq.name, status, reason))
 
     def _progress(self, seq: TakeoffSequence) -> None:
         progress = SequenceProgress(seq.phase, seq.detail, seq.altitude)
@@ -988,7 +988,7 @@ class Vehicle(Drone):
                                                "the vehicle got it, it lifts off (Land brings it down)")
             self._store.set(takeoff=SequenceProgress(SequencePhase.ABORTED, f"aborted: {why}", seq.altitude))
             self._notifier.settle(seq.future, self._store.record_locked(
-                "takeoff", CommandStatus.ABORTED, f"aborted by the pilot ({why})"))
+                seq.name, CommandStatus.ABORTED, f"aborted by the pilot ({why})"))
 
 
 #: Events: every one counts (mode/arming changes, the pilot's messages, command answers).

@@ -103,3 +103,15 @@ def test_auto_without_a_mission_says_so(sim_factory, vehicle_factory):
     s = drone.wait_for(lambda s: any(m.text == "PreArm: Mode requires mission" for m in s.messages), 60)
     assert s is not None and s.mission.count in (0, None)
     assert drone.resume_mission().result(5).status.value == "rejected"
+
+
+def test_land_aborts_a_mission_start(sim, vehicle_factory):
+    drone = vehicle_factory(f"tcp:127.0.0.1:{sim.tcp_port}")
+    assert drone.wait_for(lambda s: s.connected and s.home is not None, 20)
+    assert drone.upload_plan(recorded_mission(drone)).result(30).result.ok
+    starting = drone.start_mission()
+    assert drone.set_mode("LOITER").result(5).status is CommandStatus.REJECTED   # only Land and Stop meanwhile
+    assert drone.land().result(10).ok
+    result = starting.result(10)
+    assert (result.command, result.status) == ("mission start", CommandStatus.ABORTED), str(result)
+    assert drone.wait_for(lambda s: not s.takeoff.active, 5)
