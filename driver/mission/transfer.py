@@ -52,7 +52,8 @@ class _Transfer:
     stage: str = "start"                      # start | items | readback | done
     count: int | None = None
     received: dict = field(default_factory=dict)
-    asked: int = -1                           # upload: the highest item sent
+    asked: int = -1                           # upload: the item the vehicle wants now (its last request)
+    top: int = -1                             # upload: the highest item sent
     waiting: dict = field(default_factory=dict)   # download: item -> [asked at, times asked], in flight
     attempts: int = 0
     next_send: float = 0.0
@@ -64,6 +65,8 @@ class _Transfer:
     upload: "_Transfer | None" = None         # a read-back: the upload it checks
     detail: str = ""
     legacy: bool = False                      # rally points by RALLY_POINT (ArduCopter 3.3: legacy_rally.py)
+    probing: int | None = None                # upload: the item sent again unasked (its INVALID_SEQUENCE means
+                                              # the vehicle has it); None once the vehicle asked anything
     resent: int = 0
 
 
@@ -141,7 +144,7 @@ class PlanTransfers(LegacyRally):
         out = []
         for t in self._running.values():
             shown = t.upload or t
-            done = len(t.received) if t.direction is not TransferDirection.UPLOAD or t.upload else max(t.asked, 0)
+            done = len(t.received) if t.direction is not TransferDirection.UPLOAD or t.upload else max(t.top, 0)
             detail = t.detail or ("reading back" if t.upload else "")
             out.append(TransferProgress(shown.kind, shown.direction, done, t.count or 0, True, detail))
         return tuple(out)
@@ -182,15 +185,16 @@ class PlanTransfers(LegacyRally):
         elif t.stage == "items":                                  # upload: the vehicle leads
             if now - t.heard > SILENCE:
                 self._end(t, CommandStatus.TIMED_OUT, f"the vehicle stopped asking for items "
-                          f"({t.asked + 1} of {t.count} sent)")
+                          f"({t.top + 1} of {t.count} sent)")
                 return
             final_wait = max(FINAL_ACK_WAIT * self._retry(t), FINAL_ACK_MIN)
-            if t.asked == t.count - 1 and not t.acked and now - t.last_sent_at > final_wait:
+            if t.top == t.count - 1 and not t.acked and now - t.last_sent_at > final_wait:
                 t.detail = "the vehicle's MISSION_ACK was lost: reading back"
                 self._read_back(t, now)
                 return
             if t.asked >= 0:                                      # the next request is late: the item again
                 self._send_item(t, t.asked, now, again=True)
+                t.probing = t.asked
 
     def _send_start(self, t: _Transfer, now: float) -> None:
         system, component = self._target()
@@ -229,8 +233,9 @@ class PlanTransfers(LegacyRally):
     def _send_item(self, t: _Transfer, seq: int, now: float, again: bool = False) -> None:
         item = t.wire[seq]
         self._out.append(to_wire(self._codec, item, seq, t.kind, self._target(), self.integer, self._mavlink2()))
-        if seq > t.asked:
-            t.asked = seq
+        t.asked = max(t.asked, seq)
+        if seq > t.top:
+            t.top = seq
             self.changed = True
         if seq == t.count - 1 and (not again or t.last_sent_at == 0.0):
             t.last_sent_at = now
@@ -272,6 +277,8 @@ class PlanTransfers(LegacyRally):
         t.heard = now
 
     def _on_request(self, t: _Transfer, seq: int, now: float) -> None:
+        if t.upload is not None and not t.upload.acked and t.stage == "start":
+            t = self._resume_upload(t, now)       # a read-back begun on a lost final ACK, but the vehicle asks
         if t.direction is not TransferDirection.UPLOAD or t.upload is not None or t.stage == "readback":
             return
         if not 0 <= seq < (t.count or 0):
@@ -281,7 +288,18 @@ class PlanTransfers(LegacyRally):
         t.heard = now
         t.stage = "items"
         t.attempts = 0
+        t.probing = None
+        t.asked = seq                             # what the vehicle asks for is what it holds up to
+        self.changed = True
         self._send_item(t, seq, now)
+
+    def _resume_upload(self, check: _Transfer, now: float) -> _Transfer:
+        """Back from a read-back to its upload: the vehicle is still receiving (our last item was lost)."""
+        upload = check.upload
+        self._running[upload.kind] = upload
+        upload.stage, upload.detail, upload.heard = "items", "", now
+        self.changed = True
+        return upload
 
     def _on_count(self, t: _Transfer, count: int, now: float) -> None:
         if t.direction is not TransferDirection.DOWNLOAD or t.stage != "start":
@@ -314,13 +332,11 @@ class PlanTransfers(LegacyRally):
     def _on_ack(self, t: _Transfer, result: int, now: float) -> None:
         upload = t.upload
         if upload is not None and not upload.acked and result == mavlink.MAV_MISSION_DENIED and t.stage == "start":
-            # a read-back begun on a lost final ACK, DENIED: the vehicle is still receiving (our last item was
-            # lost, not its ACK): back to the upload, the last item again
-            self._running[t.kind] = upload
-            upload.stage, upload.detail, upload.heard = "items", "", now
-            self._send_item(upload, upload.count - 1, now)
+            # a read-back begun on a lost final ACK, DENIED: the vehicle is still receiving (an item of ours was
+            # lost, not its ACK): back to the upload, the last item asked again
+            upload = self._resume_upload(t, now)
+            self._send_item(upload, upload.asked, now)
             upload.last_sent_at = now
-            self.changed = True
             return
         if t.direction is TransferDirection.DOWNLOAD:
             if t.stage == "start" and result != mavlink.MAV_MISSION_ACCEPTED:
@@ -339,14 +355,16 @@ class PlanTransfers(LegacyRally):
             return
         # upload
         if result == mavlink.MAV_MISSION_INVALID_SEQUENCE:
-            # the item we sent again already arrived: its next request was lost. The vehicle goes on (it asks
-            # again in 1 s); it holds the item, so it wants the next one: send it now
+            # the item we sent again unasked had arrived: its next request was lost. The vehicle goes on (it
+            # asks again in 1 s); it holds the item, so it wants the next one: send it now. Only for that probe:
+            # an INVALID_SEQUENCE for anything else (a stale request answered) proves nothing
             t.heard = now
-            if t.stage == "items" and 0 <= t.asked < (t.count or 0) - 1:
+            if t.stage == "items" and t.probing == t.asked and 0 <= t.asked < (t.count or 0) - 1:
+                t.probing = None
                 self._send_item(t, t.asked + 1, now)
             return
         if result == mavlink.MAV_MISSION_ACCEPTED:
-            if (t.count and t.asked < t.count - 1) or t.stage == "readback" or (not t.count and t.attempts == 0):
+            if (t.count and t.top < t.count - 1) or t.stage == "readback" or (not t.count and t.attempts == 0):
                 return                    # not for this upload: items are still to come, or nothing asked yet
             t.acked = True
             self._read_back(t, now)
