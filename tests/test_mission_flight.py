@@ -45,9 +45,15 @@ def fly(drone, sim_truth, timeout=120):
     return [m.text for m in done.messages if m.source == "vehicle"]
 
 
+def quick_rtl(sim):
+    """RTL at the mission's own height with a 1 s loiter (RTL_ALT, RTL_LOIT_TIME): shorter tests, same path."""
+    sim.autopilot.params.update(RTL_ALT=700, RTL_LOIT_TIME=1000)
+    return sim
+
+
 @pytest.fixture
 def fast_sim(sim_factory):
-    return sim_factory(speedup=8.0)
+    return quick_rtl(sim_factory(speedup=8.0))
 
 
 def test_a_mission_flies_from_the_ground_to_landed(fast_sim, vehicle_factory):
@@ -68,7 +74,7 @@ def test_a_mission_flies_from_the_ground_to_landed(fast_sim, vehicle_factory):
 def test_the_solo_flies_a_mission_with_float_items_and_the_legacy_jump(sim_factory, vehicle_factory):
     """ArduCopter 3.3 (the Solo): MAVLink 1, MISSION_ITEM only, no mission_state in MISSION_CURRENT, no
     DO_SET_MISSION_CURRENT (MISSION_SET_CURRENT instead), no fence or rally over the mission protocol."""
-    sim = sim_factory(speedup=8.0, profile="solo")
+    sim = quick_rtl(sim_factory(speedup=8.0, profile="solo"))
     drone = vehicle_factory(f"tcp:127.0.0.1:{sim.tcp_port}")
     assert drone.wait_for(lambda s: s.connected and s.home is not None and s.firmware, 20)
     uploaded = drone.upload_plan(recorded_mission(drone)).result(30)

@@ -5,12 +5,12 @@ from __future__ import annotations
 from ice_fixtures import drone_factory, server_factory  # noqa: F401
 from driver.mission.plan import MissionRunState, Plan, PlanKind
 from driver.state import CommandStatus
-from test_mission_flight import fly, recorded_mission
+from test_mission_flight import fly, quick_rtl, recorded_mission
 from test_mission_transfer import fence_plan
 
 
 def test_a_mission_through_ice(sim_factory, vehicle_factory, server_factory, drone_factory):  # noqa: F811
-    sim = sim_factory(speedup=8.0)
+    sim = quick_rtl(sim_factory(speedup=8.0))
     vehicle = vehicle_factory(f"tcp:127.0.0.1:{sim.tcp_port}")
     assert vehicle.wait_for(lambda s: s.connected and s.home is not None, 20)
     drone = drone_factory(server_factory(vehicle))

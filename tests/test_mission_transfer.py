@@ -77,7 +77,7 @@ def test_download_fence_and_rally_then_clear(homed, sim):
 def test_upload_over_a_lossy_link_is_exact_or_reported(homed, sim):
     sim.faults.uplink.loss = 0.3
     sim.faults.downlink.loss = 0.3
-    plan = survey_mission(homed, 20)
+    plan = survey_mission(homed, 12)
     outcome = homed.upload_plan(plan).result(120)
     sim.faults.uplink.loss = sim.faults.downlink.loss = 0.0
     assert outcome.result.status is CommandStatus.ACCEPTED, str(outcome.result)
