@@ -1,7 +1,7 @@
 """The fault matrix: takeoff, forward, stop, land under every firmware profile and link fault.
 
     .venv/bin/python bench/fault_matrix.py [--speedup 2] [--profiles copter-4,solo] [--faults clean,loss30]
-                                           [--markdown]
+                                           [--markdown] [--rows flights,transfers]
 
 Each cell flies the simulated vehicle (real sockets, real time scaled by --speedup) with the embedded
 driver: takeoff to 3 m, 2 m/s forward along the nose (at 60°) for 3 s (a stick refreshed every 100 ms, as the viewer does), Stop,
@@ -12,7 +12,9 @@ command the driver reported accepted that the vehicle never carried out, or repo
 vehicle did it. Every answer the driver gives is checked against the simulated vehicle's truth at the
 moment the driver gives it. Target: no wrong report anywhere; every cell up to 30 % loss completes.
 
-The parameter row (bench/param_cells.py, ``--no-params`` leaves it out): per profile and fault, every parameter
+The transfer rows (bench/transfer_matrix.py) follow: a 50-item mission and a fence uploaded and downloaded in
+each cell, each answer checked against what the vehicle holds; target 0 corrupted plans, 0 wrong reports.
+The parameter row (bench/param_cells.py): per profile and fault, every parameter
 downloaded and no wrong "set" report.
 """
 from __future__ import annotations
@@ -32,6 +34,7 @@ from driver.sim import SimConfig, SimVehicle  # noqa: E402
 from driver.state import CommandStatus, LandedState  # noqa: E402
 from driver.vehicle import Vehicle, VehicleConfig  # noqa: E402
 import param_cells  # noqa: E402
+from transfer_matrix import run_transfers, transfer_table  # noqa: E402
 
 ALTITUDE = 3.0
 FORWARD_SPEED = 2.0
@@ -237,12 +240,14 @@ def main() -> int:
     ap.add_argument("--profiles", default=",".join(PROFILES))
     ap.add_argument("--faults", default=",".join(FAULTS))
     ap.add_argument("--markdown", action="store_true")
-    ap.add_argument("--no-params", dest="params", action="store_false", help="leave out the parameter row")
-    ap.add_argument("--only-params", action="store_true", help="the parameter row alone (no flights)")
+    ap.add_argument("--rows", default="flights,transfers,params",
+                    help="flights (takeoff, forward, stop, land), transfers (bench/transfer_matrix.py) and/or params "
+                         "(bench/param_cells.py)")
     args = ap.parse_args()
     logging.basicConfig(level=logging.ERROR)        # the table says what happened
+    rows = args.rows.split(",")
     cells = []
-    for profile in args.profiles.split(",") if not args.only_params else ():
+    for profile in args.profiles.split(",") if "flights" in rows else ():
         for fault in args.faults.split(","):
             cell = fly(profile, fault, args.speedup)
             print(f"{profile:9s} {fault:11s} {'ok' if cell.completed else 'FAILED ' + cell.error} "
@@ -250,25 +255,30 @@ def main() -> int:
             cells.append(cell)
     if cells:
         print(table(cells, args.speedup, args.markdown))
+    transfers = run_transfers(args.profiles.split(","), args.faults.split(","), args.speedup, FAULTS) \
+        if "transfers" in rows else []
+    if transfers:
+        print(transfer_table(transfers, args.speedup, args.markdown))
     checks = []
-    for profile in args.profiles.split(",") if args.params else ():
+    for profile in args.profiles.split(",") if "params" in rows else ():
         for fault in args.faults.split(","):
             checks.append(param_cells.check(profile, fault, args.speedup, FAULTS[fault][1]))
             print(f"{profile:9s} {fault:11s} parameters {checks[-1].downloaded}/{checks[-1].expected} "
                   f"wrong={len(checks[-1].wrong)}", file=sys.stderr, flush=True)
     if checks:
-        head, rows = param_cells.rows(checks)
+        head, lines = param_cells.rows(checks)
         print("\nParameters:")
         if args.markdown:
             print("\n".join(["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
-                            + ["| " + " | ".join(r) + " |" for r in rows]))
+                            + ["| " + " | ".join(r) + " |" for r in lines]))
         else:
-            widths = [max(len(x) for x in col) for col in zip(head, *rows)]
-            print("\n".join("  ".join(x.ljust(w) for x, w in zip(r, widths)) for r in (head, *rows)))
+            widths = [max(len(x) for x in col) for col in zip(head, *lines)]
+            print("\n".join("  ".join(x.ljust(w) for x, w in zip(r, widths)) for r in (head, *lines)))
         for c in checks:
             for w in c.wrong:
                 print(f"WRONG parameters {c.profile}/{c.fault}: {w}")
-    return 0 if all(c.completed and not c.wrong for c in cells + checks) else 1
+    return 0 if all(c.completed and not c.wrong for c in cells + checks) and \
+        all(not c.wrong and not c.error and not c.corrupted for c in transfers) else 1
 
 
 if __name__ == "__main__":

@@ -19,6 +19,7 @@ import time
 from concurrent.futures import Future
 
 from .battery import time_left
+from .console_plans import PlanCommands
 from .state import BatteryAlarm, CommandResult, CommandStatus, SequencePhase, VehicleState
 from .rules import COPTER_MODES, mode_warning
 from .payload.console import PayloadCommands
@@ -33,8 +34,9 @@ TELEMETRY_WAIT = 5.0         # s more for the requested telemetry (battery, posi
 NOTEWORTHY = ("driver.ice.servants", "driver.ice.camera", "driver.camera.uri")
 
 
-class Console(PayloadCommands, cmd.Cmd):
-    """``reboot, arm, disarm, takeoff, land, mode, velocity, parachute, bat, alt, param, status, help``."""
+class Console(PlanCommands, PayloadCommands, cmd.Cmd):
+    """``reboot, arm, disarm, takeoff, land, mode, velocity, parachute, bat, alt, param, status, help``; ``wp``,
+    ``fence``, ``rally`` (console_plans.py); ``gimbal``, ``roi``, ``camera`` (payload/console.py)."""
 
     intro = "MAVLinkServer console. Type help for commands, exit to quit."
 

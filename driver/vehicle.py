@@ -39,6 +39,8 @@ from .link import LinkError, ReplayControl, TlogWriter, Transport, open_transpor
 from .params.cache import ParameterCache
 from .params.manager import ParameterManager
 from .params.metadata import load_metadata, set_problem
+from .mission.control import MissionControl
+from .mission.plan import Plan, PlanKind
 from .rules import COPTER_MODES, MAX_ALTITUDE, MIN_TAKEOFF_ALTITUDE, go_to_problem, takeoff_altitude_problem
 from .setpoints import SetpointStreamer
 from .signing import LinkSigning, SigningConfig
@@ -164,6 +166,7 @@ class Vehicle(Drone):
         self._started = False
         self._forwarder = Forwarder(cfg.outputs, cfg.baud, self._forward_to_vehicle,
                                     lambda text: self._store.add_message(Severity.WARNING, text), self._closing)
+        self._missions = MissionControl(self)          # driver.mission: transfers, mission state, AUTO
 
     # ------------------------------------------------------------------------------------------
     # lifecycle
@@ -225,6 +228,7 @@ class Vehicle(Drone):
         self._forwarder.close()
         for t in self._threads:
             t.join(timeout=2.0)
+        self._missions.close()
         with self._lock:
             self._commands.abort_all("driver closed")
             self._params.abort_all("driver closed")
@@ -527,6 +531,7 @@ class Vehicle(Drone):
                 sev = Severity.INFO
             self._store.add_message_locked(sev, text, "vehicle")
             self._settle_signing(self._signing.statustext(text))
+            self._missions.on_text(text)
 
     def _on_command_ack(self, m) -> None:
         self._commands.on_ack(m, time.monotonic())
@@ -537,6 +542,7 @@ class Vehicle(Drone):
         major, minor, patch = (v >> 24) & 0xFF, (v >> 16) & 0xFF, (v >> 8) & 0xFF
         self._link.version_known = True
         self._params.ftp_capable = bool(m.capabilities & mavlink.MAV_PROTOCOL_CAPABILITY_FTP)
+        self._missions.on_autopilot_version(m)
         if major:
             self._commands.capabilities.setpoint_yaw = (major, minor) >= (3, 5)
             self._store.set(firmware=f"{major}.{minor}.{patch}")
@@ -553,6 +559,7 @@ class Vehicle(Drone):
         if self._params.reasking:
             self._wake.set()                          # the next read goes out now, not on the next tick
         self._link.param_received(name)
+        self._missions.on_param(name, m.param_value)
         if name in FENCE_PARAMS:
             self._store.set(fence=self._store.view()["fence"].with_param(name, m.param_value))
         elif name == "FS_GCS_ENABLE":
@@ -568,6 +575,8 @@ class Vehicle(Drone):
         if m.target_system in (0, self.config.source_system) and m.target_component in (0, self.config.source_component):
             self._params.on_ftp(m, time.monotonic())
             self._wake.set()
+    def _on_mission(self, m) -> None:
+        self._missions.on_message(m)
 
     def _on_fence_status(self, m) -> None:
         """FENCE_STATUS, sent while the fence is enabled: a new breach is told once, with what it was."""
@@ -601,6 +610,7 @@ class Vehicle(Drone):
                     out += self._commands.service(now, self._store.state)
                     out += self._params.service(now, self._link.status)
                     out += self._payload.service(now, self._store.state)
+                    out += self._missions.service(now, self._store.state)
                     if now >= next_health:
                         next_health = now + 0.1
                         out += self._supervise(now)
@@ -1057,6 +1067,44 @@ class Vehicle(Drone):
         self._wake.set()
         return seq.future
 
+    def _run_sequence(self, seq: TakeoffSequence, name: str) -> Future:
+        """Step ``seq`` (a takeoff-like sequence: driver.mission's MissionStart) in the takeoff's place: only
+        Land and Stop meanwhile, and Land aborts it."""
+        with self._lock:
+            if self._takeoff is not None:
+                return self._finish(name, CommandStatus.REJECTED, "a takeoff or mission start is already running")
+            self._takeoff = seq
+            self._progress(seq)
+        self._wake.set()
+        return seq.future
+
+    # ------------------------------------------------------------------------------------------
+    # missions, fences, rally points (driver.mission.control does the work)
+    # ------------------------------------------------------------------------------------------
+    def upload_plan(self, plan: Plan) -> Future:
+        return self._missions.upload(plan)
+
+    def download_plan(self, kind: PlanKind) -> Future:
+        return self._missions.download(kind)
+
+    def clear_plan(self, kind: PlanKind) -> Future:
+        return self._missions.clear(kind)
+
+    def cancel_transfer(self, kind: PlanKind) -> None:
+        self._missions.cancel(kind)
+
+    def start_mission(self) -> Future:
+        return self._busy("mission start") or self._missions.start()
+
+    def pause_mission(self) -> Future:
+        return self._busy("mission pause") or self._missions.pause()
+
+    def resume_mission(self) -> Future:
+        return self._busy("mission resume") or self._missions.resume()
+
+    def set_mission_item(self, seq: int) -> Future:
+        return self._busy(f"mission item {seq}") or self._missions.go_to_item(seq)
+
     def _step_takeoff(self, now: float) -> None:
         seq = self._takeoff
         if seq is None:
@@ -1076,7 +1124,7 @@ class Vehicle(Drone):
         self._takeoff = None
         self._store.set(takeoff=SequenceProgress(phase, reason, seq.altitude))
         log.info("takeoff: %s %s", phase.value, reason)
-        self._notifier.settle(seq.future, self._store.record_locked("takeoff", status, reason))
+        self._notifier.settle(seq.future, self._store.record_locked(seq.name, status, reason))
 
     def _progress(self, seq: TakeoffSequence) -> None:
         progress = SequenceProgress(seq.phase, seq.detail, seq.altitude)
@@ -1099,7 +1147,7 @@ class Vehicle(Drone):
                                                "the vehicle got it, it lifts off (Land brings it down)")
             self._store.set(takeoff=SequenceProgress(SequencePhase.ABORTED, f"aborted: {why}", seq.altitude))
             self._notifier.settle(seq.future, self._store.record_locked(
-                "takeoff", CommandStatus.ABORTED, f"aborted by the pilot ({why})"))
+                seq.name, CommandStatus.ABORTED, f"aborted by the pilot ({why})"))
 
 
 #: Events: every one counts (mode/arming changes, the pilot's messages, command answers).
@@ -1111,4 +1159,7 @@ _EVENTS = {
     "AUTOPILOT_VERSION": Vehicle._on_autopilot_version,
     "FENCE_STATUS": Vehicle._on_fence_status,
     "FILE_TRANSFER_PROTOCOL": Vehicle._on_file_transfer_protocol,
+    **{name: Vehicle._on_mission for name in ("MISSION_CURRENT", "MISSION_ITEM_REACHED", "MISSION_REQUEST",
+                                              "MISSION_REQUEST_INT", "MISSION_COUNT", "MISSION_ITEM",
+                                              "MISSION_ITEM_INT", "MISSION_ACK", "RALLY_POINT")},
 }

@@ -22,6 +22,7 @@ from typing import Callable
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
+from .auto import Auto
 from .commands import Commands
 from .circle import CircleNav
 from .common import (DEFAULT_PARAMS, MODE_NAMES, MODES, NOT_ARMABLE, POSITION_MODES, STREAMS, command_name,
@@ -33,6 +34,7 @@ from .messages import Messages
 from .failsafe import GcsFailsafe
 from .ftp import FtpServer
 from .params import ParamProtocol, SimParams
+from .missions import Missions
 from .profiles import POSITION_REASONS, profile_of
 from .telemetry import EARTH_RADIUS, GRAVITY, METRES_PER_DEG, Telemetry
 
@@ -81,7 +83,8 @@ class SimTruth:
         return math.hypot(self.vn, self.ve)
 
 
-class Autopilot(Telemetry, Commands, ParamProtocol, FtpServer, GcsFailsafe, Messages, Flight, Payload):
+class Autopilot(Telemetry, Commands, ParamProtocol, FtpServer, GcsFailsafe, Missions, Auto, Messages, Flight,
+                Payload):
     """One ArduCopter: state, flight modes, command handling and telemetry streams."""
 
     def __init__(self, config, faults: Faults | None = None,
@@ -131,6 +134,8 @@ class Autopilot(Telemetry, Commands, ParamProtocol, FtpServer, GcsFailsafe, Mess
         self.deferred_texts: list | None = None   # STATUSTEXT held until a command's ACK is out
         self.mode_changed = False
         self._payload_init()             # the mount and camera (gimbal.py)
+        self._missions_init()             # missions.py: the plans outlive a reboot
+        self._auto_init()                 # auto.py
         self._boot()
 
     # -- lifecycle -------------------------------------------------------------------------------
@@ -189,6 +194,8 @@ class Autopilot(Telemetry, Commands, ParamProtocol, FtpServer, GcsFailsafe, Mess
             self.next_heartbeat = self.t
             self._banner()
         self._readiness()
+        self._missions_step()
+        self._auto_step()
         self._timers()
         self._physics(dt)
         self._fence_check()
@@ -310,6 +317,13 @@ class Autopilot(Telemetry, Commands, ParamProtocol, FtpServer, GcsFailsafe, Mess
             return False
         if number == self.mode:
             return True
+        refusal = self._auto_refusal() if number == MODES["AUTO"] else None
+        if refusal is not None:
+            if refusal:
+                self._text(mavlink.MAV_SEVERITY_WARNING, refusal)
+            return False
+        if self.mode == MODES["AUTO"]:
+            self._auto_left()
         self.mode = number
         self.mode_changed = True
         self.hold_point = None
@@ -331,6 +345,8 @@ class Autopilot(Telemetry, Commands, ParamProtocol, FtpServer, GcsFailsafe, Mess
         else:
             self.yaw_mode = "hold"
         log.info("mode %s", MODE_NAMES[number])
+        if number == MODES["AUTO"]:
+            self._auto_entered()
         return True
 
     @property
@@ -342,7 +358,8 @@ class Autopilot(Telemetry, Commands, ParamProtocol, FtpServer, GcsFailsafe, Mess
             return mavlink.MAV_LANDED_STATE_ON_GROUND
         if self.armed and self.mode == MODES["GUIDED"] and self.guided == "takeoff":
             return mavlink.MAV_LANDED_STATE_TAKEOFF
-        if self.armed and (self.mode == MODES["LAND"] or (self.mode == MODES["RTL"] and self.rtl_phase == "land")):
+        if self.armed and (self.mode == MODES["LAND"] or (self.mode in (MODES["RTL"], MODES["AUTO"])
+                                                                    and self.rtl_phase == "land")):
             return mavlink.MAV_LANDED_STATE_LANDING
         return mavlink.MAV_LANDED_STATE_IN_AIR
 

@@ -172,11 +172,13 @@ class Messages:
         return True
 
     def _within_fence(self, north: float, east: float, up: float) -> bool:
-        """AC_Fence::check_destination_within_fence for the ceiling and the circle around home."""
+        """AC_Fence::check_destination_within_fence for the ceiling, the circle around home and the polygons."""
         if not self.params["FENCE_ENABLE"]:
             return True
         types = int(self.params["FENCE_TYPE"])
         if types & 1 and up > float(self.params["FENCE_ALT_MAX"]):
+            return False
+        if types & 4 and self.polygon_fence_breach(north, east):     # missions.py
             return False
         return not (types & 2 and math.hypot(north, east) > float(self.params["FENCE_RADIUS"]))
 
@@ -199,18 +201,6 @@ class Messages:
             self.yaw_mode = "look_ahead"
 
     # -- parameters, missions, misc -----------------------------------------------------------------
-    def _on_mission_request_list(self, msg) -> None:
-        self.emit(self.factory.mission_count_encode(msg.get_srcSystem(), msg.get_srcComponent(), 0,
-                                                    getattr(msg, "mission_type", 0)))
-
-    def _on_mission_clear_all(self, msg) -> None:
-        self.emit(self.factory.mission_ack_encode(msg.get_srcSystem(), msg.get_srcComponent(),
-                                                  mavlink.MAV_MISSION_ACCEPTED, getattr(msg, "mission_type", 0)))
-
-    def _on_mission_count(self, msg) -> None:
-        result = mavlink.MAV_MISSION_ACCEPTED if msg.count == 0 else mavlink.MAV_MISSION_UNSUPPORTED
-        self.emit(self.factory.mission_ack_encode(msg.get_srcSystem(), msg.get_srcComponent(), result,
-                                                  getattr(msg, "mission_type", 0)))
 
     def _on_autopilot_version_request(self, msg) -> None:
         self._send_now("AUTOPILOT_VERSION")

@@ -106,6 +106,11 @@ class SimParams:
         ptype = self._types.setdefault(name, mavlink.MAV_PARAM_TYPE_REAL32)
         self._values[name] = stored(ptype, float(value))
 
+    def update(self, values: dict | None = None, **more) -> None:
+        """Several values at once, each as a PARAM_SET would store it (tests shorten RTL with this)."""
+        for name, value in {**(values or {}), **more}.items():
+            self[name] = value
+
     def __contains__(self, name: object) -> bool:
         return name in self._values
 

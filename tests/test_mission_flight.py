@@ -1,0 +1,123 @@
+"""A mission flown end to end through the embedded driver against the simulated ArduCopter: upload, start from
+the ground, waypoints reached in order, pause and resume, a jump, RTL, landed and disarmed in AUTO."""
+from __future__ import annotations
+
+import pytest
+from pymavlink.dialects.v20 import ardupilotmega as mavlink
+
+from driver.mission.plan import MissionItem, MissionRunState, Plan, PlanKind
+from driver.state import CommandStatus
+from test_mission_transfer import place, waypoint
+
+
+def recorded_mission(vehicle) -> Plan:
+    """The recording's mission (tests/data/recordings/arducopter-4.6-sitl-mission), shorter holds."""
+    return Plan(PlanKind.MISSION, (
+        MissionItem(mavlink.MAV_CMD_NAV_TAKEOFF, alt=6),
+        waypoint(vehicle, 12, 0, 6),
+        MissionItem(mavlink.MAV_CMD_DO_CHANGE_SPEED, frame=mavlink.MAV_FRAME_MISSION, param1=1, param2=4, param3=-1),
+        waypoint(vehicle, 12, 12, 7, hold=1),
+        MissionItem(mavlink.MAV_CMD_NAV_LOITER_TIME, param1=1, lat=waypoint(vehicle, 0, 12, 7).lat,
+                    lon=waypoint(vehicle, 0, 12, 7).lon, alt=7),
+        MissionItem(mavlink.MAV_CMD_NAV_RETURN_TO_LAUNCH, frame=mavlink.MAV_FRAME_MISSION),
+    ))
+
+
+def fly(drone, sim_truth, timeout=120):
+    """Start the uploaded mission, pause and resume on item 2, jump back to 2 from 4, fly it to the end."""
+    started = drone.start_mission().result(60)
+    assert started.status is CommandStatus.ACCEPTED, str(started)
+    assert drone.wait_for(lambda s: s.mission.current == 2, 60), drone.state().mission
+    paused = drone.pause_mission().result(10)
+    assert paused.ok, str(paused)
+    s = drone.wait_for(lambda s: s.mode == "BRAKE" and s.mission.state is MissionRunState.NOT_STARTED, 10)
+    assert s is not None and s.mission.current == 2
+    resumed = drone.resume_mission().result(10)
+    assert resumed.ok, str(resumed)
+    assert drone.wait_for(lambda s: s.mission.last_reached == 4, 60), drone.state().mission
+    jumped = drone.set_mission_item(2).result(10)
+    assert jumped.ok, str(jumped)
+    assert drone.wait_for(lambda s: s.mission.last_reached == 2, 60)
+    done = drone.wait_for(lambda s: s.mission.state is MissionRunState.COMPLETE and not s.armed, timeout)
+    assert done is not None, drone.state().mission
+    truth = sim_truth()
+    assert truth.mode == "AUTO" and not truth.armed and truth.altitude < 0.1
+    return [m.text for m in done.messages if m.source == "vehicle"]
+
+
+def quick_rtl(sim):
+    """RTL at the mission's own height with a 1 s loiter (RTL_ALT, RTL_LOIT_TIME): shorter tests, same path."""
+    sim.autopilot.params.update(RTL_ALT=700, RTL_LOIT_TIME=1000)
+    return sim
+
+
+@pytest.fixture
+def fast_sim(sim_factory):
+    return quick_rtl(sim_factory(speedup=8.0))
+
+
+def test_a_mission_flies_from_the_ground_to_landed(fast_sim, vehicle_factory):
+    drone = vehicle_factory(f"tcp:127.0.0.1:{fast_sim.tcp_port}")
+    assert drone.wait_for(lambda s: s.connected and s.home is not None, 20)
+    assert drone.start_mission().result(5).status is CommandStatus.REJECTED     # nothing uploaded yet
+    assert drone.upload_plan(recorded_mission(drone)).result(30).result.ok
+    texts = fly(drone, fast_sim.truth)
+    started = [t for t in texts if t.startswith("Mission: ")]
+    # in order; item 2 flown again after the pause, and after the jump asked once 4 was reached (5 had begun);
+    # the DO_ item runs when 2 is done
+    assert started == ["Mission: 1 Takeoff", "Mission: 2 WP", "Mission: 2 WP", "Mission: 3 ChangeSpeed",
+                       "Mission: 4 WP", "Mission: 5 LoitTime", "Mission: 2 WP", "Mission: 3 ChangeSpeed",
+                       "Mission: 4 WP", "Mission: 5 LoitTime", "Mission: 6 RTL"], started
+    assert "Reached command #4" in texts and "Disarming motors" in texts
+
+
+def test_the_solo_flies_a_mission_with_float_items_and_the_legacy_jump(sim_factory, vehicle_factory):
+    """ArduCopter 3.3 (the Solo): MAVLink 1, MISSION_ITEM only, no mission_state in MISSION_CURRENT, no
+    DO_SET_MISSION_CURRENT (MISSION_SET_CURRENT instead), no fence or rally over the mission protocol."""
+    sim = quick_rtl(sim_factory(speedup=8.0, profile="solo"))
+    drone = vehicle_factory(f"tcp:127.0.0.1:{sim.tcp_port}")
+    assert drone.wait_for(lambda s: s.connected and s.home is not None and s.firmware, 20)
+    uploaded = drone.upload_plan(recorded_mission(drone)).result(30)
+    assert uploaded.result.status is CommandStatus.ACCEPTED, str(uploaded.result)
+    assert "MISSION_ITEM" in {kind for _, kind, _ in sim.received_messages}
+    assert "MISSION_ITEM_INT" not in {kind for _, kind, _ in sim.received_messages}
+    refused = drone.upload_plan(Plan(PlanKind.FENCE)).result(5).result
+    assert refused.status is CommandStatus.REJECTED and "FENCE_RADIUS" in refused.reason
+    # rally points as 3.3 takes them: RALLY_TOTAL, RALLY_POINT each, fetched back with RALLY_FETCH_POINT
+    lat, lon = place(drone, 20, 10)
+    rally = Plan(PlanKind.RALLY, (MissionItem(mavlink.MAV_CMD_NAV_RALLY_POINT, lat=lat, lon=lon, alt=15),
+                                  MissionItem(mavlink.MAV_CMD_NAV_RALLY_POINT, lat=lat, lon=lon, alt=25)))
+    sent = drone.upload_plan(rally).result(30)
+    assert sent.result.status is CommandStatus.ACCEPTED and "RALLY_POINT" in sent.result.reason, str(sent.result)
+    assert [(p.x, p.z) for p in sim.autopilot.plans[PlanKind.RALLY]] == [(round(lat * 1e7), 15), (round(lat * 1e7), 25)]
+    assert drone.download_plan(PlanKind.RALLY).result(30).plan == sent.plan
+    assert drone.clear_plan(PlanKind.RALLY).result(10).ok and sim.autopilot.params["RALLY_TOTAL"] == 0
+    assert drone.start_mission().result(60).ok
+    assert drone.wait_for(lambda s: s.mission.last_reached == 2, 60)
+    jumped = drone.set_mission_item(2).result(10)
+    assert jumped.ok and "MISSION_SET_CURRENT" in {kind for _, kind, _ in sim.received_messages}, str(jumped)
+    assert sim.autopilot.last_command != "MAV_CMD_DO_SET_MISSION_CURRENT"
+    assert drone.wait_for(lambda s: not s.armed and sim.truth().altitude < 0.1, 120)
+    assert sim.truth().mode == "AUTO" and sim.autopilot.mission_run == "complete"
+
+
+def test_auto_without_a_mission_says_so(sim_factory, vehicle_factory):
+    sim = sim_factory(speedup=12.0)                                   # the pre-arm report comes every 30 s
+    drone = vehicle_factory(f"tcp:127.0.0.1:{sim.tcp_port}")
+    assert drone.wait_for(lambda s: s.connected and s.readiness.ready_to_arm, 30)
+    assert drone.set_mode("AUTO").result(10).ok                      # disarmed, any mode may be set
+    s = drone.wait_for(lambda s: any(m.text == "PreArm: Mode requires mission" for m in s.messages), 60)
+    assert s is not None and s.mission.count in (0, None)
+    assert drone.resume_mission().result(5).status.value == "rejected"
+
+
+def test_land_aborts_a_mission_start(sim, vehicle_factory):
+    drone = vehicle_factory(f"tcp:127.0.0.1:{sim.tcp_port}")
+    assert drone.wait_for(lambda s: s.connected and s.home is not None, 20)
+    assert drone.upload_plan(recorded_mission(drone)).result(30).result.ok
+    starting = drone.start_mission()
+    assert drone.set_mode("LOITER").result(5).status is CommandStatus.REJECTED   # only Land and Stop meanwhile
+    assert drone.land().result(10).ok
+    result = starting.result(10)
+    assert (result.command, result.status) == ("mission start", CommandStatus.ABORTED), str(result)
+    assert drone.wait_for(lambda s: not s.takeoff.active, 5)
