@@ -25,7 +25,7 @@ from .sticks import StickMode
 from .widgets.telemetry_panel import GOOD, NORMAL, WARN
 
 __all__ = ["SettingsDialog", "KeysDialog", "takeoff_question", "fly_here_question", "mode_question",
-           "signing_setup_question", "emergency_stop_question"]
+           "signing_setup_question", "emergency_stop_question", "mission_start_question"]
 
 
 class SettingsDialog(QDialog):
@@ -288,6 +288,12 @@ def takeoff_question(parent: QWidget, altitude: float) -> QMessageBox:
 def fly_here_question(parent: QWidget, text: str) -> QMessageBox:
     """Confirm a go-to, saying how far and how high; like the takeoff question, Cancel is the default."""
     return _cautious_question(parent, "Fly here", text, "Fly there", "flyHereQuestion")
+
+
+def mission_start_question(parent: QWidget, text: str) -> QMessageBox:
+    """Confirm a mission start (from the ground it arms and takes off); like the takeoff question, Cancel is the
+    default."""
+    return _cautious_question(parent, "Start mission", text, "Start mission", "missionStartQuestion")
 
 
 def _cautious_question(parent: QWidget, title: str, text: str, yes: str, name: str) -> QMessageBox:

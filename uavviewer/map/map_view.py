@@ -85,6 +85,10 @@ class MapView(QWidget):
         self._dragged = False                        # the press became a pan: its release is no click
         self._drag_centre = self.centre
         self.paints = 0                              # paint events so far (tests see the UI keeps painting)
+        # Layers drawn over the trail that may take the mouse first (the plan: uavviewer/map/plan_layer.py):
+        # paint(p, view), mouse_press/mouse_move(view, event) and mouse_release(view, event, clicked) -> True
+        # when they took it, context_actions(view, point) -> [(text, enabled, slot)] for the right-click menu.
+        self.overlays: list = []
         self.drawn_tiles = 0                         # tiles drawn in the last paint
 
     # -- what to show ---------------------------------------------------------------------------
@@ -169,6 +173,8 @@ class MapView(QWidget):
 
     # -- mouse ----------------------------------------------------------------------------------
     def mousePressEvent(self, event) -> None:  # noqa: N802
+        if any(o.mouse_press(self, event) for o in self.overlays):
+            return
         if event.button() == Qt.LeftButton:
             self._drag = QPointF(event.pos())
             self._drag_centre = self.centre
@@ -176,6 +182,8 @@ class MapView(QWidget):
         super().mousePressEvent(event)
 
     def mouseMoveEvent(self, event) -> None:  # noqa: N802
+        if any(o.mouse_move(self, event) for o in self.overlays):
+            return
         if self._drag is not None:
             d = QPointF(event.pos()) - self._drag
             self._dragged = self._dragged or abs(d.x()) + abs(d.y()) >= 3
@@ -187,6 +195,8 @@ class MapView(QWidget):
     def mouseReleaseEvent(self, event) -> None:  # noqa: N802
         clicked = event.button() == Qt.LeftButton and self._drag is not None and not self._dragged
         self._drag = None
+        if any(o.mouse_release(self, event, clicked) for o in self.overlays):
+            return
         name = self.vehicle_at(QPointF(event.pos())) if clicked else ""
         if name:
             self.vehicleClicked.emit(name)
@@ -197,15 +207,19 @@ class MapView(QWidget):
             self.zoom_to(self.mpp * 2 ** (-steps / 2.0), QPointF(event.pos()))
 
     def contextMenuEvent(self, event) -> None:  # noqa: N802
-        if not self.fly_here_text:
+        extra = [a for o in self.overlays for a in o.context_actions(self, QPointF(event.pos()))]
+        if not self.fly_here_text and not extra:
             return
         east, north = self.view_at(QPointF(event.pos()))
         menu = QMenu(self)
         menu.setAttribute(Qt.WA_DeleteOnClose)            # one per right click: gone once closed
         menu.setObjectName("mapMenu")
-        action = menu.addAction(self.fly_here_text)
-        action.setEnabled(self.fly_here_enabled)
-        action.triggered.connect(lambda: self.flyHereRequested.emit(north, east))
+        for text, enabled, slot in extra:                 # what the point's layer offers first (Skip to item N)
+            menu.addAction(text, slot).setEnabled(enabled)
+        if self.fly_here_text:
+            action = menu.addAction(self.fly_here_text)
+            action.setEnabled(self.fly_here_enabled)
+            action.triggered.connect(lambda: self.flyHereRequested.emit(north, east))
         menu.popup(event.globalPos())
 
     def _tile_ready(self, key) -> None:
@@ -231,6 +245,8 @@ class MapView(QWidget):
             p.setFont(QFont(self.font().family(), 8))
             self._label(p, self.to_screen(0.0, -self.fence_radius) + QPointF(4, 12), text)
         self._paint_trail(p)
+        for overlay in self.overlays:
+            overlay.paint(p, self)
         if self.home_visible:
             self._paint_home(p)
         if self.target is not None:
