@@ -128,6 +128,7 @@ class PlanController(QObject):
         if tool != self.tool:
             self.tool = tool
             self.layer.draft = []
+            self.refresh()
             self.view.update()
 
     @property
@@ -146,15 +147,22 @@ class PlanController(QObject):
             return self.selected[1]
         return len(self.doc.entries)
 
+    def _takeoff_first(self, index: int) -> int:
+        """A first place to fly to in an empty mission brings a takeoff before it: ArduCopter starts a mission
+        from the ground only with one. Returns where the new entry goes now."""
+        if index == 0 and not any(isinstance(e, MissionItem) and e.command == mavlink.MAV_CMD_NAV_TAKEOFF
+                                   for e in self.doc.entries):
+            self.doc.insert(0, new_item(mavlink.MAV_CMD_NAV_TAKEOFF, alt=DEFAULT_ALTITUDE))
+            return 1
+        return index
+
     def click(self, lat: float, lon: float) -> None:
         """A click on free map in Plan mode: add what the tool says there."""
         layer, tool = self.panel.layer, self.tool
         if layer == "mission" and tool in ITEM_KINDS:
             index = self._where()
-            if not any(isinstance(e, MissionItem) and e.command == mavlink.MAV_CMD_NAV_TAKEOFF
-                       for e in self.doc.entries) and tool in ("Waypoint", "Loiter (time)") and index == 0:
-                self.doc.insert(0, new_item(mavlink.MAV_CMD_NAV_TAKEOFF, alt=DEFAULT_ALTITUDE))
-                index = 1                            # ArduCopter flies from the ground only after a takeoff item
+            if tool in ("Waypoint", "Loiter (time)"):
+                index = self._takeoff_first(index)
             item = new_item(ITEM_KINDS[tool], lat, lon, self._altitude_before(index))
             self._select("mission", self.doc.insert(index, item))
         elif tool.endswith("circle"):
@@ -176,7 +184,7 @@ class PlanController(QObject):
                 v = self.panel.survey_values()
                 spec = SurveySpec(tuple(draft), v["altitude"], camera_named(v["camera"]), v["front"], v["side"],
                                   v["angle"])
-                self._select("mission", self.doc.insert(self._where(), spec))
+                self._select("mission", self.doc.insert(self._takeoff_first(self._where()), spec))
             else:
                 self.doc.fence.append(FenceShape(self.tool.startswith("Inclusion"), tuple(draft)))
                 self._select("fence", len(self.doc.fence) - 1)
