@@ -52,6 +52,7 @@ def planning_window(qtbot, vehicle, window_factory):
     view.zoom_to(0.5)
     qtbot.mouseClick(w.findChild(type(w.mapPanel.followButton), "planButton"), Qt.LeftButton)
     assert plan.layer.editing and plan.panel.editCheck.isChecked() and plan.dock.isVisible()
+    assert not w.telemetryDock.isVisible()                              # the Plan dock in its place
     settle(view)
     return w, view, plan
 
@@ -105,7 +106,7 @@ def test_plan_a_mission_with_the_mouse_and_the_list(qtbot, vehicle, window_facto
     plan.panel.insertCheck.setChecked(False)
 
     # + RTL at the end, Delete the inserted one (right click on it), ROI and Land by the tool list
-    qtbot.mouseClick(plan.panel.rtlButton, Qt.LeftButton)
+    next(a for a in plan.panel.addMenu.actions() if a.text() == "RTL").trigger()
     menu = right_click(qtbot, view, 20, -30)
     delete = next(a for a in menu.actions() if a.text() == "Delete")
     delete.trigger()

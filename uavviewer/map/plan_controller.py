@@ -87,17 +87,20 @@ class PlanController(QObject):
 
     # -- the dock and the map's button -----------------------------------------------------------
     def _dock(self, window) -> QDockWidget:
+        """The Plan dock takes Telemetry's place while it is shown (tabbed with it, but only one of the two shown
+        at a time, so no tab bar costs the window height: it still fits a 768-pixel-high laptop screen)."""
         dock = QDockWidget("Plan", window)
         dock.setObjectName("planDock")
-        scroll = QScrollArea()                  # the window still fits a 768-pixel-high laptop screen
+        scroll = QScrollArea()
         scroll.setWidgetResizable(True)
         scroll.setFrameShape(QScrollArea.NoFrame)
         scroll.setWidget(self.panel)
         dock.setWidget(scroll)
-        window.addDockWidget(Qt.RightDockWidgetArea, dock)
-        window.tabifyDockWidget(window.telemetryDock, dock)     # beside Telemetry, above the map
-        window.menuView.addAction(dock.toggleViewAction())
-        window.telemetryDock.raise_()
+        dock.hide()
+        window.addDockWidget(Qt.RightDockWidgetArea, dock)      # tabbed with Telemetry when first shown: tabbed
+        window.menuView.addAction(dock.toggleViewAction())      # now, the window would lay out for a tab bar
+        self._tabbed = False
+        dock.visibilityChanged.connect(lambda _shown: self._dock_shown(dock.isVisible()))
         return dock
 
     def _map_button(self, panel) -> QToolButton:
@@ -105,21 +108,46 @@ class PlanController(QObject):
         button.setObjectName("planButton")
         button.setCheckable(True)
         button.setFocusPolicy(Qt.NoFocus)
-        button.setToolTip("Plan mode: click to add waypoints, drag to move them; the list is in the Plan dock")
+        button.setToolTip("Plan: the mission's list, transfers and controls in place of Telemetry; on the map a "
+                          "click adds a waypoint and a drag moves it")
         panel.mapBar.insertWidget(panel.mapBar.count() - 1, button)
-        button.toggled.connect(self.set_editing)
+        button.toggled.connect(self.show_plan)
         return button
 
-    def set_editing(self, on: bool) -> None:
-        """Plan mode on the map; the Plan dock comes to the front."""
-        self.layer.editing = on
-        for w in (self.plan_button, self.panel.editCheck):
-            if w.isChecked() != on:
-                w.setChecked(on)
+    def show_plan(self, on: bool) -> None:
+        """Plan mode: the Plan dock in Telemetry's place, editing on the map; off: Telemetry back."""
+        if on == self.dock.isVisible() and on == self.plan_button.isChecked():
+            return
+        if on and not self._tabbed and self._window.dockWidgetArea(self.dock) == Qt.RightDockWidgetArea:
+            self._window.tabifyDockWidget(self._window.telemetryDock, self.dock)
+        self._tabbed = True
+        leaving, coming = (self._window.telemetryDock, self.dock) if on else (self.dock, self._window.telemetryDock)
+        leaving.hide()                          # first: never both shown, so never a tab bar's height more
+        coming.show()
+        if on:                                  # the map beside the list, as tall as the list
+            w = self._window
+            w.mapDock.raise_()
+            w.resizeDocks([self.dock, w.mapDock], [1, 1], Qt.Vertical)
         if on:
-            self.dock.show()
             self.dock.raise_()
-        else:
+        self.set_editing(on)
+
+    def _dock_shown(self, shown: bool) -> None:
+        """The dock closed or opened by itself (its close button, View › Plan): the map's button follows."""
+        if self.plan_button.isChecked() != shown:
+            self.plan_button.blockSignals(True)
+            self.plan_button.setChecked(shown)
+            self.plan_button.blockSignals(False)
+            if not shown:
+                self.set_editing(False)
+                self._window.telemetryDock.setVisible(True)
+
+    def set_editing(self, on: bool) -> None:
+        """Clicks on the map add, drags move (the panel's "Edit on map")."""
+        self.layer.editing = on
+        if self.panel.editCheck.isChecked() != on:
+            self.panel.editCheck.setChecked(on)
+        if not on:
             self.layer.draft = []
         self.view.update()
 

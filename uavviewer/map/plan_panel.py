@@ -72,20 +72,64 @@ class PlanPanel(QWidget):
         lay.addLayout(bar)
 
         adds = QHBoxLayout()
-        self.takeoffButton = QToolButton(text="+ Takeoff")
-        self.rtlButton = QToolButton(text="+ RTL")
-        self.speedButton = QToolButton(text="+ Speed")
+        self.addButton = QToolButton(text="Add")
+        self.addButton.setToolTip("Items without a place on the map: a takeoff (first), RTL, a speed change")
+        self.addButton.setPopupMode(QToolButton.InstantPopup)
+        self.addMenu = QMenu(self.addButton)
+        self.addMenu.setObjectName("planAddMenu")
+        for what in ("Takeoff", "RTL", "Change speed"):
+            self.addMenu.addAction(what, lambda w=what: self.addRequested.emit(w))
+        self.addButton.setMenu(self.addMenu)
         self.insertCheck = QCheckBox("Insert")
         self.insertCheck.setToolTip("Add before the selected item instead of at the end")
         self.deleteButton = QToolButton(text="Delete")
-        for w in (self.takeoffButton, self.rtlButton, self.speedButton, self.insertCheck, self.deleteButton):
+        self.openButton = QToolButton(text="Open…")
+        self.openButton.setToolTip("Open a plan file (QGroundControl .plan, or a WPL waypoint file)")
+        self.saveButton = QToolButton(text="Save…")
+        self.saveButton.setToolTip("Save the plan (QGroundControl .plan, or the mission as a WPL waypoint file)")
+        for w in (self.addButton, self.insertCheck, self.deleteButton):
             adds.addWidget(w)
         adds.addStretch(1)
-        self.openButton = QToolButton(text="Open…")
-        self.saveButton = QToolButton(text="Save…")
         adds.addWidget(self.openButton)
         adds.addWidget(self.saveButton)
         lay.addLayout(adds)
+
+        self.totalsLabel = QLabel("Empty plan")
+        self.totalsLabel.setObjectName("planTotals")
+        self.totalsLabel.setWordWrap(True)
+        lay.addWidget(self.totalsLabel)
+
+        transfers = QHBoxLayout()
+        self.uploadButton = QPushButton("Upload")
+        self.downloadButton = QPushButton("Download")
+        self.clearButton = QPushButton("Clear")
+        self.cancelButton = QToolButton(text="✕")
+        self.cancelButton.setToolTip("Cancel the transfer")
+        self.progressBar = QProgressBar()
+        self.progressBar.setTextVisible(True)
+        self.progressBar.setSizePolicy(QSizePolicy.Expanding, QSizePolicy.Fixed)
+        for w in (self.uploadButton, self.downloadButton, self.clearButton):
+            transfers.addWidget(w)
+        transfers.addWidget(self.progressBar, 1)
+        transfers.addWidget(self.cancelButton)
+        lay.addLayout(transfers)
+        self.syncLabel = QLabel()
+        self.syncLabel.setObjectName("planSync")
+        self.syncLabel.setWordWrap(True)
+        lay.addWidget(self.syncLabel)
+
+        fly = QHBoxLayout()
+        self.startButton = QPushButton("Start mission")
+        self.startButton.setObjectName("startMission")
+        self.pauseButton = QPushButton("Pause")
+        self.resumeButton = QPushButton("Resume")
+        for w in (self.startButton, self.pauseButton, self.resumeButton):
+            fly.addWidget(w)
+        lay.addLayout(fly)
+        self.progressLabel = QLabel()
+        self.progressLabel.setObjectName("missionProgress")
+        self.progressLabel.setWordWrap(True)
+        lay.addWidget(self.progressLabel)
 
         self.tabs = QTabWidget()
         self.tables: dict[str, QTableWidget] = {}
@@ -93,6 +137,7 @@ class PlanPanel(QWidget):
             table = QTableWidget(0, len(COLUMNS[layer]))
             table.setObjectName(f"{layer}Table")
             table.setMinimumHeight(110)
+            table.verticalHeader().setDefaultSectionSize(table.fontMetrics().height() + 6)
             table.setHorizontalHeaderLabels(COLUMNS[layer])
             table.verticalHeader().hide()
             table.setSelectionBehavior(QAbstractItemView.SelectRows)
@@ -138,43 +183,6 @@ class PlanPanel(QWidget):
         self.surveyBox.hide()
         lay.addWidget(self.surveyBox)
 
-        self.totalsLabel = QLabel("Empty plan")
-        self.totalsLabel.setObjectName("planTotals")
-        self.totalsLabel.setWordWrap(True)
-        lay.addWidget(self.totalsLabel)
-
-        transfers = QHBoxLayout()
-        self.uploadButton = QPushButton("Upload")
-        self.downloadButton = QPushButton("Download")
-        self.clearButton = QPushButton("Clear")
-        self.cancelButton = QToolButton(text="✕")
-        self.cancelButton.setToolTip("Cancel the transfer")
-        self.progressBar = QProgressBar()
-        self.progressBar.setTextVisible(True)
-        self.progressBar.setSizePolicy(QSizePolicy.Expanding, QSizePolicy.Fixed)
-        for w in (self.uploadButton, self.downloadButton, self.clearButton):
-            transfers.addWidget(w)
-        transfers.addWidget(self.progressBar, 1)
-        transfers.addWidget(self.cancelButton)
-        lay.addLayout(transfers)
-        self.syncLabel = QLabel()
-        self.syncLabel.setObjectName("planSync")
-        self.syncLabel.setWordWrap(True)
-        lay.addWidget(self.syncLabel)
-
-        fly = QHBoxLayout()
-        self.startButton = QPushButton("Start mission")
-        self.startButton.setObjectName("startMission")
-        self.pauseButton = QPushButton("Pause")
-        self.resumeButton = QPushButton("Resume")
-        for w in (self.startButton, self.pauseButton, self.resumeButton):
-            fly.addWidget(w)
-        lay.addLayout(fly)
-        self.progressLabel = QLabel()
-        self.progressLabel.setObjectName("missionProgress")
-        self.progressLabel.setWordWrap(True)
-        lay.addWidget(self.progressLabel)
-
         for w in self.findChildren(QWidget):
             if not isinstance(w, QTableWidget) and not isinstance(w, (QDoubleSpinBox, QComboBox)):
                 w.setFocusPolicy(Qt.NoFocus)          # keys keep flying the drone
@@ -182,9 +190,6 @@ class PlanPanel(QWidget):
         self.toolCombo.currentTextChanged.connect(lambda t: t and self.toolChanged.emit(t))
         self.tabs.currentChanged.connect(self._tab)
         self.finishButton.clicked.connect(self.finishRequested.emit)
-        self.takeoffButton.clicked.connect(lambda: self.addRequested.emit("Takeoff"))
-        self.rtlButton.clicked.connect(lambda: self.addRequested.emit("RTL"))
-        self.speedButton.clicked.connect(lambda: self.addRequested.emit("Change speed"))
         self.deleteButton.clicked.connect(self.deleteRequested.emit)
         self.uploadButton.clicked.connect(lambda: self.transferRequested.emit("upload"))
         self.downloadButton.clicked.connect(lambda: self.transferRequested.emit("download"))
@@ -222,7 +227,7 @@ class PlanPanel(QWidget):
         self.toolCombo.addItems(TOOLS[layer])
         self.toolCombo.blockSignals(False)
         mission = layer == "mission"
-        for w in (self.takeoffButton, self.rtlButton, self.speedButton, self.insertCheck):
+        for w in (self.addButton, self.insertCheck):
             w.setVisible(mission)
         self.layerChanged.emit(layer)
         self.toolChanged.emit(self.toolCombo.currentText())
