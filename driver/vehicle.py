@@ -34,6 +34,8 @@ from .api import CEILING, Drone, Limits
 from .commands import CommandSender, Notifier, command_name
 from .forwarding import Forwarder
 from .link import LinkError, ReplayControl, TlogWriter, Transport, open_transport
+from .mission.control import MissionControl
+from .mission.plan import Plan, PlanKind
 from .rules import COPTER_MODES, MAX_ALTITUDE, MIN_TAKEOFF_ALTITUDE, go_to_problem, takeoff_altitude_problem
 from .setpoints import SetpointStreamer
 from .signing import LinkSigning, SigningConfig
@@ -145,6 +147,7 @@ class Vehicle(Drone):
         self._started = False
         self._forwarder = Forwarder(cfg.outputs, cfg.baud, self._forward_to_vehicle,
                                     lambda text: self._store.add_message(Severity.WARNING, text), self._closing)
+        self._missions = MissionControl(self)          # driver.mission: transfers, mission state, AUTO
 
     # ------------------------------------------------------------------------------------------
     # lifecycle
@@ -195,6 +198,7 @@ class Vehicle(Drone):
         self._forwarder.close()
         for t in self._threads:
             t.join(timeout=2.0)
+        self._missions.close()
         with self._lock:
             self._commands.abort_all("driver closed")
             self._store.set(link=self._link.health(self._version, LinkStatus.CLOSED))
@@ -493,6 +497,7 @@ class Vehicle(Drone):
                 sev = Severity.INFO
             self._store.add_message_locked(sev, text, "vehicle")
             self._settle_signing(self._signing.statustext(text))
+            self._missions.on_text(text)
 
     def _on_command_ack(self, m) -> None:
         self._commands.on_ack(m, time.monotonic())
@@ -502,6 +507,7 @@ class Vehicle(Drone):
         v = m.flight_sw_version
         major, minor, patch = (v >> 24) & 0xFF, (v >> 16) & 0xFF, (v >> 8) & 0xFF
         self._link.version_known = True
+        self._missions.on_autopilot_version(m)
         if major:
             self._commands.capabilities.setpoint_yaw = (major, minor) >= (3, 5)
             self._store.set(firmware=f"{major}.{minor}.{patch}")
@@ -525,6 +531,9 @@ class Vehicle(Drone):
                 self._store.add_message_locked(
                     Severity.WARNING, "GCS failsafe is off on the vehicle (FS_GCS_ENABLE=0): if this link is lost "
                     "or you quit in flight, it keeps hovering until its battery failsafe")
+
+    def _on_mission(self, m) -> None:
+        self._missions.on_message(m)
 
     def _on_fence_status(self, m) -> None:
         """FENCE_STATUS, sent while the fence is enabled: a new breach is told once, with what it was."""
@@ -556,6 +565,7 @@ class Vehicle(Drone):
                     self._step_takeoff(now)
                     out += self._stream_setpoint(now)
                     out += self._commands.service(now, self._store.state)
+                    out += self._missions.service(now, self._store.state)
                     if now >= next_health:
                         next_health = now + 0.1
                         out += self._supervise(now)
@@ -897,6 +907,44 @@ class Vehicle(Drone):
         self._wake.set()
         return seq.future
 
+    def _run_sequence(self, seq: TakeoffSequence, name: str) -> Future:
+        """Step ``seq`` (a takeoff-like sequence: driver.mission's MissionStart) in the takeoff's place: only
+        Land and Stop meanwhile, and Land aborts it."""
+        with self._lock:
+            if self._takeoff is not None:
+                return self._finish(name, CommandStatus.REJECTED, "a takeoff or mission start is already running")
+            self._takeoff = seq
+            self._progress(seq)
+        self._wake.set()
+        return seq.future
+
+    # ------------------------------------------------------------------------------------------
+    # missions, fences, rally points (driver.mission.control does the work)
+    # ------------------------------------------------------------------------------------------
+    def upload_plan(self, plan: Plan) -> Future:
+        return self._missions.upload(plan)
+
+    def download_plan(self, kind: PlanKind) -> Future:
+        return self._missions.download(kind)
+
+    def clear_plan(self, kind: PlanKind) -> Future:
+        return self._missions.clear(kind)
+
+    def cancel_transfer(self, kind: PlanKind) -> None:
+        self._missions.cancel(kind)
+
+    def start_mission(self) -> Future:
+        return self._busy("mission start") or self._missions.start()
+
+    def pause_mission(self) -> Future:
+        return self._busy("mission pause") or self._missions.pause()
+
+    def resume_mission(self) -> Future:
+        return self._busy("mission resume") or self._missions.resume()
+
+    def set_mission_item(self, seq: int) -> Future:
+        return self._busy(f"mission item {seq}") or self._missions.go_to_item(seq)
+
     def _step_takeoff(self, now: float) -> None:
         seq = self._takeoff
         if seq is None:
@@ -916,7 +964,7 @@ class Vehicle(Drone):
         self._takeoff = None
         self._store.set(takeoff=SequenceProgress(phase, reason, seq.altitude))
         log.info("takeoff: %s %s", phase.value, reason)
-        self._notifier.settle(seq.future, self._store.record_locked("takeoff", status, reason))
+        self._notifier.settle(seq.future, self._store.record_locked(getattr(seq, "name", "takeoff"), status, reason))
 
     def _progress(self, seq: TakeoffSequence) -> None:
         progress = SequenceProgress(seq.phase, seq.detail, seq.altitude)
@@ -950,4 +998,7 @@ _EVENTS = {
     "PARAM_VALUE": Vehicle._on_param_value,
     "AUTOPILOT_VERSION": Vehicle._on_autopilot_version,
     "FENCE_STATUS": Vehicle._on_fence_status,
+    **{name: Vehicle._on_mission for name in ("MISSION_CURRENT", "MISSION_ITEM_REACHED", "MISSION_REQUEST",
+                                              "MISSION_REQUEST_INT", "MISSION_COUNT", "MISSION_ITEM",
+                                              "MISSION_ITEM_INT", "MISSION_ACK")},
 }

@@ -22,12 +22,14 @@ from typing import Callable
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
+from .auto import Auto
 from .commands import Commands
 from .common import (DEFAULT_PARAMS, MODE_NAMES, MODES, NOT_ARMABLE, POSITION_MODES, STREAMS, command_name,
                      wrap_pi)
 from .faults import Faults
 from .flight import LAND_DISARM_DELAY, Flight
 from .messages import Messages
+from .missions import Missions
 from .profiles import POSITION_REASONS, profile_of
 from .telemetry import EARTH_RADIUS, GRAVITY, METRES_PER_DEG, Telemetry
 
@@ -76,7 +78,7 @@ class SimTruth:
         return math.hypot(self.vn, self.ve)
 
 
-class Autopilot(Telemetry, Commands, Messages, Flight):
+class Autopilot(Telemetry, Commands, Missions, Auto, Messages, Flight):
     """One ArduCopter: state, flight modes, command handling and telemetry streams."""
 
     def __init__(self, config, faults: Faults | None = None,
@@ -126,6 +128,8 @@ class Autopilot(Telemetry, Commands, Messages, Flight):
         self.rebooting_until: float | None = None
         self.deferred_texts: list | None = None   # STATUSTEXT held until a command's ACK is out
         self.mode_changed = False
+        self._missions_init()             # missions.py: the plans outlive a reboot
+        self._auto_init()                 # auto.py
         self._boot()
 
     # -- lifecycle -------------------------------------------------------------------------------
@@ -184,6 +188,8 @@ class Autopilot(Telemetry, Commands, Messages, Flight):
             self.next_heartbeat = self.t
             self._banner()
         self._readiness()
+        self._missions_step()
+        self._auto_step()
         self._timers()
         self._physics(dt)
         self._fence_check()
@@ -302,6 +308,13 @@ class Autopilot(Telemetry, Commands, Messages, Flight):
             return False
         if number == self.mode:
             return True
+        refusal = self._auto_refusal() if number == MODES["AUTO"] else None
+        if refusal is not None:
+            if refusal:
+                self._text(mavlink.MAV_SEVERITY_WARNING, refusal)
+            return False
+        if self.mode == MODES["AUTO"]:
+            self._auto_left()
         self.mode = number
         self.mode_changed = True
         self.hold_point = None
@@ -320,6 +333,8 @@ class Autopilot(Telemetry, Commands, Messages, Flight):
         else:
             self.yaw_mode = "hold"
         log.info("mode %s", MODE_NAMES[number])
+        if number == MODES["AUTO"]:
+            self._auto_entered()
         return True
 
     @property
@@ -331,7 +346,8 @@ class Autopilot(Telemetry, Commands, Messages, Flight):
             return mavlink.MAV_LANDED_STATE_ON_GROUND
         if self.armed and self.mode == MODES["GUIDED"] and self.guided == "takeoff":
             return mavlink.MAV_LANDED_STATE_TAKEOFF
-        if self.armed and (self.mode == MODES["LAND"] or (self.mode == MODES["RTL"] and self.rtl_phase == "land")):
+        if self.armed and (self.mode == MODES["LAND"] or (self.mode in (MODES["RTL"], MODES["AUTO"])
+                                                                    and self.rtl_phase == "land")):
             return mavlink.MAV_LANDED_STATE_LANDING
         return mavlink.MAV_LANDED_STATE_IN_AIR
 

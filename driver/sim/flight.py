@@ -187,7 +187,8 @@ class Flight:
         """Desired NED velocity for the current mode, and the acceleration limit."""
         if self.landed and self.liftoff_at is not None and self.t < self.liftoff_at:
             return 0.0, 0.0, 0.0, ACC_XY     # arming delay and spool-up: still landed (land_complete)
-        if self.landed and not (self.mode == MODES["GUIDED"] and self.guided == "takeoff"):
+        if self.landed and not (self.mode == MODES["GUIDED"] and self.guided == "takeoff") \
+                and not self._auto_climbing():
             manual = self._manual()
             if manual is not None and manual[2] < -0.3 and self.mode not in (MODES["GUIDED"], MODES["LAND"],
                                                                             MODES["RTL"], MODES["AUTO"]):
@@ -203,6 +204,8 @@ class Flight:
             return (*self._rtl(), ACC_XY)
         if mode == MODES["BRAKE"]:
             return (*self._hold(), ACC_XY_BRAKE)
+        if mode == MODES["AUTO"]:
+            return (*self._auto(), ACC_XY)
         # LOITER, POSHOLD, ALT_HOLD and the rest: hold, nudged by MANUAL_CONTROL sticks.
         manual = self._manual()
         if manual is not None and any(abs(v) > 1e-3 for v in manual):

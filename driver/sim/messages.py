@@ -228,19 +228,6 @@ class Messages:
         self.params[name] = value
         self.emit(self._param_value(name))
 
-    def _on_mission_request_list(self, msg) -> None:
-        self.emit(self.factory.mission_count_encode(msg.get_srcSystem(), msg.get_srcComponent(), 0,
-                                                    getattr(msg, "mission_type", 0)))
-
-    def _on_mission_clear_all(self, msg) -> None:
-        self.emit(self.factory.mission_ack_encode(msg.get_srcSystem(), msg.get_srcComponent(),
-                                                  mavlink.MAV_MISSION_ACCEPTED, getattr(msg, "mission_type", 0)))
-
-    def _on_mission_count(self, msg) -> None:
-        result = mavlink.MAV_MISSION_ACCEPTED if msg.count == 0 else mavlink.MAV_MISSION_UNSUPPORTED
-        self.emit(self.factory.mission_ack_encode(msg.get_srcSystem(), msg.get_srcComponent(), result,
-                                                  getattr(msg, "mission_type", 0)))
-
     def _on_autopilot_version_request(self, msg) -> None:
         self._send_now("AUTOPILOT_VERSION")
 

@@ -117,9 +117,6 @@ class Telemetry:
     def _msg_meminfo(self):
         return self.factory.meminfo_encode(0, 65535, 131072)
 
-    def _msg_mission_current(self):
-        return self.factory.mission_current_encode(0)
-
     def _msg_attitude(self):
         return self.factory.attitude_encode(
             self.time_boot_ms(), self.roll + self._noise(0.0005), self.pitch + self._noise(0.0005), self.yaw,
@@ -286,13 +283,16 @@ class Telemetry:
 
     def _msg_autopilot_version(self):
         caps = (mavlink.MAV_PROTOCOL_CAPABILITY_MISSION_FLOAT | mavlink.MAV_PROTOCOL_CAPABILITY_PARAM_FLOAT
-                | mavlink.MAV_PROTOCOL_CAPABILITY_MISSION_INT | mavlink.MAV_PROTOCOL_CAPABILITY_COMMAND_INT
+                | mavlink.MAV_PROTOCOL_CAPABILITY_COMMAND_INT
                 | mavlink.MAV_PROTOCOL_CAPABILITY_SET_POSITION_TARGET_LOCAL_NED
                 | mavlink.MAV_PROTOCOL_CAPABILITY_SET_POSITION_TARGET_GLOBAL_INT
                 | mavlink.MAV_PROTOCOL_CAPABILITY_FLIGHT_TERMINATION
                 | mavlink.MAV_PROTOCOL_CAPABILITY_COMPASS_CALIBRATION)
         if speaks_mavlink2(self.config):
             caps |= mavlink.MAV_PROTOCOL_CAPABILITY_MAVLINK2
+        if self.profile.mavlink2:          # 4.x: MISSION_ITEM_INT and mission_type (3.3 has neither)
+            caps |= (mavlink.MAV_PROTOCOL_CAPABILITY_MISSION_INT | mavlink.MAV_PROTOCOL_CAPABILITY_MISSION_FENCE
+                     | mavlink.MAV_PROTOCOL_CAPABILITY_MISSION_RALLY)
         major, minor, patch, kind = self.profile.version
         version = (major << 24) | (minor << 16) | (patch << 8) | kind
         return self.factory.autopilot_version_encode(caps, version, 0, 0, 0, [0] * 8, [0] * 8, [0] * 8,

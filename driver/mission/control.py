@@ -1,0 +1,283 @@
+"""The embedded driver's mission part: transfers, the mission state, and flying the mission (start, pause,
+resume, go to an item), wired into :class:`driver.vehicle.Vehicle`, which only forwards to it.
+
+Every command is confirmed by what the vehicle reports, as for every command of the driver: a start by the
+heartbeat showing AUTO *and* MISSION_CURRENT saying the mission runs; a pause by the heartbeat (BRAKE); a
+resume by MISSION_CURRENT running again; a jump by MISSION_CURRENT showing the item. From the ground a start
+goes through the takeoff sequence's readiness, GUIDED and arming path (:class:`MissionStart`), then AUTO and
+MISSION_START, as in the recording (tests/data/recordings/arducopter-4.6-sitl-mission).
+"""
+from __future__ import annotations
+
+import logging
+import time
+from concurrent.futures import Future
+from dataclasses import dataclass, replace
+from typing import Callable
+
+from pymavlink.dialects.v20 import ardupilotmega as mavlink
+
+from ..state import CommandResult, CommandStatus, SequencePhase, VehicleState
+from ..takeoff import TakeoffSequence
+from .limits import plan_problems
+from .plan import MissionRunState, Plan, PlanKind, TransferOutcome
+from .progress import fold_item_reached, fold_mission_current, fold_text, fold_transfer_end
+from .transfer import PlanTransfers
+
+__all__ = ["MissionControl", "MissionStart"]
+
+log = logging.getLogger(__name__)
+
+CONFIRM_TIME = 5.0           # s the vehicle's report may take to show a mission command done (MISSION_CURRENT
+                             # streams at the stream rate; a slow link needs a few)
+
+
+class MissionStart(TakeoffSequence):
+    """Start the mission: the takeoff sequence's wait for the link and readiness, GUIDED and arming (skipped
+    when already armed), then AUTO, MISSION_START, and MISSION_CURRENT saying it runs."""
+
+    name = "mission start"
+
+    def __init__(self, drone, config, now: float):
+        super().__init__(drone, 0.0, config, now)
+
+    def step(self, now: float):
+        s = self.drone.state()
+        if self._stage in ("link", "ready", "guided") and s.armed:
+            return self._start_takeoff(now)          # flying or armed already: straight to AUTO
+        if self._stage not in ("auto", "start", "running"):
+            return super().step(now)
+        elapsed = now - self._since
+        if self._stage == "auto":
+            if self._pending is None:
+                self._pending = self.drone.set_mode("AUTO")
+            r = self._result()
+            if r is not None:
+                if not r.ok:
+                    return r.status, f"AUTO: {r.reason}", SequencePhase.FAILED
+                self._go("start", now, SequencePhase.TAKING_OFF, "MISSION_START")
+        elif self._stage == "start":
+            if self._pending is None:
+                self._pending = self.drone.command_long(mavlink.MAV_CMD_MISSION_START, (0, 0), "MISSION_START")
+            r = self._result()
+            if r is not None:
+                if not r.ok and s.mission.state is not MissionRunState.ACTIVE:
+                    return r.status, f"MISSION_START: {r.reason}", SequencePhase.FAILED
+                self._go("running", now, SequencePhase.CLIMBING, "waiting for MISSION_CURRENT")
+        elif self._stage == "running":
+            if s.mode != "AUTO":
+                return CommandStatus.REFUSED, f"the vehicle left AUTO ({s.mode})", SequencePhase.FAILED
+            if s.mission.state is MissionRunState.ACTIVE or (s.mission.state is MissionRunState.UNKNOWN
+                                                             and s.mission.current):
+                return CommandStatus.ACCEPTED, f"mission running, item {s.mission.current}", SequencePhase.DONE
+            if elapsed > CONFIRM_TIME:
+                return CommandStatus.TIMED_OUT, "AUTO shown, but MISSION_CURRENT never said the mission runs", \
+                    SequencePhase.FAILED
+        return None
+
+    def _start_takeoff(self, now: float):
+        self._go("auto", now, SequencePhase.TAKING_OFF, "switching to AUTO")
+        return None
+
+
+@dataclass(eq=False)
+class _Watch:
+    """A command whose reply is not the end: the vehicle's report must show ``done`` too."""
+    name: str
+    future: Future
+    inner: Future
+    done: Callable[[VehicleState], bool]
+    what: str
+    deadline: float | None = None
+
+
+class MissionControl:
+    """Owned by one Vehicle; ``vehicle`` gives the lock, the store, the notifier and the command paths."""
+
+    def __init__(self, vehicle) -> None:
+        self._v = vehicle
+        cfg = vehicle.config
+        self.transfers = PlanTransfers(vehicle._new_encoder(), (cfg.source_system, cfg.source_component),
+                                       vehicle._target_ids, vehicle._store.record_locked, vehicle._notifier.settle,
+                                       lambda: vehicle._store.state.home, lambda: vehicle._v2)
+        self._watches: list[_Watch] = []
+
+    # -- transfers (any thread) -------------------------------------------------------------------------
+    def _refusal(self, kind: PlanKind) -> str:
+        v = self._v
+        if v._replay is not None:
+            return "replaying a recording: no vehicle to command"
+        if not v.state().connected:
+            return "no vehicle connected"
+        return self.transfers.unsupported(kind)
+
+    def upload(self, plan: Plan) -> Future:
+        name = f"upload {plan.kind.label}"
+        problems = plan_problems(plan, self._v.state(), self._v.config)
+        problem = "; ".join(problems[:5]) + (f" (and {len(problems) - 5} more)" if len(problems) > 5 else "")
+        return self._start(name, plan.kind, problem,
+                           lambda now: self.transfers.upload(plan, now), outcome=True)
+
+    def download(self, kind: PlanKind) -> Future:
+        return self._start(f"download {kind.label}", kind, "", lambda now: self.transfers.download(kind, now),
+                           outcome=True)
+
+    def clear(self, kind: PlanKind) -> Future:
+        return self._start(f"clear {kind.label}", kind, "", lambda now: self.transfers.clear(kind, now),
+                           outcome=False)
+
+    def _start(self, name: str, kind: PlanKind, problem: str, begin, outcome: bool) -> Future:
+        v = self._v
+        problem = problem or self._refusal(kind)
+        with v._lock:
+            problem = problem or self.transfers.busy(kind)
+            if problem:
+                result = v._store.record_locked(name, CommandStatus.REJECTED, problem)
+                done: Future = Future()
+                done.set_result(TransferOutcome(result) if outcome else result)
+                return done
+            future = begin(time.monotonic())
+            self._publish()
+        v._wake.set()
+        return future
+
+    def cancel(self, kind: PlanKind) -> None:
+        with self._v._lock:
+            if self.transfers.cancel(kind):
+                self._publish()
+
+    # -- flying it (any thread) ------------------------------------------------------------------------------
+    def start(self) -> Future:
+        v = self._v
+        s = v.state()
+        problem = ("replaying a recording: no vehicle to command" if v._replay is not None else
+                   "no mission on the vehicle: upload one first" if s.mission.count == 0 else "")
+        if problem:
+            return v._finish("mission start", CommandStatus.REJECTED, problem)
+        return v._run_sequence(MissionStart(v, v.config, time.monotonic()), "mission start")
+
+    def pause(self) -> Future:
+        s = self._v.state()
+        if s.mode != "AUTO":
+            return self._v._finish("mission pause", CommandStatus.REJECTED, f"not flying a mission (mode {s.mode})")
+        return self._v.set_mode("BRAKE")
+
+    def resume(self) -> Future:
+        v = self._v
+        s = v.state()
+        if s.mode == "AUTO" and s.mission.state is MissionRunState.ACTIVE:
+            return v._finish("mission resume", CommandStatus.ACCEPTED, "the mission is running")
+        if not s.flying:
+            return v._finish("mission resume", CommandStatus.REJECTED, "on the ground: start the mission instead")
+        if not s.mission.count:
+            return v._finish("mission resume", CommandStatus.REJECTED, "no mission on the vehicle")
+        return self._watch("mission resume", v.set_mode("AUTO"), _running, "MISSION_CURRENT shows it running")
+
+    def go_to_item(self, seq: int) -> Future:
+        v = self._v
+        s = v.state()
+        name = f"mission item {seq}"
+        if not isinstance(seq, int) or seq < 1 or (s.mission.count is not None and seq > s.mission.count):
+            return v._finish(name, CommandStatus.REJECTED, f"no item {seq} (the mission has {s.mission.count} items)")
+        shown = lambda st: st.mission.current == seq   # noqa: E731
+        if self.transfers.mission_int is False:       # 3.3: no DO_SET_MISSION_CURRENT, the message only
+            return self._watch(name, self._set_current_message(seq, name), shown, f"MISSION_CURRENT shows {seq}")
+        inner = v.command_long(mavlink.MAV_CMD_DO_SET_MISSION_CURRENT, (seq,), name)
+        future: Future = Future()
+
+        def fallback(f: Future) -> None:
+            r = f.result()
+            if not r.ok and "UNSUPPORTED" in r.reason:
+                chained = self._watch(name, self._set_current_message(seq, name), shown,
+                                      f"MISSION_CURRENT shows {seq}")
+                chained.add_done_callback(lambda g: future.set_result(g.result()))
+            else:
+                self._watch(name, f, shown, f"MISSION_CURRENT shows {seq}").add_done_callback(
+                    lambda g: future.set_result(g.result()))
+        inner.add_done_callback(fallback)
+        return future
+
+    def _set_current_message(self, seq: int, name: str) -> Future:
+        v = self._v
+        system, component = v._target_ids()
+        v._post(mavlink.MAVLink_mission_set_current_message(system, component, seq))
+        done: Future = Future()
+        done.set_result(CommandResult(name, CommandStatus.ACCEPTED, "MISSION_SET_CURRENT sent"))
+        return done
+
+    def _watch(self, name: str, inner: Future, done: Callable[[VehicleState], bool], what: str) -> Future:
+        w = _Watch(name, Future(), inner, done, what)
+        with self._v._lock:
+            self._watches.append(w)
+        self._v._wake.set()
+        return w.future
+
+    # -- the driver's threads (lock held) ----------------------------------------------------------------
+    def on_message(self, m) -> None:
+        mtype = m.get_type()
+        store = self._v._store
+        if mtype == "MISSION_CURRENT":
+            store.set(mission=fold_mission_current(store.view()["mission"], m))
+            return
+        if mtype == "MISSION_ITEM_REACHED":
+            store.set(mission=fold_item_reached(store.view()["mission"], m))
+            return
+        for msg in self.transfers.on_message(m, time.monotonic()):
+            self._v._post(msg)
+        if self.transfers.changed:
+            self._publish()
+
+    def on_text(self, text: str) -> None:
+        store = self._v._store
+        folded = fold_text(store.view()["mission"], text)
+        if folded is not None:
+            store.set(mission=folded)
+
+    def on_autopilot_version(self, m) -> None:
+        self.transfers.mission_int = bool(m.capabilities & mavlink.MAV_PROTOCOL_CAPABILITY_MISSION_INT)
+
+    def service(self, now: float, state: VehicleState) -> list:
+        out = self.transfers.service(now)
+        if self.transfers.changed:
+            self._publish()
+        for w in list(self._watches):
+            if not w.inner.done():
+                continue
+            r = w.inner.result()
+            if not r.ok:
+                self._settle(w, r)
+            elif w.done(state):
+                self._settle(w, self._v._store.record_locked(w.name, CommandStatus.ACCEPTED, w.what))
+            elif w.deadline is None:
+                w.deadline = now + CONFIRM_TIME
+            elif now > w.deadline:
+                self._settle(w, self._v._store.record_locked(
+                    w.name, CommandStatus.TIMED_OUT, f"{r.command} was accepted but {w.what} never happened"))
+        return out
+
+    def _settle(self, w: _Watch, result: CommandResult) -> None:
+        self._watches.remove(w)
+        self._v._notifier.settle(w.future, result)
+
+    def close(self) -> None:
+        with self._v._lock:
+            self.transfers.abort_all("driver closed")
+            for w in list(self._watches):
+                self._settle(w, CommandResult(w.name, CommandStatus.ABORTED, "driver closed"))
+
+    def _publish(self) -> None:
+        store = self._v._store
+        t = self.transfers
+        p = store.view()["mission"]
+        for kind, direction, status, plan in t.ended:
+            p = fold_transfer_end(p, kind, direction, status is CommandStatus.ACCEPTED, plan)
+        t.ended.clear()
+        t.changed = False
+        store.set(mission=replace(p, transfers=t.progress()))
+        store.publish()
+
+
+def _running(s: VehicleState) -> bool:
+    return s.mode == "AUTO" and (s.mission.state is MissionRunState.ACTIVE or
+                                 s.mission.state is MissionRunState.UNKNOWN)
+

@@ -1,0 +1,57 @@
+"""The mission as the vehicle reports it, folded into :class:`~driver.mission.plan.MissionProgress` (pure).
+
+MISSION_CURRENT carries the current item, the count without the home slot and, on 4.x, mission_state
+(3 active, 2 stopped as in BRAKE, 5 complete); MISSION_ITEM_REACHED marks an item done; "Mission: 3 WP" names
+the item started. ArduCopter 3.3 (the Solo) sends MISSION_CURRENT with the seq only: the state is then left
+UNKNOWN rather than guessed, and the count comes from the last transfer.
+"""
+from __future__ import annotations
+
+import re
+from dataclasses import replace
+
+from .plan import MissionProgress, MissionRunState, Plan, PlanKind, TransferDirection
+
+__all__ = ["fold_mission_current", "fold_item_reached", "fold_text", "fold_transfer_end"]
+
+_STARTED = re.compile(r"^Mission: (\d+) (\S+)")
+
+
+def fold_mission_current(p: MissionProgress, m) -> MissionProgress:
+    state = getattr(m, "mission_state", 0)
+    total = getattr(m, "total", None)
+    if state == 0:                       # MAVLink 1 / 3.3: no extension fields
+        return replace(p, current=int(m.seq))
+    try:
+        run = MissionRunState(state)
+    except ValueError:
+        run = MissionRunState.UNKNOWN
+    name = p.current_name if p.current == m.seq else ""
+    return replace(p, current=int(m.seq), count=int(total) if total is not None else p.count, state=run,
+                   current_name=name)
+
+
+def fold_item_reached(p: MissionProgress, m) -> MissionProgress:
+    return replace(p, last_reached=int(m.seq))
+
+
+def fold_text(p: MissionProgress, text: str) -> MissionProgress | None:
+    """The item a "Mission: N NAME" line says started; None for any other text."""
+    found = _STARTED.match(text)
+    if not found:
+        return None
+    return replace(p, current=int(found.group(1)), current_name=found.group(2))
+
+
+def fold_transfer_end(p: MissionProgress, kind: PlanKind, direction: TransferDirection, ok: bool,
+                      plan: Plan | None) -> MissionProgress:
+    """What is known to be on the vehicle after a transfer: the plan read back, nothing after a clear, and
+    after a failed upload not even the old plan (the vehicle may hold part of the new one)."""
+    others = tuple(x for x in p.on_vehicle if x.kind is not kind)
+    if ok and plan is not None:
+        known = others + (plan,)
+        count = len(plan) if kind is PlanKind.MISSION else p.count
+        return replace(p, on_vehicle=known, count=count)
+    if direction is TransferDirection.UPLOAD and not ok:
+        return replace(p, on_vehicle=others)
+    return p

@@ -1,0 +1,355 @@
+"""The transfer part: upload, download and clear missions, fences and rally points (MAVLink's mission protocol),
+as MAVSDK's MissionRaw and QGroundControl's PlanManager do, one transfer per plan kind at a time.
+
+Nothing is reported done unless the vehicle said so: an upload is ACCEPTED only once its MISSION_ACK accepted it
+and the plan read back means the same (:func:`driver.mission.wire.difference`). If that last ACK is lost the
+vehicle cannot send it again (it has left its upload), so the read-back alone decides, and the result says so.
+
+Our side times out and re-asks too: MISSION_COUNT until the first request, MISSION_REQUEST_LIST until the
+count, each missing item of a download, and the item last sent while the vehicle's next request does not come
+(a lost item costs one re-ask time, not the vehicle's own 1 s; if it was the request that was lost, the
+vehicle answers INVALID_SEQUENCE, which does not end an upload). The re-ask time follows the link: three
+round trips measured on this transfer, between :data:`MIN_RETRY` and :data:`MAX_RETRY`.
+
+:class:`PlanTransfers` runs on the driver's ticker and reader with the state lock held: ``service`` and
+``on_message`` only *return* the messages to send; futures settle on the driver's :class:`Notifier`.
+"""
+from __future__ import annotations
+
+import logging
+from concurrent.futures import Future
+from dataclasses import dataclass, field
+from typing import Callable
+
+from pymavlink.dialects.v20 import ardupilotmega as mavlink
+
+from ..state import CommandResult, CommandStatus
+from .plan import Plan, PlanKind, TransferDirection, TransferOutcome, TransferProgress
+from .wire import difference, from_wire, home_slot, result_meaning, to_wire
+
+__all__ = ["PlanTransfers", "MIN_RETRY", "MAX_RETRY"]
+
+log = logging.getLogger(__name__)
+
+MIN_RETRY = 0.25             # s: the shortest re-ask time, whatever the link
+MAX_RETRY = 1.5              # s: the longest (QGroundControl's ack timeout)
+START_ATTEMPTS = 5           # MISSION_COUNT / MISSION_REQUEST_LIST / MISSION_CLEAR_ALL sent this often
+ITEM_ATTEMPTS = 10           # a download's item asked this often before the transfer fails
+SILENCE = 10.0               # s without a word from the vehicle during an upload (it gives up after 8 s)
+FINAL_ACK_WAIT = 3           # re-ask times after the last item before the read-back decides alone
+
+
+@dataclass(eq=False)
+class _Transfer:
+    kind: PlanKind
+    direction: TransferDirection
+    future: Future
+    plan: Plan | None = None                  # upload: what is sent (mission: without the home slot)
+    wire: list = field(default_factory=list)  # upload: the items on the wire (mission: home slot first)
+    stage: str = "start"                      # start | items | readback | done
+    count: int | None = None
+    received: dict = field(default_factory=dict)
+    asked: int = -1                           # download: the item asked now; upload: the highest sent
+    attempts: int = 0
+    next_send: float = 0.0
+    heard: float = 0.0                        # the last time the vehicle said something about this transfer
+    sent_at: float = 0.0
+    rtt: float | None = None
+    acked: bool = False                       # upload: MISSION_ACK ACCEPTED arrived
+    last_sent_at: float = 0.0                 # upload: when the last item went out
+    upload: "_Transfer | None" = None         # a read-back: the upload it checks
+    detail: str = ""
+
+
+class PlanTransfers:
+    """The transfers of one vehicle. ``record(name, status, reason)`` stores a result (lock held)."""
+
+    def __init__(self, codec, source: tuple[int, int], target: Callable[[], tuple[int, int]],
+                 record: Callable[[str, CommandStatus, str], CommandResult], settle, home: Callable[[], object],
+                 mavlink2: Callable[[], bool]):
+        self._codec = codec                   # a pymavlink MAVLink used only to build messages
+        self._source = source                 # our (system, component): what the vehicle's answers target
+        self._target = target
+        self._record = record
+        self._settle = settle                 # (future, value): settles on the notifier
+        self._home = home
+        self._mavlink2 = mavlink2
+        self.mission_int: bool | None = None  # AUTOPILOT_VERSION advertises MISSION_INT (None: not said yet)
+        self._running: dict[PlanKind, _Transfer] = {}
+        self._out: list = []
+        self.changed = False                  # progress changed since the last look (the driver republishes)
+        self.ended: list = []                 # (kind, direction, status, plan) of transfers ended since then
+
+    # -- what the vehicle speaks -----------------------------------------------------------------------
+    @property
+    def integer(self) -> bool:
+        return bool(self.mission_int)
+
+    def unsupported(self, kind: PlanKind) -> str:
+        """Why this vehicle cannot transfer ``kind`` here ("" when it can)."""
+        if kind is PlanKind.MISSION:
+            return ""
+        if self.mission_int is False or not self._mavlink2():
+            return (f"this vehicle's firmware has no {kind.label} transfer over the mission protocol (MAVLink 2 "
+                    "mission_type; ArduCopter 3.3 as on the Solo has none)")
+        return ""
+
+    # -- starting (any thread, lock held) ----------------------------------------------------------------
+    def busy(self, kind: PlanKind) -> str:
+        t = self._running.get(kind)
+        return f"a {kind.label} {t.direction.value} is running" if t is not None else ""
+
+    def upload(self, plan: Plan, now: float) -> Future:
+        wire = list(plan.items)
+        if plan.kind is PlanKind.MISSION and wire:
+            wire.insert(0, home_slot(self._home()))
+        t = _Transfer(plan.kind, TransferDirection.UPLOAD, Future(), plan=plan, wire=wire, count=len(wire))
+        return self._begin(t, now)
+
+    def download(self, kind: PlanKind, now: float) -> Future:
+        return self._begin(_Transfer(kind, TransferDirection.DOWNLOAD, Future()), now)
+
+    def clear(self, kind: PlanKind, now: float) -> Future:
+        return self._begin(_Transfer(kind, TransferDirection.CLEAR, Future()), now)
+
+    def _begin(self, t: _Transfer, now: float) -> Future:
+        t.heard = now
+        self._running[t.kind] = t
+        self.changed = True
+        return t.future
+
+    def cancel(self, kind: PlanKind) -> bool:
+        t = self._running.get(kind)
+        if t is None:
+            return False
+        self._end(t, CommandStatus.ABORTED, "cancelled by the pilot")
+        return True
+
+    def abort_all(self, reason: str) -> None:
+        for t in list(self._running.values()):
+            self._end(t, CommandStatus.ABORTED, reason)
+
+    def progress(self) -> tuple[TransferProgress, ...]:
+        out = []
+        for t in self._running.values():
+            shown = t.upload or t
+            done = len(t.received) if t.direction is not TransferDirection.UPLOAD or t.upload else max(t.asked, 0)
+            detail = t.detail or ("reading back" if t.upload else "")
+            out.append(TransferProgress(shown.kind, shown.direction, done, t.count or 0, True, detail))
+        return tuple(out)
+
+    # -- the ticker ------------------------------------------------------------------------------------------
+    def service(self, now: float) -> list:
+        for t in list(self._running.values()):
+            self._service(t, now)
+        out, self._out = self._out, []
+        return out
+
+    def _retry(self, t: _Transfer) -> float:
+        return MAX_RETRY if t.rtt is None else min(MAX_RETRY, max(MIN_RETRY, 3.0 * t.rtt))
+
+    def _service(self, t: _Transfer, now: float) -> None:
+        if now < t.next_send:
+            return
+        if t.stage == "start":
+            if t.attempts >= START_ATTEMPTS:
+                what = {TransferDirection.UPLOAD: "MISSION_COUNT", TransferDirection.DOWNLOAD: "MISSION_REQUEST_LIST",
+                        TransferDirection.CLEAR: "MISSION_CLEAR_ALL"}[t.direction]
+                self._end(t, CommandStatus.TIMED_OUT, f"no answer to {what} after {t.attempts} attempts")
+                return
+            self._send_start(t, now)
+        elif t.stage == "items" and t.direction is TransferDirection.DOWNLOAD:
+            if t.attempts >= ITEM_ATTEMPTS:
+                self._end(t, CommandStatus.TIMED_OUT, f"item {t.asked} never came ({t.attempts} requests); "
+                          f"{len(t.received)} of {t.count} received")
+                return
+            self._ask_item(t, now)
+        elif t.stage == "items":                                  # upload: the vehicle leads
+            if now - t.heard > SILENCE:
+                self._end(t, CommandStatus.TIMED_OUT, f"the vehicle stopped asking for items "
+                          f"({t.asked + 1} of {t.count} sent)")
+                return
+            if t.asked == t.count - 1 and not t.acked and now - t.last_sent_at > FINAL_ACK_WAIT * self._retry(t):
+                t.detail = "the vehicle's MISSION_ACK was lost: reading back"
+                self._read_back(t, now)
+                return
+            if t.asked >= 0:                                      # the next request is late: the item again
+                self._send_item(t, t.asked, now, again=True)
+
+    def _send_start(self, t: _Transfer, now: float) -> None:
+        system, component = self._target()
+        kind = int(t.kind)
+        args = dict(mission_type=kind) if self._mavlink2() else {}
+        c = self._codec
+        if t.direction is TransferDirection.UPLOAD:
+            msg = c.mission_count_encode(system, component, t.count, **args)
+        elif t.direction is TransferDirection.DOWNLOAD:
+            msg = c.mission_request_list_encode(system, component, **args)
+        else:
+            msg = c.mission_clear_all_encode(system, component, **args)
+        t.attempts += 1
+        t.sent_at = now
+        t.next_send = now + self._retry(t)
+        self._out.append(msg)
+
+    def _ask_item(self, t: _Transfer, now: float) -> None:
+        system, component = self._target()
+        args = dict(mission_type=int(t.kind)) if self._mavlink2() else {}
+        c = self._codec
+        msg = (c.mission_request_int_encode(system, component, t.asked, **args) if self.integer else
+               c.mission_request_encode(system, component, t.asked, **args))
+        t.attempts += 1
+        t.sent_at = now
+        t.next_send = now + self._retry(t)
+        self._out.append(msg)
+
+    def _send_item(self, t: _Transfer, seq: int, now: float, again: bool = False) -> None:
+        item = t.wire[seq]
+        self._out.append(to_wire(self._codec, item, seq, t.kind, self._target(), self.integer, self._mavlink2()))
+        if seq > t.asked:
+            t.asked = seq
+            self.changed = True
+        if seq == t.count - 1 and (not again or t.last_sent_at == 0.0):
+            t.last_sent_at = now
+        t.sent_at = now
+        t.next_send = now + self._retry(t)
+
+    # -- the reader ----------------------------------------------------------------------------------------
+    def on_message(self, m, now: float) -> list:
+        """A MISSION_* message from the autopilot; returns what to send at once."""
+        if getattr(m, "target_system", 0) not in (0, self._source[0]) or \
+                getattr(m, "target_component", 0) not in (0, self._source[1]):
+            return []                                             # another ground station's transfer
+        kind = PlanKind(getattr(m, "mission_type", 0)) if getattr(m, "mission_type", 0) in (0, 1, 2) else None
+        t = self._running.get(kind) if kind is not None else None
+        if t is None:
+            return []
+        mtype = m.get_type()
+        if mtype in ("MISSION_REQUEST", "MISSION_REQUEST_INT"):
+            self._on_request(t, m.seq, now)
+        elif mtype == "MISSION_COUNT":
+            self._on_count(t, m.count, now)
+        elif mtype in ("MISSION_ITEM", "MISSION_ITEM_INT"):
+            self._on_item(t, m, now)
+        elif mtype == "MISSION_ACK":
+            self._on_ack(t, m.type, now)
+        out, self._out = self._out, []
+        return out
+
+    def _measure(self, t: _Transfer, now: float) -> None:
+        sample = now - t.sent_at
+        if 0 < sample < MAX_RETRY:
+            t.rtt = sample if t.rtt is None else 0.8 * t.rtt + 0.2 * sample
+        t.heard = now
+
+    def _on_request(self, t: _Transfer, seq: int, now: float) -> None:
+        if t.direction is not TransferDirection.UPLOAD or t.upload is not None or t.stage == "readback":
+            return
+        if not 0 <= seq < (t.count or 0):
+            return
+        if seq == t.asked + 1 or t.stage == "start":
+            self._measure(t, now)
+        t.heard = now
+        t.stage = "items"
+        t.attempts = 0
+        self._send_item(t, seq, now)
+
+    def _on_count(self, t: _Transfer, count: int, now: float) -> None:
+        if t.direction is not TransferDirection.DOWNLOAD or t.stage != "start":
+            return
+        self._measure(t, now)
+        t.count = count
+        self.changed = True
+        if count == 0:
+            self._downloaded(t, now)
+            return
+        t.stage, t.asked, t.attempts = "items", 0, 0
+        self._ask_item(t, now)
+
+    def _on_item(self, t: _Transfer, m, now: float) -> None:
+        if t.direction is not TransferDirection.DOWNLOAD or t.stage != "items" or m.seq in t.received:
+            return
+        if not 0 <= m.seq < t.count:
+            return
+        if m.seq == t.asked:
+            self._measure(t, now)
+        t.received[m.seq] = from_wire(m)
+        self.changed = True
+        missing = next((i for i in range(t.count) if i not in t.received), None)
+        if missing is None:
+            self._downloaded(t, now)
+            return
+        t.asked, t.attempts = missing, 0
+        self._ask_item(t, now)
+
+    def _on_ack(self, t: _Transfer, result: int, now: float) -> None:
+        if t.direction is TransferDirection.DOWNLOAD:
+            if t.stage == "start" and result != mavlink.MAV_MISSION_ACCEPTED:
+                self._end(t, CommandStatus.REFUSED, result_meaning(result))
+            elif t.stage == "items" and result not in (mavlink.MAV_MISSION_ACCEPTED,
+                                                       mavlink.MAV_MISSION_INVALID_SEQUENCE):
+                self._end(t, CommandStatus.REFUSED, result_meaning(result))
+            return
+        if t.direction is TransferDirection.CLEAR:
+            if t.stage != "start" or t.attempts == 0:
+                return
+            if result == mavlink.MAV_MISSION_ACCEPTED:
+                self._end(t, CommandStatus.ACCEPTED, "cleared (MISSION_ACK accepted)", Plan(t.kind))
+            else:
+                self._end(t, CommandStatus.REFUSED, result_meaning(result))
+            return
+        # upload
+        if result == mavlink.MAV_MISSION_INVALID_SEQUENCE:
+            t.heard = now                 # an item sent again after a lost request: the upload goes on
+            return
+        if result == mavlink.MAV_MISSION_ACCEPTED:
+            if (t.count and t.asked < t.count - 1) or t.stage == "readback" or (not t.count and t.attempts == 0):
+                return                    # not for this upload: items are still to come, or nothing asked yet
+            t.acked = True
+            self._read_back(t, now)
+            return
+        if t.stage in ("start", "items"):
+            self._end(t, CommandStatus.REFUSED, result_meaning(result))
+
+    # -- endings -----------------------------------------------------------------------------------------
+    def _read_back(self, upload: _Transfer, now: float) -> None:
+        upload.stage = "readback"
+        check = _Transfer(upload.kind, TransferDirection.DOWNLOAD, upload.future, upload=upload, heard=now,
+                          detail=upload.detail)
+        self._running[upload.kind] = check
+        self.changed = True
+        self._send_start(check, now)
+
+    def _downloaded(self, t: _Transfer, now: float) -> None:
+        system, component = self._target()
+        args = dict(mission_type=int(t.kind)) if self._mavlink2() else {}
+        self._out.append(self._codec.mission_ack_encode(system, component, mavlink.MAV_MISSION_ACCEPTED, **args))
+        items = [t.received[i] for i in range(t.count or 0)]
+        if t.kind is PlanKind.MISSION and items:
+            items = items[1:]                                     # the home slot
+        plan = Plan(t.kind, tuple(items))
+        upload = t.upload
+        if upload is None:
+            self._end(t, CommandStatus.ACCEPTED, f"{len(plan)} items", plan)
+            return
+        why = difference(upload.plan, plan, self.integer)
+        if why:
+            self._end(t, CommandStatus.REFUSED, f"the plan read back differs: {why}", plan)
+        elif upload.acked:
+            self._end(t, CommandStatus.ACCEPTED, f"{len(plan)} items, accepted and read back", plan)
+        else:
+            self._end(t, CommandStatus.ACCEPTED, f"{len(plan)} items read back as sent (the vehicle's final "
+                      "MISSION_ACK was lost)", plan)
+
+    def _end(self, t: _Transfer, status: CommandStatus, reason: str, plan: Plan | None = None) -> None:
+        if self._running.get(t.kind) is t:
+            del self._running[t.kind]
+        self.changed = True
+        shown = t.upload or t
+        name = f"{shown.direction.value} {shown.kind.label}"
+        result = self._record(name, status, reason)
+        if shown.direction is TransferDirection.CLEAR:
+            self._settle(t.future, result)
+        else:
+            self._settle(t.future, TransferOutcome(result, plan))
+        self.ended.append((shown.kind, shown.direction, status, plan))

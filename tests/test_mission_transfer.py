@@ -1,0 +1,106 @@
+"""Missions, fences and rally points to and from the simulated ArduCopter through the embedded driver."""
+from __future__ import annotations
+
+import pytest
+from pymavlink.dialects.v20 import ardupilotmega as mavlink
+
+from driver import frames
+from driver.mission.plan import MissionItem, Plan, PlanKind
+from driver.state import CommandStatus
+
+
+def place(vehicle, north, east):
+    home = vehicle.state().home
+    return frames.offset_latlon(home.lat, home.lon, north, east)
+
+
+def waypoint(vehicle, north, east, alt, hold=0.0):
+    lat, lon = place(vehicle, north, east)
+    return MissionItem(mavlink.MAV_CMD_NAV_WAYPOINT, param1=hold, lat=lat, lon=lon, alt=alt)
+
+
+def survey_mission(vehicle, count: int) -> Plan:
+    items = [MissionItem(mavlink.MAV_CMD_NAV_TAKEOFF, alt=10)]
+    items += [waypoint(vehicle, 5.0 * (i % 10), 5.0 * (i // 10), 10 + i % 3) for i in range(count - 2)]
+    items.append(MissionItem(mavlink.MAV_CMD_NAV_RETURN_TO_LAUNCH, frame=mavlink.MAV_FRAME_MISSION))
+    return Plan(PlanKind.MISSION, tuple(items))
+
+
+def fence_plan(vehicle) -> Plan:
+    corners = [place(vehicle, n, e) for n, e in ((-40, -40), (60, -40), (60, 60), (-40, 60))]
+    items = [MissionItem(mavlink.MAV_CMD_NAV_FENCE_POLYGON_VERTEX_INCLUSION, frame=mavlink.MAV_FRAME_GLOBAL,
+                         param1=4, lat=lat, lon=lon) for lat, lon in corners]
+    lat, lon = place(vehicle, -30, -30)
+    items.append(MissionItem(mavlink.MAV_CMD_NAV_FENCE_CIRCLE_EXCLUSION, frame=mavlink.MAV_FRAME_GLOBAL, param1=5,
+                             lat=lat, lon=lon))
+    return Plan(PlanKind.FENCE, tuple(items))
+
+
+@pytest.fixture
+def homed(vehicle):
+    assert vehicle.wait_for(lambda s: s.home is not None and s.firmware, 20), "no home position"
+    return vehicle
+
+
+def test_upload_reads_back_and_the_vehicle_holds_it(homed, sim):
+    plan = survey_mission(homed, 12)
+    outcome = homed.upload_plan(plan).result(30)
+    assert outcome.result.status is CommandStatus.ACCEPTED, str(outcome.result)
+    assert "accepted and read back" in outcome.result.reason
+    assert len(outcome.plan) == 12 and outcome.plan.items[0].command == mavlink.MAV_CMD_NAV_TAKEOFF
+    # the vehicle's own store: home slot + 12, item 0 replaced by its home, RTL read back in frame 0
+    stored = sim.autopilot.plan_items(PlanKind.MISSION)
+    assert len(stored) == 13 and stored[0].x == round(sim.autopilot.home_lat * 1e7)
+    assert stored[-1].frame == mavlink.MAV_FRAME_GLOBAL
+    s = homed.wait_for(lambda s: s.mission.count == 12, 5)
+    assert s is not None and s.mission.vehicle_plan(PlanKind.MISSION) == outcome.plan
+    assert s.mission.transfers == ()
+
+
+def test_download_fence_and_rally_then_clear(homed, sim):
+    fence = fence_plan(homed)
+    up = homed.upload_plan(fence).result(30)
+    assert up.result.ok, str(up.result)
+    lat, lon = place(homed, 20, 10)
+    rally = Plan(PlanKind.RALLY, (MissionItem(mavlink.MAV_CMD_NAV_RALLY_POINT, lat=lat, lon=lon, alt=15),))
+    assert homed.upload_plan(rally).result(30).result.ok
+    down = homed.download_plan(PlanKind.FENCE).result(30)
+    assert down.result.ok and len(down.plan) == 5
+    assert all(not item.autocontinue for item in down.plan.items)          # ArduPilot's read-back
+    assert homed.download_plan(PlanKind.RALLY).result(30).plan.items[0].alt == pytest.approx(15)
+    cleared = homed.clear_plan(PlanKind.FENCE).result(10)
+    assert cleared.status is CommandStatus.ACCEPTED, str(cleared)
+    assert sim.autopilot.plans[PlanKind.FENCE] == [] and len(sim.autopilot.plans[PlanKind.RALLY]) == 1
+    assert homed.download_plan(PlanKind.FENCE).result(30).plan == Plan(PlanKind.FENCE)
+
+
+def test_upload_over_a_lossy_link_is_exact_or_reported(homed, sim):
+    sim.faults.uplink.loss = 0.3
+    sim.faults.downlink.loss = 0.3
+    plan = survey_mission(homed, 20)
+    outcome = homed.upload_plan(plan).result(120)
+    sim.faults.uplink.loss = sim.faults.downlink.loss = 0.0
+    assert outcome.result.status is CommandStatus.ACCEPTED, str(outcome.result)
+    stored = sim.autopilot.plan_items(PlanKind.MISSION)[1:]
+    assert [(s.command, s.x, s.y) for s in stored] == \
+        [(i.command, round(i.lat * 1e7), round(i.lon * 1e7)) for i in plan.items]
+
+
+def test_items_beyond_the_limits_are_refused_by_item(homed, sim):
+    plan = Plan(PlanKind.MISSION, (MissionItem(mavlink.MAV_CMD_NAV_TAKEOFF, alt=10),
+                                   waypoint(homed, 800, 0, 20), waypoint(homed, 10, 0, 300)))
+    result = homed.upload_plan(plan).result(5).result
+    assert result.status is CommandStatus.REJECTED
+    assert "item 2 (WAYPOINT): 800 m from home" in result.reason and "item 3 (WAYPOINT): 300 m" in result.reason
+    assert sim.autopilot.plans[PlanKind.MISSION] == []                    # nothing went out
+
+
+def test_a_transfer_can_be_cancelled_and_one_runs_per_kind(homed, sim):
+    sim.faults.link_down = True
+    first = homed.download_plan(PlanKind.MISSION)
+    second = homed.download_plan(PlanKind.MISSION).result(5)
+    assert second.result.status is CommandStatus.REJECTED and "running" in second.result.reason
+    assert homed.wait_for(lambda s: s.mission.transfer(PlanKind.MISSION) is not None, 5)
+    homed.cancel_transfer(PlanKind.MISSION)
+    assert first.result(5).result.status is CommandStatus.ABORTED
+    assert homed.wait_for(lambda s: s.mission.transfers == (), 5)
