@@ -15,13 +15,14 @@ from PyQt5.QtCore import QObject, Qt, pyqtSignal
 from PyQt5.QtWidgets import QDockWidget, QMessageBox, QScrollArea, QToolButton
 
 from driver.frames import offset_ned
+from driver.mission.wire import difference
 from driver.mission.plan import MissionItem, MissionRunState, Plan, PlanKind, TransferDirection
 from driver.state import CommandResult, LinkStatus, Severity, VehicleState
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from ..dialogs import ask, mission_start_question
 from .plan_layer import PlanLayer
-from .plan_model import ITEM_KINDS, FenceShape, Performance, PlanDocument, is_nav, new_item, same_meaning
+from .plan_model import ITEM_KINDS, FenceShape, Performance, PlanDocument, is_nav, new_item
 from .plan_panel import PlanPanel
 from .survey import SurveySpec, camera_named
 
@@ -32,6 +33,7 @@ log = logging.getLogger(__name__)
 KINDS = {"mission": PlanKind.MISSION, "fence": PlanKind.FENCE, "rally": PlanKind.RALLY}
 CIRCLE_RADIUS = 30.0          # m: a new fence circle, then edited in the list
 DEFAULT_ALTITUDE = 10.0       # m above home: the first waypoint's, later ones take the one before's
+_TITLES = {PlanKind.MISSION: "Mission", PlanKind.FENCE: "Fence", PlanKind.RALLY: "Rally"}
 _DIRECTION = {TransferDirection.UPLOAD: "Uploading", TransferDirection.DOWNLOAD: "Downloading",
               TransferDirection.CLEAR: "Clearing"}
 
@@ -55,6 +57,8 @@ class PlanController(QObject):
         self.tool = "Waypoint"
         self.selected: tuple[str, int] | None = None
         self.on_vehicle: dict[PlanKind, Plan] = {}      # what each transfer last confirmed the vehicle holds
+        self._sending: dict[PlanKind, Plan] = {}        # each kind's upload under way
+        self._synced: dict[PlanKind, tuple[Plan, Plan]] = {}   # (here, there) the driver last found the same
         self._outcome: dict[PlanKind, str] = {}         # each kind's last transfer, in words
         self._state = VehicleState()
         self._perf = Performance()
@@ -341,8 +345,7 @@ class PlanController(QObject):
             editable.append((False, False, alt_ok, speed is not None, hold is not None))
         sel = self.selected
         current_entry = self.layer.current_entry
-        p.set_rows("mission", rows, editable, sel[1] if sel and sel[0] == "mission" else None,
-                   current_entry if self._doc_is_vehicles(PlanKind.MISSION) else None)
+        p.set_rows("mission", rows, editable, sel[1] if sel and sel[0] == "mission" else None, current_entry)
         p.set_rows("fence", [(s.label, len(s.vertices) if not s.circle else "", f"{s.radius:g}" if s.circle else "")
                              for s in doc.fence], [(False, False, s.circle) for s in doc.fence],
                    sel[1] if sel and sel[0] == "fence" else None)
@@ -367,12 +370,20 @@ class PlanController(QObject):
         self._shown = None
         self._show_vehicle(self._state)
 
-    def _doc_is_vehicles(self, kind: PlanKind) -> bool:
-        return same_meaning(self.doc.plan(kind), self.vehicle_plan(kind))
+    def sync(self, kind: PlanKind) -> str:
+        """Why the plan here differs from the vehicle's ("" when it is the same, or neither has one)."""
+        mine, theirs = self.doc.plan(kind), self.vehicle_plan(kind)
+        if theirs is None:
+            return f"the vehicle's {kind.label} is not known yet (Download reads it)" if mine.items else ""
+        if self._synced.get(kind) == (mine, theirs):
+            return ""                           # sent and read back, or downloaded: the driver compared them
+        why = difference(mine, theirs, integer=True)
+        return f"{len(theirs)} items there, {len(mine)} here" if why.endswith(f"instead of {len(mine)}") else why
 
     def vehicle_plan(self, kind: PlanKind) -> Plan | None:
         """What the vehicle holds, as the driver last confirmed it (read back, downloaded or cleared)."""
-        return self._state.mission.vehicle_plan(kind) or self.on_vehicle.get(kind)
+        known = self._state.mission.vehicle_plan(kind)
+        return known if known is not None else self.on_vehicle.get(kind)
 
     # -- the vehicle ------------------------------------------------------------------------------------
     def show_state(self, s: VehicleState) -> None:
@@ -390,48 +401,45 @@ class PlanController(QObject):
     def _show_vehicle(self, s: VehicleState) -> None:
         m = s.mission
         kind = KINDS[self.panel.layer]
-        transfer = m.transfer(kind)
-        mission_plan = self.vehicle_plan(PlanKind.MISSION)
         key = (m, kind, self._doc_version(), s.mode, s.link.status, s.flying, self._outcome.get(kind),
                tuple(self.on_vehicle.items()), _rounded(s))
         if key == self._shown:
             return
         self._shown = key
         p = self.panel
+        transfer = m.transfer(kind)
         if transfer is not None and transfer.active:
             p.set_transfer(f"{_DIRECTION[transfer.direction]} {transfer.done}/{transfer.total or '?'}"
                            + (f" · {transfer.detail}" if transfer.detail else ""),
                            transfer.done, transfer.total, True)
         else:
             p.set_transfer(self._outcome.get(kind, "No transfer yet"), 1 if kind in self._outcome else 0, 1, False)
-        on_vehicle = self.vehicle_plan(kind)
-        mine = self.doc.plan(kind)
-        if on_vehicle is None:
-            sync, differs = f"The vehicle's {kind.label}: not known yet (Download reads it)", bool(mine.items)
-        elif same_meaning(mine, on_vehicle):
-            sync, differs = f"Same as the vehicle's {kind.label} ({len(on_vehicle)} items)", False
-        else:
-            sync, differs = (f"Differs from the vehicle's {kind.label} ({len(on_vehicle)} items there, "
-                             f"{len(mine)} here): Upload to fly this one"), True
-        p.syncLabel.setText(sync)
-        p.syncLabel.setProperty("differs", differs)
-        p.syncLabel.setStyleSheet("color: #ffb020;" if differs else "")
-        p.tabs.setTabText(list(KINDS.values()).index(kind), ("● " if differs else "") + kind.label.split()[0].title())
-        # the mission's controls and progress
+        for k in PlanKind:                      # a dot on each tab whose plan is not the vehicle's
+            p.tabs.setTabText(list(KINDS.values()).index(k), ("● " if self.sync(k) else "") + _TITLES[k])
+        why = self.sync(kind)
+        theirs = self.vehicle_plan(kind)
+        p.syncLabel.setText(f"Differs from the vehicle's: {why}" if why else
+                            f"Same as the vehicle's {kind.label} ({len(theirs)} items)" if theirs is not None else
+                            f"No {kind.label} here; the vehicle's is not known yet")
+        p.syncLabel.setStyleSheet("color: #ffb020;" if why else "")
+        # the mission's controls and progress: from the vehicle's mode and MISSION_CURRENT
         link_ok = s.link.status is LinkStatus.OK
+        mission_plan = self.vehicle_plan(PlanKind.MISSION)
         count = m.count if m.count is not None else (len(mission_plan) if mission_plan is not None else 0)
-        state = m.state
-        p.startButton.setEnabled(link_ok and count > 0 and state is not MissionRunState.ACTIVE)
-        p.pauseButton.setEnabled(link_ok and state is MissionRunState.ACTIVE)
-        p.resumeButton.setEnabled(link_ok and s.flying and state is MissionRunState.PAUSED)
+        running = s.mode == "AUTO" and s.flying and m.state is not MissionRunState.COMPLETE
+        held = (s.flying and s.mode != "AUTO" and bool(m.current) and count > 0
+                and m.state is not MissionRunState.COMPLETE)
+        p.startButton.setEnabled(link_ok and count > 0 and not running)
+        p.pauseButton.setEnabled(link_ok and running)
+        p.resumeButton.setEnabled(link_ok and held)
         p.skip_allowed = link_ok and count > 0
-        current = m.current if m.current and m.state in (MissionRunState.ACTIVE, MissionRunState.PAUSED) else None
-        self.layer.current = current if self._doc_is_vehicles(PlanKind.MISSION) else None
-        entry = self.doc.entry_of_seq(current) if current and self.layer.current else None
+        current = m.current if m.current and (running or held) and not self.sync(PlanKind.MISSION) else None
+        self.layer.current = current
+        entry = self.doc.entry_of_seq(current) if current else None
         if entry != self.layer.current_entry:
             self.layer.current_entry = entry
             self._refresh_rows_only()
-        p.progressLabel.setText(self.progress_text(s))
+        p.progressLabel.setText(self.progress_text(s, held))
         self.view.update()
 
     def _refresh_rows_only(self) -> None:
@@ -445,23 +453,23 @@ class PlanController(QObject):
     def _doc_version(self) -> tuple:
         return (tuple(self.doc.entries), tuple(self.doc.fence), tuple(self.doc.rally))
 
-    def progress_text(self, s: VehicleState) -> str:
+    def progress_text(self, s: VehicleState, held: bool = False) -> str:
         """"Item N of M · WAYPOINT · 45 m, 9 s to it", from what the vehicle reports."""
         m = s.mission
         if m.state is MissionRunState.UNKNOWN and m.count is None:
-            return "Mission: the vehicle has not said"
+            return "Mission: the vehicle has not said yet"
         if m.state is MissionRunState.NO_MISSION or not m.count:
             return "No mission on the vehicle"
         if m.state is MissionRunState.COMPLETE:
             return f"Mission complete ({m.count} items)"
-        if m.state is MissionRunState.NOT_STARTED or not m.current:
-            return f"Mission of {m.count} items, not started"
+        if not m.current or not (s.flying or m.state is MissionRunState.ACTIVE):
+            return f"Mission of {m.count} items on the vehicle, not flying"
         plan = self.vehicle_plan(PlanKind.MISSION)
         item = plan.items[m.current - 1] if plan is not None and 1 <= m.current <= len(plan.items) else None
         name = m.current_name or (item.name if item is not None else "")
         text = f"Item {m.current} of {m.count}" + (f" · {name}" if name else "")
-        if m.state is MissionRunState.PAUSED:
-            text += " · paused"
+        if held:
+            text += f" · paused ({s.mode})"
         to = self._to_item(s, item)
         if to is not None:
             text += f" · {to[0]:.0f} m, {to[1]:.0f} s to it"
@@ -478,10 +486,12 @@ class PlanController(QObject):
 
     # -- transfers ----------------------------------------------------------------------------------
     def transfer(self, action: str) -> None:
+        """Upload, Download or Clear the plan of the tab shown; the driver's answer comes back by itself."""
         kind = KINDS[self.panel.layer]
         if action == "upload":
             self._outcome[kind] = f"Uploading the {kind.label}…"
-            self.adapter.command("upload_plan", self.doc.plan(kind))
+            self._sending[kind] = self.doc.plan(kind)
+            self.adapter.command("upload_plan", self._sending[kind])
         elif action == "download":
             self._outcome[kind] = f"Downloading the {kind.label}…"
             self.adapter.command("download_plan", kind)
@@ -500,7 +510,10 @@ class PlanController(QObject):
             self.on_vehicle[kind] = outcome.plan
             if name == "download_plan":
                 self.load(outcome.plan)
-        self._outcome[kind] = _said(result)
+                self._synced[kind] = (self.doc.plan(kind), outcome.plan)
+            elif kind in self._sending:         # the driver read it back and found it the same in meaning
+                self._synced[kind] = (self._sending.pop(kind), outcome.plan)
+        self._outcome[kind] = str(result)
         self._shown = None
         self._show_vehicle(self._state)
 
@@ -511,7 +524,7 @@ class PlanController(QObject):
             return
         if result.ok:
             self.on_vehicle[kind] = Plan(kind, ())
-        self._outcome[kind] = _said(result)
+        self._outcome[kind] = str(result)
         self._shown = None
         self._show_vehicle(self._state)
 
@@ -524,7 +537,7 @@ class PlanController(QObject):
         plan = self.vehicle_plan(PlanKind.MISSION)
         count = s.mission.count if s.mission.count is not None else len(plan or ())
         text = f"Fly the vehicle's mission ({count} items) in AUTO?"
-        if plan is not None and not same_meaning(self.doc.plan(PlanKind.MISSION), plan):
+        if plan is not None and self.sync(PlanKind.MISSION):
             text += "\n\nIt differs from the plan shown here: the vehicle flies the one it holds."
         text += ("\n\nFrom the ground the motors start and it takes off. Keep clear of the propellers."
                  if not s.flying else "\n\nIt leaves what it is doing now and flies the mission.")
@@ -556,7 +569,7 @@ class PlanController(QObject):
         layer, index, _ = hit
         if layer == "mission":
             seq = self.doc.first_seq(index)
-            if seq is not None and self._doc_is_vehicles(PlanKind.MISSION):
+            if seq is not None and not self.sync(PlanKind.MISSION):
                 actions.append((f"Skip to item {seq}", self.panel.skip_allowed, lambda: self.skip_to(seq)))
         if self.layer.editing:
             actions.append(("Delete", True, lambda: (self.select(layer, index), self.delete_selected())))
@@ -579,10 +592,6 @@ def _describe(item: MissionItem) -> str:
 
 def _kind_of(command: str) -> PlanKind | None:
     return next((k for k in PlanKind if command.endswith(k.label)), None)
-
-
-def _said(result: CommandResult) -> str:
-    return str(result)
 
 
 def _rounded(s: VehicleState) -> tuple:

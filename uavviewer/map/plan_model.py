@@ -22,7 +22,7 @@ from driver.mission.plan import MissionItem, Plan, PlanKind
 from .survey import Survey, SurveySpec, survey
 
 __all__ = ["Entry", "PlanDocument", "FenceShape", "Performance", "Totals", "ITEM_KINDS", "new_item",
-           "same_meaning", "is_nav", "NAV_COMMANDS"]
+           "is_nav", "NAV_COMMANDS"]
 
 C = mavlink
 Entry = Union[MissionItem, SurveySpec]
@@ -362,23 +362,3 @@ def _fence_shapes(items) -> tuple[list[FenceShape], list[MissionItem]]:
     if polygon:
         shapes.append(FenceShape(bool(kind), tuple(polygon)))
     return shapes, extra
-
-
-# -- comparing with the vehicle's -------------------------------------------------------------------------
-def same_meaning(a: Plan | None, b: Plan | None) -> bool:
-    """Whether two plans fly the same: commands, params, places (to 1 cm) and altitudes; frames that mean the
-    same (the _INT variants, the MISSION frame of a DO command) and autocontinue are not compared."""
-    if a is None or b is None or a.kind != b.kind or len(a.items) != len(b.items):
-        return False
-    return all(_same_item(x, y) for x, y in zip(a.items, b.items))
-
-
-def _same_item(x: MissionItem, y: MissionItem) -> bool:
-    if x.command != y.command:
-        return False
-    for p, q in zip(x.params, y.params):
-        if not (p == q or (math.isnan(p) and math.isnan(q)) or abs(p - q) <= 1e-4 * max(1.0, abs(p))):
-            return False
-    if x.has_position and (abs(x.lat - y.lat) > 1e-7 or abs(x.lon - y.lon) > 1.5e-7):
-        return False
-    return abs(x.alt - y.alt) <= 0.01 or not (x.has_position or is_nav(x))
