@@ -125,7 +125,7 @@ def test_download_clear_and_a_fence(qtbot, fast_vehicle, window_factory):
 
     # another plan here; Download brings the vehicle's back into the editor
     plan.doc.entries.clear()
-    plan.refresh()
+    plan.editor.refresh()
     qtbot.waitUntil(lambda: p.tabs.tabText(0).startswith("●") and p.downloadButton.isEnabled())
     qtbot.mouseClick(p.downloadButton, Qt.LeftButton)
     qtbot.waitUntil(lambda: len(plan.doc.entries) == 3, timeout=30000)

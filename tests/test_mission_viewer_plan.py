@@ -118,7 +118,7 @@ def test_plan_a_mission_with_the_mouse_and_the_list(qtbot, vehicle, window_facto
     assert plan.doc.entries[-1].command == mavlink.MAV_CMD_DO_SET_ROI
 
     # the totals: distance, time at the cruise speed, battery, on the panel
-    totals = plan.doc.totals(home, plan._perf)
+    totals = plan.doc.totals(home, plan.editor.perf)
     assert totals.distance == pytest.approx(40 + math.hypot(30, 60) + math.hypot(10, 60), abs=2)
     text = plan.panel.totalsLabel.text()
     assert f"{totals.distance / 1000:.2f} km" in text and "mAh" in text and "%" in text
