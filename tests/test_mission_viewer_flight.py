@@ -62,6 +62,7 @@ def test_plan_upload_start_pause_resume_skip_and_land(qtbot, fast_vehicle, windo
     table = p.tables["mission"]
     assert table.item(1, 0).background().color() == Qt.darkGreen          # ... and in the list
     qtbot.waitUntil(lambda: p.progressLabel.text().startswith("Item 2 of 5") and " s to it" in p.progressLabel.text())
+    assert plan.layer.progress.startswith("Item ")                       # on the map too
     assert p.pauseButton.isEnabled() and not p.resumeButton.isEnabled() and not p.startButton.isEnabled()
 
     # Pause: BRAKE, the current item kept; Resume: AUTO again

@@ -174,3 +174,51 @@ def test_survey_fence_and_rally_drawn_on_the_map(qtbot, vehicle, window_factory)
     p.tables["rally"].item(0, 1).setText("20")
     assert len(plan.doc.rally) == 1 and plan.doc.rally[0].alt == 20
     assert plan.doc.plan(PlanKind.RALLY).items[0].command == mavlink.MAV_CMD_NAV_RALLY_POINT
+
+
+def test_file_open_and_save_plan(qtbot, vehicle, window_factory, tmp_path):
+    from pymavlink import mavwp
+
+    w, view, plan = planning_window(qtbot, vehicle, window_factory)
+    for n, e in ((30, 0), (30, 30)):
+        click(qtbot, view, n, e)
+    plan.panel.tabs.setCurrentIndex(1)
+    plan.panel.toolCombo.setCurrentText("Exclusion circle")
+    click(qtbot, view, -20, 20)
+    plan.panel.tabs.setCurrentIndex(0)
+    mission, fence = plan.doc.plan(PlanKind.MISSION), plan.doc.plan(PlanKind.FENCE)
+
+    def choose(action, path) -> None:
+        action.trigger()
+        dialog = plan.files.dialog
+        qtbot.waitUntil(dialog.isVisible)
+        dialog.selectFile(str(path))
+        dialog.accept()
+
+    # File › Save plan…: a .plan holds all three plans; a .waypoints file the mission shown (QGC WPL 110)
+    choose(plan.save_action, tmp_path / "field.plan")
+    choose(plan.save_action, tmp_path / "field.waypoints")
+    assert (tmp_path / "field.plan").exists() and (tmp_path / "field.waypoints").read_text().startswith("QGC WPL 110")
+    loader = mavwp.MAVWPLoader()
+    assert loader.load(str(tmp_path / "field.waypoints")) == len(mission) + 1          # and the home slot
+    assert sum("Plan saved to" in t for t in logged(w)) == 2
+
+    # File › Open plan…: everything comes back as it was planned
+    plan.doc.entries.clear()
+    plan.doc.fence.clear()
+    plan.editor.refresh()
+    choose(plan.open_action, tmp_path / "field.plan")
+    qtbot.waitUntil(lambda: len(plan.doc.entries) == len(mission))
+    assert plan.doc.plan(PlanKind.MISSION) == mission and plan.doc.plan(PlanKind.FENCE) == fence
+    assert plan.panel.tables["mission"].rowCount() == 3
+
+    # a file that is no plan: said, nothing replaced
+    (tmp_path / "junk.plan").write_text("{ not json")
+    choose(plan.open_action, tmp_path / "junk.plan")
+    assert plan.doc.plan(PlanKind.MISSION) == mission
+    assert any(t.startswith("Plan not opened: junk.plan: not valid JSON") for t in logged(w))
+
+
+def logged(w) -> list[str]:
+    """The Messages dock's lines."""
+    return [w.messages.topLevelItem(i).text(2) for i in range(w.messages.topLevelItemCount())]

@@ -11,7 +11,8 @@ import logging
 import math
 
 from PyQt5.QtCore import QObject, Qt, pyqtSignal
-from PyQt5.QtWidgets import QDockWidget, QMessageBox, QScrollArea, QToolButton
+from PyQt5.QtGui import QKeySequence
+from PyQt5.QtWidgets import QAction, QDockWidget, QMessageBox, QScrollArea, QToolButton
 
 from driver.frames import offset_ned
 from driver.mission.plan import MissionItem, MissionRunState, Plan, PlanKind, TransferDirection
@@ -20,6 +21,7 @@ from driver.state import CommandResult, LinkStatus, Severity, VehicleState
 
 from ..dialogs import ask, mission_start_question
 from .plan_editor import PlanEditor
+from .plan_files import PlanFiles
 from .plan_layer import PlanLayer
 from .plan_model import Performance, PlanDocument
 from .plan_panel import PlanPanel
@@ -70,6 +72,12 @@ class PlanController(QObject):
         adapter.transferFinished.connect(self._transfer_finished)
         adapter.commandFinished.connect(self.command_finished)
         self.editor.refreshed.connect(self._edited)
+        self.files = PlanFiles(window, self)
+        self.files.loaded.connect(self._file_loaded)
+        self.files.said.connect(window.log_message)
+        p.openRequested.connect(self.files.ask_open)
+        p.saveRequested.connect(self.ask_save)
+        self._file_menu(window)
         self.editor.refresh()
 
     # -- the dock and the map's button -----------------------------------------------------------
@@ -100,6 +108,28 @@ class PlanController(QObject):
         panel.mapBar.insertWidget(panel.mapBar.count() - 1, button)
         button.toggled.connect(self.show_plan)
         return button
+
+    def _file_menu(self, window) -> None:
+        """File › Open plan… / Save plan…, above Quit."""
+        menu = window.menuFile
+        self.open_action = QAction("Open plan…", window, shortcut=QKeySequence.Open, triggered=self.files.ask_open)
+        self.save_action = QAction("Save plan…", window, shortcut=QKeySequence.Save, triggered=self.ask_save)
+        quit_action = window.actionQuit
+        menu.insertAction(quit_action, self.open_action)
+        menu.insertAction(quit_action, self.save_action)
+        menu.insertSeparator(quit_action)
+
+    def ask_save(self) -> None:
+        h = self._state.home
+        self.files.ask_save([self.doc.plan(k) for k in PlanKind], (h.lat, h.lon, h.alt) if h is not None else None,
+                            self.doc.plan(KINDS[self.panel.layer]))
+
+    def _file_loaded(self, got) -> None:
+        """An opened file replaces the plans it holds (a WPL file: one; a .plan: all three)."""
+        for plan in got.plans:
+            self.editor.load(plan)
+        if not self.dock.isVisible():
+            self.show_plan(True)
 
     def show_plan(self, on: bool) -> None:
         """Plan mode: the Plan dock in Telemetry's place, editing on the map; off: Telemetry back."""
@@ -217,6 +247,7 @@ class PlanController(QObject):
             self.layer.current_entry = entry
             self._refresh_rows_only()
         p.progressLabel.setText(self.progress_text(s, held))
+        self.layer.progress = p.progressLabel.text() if running or held else ""
         self.view.update()
 
     def _refresh_rows_only(self) -> None:

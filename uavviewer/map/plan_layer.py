@@ -29,6 +29,7 @@ EXCLUDE_EDGE = QColor("#ff4d4d")
 RALLY = QColor("#b48cff")
 DRAFT = QColor("#ffffff")
 TEXT = QColor("#101418")
+LABEL_BOX = QColor(20, 26, 34, 200)
 
 
 class PlanLayer(QObject):
@@ -48,6 +49,7 @@ class PlanLayer(QObject):
         self.current_entry: int | None = None
         self.home: tuple[float, float] | None = None       # the path starts and RTL ends here
         self.draft: list[tuple[float, float]] = []         # a polygon being drawn
+        self.progress = ""                                 # "Item 3 of 7 · 45 m, 9 s to it" while one flies
         self._grab: tuple[str, int, int] | None = None     # what a press took: layer, index, vertex
         self._press: QPointF | None = None
 
@@ -142,7 +144,17 @@ class PlanLayer(QObject):
             p.drawPolyline(QPolygonF(pts))
             for q in pts:
                 p.drawEllipse(q, 4, 4)
+        if self.progress:
+            self._paint_progress(p)
         p.restore()
+
+    def _paint_progress(self, p) -> None:
+        """The mission's progress in the map's top left corner: seen with Telemetry shown instead of Plan."""
+        metrics = p.fontMetrics()
+        box = QRectF(metrics.boundingRect(self.progress)).translated(8, 8 + metrics.ascent()).adjusted(-4, -2, 4, 2)
+        p.fillRect(box, LABEL_BOX)
+        p.setPen(CURRENT)
+        p.drawText(box, Qt.AlignCenter, self.progress)
 
     def _paint_path(self, p, view) -> None:
         if self.home is None:
