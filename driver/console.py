@@ -18,6 +18,7 @@ import threading
 import time
 from concurrent.futures import Future
 
+from .console_plans import PlanCommands
 from .state import CommandResult, CommandStatus, SequencePhase, VehicleState
 from .rules import COPTER_MODES, mode_warning
 
@@ -31,8 +32,9 @@ TELEMETRY_WAIT = 5.0         # s more for the requested telemetry (battery, posi
 NOTEWORTHY = ("driver.ice.servants", "driver.ice.camera", "driver.camera.uri")
 
 
-class Console(cmd.Cmd):
-    """``reboot, arm, disarm, takeoff, land, mode, velocity, parachute, bat, alt, status, help``."""
+class Console(PlanCommands, cmd.Cmd):
+    """``reboot, arm, disarm, takeoff, land, mode, velocity, parachute, bat, alt, status, help``; ``wp``,
+    ``fence``, ``rally`` (console_plans.py)."""
 
     intro = "MAVLinkServer console. Type help for commands, exit to quit."
 

@@ -63,3 +63,24 @@ def test_a_mission_flies_from_the_ground_to_landed(fast_sim, vehicle_factory):
                        "Mission: 4 WP", "Mission: 5 LoitTime", "Mission: 2 WP", "Mission: 3 ChangeSpeed",
                        "Mission: 4 WP", "Mission: 5 LoitTime", "Mission: 6 RTL"], started
     assert "Reached command #4" in texts and "Disarming motors" in texts
+
+
+def test_the_solo_flies_a_mission_with_float_items_and_the_legacy_jump(sim_factory, vehicle_factory):
+    """ArduCopter 3.3 (the Solo): MAVLink 1, MISSION_ITEM only, no mission_state in MISSION_CURRENT, no
+    DO_SET_MISSION_CURRENT (MISSION_SET_CURRENT instead), no fence or rally over the mission protocol."""
+    sim = sim_factory(speedup=8.0, profile="solo")
+    drone = vehicle_factory(f"tcp:127.0.0.1:{sim.tcp_port}")
+    assert drone.wait_for(lambda s: s.connected and s.home is not None and s.firmware, 20)
+    uploaded = drone.upload_plan(recorded_mission(drone)).result(30)
+    assert uploaded.result.status is CommandStatus.ACCEPTED, str(uploaded.result)
+    assert "MISSION_ITEM" in {kind for _, kind, _ in sim.received_messages}
+    assert "MISSION_ITEM_INT" not in {kind for _, kind, _ in sim.received_messages}
+    refused = drone.upload_plan(Plan(PlanKind.FENCE)).result(5).result
+    assert refused.status is CommandStatus.REJECTED and "FENCE_RADIUS" in refused.reason
+    assert drone.start_mission().result(60).ok
+    assert drone.wait_for(lambda s: s.mission.last_reached == 2, 60)
+    jumped = drone.set_mission_item(2).result(10)
+    assert jumped.ok and "MISSION_SET_CURRENT" in {kind for _, kind, _ in sim.received_messages}, str(jumped)
+    assert sim.autopilot.last_command != "MAV_CMD_DO_SET_MISSION_CURRENT"
+    assert drone.wait_for(lambda s: not s.armed and sim.truth().altitude < 0.1, 120)
+    assert sim.truth().mode == "AUTO" and sim.autopilot.mission_run == "complete"

@@ -21,7 +21,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink
 from driver.sim import ManualClock, SimConfig, SimVehicle
 from test_sim import GroundStation, wait_until
 
-from recordings import FLIGHT  # noqa: E402
+from recordings import FLIGHT, MISSION  # noqa: E402
 
 RECORDING = FLIGHT + ".tlog"
 WINDOW = 0.05            # s: the STATUSTEXT lines that follow an ACK this closely are its reasons
@@ -284,6 +284,108 @@ def test_the_sim_starts_up_as_the_real_vehicle_did():
         using_gps = line("EKF3 IMU0 is using GPS")
         assert not any(m.get_type() == "LOCAL_POSITION_NED" for m in heard[:using_gps])
         assert any(m.get_type() == "LOCAL_POSITION_NED" for m in heard[using_gps:])
+    finally:
+        gs.close()
+        sim.stop()
+
+
+# -- the mission recording (ArduCopter 4.6.3): every mission-protocol message and command, replayed ----------
+MISSION_RECORDING = MISSION + ".tlog"
+MISSION_SENT = ("MISSION_COUNT", "MISSION_ITEM_INT", "MISSION_ITEM", "MISSION_REQUEST_LIST", "MISSION_REQUEST_INT",
+                "MISSION_ACK", "MISSION_CLEAR_ALL", "MISSION_SET_CURRENT", "COMMAND_LONG", "REQUEST_DATA_STREAM")
+MISSION_TEXTS = re.compile(r"^(Mission: |Reached command|Flight plan received|Mission upload timeout|got MISSION_ITEM"
+                           r"|Fence Indexed OK|Only \d+ items|Arming motors|Disarming motors)")
+
+
+def mission_events(messages) -> list[tuple]:
+    """What the vehicle said of its missions: requests, counts, items, ACKs, progress and its mission texts."""
+    out = []
+    for m in messages:
+        kind = m.get_type()
+        if kind == "MISSION_REQUEST":
+            out.append(("request", m.seq, m.mission_type))
+        elif kind == "MISSION_ACK":
+            out.append(("ack", m.type, m.mission_type))
+        elif kind == "MISSION_COUNT":
+            out.append(("count", m.count, m.mission_type))
+        elif kind == "MISSION_ITEM_INT":
+            out.append(("item", m.seq, m.frame, m.command, m.autocontinue, m.param1, m.param2, m.param3, m.param4,
+                        m.x // 10, m.y // 10, round(m.z, 2), m.mission_type))
+        elif kind == "MISSION_ITEM_REACHED":
+            out.append(("reached", m.seq))
+        elif kind == "COMMAND_ACK":
+            out.append(("command", m.command, m.result))
+        elif kind == "STATUSTEXT" and MISSION_TEXTS.match(m.text):
+            out.append(("text", m.text))
+    return out
+
+
+def test_the_sim_answers_the_recorded_mission_session_as_the_real_vehicle_did():
+    """The mission recording's ground station, message by message at its own times (upload with an item out of
+    order and a DENIED download, the 8 s timeout, the re-asked item, the legacy float item, fence, rally, the
+    flight with pause, resume and both jumps, clear): the sim's answers in order are the real vehicle's."""
+    frames = read_tlog(MISSION_RECORDING)
+    ready_at = next(t for t, m in frames if m.get_type() == "STATUSTEXT" and "is using GPS" in m.text)
+    home = next(m for _, m in frames if m.get_type() == "HOME_POSITION")
+    sent = [(t, m) for t, m in frames if m.get_srcSystem() == 255 and m.get_type() in MISSION_SENT]
+
+    def prompt(t: float):
+        """The vehicle's request the ground station answered at ``t`` (sent within 10 ms before), or None."""
+        said = [m for t2, m in frames if m.get_srcSystem() == 1 and t - 0.010 <= t2 <= t
+                and m.get_type() in ("MISSION_REQUEST", "MISSION_COUNT", "MISSION_ITEM_INT", "MISSION_ACK")]
+        return said[-1] if said else None
+
+    recorded = mission_events(m for t, m in frames if m.get_srcSystem() == 1 and t >= sent[0][0])
+    assert ("ack", mavlink.MAV_MISSION_INVALID_SEQUENCE, 0) in recorded and ("ack", 14, 0) in recorded
+    assert ("ack", mavlink.MAV_MISSION_OPERATION_CANCELLED, 0) in recorded
+
+    clock = ManualClock()
+    config = SimConfig(tcp_port=0, speedup=SPEEDUP, ready_after=ready_at, seed=3,
+                       home=(home.latitude / 1e7, home.longitude / 1e7, home.altitude / 1000.0, 353.0))
+    sim = SimVehicle(config, clock=clock).start()
+    gs = GroundStation(sim.tcp_port)
+    try:
+        assert wait_until(lambda: sim.clients == 1, 10)
+        replay = Replay(sim, clock, gs)
+        start = gs.mark()
+        asked = start
+        for t, m in sent:
+            replay.advance_to(t)                       # the sim's clock is the recording's (ready_after = its)
+            ask = prompt(t)
+            if ask is not None:      # an answer goes out once the sim has asked as often as the vehicle had
+                wanted = mission_events([ask])[0]
+                times = mission_events(m2 for t2, m2 in frames if m2.get_srcSystem() == 1
+                                       and sent[0][0] <= t2 <= t).count(wanted)
+                while mission_events(m2 for m2, _ in gs.frames[start:]).count(wanted) < times:
+                    assert sim.truth().time < t + 2.0, f"the sim never said {wanted} ({t:.3f} s)"
+                    replay.step()
+                    gs.wait(lambda m2: mission_events([m2]) == [wanted], 0.05, since=asked)
+            data = m.get_msgbuf()
+            msg = type(m)(*[getattr(m, f) for f in m.get_fieldnames()])
+            asked = replay.deliver(msg, data[0] == mavlink.PROTOCOL_MARKER_V1)
+        replay.advance_to(frames[-1][0])
+        end = replay.marker()
+        answered = mission_events(m for m, _ in gs.frames[start:end])
+
+        def states(messages) -> tuple[list[tuple], set[int]]:
+            """MISSION_CURRENT's (seq, mission_state, mission_mode) each time it changes, and the totals seen
+            (a stream tick may fall inside an upload, whose items count as they arrive: not compared)."""
+            out, totals = [], set()
+            for m in messages:
+                if m.get_type() == "MISSION_CURRENT":
+                    totals.add(m.total)
+                    value = (m.seq, m.mission_state, m.mission_mode)
+                    if not out or out[-1] != value:
+                        out.append(value)
+            return out, totals
+        sim_states, sim_totals = states(m for m, _ in gs.frames[start:end])
+        recorded_states, recorded_totals = states(m for t, m in frames if m.get_srcSystem() == 1
+                                                  and t >= sent[0][0])
+        assert sim_states == recorded_states and recorded_totals <= sim_totals, (sim_states, recorded_states)
+        first = max(0, next((i for i, (a, b) in enumerate(zip(answered, recorded)) if a != b),
+                            min(len(answered), len(recorded))) - 6)
+        assert answered == recorded, "sim / vehicle from the first difference:\n" + "\n".join(
+            f"{a!s:75} {b!s}" for a, b in zip(answered[first:first + 12], recorded[first:first + 12]))
     finally:
         gs.close()
         sim.stop()

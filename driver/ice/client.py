@@ -26,7 +26,8 @@ from ..api import CEILING, Drone, Limits
 from ..frames import clamp, finite
 from ..state import (CommandResult, CommandStatus, Fence, LinkHealth, LinkStatus, Message, Severity, VehicleState,
                      replace)
-from . import convert, load_slice
+from ..mission.plan import Plan, PlanKind, TransferOutcome
+from . import convert, load_slice, plans
 from .server import DEFAULT_PORTS
 
 jderobot, mavlinkserver = load_slice()
@@ -444,13 +445,19 @@ class IceDrone(Drone):
             self._velocity = None
 
     # -- commands: started on the worker, answered by the vehicle --------------------------------
-    def _command(self, name: str, start) -> Future:
-        """Run ``start(proxy)`` (an Ice ...Async call) on the worker; the Future gets the vehicle's answer."""
+    def _command(self, name: str, start, transfer: bool = False) -> Future:
+        """Run ``start(proxy)`` (an Ice ...Async call) on the worker; the Future gets the vehicle's answer (a
+        TransferOutcome for a ``transfer``)."""
         future: Future = Future()
+        wrap = TransferOutcome if transfer else (lambda result: result)
 
         def failed(exc: BaseException) -> None:
             status = CommandStatus.TIMED_OUT if isinstance(exc, Ice.TimeoutException) else CommandStatus.REJECTED
-            future.set_result(CommandResult(name, status, f"server unreachable: {type(exc).__name__}"))
+            if isinstance(exc, Ice.OperationNotExistException):
+                future.set_result(wrap(CommandResult(name, CommandStatus.REJECTED,
+                                                     "this MAVLinkServer has no missions (an older version)")))
+                return
+            future.set_result(wrap(CommandResult(name, status, f"server unreachable: {type(exc).__name__}")))
 
         def answered(ice_future) -> None:
             try:
@@ -459,7 +466,11 @@ class IceDrone(Drone):
                 failed(exc)
                 return
             with self._lock:
-                result = self._result(outcome)
+                if transfer:
+                    result = TransferOutcome(self._result(outcome.outcome),
+                                             plans.plan_from_ice(outcome.plan) if outcome.hasPlan else None)
+                else:
+                    result = self._result(outcome)
             future.set_result(result)
 
         def run() -> None:
@@ -569,6 +580,49 @@ class IceDrone(Drone):
         if self._vehicle is None:
             return self._no_extension("yaw")
         return self._command("yaw", lambda p: p.setYawAsync(float(degrees), bool(relative), float(rate_deg_s)))
+
+    # -- missions over the mavlinkserver extension --------------------------------------------------
+    def upload_plan(self, plan: Plan) -> Future:
+        name = f"upload {plan.kind.label}"
+        if self._vehicle is None:
+            return self._no_extension_outcome(name)
+        ice_plan = plans.plan_to_ice(mavlinkserver, plan)
+        return self._command(name, lambda p: p.uploadPlanAsync(ice_plan), transfer=True)
+
+    def download_plan(self, kind: PlanKind) -> Future:
+        name = f"download {kind.label}"
+        if self._vehicle is None:
+            return self._no_extension_outcome(name)
+        return self._command(name, lambda p: p.downloadPlanAsync(int(kind)), transfer=True)
+
+    def clear_plan(self, kind: PlanKind) -> Future:
+        if self._vehicle is None:
+            return self._no_extension(f"clear {kind.label}")
+        return self._command(f"clear {kind.label}", lambda p: p.clearPlanAsync(int(kind)))
+
+    def cancel_transfer(self, kind: PlanKind) -> None:
+        if self._vehicle is not None:
+            self._worker.submit(lambda: self._commands.cancelTransferAsync(int(kind)))
+
+    def start_mission(self) -> Future:
+        return self._mission_command("mission start", lambda p: p.startMissionAsync())
+
+    def pause_mission(self) -> Future:
+        return self._mission_command("mission pause", lambda p: p.pauseMissionAsync())
+
+    def resume_mission(self) -> Future:
+        return self._mission_command("mission resume", lambda p: p.resumeMissionAsync())
+
+    def set_mission_item(self, seq: int) -> Future:
+        return self._mission_command(f"mission item {seq}", lambda p: p.setMissionItemAsync(int(seq)))
+
+    def _mission_command(self, name: str, start) -> Future:
+        return self._no_extension(name) if self._vehicle is None else self._command(name, start)
+
+    def _no_extension_outcome(self, name: str) -> Future:
+        future: Future = Future()
+        future.set_result(TransferOutcome(self._no_extension(name).result()))
+        return future
 
     def toggle_camera(self) -> Future:
         """JdeRobot's ``Extra.toggleCam``: the server moves its Camera to its next source."""

@@ -11,6 +11,7 @@ import math
 import time
 
 from ..frames import clamp, enu_quaternion, finite, wrap_pi
+from .plans import mission_from_ice, mission_to_ice
 from ..state import (Attitude, Battery, CommandResult, CommandStatus, Environment, Fence, GlobalPosition, Gps,
                      LandedState, LinkHealth, LinkStatus, LocalPosition, Message, Readiness, SequencePhase,
                      SequenceProgress, Setpoint, Severity, VehicleState, Velocity)
@@ -245,6 +246,7 @@ def status_from_state(ms, s: VehicleState, messages_since: int = -1, results_sin
                                    targetAltitude=s.takeoff.target_altitude),
         setpoint=ms.Setpoint(forward=s.setpoint.forward, right=s.setpoint.right, up=s.setpoint.up,
                              yawRate=s.setpoint.yaw_rate),
+        mission=mission_to_ice(ms, s.mission),
     )
 
 
@@ -306,4 +308,5 @@ def state_from_status(st, messages: tuple[Message, ...], results: tuple[CommandR
                                  detail=st.takeoff.detail, target_altitude=st.takeoff.targetAltitude),
         setpoint=Setpoint(forward=st.setpoint.forward, right=st.setpoint.right, up=st.setpoint.up,
                           yaw_rate=st.setpoint.yawRate),
+        mission=mission_from_ice(st.mission),
     )

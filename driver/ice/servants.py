@@ -25,9 +25,10 @@ import Ice
 
 from ..api import Drone
 from ..frames import finite
+from ..mission.plan import TransferOutcome
 from ..rules import COPTER_MODES, MAX_ALTITUDE, go_to_problem, takeoff_altitude_problem
 from ..state import CommandResult, CommandStatus, LandedState
-from . import convert, load_slice
+from . import convert, load_slice, plans
 
 jderobot, mavlinkserver = load_slice()
 log = logging.getLogger(__name__)
@@ -403,6 +404,62 @@ class VehicleI(mavlinkserver.Vehicle):
         if not finite(degrees, rateDegS):
             return self._rejected("yaw", "non-finite angle or rate")
         return self._answer("yaw", lambda: self._vehicle.set_yaw(degrees, relative, rateDegS))
+
+    # -- missions (driver.mission) -------------------------------------------------------------------
+    def _transfer(self, command: str, call) -> Ice.Future:
+        """An Ice future resolved with the TransferOutcome once the vehicle has answered."""
+        answer = Ice.Future()
+
+        def done(fut: Future) -> None:
+            try:
+                outcome = fut.result()
+            except Exception as exc:
+                outcome = TransferOutcome(CommandResult(command, CommandStatus.REJECTED, f"driver error: {exc}"))
+            answer.set_result(plans.outcome_to_ice(mavlinkserver, outcome))
+        try:
+            call().add_done_callback(done)
+        except Exception as exc:
+            log.exception("%s failed", command)
+            done(_resolved(TransferOutcome(CommandResult(command, CommandStatus.REJECTED, f"driver error: {exc}"))))
+        return answer
+
+    def uploadPlan(self, plan, current=None):
+        try:
+            model = plans.plan_from_ice(plan)
+        except ValueError as exc:
+            return self._transfer("upload", lambda: _resolved(TransferOutcome(
+                CommandResult("upload", CommandStatus.REJECTED, str(exc)))))
+        return self._transfer(f"upload {model.kind.label}", lambda: self._vehicle.upload_plan(model))
+
+    def downloadPlan(self, kind, current=None):
+        model = plans.kind_of(kind)
+        if model is None:
+            return self._transfer("download", lambda: _resolved(TransferOutcome(
+                CommandResult("download", CommandStatus.REJECTED, f"no plan kind {kind}"))))
+        return self._transfer(f"download {model.label}", lambda: self._vehicle.download_plan(model))
+
+    def clearPlan(self, kind, current=None):
+        model = plans.kind_of(kind)
+        if model is None:
+            return self._rejected("clear", f"no plan kind {kind}")
+        return self._answer(f"clear {model.label}", lambda: self._vehicle.clear_plan(model))
+
+    def cancelTransfer(self, kind, current=None):
+        model = plans.kind_of(kind)
+        if model is not None:
+            self._vehicle.cancel_transfer(model)
+
+    def startMission(self, current=None):
+        return self._answer("mission start", self._vehicle.start_mission)
+
+    def pauseMission(self, current=None):
+        return self._answer("mission pause", self._vehicle.pause_mission)
+
+    def resumeMission(self, current=None):
+        return self._answer("mission resume", self._vehicle.resume_mission)
+
+    def setMissionItem(self, seq, current=None):
+        return self._answer(f"mission item {seq}", lambda: self._vehicle.set_mission_item(int(seq)))
 
     def getTakeoffAltitude(self, current=None):
         return self._settings.takeoff_altitude

@@ -9,6 +9,7 @@ MISSION_START, as in the recording (tests/data/recordings/arducopter-4.6-sitl-mi
 """
 from __future__ import annotations
 
+import collections
 import logging
 import time
 from concurrent.futures import Future
@@ -101,6 +102,7 @@ class MissionControl:
                                        vehicle._target_ids, vehicle._store.record_locked, vehicle._notifier.settle,
                                        lambda: vehicle._store.state.home, lambda: vehicle._v2)
         self._watches: list[_Watch] = []
+        self._currents: collections.deque = collections.deque(maxlen=64)   # (time, item) as the vehicle says
 
     # -- transfers (any thread) -------------------------------------------------------------------------
     def _refusal(self, kind: PlanKind) -> str:
@@ -179,7 +181,10 @@ class MissionControl:
         name = f"mission item {seq}"
         if not isinstance(seq, int) or seq < 1 or (s.mission.count is not None and seq > s.mission.count):
             return v._finish(name, CommandStatus.REJECTED, f"no item {seq} (the mission has {s.mission.count} items)")
-        shown = lambda st: st.mission.current == seq   # noqa: E731
+        asked = time.monotonic()
+
+        def shown(st: VehicleState) -> bool:              # seen since asked, even if flown past at once
+            return any(at >= asked and current == seq for at, current in self._currents)
         if self.transfers.mission_int is False:       # 3.3: no DO_SET_MISSION_CURRENT, the message only
             return self._watch(name, self._set_current_message(seq, name), shown, f"MISSION_CURRENT shows {seq}")
         inner = v.command_long(mavlink.MAV_CMD_DO_SET_MISSION_CURRENT, (seq,), name)
@@ -217,6 +222,7 @@ class MissionControl:
         mtype = m.get_type()
         store = self._v._store
         if mtype == "MISSION_CURRENT":
+            self._currents.append((time.monotonic(), int(m.seq)))
             store.set(mission=fold_mission_current(store.view()["mission"], m))
             return
         if mtype == "MISSION_ITEM_REACHED":
@@ -231,6 +237,7 @@ class MissionControl:
         store = self._v._store
         folded = fold_text(store.view()["mission"], text)
         if folded is not None:
+            self._currents.append((time.monotonic(), folded.current))
             store.set(mission=folded)
 
     def on_autopilot_version(self, m) -> None:

@@ -83,15 +83,19 @@ class PlanTransfers:
     # -- what the vehicle speaks -----------------------------------------------------------------------
     @property
     def integer(self) -> bool:
-        return bool(self.mission_int)
+        """MISSION_ITEM_INT: advertised, or (not said yet) a MAVLink 2 vehicle, which is ArduCopter 3.5 or later."""
+        return self.mission_int if self.mission_int is not None else self._mavlink2()
 
     def unsupported(self, kind: PlanKind) -> str:
         """Why this vehicle cannot transfer ``kind`` here ("" when it can)."""
         if kind is PlanKind.MISSION:
             return ""
         if self.mission_int is False or not self._mavlink2():
-            return (f"this vehicle's firmware has no {kind.label} transfer over the mission protocol (MAVLink 2 "
-                    "mission_type; ArduCopter 3.3 as on the Solo has none)")
+            if kind is PlanKind.FENCE:
+                return ("this vehicle's firmware has no polygon fence (ArduCopter 3.3, as on the Solo, fences only "
+                        "with FENCE_RADIUS around home and FENCE_ALT_MAX: set those parameters)")
+            return ("this vehicle's firmware has no rally points over the mission protocol (MAVLink 2 mission_type; "
+                    "ArduCopter 3.3, as on the Solo, takes them only as RALLY_POINT messages)")
         return ""
 
     # -- starting (any thread, lock held) ----------------------------------------------------------------

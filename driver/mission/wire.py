@@ -23,6 +23,7 @@ _PLAIN_FRAME = {v: k for k, v in _INT_FRAME.items()}
 # MAV_CMDs ArduPilot keeps a place for (navigation items, and these DO_ items); the rest lose it on read-back
 _LOCATED_DO = {mavlink.MAV_CMD_DO_SET_HOME, mavlink.MAV_CMD_DO_LAND_START, mavlink.MAV_CMD_DO_SET_ROI,
                mavlink.MAV_CMD_DO_SET_ROI_LOCATION}
+_LOITERS = {mavlink.MAV_CMD_NAV_LOITER_UNLIM, mavlink.MAV_CMD_NAV_LOITER_TURNS, mavlink.MAV_CMD_NAV_LOITER_TIME}
 _RESULTS = {
     mavlink.MAV_MISSION_ERROR: "the vehicle reported an error",
     mavlink.MAV_MISSION_UNSUPPORTED_FRAME: "a coordinate frame the vehicle does not support",
@@ -91,6 +92,8 @@ def item_difference(kind: PlanKind, sent: MissionItem, got: MissionItem, integer
     if sent.command != got.command:
         return f"command {got.name} instead of {sent.name}"
     for i, (a, b) in enumerate(zip(sent.params, got.params), 1):
+        if i == 3 and sent.command in _LOITERS and kind is PlanKind.MISSION:
+            a = -1.0 if a < 0 else 1.0                # kept as a direction flag (recording: 0 sent, 1 read back)
         if not _same(_f32(a), b, 1e-6 * max(1.0, abs(a))):
             return f"param{i} {b:g} instead of {a:g}"
     if not _located(kind, sent):

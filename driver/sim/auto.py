@@ -32,6 +32,8 @@ log = logging.getLogger("driver.sim.autopilot")
 AUTO = MODES["AUTO"]
 WP_RADIUS = 2.0              # m: WPNAV_RADIUS's default (200 cm)
 ALT_REACHED = 0.3            # m from the target altitude
+JERK = 1.0                   # m/s³: WPNAV_JERK's default; 4.x's S-curves build acceleration up this slowly
+ACCEL = 2.5                  # m/s²: WPNAV_ACCEL's default
 MAX_JUMPS = 100              # DO_JUMPs followed in one walk (a jump loop without a navigation item)
 # AP_Mission::Mission_Command::type(): what "Mission: N NAME" says.
 COMMAND_NAMES = {
@@ -60,6 +62,7 @@ class Auto:
         self.auto_stage = "idle"           # fly | hold | land | done
         self.auto_target: tuple[float, float, float] | None = None
         self.auto_hold_until = 0.0
+        self.auto_accel = 0.0              # m/s²: the acceleration allowed now, ramped up at JERK
         self.jumps_done: dict[int, int] = {}
 
     # -- what MISSION_CURRENT says -------------------------------------------------------------------
@@ -110,10 +113,10 @@ class Auto:
             self._auto_start_item(self.mission_current)
 
     def _auto_left(self) -> None:
+        """AUTO left (BRAKE pauses): stopped, the current item kept; MISSION_CURRENT tells at its next turn."""
         if self.mission_run == "running":
             self.mission_run = "stopped"
             self.auto_stage = "idle"
-            self._send_now("MISSION_CURRENT")
 
     # -- jumps ------------------------------------------------------------------------------------------
     def set_mission_current(self, seq: int) -> bool:
@@ -190,6 +193,7 @@ class Auto:
         self.mission_current = seq
         self.mission_run = "running"
         self.auto_hold_until = 0.0
+        self.auto_accel = 0.0
         self.auto_stage = "fly"
         self.hold_point = None
         self.rtl_phase = None
@@ -232,6 +236,11 @@ class Auto:
         """Armed on the ground in AUTO with a takeoff item to fly: the controller may lift off."""
         return (self.mode == AUTO and self.mission_run == "running" and self.auto_stage == "fly"
                 and self.plans[MISSION][self.mission_current].command == mavlink.MAV_CMD_NAV_TAKEOFF)
+
+    def _auto_acceleration(self) -> float:
+        """The horizontal acceleration AUTO may use this step: ramped up at JERK to ACCEL (S-curves)."""
+        self.auto_accel = min(ACCEL, self.auto_accel + JERK / float(self.config.rate_hz))
+        return self.auto_accel
 
     def _auto(self) -> tuple[float, float, float]:
         if self.mission_run != "running" or self.auto_stage in ("idle", "done"):

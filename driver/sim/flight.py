@@ -205,7 +205,7 @@ class Flight:
         if mode == MODES["BRAKE"]:
             return (*self._hold(), ACC_XY_BRAKE)
         if mode == MODES["AUTO"]:
-            return (*self._auto(), ACC_XY)
+            return (*self._auto(), self._auto_acceleration())
         # LOITER, POSHOLD, ALT_HOLD and the rest: hold, nudged by MANUAL_CONTROL sticks.
         manual = self._manual()
         if manual is not None and any(abs(v) > 1e-3 for v in manual):
@@ -251,15 +251,16 @@ class Flight:
         return self._hold()
 
     def _fence_check(self) -> None:
-        """Copter::fence_check with AC_Fence::check: a new breach of the ceiling or of the circle around home
-        sends FENCE_STATUS at once (AC_Fence::record_breach) and, armed, turns the vehicle back: FENCE_ACTION 1
+        """Copter::fence_check with AC_Fence::check: a new breach of the ceiling, of the circle around home or
+        of the polygon fence uploaded (FENCE_TYPE bit 4, missions.py) sends FENCE_STATUS at once (AC_Fence::record_breach) and, armed, turns the vehicle back: FENCE_ACTION 1
         RTL (LAND if RTL cannot be set or it is more than 100 m out), 2 LAND; on the ground it disarms."""
         breaches = 0
         if self.params["FENCE_ENABLE"]:
             types = int(self.params["FENCE_TYPE"])
             over = -self.d - float(self.params["FENCE_ALT_MAX"])
             out = math.hypot(self.n, self.e) - float(self.params["FENCE_RADIUS"])
-            breaches = (1 if types & 1 and over >= 0 else 0) | (2 if types & 2 and out >= 0 else 0)
+            breaches = (1 if types & 1 and over >= 0 else 0) | (2 if types & 2 and out >= 0 else 0) \
+                | (4 if types & 4 and self.polygon_fence_breach(self.n, self.e) else 0)    # missions.py
         new = breaches & ~self.fence_breaches
         self.fence_breaches = breaches
         if not new:

@@ -172,11 +172,13 @@ class Messages:
         return True
 
     def _within_fence(self, north: float, east: float, up: float) -> bool:
-        """AC_Fence::check_destination_within_fence for the ceiling and the circle around home."""
+        """AC_Fence::check_destination_within_fence for the ceiling, the circle around home and the polygons."""
         if not self.params["FENCE_ENABLE"]:
             return True
         types = int(self.params["FENCE_TYPE"])
         if types & 1 and up > float(self.params["FENCE_ALT_MAX"]):
+            return False
+        if types & 4 and self.polygon_fence_breach(north, east):     # missions.py
             return False
         return not (types & 2 and math.hypot(north, east) > float(self.params["FENCE_RADIUS"]))
 

@@ -25,6 +25,7 @@ from dataclasses import dataclass
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
+from ..mission.limits import fence_shapes
 from .common import wrap_lon
 from .telemetry import METRES_PER_DEG
 
@@ -41,6 +42,7 @@ _NAV_LAST = 95               # MAV_CMDs up to here (and 5000s fence/rally) are n
 _LOCATED_DO = {mavlink.MAV_CMD_DO_SET_HOME, mavlink.MAV_CMD_DO_LAND_START, mavlink.MAV_CMD_DO_SET_ROI,
                mavlink.MAV_CMD_DO_SET_ROI_LOCATION}
 _NO_PLACE = {mavlink.MAV_CMD_NAV_RETURN_TO_LAUNCH, mavlink.MAV_CMD_NAV_GUIDED_ENABLE, mavlink.MAV_CMD_NAV_DELAY}
+_LOITERS = {mavlink.MAV_CMD_NAV_LOITER_UNLIM, mavlink.MAV_CMD_NAV_LOITER_TURNS, mavlink.MAV_CMD_NAV_LOITER_TIME}
 _RELATIVE = {mavlink.MAV_FRAME_GLOBAL_RELATIVE_ALT, mavlink.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT}
 _TERRAIN = {mavlink.MAV_FRAME_GLOBAL_TERRAIN_ALT, mavlink.MAV_FRAME_GLOBAL_TERRAIN_ALT_INT}
 
@@ -60,6 +62,18 @@ class StoredItem:
     def north_east(self) -> tuple[float, float]:
         return self.x / 1e7, self.y / 1e7
 
+    @property
+    def param1(self) -> float:
+        return self.params[0]
+
+    @property
+    def lat(self) -> float:
+        return self.x / 1e7
+
+    @property
+    def lon(self) -> float:
+        return self.y / 1e7
+
 
 def _f32(value: float) -> float:
     """As a float32 field carries it."""
@@ -73,6 +87,8 @@ def stored_as(kind: int, command: int, frame: int, params, x: int, y: int, z: fl
         return StoredItem(command, mavlink.MAV_FRAME_GLOBAL, params, x, y, 0.0, 0)
     if kind == RALLY:
         return StoredItem(command, mavlink.MAV_FRAME_GLOBAL_RELATIVE_ALT, params, x, y, _f32(z), 0)
+    if command in _LOITERS:                 # the direction is kept as a flag: read back as 1 or -1 (recording)
+        params = (params[0], params[1], -1.0 if params[2] < 0 else 1.0, params[3])
     if (command <= _NAV_LAST and command not in _NO_PLACE) or command in _LOCATED_DO:
         out = (mavlink.MAV_FRAME_GLOBAL_RELATIVE_ALT if frame in _RELATIVE else
                mavlink.MAV_FRAME_GLOBAL_TERRAIN_ALT if frame in _TERRAIN else mavlink.MAV_FRAME_GLOBAL)
@@ -100,7 +116,8 @@ class Missions:
         self.plans: dict[int, list[StoredItem]] = {MISSION: [], FENCE: [], RALLY: []}
         self.uploads: dict[int, _Upload] = {}
         self.warned_float_item = False
-        self.plan_changes = 0          # bumped on every change of a plan (the AUTO part restarts from it)
+        self.plan_changes = 0          # bumped on every change of a plan
+        self._fence_shapes = None      # (plan_changes, FenceShapes) of the stored fence
 
     # -- what the profile speaks -------------------------------------------------------------------
     @property
@@ -168,15 +185,20 @@ class Missions:
         self._mission_item(msg, msg.x, msg.y)
 
     def _on_mission_item(self, msg) -> None:
+        self._float_item(msg)
         if self.profile.mavlink2 and not self.warned_float_item:
-            self.warned_float_item = True           # 4.x converts it and asks, once, for the _INT form
-            self._text(mavlink.MAV_SEVERITY_WARNING, "got MISSION_ITEM; GCS should send MISSION_ITEM_INT")
+            self.warned_float_item = True           # 4.x converts it and asks, once, for the _INT form (its text
+            self._text(mavlink.MAV_SEVERITY_WARNING,   # is queued: it follows the next request, as recorded)
+                       "got MISSION_ITEM; GCS should send MISSION_ITEM_INT")
+
+    def _float_item(self, msg) -> None:
         if not (math.isfinite(msg.x) and math.isfinite(msg.y)):
             kind = self._kind(msg)
             if kind in self.uploads:
                 self._ack(msg, mavlink.MAV_MISSION_INVALID, kind)
             return
-        self._mission_item(msg, int(round(msg.x * 1e7)), int(round(msg.y * 1e7)))
+        # AP_Mission::convert_MISSION_ITEM_to_MISSION_ITEM_INT: x * 1.0e7f in float32 (recording: y 1491655552)
+        self._mission_item(msg, int(_f32(_f32(msg.x) * _f32(1e7))), int(_f32(_f32(msg.y) * _f32(1e7))))
 
     def _mission_item(self, msg, x: int, y: int) -> None:
         kind = self._kind(msg)
@@ -331,6 +353,12 @@ class Missions:
                                                      item.x, item.y, int(item.z), 0, 0, 0), self.sender)
 
     # -- geometry the AUTO part and the fence use ------------------------------------------------------
+    def polygon_fence_breach(self, north: float, east: float) -> str:
+        """AC_PolyFence_loader: outside an inclusion shape or inside an exclusion ("" inside the fence)."""
+        if self._fence_shapes is None or self._fence_shapes[0] != self.plan_changes:
+            self._fence_shapes = (self.plan_changes, fence_shapes(self.plans[FENCE], self.home_lat, self.home_lon))
+        return self._fence_shapes[1].outside(north, east)
+
     def ned_of(self, item: StoredItem) -> tuple[float, float] | None:
         """North/east metres from home of an item's place; None for 0, 0 (ArduPilot: here)."""
         if item.x == 0 and item.y == 0:

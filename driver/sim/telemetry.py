@@ -134,7 +134,7 @@ class Telemetry:
         """Only while the fence is enabled (Copter::fence_send_mavlink_status)."""
         if not self.params["FENCE_ENABLE"]:
             return None
-        kind = (mavlink.FENCE_BREACH_BOUNDARY if self.fence_breaches & 2 else
+        kind = (mavlink.FENCE_BREACH_BOUNDARY if self.fence_breaches & 6 else
                 mavlink.FENCE_BREACH_MAXALT if self.fence_breaches & 1 else mavlink.FENCE_BREACH_NONE)
         return self.factory.fence_status_encode(int(bool(self.fence_breaches)), self.fence_breach_count, kind,
                                                 self.fence_breach_time)
