@@ -38,7 +38,8 @@ def test_plan_upload_start_pause_resume_skip_and_land(qtbot, fast_vehicle, windo
 
     # Upload: the progress bar runs, then the vehicle's read-back makes it "the same"
     qtbot.mouseClick(p.uploadButton, Qt.LeftButton)
-    qtbot.waitUntil(lambda: "accepted" in p.progressBar.format(), timeout=30000)
+    qtbot.waitUntil(lambda: p.progressBar.format() == "upload mission: accepted", timeout=30000)
+    assert "read back" in p.progressBar.toolTip()
     qtbot.waitUntil(lambda: p.syncLabel.text().startswith("Same as the vehicle's mission (5 items)"), timeout=5000)
     assert p.tabs.tabText(0) == "Mission" and not p.pauseButton.isEnabled()
     assert vehicle.state().mission.vehicle_plan(PlanKind.MISSION) is not None
@@ -136,7 +137,7 @@ def test_download_clear_and_a_fence(qtbot, fast_vehicle, window_factory):
     # Clear: the vehicle holds no mission; the plan here is kept and now differs
     qtbot.waitUntil(p.clearButton.isEnabled)
     qtbot.mouseClick(p.clearButton, Qt.LeftButton)
-    qtbot.waitUntil(lambda: "cleared" in p.progressBar.format(), timeout=30000)
+    qtbot.waitUntil(lambda: p.progressBar.format() == "clear mission: accepted", timeout=30000)
     qtbot.waitUntil(lambda: "0 items there, 3 here" in p.syncLabel.text())
     assert not p.startButton.isEnabled()
 

@@ -31,6 +31,7 @@ __all__ = ["PlanController"]
 log = logging.getLogger(__name__)
 
 KINDS = {"mission": PlanKind.MISSION, "fence": PlanKind.FENCE, "rally": PlanKind.RALLY}
+PLAN_WIDTH = 520             # px: the list's columns and a map to plan on, beside the instruments
 _TITLES = {PlanKind.MISSION: "Mission", PlanKind.FENCE: "Fence", PlanKind.RALLY: "Rally"}
 _DIRECTION = {TransferDirection.UPLOAD: "Uploading", TransferDirection.DOWNLOAD: "Downloading",
               TransferDirection.CLEAR: "Clearing"}
@@ -56,6 +57,7 @@ class PlanController(QObject):
         self._sending: dict[PlanKind, Plan] = {}        # each kind's upload under way
         self._synced: dict[PlanKind, tuple[Plan, Plan]] = {}   # (here, there) the driver last found the same
         self._outcome: dict[PlanKind, str] = {}         # each kind's last transfer, in words
+        self._failed: dict[PlanKind, bool] = {}         # ... and whether the driver refused or failed it
         self._state = VehicleState()
         self._shown: tuple | None = None                # what the flying part last showed (redrawn on change)
         self._question: QMessageBox | None = None
@@ -145,6 +147,7 @@ class PlanController(QObject):
             w = self._window
             w.mapDock.raise_()
             w.resizeDocks([self.dock, w.mapDock], [1, 1], Qt.Vertical)
+            w.resizeDocks([self.dock], [PLAN_WIDTH], Qt.Horizontal)
         if on:
             self.dock.raise_()
         self.set_editing(on)
@@ -225,10 +228,15 @@ class PlanController(QObject):
             p.tabs.setTabText(list(KINDS.values()).index(k), ("● " if self.sync(k) else "") + _TITLES[k])
         why = self.sync(kind)
         theirs = self.vehicle_plan(kind)
-        p.syncLabel.setText(f"Differs from the vehicle's: {why}" if why else
-                            f"Same as the vehicle's {kind.label} ({len(theirs)} items)" if theirs is not None else
-                            f"No {kind.label} here; the vehicle's is not known yet")
-        p.syncLabel.setStyleSheet("color: #ffb020;" if why else "")
+        failed = f"{self._outcome[kind]}. " if self._failed.get(kind) else ""
+        if why:
+            sync = f"Differs from the vehicle's: {why}"
+        elif theirs is not None:
+            sync = f"Same as the vehicle's {kind.label} ({len(theirs)} items)"
+        else:
+            sync = f"No {kind.label} here; the vehicle's is not known yet"
+        p.syncLabel.setText(failed + sync)
+        p.syncLabel.setStyleSheet("color: #ffb020;" if why or failed else "")
         # the mission's controls and progress: from the vehicle's mode and MISSION_CURRENT
         link_ok = s.link.status is LinkStatus.OK
         mission_plan = self.vehicle_plan(PlanKind.MISSION)
@@ -322,6 +330,7 @@ class PlanController(QObject):
             elif kind in self._sending:         # the driver read it back and found it the same in meaning
                 self._synced[kind] = (self._sending.pop(kind), outcome.plan)
         self._outcome[kind] = str(result)
+        self._failed[kind] = not result.ok
         self._shown = None
         self._show_vehicle(self._state)
 
@@ -333,6 +342,7 @@ class PlanController(QObject):
         if result.ok:
             self.on_vehicle[kind] = Plan(kind, ())
         self._outcome[kind] = str(result)
+        self._failed[kind] = not result.ok
         self._shown = None
         self._show_vehicle(self._state)
 

@@ -320,7 +320,8 @@ class PlanPanel(QWidget):
     def set_transfer(self, text: str, done: int, total: int, active: bool) -> None:
         self.progressBar.setRange(0, max(1, total))
         self.progressBar.setValue(min(done, max(1, total)) if total else 0)
-        self.progressBar.setFormat(text)
+        self.progressBar.setFormat(text.split(" (")[0])     # "upload mission: accepted"; the whole in its tip
+        self.progressBar.setToolTip(text)
         self.cancelButton.setEnabled(active)
         for w in (self.uploadButton, self.downloadButton, self.clearButton):
             w.setEnabled(not active)
