@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import math
 
-from PyQt5.QtCore import QObject, QPointF, QRectF, Qt, pyqtSignal
+from PyQt5.QtCore import QLineF, QObject, QPointF, QRectF, Qt, pyqtSignal
 from PyQt5.QtGui import QColor, QFont, QPen, QPolygonF
 
 from .plan_model import PlanDocument, is_nav
@@ -160,9 +160,9 @@ class PlanLayer(QObject):
         if self.home is None:
             return
         pts = [self._at(view, lat, lon) for lat, lon in self.doc.path(self.home)]
-        if len(pts) > 1:
+        if len(pts) > 1:                        # as separate lines: a long self-crossing polyline strokes slowly
             p.setPen(QPen(PATH, 2))
-            p.drawPolyline(QPolygonF(pts))
+            p.drawLines([QLineF(a, b) for a, b in zip(pts, pts[1:])])
 
     def _paint_items(self, p, view) -> None:
         seq = 0
