@@ -77,3 +77,18 @@ def test_the_solo_takes_the_mission_and_refuses_a_fence_with_its_reason(qtbot, s
     start(qtbot, plan)
     qtbot.waitUntil(lambda: plan.layer.current == 2 and p.pauseButton.isEnabled(), timeout=60000)
     assert p.progressLabel.text().startswith("Item 2 of 4")
+
+
+def test_a_replayed_mission_shows_its_progress_and_cannot_be_commanded(qtbot, vehicle_factory, window_factory):  # noqa: F811
+    from recordings import MISSION
+    replay = vehicle_factory(MISSION + ".tlog", tlog_path=None, replay_speed=20.0)
+    replay.replay.pause()                                # held until the window listens
+    w = window_factory(replay)
+    plan = w.plan
+    plan.show_plan(True)
+    replay.replay.resume()
+    qtbot.waitUntil(lambda: plan.panel.progressLabel.text().startswith("Item "), timeout=60000)
+    p = plan.panel
+    assert not any(b.isEnabled() for b in (p.uploadButton, p.downloadButton, p.clearButton, p.startButton,
+                                            p.pauseButton, p.resumeButton))
+    assert not p.skip_allowed

@@ -59,6 +59,7 @@ class PlanController(QObject):
         self._outcome: dict[PlanKind, str] = {}         # each kind's last transfer, in words
         self._failed: dict[PlanKind, bool] = {}         # ... and whether the driver refused or failed it
         self._state = VehicleState()
+        self._drone = adapter.drone                     # the vehicle the plans below are known for
         self._shown: tuple | None = None                # what the flying part last showed (redrawn on change)
         self._question: QMessageBox | None = None
         p = self.panel
@@ -197,6 +198,10 @@ class PlanController(QObject):
 
     # -- the vehicle ------------------------------------------------------------------------------------
     def show_state(self, s: VehicleState) -> None:
+        if self.adapter.drone is not self._drone:     # another vehicle of the fleet: nothing known of its plans yet
+            self._drone = self.adapter.drone
+            for known in (self.on_vehicle, self._sending, self._synced, self._outcome, self._failed):
+                known.clear()
         old_home = self.home
         self._state = s
         self.layer.home = self.editor.home = self.home
@@ -238,7 +243,9 @@ class PlanController(QObject):
         p.syncLabel.setText(failed + sync)
         p.syncLabel.setStyleSheet("color: #ffb020;" if why or failed else "")
         # the mission's controls and progress: from the vehicle's mode and MISSION_CURRENT
-        link_ok = s.link.status is LinkStatus.OK
+        link_ok = s.link.status is LinkStatus.OK and self.adapter.replay is None     # a recording is only watched
+        for button in (p.uploadButton, p.downloadButton, p.clearButton):
+            button.setEnabled(button.isEnabled() and link_ok)
         mission_plan = self.vehicle_plan(PlanKind.MISSION)
         count = m.count if m.count is not None else (len(mission_plan) if mission_plan is not None else 0)
         running = s.mode == "AUTO" and s.flying and m.state is not MissionRunState.COMPLETE
