@@ -95,8 +95,9 @@ class PlanController(QObject):
         scroll.setWidget(self.panel)
         dock.setWidget(scroll)
         dock.hide()
-        window.addDockWidget(Qt.RightDockWidgetArea, dock)      # tabbed with Telemetry when first shown: tabbed
-        window.menuView.addAction(dock.toggleViewAction())      # now, the window would lay out for a tab bar
+        # tabbed with Telemetry when first shown (show_plan): tabbed now, the window would lay out for a tab bar
+        window.addDockWidget(Qt.RightDockWidgetArea, dock)
+        window.menuView.addAction(dock.toggleViewAction())
         self._tabbed = False
         dock.visibilityChanged.connect(lambda _shown: self._dock_shown(dock.isVisible()))
         return dock
@@ -147,10 +148,9 @@ class PlanController(QObject):
         if on:                                  # the map beside the list, as tall as the list
             w = self._window
             w.mapDock.raise_()
+            self.dock.raise_()
             w.resizeDocks([self.dock, w.mapDock], [1, 1], Qt.Vertical)
             w.resizeDocks([self.dock], [PLAN_WIDTH], Qt.Horizontal)
-        if on:
-            self.dock.raise_()
         self.set_editing(on)
 
     def _dock_shown(self, shown: bool) -> None:
