@@ -1,7 +1,7 @@
 """The fault matrix: takeoff, forward, stop, land under every firmware profile and link fault.
 
     .venv/bin/python bench/fault_matrix.py [--speedup 2] [--profiles copter-4,solo] [--faults clean,loss30]
-                                           [--markdown]
+                                           [--markdown] [--rows flights,transfers]
 
 Each cell flies the simulated vehicle (real sockets, real time scaled by --speedup) with the embedded
 driver: takeoff to 3 m, 2 m/s forward along the nose (at 60°) for 3 s (a stick refreshed every 100 ms, as the viewer does), Stop,
@@ -11,6 +11,9 @@ the nose, and the *wrong reports*: a
 command the driver reported accepted that the vehicle never carried out, or reported failed although the
 vehicle did it. Every answer the driver gives is checked against the simulated vehicle's truth at the
 moment the driver gives it. Target: no wrong report anywhere; every cell up to 30 % loss completes.
+
+The transfer rows (bench/transfer_matrix.py) follow: a 50-item mission and a fence uploaded and downloaded in
+each cell, each answer checked against what the vehicle holds; target 0 corrupted plans, 0 wrong reports.
 """
 from __future__ import annotations
 
@@ -28,6 +31,7 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 from driver.sim import SimConfig, SimVehicle  # noqa: E402
 from driver.state import CommandStatus, LandedState  # noqa: E402
 from driver.vehicle import Vehicle, VehicleConfig  # noqa: E402
+from transfer_matrix import run_transfers, transfer_table  # noqa: E402
 
 ALTITUDE = 3.0
 FORWARD_SPEED = 2.0
@@ -233,17 +237,26 @@ def main() -> int:
     ap.add_argument("--profiles", default=",".join(PROFILES))
     ap.add_argument("--faults", default=",".join(FAULTS))
     ap.add_argument("--markdown", action="store_true")
+    ap.add_argument("--rows", default="flights,transfers",
+                    help="flights (takeoff, forward, stop, land) and/or transfers (bench/transfer_matrix.py)")
     args = ap.parse_args()
     logging.basicConfig(level=logging.ERROR)        # the table says what happened
+    rows = args.rows.split(",")
     cells = []
-    for profile in args.profiles.split(","):
+    for profile in args.profiles.split(",") if "flights" in rows else ():
         for fault in args.faults.split(","):
             cell = fly(profile, fault, args.speedup)
             print(f"{profile:9s} {fault:11s} {'ok' if cell.completed else 'FAILED ' + cell.error} "
                   f"wrong={len(cell.wrong)}", file=sys.stderr, flush=True)
             cells.append(cell)
-    print(table(cells, args.speedup, args.markdown))
-    return 0 if all(c.completed and not c.wrong for c in cells) else 1
+    if cells:
+        print(table(cells, args.speedup, args.markdown))
+    transfers = run_transfers(args.profiles.split(","), args.faults.split(","), args.speedup, FAULTS) \
+        if "transfers" in rows else []
+    if transfers:
+        print(transfer_table(transfers, args.speedup, args.markdown))
+    return 0 if all(c.completed and not c.wrong for c in cells) and \
+        all(not c.wrong and not c.error and not c.corrupted for c in transfers) else 1
 
 
 if __name__ == "__main__":

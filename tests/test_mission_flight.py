@@ -84,3 +84,13 @@ def test_the_solo_flies_a_mission_with_float_items_and_the_legacy_jump(sim_facto
     assert sim.autopilot.last_command != "MAV_CMD_DO_SET_MISSION_CURRENT"
     assert drone.wait_for(lambda s: not s.armed and sim.truth().altitude < 0.1, 120)
     assert sim.truth().mode == "AUTO" and sim.autopilot.mission_run == "complete"
+
+
+def test_auto_without_a_mission_says_so(sim_factory, vehicle_factory):
+    sim = sim_factory(speedup=12.0)                                   # the pre-arm report comes every 30 s
+    drone = vehicle_factory(f"tcp:127.0.0.1:{sim.tcp_port}")
+    assert drone.wait_for(lambda s: s.connected and s.readiness.ready_to_arm, 30)
+    assert drone.set_mode("AUTO").result(10).ok                      # disarmed, any mode may be set
+    s = drone.wait_for(lambda s: any(m.text == "PreArm: Mode requires mission" for m in s.messages), 60)
+    assert s is not None and s.mission.count in (0, None)
+    assert drone.resume_mission().result(5).status.value == "rejected"

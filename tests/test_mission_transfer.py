@@ -104,3 +104,22 @@ def test_a_transfer_can_be_cancelled_and_one_runs_per_kind(homed, sim):
     homed.cancel_transfer(PlanKind.MISSION)
     assert first.result(5).result.status is CommandStatus.ABORTED
     assert homed.wait_for(lambda s: s.mission.transfers == (), 5)
+
+
+def test_the_vehicles_refusals_are_shown_with_their_meaning(homed, sim):
+    from test_sim import GroundStation
+    other = GroundStation(sim.tcp_port, system=254)           # another ground station starts an upload
+    try:
+        other.send(other.encoder.mission_count_encode(1, 1, 3, 0))
+        assert other.wait(lambda m: m.get_type() == "MISSION_REQUEST" and m.target_system == 254, 5)
+        refused = homed.download_plan(PlanKind.MISSION).result(10).result
+        assert refused.status is CommandStatus.REFUSED
+        assert refused.reason == "DENIED: the vehicle is busy with another transfer"
+    finally:
+        other.close()
+    too_many = Plan(PlanKind.MISSION, tuple(waypoint(homed, 1, 1, 5) for _ in range(701)))
+    sim.autopilot.uploads.clear()                               # the other station's upload given up
+    refused = homed.upload_plan(too_many).result(30).result
+    assert refused.status is CommandStatus.REFUSED
+    assert refused.reason.startswith("NO_SPACE: more items than the vehicle can store")
+    assert homed.wait_for(lambda s: any(m.text == "Only 700 items are supported" for m in s.messages), 5)

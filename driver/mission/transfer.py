@@ -8,7 +8,7 @@ vehicle cannot send it again (it has left its upload), so the read-back alone de
 Our side times out and re-asks too: MISSION_COUNT until the first request, MISSION_REQUEST_LIST until the
 count, each missing item of a download, and the item last sent while the vehicle's next request does not come
 (a lost item costs one re-ask time, not the vehicle's own 1 s; if it was the request that was lost, the
-vehicle answers INVALID_SEQUENCE, which does not end an upload). The re-ask time follows the link: three
+vehicle answers INVALID_SEQUENCE, which does not end an upload and tells us it wants the next item). The re-ask time follows the link: three
 round trips measured on this transfer, between :data:`MIN_RETRY` and :data:`MAX_RETRY`.
 
 :class:`PlanTransfers` runs on the driver's ticker and reader with the state lock held: ``service`` and
@@ -31,10 +31,10 @@ __all__ = ["PlanTransfers", "MIN_RETRY", "MAX_RETRY"]
 
 log = logging.getLogger(__name__)
 
-MIN_RETRY = 0.25             # s: the shortest re-ask time, whatever the link
+MIN_RETRY = 0.1              # s: the shortest re-ask time, whatever the link
 MAX_RETRY = 1.5              # s: the longest (QGroundControl's ack timeout)
-START_ATTEMPTS = 5           # MISSION_COUNT / MISSION_REQUEST_LIST / MISSION_CLEAR_ALL sent this often
-ITEM_ATTEMPTS = 10           # a download's item asked this often before the transfer fails
+START_ATTEMPTS = 8           # MISSION_COUNT / MISSION_REQUEST_LIST / MISSION_CLEAR_ALL sent this often
+ITEM_ATTEMPTS = 12           # a download's item asked this often before the transfer fails
 SILENCE = 10.0               # s without a word from the vehicle during an upload (it gives up after 8 s)
 FINAL_ACK_WAIT = 3           # re-ask times after the last item before the read-back decides alone
 
@@ -304,7 +304,11 @@ class PlanTransfers:
             return
         # upload
         if result == mavlink.MAV_MISSION_INVALID_SEQUENCE:
-            t.heard = now                 # an item sent again after a lost request: the upload goes on
+            # the item we sent again already arrived: its next request was lost. The vehicle goes on (it asks
+            # again in 1 s); it holds the item, so it wants the next one: send it now
+            t.heard = now
+            if t.stage == "items" and 0 <= t.asked < (t.count or 0) - 1:
+                self._send_item(t, t.asked + 1, now)
             return
         if result == mavlink.MAV_MISSION_ACCEPTED:
             if (t.count and t.asked < t.count - 1) or t.stage == "readback" or (not t.count and t.attempts == 0):

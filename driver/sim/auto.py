@@ -10,7 +10,7 @@ Mixed into :class:`~driver.sim.autopilot.Autopilot`, next to :mod:`.missions` (w
 * MISSION_SET_CURRENT (message) and DO_SET_MISSION_CURRENT (command; 4.x only) jump at once.
 * The RTL item climbs, returns, lands and disarms; the mission is then complete (mission_state 5) and the
   vehicle stays in AUTO. Armed on the ground, AUTO needs a mission that starts with a takeoff
-  ("Auto: Missing Takeoff Cmd"); with no mission at all, "PreArm: Mode requires mission".
+  ("Auto: Missing Takeoff Cmd"); disarmed in AUTO with no mission, "PreArm: Mode requires mission" (4.x).
 
 Speed is WPNAV_SPEED (``_wp_speed``, the same accessor GUIDED flies with; DO_CHANGE_SPEED overrides it).
 """
@@ -255,6 +255,10 @@ class Auto:
 
     def _auto_step(self) -> None:
         """Judge the current item: reached, held long enough, landed."""
+        if self.mode == AUTO and not self.armed and self.mission_total() == 0 and self.profile.mavlink2 \
+                and self.boot_seconds >= self.next_prearm_report:
+            self.next_prearm_report = self.boot_seconds + 30.0     # ArduCopter's pre-arm report, every 30 s
+            self._text(mavlink.MAV_SEVERITY_CRITICAL, "PreArm: Mode requires mission")
         if self.mode != AUTO or self.mission_run != "running":
             return
         item = self.plans[MISSION][self.mission_current]
