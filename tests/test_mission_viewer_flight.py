@@ -107,8 +107,8 @@ def test_plan_upload_start_pause_resume_skip_and_land(qtbot, fast_vehicle, windo
     qtbot.waitUntil(lambda: reached_2() > before, timeout=60000)
 
     # the RTL item brings it home, it lands and disarms in AUTO: the mission is complete
-    done = lambda: (vehicle.state().mission.state is MissionRunState.COMPLETE and not vehicle.state().armed)  # noqa: E731
-    qtbot.waitUntil(done, timeout=120000)
+    qtbot.waitUntil(lambda: vehicle.state().mission.state is MissionRunState.COMPLETE and not vehicle.state().armed,
+                    timeout=120000)
     qtbot.waitUntil(lambda: p.progressLabel.text() == "Mission complete (5 items)")
     assert plan.layer.current is None and not p.pauseButton.isEnabled()
     reached = [m.text for m in vehicle.state().messages if m.text.startswith("Mission: ")]

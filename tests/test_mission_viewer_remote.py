@@ -34,8 +34,8 @@ def start(qtbot, plan) -> None:
     qtbot.mouseClick(asked.args[0].button(QMessageBox.Yes), Qt.LeftButton)
 
 
-def test_the_remote_viewer_plans_and_flies_through_ice(qtbot, sim_factory, vehicle_factory, server_factory,  # noqa: F811
-                                                       drone_factory, window_factory):  # noqa: F811
+def test_the_remote_viewer_plans_and_flies_through_ice(qtbot, sim_factory, vehicle_factory,
+                                                       server_factory, drone_factory, window_factory):  # noqa: F811
     sim = sim_factory(speedup=8.0)
     vehicle = vehicle_factory(f"tcp:127.0.0.1:{sim.tcp_port}")
     assert vehicle.wait_for(lambda s: s.connected and s.home is not None, 20)
@@ -79,7 +79,8 @@ def test_the_solo_takes_the_mission_and_refuses_a_fence_with_its_reason(qtbot, s
     assert p.progressLabel.text().startswith("Item 2 of 4")
 
 
-def test_a_replayed_mission_shows_its_progress_and_cannot_be_commanded(qtbot, vehicle_factory, window_factory):  # noqa: F811
+def test_a_replayed_mission_shows_its_progress_and_cannot_be_commanded(qtbot, vehicle_factory,
+                                                                       window_factory):  # noqa: F811
     from recordings import MISSION
     replay = vehicle_factory(MISSION + ".tlog", tlog_path=None, replay_speed=20.0)
     replay.replay.pause()                                # held until the window listens

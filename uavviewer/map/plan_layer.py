@@ -175,8 +175,7 @@ class PlanLayer(QObject):
                 continue
             at = self._at(view, entry.lat, entry.lon)
             colour = CURRENT if self.current == seq else ROI if not is_nav(entry) else ITEM
-            self._marker(p, at, colour, str(seq) if is_nav(entry) else "R", self.selected == ("mission", i),
-                         self.current == seq)
+            self._marker(p, at, colour, str(seq), self.selected == ("mission", i), self.current == seq)
 
     def _paint_survey(self, p, view, i: int, spec: SurveySpec) -> None:
         pts = [self._at(view, lat, lon) for lat, lon in spec.polygon]
