@@ -129,6 +129,12 @@ def test_plan_a_mission_with_the_mouse_and_the_list(qtbot, vehicle, window_facto
     # not on the vehicle: the tab says it differs
     qtbot.waitUntil(lambda: plan.panel.tabs.tabText(0).startswith("●"))
 
+    # an item beyond the driver's flight limits: the upload is refused with the item and the reason, shown here
+    table.item(1, 2).setText("150")
+    qtbot.mouseClick(plan.panel.uploadButton, Qt.LeftButton)
+    qtbot.waitUntil(lambda: plan.panel.progressBar.format() == "upload mission: rejected", timeout=10000)
+    assert "item 2 (WAYPOINT): 150 m above home, above the 120 m ceiling" in plan.panel.syncLabel.text()
+
 
 def test_survey_fence_and_rally_drawn_on_the_map(qtbot, vehicle, window_factory):
     w, view, plan = planning_window(qtbot, vehicle, window_factory)

@@ -93,3 +93,16 @@ def test_a_replayed_mission_shows_its_progress_and_cannot_be_commanded(qtbot, ve
     assert not any(b.isEnabled() for b in (p.uploadButton, p.downloadButton, p.clearButton, p.startButton,
                                             p.pauseButton, p.resumeButton))
     assert not p.skip_allowed
+
+
+def test_picking_another_vehicle_forgets_what_the_first_one_holds(qtbot, sim_factory, vehicle_factory,
+                                                                   window_factory):  # noqa: F811
+    first, second = (vehicle_factory(f"tcp:127.0.0.1:{sim_factory(speedup=8.0).tcp_port}") for _ in range(2))
+    for v in (first, second):
+        assert v.wait_for(lambda s: s.connected and s.home is not None, 20)
+    w, view, plan = planning_window(qtbot, first, window_factory)
+    plan_and_upload(qtbot, w, view, plan)
+    assert plan.panel.startButton.isEnabled()
+    w.adapter.use(second)                              # what the window does when the Fleet panel picks another
+    qtbot.waitUntil(lambda: "not known yet" in plan.panel.syncLabel.text() and plan.panel.tabs.tabText(0)[0] == "●")
+    assert not plan.panel.startButton.isEnabled() and plan.panel.progressBar.format() == "No transfer yet"
