@@ -71,7 +71,7 @@ def main() -> int:
     doc = PlanDocument()
     layer = PlanLayer(doc)
     layer.home = HOME
-    view.overlays.append(layer)
+    layer.attach(view)
 
     def with_survey() -> None:
         mission(doc, 20)

@@ -37,9 +37,9 @@ class _FutureRelay(QObject):
 
 class DroneAdapter(QObject):
     stateChanged = pyqtSignal(object)        # VehicleState
+    transferFinished = pyqtSignal(str, object)   # a plan transfer's name and TransferOutcome (then commandFinished)
     commandFinished = pyqtSignal(object)     # CommandResult, on the UI thread
     commandSent = pyqtSignal(str)            # a command handed to the drone (its name)
-    transferFinished = pyqtSignal(str, object)   # a plan transfer's name and TransferOutcome (then commandFinished)
 
     def __init__(self, drone: Drone, rate_hz: float = 30.0, refresh_hz: float = 10.0,
                  parent: QObject | None = None) -> None:

@@ -83,13 +83,14 @@ class MapView(QWidget):
         self._bands: list[list[QPointF]] = [[] for _ in range(TRAIL_BANDS)]   # view metres, oldest band first
         self._drag: QPointF | None = None
         self._dragged = False                        # the press became a pan: its release is no click
+        # parts that may take the mouse first (the plan in Plan mode: uavviewer/map/plan_layer.py): mouse_press,
+        # mouse_move(view, event) and mouse_release(view, event, clicked) return True when they took it
+        self.mouse_parts: list = []
         self._drag_centre = self.centre
         self.paints = 0                              # paint events so far (tests see the UI keeps painting)
-        # Layers drawn over the trail that may take the mouse first (the plan: uavviewer/map/plan_layer.py):
-        # paint(p, view), mouse_press/mouse_move(view, event) and mouse_release(view, event, clicked) -> True
-        # when they took it, context_actions(view, point) -> [(text, enabled, slot)] for the right-click menu.
-        self.overlays: list = []
         self.drawn_tiles = 0                         # tiles drawn in the last paint
+        self.overlays: list = []                     # parts drawing over the map: f(painter, view) (camera_overlay)
+        self.menu_parts: list = []                   # parts adding to the right-click menu: f(menu, north, east)
 
     # -- what to show ---------------------------------------------------------------------------
     def set_vehicle(self, where: tuple[float, float, float] | None) -> None:
@@ -173,7 +174,7 @@ class MapView(QWidget):
 
     # -- mouse ----------------------------------------------------------------------------------
     def mousePressEvent(self, event) -> None:  # noqa: N802
-        if any(o.mouse_press(self, event) for o in self.overlays):
+        if any(part.mouse_press(self, event) for part in self.mouse_parts):
             return
         if event.button() == Qt.LeftButton:
             self._drag = QPointF(event.pos())
@@ -182,7 +183,7 @@ class MapView(QWidget):
         super().mousePressEvent(event)
 
     def mouseMoveEvent(self, event) -> None:  # noqa: N802
-        if any(o.mouse_move(self, event) for o in self.overlays):
+        if any(part.mouse_move(self, event) for part in self.mouse_parts):
             return
         if self._drag is not None:
             d = QPointF(event.pos()) - self._drag
@@ -195,7 +196,7 @@ class MapView(QWidget):
     def mouseReleaseEvent(self, event) -> None:  # noqa: N802
         clicked = event.button() == Qt.LeftButton and self._drag is not None and not self._dragged
         self._drag = None
-        if any(o.mouse_release(self, event, clicked) for o in self.overlays):
+        if any(part.mouse_release(self, event, clicked) for part in self.mouse_parts):
             return
         name = self.vehicle_at(QPointF(event.pos())) if clicked else ""
         if name:
@@ -207,19 +208,21 @@ class MapView(QWidget):
             self.zoom_to(self.mpp * 2 ** (-steps / 2.0), QPointF(event.pos()))
 
     def contextMenuEvent(self, event) -> None:  # noqa: N802
-        extra = [a for o in self.overlays for a in o.context_actions(self, QPointF(event.pos()))]
-        if not self.fly_here_text and not extra:
+        if not self.fly_here_text and not self.menu_parts:
             return
         east, north = self.view_at(QPointF(event.pos()))
         menu = QMenu(self)
         menu.setAttribute(Qt.WA_DeleteOnClose)            # one per right click: gone once closed
         menu.setObjectName("mapMenu")
-        for text, enabled, slot in extra:                 # what the point's layer offers first (Skip to item N)
-            menu.addAction(text, slot).setEnabled(enabled)
         if self.fly_here_text:
             action = menu.addAction(self.fly_here_text)
             action.setEnabled(self.fly_here_enabled)
             action.triggered.connect(lambda: self.flyHereRequested.emit(north, east))
+        for part in self.menu_parts:
+            part(menu, north, east)
+        if menu.isEmpty():
+            menu.deleteLater()
+            return
         menu.popup(event.globalPos())
 
     def _tile_ready(self, key) -> None:
@@ -245,14 +248,14 @@ class MapView(QWidget):
             p.setFont(QFont(self.font().family(), 8))
             self._label(p, self.to_screen(0.0, -self.fence_radius) + QPointF(4, 12), text)
         self._paint_trail(p)
-        for overlay in self.overlays:
-            overlay.paint(p, self)
         if self.home_visible:
             self._paint_home(p)
         if self.target is not None:
             self._paint_target(p)
         for mark in self.others:
             self._paint_other(p, mark)
+        for overlay in self.overlays:
+            overlay(p, self)
         if self.vehicle is not None:
             self._paint_vehicle(p)
         if self.vehicle_name or self.others:

@@ -48,7 +48,7 @@ class PlanController(QObject):
         self._window = window
         self.doc = PlanDocument()
         self.layer = PlanLayer(self.doc, self)
-        self.view.overlays.append(self.layer)
+        self.layer.attach(self.view)
         self.panel = PlanPanel()
         self.dock = self._dock(window)
         self.plan_button = self._map_button(map_controller.panel)

@@ -1,6 +1,7 @@
 """The plan on the map: the mission's path and items, surveys, fences and rally points, drawn over the trail;
-in Plan mode it also takes the mouse (a click adds, a drag moves an item or a vertex). A :class:`MapView`
-overlay (see ``MapView.overlays``); what a click means is decided by the plan controller.
+in Plan mode it also takes the mouse (a click adds, a drag moves an item or a vertex), and it adds to the
+right-click menu (Skip to item N). One of the :class:`MapView`'s ``overlays``, ``menu_parts`` and ``mouse_parts``
+(:meth:`PlanLayer.attach`); what a click means is decided by the plan editor and controller.
 """
 from __future__ import annotations
 
@@ -52,6 +53,7 @@ class PlanLayer(QObject):
         self.progress = ""                                 # "Item 3 of 7 · 45 m, 9 s to it" while one flies
         self._grab: tuple[str, int, int] | None = None     # what a press took: layer, index, vertex
         self._press: QPointF | None = None
+        self._view = None
 
     # -- geometry ---------------------------------------------------------------------------------
     @staticmethod
@@ -83,7 +85,7 @@ class PlanLayer(QObject):
             near(item.lat, item.lon, ("rally", i, 0))
         return found
 
-    # -- mouse (MapView.overlays) -------------------------------------------------------------------
+    # -- mouse (MapView.mouse_parts) -------------------------------------------------------------------
     def mouse_press(self, view, event) -> bool:
         if event.button() != Qt.LeftButton or view.frame is None:
             return False
@@ -116,10 +118,26 @@ class PlanLayer(QObject):
             return True
         return False
 
-    def context_actions(self, view, point: QPointF) -> list:
+    def attach(self, view) -> None:
+        """Drawn on ``view``, in its right-click menu and first to its mouse."""
+        self._view = view
+        view.overlays.append(self)
+        view.menu_parts.append(self.menu_part)
+        view.mouse_parts.append(self)
+
+    def menu_part(self, menu, north: float, east: float) -> None:
+        """The right-click menu at a point (view metres): what the controller offers for the item there."""
+        view = self._view
+        if view is None or view.frame is None:
+            return
         actions: list = []
-        self.contextRequested.emit(self.hit(view, point) if view.frame is not None else None, actions)
-        return actions
+        self.contextRequested.emit(self.hit(view, view.to_screen(east, north)), actions)
+        for text, enabled, slot in actions:
+            menu.addAction(text, slot).setEnabled(enabled)
+
+    def __call__(self, p, view) -> None:
+        """As one of the view's overlays."""
+        self.paint(p, view)
 
     # -- painting ---------------------------------------------------------------------------------
     def paint(self, p, view) -> None:
