@@ -16,6 +16,7 @@ from .survey import SurveySpec
 __all__ = ["PlanLayer", "HIT_PX"]
 
 HIT_PX = 12                                  # a press this near an item or vertex takes it
+HOME_PX = 9.0                                # the home mark's radius (MapView draws it 8 px)
 PATH = QColor("#ffb020")
 ITEM = QColor("#ffb020")
 SELECTED = QColor("#ffffff")
@@ -178,9 +179,20 @@ class PlanLayer(QObject):
         if self.home is None:
             return
         pts = [self._at(view, lat, lon) for lat, lon in self.doc.path(self.home)]
-        if len(pts) > 1:                        # as separate lines: a long self-crossing polyline strokes slowly
-            p.setPen(QPen(PATH, 2))
-            p.drawLines([QLineF(a, b) for a, b in zip(pts, pts[1:])])
+        if len(pts) < 2:
+            return
+        home = pts[0]
+        lines = []                              # as separate lines: a long self-crossing polyline strokes slowly
+        for a, b in zip(pts, pts[1:]):
+            line = QLineF(a, b)
+            if line.length() > HOME_PX:         # legs start and end at the home mark's edge: H stays readable
+                if a == home:
+                    line.setP1(line.pointAt(HOME_PX / line.length()))
+                if b == home:
+                    line.setP2(line.pointAt(1.0 - HOME_PX / line.length()))
+                lines.append(line)
+        p.setPen(QPen(PATH, 2))
+        p.drawLines(lines)
 
     def _paint_items(self, p, view) -> None:
         seq = 0
