@@ -8,7 +8,7 @@ from __future__ import annotations
 import math
 
 from PyQt5.QtCore import QLineF, QObject, QPointF, QRectF, Qt, pyqtSignal
-from PyQt5.QtGui import QColor, QFont, QPen, QPolygonF
+from PyQt5.QtGui import QColor, QFont, QPainter, QPen, QPixmap, QPolygonF
 
 from .plan_model import PlanDocument, is_nav
 from .survey import SurveySpec
@@ -16,6 +16,7 @@ from .survey import SurveySpec
 __all__ = ["PlanLayer", "HIT_PX"]
 
 HIT_PX = 12                                  # a press this near an item or vertex takes it
+MARK_PX = 36                                 # the pixmap a marker is drawn into (its halo is 32 px across)
 HOME_PX = 9.0                                # the home mark's radius (MapView draws it 8 px)
 PATH = QColor("#ffb020")
 ITEM = QColor("#ffb020")
@@ -55,11 +56,22 @@ class PlanLayer(QObject):
         self._grab: tuple[str, int, int] | None = None     # what a press took: layer, index, vertex
         self._press: QPointF | None = None
         self._view = None
+        self._placed: dict[tuple[float, float], tuple[float, float]] = {}   # (lat, lon) -> view metres
+        self._placed_for = None                            # ... in this frame
+        self._markers: dict[tuple, QPixmap] = {}           # each look of a marker, drawn once
+        self._look: tuple = (1.0, "")
 
     # -- geometry ---------------------------------------------------------------------------------
-    @staticmethod
-    def _at(view, lat: float, lon: float) -> QPointF:
-        return view.to_screen(*view.frame.to_view(lat, lon))
+    def _at(self, view, lat: float, lon: float) -> QPointF:
+        """A place on screen; its view metres are worked out once per frame (home) and kept."""
+        if self._placed_for is not view.frame:
+            self._placed_for, self._placed = view.frame, {}
+        where = self._placed.get((lat, lon))
+        if where is None:
+            if len(self._placed) > 5000:            # places dragged through: start again
+                self._placed.clear()
+            where = self._placed[(lat, lon)] = view.frame.to_view(lat, lon)
+        return view.to_screen(*where)
 
     def hit(self, view, point: QPointF) -> tuple[str, int, int] | None:
         """The item, survey/fence vertex or rally point nearest ``point`` within HIT_PX."""
@@ -147,6 +159,7 @@ class PlanLayer(QObject):
         p.save()
         font = QFont(view.font().family(), 8, QFont.Bold)
         p.setFont(font)
+        self._look = (view.devicePixelRatioF(), font.key())     # what the cached markers were drawn for
         for i, shape in enumerate(self.doc.fence):
             self._paint_fence(p, view, shape, self.selected == ("fence", i))
         for i, entry in enumerate(self.doc.entries):
@@ -196,6 +209,7 @@ class PlanLayer(QObject):
 
     def _paint_items(self, p, view) -> None:
         seq = 0
+        shown = QRectF(view.rect()).adjusted(-20, -20, 20, 20)
         for i, entry in enumerate(self.doc.entries):
             if isinstance(entry, SurveySpec):
                 seq += len(self.doc.survey_of(entry).items)
@@ -204,6 +218,8 @@ class PlanLayer(QObject):
             if not (entry.has_position and (entry.lat or entry.lon)):
                 continue
             at = self._at(view, entry.lat, entry.lon)
+            if not shown.contains(at):
+                continue
             colour = CURRENT if self.current == seq else ROI if not is_nav(entry) else ITEM
             self._marker(p, at, colour, str(seq), self.selected == ("mission", i), self.current == seq)
 
@@ -240,17 +256,36 @@ class PlanLayer(QObject):
             for q in pts:
                 p.drawRect(QRectF(q.x() - 4, q.y() - 4, 8, 8))
 
-    @staticmethod
-    def _marker(p, at: QPointF, colour: QColor, text: str, chosen: bool, current: bool = False) -> None:
-        if current:
-            halo = QColor(colour)
-            halo.setAlpha(80)
-            p.setPen(Qt.NoPen)
-            p.setBrush(halo)
-            p.drawEllipse(at, 16, 16)
-        p.setPen(QPen(SELECTED if chosen else Qt.black, 2.5 if chosen else 1))
-        p.setBrush(colour)
-        p.drawEllipse(at, 9, 9)
-        p.setPen(TEXT)
-        p.drawText(QRectF(at.x() - 12, at.y() - 9, 24, 18), Qt.AlignCenter, text)
+    def _marker(self, p, at: QPointF, colour: QColor, text: str, chosen: bool, current: bool = False) -> None:
+        """A numbered disc (with a halo when current), drawn once into a pixmap and then only copied: a plan of
+        hundreds of items repaints with the vehicle."""
+        key = (colour.rgba(), text, chosen, current, self._look)
+        image = self._markers.get(key)
+        if image is None:
+            if len(self._markers) > 2000:
+                self._markers.clear()
+            ratio = self._look[0]
+            image = QPixmap(int(MARK_PX * ratio), int(MARK_PX * ratio))
+            image.setDevicePixelRatio(ratio)
+            image.fill(Qt.transparent)
+            q = QPainter(image)
+            q.setRenderHint(QPainter.Antialiasing)
+            q.setFont(p.font())
+            _draw_marker(q, QPointF(MARK_PX / 2, MARK_PX / 2), colour, text, chosen, current)
+            q.end()
+            self._markers[key] = image
+        p.drawPixmap(QPointF(at.x() - MARK_PX / 2, at.y() - MARK_PX / 2), image)
 
+
+def _draw_marker(p, at: QPointF, colour: QColor, text: str, chosen: bool, current: bool) -> None:
+    if current:
+        halo = QColor(colour)
+        halo.setAlpha(80)
+        p.setPen(Qt.NoPen)
+        p.setBrush(halo)
+        p.drawEllipse(at, 16, 16)
+    p.setPen(QPen(SELECTED if chosen else Qt.black, 2.5 if chosen else 1))
+    p.setBrush(colour)
+    p.drawEllipse(at, 9, 9)
+    p.setPen(TEXT)
+    p.drawText(QRectF(at.x() - 12, at.y() - 9, 24, 18), Qt.AlignCenter, text)
