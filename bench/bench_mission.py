@@ -7,15 +7,17 @@ with ``--latency`` seconds each way (a telemetry radio's 50 ms round trip by def
 
 * **driver**: ``Vehicle.upload_plan`` of ``--items`` items, which ends only once MISSION_ACK accepted it and the
   plan read back means the same; its upload phase (to the MISSION_ACK) is timed on its own too;
-* **reference**: an uploader written here after MAVProxy's wp module (MAVProxy/modules/mavproxy_wp.py): it
-  sends MISSION_CLEAR_ALL and MISSION_COUNT once, answers each MISSION_REQUEST(_INT) with the item, and relies
-  on the vehicle to ask again (ArduPilot: every 1 s); done at MISSION_ACK, given up after 10 s without a
-  request. It does not read back.
+* **reference**: an uploader written here after MAVProxy's wp module (MAVProxy/modules/lib/
+  mission_item_protocol.py, ``send_all_items`` and ``process_waypoint_request``): it sends MISSION_COUNT once,
+  answers each MISSION_REQUEST with the item, relies on the vehicle to ask again (ArduPilot: every 1 s), stops
+  answering once the last item is sent or 10 s after the previous one, and does not read back. It is timed to
+  the vehicle's MISSION_ACK (ok when ACCEPTED and the vehicle holds the plan).
 
 The protocol floor is the round trips a transfer cannot avoid times the round-trip time: an upload of W items
 on the wire (the home slot and the items) is W + 1 round trips (MISSION_COUNT to the first request, each item
-to the next request or the ACK), a read back W + 1 more (MISSION_REQUEST_LIST to the count, each request to
-its item). Each line prints the time and its ratio to its floor.
+to the next request or the ACK); a read back is 1 + ceil(W / 4) more (MISSION_REQUEST_LIST to the count, then the
+items asked four at a time, as the driver does; MAVProxy asks five). Each line prints the time and its ratio to
+its floor.
 """
 from __future__ import annotations
 
@@ -31,7 +33,8 @@ os.environ["MAVLINK20"] = "1"                # the reference speaks MAVLink 2 (m
 from pymavlink import mavutil  # noqa: E402
 from pymavlink.dialects.v20 import ardupilotmega as mavlink  # noqa: E402
 
-from driver.mission.plan import MissionItem, PlanKind  # noqa: E402
+from driver.mission.plan import PlanKind  # noqa: E402
+from driver.mission.transfer import WINDOW  # noqa: E402
 from driver.mission.wire import home_slot, to_wire  # noqa: E402
 from driver.sim import SimConfig, SimVehicle  # noqa: E402
 from driver.vehicle import Vehicle, VehicleConfig  # noqa: E402
@@ -67,14 +70,15 @@ def driver_run(items: int, latency: float, loss: float, seed: int) -> dict:
         outcome = future.result(timeout=600)
         total = time.monotonic() - t0
         exact = same(held(sim, PlanKind.MISSION), as_held(plan), 1)
-        return dict(ok=outcome.result.ok and exact, told=outcome.result.status.value, total=total, upload=upload)
+        told = outcome.result.status.value if outcome.result.ok else str(outcome.result)
+        return dict(ok=outcome.result.ok and exact, told=told, total=total, upload=upload)
     finally:
         vehicle.close()
         sim.stop()
 
 
 def reference_run(items: int, latency: float, loss: float, seed: int) -> dict:
-    """The MAVProxy-style upload: COUNT once, answer the requests, wait for the ACK."""
+    """The MAVProxy-style upload: COUNT once, answer the requests until the last item went, then the ACK."""
     sim = new_sim(latency, loss, seed)
     link = mavutil.mavlink_connection(f"tcp:127.0.0.1:{sim.tcp_port}", source_system=255, source_component=190,
                                       dialect="ardupilotmega")
@@ -88,25 +92,28 @@ def reference_run(items: int, latency: float, loss: float, seed: int) -> dict:
         wire = [home_slot(type("Home", (), dict(lat=lat, lon=lon, alt=alt))())] + list(plan.items)
         degrade(sim, latency, loss)
         t0 = time.monotonic()
-        link.mav.mission_clear_all_send(1, 1, mavlink.MAV_MISSION_TYPE_MISSION)
         link.mav.mission_count_send(1, 1, len(wire), mavlink.MAV_MISSION_TYPE_MISSION)
-        last_request = time.monotonic()
+        loading, last_sent = True, time.monotonic()
         done = None
         while done is None:
             m = link.recv_match(type=["MISSION_REQUEST", "MISSION_REQUEST_INT", "MISSION_ACK"], blocking=True,
                                 timeout=0.1)
             now = time.monotonic()
+            if now - last_sent > MAVPROXY_TIMEOUT:
+                loading = False
+                done = done or "no MISSION_ACK (MAVProxy stopped answering)"
             if m is None:
-                if now - last_request > MAVPROXY_TIMEOUT:
-                    done = "timed out (Loading waypoint timeout)"
                 continue
             if m.get_type() == "MISSION_ACK":
-                if m.type == mavlink.MAV_MISSION_ACCEPTED and now - t0 > 0 and sim.autopilot.plan_items(0):
-                    done = "accepted"
+                name = mavlink.enums["MAV_MISSION_RESULT"][m.type].name.replace("MAV_MISSION_", "").lower()
+                done = "accepted" if m.type == mavlink.MAV_MISSION_ACCEPTED else f"MISSION_ACK {name}"
                 continue
-            last_request = now
-            if 0 <= m.seq < len(wire):
-                link.mav.send(to_wire(link.mav, wire[m.seq], m.seq, PlanKind.MISSION, (1, 1), True, True))
+            if not loading or not 0 <= m.seq < len(wire):
+                continue
+            link.mav.send(to_wire(link.mav, wire[m.seq], m.seq, PlanKind.MISSION, (1, 1), True, True))
+            last_sent = now
+            if m.seq == len(wire) - 1:
+                loading = False                    # "Sent all N waypoints": requests after it go unanswered
         total = time.monotonic() - t0
         exact = same(held(sim, PlanKind.MISSION), as_held(plan), 1)
         return dict(ok=done == "accepted" and exact, told=done, total=total, upload=total)
@@ -125,7 +132,7 @@ def main() -> int:
     wire = args.items + 1
     rtt = 2 * args.latency
     floor_up = (wire + 1) * rtt
-    floor_all = 2 * (wire + 1) * rtt
+    floor_all = floor_up + (1 + -(-wire // WINDOW)) * rtt
     print(f"{args.items} items ({wire} on the wire with the home slot), {args.latency * 1000:.0f} ms each way: "
           f"floor {floor_up:.2f} s to upload, {floor_all:.2f} s to upload and read back")
     print(f"{'uploader':34s} {'loss':>5s} {'ok':>5s} {'upload s':>9s} {'x floor':>8s} {'verified s':>11s} "

@@ -49,6 +49,8 @@ def is_climbing(s: VehicleState) -> bool:
 class TakeoffSequence:
     """One takeoff. ``step(now)`` returns None while it runs, then (status, reason, phase) once."""
 
+    name = "takeoff"                        # what its result is called (driver.mission's MissionStart: its own)
+
     def __init__(self, drone: Pilotable, altitude: float, config, now: float):
         self.drone = drone
         self.altitude = altitude

@@ -522,6 +522,7 @@ class Vehicle(Drone):
             return
         self._commands.on_param_value(name, m.param_value)
         self._link.param_received(name)
+        self._missions.on_param(name, m.param_value)
         if name in FENCE_PARAMS:
             self._store.set(fence=self._store.view()["fence"].with_param(name, m.param_value))
         elif name == "FS_GCS_ENABLE":
@@ -964,7 +965,7 @@ class Vehicle(Drone):
         self._takeoff = None
         self._store.set(takeoff=SequenceProgress(phase, reason, seq.altitude))
         log.info("takeoff: %s %s", phase.value, reason)
-        self._notifier.settle(seq.future, self._store.record_locked(getattr(seq, "name", "takeoff"), status, reason))
+        self._notifier.settle(seq.future, self._store.record_locked(seq.name, status, reason))
 
     def _progress(self, seq: TakeoffSequence) -> None:
         progress = SequenceProgress(seq.phase, seq.detail, seq.altitude)
@@ -987,7 +988,7 @@ class Vehicle(Drone):
                                                "the vehicle got it, it lifts off (Land brings it down)")
             self._store.set(takeoff=SequenceProgress(SequencePhase.ABORTED, f"aborted: {why}", seq.altitude))
             self._notifier.settle(seq.future, self._store.record_locked(
-                "takeoff", CommandStatus.ABORTED, f"aborted by the pilot ({why})"))
+                seq.name, CommandStatus.ABORTED, f"aborted by the pilot ({why})"))
 
 
 #: Events: every one counts (mode/arming changes, the pilot's messages, command answers).
@@ -1000,5 +1001,5 @@ _EVENTS = {
     "FENCE_STATUS": Vehicle._on_fence_status,
     **{name: Vehicle._on_mission for name in ("MISSION_CURRENT", "MISSION_ITEM_REACHED", "MISSION_REQUEST",
                                               "MISSION_REQUEST_INT", "MISSION_COUNT", "MISSION_ITEM",
-                                              "MISSION_ITEM_INT", "MISSION_ACK")},
+                                              "MISSION_ITEM_INT", "MISSION_ACK", "RALLY_POINT")},
 }

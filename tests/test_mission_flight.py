@@ -7,7 +7,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from driver.mission.plan import MissionItem, MissionRunState, Plan, PlanKind
 from driver.state import CommandStatus
-from test_mission_transfer import waypoint
+from test_mission_transfer import place, waypoint
 
 
 def recorded_mission(vehicle) -> Plan:
@@ -77,6 +77,15 @@ def test_the_solo_flies_a_mission_with_float_items_and_the_legacy_jump(sim_facto
     assert "MISSION_ITEM_INT" not in {kind for _, kind, _ in sim.received_messages}
     refused = drone.upload_plan(Plan(PlanKind.FENCE)).result(5).result
     assert refused.status is CommandStatus.REJECTED and "FENCE_RADIUS" in refused.reason
+    # rally points as 3.3 takes them: RALLY_TOTAL, RALLY_POINT each, fetched back with RALLY_FETCH_POINT
+    lat, lon = place(drone, 20, 10)
+    rally = Plan(PlanKind.RALLY, (MissionItem(mavlink.MAV_CMD_NAV_RALLY_POINT, lat=lat, lon=lon, alt=15),
+                                  MissionItem(mavlink.MAV_CMD_NAV_RALLY_POINT, lat=lat, lon=lon, alt=25)))
+    sent = drone.upload_plan(rally).result(30)
+    assert sent.result.status is CommandStatus.ACCEPTED and "RALLY_POINT" in sent.result.reason, str(sent.result)
+    assert [(p.x, p.z) for p in sim.autopilot.plans[PlanKind.RALLY]] == [(round(lat * 1e7), 15), (round(lat * 1e7), 25)]
+    assert drone.download_plan(PlanKind.RALLY).result(30).plan == sent.plan
+    assert drone.clear_plan(PlanKind.RALLY).result(10).ok and sim.autopilot.params["RALLY_TOTAL"] == 0
     assert drone.start_mission().result(60).ok
     assert drone.wait_for(lambda s: s.mission.last_reached == 2, 60)
     jumped = drone.set_mission_item(2).result(10)
@@ -94,3 +103,15 @@ def test_auto_without_a_mission_says_so(sim_factory, vehicle_factory):
     s = drone.wait_for(lambda s: any(m.text == "PreArm: Mode requires mission" for m in s.messages), 60)
     assert s is not None and s.mission.count in (0, None)
     assert drone.resume_mission().result(5).status.value == "rejected"
+
+
+def test_land_aborts_a_mission_start(sim, vehicle_factory):
+    drone = vehicle_factory(f"tcp:127.0.0.1:{sim.tcp_port}")
+    assert drone.wait_for(lambda s: s.connected and s.home is not None, 20)
+    assert drone.upload_plan(recorded_mission(drone)).result(30).result.ok
+    starting = drone.start_mission()
+    assert drone.set_mode("LOITER").result(5).status is CommandStatus.REJECTED   # only Land and Stop meanwhile
+    assert drone.land().result(10).ok
+    result = starting.result(10)
+    assert (result.command, result.status) == ("mission start", CommandStatus.ABORTED), str(result)
+    assert drone.wait_for(lambda s: not s.takeoff.active, 5)

@@ -233,6 +233,13 @@ class MissionControl:
         if self.transfers.changed:
             self._publish()
 
+    def on_param(self, name: str, value: float) -> None:
+        """A PARAM_VALUE (reader, lock held): RALLY_TOTAL confirms the Solo's rally transfers."""
+        for msg in self.transfers.on_param(name, value, time.monotonic()):
+            self._v._post(msg)
+        if self.transfers.changed:
+            self._publish()
+
     def on_text(self, text: str) -> None:
         store = self._v._store
         folded = fold_text(store.view()["mission"], text)

@@ -24,6 +24,7 @@ from typing import Callable
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from ..state import CommandResult, CommandStatus
+from .legacy_rally import LegacyRally
 from .plan import Plan, PlanKind, TransferDirection, TransferOutcome, TransferProgress
 from .wire import difference, from_wire, home_slot, result_meaning, to_wire
 
@@ -35,8 +36,10 @@ MIN_RETRY = 0.1              # s: the shortest re-ask time, whatever the link
 MAX_RETRY = 1.5              # s: the longest (QGroundControl's ack timeout)
 START_ATTEMPTS = 8           # MISSION_COUNT / MISSION_REQUEST_LIST / MISSION_CLEAR_ALL sent this often
 ITEM_ATTEMPTS = 12           # a download's item asked this often before the transfer fails
+WINDOW = 4                   # a download's requests in flight at once (the vehicle answers each at once)
 SILENCE = 10.0               # s without a word from the vehicle during an upload (it gives up after 8 s)
-FINAL_ACK_WAIT = 3           # re-ask times after the last item before the read-back decides alone
+FINAL_ACK_WAIT = 3           # re-ask times after the last item before the read-back decides alone ...
+FINAL_ACK_MIN = 1.5          # s, and at least this: the vehicle asks a lost last item again after 1 s
 
 
 @dataclass(eq=False)
@@ -49,7 +52,9 @@ class _Transfer:
     stage: str = "start"                      # start | items | readback | done
     count: int | None = None
     received: dict = field(default_factory=dict)
-    asked: int = -1                           # download: the item asked now; upload: the highest sent
+    asked: int = -1                           # upload: the item the vehicle wants now (its last request)
+    top: int = -1                             # upload: the highest item sent
+    waiting: dict = field(default_factory=dict)   # download: item -> [asked at, times asked], in flight
     attempts: int = 0
     next_send: float = 0.0
     heard: float = 0.0                        # the last time the vehicle said something about this transfer
@@ -59,9 +64,13 @@ class _Transfer:
     last_sent_at: float = 0.0                 # upload: when the last item went out
     upload: "_Transfer | None" = None         # a read-back: the upload it checks
     detail: str = ""
+    legacy: bool = False                      # rally points by RALLY_POINT (ArduCopter 3.3: legacy_rally.py)
+    probing: int | None = None                # upload: the item sent again unasked (its INVALID_SEQUENCE means
+                                              # the vehicle has it); None once the vehicle asked anything
+    resent: int = 0
 
 
-class PlanTransfers:
+class PlanTransfers(LegacyRally):
     """The transfers of one vehicle. ``record(name, status, reason)`` stores a result (lock held)."""
 
     def __init__(self, codec, source: tuple[int, int], target: Callable[[], tuple[int, int]],
@@ -90,12 +99,9 @@ class PlanTransfers:
         """Why this vehicle cannot transfer ``kind`` here ("" when it can)."""
         if kind is PlanKind.MISSION:
             return ""
-        if self.mission_int is False or not self._mavlink2():
-            if kind is PlanKind.FENCE:
-                return ("this vehicle's firmware has no polygon fence (ArduCopter 3.3, as on the Solo, fences only "
-                        "with FENCE_RADIUS around home and FENCE_ALT_MAX: set those parameters)")
-            return ("this vehicle's firmware has no rally points over the mission protocol (MAVLink 2 mission_type; "
-                    "ArduCopter 3.3, as on the Solo, takes them only as RALLY_POINT messages)")
+        if (self.mission_int is False or not self._mavlink2()) and kind is PlanKind.FENCE:
+            return ("this vehicle's firmware has no polygon fence (ArduCopter 3.3, as on the Solo, fences only with "
+                    "FENCE_RADIUS around home and FENCE_ALT_MAX: set those parameters)")
         return ""
 
     # -- starting (any thread, lock held) ----------------------------------------------------------------
@@ -118,6 +124,7 @@ class PlanTransfers:
 
     def _begin(self, t: _Transfer, now: float) -> Future:
         t.heard = now
+        t.legacy = self.legacy_rally(t.kind)
         self._running[t.kind] = t
         self.changed = True
         return t.future
@@ -137,7 +144,7 @@ class PlanTransfers:
         out = []
         for t in self._running.values():
             shown = t.upload or t
-            done = len(t.received) if t.direction is not TransferDirection.UPLOAD or t.upload else max(t.asked, 0)
+            done = len(t.received) if t.direction is not TransferDirection.UPLOAD or t.upload else max(t.top, 0)
             detail = t.detail or ("reading back" if t.upload else "")
             out.append(TransferProgress(shown.kind, shown.direction, done, t.count or 0, True, detail))
         return tuple(out)
@@ -153,6 +160,19 @@ class PlanTransfers:
         return MAX_RETRY if t.rtt is None else min(MAX_RETRY, max(MIN_RETRY, 3.0 * t.rtt))
 
     def _service(self, t: _Transfer, now: float) -> None:
+        if t.legacy:
+            self._legacy_service(t, now)
+            return
+        if t.stage == "items" and t.direction is TransferDirection.DOWNLOAD:
+            for seq, entry in list(t.waiting.items()):
+                if now - entry[0] < self._retry(t):
+                    continue
+                if entry[1] >= ITEM_ATTEMPTS:
+                    self._end(t, CommandStatus.TIMED_OUT, f"item {seq} never came ({entry[1]} requests); "
+                              f"{len(t.received)} of {t.count} received")
+                    return
+                self._ask_item(t, seq, now)
+            return
         if now < t.next_send:
             return
         if t.stage == "start":
@@ -162,23 +182,19 @@ class PlanTransfers:
                 self._end(t, CommandStatus.TIMED_OUT, f"no answer to {what} after {t.attempts} attempts")
                 return
             self._send_start(t, now)
-        elif t.stage == "items" and t.direction is TransferDirection.DOWNLOAD:
-            if t.attempts >= ITEM_ATTEMPTS:
-                self._end(t, CommandStatus.TIMED_OUT, f"item {t.asked} never came ({t.attempts} requests); "
-                          f"{len(t.received)} of {t.count} received")
-                return
-            self._ask_item(t, now)
         elif t.stage == "items":                                  # upload: the vehicle leads
             if now - t.heard > SILENCE:
                 self._end(t, CommandStatus.TIMED_OUT, f"the vehicle stopped asking for items "
-                          f"({t.asked + 1} of {t.count} sent)")
+                          f"({t.top + 1} of {t.count} sent)")
                 return
-            if t.asked == t.count - 1 and not t.acked and now - t.last_sent_at > FINAL_ACK_WAIT * self._retry(t):
+            final_wait = max(FINAL_ACK_WAIT * self._retry(t), FINAL_ACK_MIN)
+            if t.top == t.count - 1 and not t.acked and now - t.last_sent_at > final_wait:
                 t.detail = "the vehicle's MISSION_ACK was lost: reading back"
                 self._read_back(t, now)
                 return
             if t.asked >= 0:                                      # the next request is late: the item again
                 self._send_item(t, t.asked, now, again=True)
+                t.probing = t.asked
 
     def _send_start(self, t: _Transfer, now: float) -> None:
         system, component = self._target()
@@ -196,22 +212,30 @@ class PlanTransfers:
         t.next_send = now + self._retry(t)
         self._out.append(msg)
 
-    def _ask_item(self, t: _Transfer, now: float) -> None:
+    def _ask_item(self, t: _Transfer, seq: int, now: float) -> None:
         system, component = self._target()
         args = dict(mission_type=int(t.kind)) if self._mavlink2() else {}
         c = self._codec
-        msg = (c.mission_request_int_encode(system, component, t.asked, **args) if self.integer else
-               c.mission_request_encode(system, component, t.asked, **args))
-        t.attempts += 1
-        t.sent_at = now
-        t.next_send = now + self._retry(t)
+        msg = (c.mission_request_int_encode(system, component, seq, **args) if self.integer else
+               c.mission_request_encode(system, component, seq, **args))
+        entry = t.waiting.setdefault(seq, [now, 0])
+        entry[0], entry[1] = now, entry[1] + 1
         self._out.append(msg)
+
+    def _ask_more(self, t: _Transfer, now: float) -> None:
+        """Keep WINDOW requests in flight, lowest missing items first."""
+        for seq in range(t.count or 0):
+            if len(t.waiting) >= WINDOW:
+                return
+            if seq not in t.received and seq not in t.waiting:
+                self._ask_item(t, seq, now)
 
     def _send_item(self, t: _Transfer, seq: int, now: float, again: bool = False) -> None:
         item = t.wire[seq]
         self._out.append(to_wire(self._codec, item, seq, t.kind, self._target(), self.integer, self._mavlink2()))
-        if seq > t.asked:
-            t.asked = seq
+        t.asked = max(t.asked, seq)
+        if seq > t.top:
+            t.top = seq
             self.changed = True
         if seq == t.count - 1 and (not again or t.last_sent_at == 0.0):
             t.last_sent_at = now
@@ -224,6 +248,12 @@ class PlanTransfers:
         if getattr(m, "target_system", 0) not in (0, self._source[0]) or \
                 getattr(m, "target_component", 0) not in (0, self._source[1]):
             return []                                             # another ground station's transfer
+        if m.get_type() == "RALLY_POINT":
+            t = self._running.get(PlanKind.RALLY)
+            if t is not None and t.legacy:
+                self._legacy_point(t, m, now)
+            out, self._out = self._out, []
+            return out
         kind = PlanKind(getattr(m, "mission_type", 0)) if getattr(m, "mission_type", 0) in (0, 1, 2) else None
         t = self._running.get(kind) if kind is not None else None
         if t is None:
@@ -247,6 +277,8 @@ class PlanTransfers:
         t.heard = now
 
     def _on_request(self, t: _Transfer, seq: int, now: float) -> None:
+        if t.upload is not None and not t.upload.acked and t.stage == "start":
+            t = self._resume_upload(t, now)       # a read-back begun on a lost final ACK, but the vehicle asks
         if t.direction is not TransferDirection.UPLOAD or t.upload is not None or t.stage == "readback":
             return
         if not 0 <= seq < (t.count or 0):
@@ -256,7 +288,18 @@ class PlanTransfers:
         t.heard = now
         t.stage = "items"
         t.attempts = 0
+        t.probing = None
+        t.asked = seq                             # what the vehicle asks for is what it holds up to
+        self.changed = True
         self._send_item(t, seq, now)
+
+    def _resume_upload(self, check: _Transfer, now: float) -> _Transfer:
+        """Back from a read-back to its upload: the vehicle is still receiving (our last item was lost)."""
+        upload = check.upload
+        self._running[upload.kind] = upload
+        upload.stage, upload.detail, upload.heard = "items", "", now
+        self.changed = True
+        return upload
 
     def _on_count(self, t: _Transfer, count: int, now: float) -> None:
         if t.direction is not TransferDirection.DOWNLOAD or t.stage != "start":
@@ -267,26 +310,34 @@ class PlanTransfers:
         if count == 0:
             self._downloaded(t, now)
             return
-        t.stage, t.asked, t.attempts = "items", 0, 0
-        self._ask_item(t, now)
+        t.stage, t.attempts = "items", 0
+        self._ask_more(t, now)
 
     def _on_item(self, t: _Transfer, m, now: float) -> None:
         if t.direction is not TransferDirection.DOWNLOAD or t.stage != "items" or m.seq in t.received:
             return
         if not 0 <= m.seq < t.count:
             return
-        if m.seq == t.asked:
+        entry = t.waiting.pop(m.seq, None)
+        if entry is not None and entry[1] == 1:               # asked once: a clean round-trip sample
+            t.sent_at = entry[0]
             self._measure(t, now)
         t.received[m.seq] = from_wire(m)
         self.changed = True
-        missing = next((i for i in range(t.count) if i not in t.received), None)
-        if missing is None:
+        if len(t.received) == t.count:
             self._downloaded(t, now)
             return
-        t.asked, t.attempts = missing, 0
-        self._ask_item(t, now)
+        self._ask_more(t, now)
 
     def _on_ack(self, t: _Transfer, result: int, now: float) -> None:
+        upload = t.upload
+        if upload is not None and not upload.acked and result == mavlink.MAV_MISSION_DENIED and t.stage == "start":
+            # a read-back begun on a lost final ACK, DENIED: the vehicle is still receiving (an item of ours was
+            # lost, not its ACK): back to the upload, the last item asked again
+            upload = self._resume_upload(t, now)
+            self._send_item(upload, upload.asked, now)
+            upload.last_sent_at = now
+            return
         if t.direction is TransferDirection.DOWNLOAD:
             if t.stage == "start" and result != mavlink.MAV_MISSION_ACCEPTED:
                 self._end(t, CommandStatus.REFUSED, result_meaning(result))
@@ -304,14 +355,16 @@ class PlanTransfers:
             return
         # upload
         if result == mavlink.MAV_MISSION_INVALID_SEQUENCE:
-            # the item we sent again already arrived: its next request was lost. The vehicle goes on (it asks
-            # again in 1 s); it holds the item, so it wants the next one: send it now
+            # the item we sent again unasked had arrived: its next request was lost. The vehicle goes on (it
+            # asks again in 1 s); it holds the item, so it wants the next one: send it now. Only for that probe:
+            # an INVALID_SEQUENCE for anything else (a stale request answered) proves nothing
             t.heard = now
-            if t.stage == "items" and 0 <= t.asked < (t.count or 0) - 1:
+            if t.stage == "items" and t.probing == t.asked and 0 <= t.asked < (t.count or 0) - 1:
+                t.probing = None
                 self._send_item(t, t.asked + 1, now)
             return
         if result == mavlink.MAV_MISSION_ACCEPTED:
-            if (t.count and t.asked < t.count - 1) or t.stage == "readback" or (not t.count and t.attempts == 0):
+            if (t.count and t.top < t.count - 1) or t.stage == "readback" or (not t.count and t.attempts == 0):
                 return                    # not for this upload: items are still to come, or nothing asked yet
             t.acked = True
             self._read_back(t, now)

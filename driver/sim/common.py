@@ -77,6 +77,7 @@ DEFAULT_PARAMS = {
     "FENCE_ALT_MAX": (100.0, mavlink.MAV_PARAM_TYPE_REAL32),
     "FENCE_RADIUS": (300.0, mavlink.MAV_PARAM_TYPE_REAL32),
     "FENCE_MARGIN": (2.0, mavlink.MAV_PARAM_TYPE_REAL32),
+    "RALLY_TOTAL": (0, mavlink.MAV_PARAM_TYPE_INT8),     # AP_Rally: how many rally points (3.3: set by the GCS)
     "CHUTE_ENABLED": (1, mavlink.MAV_PARAM_TYPE_INT8),
     "CHUTE_ALT_MIN": (10, mavlink.MAV_PARAM_TYPE_INT16),
     "SERIAL0_PROTOCOL": (2, mavlink.MAV_PARAM_TYPE_INT8),

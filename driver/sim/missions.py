@@ -241,6 +241,8 @@ class Missions:
             self.plans[kind] = upload.items
             self.plan_changes += 1
         self._ack(msg, mavlink.MAV_MISSION_ACCEPTED, kind, upload.link)
+        if kind == RALLY:
+            self.params["RALLY_TOTAL"] = len(self.plans[RALLY])      # AP_Rally keeps its count there
         if kind == MISSION:
             self._text(mavlink.MAV_SEVERITY_INFO,
                        "Flight plan received" if self.profile.mavlink2 else "flight plan received")
@@ -320,6 +322,8 @@ class Missions:
             return
         self.plans[kind] = []
         self.plan_changes += 1
+        if kind == RALLY:
+            self.params["RALLY_TOTAL"] = 0
         self._ack(msg, mavlink.MAV_MISSION_ACCEPTED, kind)
         if kind == MISSION:
             self._mission_changed()
