@@ -116,6 +116,13 @@ def test_plan_a_mission_with_the_mouse_and_the_list(qtbot, vehicle, window_facto
     plan.panel.toolCombo.setCurrentText("ROI")
     click(qtbot, view, -20, 20)
     assert plan.doc.entries[-1].command == mavlink.MAV_CMD_DO_SET_ROI
+    # the Delete key in the list deletes the selected row
+    click(qtbot, view, -30, -30)
+    assert len(plan.doc.entries) == 7
+    table.setFocus()
+    table.selectRow(6)
+    qtbot.keyClick(table, Qt.Key_Delete)
+    assert len(plan.doc.entries) == 6 and plan.doc.entries[4].command == mavlink.MAV_CMD_NAV_RETURN_TO_LAUNCH
 
     # the totals: distance, time at the cruise speed, battery, on the panel
     totals = plan.doc.totals(home, plan.editor.perf)

@@ -6,9 +6,10 @@ It says what the pilot wants through its signals and shows what it is given; the
 from __future__ import annotations
 
 from PyQt5.QtCore import Qt, pyqtSignal
+from PyQt5.QtGui import QKeySequence
 from PyQt5.QtWidgets import (
     QAbstractItemView, QCheckBox, QComboBox, QDoubleSpinBox, QFormLayout, QGroupBox, QHBoxLayout, QHeaderView,
-    QLabel, QMenu, QProgressBar, QPushButton, QSizePolicy, QTabWidget, QTableWidget, QTableWidgetItem,
+    QLabel, QMenu, QProgressBar, QPushButton, QShortcut, QSizePolicy, QTabWidget, QTableWidget, QTableWidgetItem,
     QToolButton, QVBoxLayout, QWidget,
 )
 
@@ -151,6 +152,7 @@ class PlanPanel(QWidget):
             table.customContextMenuRequested.connect(lambda pos, l=layer: self._table_menu(l, pos))
             table.itemSelectionChanged.connect(lambda l=layer: self._selection(l))
             table.itemChanged.connect(lambda item, l=layer: self._edited(l, item))
+            QShortcut(QKeySequence.Delete, table, self.deleteRequested.emit, context=Qt.WidgetShortcut)
             self.tables[layer] = table
             self.tabs.addTab(table, title)
         lay.addWidget(self.tabs, 1)
