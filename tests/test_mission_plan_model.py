@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
@@ -89,6 +90,10 @@ def test_speed_is_a_change_speed_item_before_the_waypoint_and_totals_add_up():
     assert t.time == pytest.approx(expected, rel=1e-3)
     assert t.percent == pytest.approx(100 * t.mah / 5200) and 15 * t.time / 3.6 < t.mah < 17 * t.time / 3.6
     assert doc.set_speed(3, None) == 2 and len(doc.entries) == 4          # cleared: the item went
+    assert not t.beyond_reserve and "reserve" not in t.text()
+    # the same plan on a small pack: beyond the 20 % reserve, said in the totals
+    small = doc.totals(HOME, replace(perf, capacity_mah=doc.totals(HOME, perf).mah / 0.85))
+    assert small.percent == pytest.approx(85) and small.beyond_reserve and "with a 20 % reserve" in small.text()
 
 
 def test_vehicle_parameters_replace_the_defaults():

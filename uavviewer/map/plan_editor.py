@@ -251,6 +251,7 @@ class PlanEditor(QObject):
         totals = doc.totals(self.home, self.perf)
         p.totalsLabel.setText(("Plan: " + totals.text()) if self.home is not None else
                               "Plan totals need the vehicle's home position")
+        p.totalsLabel.setStyleSheet("color: #ff4d4d;" if totals.beyond_reserve else "")
         self.refreshed.emit()
 
 

@@ -25,6 +25,7 @@ __all__ = ["Entry", "PlanDocument", "FenceShape", "Performance", "Totals", "ITEM
            "is_nav", "NAV_COMMANDS"]
 
 C = mavlink
+RESERVE = 20.0                # % of the pack a plan should leave (ArduPilot's low-battery failsafe territory)
 Entry = Union[MissionItem, SurveySpec]
 
 #: Items that fly somewhere (the vehicle moves on to the next only when it gets there).
@@ -118,13 +119,19 @@ class Totals:
     percent: float = 0.0                       # of the pack
     open_ended: bool = False                   # a LOITER_UNLIM: it never ends by itself
 
+    @property
+    def beyond_reserve(self) -> bool:
+        """More than the pack gives while keeping a RESERVE of it for the landing and the unexpected."""
+        return self.percent > 100.0 - RESERVE
+
     def text(self) -> str:
         if self.distance == 0 and self.time == 0:
             return "Empty plan"
         minutes, seconds = divmod(int(round(self.time)), 60)
         more = " (then loiters until told)" if self.open_ended else ""
+        warn = f" — more than the pack gives with a {RESERVE:.0f} % reserve" if self.beyond_reserve else ""
         return (f"{self.distance / 1000:.2f} km · {minutes}:{seconds:02d} min · battery {self.mah:.0f} mAh "
-                f"({self.percent:.0f} %){more}")
+                f"({self.percent:.0f} %){warn}{more}")
 
 
 @dataclass
