@@ -25,7 +25,7 @@ from .sticks import StickMode
 from .widgets.telemetry_panel import GOOD, NORMAL, WARN
 
 __all__ = ["SettingsDialog", "KeysDialog", "takeoff_question", "fly_here_question", "mode_question",
-           "signing_setup_question", "emergency_stop_question", "mission_start_question"]
+           "signing_setup_question", "emergency_stop_question"]
 
 
 class SettingsDialog(QDialog):
