@@ -116,7 +116,9 @@ class PlanController(QObject):
     def _file_menu(self, window) -> None:
         """File › Open plan… / Save plan…, above Quit."""
         menu = window.menuFile
-        self.open_action = QAction("Open plan…", window, shortcut=QKeySequence.Open, triggered=self.files.ask_open)
+        # Ctrl+O is File › Open flight log's (the pilot's tools): the plan's is Ctrl+Shift+O
+        self.open_action = QAction("Open plan…", window, shortcut=QKeySequence("Ctrl+Shift+O"),
+                                   triggered=self.files.ask_open)
         self.save_action = QAction("Save plan…", window, shortcut=QKeySequence.Save, triggered=self.ask_save)
         quit_action = window.actionQuit
         menu.insertAction(quit_action, self.open_action)
