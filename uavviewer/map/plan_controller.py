@@ -147,6 +147,7 @@ class PlanController(QObject):
         leaving, coming = (self._window.telemetryDock, self.dock) if on else (self.dock, self._window.telemetryDock)
         leaving.hide()                          # first: never both shown, so never a tab bar's height more
         coming.show()
+        coming.raise_()                         # the front tab where others share the place (Preflight on main)
         if on:                                  # the map beside the list, as tall as the list
             w = self._window
             w.mapDock.raise_()
