@@ -336,6 +336,12 @@ def fly_here_question(parent: QWidget, text: str) -> QMessageBox:
     return _cautious_question(parent, "Fly here", text, "Fly there", "flyHereQuestion")
 
 
+def mission_start_question(parent: QWidget, text: str) -> QMessageBox:
+    """Confirm a mission start (from the ground it arms and takes off); like the takeoff question, Cancel is the
+    default."""
+    return _cautious_question(parent, "Start mission", text, "Start mission", "missionStartQuestion")
+
+
 def _cautious_question(parent: QWidget, title: str, text: str, yes: str, name: str) -> QMessageBox:
     box = QMessageBox(QMessageBox.Question, title, text, QMessageBox.Yes | QMessageBox.Cancel, parent)
     box.setObjectName(name)

@@ -15,6 +15,7 @@ from concurrent.futures import Future
 from PyQt5.QtCore import QObject, QTimer, pyqtSignal
 
 from driver.api import Drone
+from driver.mission.plan import TransferOutcome
 from driver.state import CommandResult, CommandStatus, VehicleState
 
 from .sticks import VelocityCommand
@@ -36,6 +37,7 @@ class _FutureRelay(QObject):
 
 class DroneAdapter(QObject):
     stateChanged = pyqtSignal(object)        # VehicleState
+    transferFinished = pyqtSignal(str, object)   # a plan transfer's name and TransferOutcome (then commandFinished)
     commandFinished = pyqtSignal(object)     # CommandResult, on the UI thread
     commandSent = pyqtSignal(str)            # a command handed to the drone (its name)
     droneChanged = pyqtSignal(object)        # another drone is flown from now on (a fleet's pick, File › Connect)
@@ -128,6 +130,11 @@ class DroneAdapter(QObject):
             result = future.result(timeout=0)
         except Exception as exc:             # noqa: BLE001
             result = CommandResult(name, CommandStatus.REJECTED, f"{type(exc).__name__}: {exc}")
+            if name in ("upload_plan", "download_plan"):
+                self.transferFinished.emit(name, TransferOutcome(result))
+        if isinstance(result, TransferOutcome):          # a plan transfer: the plan read back goes with it
+            self.transferFinished.emit(name, result)
+            result = result.result
         if not isinstance(result, CommandResult):
             result = CommandResult(name, CommandStatus.ACCEPTED, str(result))
         self.commandFinished.emit(result)

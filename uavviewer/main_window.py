@@ -35,6 +35,7 @@ from .link_security import signing_unavailable, signing_warning
 from .pilot_input import Input, InputSelector
 from .pilot_tools import PilotTools
 from .map.controller import MapController, TileSettings
+from .map.plan_controller import PlanController
 from .refresh import INSTRUMENTS_HZ, PLOTS_HZ, TEXT_HZ, Refresh
 from .settings import ViewerSettings, default_qsettings, load_settings, load_window, save_settings, save_window
 from .sticks import Axes, MaxSpeeds, axes_from_pads, combine, pad_labels, pads_from_axes, velocity_from_axes
@@ -128,6 +129,7 @@ class MainWindow(QMainWindow):
         self.menuView.addAction(self.mapDock.toggleViewAction())
         self.map = MapController(self.mapPanel, self.adapter, self, lambda: self.takeoff_altitude, self)
         self.tabifyDockWidget(self.plotsDock, self.mapDock)            # Map and Plots share the lower right
+        self.plan = PlanController(self.map, self.adapter, self, self)  # Plan mode, transfers, missions: own dock
         self.mapPanel.offlineCheck.setChecked(self.settings.map_offline)
         self.mapPanel.layerRequested.connect(lambda on: self._remember(map_tiles=on))
         self.mapPanel.offlineRequested.connect(lambda on: self._remember(map_offline=on))

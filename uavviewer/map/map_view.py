@@ -83,6 +83,9 @@ class MapView(QWidget):
         self._bands: list[list[QPointF]] = [[] for _ in range(TRAIL_BANDS)]   # view metres, oldest band first
         self._drag: QPointF | None = None
         self._dragged = False                        # the press became a pan: its release is no click
+        # parts that may take the mouse first (the plan in Plan mode: uavviewer/map/plan_layer.py): mouse_press,
+        # mouse_move(view, event) and mouse_release(view, event, clicked) return True when they took it
+        self.mouse_parts: list = []
         self._drag_centre = self.centre
         self.paints = 0                              # paint events so far (tests see the UI keeps painting)
         self.drawn_tiles = 0                         # tiles drawn in the last paint
@@ -171,6 +174,8 @@ class MapView(QWidget):
 
     # -- mouse ----------------------------------------------------------------------------------
     def mousePressEvent(self, event) -> None:  # noqa: N802
+        if any(part.mouse_press(self, event) for part in self.mouse_parts):
+            return
         if event.button() == Qt.LeftButton:
             self._drag = QPointF(event.pos())
             self._drag_centre = self.centre
@@ -178,6 +183,8 @@ class MapView(QWidget):
         super().mousePressEvent(event)
 
     def mouseMoveEvent(self, event) -> None:  # noqa: N802
+        if any(part.mouse_move(self, event) for part in self.mouse_parts):
+            return
         if self._drag is not None:
             d = QPointF(event.pos()) - self._drag
             self._dragged = self._dragged or abs(d.x()) + abs(d.y()) >= 3
@@ -189,6 +196,8 @@ class MapView(QWidget):
     def mouseReleaseEvent(self, event) -> None:  # noqa: N802
         clicked = event.button() == Qt.LeftButton and self._drag is not None and not self._dragged
         self._drag = None
+        if any(part.mouse_release(self, event, clicked) for part in self.mouse_parts):
+            return
         name = self.vehicle_at(QPointF(event.pos())) if clicked else ""
         if name:
             self.vehicleClicked.emit(name)

@@ -1,0 +1,414 @@
+"""Plan mode: the Plan dock and the plan on the map, edited by :class:`~uavviewer.map.plan_editor.PlanEditor`;
+here the plans move to and from the vehicle and the mission is flown (docs/missions-viewer.md).
+
+Everything about the vehicle comes from its snapshots: what it holds (the plan read back after an upload, or
+downloaded), its transfers' progress, the mission's state and current item. A plan is shown as uploaded, and a
+mission as started, paused or resumed, only when the driver says the vehicle confirmed it.
+"""
+from __future__ import annotations
+
+import logging
+import math
+
+from PyQt5.QtCore import QObject, Qt, pyqtSignal
+from PyQt5.QtGui import QKeySequence
+from PyQt5.QtWidgets import QAction, QDockWidget, QMessageBox, QScrollArea, QToolButton
+
+from driver.frames import offset_ned
+from driver.mission.plan import MissionItem, MissionRunState, Plan, PlanKind, TransferDirection
+from driver.mission.wire import difference
+from driver.state import CommandResult, LinkStatus, Severity, VehicleState
+
+from ..dialogs import ask, mission_start_question
+from .plan_editor import PlanEditor
+from .plan_files import PlanFiles
+from .plan_layer import PlanLayer
+from .plan_model import Performance, PlanDocument
+from .plan_panel import PlanPanel
+
+__all__ = ["PlanController"]
+
+log = logging.getLogger(__name__)
+
+KINDS = {"mission": PlanKind.MISSION, "fence": PlanKind.FENCE, "rally": PlanKind.RALLY}
+PLAN_WIDTH = 520             # px: the list's columns and a map to plan on, beside the instruments
+_TITLES = {PlanKind.MISSION: "Mission", PlanKind.FENCE: "Fence", PlanKind.RALLY: "Rally"}
+_DIRECTION = {TransferDirection.UPLOAD: "Uploading", TransferDirection.DOWNLOAD: "Downloading",
+              TransferDirection.CLEAR: "Clearing"}
+
+
+class PlanController(QObject):
+    startAsked = pyqtSignal(object)           # the Start mission question, open (tests answer it)
+
+    def __init__(self, map_controller, adapter, window, parent: QObject | None = None) -> None:
+        super().__init__(parent)
+        self.map = map_controller
+        self.view = map_controller.view
+        self.adapter = adapter
+        self._window = window
+        self.doc = PlanDocument()
+        self.layer = PlanLayer(self.doc, self)
+        self.layer.attach(self.view)
+        self.panel = PlanPanel()
+        self.dock = self._dock(window)
+        self.plan_button = self._map_button(map_controller.panel)
+        self.editor = PlanEditor(self.doc, self.layer, self.panel, self.view, self)
+        self.on_vehicle: dict[PlanKind, Plan] = {}      # what each transfer last confirmed the vehicle holds
+        self._sending: dict[PlanKind, Plan] = {}        # each kind's upload under way
+        self._synced: dict[PlanKind, tuple[Plan, Plan]] = {}   # (here, there) the driver last found the same
+        self._outcome: dict[PlanKind, str] = {}         # each kind's last transfer, in words
+        self._failed: dict[PlanKind, bool] = {}         # ... and whether the driver refused or failed it
+        self._state = VehicleState()
+        self._drone = adapter.drone                     # the vehicle the plans below are known for
+        self._shown: tuple | None = None                # what the flying part last showed (redrawn on change)
+        self._question: QMessageBox | None = None
+        p = self.panel
+        p.editToggled.connect(self.set_editing)
+        p.transferRequested.connect(self.transfer)
+        p.cancelRequested.connect(lambda: self.adapter.drone.cancel_transfer(KINDS[p.layer]))
+        p.startRequested.connect(self.ask_start)
+        p.pauseRequested.connect(lambda: self.adapter.command("pause_mission"))
+        p.resumeRequested.connect(lambda: self.adapter.command("resume_mission"))
+        p.skipRequested.connect(self.skip_to)
+        self.layer.contextRequested.connect(self._context)
+        adapter.stateChanged.connect(self.show_state)
+        adapter.transferFinished.connect(self._transfer_finished)
+        adapter.commandFinished.connect(self.command_finished)
+        self.editor.refreshed.connect(self._edited)
+        self.files = PlanFiles(window, self)
+        self.files.loaded.connect(self._file_loaded)
+        self.files.said.connect(window.log_message)
+        p.openRequested.connect(self.files.ask_open)
+        p.saveRequested.connect(self.ask_save)
+        self._file_menu(window)
+        self.editor.refresh()
+
+    # -- the dock and the map's button -----------------------------------------------------------
+    def _dock(self, window) -> QDockWidget:
+        """The Plan dock takes Telemetry's place while it is shown (tabbed with it, but only one of the two shown
+        at a time, so no tab bar costs the window height: it still fits a 768-pixel-high laptop screen)."""
+        dock = QDockWidget("Plan", window)
+        dock.setObjectName("planDock")
+        scroll = QScrollArea()
+        scroll.setWidgetResizable(True)
+        scroll.setFrameShape(QScrollArea.NoFrame)
+        scroll.setWidget(self.panel)
+        dock.setWidget(scroll)
+        dock.hide()
+        # tabbed with Telemetry when first shown (show_plan): tabbed now, the window would lay out for a tab bar
+        window.addDockWidget(Qt.RightDockWidgetArea, dock)
+        window.menuView.addAction(dock.toggleViewAction())
+        self._tabbed = False
+        dock.visibilityChanged.connect(lambda _shown: self._dock_shown(dock.isVisible()))
+        return dock
+
+    def _map_button(self, panel) -> QToolButton:
+        button = QToolButton(text="Plan")
+        button.setObjectName("planButton")
+        button.setCheckable(True)
+        button.setFocusPolicy(Qt.NoFocus)
+        button.setToolTip("Plan: the mission's list, transfers and controls in place of Telemetry; on the map a "
+                          "click adds a waypoint and a drag moves it")
+        panel.mapBar.insertWidget(panel.mapBar.count() - 1, button)
+        button.toggled.connect(self.show_plan)
+        return button
+
+    def _file_menu(self, window) -> None:
+        """File › Open plan… / Save plan…, above Quit."""
+        menu = window.menuFile
+        # Ctrl+O is File › Open flight log's (the pilot's tools): the plan's is Ctrl+Shift+O
+        self.open_action = QAction("Open plan…", window, shortcut=QKeySequence("Ctrl+Shift+O"),
+                                   triggered=self.files.ask_open)
+        self.save_action = QAction("Save plan…", window, shortcut=QKeySequence.Save, triggered=self.ask_save)
+        quit_action = window.actionQuit
+        menu.insertAction(quit_action, self.open_action)
+        menu.insertAction(quit_action, self.save_action)
+        menu.insertSeparator(quit_action)
+
+    def ask_save(self) -> None:
+        h = self._state.home
+        self.files.ask_save([self.doc.plan(k) for k in PlanKind], (h.lat, h.lon, h.alt) if h is not None else None,
+                            self.doc.plan(KINDS[self.panel.layer]))
+
+    def _file_loaded(self, got) -> None:
+        """An opened file replaces the plans it holds (a WPL file: one; a .plan: all three)."""
+        for plan in got.plans:
+            self.editor.load(plan)
+        if not self.dock.isVisible():
+            self.show_plan(True)
+
+    def show_plan(self, on: bool) -> None:
+        """Plan mode: the Plan dock in Telemetry's place, editing on the map; off: Telemetry back."""
+        if on == self.dock.isVisible() and on == self.plan_button.isChecked():
+            return
+        if on and not self._tabbed and self._window.dockWidgetArea(self.dock) == Qt.RightDockWidgetArea:
+            self._window.tabifyDockWidget(self._window.telemetryDock, self.dock)
+        self._tabbed = True
+        leaving, coming = (self._window.telemetryDock, self.dock) if on else (self.dock, self._window.telemetryDock)
+        leaving.hide()                          # first: never both shown, so never a tab bar's height more
+        coming.show()
+        coming.raise_()                         # the front tab where others share the place (Preflight on main)
+        if on:                                  # the map beside the list, as tall as the list
+            w = self._window
+            w.mapDock.raise_()
+            self.dock.raise_()
+            w.resizeDocks([self.dock, w.mapDock], [1, 1], Qt.Vertical)
+            w.resizeDocks([self.dock], [PLAN_WIDTH], Qt.Horizontal)
+        self.set_editing(on)
+
+    def _dock_shown(self, shown: bool) -> None:
+        """The dock closed or opened by itself (its close button, View › Plan): the map's button follows."""
+        if self.plan_button.isChecked() != shown:
+            self.plan_button.blockSignals(True)
+            self.plan_button.setChecked(shown)
+            self.plan_button.blockSignals(False)
+            if not shown:
+                self.set_editing(False)
+                self._window.telemetryDock.setVisible(True)
+
+    def set_editing(self, on: bool) -> None:
+        """Clicks on the map add, drags move (the panel's "Edit on map")."""
+        self.layer.editing = on
+        if self.panel.editCheck.isChecked() != on:
+            self.panel.editCheck.setChecked(on)
+        if not on:
+            self.layer.draft = []
+        self.view.update()
+
+    @property
+    def home(self) -> tuple[float, float] | None:
+        h = self._state.home
+        return (h.lat, h.lon) if h is not None else None
+
+    def _edited(self) -> None:
+        self._shown = None
+        self._show_vehicle(self._state)
+
+    def sync(self, kind: PlanKind) -> str:
+        """Why the plan here differs from the vehicle's ("" when it is the same, or neither has one)."""
+        mine, theirs = self.doc.plan(kind), self.vehicle_plan(kind)
+        if theirs is None:
+            return f"the vehicle's {kind.label} is not known yet (Download reads it)" if mine.items else ""
+        if self._synced.get(kind) == (mine, theirs):
+            return ""                           # sent and read back, or downloaded: the driver compared them
+        why = difference(mine, theirs, integer=True)
+        return f"{len(theirs)} items there, {len(mine)} here" if why.endswith(f"instead of {len(mine)}") else why
+
+    def vehicle_plan(self, kind: PlanKind) -> Plan | None:
+        """What the vehicle holds, as the driver last confirmed it (read back, downloaded or cleared)."""
+        known = self._state.mission.vehicle_plan(kind)
+        return known if known is not None else self.on_vehicle.get(kind)
+
+    # -- the vehicle ------------------------------------------------------------------------------------
+    def show_state(self, s: VehicleState) -> None:
+        if self.adapter.drone is not self._drone:     # another vehicle of the fleet: nothing known of its plans yet
+            self._drone = self.adapter.drone
+            for known in (self.on_vehicle, self._sending, self._synced, self._outcome, self._failed):
+                known.clear()
+        old_home = self.home
+        self._state = s
+        self.layer.home = self.editor.home = self.home
+        perf = Performance.from_parameters(s.parameters)
+        if perf != self.editor.perf or self.home != old_home:
+            self.editor.perf = perf
+            self.editor.refresh()
+            self.view.update()
+        else:
+            self._show_vehicle(s)
+
+    def _show_vehicle(self, s: VehicleState) -> None:
+        m = s.mission
+        kind = KINDS[self.panel.layer]
+        key = (m, kind, self._doc_version(), s.mode, s.link.status, s.flying, self._outcome.get(kind),
+               tuple(self.on_vehicle.items()), _rounded(s))
+        if key == self._shown:
+            return
+        self._shown = key
+        p = self.panel
+        transfer = m.transfer(kind)
+        if transfer is not None and transfer.active:
+            p.set_transfer(f"{_DIRECTION[transfer.direction]} {transfer.done}/{transfer.total or '?'}"
+                           + (f" · {transfer.detail}" if transfer.detail else ""),
+                           transfer.done, transfer.total, True)
+        else:
+            p.set_transfer(self._outcome.get(kind, "No transfer yet"), 1 if kind in self._outcome else 0, 1, False)
+        for k in PlanKind:                      # a dot on each tab whose plan is not the vehicle's
+            p.tabs.setTabText(list(KINDS.values()).index(k), ("● " if self.sync(k) else "") + _TITLES[k])
+        why = self.sync(kind)
+        theirs = self.vehicle_plan(kind)
+        failed = f"{self._outcome[kind]}. " if self._failed.get(kind) else ""
+        if why:
+            sync = f"Differs from the vehicle's: {why}"
+        elif theirs is not None:
+            sync = f"Same as the vehicle's {kind.label} ({len(theirs)} items)"
+        else:
+            sync = f"No {kind.label} here; the vehicle's is not known yet"
+        p.syncLabel.setText(failed + sync)
+        p.syncLabel.setStyleSheet("color: #ffb020;" if why or failed else "")
+        # the mission's controls and progress: from the vehicle's mode and MISSION_CURRENT
+        link_ok = s.link.status is LinkStatus.OK and self.adapter.replay is None     # a recording is only watched
+        for button in (p.uploadButton, p.downloadButton, p.clearButton):
+            button.setEnabled(button.isEnabled() and link_ok)
+        mission_plan = self.vehicle_plan(PlanKind.MISSION)
+        count = m.count if m.count is not None else (len(mission_plan) if mission_plan is not None else 0)
+        running = s.mode == "AUTO" and s.flying and m.state is not MissionRunState.COMPLETE
+        held = (s.flying and s.mode != "AUTO" and bool(m.current) and count > 0
+                and m.state is not MissionRunState.COMPLETE)
+        p.startButton.setEnabled(link_ok and count > 0 and not running)
+        p.pauseButton.setEnabled(link_ok and running)
+        p.resumeButton.setEnabled(link_ok and held)
+        p.skip_allowed = link_ok and count > 0
+        current = m.current if m.current and (running or held) and not self.sync(PlanKind.MISSION) else None
+        self.layer.current = current
+        entry = self.doc.entry_of_seq(current) if current else None
+        if entry != self.layer.current_entry:
+            self.layer.current_entry = entry
+            self._refresh_rows_only()
+        p.progressLabel.setText(self.progress_text(s, held))
+        self.layer.progress = p.progressLabel.text() if running or held else ""
+        self.view.update()
+
+    def _refresh_rows_only(self) -> None:
+        table = self.panel.tables["mission"]
+        for r in range(table.rowCount()):
+            for c in range(table.columnCount()):
+                item = table.item(r, c)
+                if item is not None:
+                    item.setBackground(Qt.darkGreen if r == self.layer.current_entry else Qt.transparent)
+
+    def _doc_version(self) -> tuple:
+        return (tuple(self.doc.entries), tuple(self.doc.fence), tuple(self.doc.rally))
+
+    def progress_text(self, s: VehicleState, held: bool = False) -> str:
+        """"Item N of M · WAYPOINT · 45 m, 9 s to it", from what the vehicle reports."""
+        m = s.mission
+        if m.state is MissionRunState.UNKNOWN and m.count is None:
+            return "Mission: the vehicle has not said yet"
+        if m.state is MissionRunState.NO_MISSION or not m.count:
+            return "No mission on the vehicle"
+        if m.state is MissionRunState.COMPLETE:
+            return f"Mission complete ({m.count} items)"
+        if not m.current or not (s.flying or m.state is MissionRunState.ACTIVE):
+            return f"Mission of {m.count} items on the vehicle, not flying"
+        plan = self.vehicle_plan(PlanKind.MISSION)
+        item = plan.items[m.current - 1] if plan is not None and 1 <= m.current <= len(plan.items) else None
+        name = m.current_name or (item.name if item is not None else "")
+        text = f"Item {m.current} of {m.count}" + (f" · {name}" if name else "")
+        if held:
+            text += f" · paused ({s.mode})"
+        to = self._to_item(s, item)
+        if to is not None:
+            text += f" · {to[0]:.0f} m, {to[1]:.0f} s to it"
+        return text
+
+    def _to_item(self, s: VehicleState, item: MissionItem | None) -> tuple[float, float] | None:
+        pos = s.position
+        if item is None or pos is None or not (item.lat or item.lon) or not item.has_position:
+            return None
+        north, east = offset_ned(pos.lat, pos.lon, item.lat, item.lon)
+        d = math.hypot(north, east)
+        speed = s.velocity.ground_speed if s.velocity.ground_speed > 0.5 else self.editor.perf.cruise
+        return d, d / max(speed, 0.1)
+
+    # -- transfers ----------------------------------------------------------------------------------
+    def transfer(self, action: str) -> None:
+        """Upload, Download or Clear the plan of the tab shown; the driver's answer comes back by itself."""
+        kind = KINDS[self.panel.layer]
+        if action == "upload":
+            self._outcome[kind] = f"Uploading the {kind.label}…"
+            self._sending[kind] = self.doc.plan(kind)
+            self.adapter.command("upload_plan", self._sending[kind])
+        elif action == "download":
+            self._outcome[kind] = f"Downloading the {kind.label}…"
+            self.adapter.command("download_plan", kind)
+        else:
+            self._outcome[kind] = f"Clearing the {kind.label}…"
+            self.adapter.command("clear_plan", kind)
+        self._shown = None
+        self._show_vehicle(self._state)
+
+    def _transfer_finished(self, name: str, outcome) -> None:
+        result: CommandResult = outcome.result
+        kind = outcome.plan.kind if outcome.plan is not None else _kind_of(result.command)
+        if kind is None:
+            return
+        if result.ok and outcome.plan is not None:
+            self.on_vehicle[kind] = outcome.plan
+            if name == "download_plan":
+                self.editor.load(outcome.plan)
+                self._synced[kind] = (self.doc.plan(kind), outcome.plan)
+            elif kind in self._sending:         # the driver read it back and found it the same in meaning
+                self._synced[kind] = (self._sending.pop(kind), outcome.plan)
+        self._outcome[kind] = str(result)
+        self._failed[kind] = not result.ok
+        self._shown = None
+        self._show_vehicle(self._state)
+
+    def command_finished(self, result: CommandResult) -> None:
+        """A clear's answer (a CommandResult of its own): the vehicle holds nothing of that kind any more."""
+        kind = _kind_of(result.command) if result.command.startswith("clear") else None
+        if kind is None:
+            return
+        if result.ok:
+            self.on_vehicle[kind] = Plan(kind, ())
+        self._outcome[kind] = str(result)
+        self._failed[kind] = not result.ok
+        self._shown = None
+        self._show_vehicle(self._state)
+
+    # -- flying it ---------------------------------------------------------------------------------
+    def ask_start(self) -> None:
+        """One confirmation, like Take off: what will fly, and that from the ground it arms and takes off."""
+        if self._question is not None and self._question.isVisible():
+            return
+        s = self._state
+        plan = self.vehicle_plan(PlanKind.MISSION)
+        count = s.mission.count if s.mission.count is not None else len(plan or ())
+        text = f"Fly the vehicle's mission ({count} items) in AUTO?"
+        if plan is not None and self.sync(PlanKind.MISSION):
+            text += "\n\nIt differs from the plan shown here: the vehicle flies the one it holds."
+        text += ("\n\nFrom the ground the motors start and it takes off. Keep clear of the propellers."
+                 if not s.flying else "\n\nIt leaves what it is doing now and flies the mission.")
+        text += "\nPause holds it where it is (BRAKE); Stop, Land and RTL stay available."
+        self._question = ask(mission_start_question(self._window, text), self._start_answered)
+        self.startAsked.emit(self._question)
+
+    @property
+    def question(self) -> QMessageBox | None:
+        return self._question
+
+    def _start_answered(self, box: QMessageBox) -> None:
+        if box.clickedButton() is box.button(QMessageBox.Yes):
+            if self._state.link.status is LinkStatus.OK:
+                self.adapter.command("start_mission")
+            else:
+                self._window.log_message("Mission start not sent: no link to the vehicle", Severity.WARNING)
+        box.deleteLater()
+        if self._question is box:
+            self._question = None
+
+    def skip_to(self, seq: int) -> None:
+        self.adapter.command("set_mission_item", seq)
+
+    def _context(self, hit, actions: list) -> None:
+        """Right click on the map: Skip to item N on a mission item; Delete in Plan mode."""
+        if hit is None:
+            return
+        layer, index, _ = hit
+        if layer == "mission":
+            seq = self.doc.first_seq(index)
+            if seq is not None and not self.sync(PlanKind.MISSION):
+                actions.append((f"Skip to item {seq}", self.panel.skip_allowed, lambda: self.skip_to(seq)))
+        if self.layer.editing:
+            actions.append(("Delete", True, lambda: (self.editor.select(layer, index),
+                                                     self.editor.delete_selected())))
+
+
+def _kind_of(command: str) -> PlanKind | None:
+    return next((k for k in PlanKind if command.endswith(k.label)), None)
+
+
+def _rounded(s: VehicleState) -> tuple:
+    """What the progress line shows of the vehicle's movement, to the metre."""
+    pos = s.position
+    return (round(pos.lat, 5), round(pos.lon, 5), round(s.velocity.ground_speed)) if pos is not None else ()
