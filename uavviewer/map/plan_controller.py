@@ -99,7 +99,9 @@ class PlanController(QObject):
         window.addDockWidget(Qt.RightDockWidgetArea, dock)
         window.menuView.addAction(dock.toggleViewAction())
         self._tabbed = False
-        dock.visibilityChanged.connect(lambda _shown: self._dock_shown(dock.isVisible()))
+        # closed or opened as a dock (its close button, View › Plan), not merely behind another tab: the
+        # toggle action follows isHidden(), where visibilityChanged also fires for a tab going to the back
+        dock.toggleViewAction().toggled.connect(self._dock_shown)
         return dock
 
     def _map_button(self, panel) -> QToolButton:

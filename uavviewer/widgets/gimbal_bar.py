@@ -24,7 +24,7 @@ class GimbalBar(QWidget):
 
     def __init__(self, parent: QWidget | None = None) -> None:
         super().__init__(parent)
-        self.pitch_label = QLabel("<b>Drone cam</b> ?°", self)   # short: the row fits a 1024-pixel window;
+        self.pitch_label = QLabel("Drone cam ?°", self)   # short: the row fits a 1024-pixel window;
         self.pitch_label.setToolTip("The gimbal's pitch as the vehicle reports it (0 level, -90 straight down)")
         self.level_button = self._button("Level", "Point the camera level (gimbal pitch 0°)")
         self.down_button = self._button("Down", "Point the camera straight down (gimbal pitch -90°)")
@@ -44,6 +44,7 @@ class GimbalBar(QWidget):
         self.stop_looking_button.clicked.connect(self.stopLookingRequested)
         row = QHBoxLayout(self)
         row.setContentsMargins(0, 0, 0, 0)
+        row.setSpacing(4)
         for w in (self.pitch_label, self.level_button, self.down_button, self.photo_button,
                   self.record_button, self.stop_looking_button):
             row.addWidget(w)
@@ -59,7 +60,7 @@ class GimbalBar(QWidget):
     def show_state(self, s: VehicleState) -> None:
         """What the vehicle says about its gimbal and camera; the Record button follows the camera, not the click."""
         pitch = s.gimbal.pitch_deg
-        self.pitch_label.setText("<b>Drone cam</b> " + ("?°" if pitch is None else f"{pitch:.0f}°"))
+        self.pitch_label.setText("Drone cam " + ("?°" if pitch is None else f"{pitch:.0f}°"))
         self.pitch_label.setToolTip(f"The vehicle's camera: gimbal {s.gimbal.describe()}, the pitch as the vehicle reports it "
                                     "(0 level, -90 straight down)")
         c = s.camera
