@@ -1,0 +1,288 @@
+"""The vehicle's parameters as a Qt table: one row per parameter, the values from the newest ParameterTable.
+
+Rows are kept in the order the parameters arrived and only ever appended while the vehicle stays the same, so
+a download that grows the table inserts rows (the sorting proxy keeps the selection and the scroll position)
+instead of resetting 1,392 of them. A new value changes one row.
+"""
+from __future__ import annotations
+
+import enum
+from typing import Mapping
+
+from PyQt5.QtCore import QAbstractTableModel, QModelIndex, Qt, pyqtSignal
+from PyQt5.QtGui import QBrush, QColor, QFont
+
+from driver.params.model import Parameter, ParameterTable
+
+from .values import format_value, group_of, meta_attr, range_text, same_value
+
+__all__ = ["Column", "ParameterModel", "WriteState", "GROUP_ROLE", "MODIFIED_ROLE", "NAME_ROLE", "SEARCH_ROLE"]
+
+NAME_ROLE = Qt.UserRole + 1          # the parameter's name
+GROUP_ROLE = Qt.UserRole + 2         # its prefix
+MODIFIED_ROLE = Qt.UserRole + 3      # pending, changed here, or off its default
+SEARCH_ROLE = Qt.UserRole + 4        # name, display name and description, upper-case, for the search box
+
+PENDING = QColor("#ffd27a")
+CHANGED = QColor("#8fd0ff")
+CONFIRMED = QColor("#56d364")
+FAILED = QColor("#ff6b5b")
+DIM = QColor("#8b97a3")
+
+
+class Column(enum.IntEnum):
+    NAME = 0
+    VALUE = 1
+    UNITS = 2
+    RANGE = 3
+    STATUS = 4
+    DESCRIPTION = 5
+
+
+_HEADERS = {Column.NAME: "Name", Column.VALUE: "Value", Column.UNITS: "Units", Column.RANGE: "Range",
+            Column.STATUS: "Status", Column.DESCRIPTION: "Description"}
+
+
+class WriteState(enum.Enum):
+    WRITING = "writing…"
+    CONFIRMED = "confirmed by the vehicle"
+    FAILED = "not confirmed"
+
+
+class ParameterModel(QAbstractTableModel):
+    """Parameters, their metadata, the pilot's pending changes and how each write ended."""
+    pendingChanged = pyqtSignal()            # a change was staged or dropped
+
+    def __init__(self, parent=None) -> None:
+        super().__init__(parent)
+        self._table = ParameterTable()
+        self._names: list[str] = []
+        self._row: dict[str, int] = {}
+        self._first: dict[str, float] = {}   # each value as first seen: "changed here" is measured from it
+        self._meta: Mapping[str, object] = {}
+        self._pending: dict[str, float] = {}
+        self._writes: dict[str, tuple[WriteState, str]] = {}
+        self._bold = QFont()
+        self._bold.setBold(True)
+
+    # -- what is shown ---------------------------------------------------------------------------
+    @property
+    def table(self) -> ParameterTable:
+        return self._table
+
+    def set_table(self, table: ParameterTable) -> None:
+        """The newest table: new names are appended, new values repaint their rows; a table that lost names
+        (another vehicle) starts over."""
+        old = self._table
+        if table is old:
+            return
+        self._table = table
+        values = table.values
+        if any(name not in values for name in self._names):
+            self.beginResetModel()
+            self._names = list(values)
+            self._row = {n: i for i, n in enumerate(self._names)}
+            self._first = {n: p.value for n, p in values.items()}
+            self._pending = {n: v for n, v in self._pending.items() if n in values}
+            self._writes.clear()
+            self.endResetModel()
+            self.pendingChanged.emit()
+            return
+        new = [name for name in values if name not in self._row]
+        old_values = old.values
+        changed = [self._row[n] for n in self._names if values[n] is not old_values.get(n)]
+        if new:
+            start = len(self._names)
+            self.beginInsertRows(QModelIndex(), start, start + len(new) - 1)
+            for name in new:
+                self._row[name] = len(self._names)
+                self._names.append(name)
+                self._first.setdefault(name, values[name].value)
+            self.endInsertRows()
+        if changed:
+            self.dataChanged.emit(self.index(min(changed), 0), self.index(max(changed), len(Column) - 1))
+
+    def forget(self) -> None:
+        """Another vehicle: nothing shown, staged or written so far applies to it."""
+        self.beginResetModel()
+        self._table = ParameterTable()
+        self._names, self._row, self._first = [], {}, {}
+        self._pending.clear()
+        self._writes.clear()
+        self.endResetModel()
+        self.pendingChanged.emit()
+
+    def set_metadata(self, meta: Mapping[str, object]) -> None:
+        self.beginResetModel()
+        self._meta = meta or {}
+        self.endResetModel()
+
+    def meta(self, name: str):
+        return self._meta.get(name)
+
+    @property
+    def has_metadata(self) -> bool:
+        return bool(self._meta)
+
+    def parameter(self, name: str) -> Parameter | None:
+        return self._table.get(name)
+
+    def name_at(self, row: int) -> str:
+        return self._names[row]
+
+    def row_of(self, name: str) -> int:
+        return self._row.get(name, -1)
+
+    # -- pending changes and writes ------------------------------------------------------------
+    @property
+    def pending(self) -> dict[str, float]:
+        """Staged changes, name → new value, in the order they were made."""
+        return dict(self._pending)
+
+    def stage(self, name: str, value: float) -> None:
+        """Stage ``value`` for ``name``; staging the vehicle's own value drops the change."""
+        param = self._table.get(name)
+        if param is None:
+            return
+        if same_value(param.value, value, param.type):
+            self._pending.pop(name, None)
+        else:
+            self._pending[name] = value
+        self._writes.pop(name, None)
+        self._repaint(name)
+        self.pendingChanged.emit()
+
+    def unstage(self, names) -> None:
+        for name in list(names):
+            if self._pending.pop(name, None) is not None:
+                self._repaint(name)
+        self.pendingChanged.emit()
+
+    def write_state(self, name: str) -> tuple[WriteState, str] | None:
+        return self._writes.get(name)
+
+    def set_write_state(self, name: str, state: WriteState, reason: str = "") -> None:
+        self._writes[name] = (state, reason)
+        if state is WriteState.CONFIRMED:
+            self._pending.pop(name, None)
+            self.pendingChanged.emit()
+        self._repaint(name)
+
+    def modified(self, name: str) -> bool:
+        """Pending, changed since this page first saw it, or off the metadata's default where it gives one."""
+        param = self._table.get(name)
+        if param is None:
+            return False
+        if name in self._pending:
+            return True
+        if not same_value(self._first.get(name, param.value), param.value, param.type):
+            return True
+        default = meta_attr(self._meta.get(name), "default")
+        return default is not None and not same_value(float(default), param.value, param.type)
+
+    def _repaint(self, name: str) -> None:
+        row = self._row.get(name)
+        if row is not None:
+            self.dataChanged.emit(self.index(row, 0), self.index(row, len(Column) - 1))
+
+    # -- QAbstractTableModel ------------------------------------------------------------------------
+    def rowCount(self, parent: QModelIndex = QModelIndex()) -> int:  # noqa: N802
+        return 0 if parent.isValid() else len(self._names)
+
+    def columnCount(self, parent: QModelIndex = QModelIndex()) -> int:  # noqa: N802
+        return 0 if parent.isValid() else len(Column)
+
+    def headerData(self, section: int, orientation, role: int = Qt.DisplayRole):  # noqa: N802
+        if orientation == Qt.Horizontal and role == Qt.DisplayRole:
+            return _HEADERS[Column(section)]
+        return None
+
+    def data(self, index: QModelIndex, role: int = Qt.DisplayRole):
+        if not index.isValid():
+            return None
+        name = self._names[index.row()]
+        column = Column(index.column())
+        if role == Qt.DisplayRole:
+            return self._text(name, column)
+        if role == NAME_ROLE:
+            return name
+        if role == GROUP_ROLE:
+            return group_of(name)
+        if role == MODIFIED_ROLE:
+            return self.modified(name)
+        if role == SEARCH_ROLE:
+            meta = self._meta.get(name)
+            return " ".join((name, meta_attr(meta, "display_name", ""), meta_attr(meta, "description", ""))).upper()
+        if role == Qt.ForegroundRole:
+            return self._colour(name, column)
+        if role == Qt.FontRole and column in (Column.NAME, Column.VALUE) and self.modified(name):
+            return self._bold
+        if role == Qt.ToolTipRole:
+            return self._tooltip(name, column)
+        if role == Qt.TextAlignmentRole and column is Column.VALUE:
+            return int(Qt.AlignRight | Qt.AlignVCenter)
+        return None
+
+    def _text(self, name: str, column: Column) -> str:
+        param = self._table.values[name]
+        meta = self._meta.get(name)
+        if column is Column.NAME:
+            return name
+        if column is Column.VALUE:
+            text = format_value(param.value, param.type)
+            label = _label(meta, param.value)
+            if label:
+                text = f"{text} ({label})"
+            if name in self._pending:
+                text += f" → {format_value(self._pending[name], param.type)}"
+            return text
+        if column is Column.UNITS:
+            return meta_attr(meta, "units", "")
+        if column is Column.RANGE:
+            return range_text(meta, with_units=False)
+        if column is Column.STATUS:
+            write = self._writes.get(name)
+            if write is not None:
+                state, reason = write
+                return state.value + (f": {reason}" if reason and state is WriteState.FAILED else "")
+            if name in self._pending:
+                return "pending"
+            return "needs reboot" if meta_attr(meta, "reboot_required", False) and self.modified(name) else ""
+        return meta_attr(meta, "display_name", "") or meta_attr(meta, "description", "")
+
+    def _colour(self, name: str, column: Column):
+        if column is Column.STATUS:
+            write = self._writes.get(name)
+            if write is not None:
+                return QBrush({WriteState.WRITING: PENDING, WriteState.CONFIRMED: CONFIRMED,
+                               WriteState.FAILED: FAILED}[write[0]])
+        if column in (Column.NAME, Column.VALUE, Column.STATUS):
+            if name in self._pending:
+                return QBrush(PENDING)
+            if self.modified(name):
+                return QBrush(CHANGED)
+            return None
+        return QBrush(DIM) if column is not Column.DESCRIPTION else None
+
+    def _tooltip(self, name: str, column: Column) -> str:
+        meta = self._meta.get(name)
+        if meta is None:
+            return f"{name}: no metadata (no bounds, units or description known)"
+        parts = [f"<b>{name}</b> — {meta_attr(meta, 'display_name', '')}", meta_attr(meta, "description", "")]
+        if range_text(meta):
+            parts.append(f"Range: {range_text(meta)}")
+        if meta_attr(meta, "reboot_required", False):
+            parts.append("Takes effect after a reboot")
+        return "<br>".join(p for p in parts if p)
+
+
+def _label(meta, value: float) -> str:
+    """The metadata's name for ``value`` (an enumerated parameter), or ""."""
+    values = meta_attr(meta, "values", {})
+    for key, label in values.items():
+        try:
+            if float(key) == value:
+                return str(label)
+        except (TypeError, ValueError):
+            continue
+    return ""
