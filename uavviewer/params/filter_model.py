@@ -1,7 +1,7 @@
-"""Which parameters the page lists: a search, a group (prefix), modified only; sorted by name."""
+"""Which parameters the page lists: a search, a group (prefix), modified only (the model keeps them by name)."""
 from __future__ import annotations
 
-from PyQt5.QtCore import QModelIndex, QSortFilterProxyModel, Qt
+from PyQt5.QtCore import QModelIndex, QSortFilterProxyModel
 
 from .table_model import GROUP_ROLE, MODIFIED_ROLE, SEARCH_ROLE
 
@@ -17,9 +17,7 @@ class ParameterFilter(QSortFilterProxyModel):
         self._words: list[str] = []
         self._group = ""
         self._modified_only = False
-        self.setSortCaseSensitivity(Qt.CaseInsensitive)
-        self.setDynamicSortFilter(True)
-        self.sort(0, Qt.AscendingOrder)
+        self.setDynamicSortFilter(True)           # the model is sorted by name already: nothing to sort here
 
     def set_search(self, text: str) -> None:
         self._words = text.upper().split()

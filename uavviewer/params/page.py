@@ -93,8 +93,6 @@ class ParametersPage(QWidget):
         self.table.setSelectionBehavior(QAbstractItemView.SelectRows)
         self.table.setSelectionMode(QAbstractItemView.SingleSelection)
         self.table.setEditTriggers(QAbstractItemView.NoEditTriggers)
-        self.table.setSortingEnabled(True)
-        self.table.sortByColumn(Column.NAME, Qt.AscendingOrder)
         self.table.verticalHeader().hide()
         self.table.verticalHeader().setDefaultSectionSize(22)
         self.table.setWordWrap(False)
@@ -153,8 +151,7 @@ class ParametersPage(QWidget):
         self.editor.stageRequested.connect(self.stageRequested)
         self.editor.revertRequested.connect(self.revertRequested)
         model.dataChanged.connect(self._data_changed)
-        model.rowsInserted.connect(lambda *_: self._update_groups())
-        model.modelReset.connect(self._update_groups)
+        model.namesChanged.connect(self._update_groups)
         model.pendingChanged.connect(self._pending_changed)
         QShortcut(QKeySequence.Find, self, activated=lambda: (self.search.setFocus(), self.search.selectAll()))
         self._group_counts: dict[str, int] = {}

@@ -1,0 +1,145 @@
+"""The Parameters page end to end: the real window on the real driver and simulated ArduCopter (docs/parameters.md).
+
+Download with progress, search and groups, an edit reviewed and written (and confirmed by the vehicle's echo),
+a write the vehicle never confirms, an out-of-bounds value that needs confirming, a .param file compared and
+applied selectively, and Fix… on the FS_GCS_ENABLE warning.
+"""
+from __future__ import annotations
+
+import pytest
+from PyQt5.QtCore import Qt
+from PyQt5.QtWidgets import QMessageBox
+
+from uavviewer.params.mentions import named_parameter
+from uavviewer.params.table_model import Column, WriteState
+from viewer_fixtures import viewer_settings, window, window_factory  # noqa: F401  (fixtures)
+
+pytestmark = pytest.mark.timeout(120)
+
+DOWNLOAD_MS = 8000
+
+
+def open_page(qtbot, w):
+    """Vehicle › Parameters…, as the pilot opens it; returns the page once every parameter is in."""
+    action = w.findChild(type(w.menuBar().actions()[0]), "actionParameters")
+    action.trigger()
+    page = w.params.page
+    qtbot.waitUntil(lambda: page.isVisible(), timeout=3000)
+    qtbot.waitUntil(lambda: w.params.model.table.complete, timeout=DOWNLOAD_MS)
+    return page
+
+
+def stage(qtbot, page, name: str, text: str) -> None:
+    """Pick ``name`` in the table, type ``text`` in the editor and press Stage change."""
+    assert page.select(name)
+    page.editor.value.clear()
+    qtbot.keyClicks(page.editor.value, text)
+    qtbot.mouseClick(page.editor.stage_button, Qt.LeftButton)
+
+
+def review_and_write(qtbot, w, page):
+    qtbot.mouseClick(page.review_button, Qt.LeftButton)
+    review = w.params.review
+    assert review is not None and review.isVisible()
+    qtbot.mouseClick(review.write_button, Qt.LeftButton)
+    return review
+
+
+def test_download_shows_progress_then_every_parameter(qtbot, sim, window):
+    seen: list[str] = []
+    window.adapter.stateChanged.connect(lambda _s: window.params.page is not None
+                                        and seen.append(window.params.page.status.text()))
+    page = open_page(qtbot, window)
+    table = window.params.model.table
+    assert table.expected == len(sim.autopilot.params) == window.params.model.rowCount() == 1392
+    assert any(text.startswith("Downloading parameters: ") for text in seen)
+    qtbot.waitUntil(lambda: page.status.text().startswith("1,392 parameters, all read"), timeout=3000)
+    assert not page.progress.isVisible()
+    assert page.groups.item(0).text() == "All (1,392)"
+
+
+def test_search_groups_and_modified_only(qtbot, sim, window):
+    page = open_page(qtbot, window)
+    qtbot.keyClicks(page.search, "rtl alt")
+    names = page.visible_names()
+    assert "RTL_ALT" in names and "RTL_ALT_FINAL" in names
+    assert all("RTL" in n and "ALT" in n for n in names)
+    page.search.clear()
+    page.pick_group("FENCE")
+    names = page.visible_names()
+    assert names == sorted(names) and names and all(n.startswith("FENCE_") for n in names)
+    assert set(names) == {n for n in sim.autopilot.params if n.split("_")[0] == "FENCE"}
+    page.pick_group("")
+    page.modified_only.setChecked(True)
+    assert page.visible_names() == []                  # nothing changed yet
+    stage(qtbot, page, "WPNAV_SPEED", "750")
+    assert page.visible_names() == ["WPNAV_SPEED"]
+
+
+def test_edit_review_write_and_see_it_confirmed(qtbot, sim, window):
+    page = open_page(qtbot, window)
+    model = window.params.model
+    before = sim.autopilot.params["WPNAV_SPEED"]
+    stage(qtbot, page, "WPNAV_SPEED", "800")
+    stage(qtbot, page, "RTL_ALT", "2500")
+    row = model.row_of("WPNAV_SPEED")
+    assert model.index(row, Column.VALUE).data() == f"{before:g} → 800"
+    assert model.index(row, Column.STATUS).data() == "pending"
+    assert sim.autopilot.params["WPNAV_SPEED"] == before          # nothing written before the review
+    assert page.pending_label.text().startswith("2 change(s) pending")
+
+    review = review_and_write(qtbot, window, page)
+    qtbot.waitUntil(lambda: review.result("WPNAV_SPEED") == WriteState.CONFIRMED.value
+                    and review.result("RTL_ALT") == WriteState.CONFIRMED.value, timeout=15000)
+    assert sim.autopilot.params["WPNAV_SPEED"] == 800 and sim.autopilot.params["RTL_ALT"] == 2500
+    qtbot.waitUntil(lambda: model.index(row, Column.VALUE).data() == "800", timeout=3000)
+    assert model.index(row, Column.STATUS).data() == WriteState.CONFIRMED.value
+    assert model.modified("WPNAV_SPEED") and model.pending == {}
+    assert not page.review_button.isEnabled()
+
+
+def test_a_write_the_vehicle_never_echoes_is_not_confirmed(qtbot, sim, window):
+    page = open_page(qtbot, window)
+    stage(qtbot, page, "LAND_SPEED", "40")
+    sim.faults.link_down = True                                   # nothing gets through any more
+    review = review_and_write(qtbot, window, page)
+    assert review.result("LAND_SPEED") == WriteState.WRITING.value
+    qtbot.waitUntil(lambda: review.result("LAND_SPEED").startswith(WriteState.FAILED.value), timeout=60000)
+    model = window.params.model
+    assert model.pending == {"LAND_SPEED": 40.0}                  # still pending: it may be written again
+    assert model.index(model.row_of("LAND_SPEED"), Column.STATUS).data().startswith(WriteState.FAILED.value)
+
+
+def test_a_value_the_type_cannot_hold_is_refused(qtbot, sim, window):
+    page = open_page(qtbot, window)
+    stage(qtbot, page, "FS_GCS_ENABLE", "300")                    # an int8
+    assert "int8" in page.editor.error.text()
+    stage(qtbot, page, "FS_GCS_ENABLE", "1.5")
+    assert page.editor.error.text().startswith("Not staged")
+    assert window.params.model.pending == {}
+
+
+def test_fix_on_the_gcs_failsafe_warning_opens_the_parameter(qtbot, sim, window):
+    messages = window.messages
+    qtbot.waitUntil(lambda: any("FS_GCS_ENABLE=0" in t for t in messages.texts()), timeout=15000)
+    row = next(i for i, t in enumerate(messages.texts()) if "FS_GCS_ENABLE=0" in t)
+    fix = messages.fix_button(row)
+    assert fix is not None and fix.text() == "Fix…"
+    assert all(messages.fix_button(i) is None for i, t in enumerate(messages.texts()) if "_" not in t)
+    qtbot.mouseClick(fix, Qt.LeftButton)
+    page = window.params.page
+    qtbot.waitUntil(lambda: page.isVisible() and page.current_name() == "FS_GCS_ENABLE", timeout=DOWNLOAD_MS)
+    assert page.editor.name == "FS_GCS_ENABLE"
+    stage(qtbot, page, "FS_GCS_ENABLE", "1")
+    review = review_and_write(qtbot, window, page)
+    qtbot.waitUntil(lambda: review.result("FS_GCS_ENABLE") == WriteState.CONFIRMED.value, timeout=15000)
+    assert sim.autopilot.params["FS_GCS_ENABLE"] == 1
+
+
+def test_messages_naming_parameters():
+    assert named_parameter("GCS failsafe is off on the vehicle (FS_GCS_ENABLE=0): if") == "FS_GCS_ENABLE"
+    assert named_parameter("Fence breached: above FENCE_ALT_MAX; (FENCE_ACTION: RTL or land)") == "FENCE_ALT_MAX"
+    assert named_parameter("FENCE_STATUS from the vehicle") == ""          # a MAVLink message
+    assert named_parameter("Mode GUIDED_NOGPS refused") == ""                # a flight mode
+    assert named_parameter("PreArm: Check FS_THR_VALUE", {"RTL_ALT"}, complete=True) == ""
+    assert named_parameter("PreArm: Check FS_THR_VALUE", {"FS_THR_VALUE"}, complete=True) == "FS_THR_VALUE"
