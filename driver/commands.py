@@ -1,4 +1,5 @@
-"""The command sender: COMMAND_LONG, mode changes and parameter writes, each with retries and its own reply.
+"""The command sender: COMMAND_LONG and mode changes, each with retries and its own reply (parameter writes:
+driver.params.setter).
 
 What a pilot must be able to trust, on a lossy link shared with other systems:
 
@@ -79,13 +80,12 @@ class Capabilities:
 @dataclass(eq=False)
 class _Command:
     name: str
-    key: object                               # the command id, or ("param", NAME)
+    key: object                               # the command id
     command: int
     params: list
     future: Future
     message_index: int
     mode: int | None = None                   # a mode change: the custom_mode the heartbeat must show
-    param: tuple[str, float] | None = None
     guard: Callable[[VehicleState], str | None] | None = None
     attempts: int = 0
     next_send: float = 0.0
@@ -123,11 +123,6 @@ class CommandSender:
                      Future(), self._store.message_index, mode=number)
         c.legacy = self.capabilities.set_mode_command is False
         return self._add(c, now, tag)
-
-    def submit_param(self, name: str, value: float, now: float) -> Future:
-        """PARAM_SET, confirmed by the PARAM_VALUE echo."""
-        return self._add(_Command(f"param {name}={value:g}", ("param", name), 0, [], Future(),
-                                  self._store.message_index, param=(name, float(value))), now, None)
 
     def _add(self, c: _Command, now: float, tag) -> Future:
         if tag is not None:
@@ -219,11 +214,6 @@ class CommandSender:
             if c.mode == custom_mode:
                 self._resolve(c, CommandStatus.ACCEPTED, "" if c.acked or not c.legacy else "shown by the heartbeat")
 
-    def on_param_value(self, name: str, value: float) -> None:
-        c = self._pending.get(("param", name))
-        if c is not None and c.attempts and abs(value - c.param[1]) <= 1e-6 * max(1.0, abs(c.param[1])):
-            self._resolve(c, CommandStatus.ACCEPTED)
-
     # -- the ticker ---------------------------------------------------------------------------------------
     def service(self, now: float, state: VehicleState) -> list:
         """Re-send, time out and settle; returns the MAVLink messages to send (after the lock is released)."""
@@ -258,13 +248,6 @@ class CommandSender:
                     out.append(mavlink.MAVLink_command_long_message(system, component, c.command,
                                                                     min(c.attempts, 255), *c.params))
                     c.next_send = now + (ACKED_MODE_WAIT if c.acked else cfg.command_timeout)
-            elif c.param is not None:
-                if c.attempts >= cfg.command_attempts:
-                    self._resolve(c, CommandStatus.TIMED_OUT, "no PARAM_VALUE echo")
-                    continue
-                out.append(mavlink.MAVLink_param_set_message(system, component, c.param[0].encode(), c.param[1],
-                                                             mavlink.MAV_PARAM_TYPE_REAL32))
-                c.next_send = now + cfg.command_timeout
             else:
                 if c.attempts >= cfg.command_attempts:
                     self._resolve(c, CommandStatus.TIMED_OUT, f"no answer from the vehicle after {c.attempts} attempts")

@@ -34,6 +34,7 @@ from .api import CEILING, Drone, Limits
 from .commands import CommandSender, Notifier, command_name
 from .forwarding import Forwarder
 from .link import LinkError, ReplayControl, TlogWriter, Transport, open_transport
+from .params.manager import ParameterManager
 from .rules import COPTER_MODES, MAX_ALTITUDE, MIN_TAKEOFF_ALTITUDE, go_to_problem, takeoff_altitude_problem
 from .setpoints import SetpointStreamer
 from .signing import LinkSigning, SigningConfig
@@ -127,6 +128,7 @@ class Vehicle(Drone):
         self._notifier = Notifier()
         self._commands = CommandSender(self._store, cfg, self._notifier, self._target_ids)
         self._link = LinkSupervisor(cfg, self._transport, self._commands.capabilities, self._target_ids)
+        self._params = ParameterManager(self._store, self._notifier, self._target_ids)
         self._setpoints = SetpointStreamer(cfg.deadman, cfg.setpoint_rate)
         self._takeoff: TakeoffSequence | None = None
         self._stepping_takeoff = False        # the ticker is stepping the sequence: its commands pass
@@ -197,6 +199,7 @@ class Vehicle(Drone):
             t.join(timeout=2.0)
         with self._lock:
             self._commands.abort_all("driver closed")
+            self._params.abort_all("driver closed")
             self._store.set(link=self._link.health(self._version, LinkStatus.CLOSED))
             self._store.publish()
         self._notifier.close()
@@ -514,7 +517,7 @@ class Vehicle(Drone):
         name = m.param_id.rstrip("\x00") if isinstance(m.param_id, str) else bytes(m.param_id).decode(errors="replace")
         if not frames.finite(m.param_value):
             return
-        self._commands.on_param_value(name, m.param_value)
+        self._params.on_param_value(m, time.monotonic())
         self._link.param_received(name)
         if name in FENCE_PARAMS:
             self._store.set(fence=self._store.view()["fence"].with_param(name, m.param_value))
@@ -556,6 +559,7 @@ class Vehicle(Drone):
                     self._step_takeoff(now)
                     out += self._stream_setpoint(now)
                     out += self._commands.service(now, self._store.state)
+                    out += self._params.service(now, self._link.status)
                     if now >= next_health:
                         next_health = now + 0.1
                         out += self._supervise(now)
@@ -591,6 +595,7 @@ class Vehicle(Drone):
             age = self._link.health(self._version).heartbeat_age or 0.0
             store.add_message_locked(Severity.CRITICAL, f"Link lost: no heartbeat for {age:.1f} s")
             self._commands.link_lost()
+            self._params.link_lost()
         return out
 
     def _stream_setpoint(self, now: float) -> list:
@@ -733,17 +738,25 @@ class Vehicle(Drone):
             self._target_ids()[0], mavlink.MAV_MODE_FLAG_DECODE_POSITION_SAFETY, 1 if on else 0))
         return self._finish(f"safety {'on' if on else 'off'}", CommandStatus.ACCEPTED, "sent (not acknowledged)")
 
-    def set_parameter(self, name: str, value: float, timeout: float = 3.0) -> Future:
-        """PARAM_SET, confirmed by the PARAM_VALUE echo."""
-        if not frames.finite(value) or not name or len(name) > 16:
-            return self._finish(f"param {name}", CommandStatus.REJECTED, "bad name or value")
-        busy = self._busy(f"param {name}")
-        if busy:
-            return busy
+    # -- parameters (driver.params) ------------------------------------------------------------------------
+    def fetch_parameters(self, refresh: bool = False) -> Future:
+        """Download every parameter into ``state().parameters`` (driver.params.download)."""
+        if self._replay is not None:
+            return self._finish("parameters", CommandStatus.REJECTED, "replaying a recording: no vehicle to ask")
+        with self._lock:
+            future = self._params.fetch(refresh, time.monotonic())
+        self._wake.set()
+        return future
+
+    def set_parameter(self, name: str, value: float) -> Future:
+        """PARAM_SET in the parameter's own type, confirmed by the vehicle's echo (driver.params.setter)."""
+        name = name.upper() if isinstance(name, str) else ""
+        if not name or len(name) > 16 or not name.isascii():
+            return self._finish(f"param {name}", CommandStatus.REJECTED, "a parameter name is 1 to 16 ASCII characters")
         if self._replay is not None:
             return self._finish(f"param {name}", CommandStatus.REJECTED, "replaying a recording: no vehicle to command")
         with self._lock:
-            future = self._commands.submit_param(name, value, time.monotonic())
+            future = self._params.set(name, float(value), time.monotonic())
         self._wake.set()
         return future
 

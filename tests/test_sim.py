@@ -539,7 +539,8 @@ def test_disarm_in_the_air_is_refused_unless_forced(make_sim, connect):
 def test_parachute_release_stops_the_motors_and_it_floats_down(make_sim, connect):
     sim = make_sim()
     gs = connect(sim)
-    mark = gs.mark()
+    assert gs.command(mavlink.MAV_CMD_DO_PARACHUTE, mavlink.PARACHUTE_ENABLE).result == mavlink.MAV_RESULT_ACCEPTED
+    mark = gs.mark()                         # (off by default, as ArduCopter 4.6.3's CHUTE_ENABLED is)
     gs.send(gs.encoder.param_set_encode(1, 1, b"CHUTE_ALT_MIN", 3, mavlink.MAV_PARAM_TYPE_INT16))
     assert gs.wait(lambda m: m.get_type() == "PARAM_VALUE" and m.param_id == "CHUTE_ALT_MIN", since=mark)
     airborne(sim, gs, altitude=2.0)

@@ -28,6 +28,7 @@ from .common import (DEFAULT_PARAMS, MODE_NAMES, MODES, NOT_ARMABLE, POSITION_MO
 from .faults import Faults
 from .flight import LAND_DISARM_DELAY, Flight
 from .messages import Messages
+from .params import ParamProtocol, SimParams
 from .profiles import POSITION_REASONS, profile_of
 from .telemetry import EARTH_RADIUS, GRAVITY, METRES_PER_DEG, Telemetry
 
@@ -76,7 +77,7 @@ class SimTruth:
         return math.hypot(self.vn, self.ve)
 
 
-class Autopilot(Telemetry, Commands, Messages, Flight):
+class Autopilot(Telemetry, Commands, ParamProtocol, Messages, Flight):
     """One ArduCopter: state, flight modes, command handling and telemetry streams."""
 
     def __init__(self, config, faults: Faults | None = None,
@@ -96,12 +97,11 @@ class Autopilot(Telemetry, Commands, Messages, Flight):
         self.home_lat, self.home_lon, self.home_alt = float(lat), float(lon), float(alt)
         self.m_per_deg_lon = METRES_PER_DEG * math.cos(math.radians(self.home_lat))
         self.origin = tuple(float(v) for v in getattr(config, "origin_offset", (0.0, 0.0, 0.0)))
-        self.params = {name: value for name, (value, _type) in DEFAULT_PARAMS.items()}
+        self.params = SimParams(DEFAULT_PARAMS)          # ArduCopter 4.6.3's table, the sim's values over it
         self.params["SYSID_THISMAV"] = config.system_id
         self.params["BATT_CAPACITY"] = config.battery_capacity_mah
         self.params["DISARM_DELAY"] = config.auto_disarm_after
         self.params["FENCE_TYPE"] = self.profile.fence_types
-        self.param_names = list(DEFAULT_PARAMS)
         self.t = 0.0
         # vehicle state
         self.n = self.e = self.d = 0.0
@@ -189,6 +189,7 @@ class Autopilot(Telemetry, Commands, Messages, Flight):
         self._fence_check()
         self._battery(dt)
         self._send_due()
+        self.params_step(dt)
 
     @property
     def boot_seconds(self) -> float:

@@ -42,7 +42,8 @@ VEL_IGNORE = 0b111000
 YAW_IGNORE = 1024
 YAW_RATE_IGNORE = 2048
 
-# name → (value, MAV_PARAM_TYPE)
+# name → (value, MAV_PARAM_TYPE): the parameters the sim's behaviour reads, laid over ArduCopter 4.6.3's recorded
+# table (params.py); a listed name keeps the recorded type. Values are the recording's unless said here.
 DEFAULT_PARAMS = {
     "SYSID_THISMAV": (1, mavlink.MAV_PARAM_TYPE_INT16),
     "SYSID_MYGCS": (255, mavlink.MAV_PARAM_TYPE_INT16),
@@ -53,7 +54,7 @@ DEFAULT_PARAMS = {
     "RTL_ALT_FINAL": (0, mavlink.MAV_PARAM_TYPE_INT16),
     "RTL_LOIT_TIME": (5000, mavlink.MAV_PARAM_TYPE_INT32),
     "RTL_SPEED": (0, mavlink.MAV_PARAM_TYPE_INT16),
-    "WPNAV_SPEED": (500.0, mavlink.MAV_PARAM_TYPE_REAL32),
+    "WPNAV_SPEED": (1000.0, mavlink.MAV_PARAM_TYPE_REAL32),
     "WPNAV_SPEED_UP": (250.0, mavlink.MAV_PARAM_TYPE_REAL32),
     "WPNAV_SPEED_DN": (150.0, mavlink.MAV_PARAM_TYPE_REAL32),
     "WPNAV_ACCEL": (250.0, mavlink.MAV_PARAM_TYPE_REAL32),
@@ -65,22 +66,24 @@ DEFAULT_PARAMS = {
     "ANGLE_MAX": (3000, mavlink.MAV_PARAM_TYPE_INT16),
     "WP_YAW_BEHAVIOR": (2, mavlink.MAV_PARAM_TYPE_INT8),
     "FRAME_CLASS": (1, mavlink.MAV_PARAM_TYPE_INT8),
-    "FRAME_TYPE": (1, mavlink.MAV_PARAM_TYPE_INT8),
+    "FRAME_TYPE": (1, mavlink.MAV_PARAM_TYPE_INT8),   # X, as the sim's banner says (the recording's SITL: +)
     "BATT_MONITOR": (4, mavlink.MAV_PARAM_TYPE_INT8),
     "BATT_CAPACITY": (5200, mavlink.MAV_PARAM_TYPE_INT32),
-    "BATT_LOW_VOLT": (0.0, mavlink.MAV_PARAM_TYPE_REAL32),
+    "BATT_LOW_VOLT": (10.5, mavlink.MAV_PARAM_TYPE_REAL32),
     "FS_GCS_ENABLE": (0, mavlink.MAV_PARAM_TYPE_INT8),
-    # AC_Fence (libraries/AC_Fence/AC_Fence.cpp): off by default; circle 300 m around home, ceiling 100 m
+    # AC_Fence (libraries/AC_Fence/AC_Fence.cpp): off by default; circle 300 m around home (the firmware's default;
+    # the recording's SITL reads 150 from its defaults file), ceiling 100 m
     "FENCE_ENABLE": (0, mavlink.MAV_PARAM_TYPE_INT8),
     "FENCE_TYPE": (7, mavlink.MAV_PARAM_TYPE_INT8),      # ceiling | circle | polygon on 4.x (Profile.fence_types)
     "FENCE_ACTION": (1, mavlink.MAV_PARAM_TYPE_INT8),    # RTL or land
     "FENCE_ALT_MAX": (100.0, mavlink.MAV_PARAM_TYPE_REAL32),
     "FENCE_RADIUS": (300.0, mavlink.MAV_PARAM_TYPE_REAL32),
     "FENCE_MARGIN": (2.0, mavlink.MAV_PARAM_TYPE_REAL32),
-    "CHUTE_ENABLED": (1, mavlink.MAV_PARAM_TYPE_INT8),
+    "CHUTE_ENABLED": (0, mavlink.MAV_PARAM_TYPE_INT8),  # off, as recorded; CHUTE_ALT_MIN is then hidden
     "CHUTE_ALT_MIN": (10, mavlink.MAV_PARAM_TYPE_INT16),
     "SERIAL0_PROTOCOL": (2, mavlink.MAV_PARAM_TYPE_INT8),
-    "SR0_EXT_STAT": (0, mavlink.MAV_PARAM_TYPE_INT16),
+    "SR0_EXT_STAT": (0, mavlink.MAV_PARAM_TYPE_INT16),    # SITL's defaults file streams at once; the sim
+    # streams only what a ground station asks for (REQUEST_DATA_STREAM writes these, as ArduPilot does)
     "SR0_POSITION": (0, mavlink.MAV_PARAM_TYPE_INT16),
     "SR0_EXTRA1": (0, mavlink.MAV_PARAM_TYPE_INT16),
     "SR0_EXTRA2": (0, mavlink.MAV_PARAM_TYPE_INT16),

@@ -13,7 +13,7 @@ import math
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-from .common import (DEFAULT_PARAMS, MODES, POS_IGNORE, STREAM_PARAMS, STREAMS, VEL_IGNORE, YAW_IGNORE,
+from .common import (MODES, POS_IGNORE, STREAM_PARAMS, STREAMS, VEL_IGNORE, YAW_IGNORE,
                      YAW_RATE_IGNORE, clamp as _clamp, finite, wrap_lon, wrap_pi)
 from .telemetry import METRES_PER_DEG
 
@@ -199,35 +199,6 @@ class Messages:
             self.yaw_mode = "look_ahead"
 
     # -- parameters, missions, misc -----------------------------------------------------------------
-    def _param_value(self, name: str):
-        value = self.params[name]
-        ptype = DEFAULT_PARAMS[name][1]
-        return self.factory.param_value_encode(name.encode(), float(value), ptype, len(self.param_names),
-                                               self.param_names.index(name))
-
-    def _on_param_request_list(self, msg) -> None:
-        self._banner()
-        for name in self.param_names:
-            self.emit(self._param_value(name))
-
-    def _on_param_request_read(self, msg) -> None:
-        name = msg.param_id
-        if msg.param_index >= 0:
-            if msg.param_index >= len(self.param_names):
-                return
-            name = self.param_names[msg.param_index]
-        if name in self.params:
-            self.emit(self._param_value(name))
-
-    def _on_param_set(self, msg) -> None:
-        name = msg.param_id
-        if name not in self.params or not finite(msg.param_value):
-            return
-        ptype = DEFAULT_PARAMS[name][1]
-        value = float(msg.param_value) if ptype == mavlink.MAV_PARAM_TYPE_REAL32 else int(round(msg.param_value))
-        self.params[name] = value
-        self.emit(self._param_value(name))
-
     def _on_mission_request_list(self, msg) -> None:
         self.emit(self.factory.mission_count_encode(msg.get_srcSystem(), msg.get_srcComponent(), 0,
                                                     getattr(msg, "mission_type", 0)))

@@ -57,6 +57,8 @@ class SimConfig:
     rate_hz: int = 50
     seed: int | None = None
     signing_key: bytes | None = None        # 32 bytes: a MAVLink 2 signing key already in storage at power-on
+    radio_baud: int | None = None           # a telemetry radio's rate: a parameter list streams only as fast as it
+                                            # allows (params.py); None: as fast as the recording's TCP (2,300/s)
 
 
 class SimVehicle:

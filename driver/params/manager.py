@@ -1,0 +1,229 @@
+"""The vehicle's parameters inside the driver: the table, its download and every write, for one vehicle.
+
+:class:`ParameterManager` is the part :class:`~driver.vehicle.Vehicle` wires in (as QGroundControl's
+ParameterManager is to its Vehicle): every PARAM_VALUE goes to :meth:`on_param_value` (reader thread), the
+ticker calls :meth:`service`; both with the state lock held, and :meth:`service` only *returns* the messages
+to send. The table is published in ``VehicleState.parameters`` as an immutable
+:class:`~driver.params.model.ParameterTable`, rebuilt at most every :data:`PUBLISH_EVERY` while a list streams.
+"""
+from __future__ import annotations
+
+import logging
+import math
+from concurrent.futures import Future
+from typing import Callable
+
+from ..state import CommandStatus, LinkStatus
+from .download import Download
+from .model import Parameter, ParameterTable, ParamType
+from .setter import SET_RETRY, PendingSet
+from .values import as_stored, format_value, type_problem
+
+log = logging.getLogger(__name__)
+
+__all__ = ["ParameterManager", "PUBLISH_EVERY"]
+
+PUBLISH_EVERY = 0.1          # s between tables published while a download streams
+NO_INDEX = 65535             # param_index of a reply to a read by name or to a set
+
+
+def param_name(m) -> str:
+    raw = m.param_id
+    name = raw if isinstance(raw, str) else bytes(raw).decode("ascii", "replace")
+    return name.split("\x00", 1)[0]
+
+
+class ParameterManager:
+    """Parameters of one vehicle; every method runs with the driver's state lock held."""
+
+    def __init__(self, store, notifier, target: Callable[[], tuple[int, int]]) -> None:
+        self._store = store
+        self._notifier = notifier
+        self._target = target
+        self._values: dict[str, Parameter] = {}
+        self._expected: int | None = None
+        self._download: Download | None = None
+        self._waiting: list[Future] = []         # fetches that end with this download
+        self._sets: dict[str, PendingSet] = {}
+        self._dirty = False
+        self._published = -math.inf
+        self._detail = ""
+        self.on_complete: Callable[[ParameterTable], None] | None = None   # the cache's hook
+
+    # -- what callers ask (any thread, under the lock) ------------------------------------------------
+    @property
+    def table(self) -> ParameterTable:
+        return self._store.view()["parameters"]
+
+    def fetch(self, refresh: bool, now: float) -> Future:
+        """Download every parameter; without ``refresh`` a complete table is answered at once and a partial one
+        only has its missing indexes asked for."""
+        future: Future = Future()
+        if self._download is not None:
+            self._waiting.append(future)         # one download at a time: this one ends with it
+            return future
+        if not refresh and self._expected is not None and self._complete():
+            self._settle(future, CommandStatus.ACCEPTED, f"{len(self._values)} parameters (already complete)")
+            return future
+        download = Download(started=now)
+        if refresh:
+            self._values = {name: p for name, p in self._values.items() if p.index < 0}
+            self._expected = None
+        elif self._expected is not None:         # a partial table: ask only for what is missing
+            download.expected, download.listing = self._expected, False
+            download.have = {p.index for p in self._values.values() if 0 <= p.index < self._expected}
+        self._download = download
+        self._waiting.append(future)
+        self._detail = "asking for the list" if download.listing else f"asking for {download.missing} missing"
+        self._publish(now, force=True)
+        return future
+
+    def set(self, name: str, value: float, now: float) -> Future:
+        """PARAM_SET ``name``; the future resolves on the vehicle's echo (driver.params.setter)."""
+        future: Future = Future()
+        command = f"param {name}={format_value(None, value)}"
+        known = self._values.get(name)
+        ptype = known.type if known is not None else None
+        if ptype is not None:
+            problem = type_problem(ptype, value)
+            if problem:
+                self._settle(future, CommandStatus.REJECTED, f"{format_value(None, value)}: {problem}", command)
+                return future
+            value = as_stored(ptype, value)
+        elif not math.isfinite(value):
+            self._settle(future, CommandStatus.REJECTED, "not a finite number", command)
+            return future
+        old = self._sets.pop(name, None)
+        if old is not None:
+            self._settle(old.future, CommandStatus.ABORTED, f"superseded by {name}={format_value(ptype, value)}",
+                         command, old.attempts)
+        listed = known is not None and known.index >= 0
+        self._sets[name] = PendingSet(name, value, ptype, future, known=known is not None,
+                                      listed_complete=self._complete() and not listed)
+        return future
+
+    def abort_all(self, reason: str) -> None:
+        for pending in list(self._sets.values()):
+            self._settle(pending.future, CommandStatus.ABORTED, reason, pending.command, pending.attempts)
+        self._sets.clear()
+        if self._download is not None:
+            self._end_download(CommandStatus.ABORTED, reason)
+
+    def link_lost(self) -> None:
+        """Writes keep their tries for when the link is back (none is spent on a dead link)."""
+        for pending in self._sets.values():
+            pending.attempts = min(pending.attempts, max(0, pending.tries - 2))
+
+    # -- the vehicle's word (reader thread) -----------------------------------------------------------
+    def on_param_value(self, m, now: float) -> Parameter | None:
+        """A PARAM_VALUE from the autopilot: into the table; it may confirm a write or advance the download."""
+        if not math.isfinite(m.param_value):
+            return None
+        name = param_name(m)
+        try:
+            ptype = ParamType(m.param_type)
+        except ValueError:
+            return None
+        old = self._values.get(name)
+        index = m.param_index
+        if index == NO_INDEX or index >= m.param_count:
+            index = old.index if old is not None else -1
+        param = Parameter(name, as_stored(ptype, m.param_value), ptype, index)
+        self._values[name] = param
+        if index >= 0:
+            if self._expected != m.param_count:
+                self._expected = m.param_count
+            download = self._download
+            if download is not None:
+                download.arrived(index, m.param_count, now)
+        pending = self._sets.get(name)
+        if pending is not None and pending.attempts:
+            pending.ptype = ptype                 # the vehicle's own type, whatever we assumed
+            if pending.confirms(ptype, param.value):
+                del self._sets[name]
+                self._settle(pending.future, CommandStatus.ACCEPTED, "", pending.command, pending.attempts)
+                self._publish(now, force=True)
+                return param
+        self._dirty = True
+        if self._download is not None and self._download.complete:
+            self._end_download(CommandStatus.ACCEPTED, f"{len(self._values)} parameters", now)
+        elif self._download is None or index < 0:
+            self._publish(now, force=True)        # one value changed: the pilot sees it at once
+        else:
+            self._publish(now)
+        return param
+
+    # -- the ticker ---------------------------------------------------------------------------------------
+    def service(self, now: float, link: LinkStatus) -> list:
+        """Messages to send now (the caller sends them after releasing the lock)."""
+        out: list = []
+        if link is LinkStatus.LOST or link is LinkStatus.CLOSED:
+            if self._download is not None:
+                d = self._download
+                got = f"{len(d.have)} of {d.expected}" if d.expected else "none"
+                self._end_download(CommandStatus.TIMED_OUT, f"link lost: {got} parameters received", now)
+            return out
+        if link is not LinkStatus.OK:
+            return out                            # no vehicle yet: its answers would go nowhere
+        target = self._target()
+        download = self._download
+        if download is not None:
+            msgs, failure = download.service(now, target)
+            out += msgs
+            if failure:
+                self._end_download(CommandStatus.TIMED_OUT, failure, now)
+            else:
+                detail = (f"{len(download.have)} of {download.expected}" if download.listing and download.expected
+                          else f"re-asking {download.missing} missing" if download.expected else "asking for the list")
+                if detail != self._detail:
+                    self._detail = detail
+                    self._dirty = True
+        for pending in list(self._sets.values()):
+            if not pending.due(now):
+                continue
+            if pending.attempts >= pending.tries:
+                del self._sets[pending.name]
+                self._settle(pending.future, CommandStatus.TIMED_OUT if pending.reported is None
+                             else CommandStatus.REFUSED, pending.failure(), pending.command, pending.attempts)
+                continue
+            out.append(pending.message(target))
+            pending.attempts += 1
+            pending.next_send = now + SET_RETRY
+        if self._dirty:
+            self._publish(now)
+        return out
+
+    # -- inside -------------------------------------------------------------------------------------------
+    def _complete(self) -> bool:
+        if self._expected is None:
+            return False
+        return sum(1 for p in self._values.values() if 0 <= p.index < self._expected) >= self._expected
+
+    def _end_download(self, status: CommandStatus, reason: str, now: float = 0.0) -> None:
+        d, self._download = self._download, None
+        waiting, self._waiting = self._waiting, []
+        if d is not None and d.reads:
+            reason += f" ({d.reads} asked again by index)"
+        self._detail = "" if status is CommandStatus.ACCEPTED else reason
+        self._publish(now, force=True)
+        for future in waiting:
+            self._settle(future, status, reason, "parameters")
+        if status is CommandStatus.ACCEPTED and self.on_complete is not None:
+            try:
+                self.on_complete(self.table)
+            except Exception:
+                log.exception("parameter cache")
+
+    def _publish(self, now: float, force: bool = False) -> None:
+        if not force and now - self._published < PUBLISH_EVERY:
+            self._dirty = True
+            return
+        self._dirty = False
+        self._published = now
+        self._store.set(parameters=ParameterTable(dict(self._values), self._expected, self._download is not None,
+                                                  self._detail))
+        self._store.publish()
+
+    def _settle(self, future: Future, status: CommandStatus, reason: str, command: str = "parameters",
+                attempts: int = 0) -> None:
+        self._notifier.settle(future, self._store.record_locked(command, status, reason, attempts))

@@ -1,0 +1,75 @@
+"""Writing one parameter: PARAM_SET, confirmed only by a PARAM_VALUE that carries the new value.
+
+* The value goes out in the parameter's own type as the vehicle reported it (ArduPilot casts the float to it);
+  a value the type cannot hold (1.5 for an int8, 300 for an int8) is refused before anything is sent.
+* The echo is compared at that type's precision (driver.params.values); a PARAM_VALUE with another value
+  confirms nothing (it may be the list's stream, or another ground station): the set is sent again, and if
+  the vehicle keeps reporting another value the result says which.
+* Unanswered, the set is sent again (a lost PARAM_SET and a lost echo look the same; setting twice is
+  harmless). A name the vehicle does not have gets no answer at all (the recording): after a few tries the
+  result says so; a name the vehicle listed gets many more tries, so a bad radio is not taken for a bad name.
+
+All methods run with the driver's state lock held.
+"""
+from __future__ import annotations
+
+from concurrent.futures import Future
+from dataclasses import dataclass
+
+from pymavlink.dialects.v20 import ardupilotmega as mavlink
+
+from .model import ParamType
+from .values import format_value, same_value
+
+__all__ = ["PendingSet", "SET_RETRY", "KNOWN_TRIES", "UNKNOWN_TRIES"]
+
+SET_RETRY = 1.0          # s without the echo before PARAM_SET goes again (MAVProxy waits 1 s)
+KNOWN_TRIES = 10         # a listed parameter: 30 % loss each way loses all ten with a chance under 0.1 %
+UNKNOWN_TRIES = 3        # a name the vehicle never listed
+
+
+@dataclass(eq=False)
+class PendingSet:
+    name: str
+    value: float
+    ptype: ParamType | None              # None: the vehicle has not said (sent as REAL32, which ArduPilot obeys)
+    future: Future
+    known: bool                          # the vehicle listed this name
+    listed_complete: bool                # ... and its list is complete, so "unknown" is certain
+    attempts: int = 0
+    next_send: float = 0.0
+    reported: float | None = None        # another value the vehicle reported meanwhile
+
+    @property
+    def command(self) -> str:
+        return f"param {self.name}={format_value(self.ptype, self.value)}"
+
+    def message(self, target: tuple[int, int]):
+        ptype = int(self.ptype) if self.ptype is not None else mavlink.MAV_PARAM_TYPE_REAL32
+        return mavlink.MAVLink_param_set_message(target[0], target[1], self.name.encode(), float(self.value), ptype)
+
+    def confirms(self, ptype: ParamType, value: float) -> bool:
+        """Whether a PARAM_VALUE of this name (its true ``ptype``) carries the value asked for."""
+        if same_value(ptype, value, self.value):
+            return True
+        self.reported = value
+        return False
+
+    def due(self, now: float) -> bool:
+        return self.attempts == 0 or now >= self.next_send
+
+    @property
+    def tries(self) -> int:
+        return KNOWN_TRIES if self.known else UNKNOWN_TRIES
+
+    def failure(self) -> str:
+        """Why the set ended unconfirmed."""
+        if self.reported is not None:
+            return (f"the vehicle reports {self.name} = {format_value(self.ptype, self.reported)}, not "
+                    f"{format_value(self.ptype, self.value)}, after {self.attempts} attempts")
+        if not self.known:
+            listed = " and it is not in the vehicle's list" if self.listed_complete else ""
+            return (f"no answer after {self.attempts} attempts: the vehicle has no parameter {self.name}{listed} "
+                    "(ArduPilot does not answer an unknown name)")
+        return (f"no PARAM_VALUE echo after {self.attempts} attempts: the link lost every one; the vehicle may or "
+                "may not have the new value (read it again)")

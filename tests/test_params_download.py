@@ -1,0 +1,68 @@
+"""Reading every parameter through the driver: the whole list, then re-asking what the radio lost."""
+from __future__ import annotations
+
+from driver.params.model import ParamType
+from driver.state import CommandStatus
+
+
+def _same_as_sim(table, sim) -> None:
+    """Every parameter as the vehicle holds it (SRn_ rates aside: REQUEST_DATA_STREAM rewrites them without a
+    PARAM_VALUE, in ArduPilot as in the sim)."""
+    params = sim.autopilot.params
+    assert table.complete and table.expected == len(params) == 1392
+    for name in params.names:
+        p = table.get(name)
+        assert p is not None, name
+        assert (p.type, p.index) == (ParamType(params.type_of(name)), params.index_of(name)), name
+        if name.startswith("SR0_"):
+            continue
+        assert abs(p.value - params[name]) <= 1e-6 * max(1.0, abs(params[name])), (name, p.value, params[name])
+
+
+def test_a_clean_link_brings_the_whole_list_into_the_state(vehicle, sim):
+    result = vehicle.fetch_parameters().result(timeout=30)
+    assert result.status is CommandStatus.ACCEPTED, result
+    table = vehicle.state().parameters
+    _same_as_sim(table, sim)
+    assert not table.downloading and table.detail == ""
+    assert table.get("FS_GCS_ENABLE").type is ParamType.INT8 and table.get("RTL_ALT").type is ParamType.INT32
+    again = vehicle.fetch_parameters().result(timeout=5)                     # complete: answered at once
+    assert again.ok and "already complete" in again.reason
+
+
+def test_thirty_percent_loss_each_way_still_ends_with_every_parameter(vehicle, sim):
+    sim.faults.uplink.loss = sim.faults.downlink.loss = 0.3
+    seen = []
+    future = vehicle.fetch_parameters(refresh=True)
+    while not future.done():                                              # progress while it runs
+        s = vehicle.wait_for(lambda s: s.parameters.downloading, 1)
+        if s is not None:
+            seen.append(s.parameters.detail)
+        if len(seen) > 3:
+            break
+    result = future.result(timeout=90)
+    assert result.status is CommandStatus.ACCEPTED, result
+    assert "asked again by index" in result.reason
+    assert any(d for d in seen)
+    sim.faults.uplink.loss = sim.faults.downlink.loss = 0.0
+    _same_as_sim(vehicle.state().parameters, sim)
+
+
+def test_a_lost_link_ends_the_download_and_the_next_asks_only_for_what_is_missing(vehicle_factory, sim_factory):
+    sim = sim_factory(radio_baud=57600, speedup=1.0)                      # about 155 a second: time to cut it
+    vehicle = vehicle_factory(f"tcp:127.0.0.1:{sim.tcp_port}", loss_timeout=1.0)
+    assert vehicle.wait_for(lambda s: s.connected, 10)
+    future = vehicle.fetch_parameters()
+    assert vehicle.wait_for(lambda s: s.parameters.received > 100, 20)
+    sim.faults.link_down = True
+    result = future.result(timeout=20)
+    assert result.status is CommandStatus.TIMED_OUT and "link lost" in result.reason, result
+    partial = vehicle.state().parameters
+    assert 100 < partial.received < 1392 and not partial.complete and "link lost" in partial.detail
+    sim.faults.link_down = False
+    assert vehicle.wait_for(lambda s: s.connected, 10)
+    lists_before = sum(1 for _, kind, _ in sim.received_messages if kind == "PARAM_REQUEST_LIST")
+    result = vehicle.fetch_parameters().result(timeout=60)
+    assert result.ok, result
+    assert sum(1 for _, kind, _ in sim.received_messages if kind == "PARAM_REQUEST_LIST") == lists_before
+    _same_as_sim(vehicle.state().parameters, sim)
