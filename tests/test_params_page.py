@@ -51,7 +51,7 @@ def test_download_shows_progress_then_every_parameter(qtbot, sim, window):
                                         and seen.append(window.params.page.status.text()))
     page = open_page(qtbot, window)
     table = window.params.model.table
-    assert table.expected == len(sim.autopilot.params) == window.params.model.rowCount() == 1392
+    assert table.expected == len(sim.autopilot.params.names) == window.params.model.rowCount() == 1392
     assert any(text.startswith("Downloading parameters: ") for text in seen)
     qtbot.waitUntil(lambda: page.status.text().startswith("1,392 parameters, all read"), timeout=3000)
     assert not page.progress.isVisible()
@@ -68,12 +68,14 @@ def test_search_groups_and_modified_only(qtbot, sim, window):
     page.pick_group("FENCE")
     names = page.visible_names()
     assert names == sorted(names) and names and all(n.startswith("FENCE_") for n in names)
-    assert set(names) == {n for n in sim.autopilot.params if n.split("_")[0] == "FENCE"}
+    assert set(names) == {n for n in sim.autopilot.params.names if n.split("_")[0] == "FENCE"}
     page.pick_group("")
     page.modified_only.setChecked(True)
     assert page.visible_names() == []                  # nothing changed yet
+    page.modified_only.setChecked(False)
     stage(qtbot, page, "WPNAV_SPEED", "750")
-    assert page.visible_names() == ["WPNAV_SPEED"]
+    page.modified_only.setChecked(True)
+    assert page.visible_names() == ["WPNAV_SPEED"]     # a pending change counts as modified
 
 
 def test_edit_review_write_and_see_it_confirmed(qtbot, sim, window):
@@ -101,10 +103,12 @@ def test_edit_review_write_and_see_it_confirmed(qtbot, sim, window):
 def test_a_write_the_vehicle_never_echoes_is_not_confirmed(qtbot, sim, window):
     page = open_page(qtbot, window)
     stage(qtbot, page, "LAND_SPEED", "40")
-    sim.faults.link_down = True                                   # nothing gets through any more
+    sim.faults.uplink.loss = 1.0              # the vehicle hears nothing more; its heartbeats still come
     review = review_and_write(qtbot, window, page)
     assert review.result("LAND_SPEED") == WriteState.WRITING.value
-    qtbot.waitUntil(lambda: review.result("LAND_SPEED").startswith(WriteState.FAILED.value), timeout=60000)
+    qtbot.waitUntil(lambda: review.result("LAND_SPEED").startswith(WriteState.FAILED.value), timeout=30000)
+    assert "no PARAM_VALUE echo" in review.result("LAND_SPEED")
+    assert sim.autopilot.params["LAND_SPEED"] == 50
     model = window.params.model
     assert model.pending == {"LAND_SPEED": 40.0}                  # still pending: it may be written again
     assert model.index(model.row_of("LAND_SPEED"), Column.STATUS).data().startswith(WriteState.FAILED.value)

@@ -13,6 +13,7 @@ from PyQt5.QtCore import QObject, Qt, pyqtSignal
 from PyQt5.QtGui import QKeySequence
 from PyQt5.QtWidgets import QAction, QMainWindow, QMenu, QMessageBox, QTreeWidgetItem, QWidget
 
+from driver.params.values import format_value, same_value
 from driver.state import CommandResult, LinkStatus, Severity, VehicleState
 
 from ..dialogs import ask
@@ -21,7 +22,7 @@ from .mentions import named_parameter
 from .page import ParametersPage
 from .review_dialog import ReviewDialog, ReviewRow
 from .table_model import ParameterModel, WriteState
-from .values import check, format_value, meta_attr, parse_value, range_text, same_value
+from .values import check, meta_attr, parse_value, range_text
 
 __all__ = ["ParamsController"]
 
@@ -115,6 +116,9 @@ class ParamsController(QObject):
             page.compareFileChosen.connect(self.compare_file)
             page.saveFileChosen.connect(self.save_file)
             page.metadataFileChosen.connect(self.load_metadata)
+            screen = self._parent.screen().availableGeometry() if self._parent.screen() else None
+            if screen is not None:                   # a laptop's 1366×768 included
+                page.resize(min(page.width(), screen.width() - 40), min(page.height(), screen.height() - 60))
             self.page = page
         return self.page
 
@@ -174,6 +178,8 @@ class ParamsController(QObject):
         """Stage ``values``; any outside the metadata's bounds are staged only once the pilot confirms them."""
         fine: dict[str, float] = {}
         outside: dict[str, str] = {}
+        if typed and self.page is not None:
+            self.page.editor.show_error("")
         for name, value in values.items():
             param = self.model.parameter(name)
             if param is None:
@@ -186,8 +192,6 @@ class ParamsController(QObject):
             if verdict.warning and (name, verdict.value) not in self._confirmed_outside:
                 outside[name] = verdict.warning
             fine[name] = verdict.value
-        if self.page is not None and typed:
-            self.page.editor.show_error("")
         if not outside:
             self._stage(fine)
             return
@@ -236,10 +240,10 @@ class ParamsController(QObject):
             if meta_attr(meta, "reboot_required", False):
                 notes.append("needs a reboot to take effect")
             units = meta_attr(meta, "units", "")
-            rows.append(ReviewRow(name, format_value(param.value, param.type) + (f" {units}" if units else ""),
-                                  format_value(value, param.type) + (f" {units}" if units else ""),
+            rows.append(ReviewRow(name, format_value(param.type, param.value) + (f" {units}" if units else ""),
+                                  format_value(param.type, value) + (f" {units}" if units else ""),
                                   "; ".join(notes), bool(verdict.warning)))
-        review = ReviewDialog(rows, self.page or self._parent)
+        review = ReviewDialog(rows, self.page or self._parent, armed=self._state.armed)
         review.setAttribute(Qt.WA_DeleteOnClose)
         review.writeRequested.connect(self.write)
         review.discardRequested.connect(self.model.unstage)
@@ -321,15 +325,15 @@ class ParamsController(QObject):
                                               "not on this vehicle" + ("" if table.complete else " (yet)"),
                                               applicable=False))
                 continue
-            if same_value(param.value, value, param.type):
+            if same_value(param.type, param.value, value):
                 same += 1
                 continue
             verdict = check(param, value, self.model.meta(name))
             units = meta_attr(self.model.meta(name), "units", "")
             notes = verdict.error or verdict.warning or (f"range {range_text(self.model.meta(name))}"
                                                          if range_text(self.model.meta(name)) else "")
-            differences.append(Difference(name, format_value(param.value, param.type) + (f" {units}" if units else ""),
-                                          format_value(value, param.type) + (f" {units}" if units else ""), value,
+            differences.append(Difference(name, format_value(param.type, param.value) + (f" {units}" if units else ""),
+                                          format_value(param.type, value) + (f" {units}" if units else ""), value,
                                           notes, bool(verdict.warning), verdict.ok))
         vehicle_only = sum(1 for name in table.values if name not in values)
         if self.compare is not None:

@@ -11,8 +11,9 @@ from PyQt5.QtWidgets import (
 )
 
 from driver.params.model import Parameter
+from driver.params.values import format_value
 
-from .values import format_value, meta_attr, parse_value, range_text
+from .values import meta_attr, parse_value, range_text
 
 __all__ = ["ParamEditor"]
 
@@ -105,7 +106,7 @@ class ParamEditor(QFrame):
         self.display_name.setText(meta_attr(meta, "display_name", ""))
         self.display_name.setVisible(bool(self.display_name.text()))
         self.description.setText(meta_attr(meta, "description", ""))
-        facts = [f"Vehicle: <b>{format_value(param.value, param.type)}</b>"
+        facts = [f"Vehicle: <b>{format_value(param.type, param.value)}</b>"
                  + (f" {meta_attr(meta, 'units')}" if meta_attr(meta, "units") else ""),
                  f"type {param.type.name.lower()}"]
         if range_text(meta):
@@ -113,7 +114,7 @@ class ParamEditor(QFrame):
         if meta_attr(meta, "increment") is not None:
             facts.append(f"step {meta_attr(meta, 'increment'):g}")
         if pending is not None:
-            facts.append(f"<span style='color:#ffd27a'>pending → {format_value(pending, param.type)}</span>")
+            facts.append(f"<span style='color:#ffd27a'>pending → {format_value(param.type, pending)}</span>")
         self.facts.setText(" · ".join(facts))
         if meta is None:
             self.warning.setText("No metadata for this parameter: its bounds, units and meaning are unknown here. "
@@ -128,7 +129,7 @@ class ParamEditor(QFrame):
         self._fill_choices(meta, shown)
         self._fill_bits(meta, shown)
         if not same or not self.value.hasFocus():
-            self.value.setText(format_value(shown, param.type))
+            self.value.setText(format_value(param.type, shown))
         if not same:
             self.error.setText("")
 
@@ -154,7 +155,7 @@ class ParamEditor(QFrame):
     def _choice_picked(self, index: int) -> None:
         value = self.choices.itemData(index)
         if value is not None and self._param is not None:
-            self.value.setText(format_value(value, self._param.type))
+            self.value.setText(format_value(self._param.type, value))
 
     def _fill_bits(self, meta, shown: float) -> None:
         bits = meta_attr(meta, "bitmask", {})
@@ -175,7 +176,7 @@ class ParamEditor(QFrame):
             return
         mask = 1 << item.data(Qt.UserRole)
         value = int(current) | mask if item.checkState() == Qt.Checked else int(current) & ~mask
-        self.value.setText(format_value(value, self._param.type))
+        self.value.setText(format_value(self._param.type, value))
 
     def _stage(self) -> None:
         if self._name:

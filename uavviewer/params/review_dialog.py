@@ -26,7 +26,7 @@ class ReviewDialog(QDialog):
     writeRequested = pyqtSignal(list)        # the names ticked, to write in one go
     discardRequested = pyqtSignal(list)      # the names ticked, to drop
 
-    def __init__(self, rows: list[ReviewRow], parent: QWidget | None = None) -> None:
+    def __init__(self, rows: list[ReviewRow], parent: QWidget | None = None, armed: bool = False) -> None:
         super().__init__(parent)
         self.setObjectName("reviewDialog")
         self.setWindowTitle("Review parameter changes")
@@ -34,6 +34,7 @@ class ReviewDialog(QDialog):
         self.summary = QLabel()
         self.summary.setWordWrap(True)
         self.table = checklist(len(rows), ["Parameter", "Vehicle", "New", "Notes", "Result"], _NOTES)
+        self._armed = armed
         self._rows = {r.name: i for i, r in enumerate(rows)}
         for i, r in enumerate(rows):
             name = QTableWidgetItem(r.name)
@@ -121,4 +122,6 @@ class ReviewDialog(QDialog):
         else:
             parts.append("Nothing is written until you press Write; each value counts only once the vehicle "
                          "reports it back.")
+        if self._armed:
+            parts.append("<b>The vehicle is armed: a new value acts at once, in the air too.</b>")
         self.summary.setText(" ".join(parts))

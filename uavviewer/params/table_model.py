@@ -14,8 +14,9 @@ from PyQt5.QtCore import QAbstractTableModel, QModelIndex, Qt, pyqtSignal
 from PyQt5.QtGui import QBrush, QColor, QFont
 
 from driver.params.model import Parameter, ParameterTable
+from driver.params.values import format_value, same_value
 
-from .values import format_value, group_of, meta_attr, range_text, same_value
+from .values import group_of, meta_attr, range_text
 
 __all__ = ["Column", "ParameterModel", "WriteState", "GROUP_ROLE", "MODIFIED_ROLE", "NAME_ROLE", "SEARCH_ROLE"]
 
@@ -169,7 +170,7 @@ class ParameterModel(QAbstractTableModel):
         param = self._table.get(name)
         if param is None:
             return
-        if same_value(param.value, value, param.type):
+        if same_value(param.type, param.value, value):
             self._pending.pop(name, None)
         else:
             self._pending[name] = value
@@ -200,10 +201,10 @@ class ParameterModel(QAbstractTableModel):
             return False
         if name in self._pending:
             return True
-        if not same_value(self._first.get(name, param.value), param.value, param.type):
+        if not same_value(param.type, self._first.get(name, param.value), param.value):
             return True
         default = meta_attr(self._meta.get(name), "default")
-        return default is not None and not same_value(float(default), param.value, param.type)
+        return default is not None and not same_value(param.type, float(default), param.value)
 
     def _repaint(self, name: str) -> None:
         row = self._row.get(name)
@@ -253,12 +254,12 @@ class ParameterModel(QAbstractTableModel):
         if column is Column.NAME:
             return name
         if column is Column.VALUE:
-            text = format_value(param.value, param.type)
+            text = format_value(param.type, param.value)
             label = _label(meta, param.value)
             if label:
                 text = f"{text} ({label})"
             if name in self._pending:
-                text += f" → {format_value(self._pending[name], param.type)}"
+                text += f" → {format_value(param.type, self._pending[name])}"
             return text
         if column is Column.UNITS:
             return meta_attr(meta, "units", "")
