@@ -117,8 +117,13 @@ class ParamsController(QObject):
             page.saveFileChosen.connect(self.save_file)
             page.metadataFileChosen.connect(self.load_metadata)
             screen = self._parent.screen().availableGeometry() if self._parent.screen() else None
-            if screen is not None:                   # a laptop's 1366×768 included
+            if screen is not None:                   # on the window's screen, a laptop's 1366×768 included
                 page.resize(min(page.width(), screen.width() - 40), min(page.height(), screen.height() - 60))
+                frame = page.frameGeometry()
+                frame.moveCenter(self._parent.frameGeometry().center())
+                frame.moveTop(max(frame.top(), screen.top()))
+                frame.moveLeft(max(min(frame.left(), screen.right() - frame.width()), screen.left()))
+                page.move(frame.topLeft())
             self.page = page
         return self.page
 

@@ -152,11 +152,13 @@ class ParametersPage(QWidget):
         self.editor.revertRequested.connect(self.revertRequested)
         model.dataChanged.connect(self._data_changed)
         model.namesChanged.connect(self._update_groups)
+        model.modelReset.connect(self._show_metadata_columns)
         model.pendingChanged.connect(self._pending_changed)
         QShortcut(QKeySequence.Find, self, activated=lambda: (self.search.setFocus(), self.search.selectAll()))
         self._group_counts: dict[str, int] = {}
         self._update_groups()
         self._pending_changed()
+        self._show_metadata_columns()
 
     # -- shown state -------------------------------------------------------------------------------
     def show_download(self, table: ParameterTable, connected: bool) -> None:
@@ -263,6 +265,11 @@ class ParametersPage(QWidget):
         if not current:
             self.groups.setCurrentRow(0)
         self.groups.blockSignals(False)
+
+    def _show_metadata_columns(self) -> None:
+        """Units, range and description only say something with metadata: without it the values get the room."""
+        for column in (Column.UNITS, Column.RANGE, Column.DESCRIPTION):
+            self.table.setColumnHidden(column, not self.model.has_metadata)
 
     def pick_group(self, group: str) -> None:
         for i in range(self.groups.count()):

@@ -70,6 +70,7 @@ class MessagesView(QTreeWidget):
         """A Fix… button at the end of ``item``'s line that asks to open parameter ``name``."""
         if self.columnCount() <= self._fix_column:
             self.setColumnCount(self._fix_column + 1)
+            self.headerItem().setText(self._fix_column, "")
             header = self.header()
             header.setStretchLastSection(False)
             header.setSectionResizeMode(2, QHeaderView.Stretch)
@@ -78,7 +79,8 @@ class MessagesView(QTreeWidget):
         button.setObjectName("fixButton")
         button.setText("Fix…")
         button.setToolTip(f"Open {name} on the Parameters page")
-        button.setAutoRaise(True)
+        button.setStyleSheet("QToolButton { color: #8cb8ff; border: 1px solid #34475c; border-radius: 4px;"
+                             " padding: 0 6px; background: #22303f; } QToolButton:hover { background: #2b3d51; }")
         button.clicked.connect(lambda: self.fixRequested.emit(name))
         item.setData(self._fix_column, Qt.UserRole, name)
         self.setItemWidget(item, self._fix_column, button)
