@@ -163,9 +163,17 @@ class Drone(abc.ABC):
         """Download every parameter (re-asking missing ones by index); ``refresh`` ignores what is cached."""
         return _answered(CommandResult("parameters", CommandStatus.REJECTED, _NO_PARAMETERS))
 
-    def set_parameter(self, name: str, value: float) -> Future[CommandResult]:
-        """PARAM_SET ``name`` to ``value`` in the parameter's own type, confirmed by the vehicle's echo."""
+    def set_parameter(self, name: str, value: float, allow_out_of_bounds: bool = False) -> Future[CommandResult]:
+        """PARAM_SET ``name`` to ``value`` in the parameter's own type, confirmed by the vehicle's echo. A value
+        outside ArduPilot's documented bounds (:attr:`parameter_metadata`) is REJECTED unless
+        ``allow_out_of_bounds`` says the pilot confirmed exactly that: the vehicle itself checks nothing."""
         return _answered(CommandResult(f"param {name}", CommandStatus.REJECTED, _NO_PARAMETERS))
+
+    @property
+    def parameter_metadata(self):
+        """ArduPilot's metadata (:class:`driver.params.metadata.ParamMetadata`: bounds, units, descriptions,
+        reboot-required), or None when there is none: editing still works, unchecked."""
+        return None
 
     # -- link security (MAVLink 2 signing; driver.signing) -------------------------------------
     # Only a driver that holds the MAVLink link can sign it; a remote one (Ice) is set up on its server.

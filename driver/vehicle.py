@@ -35,6 +35,7 @@ from .commands import CommandSender, Notifier, command_name
 from .forwarding import Forwarder
 from .link import LinkError, ReplayControl, TlogWriter, Transport, open_transport
 from .params.manager import ParameterManager
+from .params.metadata import load_metadata, set_problem
 from .rules import COPTER_MODES, MAX_ALTITUDE, MIN_TAKEOFF_ALTITUDE, go_to_problem, takeoff_altitude_problem
 from .setpoints import SetpointStreamer
 from .signing import LinkSigning, SigningConfig
@@ -92,6 +93,7 @@ class VehicleConfig:
     heartbeat_interval: float = 1.0
     signing: SigningConfig | None = None      # MAVLink 2 signing (driver.signing); None: off until a key is given
     allowed_senders: tuple[str, ...] = ()     # UDP: other addresses read besides the vehicle's ("10.1.1.1")
+    param_metadata: str | None = None         # apm.pdef.xml; None: the per-user cache's, else the shipped copy
 
 
 def _ground_only(s: VehicleState) -> str | None:
@@ -129,6 +131,10 @@ class Vehicle(Drone):
         self._commands = CommandSender(self._store, cfg, self._notifier, self._target_ids)
         self._link = LinkSupervisor(cfg, self._transport, self._commands.capabilities, self._target_ids)
         self._params = ParameterManager(self._store, self._notifier, self._target_ids)
+        self._metadata = None                 # loaded by start() in the background (half a second of XML)
+        self._metadata_loaded = threading.Event()
+        self._metadata_lock = threading.Lock()
+        self._metadata_warned = False
         self._setpoints = SetpointStreamer(cfg.deadman, cfg.setpoint_rate)
         self._takeoff: TakeoffSequence | None = None
         self._stepping_takeoff = False        # the ticker is stepping the sequence: its commands pass
@@ -181,6 +187,7 @@ class Vehicle(Drone):
             if name == "mavlink-ticker":
                 self._ticker = t
         self._threads += self._forwarder.start()
+        threading.Thread(target=self._load_metadata, name="param-metadata", daemon=True).start()
         return self
 
     def close(self) -> None:
@@ -748,17 +755,44 @@ class Vehicle(Drone):
         self._wake.set()
         return future
 
-    def set_parameter(self, name: str, value: float) -> Future:
-        """PARAM_SET in the parameter's own type, confirmed by the vehicle's echo (driver.params.setter)."""
+    def set_parameter(self, name: str, value: float, allow_out_of_bounds: bool = False) -> Future:
+        """PARAM_SET in the parameter's own type, confirmed by the vehicle's echo (driver.params.setter); outside
+        ArduPilot's documented bounds only when ``allow_out_of_bounds`` (driver.params.metadata)."""
         name = name.upper() if isinstance(name, str) else ""
         if not name or len(name) > 16 or not name.isascii():
             return self._finish(f"param {name}", CommandStatus.REJECTED, "a parameter name is 1 to 16 ASCII characters")
         if self._replay is not None:
             return self._finish(f"param {name}", CommandStatus.REJECTED, "replaying a recording: no vehicle to command")
+        metadata = self.parameter_metadata
+        with self._lock:
+            problem = self._params.value_problem(name, float(value))
+        problem = problem or set_problem(metadata, name, float(value), allow_out_of_bounds)
+        if problem:
+            return self._finish(f"param {name}", CommandStatus.REJECTED, problem)
+        if metadata is None and not self._metadata_warned:
+            self._metadata_warned = True
+            self._store.add_message(Severity.WARNING, "No parameter metadata (ArduPilot's apm.pdef.xml): values are "
+                                    "written without checking their bounds")
         with self._lock:
             future = self._params.set(name, float(value), time.monotonic())
         self._wake.set()
         return future
+
+    @property
+    def parameter_metadata(self):
+        if not self._metadata_loaded.is_set():
+            self._load_metadata()
+        return self._metadata
+
+    def _load_metadata(self) -> None:
+        with self._metadata_lock:
+            if self._metadata_loaded.is_set():
+                return
+            try:
+                self._metadata = load_metadata(self.config.param_metadata)
+            except (OSError, ValueError) as e:
+                self._store.add_message(Severity.WARNING, f"Parameter metadata not read: {e}")
+            self._metadata_loaded.set()
 
     # ------------------------------------------------------------------------------------------
     # signing (driver.signing)

@@ -78,6 +78,14 @@ class ParameterManager:
         self._publish(now, force=True)
         return future
 
+    def value_problem(self, name: str, value: float) -> str:
+        """Why ``name`` cannot hold ``value`` in the type the vehicle reported ("" when it can, or is not known)."""
+        known = self._values.get(name)
+        if known is None:
+            return "" if math.isfinite(value) else "not a finite number"
+        problem = type_problem(known.type, value)
+        return f"{format_value(None, value)}: {problem}" if problem else ""
+
     def set(self, name: str, value: float, now: float) -> Future:
         """PARAM_SET ``name``; the future resolves on the vehicle's echo (driver.params.setter)."""
         future: Future = Future()
@@ -179,9 +187,9 @@ class ParameterManager:
                     self._detail = detail
                     self._dirty = True
         for pending in list(self._sets.values()):
-            if not pending.due(now):
+            if not pending.due(now) and not pending.answered_otherwise:
                 continue
-            if pending.attempts >= pending.tries:
+            if pending.attempts >= pending.tries or pending.answered_otherwise:
                 del self._sets[pending.name]
                 self._settle(pending.future, CommandStatus.TIMED_OUT if pending.reported is None
                              else CommandStatus.REFUSED, pending.failure(), pending.command, pending.attempts)

@@ -26,6 +26,7 @@ __all__ = ["PendingSet", "SET_RETRY", "KNOWN_TRIES", "UNKNOWN_TRIES"]
 SET_RETRY = 1.0          # s without the echo before PARAM_SET goes again (MAVProxy waits 1 s)
 KNOWN_TRIES = 10         # a listed parameter: 30 % loss each way loses all ten with a chance under 0.1 %
 UNKNOWN_TRIES = 3        # a name the vehicle never listed
+OTHER_VALUE_ECHOES = 3   # echoes of another value, each after a PARAM_SET of ours: the vehicle's answer
 
 
 @dataclass(eq=False)
@@ -39,6 +40,7 @@ class PendingSet:
     attempts: int = 0
     next_send: float = 0.0
     reported: float | None = None        # another value the vehicle reported meanwhile
+    other_echoes: int = 0                # how many times
 
     @property
     def command(self) -> str:
@@ -53,7 +55,13 @@ class PendingSet:
         if same_value(ptype, value, self.value):
             return True
         self.reported = value
+        self.other_echoes += 1
         return False
+
+    @property
+    def answered_otherwise(self) -> bool:
+        """The vehicle keeps reporting another value: it will not take this one (or something resets it)."""
+        return self.other_echoes >= OTHER_VALUE_ECHOES
 
     def due(self, now: float) -> bool:
         return self.attempts == 0 or now >= self.next_send
