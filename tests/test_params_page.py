@@ -147,3 +147,29 @@ def test_messages_naming_parameters():
     assert named_parameter("Mode GUIDED_NOGPS refused") == ""                # a flight mode
     assert named_parameter("PreArm: Check FS_THR_VALUE", {"RTL_ALT"}, complete=True) == ""
     assert named_parameter("PreArm: Check FS_THR_VALUE", {"FS_THR_VALUE"}, complete=True) == "FS_THR_VALUE"
+
+
+def test_out_of_bounds_needs_explicit_confirmation(qtbot, sim, window):
+    page = open_page(qtbot, window)
+    controller = window.params
+    qtbot.waitUntil(lambda: controller.model.meta("RTL_ALT") is not None, timeout=10000)   # the shipped metadata
+    meta = controller.model.meta("RTL_ALT")
+    assert page.select("RTL_ALT") and meta.units in page.editor.facts.text()
+    assert meta.description and page.editor.description.text() == meta.description
+
+    stage(qtbot, page, "RTL_ALT", "1000000000")                   # what the recorded vehicle stored unchecked
+    qtbot.waitUntil(lambda: controller.question is not None and controller.question.isVisible(), timeout=3000)
+    box = controller.question
+    assert "outside" in box.text() and box.defaultButton() is box.button(QMessageBox.Cancel)
+    box.button(QMessageBox.Cancel).click()
+    qtbot.waitUntil(lambda: controller.question is None, timeout=3000)
+    assert controller.model.pending == {}                         # cancelled: nothing staged
+
+    stage(qtbot, page, "RTL_ALT", "1000000000")
+    qtbot.waitUntil(lambda: controller.question is not None and controller.question.isVisible(), timeout=3000)
+    controller.question.button(QMessageBox.Yes).click()
+    qtbot.waitUntil(lambda: controller.model.pending == {"RTL_ALT": 1e9}, timeout=3000)
+    review = review_and_write(qtbot, window, page)
+    assert "confirmed" in review.table.item(0, 3).text()
+    qtbot.waitUntil(lambda: review.result("RTL_ALT") == WriteState.CONFIRMED.value, timeout=15000)
+    assert sim.autopilot.params["RTL_ALT"] == 1000000000

@@ -7,6 +7,7 @@ result (confirmed only by the vehicle's PARAM_VALUE echo) comes back as the adap
 from __future__ import annotations
 
 import logging
+import threading
 from typing import Callable, Mapping
 
 from PyQt5.QtCore import QObject, Qt, pyqtSignal
@@ -29,6 +30,12 @@ __all__ = ["ParamsController"]
 log = logging.getLogger(__name__)
 
 
+class _Relay(QObject):
+    """Carries metadata read on a worker thread to the UI thread; parentless, like the adapter's relay, so a
+    late answer never lands on a deleted controller."""
+    arrived = pyqtSignal(object, object, str)    # the drone it is for, ParamMetadata or None, the source or why not
+
+
 class ParamsController(QObject):
     said = pyqtSignal(str, object)               # a line for Messages (text, Severity)
 
@@ -48,10 +55,14 @@ class ParamsController(QObject):
         self._fetch_problem = ""
         self._writing: set[str] = set()
         self._confirmed_outside: set[tuple[str, float]] = set()
+        self._user_metadata = ""                 # a file the pilot chose with Metadata… (it wins over the driver's)
+        self._relay = _Relay()
+        self._relay.arrived.connect(self._metadata_arrived)
         if say is not None:
             self.said.connect(say)
         adapter.stateChanged.connect(self.show_state)
         adapter.commandFinished.connect(self._result)
+        self._read_metadata(lambda drone: drone.parameter_metadata)
 
     # -- wiring ------------------------------------------------------------------------------------
     def add_to_menu(self, window: QMainWindow) -> QAction:
@@ -145,6 +156,8 @@ class ParamsController(QObject):
             self._show_download()
 
     def _vehicle_changed(self) -> None:
+        if not self._user_metadata:
+            self._read_metadata(lambda drone: drone.parameter_metadata)
         self._asked = False
         self._writing.clear()
         self._confirmed_outside.clear()
@@ -275,7 +288,8 @@ class ParamsController(QObject):
                 continue
             self._writing.add(name)
             self._show_write(name, WriteState.WRITING)
-            self.adapter.command("set_parameter", name, value)
+            # outside the bounds only as the pilot confirmed exactly this value (the driver refuses it otherwise)
+            self.adapter.command("set_parameter", name, value, (name, value) in self._confirmed_outside)
 
     def _show_write(self, name: str, state: WriteState, reason: str = "") -> None:
         self.model.set_write_state(name, state, reason)
@@ -363,14 +377,34 @@ class ParamsController(QObject):
             self.question.finished.connect(lambda _r: self.open_review())
 
     def load_metadata(self, path: str) -> None:
+        """ArduPilot's apm.pdef.xml at ``path`` describes the parameters from now on (read off the UI thread)."""
         from driver.params.metadata import load_metadata
-        try:
-            meta = load_metadata(path)
-        except (OSError, ValueError) as exc:
-            self.said.emit(f"Parameter metadata not read from {path}: {exc}", Severity.WARNING)
+        self._user_metadata = path
+        self._read_metadata(lambda _drone: load_metadata(path), path)
+
+    def _read_metadata(self, read: Callable, source: str = "") -> None:
+        """``read(drone)`` on a worker thread (parsing takes half a second; a remote drone asks its server)."""
+        drone, relay = self.adapter.drone, self._relay
+
+        def work() -> None:
+            try:
+                relay.arrived.emit(drone, read(drone), source)
+            except Exception as exc:                     # noqa: BLE001 - a bad file or a remote failure: said
+                log.debug("parameter metadata not read", exc_info=True)
+                relay.arrived.emit(drone, None, f"{source or 'the driver'}: {exc}")
+        threading.Thread(target=work, name="param-metadata", daemon=True).start()
+
+    def _metadata_arrived(self, drone, metadata, source: str) -> None:
+        if drone is not self.adapter.drone:
+            return                                       # another vehicle was picked meanwhile
+        if metadata is None and source:
+            self.said.emit(f"Parameter metadata not read from {source}", Severity.WARNING)
             return
-        self.set_metadata(meta)
-        self.said.emit(f"Parameter metadata: {len(meta)} parameters described ({path})", Severity.INFO)
+        if metadata is None:
+            return
+        self.set_metadata(metadata)
+        if source:
+            self.said.emit(f"Parameter metadata: {len(metadata)} parameters described ({source})", Severity.INFO)
 
     def set_metadata(self, meta: Mapping[str, object]) -> None:
         self.model.set_metadata(meta)

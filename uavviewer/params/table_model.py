@@ -302,12 +302,5 @@ class ParameterModel(QAbstractTableModel):
 
 
 def _label(meta, value: float) -> str:
-    """The metadata's name for ``value`` (an enumerated parameter), or ""."""
-    values = meta_attr(meta, "values", {})
-    for key, label in values.items():
-        try:
-            if float(key) == value:
-                return str(label)
-        except (TypeError, ValueError):
-            continue
-    return ""
+    """What ``value`` means for an enumerated or bitmask parameter (ParamMeta.value_text), or ""."""
+    return meta.value_text(value) if meta is not None else ""

@@ -1,7 +1,7 @@
 """What a value means for one parameter: whether it parses, fits its type (driver.params.values) and the bounds.
 
 No Qt here: the page, the review and the compare dialogs all judge a value the same way. ``meta`` is the
-driver's ParamMeta (driver.params metadata) or None; only its attributes are read.
+driver's ParamMeta (driver.params.metadata) or None.
 """
 from __future__ import annotations
 
@@ -9,7 +9,8 @@ import math
 from dataclasses import dataclass
 
 from driver.params.model import Parameter
-from driver.params.values import format_value, type_problem
+from driver.params.metadata import bounds_problem
+from driver.params.values import type_problem
 
 __all__ = ["Check", "check", "group_of", "meta_attr", "parse_value", "range_text"]
 
@@ -58,23 +59,15 @@ class Check:
 
 
 def check(param: Parameter, value: float | None, meta) -> Check:
-    """Judge ``value`` for ``param``: a type it cannot hold is refused; outside the metadata's bounds, or an
-    integer parameter given a fraction, it needs confirming (the vehicle itself checks nothing)."""
+    """Judge ``value`` for ``param``: a type it cannot hold, or a read-only parameter, is refused; outside the
+    metadata's bounds (driver.params.metadata) it needs confirming, since the vehicle itself checks nothing."""
     if value is None:
         return Check(None, "not a number")
     problem = type_problem(param.type, value)
     if problem:
         return Check(value, f"{param.name} is an {param.type.name.lower()}: {problem}" if param.type.is_integer
                      else problem)
-    lo, hi = meta_attr(meta, "min"), meta_attr(meta, "max")
-    if (lo is not None and value < lo) or (hi is not None and value > hi):
-        return Check(value, warning=f"{format_value(param.type, value)} is outside {param.name}'s range "
-                                    f"{range_text(meta)}: the vehicle stores it without checking")
-    values = meta_attr(meta, "values", {})
-    if values and lo is None and hi is None and not _among(value, values):
-        return Check(value, warning=f"{format_value(param.type, value)} is none of {param.name}'s listed values")
-    return Check(value)
-
-
-def _among(value: float, values) -> bool:
-    return any(math.isclose(float(k), value, abs_tol=1e-6) for k in values)
+    if meta_attr(meta, "read_only", False):
+        return Check(value, f"{param.name} is read-only")
+    problem = bounds_problem(meta, value)
+    return Check(value, warning=f"{problem}: the vehicle stores it without checking" if problem else "")
