@@ -32,7 +32,7 @@ NOTEWORTHY = ("driver.ice.servants", "driver.ice.camera", "driver.camera.uri")
 
 
 class Console(cmd.Cmd):
-    """``reboot, arm, disarm, takeoff, land, mode, velocity, parachute, bat, alt, status, help``."""
+    """``reboot, arm, disarm, takeoff, land, mode, velocity, parachute, bat, alt, param, status, help``."""
 
     intro = "MAVLinkServer console. Type help for commands, exit to quit."
 
@@ -326,6 +326,14 @@ class Console(cmd.Cmd):
             self.say("signing " + self.vehicle.state().signing.summary)
         else:
             raise ValueError(usage)
+
+    def do_param(self, arg: str) -> None:
+        """param fetch | param show [PATTERN] | param help NAME | param set NAME VALUE [force] |
+        param load FILE [PATTERN] [force] | param save FILE [PATTERN] [missionplanner] | param diff FILE [PATTERN]
+        The vehicle's parameters, as MAVProxy's verbs (driver.params.verbs). A value outside ArduPilot's
+        documented bounds is written only with force; every write is confirmed by the vehicle."""
+        from .params.verbs import ParamVerbs
+        ParamVerbs(self.vehicle, self.say, self._report)(arg)
 
     def do_status(self, arg: str) -> None:
         """status: link, mode, armed, position, battery, GPS, takeoff"""

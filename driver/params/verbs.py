@@ -1,0 +1,164 @@
+"""The console's ``param`` verbs, as MAVProxy's: fetch, show, help, set, load, save, diff.
+
+They work on any :class:`~driver.api.Drone` (the embedded driver or an Ice client): the table read is
+``state().parameters``, every write goes through ``set_parameter`` and is confirmed by the vehicle.
+"""
+from __future__ import annotations
+
+import fnmatch
+from concurrent.futures import Future
+from typing import Callable
+
+from .files import ParamFormat, compare, read_param_file, write_param_file
+from .metadata import ParamMeta
+from .values import format_value
+
+__all__ = ["ParamVerbs", "USAGE"]
+
+USAGE = ("param fetch | param show [PATTERN] | param help NAME | param set NAME VALUE [force] | "
+         "param load FILE [PATTERN] [force] | param save FILE [PATTERN] [missionplanner] | param diff FILE [PATTERN]")
+
+
+class ParamVerbs:
+    """``param ...`` typed at the console; ``say`` prints a line, ``report`` prints a future's result when it
+    comes."""
+
+    def __init__(self, drone, say: Callable[[str], None], report: Callable[[Future], None]) -> None:
+        self.drone = drone
+        self.say = say
+        self.report = report
+
+    def __call__(self, arg: str) -> None:
+        words = arg.split()
+        if not words:
+            raise ValueError(f"usage: {USAGE}")
+        verb, rest = words[0], words[1:]
+        handler = getattr(self, "_" + verb, None)
+        if handler is None:
+            raise ValueError(f"usage: {USAGE}")
+        handler(rest)
+
+    # -- the verbs ----------------------------------------------------------------------------------------
+    def _fetch(self, rest: list[str]) -> None:
+        self.report(self.drone.fetch_parameters(refresh=True))
+
+    def _show(self, rest: list[str]) -> None:
+        pattern = (rest[0] if rest else "*").upper()
+        table = self.drone.state().parameters
+        meta = self.drone.parameter_metadata
+        names = [n for n in sorted(table.values) if fnmatch.fnmatchcase(n, pattern)]
+        for name in names:
+            p = table.values[name]
+            info = meta.get(name) if meta is not None else None
+            self.say(f"{name:<16} {format_value(p.type, p.value)}{_meaning(info, p.value)}")
+        if not table.complete:
+            have = f"{table.received} of {table.expected}" if table.expected else "none"
+            self.say(f"({have} parameters known: param fetch reads them all)")
+        elif not names:
+            self.say(f"no parameter matches {pattern}")
+
+    def _help(self, rest: list[str]) -> None:
+        if len(rest) != 1:
+            raise ValueError("usage: param help NAME")
+        name = rest[0].upper()
+        meta = self.drone.parameter_metadata
+        info = meta.get(name) if meta is not None else None
+        if info is None:
+            self.say(f"{name}: no metadata" + ("" if meta is not None else " (none loaded)"))
+            return
+        self.say(f"{name}: {info.display_name}")
+        self.say(f"  {info.description}")
+        if info.min is not None:
+            self.say(f"  range {info.min:g} to {info.max:g} {info.units}".rstrip())
+        elif info.units:
+            self.say(f"  units {info.units}")
+        for code, text in info.values.items():
+            self.say(f"  {code:g}: {text}")
+        for bit, text in info.bitmask.items():
+            self.say(f"  bit {bit}: {text}")
+        if info.reboot_required:
+            self.say("  takes effect after a reboot")
+
+    def _set(self, rest: list[str]) -> None:
+        force = rest[-1:] == ["force"]
+        if force:
+            rest = rest[:-1]
+        if len(rest) != 2:
+            raise ValueError("usage: param set NAME VALUE [force]")
+        name, value = rest[0].upper(), _value(rest[1])
+        self.report(self.drone.set_parameter(name, value, allow_out_of_bounds=force))
+        meta = self.drone.parameter_metadata
+        info = meta.get(name) if meta is not None else None
+        if info is not None and info.reboot_required:
+            self.say(f"{name} takes effect after a reboot")
+
+    def _load(self, rest: list[str]) -> None:
+        force = rest[-1:] == ["force"]
+        if force:
+            rest = rest[:-1]
+        if not 1 <= len(rest) <= 2:
+            raise ValueError("usage: param load FILE [PATTERN] [force]")
+        table = self.drone.state().parameters
+        if not table.complete:
+            raise ValueError("the vehicle's parameters are not all known yet: param fetch first")
+        f = self._read(rest[0])
+        changes = compare(f.values, table, rest[1] if len(rest) > 1 else "*")
+        unknown = [d.name for d in changes if d.vehicle_value is None]
+        if unknown:
+            self.say(f"not on the vehicle, left out: {', '.join(unknown)}")
+        writes = [d for d in changes if d.vehicle_value is not None]
+        self.say(f"{len(writes)} of {len(f.values)} parameters differ from the vehicle: writing them")
+        for d in writes:
+            self.report(self.drone.set_parameter(d.name, d.file_value, allow_out_of_bounds=force))
+
+    def _save(self, rest: list[str]) -> None:
+        fmt = ParamFormat.MISSION_PLANNER if rest[-1:] == ["missionplanner"] else ParamFormat.MAVPROXY
+        if rest[-1:] == ["missionplanner"]:
+            rest = rest[:-1]
+        if not 1 <= len(rest) <= 2:
+            raise ValueError("usage: param save FILE [PATTERN] [missionplanner]")
+        table = self.drone.state().parameters
+        if not table.complete:
+            self.say(f"warning: only {table.received} of {table.expected or '?'} parameters are known")
+        try:
+            count = write_param_file(rest[0], table, fmt, rest[1] if len(rest) > 1 else "*")
+        except OSError as e:
+            raise ValueError(f"cannot write {rest[0]}: {e.strerror or e}") from None
+        self.say(f"saved {count} parameters to {rest[0]} ({fmt.value})")
+
+    def _diff(self, rest: list[str]) -> None:
+        if not 1 <= len(rest) <= 2:
+            raise ValueError("usage: param diff FILE [PATTERN]")
+        f = self._read(rest[0])
+        table = self.drone.state().parameters
+        changes = compare(f.values, table, rest[1] if len(rest) > 1 else "*")
+        self.say(f"{'PARAMETER':<16} {'FILE':>12} {'VEHICLE':>12}")
+        for d in changes:
+            mine = format_value(d.type, d.file_value) if d.file_value is not None else "-"
+            theirs = format_value(d.type, d.vehicle_value) if d.vehicle_value is not None else "-"
+            self.say(f"{d.name:<16} {mine:>12} {theirs:>12}")
+        self.say(f"{len(changes)} differences")
+
+    def _read(self, path: str):
+        try:
+            f = read_param_file(path)
+        except OSError as e:
+            raise ValueError(f"cannot read {path}: {e.strerror or e}") from None
+        for problem in f.problems:
+            self.say(f"{path} {problem}")
+        return f
+
+
+def _value(text: str) -> float:
+    try:
+        return float(int(text, 16)) if text.lower().startswith("0x") else float(text)
+    except ValueError:
+        raise ValueError(f"VALUE must be a number, not {text!r}") from None
+
+
+def _meaning(info: ParamMeta | None, value: float) -> str:
+    if info is None:
+        return ""
+    text = info.value_text(value)
+    unit = f" {info.units}" if info.units else ""
+    return f"{unit}  ({text})" if text else unit
