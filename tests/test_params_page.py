@@ -173,3 +173,43 @@ def test_out_of_bounds_needs_explicit_confirmation(qtbot, sim, window):
     assert "confirmed" in review.table.item(0, 3).text()
     qtbot.waitUntil(lambda: review.result("RTL_ALT") == WriteState.CONFIRMED.value, timeout=15000)
     assert sim.autopilot.params["RTL_ALT"] == 1000000000
+
+
+def test_save_a_file_then_compare_it_and_apply_selectively(qtbot, sim, window, tmp_path):
+    page = open_page(qtbot, window)
+    controller = window.params
+    saved = str(tmp_path / "solo.param")
+    qtbot.mouseClick(page.save_button, Qt.LeftButton)
+    dialog = page.file_dialog
+    dialog.selectFile(saved)
+    dialog.accept()
+    lines = open(saved).read().splitlines()
+    assert len(lines) == 1392 and lines[0].split() == ["ACRO_BAL_PITCH", "1"]
+
+    edited = str(tmp_path / "tuned.param")
+    text = open(saved).read()
+    for name, value in (("WPNAV_SPEED", "1200"), ("LOIT_SPEED", "900"), ("RTL_ALT", "1000000000")):
+        text = "\n".join(f"{name},{value}" if line.split()[0] == name else line for line in text.splitlines())
+    open(edited, "w").write(text + "\nNOT_A_PARAM,5\nthis line is not a parameter\n")
+    qtbot.mouseClick(page.compare_button, Qt.LeftButton)
+    page.file_dialog.selectFile(edited)
+    page.file_dialog.accept()
+    compare = controller.compare
+    assert compare is not None and compare.isVisible()
+    assert compare.names() == ["LOIT_SPEED", "NOT_A_PARAM", "RTL_ALT", "WPNAV_SPEED"]
+    summary = compare.summary.text()                               # 3 counters MAVProxy never loads are left out
+    assert "1386 the same" in summary and "not a parameter" in summary and "FORMAT_VERSION" in summary
+    assert "on the vehicle only" not in summary
+    assert "NOT_A_PARAM" not in compare.ticked()                   # the vehicle has none: it cannot be applied
+    compare.set_ticked("LOIT_SPEED", False)
+    compare.set_ticked("RTL_ALT", False)
+    assert compare.apply_button.text() == "Stage 1 for review"
+    qtbot.mouseClick(compare.apply_button, Qt.LeftButton)
+
+    qtbot.waitUntil(lambda: controller.review is not None and controller.review.isVisible(), timeout=3000)
+    assert controller.model.pending == {"WPNAV_SPEED": 1200.0}
+    review = controller.review
+    qtbot.mouseClick(review.write_button, Qt.LeftButton)
+    qtbot.waitUntil(lambda: review.result("WPNAV_SPEED") == WriteState.CONFIRMED.value, timeout=15000)
+    assert sim.autopilot.params["WPNAV_SPEED"] == 1200
+    assert sim.autopilot.params["LOIT_SPEED"] != 900 and sim.autopilot.params["RTL_ALT"] != 1000000000

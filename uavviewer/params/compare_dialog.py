@@ -1,37 +1,25 @@
 """A .param file beside the vehicle: every difference listed, the ones ticked staged for review."""
 from __future__ import annotations
 
-from dataclasses import dataclass
-
 from PyQt5.QtCore import Qt, pyqtSignal
 from PyQt5.QtGui import QBrush
 from PyQt5.QtWidgets import QDialog, QDialogButtonBox, QLabel, QPushButton, QTableWidgetItem, QVBoxLayout, QWidget
 
 from .checklist import checklist
 
+from .rows import FileRow
 from .table_model import DIM, FAILED, PENDING
 
-__all__ = ["CompareDialog", "Difference"]
+__all__ = ["CompareDialog"]
 
 _NAME, _VEHICLE, _FILE, _NOTES = range(4)
-
-
-@dataclass(frozen=True)
-class Difference:
-    name: str
-    vehicle: str                 # "" when the vehicle has no such parameter
-    file: str
-    value: float                 # the file's value
-    notes: str = ""
-    warn: bool = False           # outside the bounds: staging it asks first
-    applicable: bool = True      # False: the vehicle has no such parameter, or the value cannot be held
 
 
 class CompareDialog(QDialog):
     applyRequested = pyqtSignal(dict)          # name → the file's value, for every ticked row
 
-    def __init__(self, path: str, differences: list[Difference], same: int, vehicle_only: int,
-                 parent: QWidget | None = None) -> None:
+    def __init__(self, path: str, differences: list[FileRow], same: int, vehicle_only: int,
+                 parent: QWidget | None = None, problems: list[str] = (), excluded: list[str] = ()) -> None:
         super().__init__(parent)
         self.setObjectName("compareDialog")
         self.setWindowTitle(f"Compare with {path}")
@@ -41,7 +29,10 @@ class CompareDialog(QDialog):
         summary = (f"<b>{path}</b>: {len(differences)} difference(s) with the vehicle, {same} the same"
                    + (f", {vehicle_only} on the vehicle only (left as they are)" if vehicle_only else "") + ". "
                    + ("Tick the values to take from the file; they are staged for review, nothing is written yet."
-                      if applicable else "Nothing to apply."))
+                      if applicable else "Nothing to apply.")
+                   + (f"<br>Not read: {'; '.join(problems[:5])}" + (" …" if len(problems) > 5 else "")
+                      if problems else "")
+                   + (f"<br>Left out as MAVProxy does: {', '.join(excluded)}" if excluded else ""))
         self.summary = QLabel(summary)
         self.summary.setWordWrap(True)
         self.table = checklist(len(differences), ["Parameter", "Vehicle", "File", "Notes"], _NOTES)

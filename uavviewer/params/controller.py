@@ -14,16 +14,16 @@ from PyQt5.QtCore import QObject, Qt, pyqtSignal
 from PyQt5.QtGui import QKeySequence
 from PyQt5.QtWidgets import QAction, QMainWindow, QMenu, QMessageBox, QTreeWidgetItem, QWidget
 
-from driver.params.values import format_value, same_value
 from driver.state import CommandResult, LinkStatus, Severity, VehicleState
 
 from ..dialogs import ask
-from .compare_dialog import CompareDialog, Difference
+from .compare_dialog import CompareDialog
 from .mentions import named_parameter
 from .page import ParametersPage
-from .review_dialog import ReviewDialog, ReviewRow
+from .review_dialog import ReviewDialog
+from .rows import compare_rows, review_rows
 from .table_model import ParameterModel, WriteState
-from .values import check, meta_attr, parse_value, range_text
+from .values import check, meta_attr, parse_value
 
 __all__ = ["ParamsController"]
 
@@ -132,7 +132,7 @@ class ParamsController(QObject):
                 page.resize(min(page.width(), screen.width() - 40), min(page.height(), screen.height() - 60))
                 frame = page.frameGeometry()
                 frame.moveCenter(self._parent.frameGeometry().center())
-                frame.moveTop(max(frame.top(), screen.top()))
+                frame.moveTop(max(min(frame.top(), screen.bottom() - frame.height()), screen.top()))
                 frame.moveLeft(max(min(frame.left(), screen.right() - frame.width()), screen.left()))
                 page.move(frame.topLeft())
             self.page = page
@@ -243,24 +243,7 @@ class ParamsController(QObject):
             return None
         if self.review is not None:
             self.review.reject()
-        rows = []
-        for name, value in pending.items():
-            param = self.model.parameter(name)
-            meta = self.model.meta(name)
-            verdict = check(param, value, meta)
-            notes = []
-            if verdict.warning:
-                notes.append(verdict.warning + " (confirmed)")
-            if meta is None:
-                notes.append("no metadata: bounds unknown")
-            elif range_text(meta):
-                notes.append(f"range {range_text(meta)}")
-            if meta_attr(meta, "reboot_required", False):
-                notes.append("needs a reboot to take effect")
-            units = meta_attr(meta, "units", "")
-            rows.append(ReviewRow(name, format_value(param.type, param.value) + (f" {units}" if units else ""),
-                                  format_value(param.type, value) + (f" {units}" if units else ""),
-                                  "; ".join(notes), bool(verdict.warning)))
+        rows = review_rows(pending, self.model.table, self.model.meta)
         review = ReviewDialog(rows, self.page or self._parent, armed=self._state.armed)
         review.setAttribute(Qt.WA_DeleteOnClose)
         review.writeRequested.connect(self.write)
@@ -316,48 +299,32 @@ class ParamsController(QObject):
             self._show_write(name, WriteState.FAILED, result.reason or result.status.value)
 
     # -- files and metadata ------------------------------------------------------------------------
-    def save_file(self, path: str) -> None:
-        from driver.params.files import write_param_file
+    def save_file(self, path: str, mission_planner: bool = False) -> None:
+        """The vehicle's parameters into ``path``, in MAVProxy's format (``NAME VALUE``) or Mission Planner's."""
+        from driver.params.files import ParamFormat, write_param_file
         table = self.model.table
         try:
-            write_param_file(path, table)
+            count = write_param_file(path, table, ParamFormat.MISSION_PLANNER if mission_planner
+                                     else ParamFormat.MAVPROXY)
         except OSError as exc:
             self.said.emit(f"Parameters not saved to {path}: {exc.strerror or exc}", Severity.WARNING)
             return
-        note = "" if table.complete else f" (incomplete: {table.received} of {table.expected or '?'})"
-        self.said.emit(f"{table.received} parameters saved to {path}{note}", Severity.INFO)
+        note = "" if table.complete else f" (incomplete: {table.received} of {table.expected or '?'} read)"
+        self.said.emit(f"{count} parameters saved to {path}{note}", Severity.INFO)
 
     def compare_file(self, path: str) -> CompareDialog | None:
         """List how the file at ``path`` differs from the vehicle; the ticked values are staged for review."""
         from driver.params.files import read_param_file
         try:
-            values = read_param_file(path)
-        except (OSError, ValueError) as exc:
-            self.said.emit(f"{path} not read: {exc}", Severity.WARNING)
+            file = read_param_file(path)
+        except OSError as exc:
+            self.said.emit(f"{path} not read: {exc.strerror or exc}", Severity.WARNING)
             return None
-        table = self.model.table
-        differences, same = [], 0
-        for name, value in values.items():
-            param = table.get(name)
-            if param is None:
-                differences.append(Difference(name, "", f"{value:g}", value,
-                                              "not on this vehicle" + ("" if table.complete else " (yet)"),
-                                              applicable=False))
-                continue
-            if same_value(param.type, param.value, value):
-                same += 1
-                continue
-            verdict = check(param, value, self.model.meta(name))
-            units = meta_attr(self.model.meta(name), "units", "")
-            notes = verdict.error or verdict.warning or (f"range {range_text(self.model.meta(name))}"
-                                                         if range_text(self.model.meta(name)) else "")
-            differences.append(Difference(name, format_value(param.type, param.value) + (f" {units}" if units else ""),
-                                          format_value(param.type, value) + (f" {units}" if units else ""), value,
-                                          notes, bool(verdict.warning), verdict.ok))
-        vehicle_only = sum(1 for name in table.values if name not in values)
+        rows, same, vehicle_only = compare_rows(file, self.model.table, self.model.meta)
         if self.compare is not None:
             self.compare.reject()
-        dialog = CompareDialog(path, differences, same, vehicle_only, self.page or self._parent)
+        dialog = CompareDialog(path, rows, same, vehicle_only, self.page or self._parent,
+                               problems=file.problems, excluded=file.excluded)
         dialog.setAttribute(Qt.WA_DeleteOnClose)
         dialog.applyRequested.connect(self._apply_from_file)
         dialog.finished.connect(lambda _r, d=dialog: self._compare_closed(d))

@@ -33,13 +33,14 @@ QPushButton#reviewButton:enabled { background: #1f5fa8; border-color: #2f81f7; }
 """
 
 PARAM_FILES = "Parameter files (*.param *.parm *.txt);;All files (*)"
+SAVE_FORMATS = "MAVProxy: NAME VALUE (*.param);;Mission Planner: NAME,VALUE (*.param)"
 METADATA_FILES = "ArduPilot parameter metadata (*.xml);;All files (*)"
 
 
 class ParametersPage(QWidget):
     refreshRequested = pyqtSignal()              # download every parameter again
     compareFileChosen = pyqtSignal(str)          # a .param file to compare with the vehicle
-    saveFileChosen = pyqtSignal(str)             # where to save the vehicle's parameters
+    saveFileChosen = pyqtSignal(str, bool)       # where to save the vehicle's parameters, in Mission Planner's format?
     metadataFileChosen = pyqtSignal(str)         # an apm.pdef.xml to read bounds and meanings from
     reviewRequested = pyqtSignal()
     discardRequested = pyqtSignal()              # drop every pending change
@@ -101,8 +102,8 @@ class ParametersPage(QWidget):
         header = self.table.horizontalHeader()
         header.setSectionResizeMode(QHeaderView.Interactive)
         header.setStretchLastSection(True)
-        for column, width in ((Column.NAME, 150), (Column.VALUE, 120), (Column.UNITS, 55), (Column.RANGE, 125),
-                              (Column.STATUS, 110)):
+        for column, width in ((Column.NAME, 150), (Column.VALUE, 150), (Column.UNITS, 50), (Column.RANGE, 110),
+                              (Column.STATUS, 90)):
             self.table.setColumnWidth(column, width)
         self.editor = ParamEditor()
         self.editor.setMinimumWidth(260)
@@ -142,8 +143,8 @@ class ParametersPage(QWidget):
         self.refresh_button.clicked.connect(self.refreshRequested)
         self.compare_button.clicked.connect(lambda: self._ask_file("Compare a parameter file with the vehicle",
                                                                    PARAM_FILES, self.compareFileChosen))
-        self.save_button.clicked.connect(lambda: self._ask_file("Save the vehicle's parameters", PARAM_FILES,
-                                                                self.saveFileChosen, save=True))
+        self.save_button.clicked.connect(lambda: self._ask_file("Save the vehicle's parameters", SAVE_FORMATS,
+                                                                self._save_chosen, save=True))
         self.metadata_button.clicked.connect(lambda: self._ask_file("ArduPilot parameter metadata", METADATA_FILES,
                                                                     self.metadataFileChosen))
         self.review_button.clicked.connect(self.reviewRequested)
@@ -152,7 +153,7 @@ class ParametersPage(QWidget):
         self.editor.revertRequested.connect(self.revertRequested)
         model.dataChanged.connect(self._data_changed)
         model.namesChanged.connect(self._update_groups)
-        model.modelReset.connect(self._show_metadata_columns)
+        model.metadataChanged.connect(self._show_metadata_columns)
         model.pendingChanged.connect(self._pending_changed)
         QShortcut(QKeySequence.Find, self, activated=lambda: (self.search.setFocus(), self.search.selectAll()))
         self._group_counts: dict[str, int] = {}
@@ -280,7 +281,12 @@ class ParametersPage(QWidget):
     def _group_picked(self, item: QListWidgetItem | None, _previous=None) -> None:
         self.proxy.set_group(item.data(Qt.UserRole) if item is not None else "")
 
-    def _ask_file(self, title: str, filters: str, chosen, save: bool = False) -> None:
+    def _save_chosen(self, path: str) -> None:
+        dialog = self.file_dialog
+        mission_planner = dialog is not None and dialog.selectedNameFilter().startswith("Mission Planner")
+        self.saveFileChosen.emit(path, mission_planner)
+
+    def _ask_file(self, title: str, filters: str, chosen, save: bool = False) -> QFileDialog:
         """A file dialog that does not block (``open``); ``chosen`` is emitted with the path."""
         dialog = QFileDialog(self, title, "", filters)
         dialog.setOption(QFileDialog.DontUseNativeDialog, True)
@@ -294,3 +300,4 @@ class ParametersPage(QWidget):
         dialog.finished.connect(lambda _r: setattr(self, "file_dialog", None))
         self.file_dialog = dialog
         dialog.open()
+        return dialog

@@ -8,18 +8,12 @@ from PyQt5.QtWidgets import QDialog, QDialogButtonBox, QLabel, QPushButton, QTab
 
 from .checklist import checklist
 
+from .rows import ReviewRow
 from .table_model import CONFIRMED, FAILED, PENDING, WriteState
 
-__all__ = ["ReviewDialog", "ReviewRow"]
+__all__ = ["ReviewDialog"]
 
 _NAME, _VEHICLE, _NEW, _NOTES, _RESULT = range(5)
-
-
-class ReviewRow:
-    """One pending change as the review shows it."""
-
-    def __init__(self, name: str, vehicle: str, new: str, notes: str = "", warn: bool = False) -> None:
-        self.name, self.vehicle, self.new, self.notes, self.warn = name, vehicle, new, notes, warn
 
 
 class ReviewDialog(QDialog):

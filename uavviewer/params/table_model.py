@@ -59,6 +59,7 @@ class ParameterModel(QAbstractTableModel):
     """Parameters, their metadata, the pilot's pending changes and how each write ended."""
     pendingChanged = pyqtSignal()            # a change was staged or dropped
     namesChanged = pyqtSignal()              # parameters were added (once per table), or the list started over
+    metadataChanged = pyqtSignal()
 
     def __init__(self, parent=None) -> None:
         super().__init__(parent)
@@ -139,9 +140,11 @@ class ParameterModel(QAbstractTableModel):
         self.pendingChanged.emit()
 
     def set_metadata(self, meta: Mapping[str, object]) -> None:
-        self.beginResetModel()
+        """Describe the parameters with ``meta``: every row repaints, the selection and scroll stay."""
         self._meta = meta or {}
-        self.endResetModel()
+        if self._names:
+            self.dataChanged.emit(self.index(0, 0), self.index(len(self._names) - 1, _COLUMNS - 1))
+        self.metadataChanged.emit()
 
     def meta(self, name: str):
         return self._meta.get(name)
@@ -256,7 +259,7 @@ class ParameterModel(QAbstractTableModel):
         if column is Column.VALUE:
             text = format_value(param.type, param.value)
             label = _label(meta, param.value)
-            if label:
+            if label and label != text:
                 text = f"{text} ({label})"
             if name in self._pending:
                 text += f" → {format_value(param.type, self._pending[name])}"
