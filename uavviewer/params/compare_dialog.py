@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 from PyQt5.QtCore import Qt, pyqtSignal
-from PyQt5.QtGui import QBrush
+from PyQt5.QtGui import QBrush, QIcon
 from PyQt5.QtWidgets import QDialog, QDialogButtonBox, QLabel, QPushButton, QTableWidgetItem, QVBoxLayout, QWidget
 
 from .checklist import checklist
@@ -64,7 +64,9 @@ class CompareDialog(QDialog):
         for b in (self.all_button, self.none_button, self.apply_button):
             b.setAutoDefault(False)
             self.buttons.addButton(b, QDialogButtonBox.ActionRole)
-        self.buttons.addButton(QDialogButtonBox.Close).clicked.connect(self.reject)
+        close = self.buttons.addButton(QDialogButtonBox.Close)
+        close.setIcon(QIcon())
+        close.clicked.connect(self.reject)
         layout = QVBoxLayout(self)
         layout.addWidget(self.summary)
         layout.addWidget(self.table, 1)

@@ -3,7 +3,7 @@ each write's outcome as the vehicle confirmed it (or did not)."""
 from __future__ import annotations
 
 from PyQt5.QtCore import Qt, pyqtSignal
-from PyQt5.QtGui import QBrush
+from PyQt5.QtGui import QBrush, QIcon
 from PyQt5.QtWidgets import QDialog, QDialogButtonBox, QLabel, QPushButton, QTableWidgetItem, QVBoxLayout, QWidget
 
 from .checklist import checklist
@@ -55,6 +55,7 @@ class ReviewDialog(QDialog):
         self.buttons.addButton(self.discard_button, QDialogButtonBox.ActionRole)
         close = self.buttons.addButton(QDialogButtonBox.Close)
         close.setAutoDefault(False)
+        close.setIcon(QIcon())
         layout = QVBoxLayout(self)
         layout.addWidget(self.summary)
         layout.addWidget(self.table, 1)
@@ -110,7 +111,7 @@ class ReviewDialog(QDialog):
         self.write_button.setText(f"Write {len(ticked)} to the vehicle")
         self.write_button.setEnabled(bool(ticked) and not writing)
         self.discard_button.setEnabled(bool(ticked) and not writing)
-        parts = [f"{self.table.rowCount()} change(s) pending."]
+        parts = [f"{self.table.rowCount()} change(s) to review."]
         if writing or confirmed or failed:
             parts.append(f"{confirmed} confirmed by the vehicle, {failed} not confirmed, {writing} writing.")
         else:
