@@ -3,7 +3,7 @@
 
     QT_QPA_PLATFORM=offscreen python bench/bench_params_page.py
 
-Prints, in milliseconds of UI-thread time: the list arriving in 28 steps of ~50 (as a download grows it, each
+With ArduCopter's metadata (the shipped apm.pdef.xml). Prints, in milliseconds of UI-thread time: the list arriving in 28 steps of ~50 (as a download grows it, each
 step a new ParameterTable), one value changing (the echo of a write), each keystroke of a search
 ("W", "WP", ..., "WPNAV_SPEED"), a group picked, and the page's first showing with every row.
 """
@@ -52,8 +52,10 @@ def main() -> None:
 
     app = QApplication(sys.argv)
     app.setStyleSheet(load_style())
+    from driver.params.metadata import load_metadata
     params = recorded_parameters()
     model = ParameterModel()
+    model.set_metadata(load_metadata())          # ArduCopter's shipped apm.pdef.xml: searched descriptions too
     page = ParametersPage(model)
     page.resize(1366, 700)
     page.show()
@@ -80,6 +82,7 @@ def main() -> None:
     print(f"group FENCE picked: {ms(lambda: (page.pick_group('FENCE'), app.processEvents())):.1f} ms; "
           f"back to All: {ms(lambda: (page.pick_group(''), app.processEvents())):.1f} ms")
     fresh = ParameterModel()
+    fresh.set_metadata(load_metadata())
     fresh.set_table(table)
     print(f"a new page over all of them, shown: "
           f"{ms(lambda: (ParametersPage(fresh).show(), app.processEvents())):.1f} ms")

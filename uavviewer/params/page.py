@@ -133,7 +133,7 @@ class ParametersPage(QWidget):
         layout.addLayout(status_row)
         layout.addWidget(splitter, 1)
         layout.addLayout(bottom)
-        self.resize(1200, 680)
+        self.resize(1300, 700)
 
         self.search.textChanged.connect(self.proxy.set_search)
         self.modified_only.toggled.connect(self.proxy.set_modified_only)

@@ -293,6 +293,8 @@ class ParameterModel(QAbstractTableModel):
         return QBrush(DIM) if column is not Column.DESCRIPTION else None
 
     def _tooltip(self, name: str, column: Column) -> str:
+        if column is Column.VALUE:                   # the whole text, which the column may cut short
+            return self._text(name, column)
         meta = self._meta.get(name)
         if meta is None:
             return f"{name}: no metadata (no bounds, units or description known)"
