@@ -57,6 +57,13 @@ def test_download_shows_progress_then_every_parameter(qtbot, sim, window):
     assert not page.progress.isVisible()
     assert page.groups.item(0).text() == "All (1,392)"
 
+    assert page.select("WPNAV_SPEED")
+    seen.clear()
+    qtbot.mouseClick(page.refresh_button, Qt.LeftButton)                   # everything again
+    qtbot.waitUntil(lambda: any(t.startswith("Downloading") for t in seen), timeout=5000)
+    qtbot.waitUntil(lambda: page.status.text().startswith("1,392 parameters, all read"), timeout=DOWNLOAD_MS)
+    assert page.current_name() == "WPNAV_SPEED"                          # the rows were not reset under the pilot
+
 
 def test_search_groups_and_modified_only(qtbot, sim, window):
     page = open_page(qtbot, window)
@@ -156,6 +163,8 @@ def test_out_of_bounds_needs_explicit_confirmation(qtbot, sim, window):
     meta = controller.model.meta("RTL_ALT")
     assert page.select("RTL_ALT") and meta.units in page.editor.facts.text()
     assert meta.description and page.editor.description.text() == meta.description
+    assert not page.editor.reboot.isVisible() and not page.editor.warning.isVisible()
+    assert page.select("FRAME_CLASS") and page.editor.reboot.isVisible()            # RebootRequired in the metadata
 
     stage(qtbot, page, "RTL_ALT", "1000000000")                   # what the recorded vehicle stored unchecked
     qtbot.waitUntil(lambda: controller.question is not None and controller.question.isVisible(), timeout=3000)
@@ -213,3 +222,17 @@ def test_save_a_file_then_compare_it_and_apply_selectively(qtbot, sim, window, t
     qtbot.waitUntil(lambda: review.result("WPNAV_SPEED") == WriteState.CONFIRMED.value, timeout=15000)
     assert sim.autopilot.params["WPNAV_SPEED"] == 1200
     assert sim.autopilot.params["LOIT_SPEED"] != 900 and sim.autopilot.params["RTL_ALT"] != 1000000000
+
+
+def test_another_vehicle_gets_none_of_the_changes_staged_for_the_first(qtbot, sim, sim_factory, vehicle_factory,
+                                                                       window):
+    page = open_page(qtbot, window)
+    stage(qtbot, page, "WPNAV_SPEED", "900")
+    assert window.params.model.pending == {"WPNAV_SPEED": 900.0}
+    other_sim = sim_factory(system_id=2)
+    other = vehicle_factory(f"tcp:127.0.0.1:{other_sim.tcp_port}")
+    assert other.wait_for(lambda s: s.connected, 10)
+    window.adapter.use(other)                                       # as the fleet does when the pilot picks it
+    qtbot.waitUntil(lambda: window.params.model.pending == {} and not page.review_button.isEnabled(), timeout=3000)
+    qtbot.waitUntil(lambda: window.params.model.table.complete, timeout=DOWNLOAD_MS)   # its own list, read anew
+    assert page.select("WPNAV_SPEED") and page.editor.value.text() == "1000"

@@ -243,7 +243,7 @@ class ParamsController(QObject):
             return None
         if self.review is not None:
             self.review.reject()
-        rows = review_rows(pending, self.model.table, self.model.meta)
+        rows = review_rows(pending, self.model.parameter, self.model.meta)
         review = ReviewDialog(rows, self.page or self._parent, armed=self._state.armed)
         review.setAttribute(Qt.WA_DeleteOnClose)
         review.writeRequested.connect(self.write)

@@ -43,10 +43,11 @@ def _with_units(text: str, meta) -> str:
     return f"{text} {units}" if units else text
 
 
-def review_rows(pending: dict[str, float], table: ParameterTable, meta_of: Callable) -> list[ReviewRow]:
+def review_rows(pending: dict[str, float], param_of: Callable, meta_of: Callable) -> list[ReviewRow]:
+    """``param_of(name)``: the Parameter as shown (during a Refresh, possibly the value read before it)."""
     rows = []
     for name, value in pending.items():
-        param, meta = table.get(name), meta_of(name)
+        param, meta = param_of(name), meta_of(name)
         if param is None:
             continue
         verdict = check(param, value, meta)

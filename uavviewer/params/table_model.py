@@ -64,6 +64,7 @@ class ParameterModel(QAbstractTableModel):
     def __init__(self, parent=None) -> None:
         super().__init__(parent)
         self._table = ParameterTable()
+        self._values: dict[str, Parameter] = {}   # what is shown: the table's, and during a refresh the older ones
         self._names: list[str] = []
         self._row: dict[str, int] = {}
         self._first: dict[str, float] = {}   # each value as first seen: "changed here" is measured from it
@@ -79,15 +80,16 @@ class ParameterModel(QAbstractTableModel):
         return self._table
 
     def set_table(self, table: ParameterTable) -> None:
-        """The newest table: new names are appended, new values repaint their rows; a table that lost names
-        (another vehicle) starts over."""
-        old = self._table
-        if table is old:
+        """The newest table: new names are inserted, new values repaint their rows. While a download runs (a
+        Refresh starts from an empty list) the values not read again yet stay shown; a finished table that lost
+        names starts over."""
+        if table is self._table:
             return
         self._table = table
         values = table.values
-        if any(name not in values for name in self._names):
+        if not table.downloading and any(name not in values for name in self._names):
             self.beginResetModel()
+            self._values = dict(values)
             self._names = sorted(values)
             self._row = {n: i for i, n in enumerate(self._names)}
             self._first = {n: p.value for n, p in values.items()}
@@ -97,18 +99,18 @@ class ParameterModel(QAbstractTableModel):
             self.namesChanged.emit()
             self.pendingChanged.emit()
             return
+        old_values = self._values
+        self._values = {**old_values, **values}
         new = sorted(name for name in values if name not in self._row)
-        old_values = old.values
         if new:
             self._insert(new)
-        if new:
             self._row = {n: i for i, n in enumerate(self._names)}
             for name in new:
                 self._first.setdefault(name, values[name].value)
             self.namesChanged.emit()
-        changed = [self._row[n] for n in self._names if values[n] is not old_values.get(n) and n in old_values]
+        changed = [self._row[n] for n, p in values.items() if n in old_values and p is not old_values[n]]
         if changed:
-            self.dataChanged.emit(self.index(min(changed), 0), self.index(max(changed), len(Column) - 1))
+            self.dataChanged.emit(self.index(min(changed), 0), self.index(max(changed), _COLUMNS - 1))
 
     def _insert(self, new: list[str]) -> None:
         """Insert the sorted ``new`` names where they belong, a run of neighbours at a time (a download brings
@@ -132,7 +134,7 @@ class ParameterModel(QAbstractTableModel):
         """Another vehicle: nothing shown, staged or written so far applies to it."""
         self.beginResetModel()
         self._table = ParameterTable()
-        self._names, self._row, self._first = [], {}, {}
+        self._values, self._names, self._row, self._first = {}, [], {}, {}
         self._pending.clear()
         self._writes.clear()
         self.endResetModel()
@@ -154,7 +156,7 @@ class ParameterModel(QAbstractTableModel):
         return bool(self._meta)
 
     def parameter(self, name: str) -> Parameter | None:
-        return self._table.get(name)
+        return self._values.get(name)
 
     def name_at(self, row: int) -> str:
         return self._names[row]
@@ -170,7 +172,7 @@ class ParameterModel(QAbstractTableModel):
 
     def stage(self, name: str, value: float) -> None:
         """Stage ``value`` for ``name``; staging the vehicle's own value drops the change."""
-        param = self._table.get(name)
+        param = self._values.get(name)
         if param is None:
             return
         if same_value(param.type, param.value, value):
@@ -199,7 +201,7 @@ class ParameterModel(QAbstractTableModel):
 
     def modified(self, name: str) -> bool:
         """Pending, changed since this page first saw it, or off the metadata's default where it gives one."""
-        param = self._table.get(name)
+        param = self._values.get(name)
         if param is None:
             return False
         if name in self._pending:
@@ -252,7 +254,7 @@ class ParameterModel(QAbstractTableModel):
         return None
 
     def _text(self, name: str, column: Column) -> str:
-        param = self._table.values[name]
+        param = self._values[name]
         meta = self._meta.get(name)
         if column is Column.NAME:
             return name
