@@ -236,3 +236,18 @@ def test_another_vehicle_gets_none_of_the_changes_staged_for_the_first(qtbot, si
     qtbot.waitUntil(lambda: window.params.model.pending == {} and not page.review_button.isEnabled(), timeout=3000)
     qtbot.waitUntil(lambda: window.params.model.table.complete, timeout=DOWNLOAD_MS)   # its own list, read anew
     assert page.select("WPNAV_SPEED") and page.editor.value.text() == "1000"
+
+
+def test_download_over_a_lossy_radio_says_what_it_re_asks(qtbot, sim_factory, vehicle_factory, window_factory):
+    from driver.sim.faults import LinkFaults
+    sim = sim_factory(seed=7)
+    sim.faults.downlink = LinkFaults(loss=0.3)
+    vehicle = vehicle_factory(f"tcp:127.0.0.1:{sim.tcp_port}")
+    assert vehicle.wait_for(lambda s: s.connected, 15)
+    w = window_factory(vehicle)
+    seen: list[str] = []
+    w.adapter.stateChanged.connect(lambda _s: w.params.page is not None and seen.append(w.params.page.status.text()))
+    page = open_page(qtbot, w)
+    assert w.params.model.rowCount() == 1392
+    assert any("missing" in text for text in seen)                # the driver's re-asking, shown as it goes
+    qtbot.waitUntil(lambda: page.status.text().startswith("1,392 parameters, all read"), timeout=3000)
