@@ -34,6 +34,7 @@ from .api import CEILING, Drone, Limits
 from .commands import CommandSender, Notifier, command_name
 from .forwarding import Forwarder
 from .link import LinkError, ReplayControl, TlogWriter, Transport, open_transport
+from .params.cache import ParameterCache
 from .params.manager import ParameterManager
 from .params.metadata import load_metadata, set_problem
 from .rules import COPTER_MODES, MAX_ALTITUDE, MIN_TAKEOFF_ALTITUDE, go_to_problem, takeoff_altitude_problem
@@ -94,6 +95,7 @@ class VehicleConfig:
     signing: SigningConfig | None = None      # MAVLink 2 signing (driver.signing); None: off until a key is given
     allowed_senders: tuple[str, ...] = ()     # UDP: other addresses read besides the vehicle's ("10.1.1.1")
     param_metadata: str | None = None         # apm.pdef.xml; None: the per-user cache's, else the shipped copy
+    param_cache: str | None = ""              # folder of tables per vehicle; "": the per-user cache, None: none
 
 
 def _ground_only(s: VehicleState) -> str | None:
@@ -131,6 +133,8 @@ class Vehicle(Drone):
         self._commands = CommandSender(self._store, cfg, self._notifier, self._target_ids)
         self._link = LinkSupervisor(cfg, self._transport, self._commands.capabilities, self._target_ids)
         self._params = ParameterManager(self._store, self._notifier, self._target_ids)
+        self._param_cache = ParameterCache(cfg.param_cache or None) if cfg.param_cache is not None else None
+        self._params.on_complete = self._cache_parameters
         self._metadata = None                 # loaded by start() in the background (half a second of XML)
         self._metadata_loaded = threading.Event()
         self._metadata_lock = threading.Lock()
@@ -750,10 +754,19 @@ class Vehicle(Drone):
         """Download every parameter into ``state().parameters`` (driver.params.download)."""
         if self._replay is not None:
             return self._finish("parameters", CommandStatus.REJECTED, "replaying a recording: no vehicle to ask")
+        s = self.state()
+        cached = None if refresh or self._param_cache is None else self._param_cache.load(s.system_id, s.firmware)
         with self._lock:
-            future = self._params.fetch(refresh, time.monotonic())
+            future = self._params.fetch(refresh, time.monotonic(), cached)
         self._wake.set()
         return future
+
+    def _cache_parameters(self, table) -> None:
+        """A complete table: kept per vehicle for its next connection (written off the reader's lock)."""
+        if self._param_cache is not None:
+            s = self._store.view()
+            threading.Thread(target=self._param_cache.save, args=(s["system_id"], s["firmware"], table),
+                             name="param-cache", daemon=True).start()
 
     def set_parameter(self, name: str, value: float, allow_out_of_bounds: bool = False) -> Future:
         """PARAM_SET in the parameter's own type, confirmed by the vehicle's echo (driver.params.setter); outside

@@ -18,8 +18,10 @@ SPEEDUP = 4.0
 
 @pytest.fixture(autouse=True, scope="session")
 def _own_state_folder(tmp_path_factory):
-    """What the program keeps per user (the signing timestamp) goes to the test run's folder, not ~/.local."""
+    """What the program keeps per user (the signing timestamp, the parameter cache) goes to the test run's
+    folder, not ~/.local or ~/.cache."""
     os.environ["XDG_STATE_HOME"] = str(tmp_path_factory.mktemp("state"))
+    os.environ["XDG_CACHE_HOME"] = str(tmp_path_factory.mktemp("cache"))    # the parameter cache too
 
 
 @pytest.fixture

@@ -1,8 +1,13 @@
 """Reading every parameter through the driver: the whole list, then re-asking what the radio lost."""
 from __future__ import annotations
 
+import os
+
+from driver.params.cache import ParameterCache
 from driver.params.model import ParamType
 from driver.state import CommandStatus
+
+from ice_fixtures import eventually
 
 
 def _same_as_sim(table, sim) -> None:
@@ -66,3 +71,29 @@ def test_a_lost_link_ends_the_download_and_the_next_asks_only_for_what_is_missin
     assert result.ok, result
     assert sum(1 for _, kind, _ in sim.received_messages if kind == "PARAM_REQUEST_LIST") == lists_before
     _same_as_sim(vehicle.state().parameters, sim)
+
+
+def test_a_known_vehicle_shows_its_cached_table_at_once_and_names_what_changed(sim, vehicle_factory, tmp_path):
+    folder = str(tmp_path / "params")
+    url = f"tcp:127.0.0.1:{sim.tcp_port}"
+    first = vehicle_factory(url, param_cache=folder)
+    assert first.wait_for(lambda s: s.connected and s.firmware, 10)
+    assert first.fetch_parameters().result(timeout=30).ok
+    saved = ParameterCache(folder).path(1, first.state().firmware)
+    assert eventually(lambda: os.path.exists(saved), 5)                  # written off the reader's lock
+    first.close()
+    sim.autopilot.params["RTL_ALT"] = 2000                               # changed meanwhile (another station)
+    again = vehicle_factory(url, param_cache=folder)
+    s = again.wait_for(lambda s: s.connected and s.firmware, 10)
+    future = again.fetch_parameters()
+    shown = again.state().parameters
+    assert shown.received == 1392 and shown.downloading and "from the cache" in shown.detail
+    assert shown.get("RTL_ALT").value == 1500                             # what it was: not checked yet
+    assert future.result(timeout=30).ok
+    assert again.state().parameters.get("RTL_ALT").value == 2000
+    assert any("1 changed since this vehicle was last seen: RTL_ALT" in m.text for m in again.state().messages)
+    other = vehicle_factory(url, param_cache=folder)                       # refresh: the cache is not shown
+    assert other.wait_for(lambda s: s.connected and s.firmware, 10)
+    other.fetch_parameters(refresh=True)
+    assert "from the cache" not in other.state().parameters.detail
+    assert s.system_id == 1

@@ -26,7 +26,10 @@ from ..api import CEILING, Drone, Limits
 from ..frames import clamp, finite
 from ..state import (CommandResult, CommandStatus, Fence, LinkHealth, LinkStatus, Message, Severity, VehicleState,
                      replace)
+from ..params.metadata import load_metadata
+from ..params.model import ParameterTable
 from . import convert, load_slice
+from .params import table_from_ice
 from .server import DEFAULT_PORTS
 
 jderobot, mavlinkserver = load_slice()
@@ -35,6 +38,7 @@ log = logging.getLogger(__name__)
 _MAX_MESSAGES = 200
 _MAX_RESULTS = 50
 FENCE_EVERY = 20                       # polls between reads of the fence (2 s at the default 0.1 s poll)
+PARAMS_EVERY = 10                      # polls between looks at the parameters (each poll while they change)
 RESUBSCRIBE_AFTER = 5.0                # s without a publication while the server answers: subscribe again
 PREFIX = "UAVViewer"
 #: KB a reply may have: the largest picture a JdeRobot Camera sends the viewer, 1920x1080 RGB8 (6075 KB),
@@ -112,6 +116,11 @@ class IceDrone(Drone):
         self._said_unreachable = False
         self._fence = Fence()
         self._fence_polls = 0                  # polls until the fence is read again; None: the server has none
+        self._parameters = ParameterTable()
+        self._param_revision = -1              # the server's revision of the table we have
+        self._param_polls: int | None = 0      # polls until the parameters are looked at; None: the server has none
+        self._metadata = None
+        self._metadata_lock = threading.Lock()
 
         self._velocity: tuple[float, float, float, float] | None = None
         self._velocity_ready = threading.Condition(threading.Lock())
@@ -243,6 +252,7 @@ class IceDrone(Drone):
                 if self._vehicle is not None:       # the fence is not published: asked now and then
                     try:
                         self._read_fence()
+                        self._read_parameters()
                     except Ice.Exception:           # the status from IceStorm tells how the link is
                         pass
                 self._closing.wait(self._poll)      # IceStorm brings the status: no call to the server
@@ -257,6 +267,7 @@ class IceDrone(Drone):
                         lim = self._vehicle.getLimits()
                         self._limits = self._clamps(Limits(lim.horizontal, lim.vertical, lim.yawRate))
                     self._read_fence()
+                    self._read_parameters()
                     self._answered(self._vehicle.getStatus(self._server_message, self._server_result))
                     if (self._subscription is not None
                             and started - max(self._subscribed_at, published or 0.0) > RESUBSCRIBE_AFTER):
@@ -281,6 +292,26 @@ class IceDrone(Drone):
             self._fence_polls = None
             with self._lock:
                 self._note(Severity.NOTICE, "this MAVLinkServer does not serve the fence (an older version)")
+
+    def _read_parameters(self) -> None:
+        """Vehicle.getParameters: the summary only while nothing changed; each poll while the table changes."""
+        if self._param_polls is None:
+            return
+        if self._param_polls > 0:
+            self._param_polls -= 1
+            return
+        try:
+            answer = self._vehicle.getParameters("*", self._param_revision)
+        except Ice.OperationNotExistException:
+            self._param_polls = None
+            return
+        changed = answer.revision != self._param_revision
+        if changed:
+            table = table_from_ice(answer)
+            with self._lock:
+                self._param_revision, self._parameters = answer.revision, table
+                self._state = replace(self._state, parameters=table)
+        self._param_polls = 0 if changed or answer.downloading else PARAMS_EVERY
 
     def _clamps(self, server: Limits) -> Limits:
         """The server's limits, tightened by JdeRobot's optional ``UAVViewer.CMDVel.Xmax/Ymax/Zmax/Yawmax``."""
@@ -334,7 +365,7 @@ class IceDrone(Drone):
             s = convert.state_from_status(status, tuple(self._messages), tuple(self._results))
             link = replace(s.link, address=f"{s.link.address} via {self._description}",
                            lost_count=s.link.lost_count + self._lost_count)
-            self._state = replace(s, link=link, fence=self._fence)
+            self._state = replace(s, link=link, fence=self._fence, parameters=self._parameters)
 
     def _result(self, outcome) -> CommandResult:
         """The server's outcome, numbered as in our results (the window pairs a Future's answer with it)."""
@@ -569,6 +600,35 @@ class IceDrone(Drone):
         if self._vehicle is None:
             return self._no_extension("yaw")
         return self._command("yaw", lambda p: p.setYawAsync(float(degrees), bool(relative), float(rate_deg_s)))
+
+    # -- parameters: the server's driver reads and writes them (driver.params) ------------------------
+    def fetch_parameters(self, refresh: bool = False) -> Future:
+        if self._vehicle is None:
+            return self._no_extension("parameters")
+        return self._parameter_command("parameters", lambda p: p.fetchParametersAsync(bool(refresh)))
+
+    def set_parameter(self, name: str, value: float, allow_out_of_bounds: bool = False) -> Future:
+        if self._vehicle is None:
+            return self._no_extension(f"param {name}")
+        if not finite(value):
+            return self._local_result(f"param {name}", CommandStatus.REJECTED, "not a finite number")
+        return self._parameter_command(f"param {name}", lambda p: p.setParameterAsync(
+            str(name), float(value), bool(allow_out_of_bounds)))
+
+    def _parameter_command(self, name: str, start) -> Future:
+        """A command whose answer changes the table: looked at again on the next poll."""
+        self._param_polls = 0 if self._param_polls is not None else None
+        future = self._command(name, start)
+        future.add_done_callback(lambda _: setattr(self, "_param_polls", 0 if self._param_polls is not None else None))
+        return future
+
+    @property
+    def parameter_metadata(self):
+        """ArduPilot's metadata from this machine (the per-user cache's, else the shipped copy)."""
+        with self._metadata_lock:
+            if self._metadata is None:
+                self._metadata = load_metadata() or False
+            return self._metadata or None
 
     def toggle_camera(self) -> Future:
         """JdeRobot's ``Extra.toggleCam``: the server moves its Camera to its next source."""

@@ -28,6 +28,7 @@ from ..frames import finite
 from ..rules import COPTER_MODES, MAX_ALTITUDE, go_to_problem, takeoff_altitude_problem
 from ..state import CommandResult, CommandStatus, LandedState
 from . import convert, load_slice
+from .params import Revisions, table_to_ice
 
 jderobot, mavlinkserver = load_slice()
 log = logging.getLogger(__name__)
@@ -289,6 +290,7 @@ class VehicleI(mavlinkserver.Vehicle):
         self._lock = threading.Lock()
         self._pending: dict[Ice.Future, str] = {}     # answers still waiting for the vehicle
         self.status_calls = 0                         # getStatus dispatches: what polling observers cost
+        self._revisions = Revisions()                 # of the parameter tables served
 
     def _reply(self, answer: Ice.Future, result: CommandResult) -> None:
         with self._lock:
@@ -403,6 +405,20 @@ class VehicleI(mavlinkserver.Vehicle):
         if not finite(degrees, rateDegS):
             return self._rejected("yaw", "non-finite angle or rate")
         return self._answer("yaw", lambda: self._vehicle.set_yaw(degrees, relative, rateDegS))
+
+    # -- parameters (driver.params; driver.ice.params) ------------------------------------------------
+    def getParameters(self, pattern, knownRevision, current=None):
+        table = self._vehicle.state().parameters
+        return table_to_ice(mavlinkserver, table, self._revisions.of(table), pattern, knownRevision)
+
+    def fetchParameters(self, refresh, current=None):
+        return self._answer("parameters", lambda: self._vehicle.fetch_parameters(bool(refresh)))
+
+    def setParameter(self, name, value, allowOutOfBounds, current=None):
+        if allowOutOfBounds:
+            log.warning("Vehicle.setParameter %s=%g: an Ice client confirmed a value outside the bounds", name, value)
+        return self._answer(f"param {name}", lambda: self._vehicle.set_parameter(str(name), float(value),
+                                                                                 bool(allowOutOfBounds)))
 
     def getTakeoffAltitude(self, current=None):
         return self._settings.takeoff_altitude

@@ -13,7 +13,8 @@ import math
 from concurrent.futures import Future
 from typing import Callable
 
-from ..state import CommandStatus, LinkStatus
+from ..state import CommandStatus, LinkStatus, Severity
+from .cache import changed_names
 from .download import Download
 from .model import Parameter, ParameterTable, ParamType
 from .setter import SET_RETRY, PendingSet
@@ -48,6 +49,7 @@ class ParameterManager:
         self._dirty = False
         self._published = -math.inf
         self._detail = ""
+        self._cached: ParameterTable | None = None   # shown while the vehicle's own list is read
         self.on_complete: Callable[[ParameterTable], None] | None = None   # the cache's hook
 
     # -- what callers ask (any thread, under the lock) ------------------------------------------------
@@ -55,9 +57,10 @@ class ParameterManager:
     def table(self) -> ParameterTable:
         return self._store.view()["parameters"]
 
-    def fetch(self, refresh: bool, now: float) -> Future:
+    def fetch(self, refresh: bool, now: float, cached: ParameterTable | None = None) -> Future:
         """Download every parameter; without ``refresh`` a complete table is answered at once and a partial one
-        only has its missing indexes asked for."""
+        only has its missing indexes asked for. ``cached``: this vehicle's table from the cache, shown (and
+        compared at the end) while the list is read when nothing is known yet."""
         future: Future = Future()
         if self._download is not None:
             self._waiting.append(future)         # one download at a time: this one ends with it
@@ -75,6 +78,9 @@ class ParameterManager:
         self._download = download
         self._waiting.append(future)
         self._detail = "asking for the list" if download.listing else f"asking for {download.missing} missing"
+        if download.listing and cached is not None and cached.complete and self._expected is None:
+            self._cached = cached
+            self._detail = "from the cache: checking with the vehicle"
         self._publish(now, force=True)
         return future
 
@@ -210,10 +216,16 @@ class ParameterManager:
     def _end_download(self, status: CommandStatus, reason: str, now: float = 0.0) -> None:
         d, self._download = self._download, None
         waiting, self._waiting = self._waiting, []
+        cached, self._cached = self._cached, None
         if d is not None and d.reads:
             reason += f" ({d.reads} asked again by index)"
         self._detail = "" if status is CommandStatus.ACCEPTED else reason
         self._publish(now, force=True)
+        if cached is not None and status is CommandStatus.ACCEPTED:
+            changed = changed_names(cached, self.table)
+            names = ", ".join(changed[:8]) + (", ..." if len(changed) > 8 else "")
+            self._store.add_message_locked(Severity.INFO, f"Parameters: {len(changed)} changed since this vehicle was "
+                                           f"last seen{': ' + names if changed else ''}")
         for future in waiting:
             self._settle(future, status, reason, "parameters")
         if status is CommandStatus.ACCEPTED and self.on_complete is not None:
@@ -228,7 +240,10 @@ class ParameterManager:
             return
         self._dirty = False
         self._published = now
-        self._store.set(parameters=ParameterTable(dict(self._values), self._expected, self._download is not None,
+        values, expected = self._values, self._expected
+        if self._cached is not None:              # the cache's values until the vehicle's own arrive
+            values, expected = {**self._cached.values, **values}, expected or self._cached.expected
+        self._store.set(parameters=ParameterTable(dict(values), expected, self._download is not None,
                                                   self._detail))
         self._store.publish()
 
