@@ -19,6 +19,12 @@ pytestmark = pytest.mark.timeout(120)
 DOWNLOAD_MS = 8000
 
 
+@pytest.fixture(autouse=True)
+def _first_connection(monkeypatch, tmp_path):
+    """Every test meets its vehicle for the first time: no parameter table kept from another test."""
+    monkeypatch.setenv("XDG_CACHE_HOME", str(tmp_path / "cache"))
+
+
 def open_page(qtbot, w):
     """Vehicle › Parameters…, as the pilot opens it; returns the page once every parameter is in."""
     action = w.findChild(type(w.menuBar().actions()[0]), "actionParameters")
@@ -251,3 +257,22 @@ def test_download_over_a_lossy_radio_says_what_it_re_asks(qtbot, sim_factory, ve
     assert w.params.model.rowCount() == 1392
     assert any("missing" in text for text in seen)                # the driver's re-asking, shown as it goes
     qtbot.waitUntil(lambda: page.status.text().startswith("1,392 parameters, all read"), timeout=3000)
+
+
+def test_a_reconnect_shows_the_kept_table_at_once_then_reads_it_again(qtbot, sim, vehicle, vehicle_factory,
+                                                                        window_factory):
+    first = window_factory(vehicle)
+    open_page(qtbot, first)
+    first.quit_without_asking()
+    vehicle.close()
+    sim.autopilot.params["WPNAV_SPEED"] = 1100                      # changed while we were away
+    again = vehicle_factory(f"tcp:127.0.0.1:{sim.tcp_port}")
+    assert again.wait_for(lambda s: s.connected, 10)
+    w = window_factory(again)
+    seen: list[str] = []
+    w.adapter.stateChanged.connect(lambda _s: w.params.page is not None and seen.append(w.params.page.status.text()))
+    page = open_page(qtbot, w)
+    qtbot.waitUntil(lambda: not w.params.model.table.downloading, timeout=DOWNLOAD_MS)
+    assert any(t.startswith("1,392 parameters shown, reading them again") for t in seen)
+    assert page.select("WPNAV_SPEED") and page.editor.value.text() == "1100"
+    assert any("changed since" in t and "WPNAV_SPEED" in t for t in w.messages.texts())

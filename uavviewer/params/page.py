@@ -165,7 +165,11 @@ class ParametersPage(QWidget):
     def show_download(self, table: ParameterTable, connected: bool) -> None:
         """The download's progress: a bar while it runs, the count when complete, why when it stopped short."""
         expected = table.expected
-        if table.downloading and expected:
+        if table.downloading and table.complete:    # a table kept from before (the per-vehicle cache), re-read
+            self.progress.setRange(0, 0)
+            self.progress.show()
+            text = f"{table.received:,} parameters shown, reading them again from the vehicle"
+        elif table.downloading and expected:
             self.progress.setRange(0, expected)
             self.progress.setValue(min(table.received, expected))
             self.progress.setFormat(f"{table.received:,} of {expected:,}")
