@@ -12,6 +12,7 @@ from PyQt5.QtWidgets import QMessageBox
 
 from uavviewer.params.mentions import named_parameter
 from uavviewer.params.table_model import Column, WriteState
+from ice_fixtures import drone_factory, server_factory  # noqa: F401  (fixtures)
 from viewer_fixtures import viewer_settings, window, window_factory  # noqa: F401  (fixtures)
 
 pytestmark = pytest.mark.timeout(120)
@@ -276,3 +277,15 @@ def test_a_reconnect_shows_the_kept_table_at_once_then_reads_it_again(qtbot, sim
     assert any(t.startswith("1,392 parameters shown, reading them again") for t in seen)
     assert page.select("WPNAV_SPEED") and page.editor.value.text() == "1100"
     assert any("changed since" in t and "WPNAV_SPEED" in t for t in w.messages.texts())
+
+
+def test_the_page_over_ice(qtbot, sim, vehicle, window_factory, server_factory, drone_factory):
+    """The same page on a remote vehicle: the list, the metadata and a confirmed write through the Ice server."""
+    w = window_factory(drone_factory(server_factory(vehicle)))
+    page = open_page(qtbot, w)
+    assert w.params.model.rowCount() == 1392
+    qtbot.waitUntil(lambda: w.params.model.meta("WPNAV_SPEED") is not None, timeout=10000)
+    stage(qtbot, page, "WPNAV_SPEED", "650")
+    review = review_and_write(qtbot, w, page)
+    qtbot.waitUntil(lambda: review.result("WPNAV_SPEED") == WriteState.CONFIRMED.value, timeout=15000)
+    assert sim.autopilot.params["WPNAV_SPEED"] == 650
