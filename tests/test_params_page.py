@@ -289,3 +289,22 @@ def test_the_page_over_ice(qtbot, sim, vehicle, window_factory, server_factory, 
     review = review_and_write(qtbot, w, page)
     qtbot.waitUntil(lambda: review.result("WPNAV_SPEED") == WriteState.CONFIRMED.value, timeout=15000)
     assert sim.autopilot.params["WPNAV_SPEED"] == 650
+
+
+def test_fix_on_a_go_to_refused_by_the_fence_opens_its_parameter(qtbot, sim_factory, vehicle_factory,
+                                                                 window_factory):
+    sim = sim_factory()
+    sim.autopilot.params["FENCE_ENABLE"] = 1                        # the vehicle's ceiling at 50 m
+    sim.autopilot.params["FENCE_ALT_MAX"] = 50
+    vehicle = vehicle_factory(f"tcp:127.0.0.1:{sim.tcp_port}")
+    assert vehicle.wait_for(lambda s: s.fence.ceiling == 50, 15)
+    w = window_factory(vehicle)
+    w.adapter.command("go_to", 10.0, 0.0, 60.0)                     # what the map's Fly here sends
+    messages = w.messages
+    qtbot.waitUntil(lambda: any("FENCE_ALT_MAX" in t for t in messages.texts()), timeout=5000)
+    row = next(i for i, t in enumerate(messages.texts()) if "FENCE_ALT_MAX" in t)
+    assert "rejected" in messages.texts()[row]
+    qtbot.mouseClick(messages.fix_button(row), Qt.LeftButton)
+    page = w.params.page
+    qtbot.waitUntil(lambda: page.isVisible() and page.current_name() == "FENCE_ALT_MAX", timeout=DOWNLOAD_MS)
+    assert page.editor.value.text() == "50"
