@@ -53,7 +53,7 @@ class ParamsController(QObject):
         self._wanted = ""                        # a parameter to show once the vehicle reports it (Fix…)
         self._asked = False                      # the download was asked for on this link
         self._fetch_problem = ""
-        self._writing: set[str] = set()
+        self._writing: dict[str, float] = {}      # name → the value on its way
         self._confirmed_outside: set[tuple[str, float]] = set()
         self._user_metadata = ""                 # a file the pilot chose with Metadata… (it wins over the driver's)
         self._relay = _Relay()
@@ -92,14 +92,10 @@ class ParamsController(QObject):
         if item is None or item.data(0, Qt.UserRole) is None or item.data(0, Qt.UserRole) > Severity.WARNING:
             return
         table = self.model.table
-        known = table.values if table.values else self._metadata
+        known = table.values if table.values else self.model.metadata
         name = named_parameter(item.text(2), known, complete=table.complete)
         if name:
             messages.offer_fix(item, name)
-
-    @property
-    def _metadata(self) -> Mapping[str, object]:
-        return self.model._meta                 # noqa: SLF001 - the model is this controller's own
 
     # -- the page ----------------------------------------------------------------------------------
     def open(self, name: str = "") -> ParametersPage:
@@ -269,13 +265,13 @@ class ParamsController(QObject):
             if not check(param, value, self.model.meta(name)).ok:      # never reaches the wire
                 self._show_write(name, WriteState.FAILED, "the value does not fit the parameter")
                 continue
-            self._writing.add(name)
+            self._writing[name] = value
             self._show_write(name, WriteState.WRITING)
             # outside the bounds only as the pilot confirmed exactly this value (the driver refuses it otherwise)
             self.adapter.command("set_parameter", name, value, (name, value) in self._confirmed_outside)
 
-    def _show_write(self, name: str, state: WriteState, reason: str = "") -> None:
-        self.model.set_write_state(name, state, reason)
+    def _show_write(self, name: str, state: WriteState, reason: str = "", written: float | None = None) -> None:
+        self.model.set_write_state(name, state, reason, written)
         if self.review is not None:
             self.review.show_write(name, state, reason)
 
@@ -290,9 +286,9 @@ class ParamsController(QObject):
         name = result.command[len("param "):].split("=", 1)[0].strip()
         if name not in self._writing:
             return
-        self._writing.discard(name)
+        written = self._writing.pop(name)
         if result.ok:
-            self._show_write(name, WriteState.CONFIRMED)
+            self._show_write(name, WriteState.CONFIRMED, written=written)
             if meta_attr(self.model.meta(name), "reboot_required", False):
                 self.said.emit(f"{name} takes effect after the vehicle reboots", Severity.NOTICE)
         else:

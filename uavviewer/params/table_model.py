@@ -152,6 +152,11 @@ class ParameterModel(QAbstractTableModel):
         return self._meta.get(name)
 
     @property
+    def metadata(self) -> Mapping[str, object]:
+        """ParamMetadata (or {} without any)."""
+        return self._meta
+
+    @property
     def has_metadata(self) -> bool:
         return bool(self._meta)
 
@@ -192,9 +197,11 @@ class ParameterModel(QAbstractTableModel):
     def write_state(self, name: str) -> tuple[WriteState, str] | None:
         return self._writes.get(name)
 
-    def set_write_state(self, name: str, state: WriteState, reason: str = "") -> None:
+    def set_write_state(self, name: str, state: WriteState, reason: str = "", written: float | None = None) -> None:
+        """How the write of ``name`` stands; once confirmed, the change is no longer pending, unless the pilot
+        has staged another value meanwhile (``written``: the value that was confirmed)."""
         self._writes[name] = (state, reason)
-        if state is WriteState.CONFIRMED:
+        if state is WriteState.CONFIRMED and (written is None or self._pending.get(name) == written):
             self._pending.pop(name, None)
             self.pendingChanged.emit()
         self._repaint(name)
