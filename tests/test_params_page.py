@@ -10,6 +10,7 @@ import pytest
 from PyQt5.QtCore import Qt
 from PyQt5.QtWidgets import QMessageBox
 
+from driver.sim.faults import LinkFaults
 from uavviewer.params.mentions import named_parameter
 from uavviewer.params.table_model import Column, WriteState
 from ice_fixtures import drone_factory, server_factory  # noqa: F401  (fixtures)
@@ -53,6 +54,7 @@ def review_and_write(qtbot, w, page):
 
 
 def test_download_shows_progress_then_every_parameter(qtbot, sim, window):
+    sim.faults.downlink = LinkFaults(loss=0.1)          # a real radio: the list takes more than one snapshot
     seen: list[str] = []
     window.adapter.stateChanged.connect(lambda _s: window.params.page is not None
                                         and seen.append(window.params.page.status.text()))
@@ -246,7 +248,6 @@ def test_another_vehicle_gets_none_of_the_changes_staged_for_the_first(qtbot, si
 
 
 def test_download_over_a_lossy_radio_says_what_it_re_asks(qtbot, sim_factory, vehicle_factory, window_factory):
-    from driver.sim.faults import LinkFaults
     sim = sim_factory(seed=7)
     sim.faults.downlink = LinkFaults(loss=0.3)
     vehicle = vehicle_factory(f"tcp:127.0.0.1:{sim.tcp_port}")
@@ -267,6 +268,7 @@ def test_a_reconnect_shows_the_kept_table_at_once_then_reads_it_again(qtbot, sim
     first.quit_without_asking()
     vehicle.close()
     sim.autopilot.params["WPNAV_SPEED"] = 1100                      # changed while we were away
+    sim.faults.downlink = LinkFaults(loss=0.2)                      # reading them again takes a while
     again = vehicle_factory(f"tcp:127.0.0.1:{sim.tcp_port}")
     assert again.wait_for(lambda s: s.connected and s.firmware, 10)   # the cache is per system id and firmware
     w = window_factory(again)
