@@ -11,6 +11,9 @@ the nose, and the *wrong reports*: a
 command the driver reported accepted that the vehicle never carried out, or reported failed although the
 vehicle did it. Every answer the driver gives is checked against the simulated vehicle's truth at the
 moment the driver gives it. Target: no wrong report anywhere; every cell up to 30 % loss completes.
+
+The parameter row (bench/param_cells.py, ``--no-params`` leaves it out): per profile and fault, every parameter
+downloaded and no wrong "set" report.
 """
 from __future__ import annotations
 
@@ -28,6 +31,7 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 from driver.sim import SimConfig, SimVehicle  # noqa: E402
 from driver.state import CommandStatus, LandedState  # noqa: E402
 from driver.vehicle import Vehicle, VehicleConfig  # noqa: E402
+import param_cells  # noqa: E402
 
 ALTITUDE = 3.0
 FORWARD_SPEED = 2.0
@@ -233,17 +237,38 @@ def main() -> int:
     ap.add_argument("--profiles", default=",".join(PROFILES))
     ap.add_argument("--faults", default=",".join(FAULTS))
     ap.add_argument("--markdown", action="store_true")
+    ap.add_argument("--no-params", dest="params", action="store_false", help="leave out the parameter row")
+    ap.add_argument("--only-params", action="store_true", help="the parameter row alone (no flights)")
     args = ap.parse_args()
     logging.basicConfig(level=logging.ERROR)        # the table says what happened
     cells = []
-    for profile in args.profiles.split(","):
+    for profile in args.profiles.split(",") if not args.only_params else ():
         for fault in args.faults.split(","):
             cell = fly(profile, fault, args.speedup)
             print(f"{profile:9s} {fault:11s} {'ok' if cell.completed else 'FAILED ' + cell.error} "
                   f"wrong={len(cell.wrong)}", file=sys.stderr, flush=True)
             cells.append(cell)
-    print(table(cells, args.speedup, args.markdown))
-    return 0 if all(c.completed and not c.wrong for c in cells) else 1
+    if cells:
+        print(table(cells, args.speedup, args.markdown))
+    checks = []
+    for profile in args.profiles.split(",") if args.params else ():
+        for fault in args.faults.split(","):
+            checks.append(param_cells.check(profile, fault, args.speedup, FAULTS[fault][1]))
+            print(f"{profile:9s} {fault:11s} parameters {checks[-1].downloaded}/{checks[-1].expected} "
+                  f"wrong={len(checks[-1].wrong)}", file=sys.stderr, flush=True)
+    if checks:
+        head, rows = param_cells.rows(checks)
+        print("\nParameters:")
+        if args.markdown:
+            print("\n".join(["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
+                            + ["| " + " | ".join(r) + " |" for r in rows]))
+        else:
+            widths = [max(len(x) for x in col) for col in zip(head, *rows)]
+            print("\n".join("  ".join(x.ljust(w) for x, w in zip(r, widths)) for r in (head, *rows)))
+        for c in checks:
+            for w in c.wrong:
+                print(f"WRONG parameters {c.profile}/{c.fault}: {w}")
+    return 0 if all(c.completed and not c.wrong for c in cells + checks) else 1
 
 
 if __name__ == "__main__":

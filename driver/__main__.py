@@ -62,6 +62,8 @@ def parser() -> argparse.ArgumentParser:
     p.add_argument("--aircraft", help="aircraft name: logs go to NAME/logs/, shown in the prompt")
     p.add_argument("--cmd", action="append", default=[], help='console commands to run at start, ";"-separated')
     p.add_argument("--daemon", action="store_true", help="no interactive console; run until interrupted")
+    p.add_argument("--param-metadata", metavar="FILE", help="ArduPilot's apm.pdef.xml for parameter bounds and "
+                   "meanings (default: the per-user cache's, else the copy shipped for ArduCopter)")
     version = p.add_mutually_exclusive_group()
     version.add_argument("--mav10", action="store_true", help="speak MAVLink 1 only")
     version.add_argument("--mav20", action="store_true", help="speak MAVLink 2 from the start")
@@ -208,7 +210,7 @@ def main(argv: list[str] | None = None) -> int:
                 target_component=opts.target_component, stream_rate=opts.streamrate, takeoff_altitude=takeoff_alt,
                 limits=Limits(), tlog_path=log_path(opts, name if len(names) > 1 else ""),
                 tlog_append=opts.append_log, outputs=tuple(opts.out), signing=signing, allowed_senders=allowed,
-                mavlink_version=1 if opts.mav10 else 2 if opts.mav20 else None))
+                mavlink_version=1 if opts.mav10 else 2 if opts.mav20 else None, param_metadata=opts.param_metadata))
             vehicles.append(vehicle)
             vehicle.start()
             own = props.clone()

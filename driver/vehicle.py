@@ -132,7 +132,7 @@ class Vehicle(Drone):
         self._notifier = Notifier()
         self._commands = CommandSender(self._store, cfg, self._notifier, self._target_ids)
         self._link = LinkSupervisor(cfg, self._transport, self._commands.capabilities, self._target_ids)
-        self._params = ParameterManager(self._store, self._notifier, self._target_ids)
+        self._params = ParameterManager(self._store, self._notifier, self._target_ids, 2 * cfg.loss_timeout)
         self._param_cache = ParameterCache(cfg.param_cache or None) if cfg.param_cache is not None else None
         self._params.on_complete = self._cache_parameters
         self._metadata = None                 # loaded by start() in the background (half a second of XML)
@@ -529,6 +529,8 @@ class Vehicle(Drone):
         if not frames.finite(m.param_value):
             return
         self._params.on_param_value(m, time.monotonic())
+        if self._params.reasking:
+            self._wake.set()                          # the next read goes out now, not on the next tick
         self._link.param_received(name)
         if name in FENCE_PARAMS:
             self._store.set(fence=self._store.view()["fence"].with_param(name, m.param_value))

@@ -124,3 +124,30 @@ def test_a_radio_streams_the_list_no_faster_than_its_bandwidth(sim_factory):
         assert rate < 57600 / 10 / 37 * 1.1           # bytes a second over a PARAM_VALUE frame's 37 bytes
     finally:
         gs.close()
+
+
+def test_the_gcs_failsafe_follows_fs_gcs_enable(flying, sim):
+    """ArduCopter's failsafe_gcs_check: off by default; on, a silent ground station makes it RTL (GUIDED is an
+    autopilot mode), and hearing it again clears the failsafe without changing the mode back."""
+    sim.faults.uplink.loss = 1.0                                   # the ground station falls silent
+    assert wait_until(lambda: sim.autopilot.t - sim.autopilot.gcs_seen > 6.0, 10)
+    assert sim.truth().mode == "GUIDED" and not sim.autopilot.gcs_failsafe
+    sim.faults.uplink.loss = 0.0
+    assert flying.set_parameter("FS_GCS_ENABLE", 1).result(timeout=10).ok
+    assert flying.set_parameter("WPNAV_SPEED", 750).result(timeout=10).ok
+    assert sim.autopilot._wp_speed() == 7.5                       # the behaviour reads the table
+    sim.faults.uplink.loss = 1.0
+    assert wait_until(lambda: sim.truth().mode == "RTL", 10), sim.truth()
+    sim.faults.uplink.loss = 0.0
+    assert flying.wait_for(lambda s: any(m.text == "GCS Failsafe Cleared" for m in s.messages), 10)
+    assert any(m.text == "GCS Failsafe" for m in flying.state().messages) and sim.truth().mode == "RTL"
+
+
+def test_fs_options_lets_a_pilot_controlled_mode_carry_on(flying, sim):
+    assert flying.set_parameter("FS_GCS_ENABLE", 1).result(timeout=10).ok
+    assert flying.set_mode("LOITER").result(timeout=10).ok
+    sim.faults.uplink.loss = 1.0
+    assert wait_until(lambda: sim.autopilot.gcs_failsafe, 10)
+    assert sim.truth().mode == "LOITER"                            # FS_OPTIONS 16 (the default): carry on
+    sim.faults.uplink.loss = 0.0
+    assert flying.wait_for(lambda s: any(m.text == "GCS Failsafe - Continuing Pilot Control" for m in s.messages), 10)

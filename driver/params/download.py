@@ -3,7 +3,10 @@
 As QGroundControl's ParameterManager: the list is asked for once; while the vehicle streams it, gaps (frames
 lost on the radio) are only noted. Once the stream has gone quiet, every index still missing is asked for
 with PARAM_REQUEST_READ, a few at a time (ArduPilot queues only a handful of reads), each asked again when its
-answer does not come. Unlike QGroundControl, which gives up on an index after a few tries, this goes on while
+answer does not come: at once when a read sent after it has been answered (the vehicle answers its queue in
+order, so the earlier one or its answer was lost), else after a few round trips. How many are out at once
+adapts as TCP's window does: one more for each answered, half as many when reads go unanswered altogether (a
+burst of interference, a radio's full buffer), so a link that drops frames when busy is not kept busier. Unlike QGroundControl, which gives up on an index after a few tries, this goes on while
 the link is up: a radio at 30 % loss still ends with every parameter. It ends when the set is complete, or
 when the link is lost (the table keeps what arrived; the next fetch asks only for what is missing).
 
@@ -24,7 +27,8 @@ LIST_RETRY = 2.0        # s without any PARAM_VALUE after PARAM_REQUEST_LIST bef
 LIST_TRIES = 5          # PARAM_REQUEST_LIST sent without any answer before the download fails
 QUIET_MIN = 0.4         # s: the stream counts as over after this long without a new index (or more: see quiet)
 QUIET_MAX = 2.0
-READ_WINDOW = 16        # PARAM_REQUEST_READs outstanding at once (ArduPilot answers reads from a small queue)
+READ_WINDOW = 16        # most PARAM_REQUEST_READs outstanding at once (ArduPilot answers reads from a small queue)
+MIN_WINDOW = 2
 READ_TIMEOUT_MIN = 0.1  # s before an unanswered read is asked again (or 3 round trips, whichever is longer)
 
 
@@ -39,10 +43,12 @@ class Download:
     list_tries: int = 0
     last_new: float = 0.0                # when the last new index arrived
     gap: float = 0.05                    # smoothed time between new indexes while the list streams
-    asked: dict[int, float] = field(default_factory=dict)     # index -> when it was asked
+    asked: dict[int, tuple[float, int]] = field(default_factory=dict)   # index -> (when, order), oldest first
+    sequence: int = 0                    # reads sent so far, to order them
     tries: dict[int, int] = field(default_factory=dict)       # index -> reads sent for it
     reads: int = 0                       # PARAM_REQUEST_READs sent
     rtt: float = 0.1                     # smoothed round trip of a read
+    window: float = READ_WINDOW          # reads outstanding at once now
 
     @property
     def missing(self) -> int:
@@ -65,9 +71,14 @@ class Download:
             self.expected = count
         if index in self.have or index >= count:
             return False
-        sent = self.asked.pop(index, None)
-        if sent is not None and self.tries.get(index) == 1:   # a re-asked one cannot say which read it answers
-            self.rtt = 0.8 * self.rtt + 0.2 * max(0.0, now - sent)
+        asked = self.asked.pop(index, None)
+        if asked is not None:
+            sent, order = asked
+            self.window = min(READ_WINDOW, self.window + 1.0 / self.window)
+            if self.tries.get(index) == 1:           # a re-asked one cannot say which read it answers
+                self.rtt = 0.8 * self.rtt + 0.2 * max(0.0, now - sent)
+            for earlier in [i for i, (_, o) in self.asked.items() if o < order]:
+                del self.asked[earlier]              # answered in order: those were lost, ask again now
         elif self.listing and self.have:
             self.gap = 0.9 * self.gap + 0.1 * max(0.0, now - self.last_new)
         self.have.add(index)
@@ -89,15 +100,18 @@ class Download:
                 return [], None
             self.listing = False                             # the stream is over: ask for the gaps
         timeout = max(READ_TIMEOUT_MIN, 3.0 * self.rtt)
-        for index, sent in list(self.asked.items()):
-            if now - sent >= timeout:
-                del self.asked[index]
+        timed_out = [index for index, (sent, _) in self.asked.items() if now - sent >= timeout]
+        for index in timed_out:
+            del self.asked[index]
+        if timed_out:
+            self.window = max(MIN_WINDOW, self.window / 2.0)
         out = []
         for index in range(self.expected):
-            if len(self.asked) >= READ_WINDOW:
+            if len(self.asked) >= int(self.window):
                 break
             if index not in self.have and index not in self.asked:
-                self.asked[index] = now
+                self.sequence += 1
+                self.asked[index] = (now, self.sequence)
                 self.tries[index] = self.tries.get(index, 0) + 1
                 out.append(mavlink.MAVLink_param_request_read_message(system, component, b"", index))
         self.reads += len(out)

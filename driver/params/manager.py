@@ -37,8 +37,10 @@ def param_name(m) -> str:
 class ParameterManager:
     """Parameters of one vehicle; every method runs with the driver's state lock held."""
 
-    def __init__(self, store, notifier, target: Callable[[], tuple[int, int]]) -> None:
+    def __init__(self, store, notifier, target: Callable[[], tuple[int, int]], give_up_after: float = 7.0) -> None:
         self._store = store
+        self._give_up_after = give_up_after      # s of a lost link before a download ends (it waits until then)
+        self._lost_since: float | None = None
         self._notifier = notifier
         self._target = target
         self._values: dict[str, Parameter] = {}
@@ -128,6 +130,11 @@ class ParameterManager:
         for pending in self._sets.values():
             pending.attempts = min(pending.attempts, max(0, pending.tries - 2))
 
+    @property
+    def reasking(self) -> bool:
+        """Reads by index are out: each answer frees a place for the next (the ticker is woken for it)."""
+        return self._download is not None and not self._download.listing
+
     # -- the vehicle's word (reader thread) -----------------------------------------------------------
     def on_param_value(self, m, now: float) -> Parameter | None:
         """A PARAM_VALUE from the autopilot: into the table; it may confirm a write or advance the download."""
@@ -172,11 +179,15 @@ class ParameterManager:
         """Messages to send now (the caller sends them after releasing the lock)."""
         out: list = []
         if link is LinkStatus.LOST or link is LinkStatus.CLOSED:
-            if self._download is not None:
+            # a few lost heartbeats on a bad radio pause the download; a link gone for longer ends it
+            self._lost_since = now if self._lost_since is None else self._lost_since
+            if self._download is not None and (link is LinkStatus.CLOSED
+                                               or now - self._lost_since >= self._give_up_after):
                 d = self._download
                 got = f"{len(d.have)} of {d.expected}" if d.expected else "none"
                 self._end_download(CommandStatus.TIMED_OUT, f"link lost: {got} parameters received", now)
             return out
+        self._lost_since = None
         if link is not LinkStatus.OK:
             return out                            # no vehicle yet: its answers would go nowhere
         target = self._target()

@@ -28,6 +28,7 @@ from .common import (DEFAULT_PARAMS, MODE_NAMES, MODES, NOT_ARMABLE, POSITION_MO
 from .faults import Faults
 from .flight import LAND_DISARM_DELAY, Flight
 from .messages import Messages
+from .failsafe import GcsFailsafe
 from .params import ParamProtocol, SimParams
 from .profiles import POSITION_REASONS, profile_of
 from .telemetry import EARTH_RADIUS, GRAVITY, METRES_PER_DEG, Telemetry
@@ -77,7 +78,7 @@ class SimTruth:
         return math.hypot(self.vn, self.ve)
 
 
-class Autopilot(Telemetry, Commands, ParamProtocol, Messages, Flight):
+class Autopilot(Telemetry, Commands, ParamProtocol, GcsFailsafe, Messages, Flight):
     """One ArduCopter: state, flight modes, command handling and telemetry streams."""
 
     def __init__(self, config, faults: Faults | None = None,
@@ -190,6 +191,7 @@ class Autopilot(Telemetry, Commands, ParamProtocol, Messages, Flight):
         self._battery(dt)
         self._send_due()
         self.params_step(dt)
+        self.failsafe_step()
 
     @property
     def boot_seconds(self) -> float:

@@ -15,7 +15,8 @@ Everything in the sim reads its parameters through ``params.get(NAME)`` (or ``pa
   ``queued_param_send`` does: at most what the link's bandwidth allows (``SimConfig.radio_baud``; without it
   the recorded TCP rate, 2,300 a second);
 * PARAM_REQUEST_READ by index answers with that index, by name with param_index 65535; an unknown name or
-  an index past the end gets no answer at all;
+  an index past the end gets no answer at all. Reads wait in a queue of :data:`READ_QUEUE` (one more is
+  dropped) and their answers share the list's bandwidth, first (ArduPilot's async parameter replies);
 * PARAM_SET is obeyed whatever the type it is sent as (REAL32 for an int8 is fine) and answered with the
   parameter's true type and param_index 65535; nothing is range-checked (RTL_ALT = 1e9 is stored); integers
   are rounded and held in their type's range as AP_Param::set_float does; NaN, infinity and unknown names get
@@ -33,6 +34,7 @@ __all__ = ["SimParams", "ParamProtocol", "TABLE_FILE", "RECORDED_RATE"]
 TABLE_FILE = os.path.join(os.path.dirname(os.path.abspath(__file__)), "data", "arducopter-4.6.3.params")
 RECORDED_RATE = 2300.0          # PARAM_VALUE a second over TCP in the recording (1,392 in 0.60 s)
 READ_BY_NAME_INDEX = 65535      # param_index of a reply to a read by name or a set (the recording)
+READ_QUEUE = 20                 # PARAM_REQUEST_READs waiting for an answer (GCS_MAVLINK's param_requests)
 PARAM_VALUE_BYTES = 25 + 12       # a PARAM_VALUE in a MAVLink 2 frame, unsigned: payload + header and CRC
 
 _RANGES = {
@@ -120,6 +122,16 @@ class SimParams:
         return ((name, self._values[name]) for name in self.names)
 
 
+class _LinkParams:
+    """One link's parameter traffic (ArduPilot keeps it per GCS_MAVLINK): reads waiting, the list's progress, and
+    the bandwidth left over from the last step (a fraction of a frame)."""
+
+    def __init__(self) -> None:
+        self.reads: list[tuple[int, str]] = []
+        self.next_index: int | None = None          # the list's next index; None: no list asked
+        self.budget = 0.0
+
+
 class ParamProtocol:
     """PARAM_REQUEST_LIST, PARAM_REQUEST_READ and PARAM_SET as ArduCopter answers them; state on the Autopilot
     (``params``, ``emit_to``, ``sender``, ``factory``, ``config``)."""
@@ -130,27 +142,25 @@ class ParamProtocol:
                                                READ_BY_NAME_INDEX if index is None else index)
 
     def _param_rate(self) -> float:
-        """PARAM_VALUE a second the link carries for a list (ArduPilot budgets its streamed parameters by the
-        port's bandwidth: a byte is 10 bits on a serial radio)."""
+        """PARAM_VALUE a second a link carries (ArduPilot budgets its parameter replies by the port's bandwidth: a
+        byte is 10 bits on a serial radio)."""
         baud = getattr(self.config, "radio_baud", None)
         if not baud:
             return RECORDED_RATE
         return min(RECORDED_RATE, baud / 10.0 / PARAM_VALUE_BYTES)
 
+    def _param_link(self) -> _LinkParams:
+        links = self.__dict__.setdefault("param_links", {})
+        return links.setdefault(self.sender, _LinkParams())
+
     def _on_param_request_list(self, msg) -> None:
         self._banner()
-        streams = self.__dict__.setdefault("param_streams", {})
-        streams[self.sender] = [0, 0.0]                  # next index, budget carried over (a fraction)
+        self._param_link().next_index = 0
 
     def _on_param_request_read(self, msg) -> None:
-        params: SimParams = self.params
-        if msg.param_index >= 0:
-            if msg.param_index < len(params):
-                self.emit_to(self._param_value(params.names[msg.param_index], msg.param_index), self.sender)
-            return
-        name = msg.param_id
-        if name in params:
-            self.emit_to(self._param_value(name), self.sender)
+        link = self._param_link()
+        if len(link.reads) < READ_QUEUE:                 # a full queue drops the request, silently
+            link.reads.append((msg.param_index, msg.param_id))
 
     def _on_param_set(self, msg) -> None:
         params: SimParams = self.params
@@ -161,17 +171,25 @@ class ParamProtocol:
         self.emit(self._param_value(name))                # every link hears a change (send_parameter_value)
 
     def params_step(self, dt: float) -> None:
-        """Stream the lists asked for, as many a step as the link allows."""
-        streams = self.__dict__.get("param_streams")
-        if not streams:
+        """Each link: the reads' answers first, then the list, as many as its bandwidth allows this step."""
+        links = self.__dict__.get("param_links")
+        if not links:
             return
         params: SimParams = self.params
-        budget = self._param_rate() * dt
-        for peer, state in list(streams.items()):
-            state[1] += budget
-            while state[1] >= 1.0 and state[0] < len(params):
-                self.emit_to(self._param_value(params.names[state[0]], state[0]), peer)
-                state[0] += 1
-                state[1] -= 1.0
-            if state[0] >= len(params):
-                del streams[peer]
+        for peer, link in list(links.items()):
+            link.budget = min(link.budget + self._param_rate() * dt, max(1.0, self._param_rate() * dt))
+            while link.budget >= 1.0 and link.reads:
+                index, name = link.reads.pop(0)
+                link.budget -= 1.0
+                if 0 <= index < len(params):
+                    self.emit_to(self._param_value(params.names[index], index), peer)
+                elif index < 0 and name in params:
+                    self.emit_to(self._param_value(name), peer)
+            while link.budget >= 1.0 and link.next_index is not None:
+                self.emit_to(self._param_value(params.names[link.next_index], link.next_index), peer)
+                link.budget -= 1.0
+                link.next_index += 1
+                if link.next_index >= len(params):
+                    link.next_index = None
+            if not link.reads and link.next_index is None:
+                del links[peer]

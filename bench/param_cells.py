@@ -1,0 +1,106 @@
+"""The fault matrix's parameter row: every parameter downloaded, and no wrong "set" report, under each fault.
+
+One cell per firmware profile and fault of bench/fault_matrix.py: the embedded driver downloads the whole list
+(``fetch_parameters(refresh=True)``) with the fault on, then writes parameters (a float, an int8, an int32, back
+again, and a name the vehicle does not have). Every answer is judged against the simulated vehicle's own table
+the moment it is given: a set reported ACCEPTED that the vehicle does not hold, or reported refused or timed
+out although the vehicle holds it, is a wrong report; so is a download reported complete with a value that is
+not the vehicle's. The outage fault cuts the link for 1 s in the middle of the download.
+"""
+from __future__ import annotations
+
+import threading
+import time
+from dataclasses import dataclass, field
+
+from driver.sim import SimConfig, SimVehicle
+from driver.state import CommandStatus
+from driver.vehicle import Vehicle, VehicleConfig
+
+SETS = (("WPNAV_SPEED", 750.0), ("FS_GCS_ENABLE", 1.0), ("RTL_ALT", 2500.0), ("WPNAV_SPEED", 1000.0),
+        ("FS_GCS_ENABLE", 0.0), ("NO_SUCH_PARAM", 1.0))
+
+
+@dataclass
+class ParamCell:
+    profile: str
+    fault: str
+    downloaded: int = 0
+    expected: int = 0
+    seconds: float = 0.0
+    told: list = field(default_factory=list)
+    wrong: list = field(default_factory=list)
+    error: str = ""
+
+    @property
+    def completed(self) -> bool:
+        return not self.error and self.expected > 0 and self.downloaded == self.expected
+
+
+def _holds(sim: SimVehicle, name: str, value: float) -> bool:
+    held = sim.autopilot.params.get(name)
+    return held is not None and abs(float(held) - value) <= 1e-6 * max(1.0, abs(value))
+
+
+def check(profile: str, fault: str, speedup: float, apply_fault) -> ParamCell:
+    cell = ParamCell(profile, fault)
+    sim = SimVehicle(SimConfig(tcp_port=0, speedup=speedup, ready_after=2.0, seed=7, profile=profile,
+                               mavlink2=profile != "solo"))
+    sim.start()
+    vehicle = Vehicle(VehicleConfig(connection=f"tcp:127.0.0.1:{sim.tcp_port}", param_cache=None)).start()
+    try:
+        if not vehicle.wait_for(lambda s: s.connected, 60):
+            cell.error = "no heartbeat"
+            return cell
+        apply_fault(sim.faults)
+        start = time.monotonic()
+        future = vehicle.fetch_parameters(refresh=True)
+        if fault == "outage":
+            vehicle.wait_for(lambda s: s.parameters.received > 300, 30)
+            sim.faults.outage(1.0)
+        result = future.result(timeout=300)
+        cell.seconds = time.monotonic() - start
+        params = sim.autopilot.params
+        table = vehicle.state().parameters
+        cell.expected = len(params)
+        cell.downloaded = sum(1 for n in params.names if table.get(n) is not None and (
+            n.startswith("SR0_") or _holds(sim, n, table.get(n).value)))
+        cell.told.append(f"list {result.status.value}")
+        if result.ok and cell.downloaded != cell.expected:
+            cell.wrong.append(f"{result} but {cell.expected - cell.downloaded} values are not the vehicle's")
+        if not result.ok:
+            cell.error = str(result)
+        for name, value in SETS:
+            answered = threading.Event()
+            verdict = {}
+
+            def judge(f, name=name, value=value):
+                r = f.result()
+                holds = _holds(sim, name, value)       # the vehicle's truth when the answer is given
+                verdict["r"] = r
+                if r.status is CommandStatus.ACCEPTED and not holds:
+                    verdict["wrong"] = f"{r} but the vehicle holds {sim.autopilot.params.get(name)}"
+                elif r.status in (CommandStatus.REFUSED, CommandStatus.TIMED_OUT) and holds:
+                    verdict["wrong"] = f"{r} but the vehicle holds {value:g}"
+                answered.set()
+            vehicle.set_parameter(name, value).add_done_callback(judge)
+            if not answered.wait(120):
+                cell.wrong.append(f"param {name}={value:g}: no answer at all")
+                continue
+            cell.told.append(verdict["r"].status.value)
+            if "wrong" in verdict:
+                cell.wrong.append(verdict["wrong"])
+    except Exception as exc:  # noqa: BLE001 - reported in the table
+        cell.error = f"{type(exc).__name__}: {exc}"
+    finally:
+        vehicle.close()
+        sim.stop()
+    return cell
+
+
+def rows(cells: list[ParamCell]) -> tuple[tuple, list[tuple]]:
+    head = ("profile", "fault", "every parameter", "downloaded", "list s", "sets told (last: an unknown name)",
+            "wrong reports")
+    out = [(c.profile, c.fault, "yes" if c.completed else f"NO ({c.error})", f"{c.downloaded}/{c.expected}",
+            f"{c.seconds:.1f}", ", ".join(c.told), str(len(c.wrong))) for c in cells]
+    return head, out
