@@ -174,6 +174,10 @@ def test_out_of_bounds_needs_explicit_confirmation(qtbot, sim, window):
     assert meta.description and page.editor.description.text() == meta.description
     assert not page.editor.reboot.isVisible() and not page.editor.warning.isVisible()
     assert page.select("FRAME_CLASS") and page.editor.reboot.isVisible()            # RebootRequired in the metadata
+    assert page.select("FS_OPTIONS") and page.editor.bits.isVisible() and not page.editor.choices.isVisible()
+    assert page.editor.value.text() == "16"
+    page.editor.bits.item(0).setCheckState(Qt.Checked)                              # bit 0 ticked: 16 + 1
+    assert page.editor.value.text() == "17"
 
     stage(qtbot, page, "RTL_ALT", "1000000000")                   # what the recorded vehicle stored unchecked
     qtbot.waitUntil(lambda: controller.question is not None and controller.question.isVisible(), timeout=3000)

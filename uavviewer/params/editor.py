@@ -52,6 +52,10 @@ class ParamEditor(QFrame):
         self.bits = QListWidget()                  # a bitmask parameter's bits
         self.bits.setObjectName("paramBits")
         self.bits.setMaximumHeight(150)
+        self.bits.setHorizontalScrollBarPolicy(Qt.ScrollBarAlwaysOff)
+        self.bits.setStyleSheet("QListWidget::indicator { width: 12px; height: 12px; border: 1px solid #6b7d91;"
+                                " border-radius: 3px; background: #0d1117; }"
+                                "QListWidget::indicator:checked { background: #2f81f7; border-color: #8cb8ff; }")
         self.stage_button = QPushButton("Stage change")
         self.stage_button.setObjectName("stageButton")
         self.stage_button.setToolTip("Add this value to the changes to review and write (Enter)")
@@ -142,7 +146,7 @@ class ParamEditor(QFrame):
 
     # -- enumerations and bitmasks write into the value box -------------------------------------
     def _fill_choices(self, meta, shown: float) -> None:
-        values = meta_attr(meta, "values", {})
+        values = {} if meta_attr(meta, "bitmask", {}) else meta_attr(meta, "values", {})   # bits say more
         self.choices.blockSignals(True)
         self.choices.clear()
         for key, label in values.items():
@@ -163,6 +167,7 @@ class ParamEditor(QFrame):
         self.bits.clear()
         for bit, label in bits.items():
             item = QListWidgetItem(f"{int(bit)}: {label}")
+            item.setToolTip(f"bit {int(bit)} (value {1 << int(bit)}): {label}")
             item.setData(Qt.UserRole, int(bit))
             item.setFlags(item.flags() | Qt.ItemIsUserCheckable)
             item.setCheckState(Qt.Checked if int(shown) >> int(bit) & 1 else Qt.Unchecked)
