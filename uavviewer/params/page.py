@@ -51,6 +51,7 @@ class ParametersPage(QWidget):
         super().__init__(parent, Qt.Window)
         self.setObjectName("parametersPage")
         self.setWindowTitle("Parameters")
+        self.setAttribute(Qt.WA_QuitOnClose, False)   # closing the flying window ends the program, page open or not
         self.setStyleSheet(STYLE)
         self.model = model
         self.proxy = ParameterFilter(self)
