@@ -140,7 +140,7 @@ class ParametersPage(QWidget):
         self.modified_only.toggled.connect(self.proxy.set_modified_only)
         self.groups.currentItemChanged.connect(self._group_picked)
         self.table.selectionModel().currentRowChanged.connect(lambda *_: self.show_current())
-        self.table.doubleClicked.connect(lambda _index: self.editor.focus_value())
+        self.table.activated.connect(lambda _index: self.editor.focus_value())      # Enter or double-click
         self.refresh_button.clicked.connect(self.refreshRequested)
         self.compare_button.clicked.connect(lambda: self._ask_file("Compare a parameter file with the vehicle",
                                                                    PARAM_FILES, self.compareFileChosen))
