@@ -116,14 +116,16 @@ def test_edit_review_write_and_see_it_confirmed(qtbot, sim, window):
     assert not page.review_button.isEnabled()
 
 
-def test_a_write_the_vehicle_never_echoes_is_not_confirmed(qtbot, sim, window):
+def test_a_write_the_vehicle_never_echoes_is_not_confirmed(qtbot, sim, window, monkeypatch):
+    from driver.params import setter
+    monkeypatch.setattr(setter, "KNOWN_TRIES", 3)                  # the driver gives up after 3 s, not 10
     page = open_page(qtbot, window)
     stage(qtbot, page, "LAND_SPEED", "40")
     sim.faults.uplink.loss = 1.0              # the vehicle hears nothing more; its heartbeats still come
     review = review_and_write(qtbot, window, page)
     assert review.result("LAND_SPEED") == WriteState.WRITING.value
     qtbot.waitUntil(lambda: review.result("LAND_SPEED").startswith(WriteState.FAILED.value), timeout=30000)
-    assert "no PARAM_VALUE echo" in review.result("LAND_SPEED")
+    assert "no PARAM_VALUE echo after 3 attempts" in review.result("LAND_SPEED")
     assert sim.autopilot.params["LAND_SPEED"] == 50
     model = window.params.model
     assert model.pending == {"LAND_SPEED": 40.0}                  # still pending: it may be written again
