@@ -107,6 +107,9 @@ def observer_process(locator: str, mode: str, count: int, seconds: float, conn) 
 
             def event(self, vehicle, e, current=None):
                 pass
+
+            def payload(self, vehicle, p, current=None):
+                pass
         adapter = com.createObjectAdapterWithEndpoints("Observers", "tcp -h 127.0.0.1")
         adapter.activate()
         t = topic(com, TOPIC_MANAGER, NAME)

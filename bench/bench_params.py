@@ -1,6 +1,7 @@
 """Time to the complete parameter list: clean and at 10 % and 30 % loss each way, against the link's floor.
 
-    .venv/bin/python bench/bench_params.py [--links tcp,radio] [--losses 0,0.1,0.3] [--runs 1] [--markdown]
+    .venv/bin/python bench/bench_params.py [--links tcp,radio] [--losses 0,0.1,0.3] [--methods list,ftp]
+                                           [--runs 1] [--markdown]
 
 Each cell starts the simulated ArduCopter (real time; its 1,392 parameters of ArduCopter 4.6.3) and the
 embedded driver, sets the loss on both directions, calls ``fetch_parameters(refresh=True)`` and times it to the
@@ -10,7 +11,11 @@ Links: ``tcp`` streams the list as fast as the recording's TCP did (2,300 a seco
 telemetry radio (SiK's default), which ArduPilot's queued_param_send keeps the list within (the sim models
 that: ``SimConfig.radio_baud``). The floor is what the link's bandwidth allows for the list alone: 1,392
 PARAM_VALUE frames of 37 bytes (MAVLink 2), and at a loss p each way every frame is needed 1/(1 - p) times on
-average (a lost frame is asked again, and a lost request too; the floor counts the frames only).
+average (a lost frame is asked again, and a lost request too; the floor counts the frames only). FTP's floor is
+the file's 64 frames of 266 bytes, the same way.
+
+Methods: ``list`` is PARAM_REQUEST_LIST and re-asks by index; ``ftp`` reads ``@PARAM/param.pck`` over MAVLink FTP
+(driver/params/ftp.py: 15,244 bytes in 64 chunks for the same table), falling back to the list if FTP fails.
 """
 from __future__ import annotations
 
@@ -26,24 +31,28 @@ import time
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 from driver.sim import SimConfig, SimVehicle  # noqa: E402
-from driver.sim.params import PARAM_VALUE_BYTES, RECORDED_RATE  # noqa: E402
+from driver.sim.ftp import CHUNK, pack_params  # noqa: E402
+from driver.sim.params import FTP_FRAME_BYTES, PARAM_VALUE_BYTES, RECORDED_RATE  # noqa: E402
 from driver.vehicle import Vehicle, VehicleConfig  # noqa: E402
 
 LINKS = {"tcp": None, "radio": 57600}
 
 
-def floor(link: str, count: int, loss: float) -> float:
+def floor(link: str, count: int, loss: float, pck_bytes: int | None = None) -> float:
+    """Seconds the link's bandwidth needs for the list's frames (or, with ``pck_bytes``, the FTP file's)."""
     baud = LINKS[link]
-    rate = RECORDED_RATE if baud is None else min(RECORDED_RATE, baud / 10.0 / PARAM_VALUE_BYTES)
-    return count / rate / (1.0 - loss)
+    rate = RECORDED_RATE * PARAM_VALUE_BYTES if baud is None else min(RECORDED_RATE * PARAM_VALUE_BYTES, baud / 10.0)
+    frames = count * PARAM_VALUE_BYTES if pck_bytes is None else -(-pck_bytes // CHUNK) * FTP_FRAME_BYTES
+    return frames / rate / (1.0 - loss)
 
 
-def run(link: str, loss: float, seed: int) -> dict:
+def run(link: str, loss: float, seed: int, method: str) -> dict:
     sim = SimVehicle(SimConfig(tcp_port=0, speedup=1.0, ready_after=1.0, seed=seed, radio_baud=LINKS[link]))
     sim.start()
-    vehicle = Vehicle(VehicleConfig(connection=f"tcp:127.0.0.1:{sim.tcp_port}", param_cache=None)).start()
+    vehicle = Vehicle(VehicleConfig(connection=f"tcp:127.0.0.1:{sim.tcp_port}", param_cache=None,
+                                    param_ftp=method == "ftp")).start()
     try:
-        if not vehicle.wait_for(lambda s: s.connected, 20):
+        if not vehicle.wait_for(lambda s: s.connected and s.firmware, 20):     # AUTOPILOT_VERSION: FTP offered
             raise RuntimeError("no heartbeat")
         sim.faults.uplink.loss = sim.faults.downlink.loss = loss
         frames_before = sim.faults.counters.downlink.frames
@@ -56,6 +65,7 @@ def run(link: str, loss: float, seed: int) -> dict:
             not n.startswith("SR0_") and abs(table.get(n).value - params[n]) > 1e-6 * max(1.0, abs(params[n])))]
         reads = re.search(r"\((\d+) asked again", result.reason)
         return dict(ok=result.ok and table.complete and not wrong, seconds=seconds, count=len(params),
+                    pck=len(pack_params(params)),
                     reads=int(reads.group(1)) if reads else 0, wrong=len(wrong), reason=result.reason,
                     frames=sim.faults.counters.downlink.frames - frames_before)
     finally:
@@ -67,26 +77,28 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--links", default="tcp,radio")
     ap.add_argument("--losses", default="0,0.1,0.3")
+    ap.add_argument("--methods", default="list,ftp")
     ap.add_argument("--runs", type=int, default=1)
     ap.add_argument("--markdown", action="store_true")
     args = ap.parse_args()
     logging.basicConfig(level=logging.ERROR)
     os.environ.setdefault("XDG_CACHE_HOME", tempfile.mkdtemp(prefix="bench-params-"))
-    head = ("link", "loss each way", "complete", "time s", "floor s", "time / floor", "re-asked by index",
+    head = ("link", "method", "loss each way", "complete", "time s", "floor s", "time / floor", "re-asked by index",
             "frames down", "wrong values")
     rows = []
     ok = True
-    for link in args.links.split(","):
-        for loss in (float(x) for x in args.losses.split(",")):
-            cells = [run(link, loss, seed) for seed in range(1, args.runs + 1)]
-            seconds = statistics.median(c["seconds"] for c in cells)
-            low = floor(link, cells[0]["count"], loss)
-            done = all(c["ok"] for c in cells)
-            ok &= done
-            rows.append((link, f"{loss:.0%}", "yes" if done else f"NO ({cells[0]['reason']})", f"{seconds:.2f}",
-                         f"{low:.2f}", f"{seconds / low:.2f}", str(round(statistics.median(c['reads'] for c in cells))),
-                         str(round(statistics.median(c['frames'] for c in cells))), str(max(c["wrong"] for c in cells))))
-            print(" ".join(rows[-1]), file=sys.stderr, flush=True)
+    for link, method, loss in [(k, m, float(x)) for k in args.links.split(",") for m in args.methods.split(",")
+                               for x in args.losses.split(",")]:
+        cells = [run(link, loss, seed, method) for seed in range(1, args.runs + 1)]
+        seconds = statistics.median(c["seconds"] for c in cells)
+        done = all(c["ok"] for c in cells)
+        ok &= done
+        used = "ftp" if all("FTP" in c["reason"] for c in cells) else "list" if method == "list" else "ftp→list"
+        low = floor(link, cells[0]["count"], loss, cells[0]["pck"] if used == "ftp" else None)
+        rows.append((link, used, f"{loss:.0%}", "yes" if done else f"NO ({cells[0]['reason']})", f"{seconds:.2f}",
+                     f"{low:.2f}", f"{seconds / low:.2f}", str(round(statistics.median(c['reads'] for c in cells))),
+                     str(round(statistics.median(c['frames'] for c in cells))), str(max(c["wrong"] for c in cells))))
+        print(" ".join(rows[-1]), file=sys.stderr, flush=True)
     if args.markdown:
         print("| " + " | ".join(head) + " |\n|" + "---|" * len(head))
         for r in rows:

@@ -1,7 +1,8 @@
 """The fault matrix's parameter row: every parameter downloaded, and no wrong "set" report, under each fault.
 
-One cell per firmware profile and fault of bench/fault_matrix.py: the embedded driver downloads the whole list
-(``fetch_parameters(refresh=True)``) with the fault on, then writes parameters (a float, an int8, an int32, back
+One cell per firmware profile and fault of bench/fault_matrix.py: the embedded driver downloads the whole table
+(``fetch_parameters(refresh=True)``: over MAVLink FTP where the firmware offers it, copter-4; the list on the
+solo) with the fault on, then writes parameters (a float, an int8, an int32, back
 again, and a name the vehicle does not have). Every answer is judged against the simulated vehicle's own table
 the moment it is given: a set reported ACCEPTED that the vehicle does not hold, or reported refused or timed
 out although the vehicle holds it, is a wrong report; so is a download reported complete with a value that is
@@ -49,14 +50,14 @@ def check(profile: str, fault: str, speedup: float, apply_fault) -> ParamCell:
     sim.start()
     vehicle = Vehicle(VehicleConfig(connection=f"tcp:127.0.0.1:{sim.tcp_port}", param_cache=None)).start()
     try:
-        if not vehicle.wait_for(lambda s: s.connected, 60):
+        if not vehicle.wait_for(lambda s: s.connected and s.firmware, 60):   # FTP where the firmware offers it
             cell.error = "no heartbeat"
             return cell
         apply_fault(sim.faults)
         start = time.monotonic()
         future = vehicle.fetch_parameters(refresh=True)
         if fault == "outage":
-            vehicle.wait_for(lambda s: s.parameters.received > 300, 30)
+            time.sleep(0.2)                             # mid-transfer (the FTP file or the list)
             sim.faults.outage(1.0)
         result = future.result(timeout=300)
         cell.seconds = time.monotonic() - start
@@ -65,7 +66,7 @@ def check(profile: str, fault: str, speedup: float, apply_fault) -> ParamCell:
         cell.expected = len(params)
         cell.downloaded = sum(1 for n in params.names if table.get(n) is not None and (
             n.startswith("SR0_") or _holds(sim, n, table.get(n).value)))
-        cell.told.append(f"list {result.status.value}")
+        cell.told.append(f"{'ftp' if 'FTP' in result.reason else 'list'} {result.status.value}")
         if result.ok and cell.downloaded != cell.expected:
             cell.wrong.append(f"{result} but {cell.expected - cell.downloaded} values are not the vehicle's")
         if not result.ok:

@@ -12,6 +12,7 @@ import abc
 from concurrent.futures import Future
 from dataclasses import dataclass
 
+from . import guided
 from .mission.plan import Plan, PlanKind, TransferOutcome
 from .state import CommandResult, CommandStatus, VehicleState
 
@@ -113,10 +114,46 @@ class Drone(abc.ABC):
     def set_yaw(self, degrees: float, relative: bool = False, rate_deg_s: float = 30.0) -> Future[CommandResult]:
         """Turn to a heading (clockwise from north) or by an angle (relative, positive = right)."""
 
+    # -- guided actions (driver.guided: built on the calls above, so every Drone has them) --------------
+    def change_altitude(self, altitude: float) -> Future[CommandResult]:
+        """Climb or descend to ``altitude`` m above home where the vehicle is, in GUIDED."""
+        return guided.change_altitude(self, altitude)
+
+    def circle(self, north: float, east: float, radius: float) -> Future[CommandResult]:
+        """Circle the point (north, east) m from home at ``radius`` m, the way ArduCopter's CIRCLE mode can."""
+        return guided.circle_point(self, north, east, radius)
+
     # -- payload --------------------------------------------------------------------------
     def toggle_camera(self) -> Future[CommandResult]:
         """Ask the vehicle to show its next camera; a vehicle with one camera (the default) refuses at once."""
         return _answered(CommandResult("switch camera", CommandStatus.REJECTED, "this vehicle has no camera switch"))
+
+    # -- gimbal, region of interest, camera on the vehicle (driver.payload; docs/camera.md) ------------
+    # Each resolves on the vehicle's word: a pointing command on its ACK (or, on the Solo, MOUNT_STATUS
+    # showing the angle); a picture or a recording only on the camera's own confirmation, never an ACK alone.
+    def point_gimbal(self, pitch_deg: float, yaw_deg: float | None = None) -> Future[CommandResult]:
+        """Point the gimbal: pitch 0 level, -90 straight down; yaw from the nose where the mount has it."""
+        return _answered(CommandResult("gimbal", CommandStatus.REJECTED, _NO_PAYLOAD))
+
+    def gimbal_rate(self, pitch_deg_s: float, yaw_deg_s: float = 0.0) -> Future[CommandResult]:
+        """Turn the gimbal at a rate (positive pitch rate tilts up) until another command; 0 stops it."""
+        return _answered(CommandResult("gimbal rate", CommandStatus.REJECTED, _NO_PAYLOAD))
+
+    def look_at(self, lat: float, lon: float, alt: float = 0.0) -> Future[CommandResult]:
+        """Region of interest: the vehicle keeps its camera (and nose) on this point, alt above home."""
+        return _answered(CommandResult("look at", CommandStatus.REJECTED, _NO_PAYLOAD))
+
+    def stop_looking(self) -> Future[CommandResult]:
+        """End the region of interest: the mount goes back to its default mode."""
+        return _answered(CommandResult("stop looking", CommandStatus.REJECTED, _NO_PAYLOAD))
+
+    def take_photo(self) -> Future[CommandResult]:
+        """A picture on the vehicle's camera; ACCEPTED only once the camera confirms it."""
+        return _answered(CommandResult("photo", CommandStatus.REJECTED, _NO_PAYLOAD))
+
+    def record_video(self, on: bool) -> Future[CommandResult]:
+        """Start or stop video on the vehicle's camera; ACCEPTED once the camera says it records (or stopped)."""
+        return _answered(CommandResult(f"record {'on' if on else 'off'}", CommandStatus.REJECTED, _NO_PAYLOAD))
 
     # -- missions, fences, rally points (driver.mission) ----------------------------------------
     # A transfer resolves only on the vehicle's word: an upload is ACCEPTED once MISSION_ACK accepted it *and*
@@ -239,6 +276,7 @@ class Fleet(abc.ABC):
 
 _NO_MISSIONS = "this vehicle connection cannot transfer or fly plans"
 _NO_PARAMETERS = "this vehicle connection cannot read or write parameters"
+_NO_PAYLOAD = "this vehicle connection cannot point a gimbal or trigger a camera"
 _NO_SIGNING = "the MAVLink link is signed where it is held: set signing up on the MAVLinkServer"
 
 

@@ -20,6 +20,7 @@ from concurrent.futures import Future
 
 from .state import CommandResult, CommandStatus, SequencePhase, VehicleState
 from .rules import COPTER_MODES, mode_warning
+from .payload.console import PayloadCommands
 
 ARM_USAGE = ("arm [throttle] [force] | arm check [all|none|MASK] | arm safetyon | arm safetyoff | arm list")
 VELOCITY_HOLD = 3.0          # s a typed velocity lasts (ArduCopter's GUID_TIMEOUT)
@@ -31,7 +32,7 @@ TELEMETRY_WAIT = 5.0         # s more for the requested telemetry (battery, posi
 NOTEWORTHY = ("driver.ice.servants", "driver.ice.camera", "driver.camera.uri")
 
 
-class Console(cmd.Cmd):
+class Console(PayloadCommands, cmd.Cmd):
     """``reboot, arm, disarm, takeoff, land, mode, velocity, parachute, bat, alt, param, status, help``."""
 
     intro = "MAVLinkServer console. Type help for commands, exit to quit."

@@ -9,6 +9,7 @@ MAVLink 2 switch rewrites process-global state.
 """
 from __future__ import annotations
 
+import bisect
 import logging
 import os
 import select
@@ -412,6 +413,7 @@ class TlogReplay(Transport):
         with open(path, "rb") as f:
             data = f.read()
         self._packets = _records(data)
+        self._stamps = [stamp for stamp, _ in self._packets]     # for seeking
         self.start_time = self._packets[0][0] if self._packets else 0.0
         self.duration = (self._packets[-1][0] - self.start_time) if self._packets else 0.0
         self._cond = threading.Condition()
@@ -457,6 +459,15 @@ class TlogReplay(Transport):
     @property
     def finished(self) -> bool:
         return self._index >= len(self._packets)
+
+    def seek(self, position: float) -> None:
+        """Play on from ``position`` seconds of log time (0: the start again); paused stays paused."""
+        with self._cond:
+            self._position = max(0.0, min(self.duration, float(position)))
+            self._anchor = time.monotonic()
+            when = self.start_time + self._position
+            self._index = bisect.bisect_left(self._stamps, when) if self._packets else 0
+            self._cond.notify_all()
 
     def track(self) -> list[tuple[float, float, float]]:
         """(seconds from the start, lat, lon) of every GLOBAL_POSITION_INT with a position: the whole flight,
@@ -564,6 +575,13 @@ class ReplayControl:
     @property
     def finished(self) -> bool:
         return self._t.finished
+
+    def seek(self, position: float) -> None:
+        """Jump to ``position`` seconds into the recording; what the vehicle reports from there is shown."""
+        self._t.seek(position)
+
+    def restart(self) -> None:
+        self._t.seek(0.0)
 
     def track(self) -> Future:
         """The recording's whole track, (seconds, lat, lon) each, read on a thread of its own."""

@@ -16,6 +16,7 @@ from dataclasses import dataclass, field, replace
 
 from .mission.plan import MissionProgress
 from .params.model import ParameterTable
+from .payload.model import Gimbal, VehicleCamera
 
 __all__ = [
     "LandedState", "LinkStatus", "Severity", "CommandStatus", "Attitude", "GlobalPosition",
@@ -398,6 +399,8 @@ class VehicleState:
     fence: Fence = field(default_factory=Fence)      # FENCE_* parameters, as they are read
     mission: MissionProgress = field(default_factory=MissionProgress)   # driver.mission: progress, transfers
     parameters: ParameterTable = field(default_factory=ParameterTable)  # driver.params: every value reported
+    gimbal: Gimbal = field(default_factory=Gimbal)   # driver.payload: as the vehicle reports it, unknown until then
+    camera: VehicleCamera = field(default_factory=VehicleCamera)   # the vehicle's camera (not the window's video)
 
     # -- derived views -----------------------------------------------------------------------
     @property

@@ -81,7 +81,8 @@ class LinkSupervisor:
 
     # -- the ticker (lock held) -----------------------------------------------------------------------------
     def tick(self, now: float) -> tuple[list, str | None, bool]:
-        """(messages to send, "lost" when the link was just lost, whether to reopen the link)."""
+        """(messages to send, "lost" when the link was just lost or "finished" when a replay just ended, whether
+        to reopen the link)."""
         out: list = []
         event = None
         reopen = False
@@ -93,6 +94,9 @@ class LinkSupervisor:
             reopen = True                         # a half-open TCP link never errors: reopen it
         if not self._window or now - self._window[-1][0] >= 1.0:
             self._window.append((now, self.rx_count, self.rx_lost))
+        if self.status is LinkStatus.OK and self._transport.is_replay and self._transport.finished:
+            self.status = LinkStatus.CLOSED       # the recording has ended: no heartbeat is live any more
+            event = "finished"
         if self.last_heartbeat is not None and self.status is LinkStatus.OK:
             if clock - self.last_heartbeat > cfg.loss_timeout:
                 self.status = LinkStatus.LOST

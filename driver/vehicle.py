@@ -33,6 +33,7 @@ from . import frames
 from .api import CEILING, Drone, Limits
 from .commands import CommandSender, Notifier, command_name
 from .forwarding import Forwarder
+from .payload.control import PAYLOAD_MESSAGES, Payload
 from .link import LinkError, ReplayControl, TlogWriter, Transport, open_transport
 from .params.cache import ParameterCache
 from .params.manager import ParameterManager
@@ -96,6 +97,7 @@ class VehicleConfig:
     allowed_senders: tuple[str, ...] = ()     # UDP: other addresses read besides the vehicle's ("10.1.1.1")
     param_metadata: str | None = None         # apm.pdef.xml; None: the per-user cache's, else the shipped copy
     param_cache: str | None = ""              # folder of tables per vehicle; "": the per-user cache, None: none
+    param_ftp: bool = True                    # read all parameters over MAVLink FTP where the vehicle offers it
 
 
 def _ground_only(s: VehicleState) -> str | None:
@@ -135,11 +137,13 @@ class Vehicle(Drone):
         self._params = ParameterManager(self._store, self._notifier, self._target_ids, 2 * cfg.loss_timeout)
         self._param_cache = ParameterCache(cfg.param_cache or None) if cfg.param_cache is not None else None
         self._params.on_complete = self._cache_parameters
+        self._params.use_ftp = cfg.param_ftp
         self._metadata = None                 # loaded by start() in the background (half a second of XML)
         self._metadata_loaded = threading.Event()
         self._metadata_lock = threading.Lock()
         self._metadata_warned = False
         self._setpoints = SetpointStreamer(cfg.deadman, cfg.setpoint_rate)
+        self._payload = Payload(self)         # gimbal, region of interest, camera (driver.payload)
         self._takeoff: TakeoffSequence | None = None
         self._stepping_takeoff = False        # the ticker is stepping the sequence: its commands pass
         self._yaw_next = 0.0                  # old firmware: next CONDITION_YAW of a held yaw stick
@@ -456,6 +460,9 @@ class Vehicle(Drone):
                 link.rx_lost += gap
         link.last_seq[component] = seq
         link.rx_count += 1
+        if mtype in PAYLOAD_MESSAGES:                 # the gimbal and camera speak from any component
+            self._payload.on_message(msg, component)
+            return 1
         if component != self._autopilot and self._autopilot:   # a gimbal, camera or companion computer
             if mtype == "STATUSTEXT":
                 self._on_statustext(msg)
@@ -516,6 +523,7 @@ class Vehicle(Drone):
         v = m.flight_sw_version
         major, minor, patch = (v >> 24) & 0xFF, (v >> 16) & 0xFF, (v >> 8) & 0xFF
         self._link.version_known = True
+        self._params.ftp_capable = bool(m.capabilities & mavlink.MAV_PROTOCOL_CAPABILITY_FTP)
         if major:
             self._commands.capabilities.setpoint_yaw = (major, minor) >= (3, 5)
             self._store.set(firmware=f"{major}.{minor}.{patch}")
@@ -541,6 +549,12 @@ class Vehicle(Drone):
                 self._store.add_message_locked(
                     Severity.WARNING, "GCS failsafe is off on the vehicle (FS_GCS_ENABLE=0): if this link is lost "
                     "or you quit in flight, it keeps hovering until its battery failsafe")
+
+    def _on_file_transfer_protocol(self, m) -> None:
+        """MAVLink FTP: the parameters' file (driver.params.ftp)."""
+        if m.target_system in (0, self.config.source_system) and m.target_component in (0, self.config.source_component):
+            self._params.on_ftp(m, time.monotonic())
+            self._wake.set()
 
     def _on_fence_status(self, m) -> None:
         """FENCE_STATUS, sent while the fence is enabled: a new breach is told once, with what it was."""
@@ -573,6 +587,7 @@ class Vehicle(Drone):
                     out += self._stream_setpoint(now)
                     out += self._commands.service(now, self._store.state)
                     out += self._params.service(now, self._link.status)
+                    out += self._payload.service(now, self._store.state)
                     if now >= next_health:
                         next_health = now + 0.1
                         out += self._supervise(now)
@@ -609,6 +624,8 @@ class Vehicle(Drone):
             store.add_message_locked(Severity.CRITICAL, f"Link lost: no heartbeat for {age:.1f} s")
             self._commands.link_lost()
             self._params.link_lost()
+        elif event == "finished":
+            store.add_message_locked(Severity.NOTICE, "Replay finished: the recording has ended")
         return out
 
     def _stream_setpoint(self, now: float) -> list:
@@ -808,6 +825,27 @@ class Vehicle(Drone):
             except (OSError, ValueError) as e:
                 self._store.add_message(Severity.WARNING, f"Parameter metadata not read: {e}")
             self._metadata_loaded.set()
+
+    # ------------------------------------------------------------------------------------------
+    # payload: gimbal, region of interest, camera (driver.payload)
+    # ------------------------------------------------------------------------------------------
+    def point_gimbal(self, pitch_deg: float, yaw_deg: float | None = None) -> Future:
+        return self._payload.point(pitch_deg, yaw_deg)
+
+    def gimbal_rate(self, pitch_deg_s: float, yaw_deg_s: float = 0.0) -> Future:
+        return self._payload.rate(pitch_deg_s, yaw_deg_s)
+
+    def look_at(self, lat: float, lon: float, alt: float = 0.0) -> Future:
+        return self._payload.look_at(lat, lon, alt)
+
+    def stop_looking(self) -> Future:
+        return self._payload.stop_looking()
+
+    def take_photo(self) -> Future:
+        return self._payload.take_photo()
+
+    def record_video(self, on: bool) -> Future:
+        return self._payload.record_video(on)
 
     # ------------------------------------------------------------------------------------------
     # signing (driver.signing)
@@ -1012,4 +1050,5 @@ _EVENTS = {
     "PARAM_VALUE": Vehicle._on_param_value,
     "AUTOPILOT_VERSION": Vehicle._on_autopilot_version,
     "FENCE_STATUS": Vehicle._on_fence_status,
+    "FILE_TRANSFER_PROTOCOL": Vehicle._on_file_transfer_protocol,
 }

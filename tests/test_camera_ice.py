@@ -12,6 +12,7 @@ import pytest
 Ice = pytest.importorskip("Ice", reason="zeroc-ice is not installed")
 
 from camera_media import COLOURS, UdpSender, free_udp_port, wait, write_clip, write_ts  # noqa: E402
+import driver.ice.camera_source  # noqa: F401  (registers ice: cameras)
 from driver.camera import open_source  # noqa: E402
 from driver.camera.sim import SimulatedCamera  # noqa: E402
 from driver.ice import load_slice  # noqa: E402

@@ -299,6 +299,8 @@ def test_simulated_camera_follows_the_simulated_vehicle(qtbot, camera, flying):
     """--sim: the picture comes from the simulated vehicle, and its horizon tilts as it rolls."""
     from test_camera_sources import horizon_rows
     panel, controller = camera(["sim"], state_fn=flying.state)
+    assert flying.point_gimbal(0).result(10).ok              # the mount starts straight down (RC, as recorded)
+    qtbot.waitUntil(lambda: flying.state().gimbal.pitch_deg == 0.0, timeout=5000)
     qtbot.waitUntil(lambda: panel.view.frame() is not None, timeout=5000)
     left, right = horizon_rows(controller.source.latest().image)
     assert abs(left - right) <= 3                           # hovering level

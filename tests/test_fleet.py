@@ -87,7 +87,7 @@ class Observer(mavlinkserver.Telemetry):
     """A subscriber as a student's program would write it: it only collects what is published."""
 
     def __init__(self):
-        self.statuses, self.poses, self.navdatas, self.events = [], [], [], []
+        self.statuses, self.poses, self.navdatas, self.events, self.payloads = [], [], [], [], []
         self.lock = threading.Lock()
 
     def status(self, vehicle, status, current=None):
@@ -105,6 +105,10 @@ class Observer(mavlinkserver.Telemetry):
     def event(self, vehicle, e, current=None):
         with self.lock:
             self.events.append((vehicle, e))
+
+    def payload(self, vehicle, p, current=None):
+        with self.lock:
+            self.payloads.append((vehicle, p))
 
 
 def test_observers_subscribe_instead_of_polling(fleet, lab, client, drones):
@@ -132,6 +136,9 @@ def test_observers_subscribe_instead_of_polling(fleet, lab, client, drones):
         assert {v for v, *_ in observer.statuses + observer.poses + observer.navdatas} == {"solo-1"}   # its topic
         assert observer.poses and observer.navdatas and observer.statuses
         assert observer.statuses[-1][1].link.status == "OK"
+    # the camera on the vehicle rides along (issue 23): the gimbal as the vehicle reports it, straight down
+    assert eventually(lambda: observer.payloads and observer.payloads[-1][1].hasPitch, 10)
+    assert all(w.wait_for(lambda s: s.gimbal.pitch_deg == -90.0, 10) for w in watchers)
 
 
 def test_a_killed_server_goes_stale(lab, client, drones, tmp_path):

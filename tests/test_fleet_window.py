@@ -112,7 +112,7 @@ def painted(view, east: float, north: float):
 
 
 def test_two_vehicles_flown_at_once_from_one_window(qtbot, fleet, lab, ice_fleet, window_factory, monkeypatch):
-    from driver.camera import ice_source
+    from driver.ice import camera_source as ice_source
     monkeypatch.setitem(ice_source.client_properties, "Ice.Default.Locator", lab.locator)
     sims, vehicles, servers = fleet(2, **{"MAVLinkServer.Camera.Uri": "sim"})
     f = ice_fleet()

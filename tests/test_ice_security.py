@@ -379,7 +379,8 @@ def _image(camera):
 def test_the_viewer_reaches_the_servers_camera_over_tls_with_the_pilots_certificate(cert_dir, ssl_server,
                                                                                      monkeypatch):
     """main.py --ice-certs puts the IceSSL properties where every ``ice:`` camera of the viewer finds them."""
-    from driver.camera import ice_source, open_source
+    from driver.camera import open_source
+    from driver.ice import camera_source as ice_source
     server, port = ssl_server(cert_dir, **{"MAVLinkServer.Camera.Uri": "sim"})
     monkeypatch.setattr(ice_source, "client_properties", {})
     src = open_source(f"ice:Camera:ssl -h {SECURE_HOST} -p {port}")

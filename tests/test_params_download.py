@@ -3,6 +3,8 @@ from __future__ import annotations
 
 import os
 
+import pytest
+
 from driver.params.cache import ParameterCache
 from driver.params.model import ParamType
 from driver.state import CommandStatus
@@ -24,7 +26,16 @@ def _same_as_sim(table, sim) -> None:
         assert abs(p.value - params[name]) <= 1e-6 * max(1.0, abs(params[name])), (name, p.value, params[name])
 
 
-def test_a_clean_link_brings_the_whole_list_into_the_state(vehicle, sim):
+@pytest.fixture
+def listing(sim, vehicle_factory):
+    """The driver reading the classic list (PARAM_REQUEST_LIST), not the FTP file."""
+    v = vehicle_factory(f"tcp:127.0.0.1:{sim.tcp_port}", param_ftp=False)
+    assert v.wait_for(lambda s: s.connected, 10)
+    return v
+
+
+def test_a_clean_link_brings_the_whole_list_into_the_state(listing, sim):
+    vehicle = listing
     result = vehicle.fetch_parameters().result(timeout=30)
     assert result.status is CommandStatus.ACCEPTED, result
     table = vehicle.state().parameters
@@ -35,7 +46,8 @@ def test_a_clean_link_brings_the_whole_list_into_the_state(vehicle, sim):
     assert again.ok and "already complete" in again.reason
 
 
-def test_thirty_percent_loss_each_way_still_ends_with_every_parameter(vehicle, sim):
+def test_thirty_percent_loss_each_way_still_ends_with_every_parameter(listing, sim):
+    vehicle = listing
     sim.faults.uplink.loss = sim.faults.downlink.loss = 0.3
     seen = []
     future = vehicle.fetch_parameters(refresh=True)
@@ -55,7 +67,7 @@ def test_thirty_percent_loss_each_way_still_ends_with_every_parameter(vehicle, s
 
 def test_a_lost_link_ends_the_download_and_the_next_asks_only_for_what_is_missing(vehicle_factory, sim_factory):
     sim = sim_factory(radio_baud=57600)                      # about 155 a second (x4 sped up): time to cut it
-    vehicle = vehicle_factory(f"tcp:127.0.0.1:{sim.tcp_port}", loss_timeout=1.0)
+    vehicle = vehicle_factory(f"tcp:127.0.0.1:{sim.tcp_port}", loss_timeout=1.0, param_ftp=False)
     assert vehicle.wait_for(lambda s: s.connected, 10)
     future = vehicle.fetch_parameters()
     assert vehicle.wait_for(lambda s: s.parameters.received > 100, 20)
@@ -97,3 +109,30 @@ def test_a_known_vehicle_shows_its_cached_table_at_once_and_names_what_changed(s
     other.fetch_parameters(refresh=True)
     assert "from the cache" not in other.state().parameters.detail
     assert s.system_id == 1
+
+
+def test_over_ftp_the_whole_table_comes_as_one_file(sim, vehicle_factory):
+    vehicle = vehicle_factory(f"tcp:127.0.0.1:{sim.tcp_port}")
+    assert vehicle.wait_for(lambda s: s.connected and s.firmware, 10)     # AUTOPILOT_VERSION offers FTP
+    sim.faults.uplink.loss = sim.faults.downlink.loss = 0.3
+    result = vehicle.fetch_parameters(refresh=True).result(timeout=60)
+    assert result.ok and "over MAVLink FTP" in result.reason, result
+    assert not any(kind == "PARAM_REQUEST_LIST" for _, kind, _ in sim.received_messages)
+    sim.faults.uplink.loss = sim.faults.downlink.loss = 0.0
+    _same_as_sim(vehicle.state().parameters, sim)
+
+
+def test_a_vehicle_whose_ftp_does_not_answer_gets_the_list(sim, vehicle_factory):
+    sim.autopilot._on_file_transfer_protocol = lambda msg: None             # advertised, but silent
+    vehicle = vehicle_factory(f"tcp:127.0.0.1:{sim.tcp_port}")
+    assert vehicle.wait_for(lambda s: s.connected and s.firmware, 10)
+    seen = []
+    future = vehicle.fetch_parameters()
+    while not future.done() and len(seen) < 200:
+        s = vehicle.wait_for(lambda s: s.parameters.detail not in seen[-1:], 1)
+        if s is not None:
+            seen.append(s.parameters.detail)
+    result = future.result(timeout=30)
+    assert result.ok and "over MAVLink FTP" not in result.reason, result
+    assert any("no answer to the FTP open" in d and "reading the list" in d for d in seen), seen
+    _same_as_sim(vehicle.state().parameters, sim)

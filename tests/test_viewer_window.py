@@ -67,6 +67,8 @@ def test_keys_dialog_lists_the_keys(qtbot, silent_vehicle, window_factory):
                      ("↑", "Climb"), ("↓", "Descend"), ("←", "Yaw left"), ("→", "Yaw right"),
                      ("Space", "Stop: hover where you are"), ("Esc", "Stop: cancel a Fly here, hover where you are"),
                      ("T", "Take off"), ("L", "Land"),
+                     ("PgUp", "Tilt the drone's camera up 5° (or the mouse wheel / drag on the video)"),
+                     ("PgDn", "Tilt the drone's camera down 5°"),
                      ("(release)", "Releasing a key centres its axis"),
                      ("Gamepad A", "Stop (hover)"), ("Gamepad B", "Land"), ("Gamepad START", "Take off (asks)"),
                      ("Gamepad BACK", "Return to launch"),

@@ -197,7 +197,7 @@ def main(argv: list[str] | None = None) -> int:
     sim = None
     if args.sim:
         from driver.sim import SimConfig, SimVehicle
-        sim = SimVehicle(SimConfig(tcp_port=0, speedup=args.speedup, ready_after=args.ready_after,
+        sim = SimVehicle(SimConfig(tcp_port=0, speedup=args.speedup, ready_after=args.ready_after, camera=True,
                                    signing_key=signing.key if signing else None))   # a vehicle that has our key
         sim.start()
         connection = f"tcp:127.0.0.1:{sim.tcp_port}"
@@ -252,10 +252,8 @@ def main(argv: list[str] | None = None) -> int:
         proxy = camera_props.getProperty("UAVViewer.Camera.Proxy")
         own_camera = [f"ice:{proxy}"] if proxy else []
     if camera_props is not None:                    # its camera over TLS too, with the pilot's certificate; in a
-        from driver.camera import ice_source        # fleet, found through the registry
-        ice_source.client_properties.update(
-            {k: v for prefix in ("IceSSL.", "Ice.Plugin.IceSSL", "Ice.Default.Locator")
-             for k, v in camera_props.getPropertiesForPrefix(prefix).items()})
+        from driver.ice import camera_source as ice_source        # fleet, found through the registry
+        ice_source.use_client_properties(camera_props)
     window = MainWindow(drone, takeoff_altitude=args.takeoff_altitude, cameras=args.camera,  # --camera: this run
                         default_cameras=own_camera)
     if fleet is not None:
@@ -263,6 +261,14 @@ def main(argv: list[str] | None = None) -> int:
         window.attach_fleet(controller)
     elif args.connect or not (args.sim or args.replay or remote):
         window.remember_connection_when_answered(connection)
+    connections = window.connections                              # File › Connect switches from this one
+    connections.base, connections.speedup = config, args.speedup
+    connections.log_dir = str(args.log_dir) if args.log_dir is not None else None
+    connections.certs = str(args.ice_certs) if args.ice_certs else None
+    from uavviewer.connect.choice import from_command_line
+    connections.adopt(drone, from_command_line(args, connection), sim=sim, fleet=fleet,
+                      first=first if fleet is not None else "")
+    sim = None                                                    # stopped with its drone, whenever that is
     window.show()
     for number in (signal.SIGINT, signal.SIGTERM):              # Ctrl+C, kill: close cleanly, without asking
         signal.signal(number, lambda *_: window.quit_without_asking())
@@ -276,11 +282,9 @@ def main(argv: list[str] | None = None) -> int:
     try:
         return app.exec_()
     finally:
-        if fleet is not None:
-            controller.stop()
-            fleet.close()                                         # every vehicle's client, the picked one too
-        else:
-            drone.close()
+        if getattr(window, "fleet", None) is not None:           # the fleet flown last (File › Connect may have
+            window.fleet.stop()                                   # left the first one)
+        window.connections.close()                                # the vehicle (or fleet) flown last, and any left
         if sim is not None:
             sim.stop()
 

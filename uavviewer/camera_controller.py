@@ -18,6 +18,7 @@ from typing import Callable
 
 from PyQt5.QtCore import QObject, QStandardPaths, Qt, QTimer, pyqtSignal
 
+import driver.ice.camera_source  # noqa: F401  (registers ice: cameras)
 from driver.api import Drone
 from driver.camera import CameraSet, VideoRecorder, describe_uri, save_snapshot
 from driver.state import CommandResult, CommandStatus, VehicleState

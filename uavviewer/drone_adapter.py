@@ -38,6 +38,7 @@ class DroneAdapter(QObject):
     stateChanged = pyqtSignal(object)        # VehicleState
     commandFinished = pyqtSignal(object)     # CommandResult, on the UI thread
     commandSent = pyqtSignal(str)            # a command handed to the drone (its name)
+    droneChanged = pyqtSignal(object)        # another drone is flown from now on (a fleet's pick, File › Connect)
 
     def __init__(self, drone: Drone, rate_hz: float = 30.0, refresh_hz: float = 10.0,
                  parent: QObject | None = None) -> None:
@@ -83,6 +84,7 @@ class DroneAdapter(QObject):
         self._setpoint = VelocityCommand()
         self.drone = drone
         self._state = None
+        self.droneChanged.emit(drone)
         self.poll()
 
     def stop(self) -> None:
@@ -100,23 +102,28 @@ class DroneAdapter(QObject):
             self.stateChanged.emit(s)
 
     # -- commands -------------------------------------------------------------------------------
-    def command(self, name: str, *args) -> None:
+    def command(self, name: str, *args) -> Future | None:
         """Call ``drone.<name>(*args)``; the result arrives as ``commandFinished`` (at once from a call that
-        answers at once, such as ``use_signing_key``)."""
+        answers at once, such as ``use_signing_key``). Returns the drone's Future (a caller may cancel it), if any."""
         self.commandSent.emit(name)
         try:
             future = getattr(self.drone, name)(*args)
         except Exception as exc:             # noqa: BLE001
             log.exception("command %s failed to start", name)
             self.commandFinished.emit(CommandResult(name, CommandStatus.REJECTED, str(exc)))
-            return
+            return None
         if isinstance(future, CommandResult):
             self.commandFinished.emit(future)
         elif isinstance(future, Future):
             relay = self._relay              # the callback holds the relay, not this adapter (see _FutureRelay)
             future.add_done_callback(lambda f, n=name: relay.done.emit(n, f))
+            return future
+        return None
 
     def _on_future_done(self, name: str, future: Future) -> None:
+        if future.cancelled():
+            self.commandFinished.emit(CommandResult(name, CommandStatus.ABORTED, "cancelled by the pilot"))
+            return
         try:
             result = future.result(timeout=0)
         except Exception as exc:             # noqa: BLE001

@@ -35,7 +35,7 @@ class _FrameRelay(QObject):
 
 class GamepadInput(QObject):
     changed = pyqtSignal()                   # the pad's demand or state changed: fly again, redraw the label
-    actionPressed = pyqtSignal(str)          # "stop" | "land" | "takeoff" | "rtl"
+    actionPressed = pyqtSignal(str)          # "stop" | "land" | "takeoff" | "rtl" | "tilt_up" | "tilt_down"
     message = pyqtSignal(str, object)        # text for the pilot, Severity
     frameArrived = pyqtSignal(object)        # every GamepadFrame (Preferences' live bars)
 

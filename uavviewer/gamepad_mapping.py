@@ -26,7 +26,9 @@ PILOT_AXES: dict[str, tuple[str, str]] = {
 }
 #: action -> what the pilot reads
 ACTIONS: dict[str, str] = {"stop": "Stop (hover)", "land": "Land", "takeoff": "Take off (asks)",
-                           "rtl": "Return to launch"}
+                           "rtl": "Return to launch",
+                           # the drone's camera, 5 degrees a press (a paddle or shoulder button; unmapped at first)
+                           "tilt_up": "Camera tilt up", "tilt_down": "Camera tilt down"}
 ALWAYS_MAPPED = ("stop", "land")
 #: a known game controller's buttons until the pilot maps others (SDL's names for the Xbox layout's places)
 CONTROLLER_BUTTONS = {"stop": "a", "land": "b", "takeoff": "start", "rtl": "back"}

@@ -29,10 +29,12 @@ ACTION_KEYS: dict[int, tuple[str, str]] = {
     Qt.Key_Escape: ("stop", "Stop: cancel a Fly here, hover where you are"),
     Qt.Key_T: ("takeoff", "Take off"),
     Qt.Key_L: ("land", "Land"),
+    Qt.Key_PageUp: ("tilt_up", "Tilt the drone's camera up 5° (or the mouse wheel / drag on the video)"),
+    Qt.Key_PageDown: ("tilt_down", "Tilt the drone's camera down 5°"),
 }
 
 _KEY_NAMES = {Qt.Key_Up: "↑", Qt.Key_Down: "↓", Qt.Key_Left: "←", Qt.Key_Right: "→", Qt.Key_Space: "Space",
-              Qt.Key_Escape: "Esc"}
+              Qt.Key_Escape: "Esc", Qt.Key_PageUp: "PgUp", Qt.Key_PageDown: "PgDn"}
 
 
 class KeyboardSticks:

@@ -30,12 +30,15 @@ from .gamepad_input import GamepadInput
 from .keyboard import ACTION_KEYS, AXIS_KEYS, KeyboardSticks
 from .link_security import signing_unavailable, signing_warning
 from .pilot_input import Input, InputSelector
+from .pilot_tools import PilotTools
 from .map.controller import MapController, TileSettings
 from .params import ParamsController
 from .refresh import INSTRUMENTS_HZ, PLOTS_HZ, TEXT_HZ, Refresh
 from .settings import ViewerSettings, default_qsettings, load_settings, load_window, save_settings, save_window
 from .sticks import Axes, MaxSpeeds, axes_from_pads, combine, pad_labels, velocity_from_axes
+from .gimbal_controller import KEY_STEP, GimbalController
 from .widgets.camera_panel import CameraPanel
+from .widgets.gimbal_bar import GimbalBar
 from .widgets.gamepad_page import GamepadPage
 
 __all__ = ["MainWindow", "load_style"]
@@ -110,6 +113,9 @@ class MainWindow(QMainWindow):
                                        drone=lambda: self.adapter.drone,
                                        folder=self.settings.media_folder or None, parent=self)
         self.refresh.shownChanged.connect(self.camera.set_shown)
+        self.gimbal_bar = GimbalBar()                 # the camera on the vehicle: tilt, its own photo and video
+        self.camera_panel.layout().addWidget(self.gimbal_bar)
+        self.gimbal = GimbalController(self.adapter, self.camera_view, self.gimbal_bar, self)
         self.camera_panel.hud_button.setChecked(self.settings.hud)
         self.menuView.addAction(self.telemetryDock.toggleViewAction())
         self.menuView.addAction(self.plotsDock.toggleViewAction())
@@ -154,6 +160,7 @@ class MainWindow(QMainWindow):
         self.gamepad.changed.connect(self._fly)
         self.gamepad.actionPressed.connect(self._key_action)
         self.gamepad.message.connect(self._gamepad_message)
+        self.tools = PilotTools(self)                 # connecting, alerts, preflight, guided actions, home arrow
         self.params = ParamsController(self.adapter, self, say=self.log_message)    # docs/parameters.md
         self.params.add_to_menu(self)                       # Vehicle › Parameters…
         self.params.offer_fixes(self.messages)              # a warning naming a parameter: Fix… opens it
@@ -164,10 +171,68 @@ class MainWindow(QMainWindow):
             self.restoreGeometry(geometry)
         if state is not None:
             self.restoreState(state)
+            if "preflightDock".encode("utf-16-be") not in bytes(state):   # saved before the dock existed
+                self.tools.tab_preflight()
         self.setFocusPolicy(Qt.StrongFocus)
         QApplication.instance().installEventFilter(self)
         self.show_state(VehicleState(link=self.adapter.state.link))
         self.adapter.start()
+
+    # -- connecting (File › Connect, Disconnect, Open flight log: uavviewer/pilot_tools.py wires them) ----------
+    def _connected(self, opened) -> None:
+        """A connection opened by File › Connect (:class:`uavviewer.connect.opener.Opened`): a vehicle, or a lab's
+        fleet with its Fleet panel."""
+        self._leave_fleet()
+        self.use_connection(opened.drone)
+        self.actionDisconnect.setEnabled(self.connections.connected)
+        own = ["sim"] if opened.sim is not None else []            # the new vehicle's own camera, if we know it
+        if opened.fleet is not None:                               # its cameras through the registry, as app.py
+            from driver.ice import camera_source as ice_source
+            from driver.ice.client import fleet_properties
+
+            from .fleet import FleetController
+            ice_source.use_client_properties(fleet_properties(opened.choice.target, self.connections.certs))
+            own = [FleetController.camera_uri(opened.first)]
+            self.attach_fleet(FleetController(opened.fleet, opened.first, parent=self))
+        if self.camera.uris == self._default_cameras and own != self._default_cameras:   # not --camera's
+            self._default_cameras = own                                                  # nor Preferences'
+            self.camera.set_sources(own)
+
+    def _leave_fleet(self) -> None:
+        """Another connection replaces the fleet: its panel goes; the fleet itself is closed by the connections."""
+        fleet = getattr(self, "fleet", None)
+        if fleet is None:
+            return
+        fleet.stop()
+        self.mapPanel.mapView.vehicleClicked.disconnect(fleet.pick)
+        self.map.show_fleet(())
+        dock = self.fleet_panel.parentWidget()
+        self.removeDockWidget(dock)
+        dock.deleteLater()
+        fleet.deleteLater()
+        self.fleet = None
+
+    def use_connection(self, drone: Drone) -> None:
+        """Fly (or watch) ``drone`` from now on: File › Connect, Disconnect, Open flight log. The vehicle left
+        behind was sent zero velocity first, so it hovers."""
+        self.centre_sticks()
+        self.map.cancel()
+        self.guided.cancel()
+        self._last_message = self._last_result = -1
+        self._shown_results.clear()
+        self._plot_gap = True
+        self.plots.gap(time.monotonic() - self._t0)
+        self.adapter.use(drone)
+        self.map.use_connection()
+        self.setWindowTitle(f"UavViewerPy — {self.adapter.description}")
+        self._signing_unavailable = signing_unavailable(drone)
+        self.telemetry.set_security_unknown(self._signing_unavailable)
+        self._speeds = self._set_limits(self.settings.speeds)
+        replay = self.adapter.replay is not None
+        self.replayBar.setVisible(replay)
+        self.controlsRow.setEnabled(not replay)
+        self.attitude.clear("NO LINK")
+        self.show_state(self.adapter.state)
 
     # -- settings --------------------------------------------------------------------------------
     def _apply_settings(self) -> None:
@@ -301,6 +366,7 @@ class MainWindow(QMainWindow):
         if self._emergency_box is not None and not s.armed:
             self._emergency_box.reject()            # the motors have stopped: nothing left to ask
         self.map.show_state(s)                      # cheap; it repaints only on a change it can show
+        self.gimbal.show_state(s)
         phase = flight_phase(s)
         progress = takeoff_progress(s) if phase is FlightPhase.TAKING_OFF else None
         detail = s.takeoff.phase.value if s.takeoff.active else ""
@@ -501,6 +567,8 @@ class MainWindow(QMainWindow):
             fc.main_button.click()
         elif action == "land" and fc.phase in (FlightPhase.TAKING_OFF, FlightPhase.FLYING):
             fc.main_button.click()
+        elif action in ("tilt_up", "tilt_down"):      # the vehicle's camera (uavviewer.gimbal_controller)
+            self.gimbal.tilt_by(KEY_STEP if action == "tilt_up" else -KEY_STEP)
 
     def changeEvent(self, event: QEvent) -> None:  # noqa: N802
         # Focus lost or minimised: nobody holds the sticks or keys any more; the gamepad flies on only if the
@@ -676,6 +744,7 @@ class MainWindow(QMainWindow):
         save_settings(self._qsettings, self.settings)
         save_window(self._qsettings, self.saveGeometry(), self.saveState())
         QApplication.instance().removeEventFilter(self)
+        self.alerts.close()
         self.gamepad.close()
         self.camera.close(wait=0.5)
         self.adapter.stop()

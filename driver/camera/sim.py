@@ -37,7 +37,8 @@ def _body_to_ned(roll: float, pitch: float, yaw: float) -> np.ndarray:
 
 
 class SimulatedCamera:
-    """Pinhole camera fixed to the body, looking forward and ``tilt_deg`` down."""
+    """Pinhole camera on the vehicle's gimbal where the vehicle reports one (it follows the gimbal's pitch,
+    so the horizon moves when the pilot tilts), else fixed to the body, looking forward and ``tilt_deg`` down."""
 
     def __init__(self, width: int = 640, height: int = 480, fov_deg: float = 90.0, tilt_deg: float = 0.0,
                  grid_spacing: float = 5.0, grid_radius: float = 150.0):
@@ -49,6 +50,7 @@ class SimulatedCamera:
         self._cam_in_body = np.array([[0.0, -math.sin(t), math.cos(t)],
                                       [1.0, 0.0, 0.0],
                                       [0.0, math.cos(t), math.sin(t)]])
+        self._level = np.array([[0.0, 0.0, 1.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]])   # gimbal frame: no tilt
         n = int(grid_radius // grid_spacing)
         self._offsets = np.arange(-n, n + 1) * grid_spacing
         self._spacing, self._radius = grid_spacing, grid_radius
@@ -65,7 +67,14 @@ class SimulatedCamera:
         values = (a.roll, a.pitch, a.yaw, north, east, down)
         if not all(math.isfinite(v) for v in values):
             raise ValueError("vehicle state is not finite")
-        world_from_cam = _body_to_ned(a.roll, a.pitch, a.yaw) @ self._cam_in_body
+        g = state.gimbal
+        if g.pitch_deg is not None and math.isfinite(g.pitch_deg):
+            # on a pitch gimbal (the recorded servo mount): pitch held in the earth's frame, yaw from the nose
+            # (or from north), no roll axis: the picture still rolls with the vehicle
+            yaw = math.radians(g.yaw_deg or 0.0) + (0.0 if g.yaw_earth else a.yaw)
+            world_from_cam = _body_to_ned(a.roll, math.radians(g.pitch_deg), yaw) @ self._level
+        else:
+            world_from_cam = _body_to_ned(a.roll, a.pitch, a.yaw) @ self._cam_in_body
         eye = np.array([north, east, min(down, -0.3)])     # never below the ground
         img = self._sky.copy()
         self._draw_ground(img, world_from_cam)

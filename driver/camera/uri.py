@@ -25,7 +25,15 @@ from .source import FFMPEG_TIMEOUT_MS, STALL_S, OpenCVSource, SourceFailed, Vide
 
 log = logging.getLogger(__name__)
 
-__all__ = ["open_source", "describe_uri", "CameraSet", "STREAM_SCHEMES"]
+__all__ = ["open_source", "describe_uri", "CameraSet", "STREAM_SCHEMES", "register_scheme"]
+
+#: Sources other packages add without this one importing them (the Ice camera: driver.ice.camera_source).
+_SCHEMES: dict = {}
+
+
+def register_scheme(scheme: str, factory) -> None:
+    """``scheme:REST`` URIs open as ``factory(rest, image_format, timeout_ms)``."""
+    _SCHEMES[scheme] = factory
 
 STREAM_SCHEMES = ("rtsp", "rtsps", "rtmp", "http", "https", "udp", "rtp", "tcp", "srt")
 
@@ -98,9 +106,11 @@ def open_source(uri: str, *, state_fn: Callable[[], VehicleState] | None = None,
     elif u == "solo" or u.startswith("solo:"):
         host = u.partition(":")[2]
         source = SoloSource(host or SOLO_HOST, timeout_ms=timeout_ms, low_latency=low_latency)
+    elif u.split(":", 1)[0] in _SCHEMES:               # ice: (driver.ice.camera_source registers it)
+        scheme, rest = u.split(":", 1)
+        source = _SCHEMES[scheme](rest, image_format, timeout_ms)
     elif u.startswith("ice:"):
-        from .ice_source import IceSource
-        source = IceSource(u[4:].strip(), image_format, timeout_ms=timeout_ms)
+        source = UnsupportedSource(u)          # nothing registered ice: (import driver.ice.camera_source)
     elif u.isdigit():
         source = OpenCVSource(int(u), f"camera {u}", stream=True, timeout_ms=timeout_ms)
     elif u.startswith("/dev/"):

@@ -30,6 +30,8 @@ from ..params.metadata import load_metadata
 from ..params.model import ParameterTable
 from . import convert, load_slice
 from .params import table_from_ice
+from .payload import PayloadClient
+from ..payload.model import Gimbal, VehicleCamera
 from .server import DEFAULT_PORTS
 
 jderobot, mavlinkserver = load_slice()
@@ -74,7 +76,7 @@ def viewer_properties(config: str | None = None, host: str | None = None, args: 
     return props
 
 
-class IceDrone(Drone):
+class IceDrone(PayloadClient, Drone):
     """The remote vehicle; ``start()`` returns at once, the first status arrives in the background."""
 
     def __init__(self, properties: Ice.Properties, prefix: str = PREFIX, poll_interval: float = 0.1,
@@ -115,6 +117,7 @@ class IceDrone(Drone):
         self._resync = False                   # after a loss: the server may have restarted its numbering
         self._said_unreachable = False
         self._fence = Fence()
+        self._payload = (Gimbal(), VehicleCamera())  # the camera on the vehicle (driver.ice.payload)
         self._fence_polls = 0                  # polls until the fence is read again; None: the server has none
         self._parameters = ParameterTable()
         self._param_revision = -1              # the server's revision of the table we have
@@ -268,6 +271,7 @@ class IceDrone(Drone):
                         self._limits = self._clamps(Limits(lim.horizontal, lim.vertical, lim.yawRate))
                     self._read_fence()
                     self._read_parameters()
+                    self._read_payload()
                     self._answered(self._vehicle.getStatus(self._server_message, self._server_result))
                     if (self._subscription is not None
                             and started - max(self._subscribed_at, published or 0.0) > RESUBSCRIBE_AFTER):
@@ -365,7 +369,9 @@ class IceDrone(Drone):
             s = convert.state_from_status(status, tuple(self._messages), tuple(self._results))
             link = replace(s.link, address=f"{s.link.address} via {self._description}",
                            lost_count=s.link.lost_count + self._lost_count)
-            self._state = replace(s, link=link, fence=self._fence, parameters=self._parameters)
+            gimbal, camera = self._payload
+            self._state = replace(s, link=link, fence=self._fence, gimbal=gimbal, camera=camera,
+                                  parameters=self._parameters)
 
     def _result(self, outcome) -> CommandResult:
         """The server's outcome, numbered as in our results (the window pairs a Future's answer with it)."""
@@ -657,6 +663,9 @@ class _Subscriber(mavlinkserver.Telemetry):
 
     def event(self, vehicle, e, current=None):
         pass
+
+    def payload(self, vehicle, p, current=None):
+        self._owner._published_payload(p)
 
 
 def fleet_properties(registry: str, certs: str | None = None) -> Ice.Properties:

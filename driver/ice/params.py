@@ -5,7 +5,7 @@ from __future__ import annotations
 import fnmatch
 import threading
 
-from ..params.model import Parameter, ParameterTable, ParamType
+from ..params.model import Parameter, ParameterTable, ParameterValues, ParamType
 
 __all__ = ["Revisions", "table_to_ice", "table_from_ice"]
 
@@ -43,4 +43,5 @@ def table_from_ice(answer) -> ParameterTable:
             values[p.name] = Parameter(p.name, p.value, ParamType(p.type), p.index)
         except ValueError:                   # a type this side does not know: left out rather than guessed
             continue
-    return ParameterTable(values, None if answer.expected < 0 else answer.expected, answer.downloading, answer.detail)
+    return ParameterTable(ParameterValues(values), None if answer.expected < 0 else answer.expected,
+                          answer.downloading, answer.detail)

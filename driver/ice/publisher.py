@@ -19,6 +19,7 @@ import IceStorm
 from ..api import Drone
 from ..state import CommandStatus, Severity, VehicleState
 from . import convert, load_slice
+from .payload import payload_to_ice
 
 jderobot, mavlinkserver = load_slice()
 log = logging.getLogger(__name__)
@@ -125,6 +126,7 @@ class TelemetryPublisher:
                     self._publisher.status(self.name, status)
                     self._publisher.pose(self.name, time.time(), self._snapshots.pose())
                     self._publisher.navdata(self.name, self._snapshots.navdata())
+                    self._publisher.payload(self.name, payload_to_ice(mavlinkserver, s))
                     next_status = max(next_status + self._period, now)
                     if s.messages:                    # published: the next status starts after them
                         last_message = s.messages[-1].index

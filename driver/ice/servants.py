@@ -29,6 +29,7 @@ from ..rules import COPTER_MODES, MAX_ALTITUDE, go_to_problem, takeoff_altitude_
 from ..state import CommandResult, CommandStatus, LandedState
 from . import convert, load_slice
 from .params import Revisions, table_to_ice
+from .payload import PayloadServant
 
 jderobot, mavlinkserver = load_slice()
 log = logging.getLogger(__name__)
@@ -281,7 +282,7 @@ class NoCameraI(jderobot.Camera):
         pass
 
 
-class VehicleI(mavlinkserver.Vehicle):
+class VehicleI(PayloadServant, mavlinkserver.Vehicle):
     """Our extension: status and commands with the vehicle's own answer."""
 
     def __init__(self, vehicle: Drone, settings: ServerSettings):

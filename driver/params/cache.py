@@ -14,7 +14,7 @@ import os
 import re
 
 from ..files import private_dir, write_private
-from .model import Parameter, ParameterTable, ParamType
+from .model import Parameter, ParameterTable, ParameterValues, ParamType
 from .values import same_value
 
 log = logging.getLogger(__name__)
@@ -49,7 +49,7 @@ class ParameterCache:
                 data = json.load(f)
             values = {name: Parameter(name, float(value), ParamType(ptype), int(index))
                       for name, ptype, value, index in data["params"]}
-            return ParameterTable(values, int(data["expected"]), False, "")
+            return ParameterTable(ParameterValues(values), int(data["expected"]), False, "")
         except FileNotFoundError:
             return None
         except (OSError, ValueError, KeyError, TypeError) as e:

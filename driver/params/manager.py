@@ -16,7 +16,8 @@ from typing import Callable
 from ..state import CommandStatus, LinkStatus, Severity
 from .cache import changed_names
 from .download import Download
-from .model import Parameter, ParameterTable, ParamType
+from .ftp import FtpDownload
+from .model import Parameter, ParameterTable, ParameterValues, ParamType
 from .setter import SET_RETRY, PendingSet
 from .values import as_stored, format_value, type_problem
 
@@ -52,6 +53,9 @@ class ParameterManager:
         self._published = -math.inf
         self._detail = ""
         self._cached: ParameterTable | None = None   # shown while the vehicle's own list is read
+        self._ftp: FtpDownload | None = None         # @PARAM/param.pck on its way (driver.params.ftp)
+        self.use_ftp = True                          # read the whole table over MAVLink FTP where it is offered
+        self.ftp_capable: bool | None = None         # AUTOPILOT_VERSION's MAV_PROTOCOL_CAPABILITY_FTP
         self.on_complete: Callable[[ParameterTable], None] | None = None   # the cache's hook
 
     # -- what callers ask (any thread, under the lock) ------------------------------------------------
@@ -80,6 +84,9 @@ class ParameterManager:
         self._download = download
         self._waiting.append(future)
         self._detail = "asking for the list" if download.listing else f"asking for {download.missing} missing"
+        if download.listing and self.use_ftp and self.ftp_capable:
+            self._ftp = FtpDownload(now)
+            self._detail = "reading @PARAM/param.pck over MAVLink FTP"
         if download.listing and cached is not None and cached.complete and self._expected is None:
             self._cached = cached
             self._detail = "from the cache: checking with the vehicle"
@@ -136,6 +143,15 @@ class ParameterManager:
         return self._download is not None and not self._download.listing
 
     # -- the vehicle's word (reader thread) -----------------------------------------------------------
+    def on_ftp(self, m, now: float) -> None:
+        """A FILE_TRANSFER_PROTOCOL message addressed to us."""
+        ftp = self._ftp
+        if ftp is None:
+            return
+        failure = ftp.on_message(m, now)
+        if failure:
+            self._ftp_failed(failure)
+
     def on_param_value(self, m, now: float) -> Parameter | None:
         """A PARAM_VALUE from the autopilot: into the table; it may confirm a write or advance the download."""
         if not math.isfinite(m.param_value):
@@ -192,7 +208,9 @@ class ParameterManager:
             return out                            # no vehicle yet: its answers would go nowhere
         target = self._target()
         download = self._download
-        if download is not None:
+        if download is not None and self._ftp is not None:
+            out += self._service_ftp(now, target)
+        elif download is not None:
             msgs, failure = download.service(now, target)
             out += msgs
             if failure:
@@ -219,6 +237,38 @@ class ParameterManager:
         return out
 
     # -- inside -------------------------------------------------------------------------------------------
+    def _service_ftp(self, now: float, target: tuple[int, int]) -> list:
+        ftp = self._ftp
+        msgs, failure = ftp.service(now, target)
+        if failure:
+            self._ftp_failed(failure)
+            return msgs
+        if ftp.done:
+            got = ftp.parameters()
+            if isinstance(got, str):
+                self._ftp_failed(got)
+                return msgs
+            values, count = got
+            self._ftp = None
+            self._values = {**{n: p for n, p in self._values.items() if p.index < 0 and n not in values}, **values}
+            self._expected = count
+            self._end_download(CommandStatus.ACCEPTED, f"{len(values)} parameters over MAVLink FTP ({ftp.size} bytes in "
+                               f"{ftp.frames} frames)", now)
+            return msgs
+        detail = f"FTP: {ftp.received} of {ftp.size} bytes" if ftp.size else "opening @PARAM/param.pck (FTP)"
+        if detail != self._detail and not self._detail.startswith("from the cache"):
+            self._detail = detail
+            self._dirty = True
+        return msgs
+
+    def _ftp_failed(self, reason: str) -> None:
+        """FTP did not work: the classic list from here on (and for this vehicle from now on)."""
+        log.info("parameters over FTP: %s; reading the list", reason)
+        self._ftp = None
+        self.ftp_capable = False
+        self._detail = f"FTP: {reason}; reading the list"
+        self._dirty = True
+
     def _complete(self) -> bool:
         if self._expected is None:
             return False
@@ -226,6 +276,7 @@ class ParameterManager:
 
     def _end_download(self, status: CommandStatus, reason: str, now: float = 0.0) -> None:
         d, self._download = self._download, None
+        self._ftp = None
         waiting, self._waiting = self._waiting, []
         cached, self._cached = self._cached, None
         if d is not None and d.reads:
@@ -254,7 +305,7 @@ class ParameterManager:
         values, expected = self._values, self._expected
         if self._cached is not None:              # the cache's values until the vehicle's own arrive
             values, expected = {**self._cached.values, **values}, expected or self._cached.expected
-        self._store.set(parameters=ParameterTable(dict(values), expected, self._download is not None,
+        self._store.set(parameters=ParameterTable(ParameterValues(values), expected, self._download is not None,
                                                   self._detail))
         self._store.publish()
 

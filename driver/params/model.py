@@ -7,13 +7,12 @@ parameters copies nothing.
 from __future__ import annotations
 
 import enum
-import types
 from dataclasses import dataclass, field
-from typing import Mapping
+from typing import Iterator, Mapping
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-__all__ = ["ParamType", "Parameter", "ParameterTable"]
+__all__ = ["ParamType", "Parameter", "ParameterValues", "ParameterTable"]
 
 
 class ParamType(enum.IntEnum):
@@ -39,14 +38,33 @@ class Parameter:
     index: int = -1                              # the vehicle's param_index, -1 when not known
 
 
-def _frozen(mapping: Mapping[str, Parameter] | None = None) -> Mapping[str, Parameter]:
-    return types.MappingProxyType(dict(mapping or {}))
+class ParameterValues(Mapping[str, Parameter]):
+    """A read-only name → :class:`Parameter` mapping: shared, never copied (a deep copy is itself)."""
+    __slots__ = ("_values",)
+
+    def __init__(self, values: Mapping[str, Parameter] | None = None):
+        self._values = dict(values or {})
+
+    def __getitem__(self, name: str) -> Parameter:
+        return self._values[name]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._values)
+
+    def __len__(self) -> int:
+        return len(self._values)
+
+    def __deepcopy__(self, memo) -> "ParameterValues":
+        return self
+
+    def __repr__(self) -> str:
+        return f"ParameterValues({len(self._values)} parameters)"
 
 
 @dataclass(frozen=True)
 class ParameterTable:
     """Every parameter the vehicle has reported, by name, and how complete the set is."""
-    values: Mapping[str, Parameter] = field(default_factory=_frozen)
+    values: Mapping[str, Parameter] = field(default_factory=ParameterValues)
     expected: int | None = None                  # PARAM_VALUE.param_count; None until the first one
     downloading: bool = False
     detail: str = ""                             # "re-asking 12 missing", "link lost: 1380 of 1392", ...

@@ -86,6 +86,8 @@ def parser() -> argparse.ArgumentParser:
                         help="where the EKF origin is from home, metres (default %(default)s)")
     parser.add_argument("--gimbal", action="store_true", help="a gimbal (component 154) on the link, MAVLink 2")
     parser.add_argument("--companion", action="store_true", help="a companion computer (component 191)")
+    parser.add_argument("--camera", action="store_true",
+                        help="a camera on the vehicle: pictures are confirmed with CAMERA_FEEDBACK (copter-4)")
     parser.add_argument("--usb-port", type=whole(0, 65535), metavar="PORT",
                         help="also serve TCP on this port (on --tcp's host, 0 = any) as the USB port, SERIAL0: "
                              "unsigned frames are accepted there even with signing on (--tcp is a telemetry port)")
@@ -128,7 +130,7 @@ def configure(args: argparse.Namespace) -> SimVehicle:
                        speedup=args.speedup, ready_after=args.ready_after, home=args.home,
                        mavlink2=not args.mav1, seed=args.seed, profile=args.profile,
                        origin_offset=args.origin_offset, gimbal=args.gimbal, companion=args.companion,
-                       usb_port=args.usb_port, signing_key=key)
+                       usb_port=args.usb_port, signing_key=key, camera=args.camera)
     return _with_faults(SimVehicle(config), args)
 
 

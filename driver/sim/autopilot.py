@@ -23,12 +23,15 @@ from typing import Callable
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from .commands import Commands
+from .circle import CircleNav
 from .common import (DEFAULT_PARAMS, MODE_NAMES, MODES, NOT_ARMABLE, POSITION_MODES, STREAMS, command_name,
                      wrap_pi)
 from .faults import Faults
 from .flight import LAND_DISARM_DELAY, Flight
+from .gimbal import Payload
 from .messages import Messages
 from .failsafe import GcsFailsafe
+from .ftp import FtpServer
 from .params import ParamProtocol, SimParams
 from .profiles import POSITION_REASONS, profile_of
 from .telemetry import EARTH_RADIUS, GRAVITY, METRES_PER_DEG, Telemetry
@@ -78,7 +81,7 @@ class SimTruth:
         return math.hypot(self.vn, self.ve)
 
 
-class Autopilot(Telemetry, Commands, ParamProtocol, GcsFailsafe, Messages, Flight):
+class Autopilot(Telemetry, Commands, ParamProtocol, FtpServer, GcsFailsafe, Messages, Flight, Payload):
     """One ArduCopter: state, flight modes, command handling and telemetry streams."""
 
     def __init__(self, config, faults: Faults | None = None,
@@ -127,6 +130,7 @@ class Autopilot(Telemetry, Commands, ParamProtocol, GcsFailsafe, Messages, Fligh
         self.rebooting_until: float | None = None
         self.deferred_texts: list | None = None   # STATUSTEXT held until a command's ACK is out
         self.mode_changed = False
+        self._payload_init()             # the mount and camera (gimbal.py)
         self._boot()
 
     # -- lifecycle -------------------------------------------------------------------------------
@@ -189,6 +193,7 @@ class Autopilot(Telemetry, Commands, ParamProtocol, GcsFailsafe, Messages, Fligh
         self._physics(dt)
         self._fence_check()
         self._battery(dt)
+        self._payload_step(dt)
         self._send_due()
         self.params_step(dt)
         self.failsafe_step()
@@ -320,6 +325,9 @@ class Autopilot(Telemetry, Commands, ParamProtocol, GcsFailsafe, Messages, Fligh
         elif number == MODES["RTL"]:
             self.rtl_phase = "land" if self.landed else "climb"
             self.yaw_mode = "hold"
+        elif number == MODES["CIRCLE"]:
+            self.circle = CircleNav.entering(self)       # centre CIRCLE_RADIUS ahead of the nose
+            self.yaw_mode = "rate"
         else:
             self.yaw_mode = "hold"
         log.info("mode %s", MODE_NAMES[number])

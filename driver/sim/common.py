@@ -58,6 +58,8 @@ DEFAULT_PARAMS = {
     "WPNAV_SPEED_UP": (250.0, mavlink.MAV_PARAM_TYPE_REAL32),
     "WPNAV_SPEED_DN": (150.0, mavlink.MAV_PARAM_TYPE_REAL32),
     "WPNAV_ACCEL": (250.0, mavlink.MAV_PARAM_TYPE_REAL32),
+    "CIRCLE_RADIUS": (1000.0, mavlink.MAV_PARAM_TYPE_REAL32),   # cm (AC_Circle), the centre this far ahead
+    "CIRCLE_RATE": (20.0, mavlink.MAV_PARAM_TYPE_REAL32),       # deg/s, positive clockwise
     "LAND_SPEED": (50, mavlink.MAV_PARAM_TYPE_INT16),
     "LAND_SPEED_HIGH": (0, mavlink.MAV_PARAM_TYPE_INT16),
     "PILOT_SPEED_UP": (250, mavlink.MAV_PARAM_TYPE_INT16),

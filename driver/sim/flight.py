@@ -203,6 +203,9 @@ class Flight:
             return (*self._rtl(), ACC_XY)
         if mode == MODES["BRAKE"]:
             return (*self._hold(), ACC_XY_BRAKE)
+        if mode == MODES["CIRCLE"] and getattr(self, "circle", None) is not None:
+            vn, ve, vd, self.yaw_rate_cmd = self.circle.step(self.n, self.e, self.d, self.yaw, self.t)
+            return vn, ve, vd, ACC_XY
         # LOITER, POSHOLD, ALT_HOLD and the rest: hold, nudged by MANUAL_CONTROL sticks.
         manual = self._manual()
         if manual is not None and any(abs(v) > 1e-3 for v in manual):

@@ -37,7 +37,7 @@ class Messages:
         kind = msg.get_type()
         if getattr(msg, "target_system", 0) not in (0, self.config.system_id):
             return
-        if getattr(msg, "target_component", 0) not in (0, self.config.component_id):
+        if getattr(msg, "target_component", 0) not in (0, self.config.component_id) and not self._for_gimbal(msg):
             return
         handler = getattr(self, "_on_" + kind.lower(), None)
         if handler is not None:

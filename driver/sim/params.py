@@ -36,6 +36,7 @@ RECORDED_RATE = 2300.0          # PARAM_VALUE a second over TCP in the recording
 READ_BY_NAME_INDEX = 65535      # param_index of a reply to a read by name or a set (the recording)
 READ_QUEUE = 20                 # PARAM_REQUEST_READs waiting for an answer (GCS_MAVLINK's param_requests)
 PARAM_VALUE_BYTES = 25 + 12       # a PARAM_VALUE in a MAVLink 2 frame, unsigned: payload + header and CRC
+FTP_FRAME_BYTES = 254 + 12        # a full FILE_TRANSFER_PROTOCOL frame
 
 _RANGES = {
     mavlink.MAV_PARAM_TYPE_INT8: (-128, 127), mavlink.MAV_PARAM_TYPE_UINT8: (0, 255),
@@ -141,13 +142,11 @@ class ParamProtocol:
         return self.factory.param_value_encode(name.encode(), float(params[name]), params.type_of(name), len(params),
                                                READ_BY_NAME_INDEX if index is None else index)
 
-    def _param_rate(self) -> float:
-        """PARAM_VALUE a second a link carries (ArduPilot budgets its parameter replies by the port's bandwidth: a
-        byte is 10 bits on a serial radio)."""
+    def _link_rate(self) -> float:
+        """Bytes a second a link carries for parameters (ArduPilot budgets its parameter replies by the port's
+        bandwidth: a byte is 10 bits on a serial radio; without one, the recording's TCP rate)."""
         baud = getattr(self.config, "radio_baud", None)
-        if not baud:
-            return RECORDED_RATE
-        return min(RECORDED_RATE, baud / 10.0 / PARAM_VALUE_BYTES)
+        return RECORDED_RATE * PARAM_VALUE_BYTES if not baud else min(RECORDED_RATE * PARAM_VALUE_BYTES, baud / 10.0)
 
     def _param_link(self) -> _LinkParams:
         links = self.__dict__.setdefault("param_links", {})
@@ -171,25 +170,35 @@ class ParamProtocol:
         self.emit(self._param_value(name))                # every link hears a change (send_parameter_value)
 
     def params_step(self, dt: float) -> None:
-        """Each link: the reads' answers first, then the list, as many as its bandwidth allows this step."""
-        links = self.__dict__.get("param_links")
+        """Each link: the reads' answers first, then an FTP burst (ftp.py), then the list, as many as its
+        bandwidth allows this step."""
+        links = self.__dict__.get("param_links") or {}
+        session = getattr(self, "ftp_session", None)
+        if session is not None and session.sending:
+            links = self.__dict__.setdefault("param_links", links)
+            links.setdefault(session.peer, _LinkParams())
         if not links:
             return
         params: SimParams = self.params
+        step = self._link_rate() * dt
         for peer, link in list(links.items()):
-            link.budget = min(link.budget + self._param_rate() * dt, max(1.0, self._param_rate() * dt))
-            while link.budget >= 1.0 and link.reads:
+            link.budget = min(link.budget + step, max(FTP_FRAME_BYTES, step))
+            while link.budget >= PARAM_VALUE_BYTES and link.reads:
                 index, name = link.reads.pop(0)
-                link.budget -= 1.0
+                link.budget -= PARAM_VALUE_BYTES
                 if 0 <= index < len(params):
                     self.emit_to(self._param_value(params.names[index], index), peer)
                 elif index < 0 and name in params:
                     self.emit_to(self._param_value(name), peer)
-            while link.budget >= 1.0 and link.next_index is not None:
+            session = getattr(self, "ftp_session", None)
+            while session is not None and session.peer is peer and session.sending and link.budget >= FTP_FRAME_BYTES:
+                link.budget -= self.ftp_burst_chunk()
+            while link.budget >= PARAM_VALUE_BYTES and link.next_index is not None:
                 self.emit_to(self._param_value(params.names[link.next_index], link.next_index), peer)
-                link.budget -= 1.0
+                link.budget -= PARAM_VALUE_BYTES
                 link.next_index += 1
                 if link.next_index >= len(params):
                     link.next_index = None
-            if not link.reads and link.next_index is None:
+            if not link.reads and link.next_index is None and not (
+                    session is not None and session.peer is peer and session.sending):
                 del links[peer]

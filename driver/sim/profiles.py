@@ -113,6 +113,7 @@ class Profile:
     sitl_texts: bool                # SITL's own lines ("SIM Hit ground at ... m/s")
     texts_after_ack: bool           # a command's STATUSTEXT follows its COMMAND_ACK (4.x queues text)
     fence_types: int = 7            # FENCE_TYPE's default: 4.x ceiling|circle|polygon, 3.3 ceiling|circle (3)
+    mount: str = "servo"            # gimbal.py: "servo" (4.6 recording, gimbal manager) or "solo" (3.3, MOUNT_*)
 
 
 # copter-4, from the recording: DO_SET_MODE GUIDED answered ACCEPTED then an immediate HEARTBEAT (7.03 s);
@@ -144,7 +145,7 @@ SOLO = Profile(
     do_set_mode=False, message_commands=False, extended_sys_state=False, home_pushed=False,
     mode_heartbeat=False, setpoint_frames=False, setpoint_yaw=False, local_z_from_home=True, arming_delay=0.0,
     liftoff_after=0.5, arm_severity=SOLO_SEVERITY_HIGH, arm_texts=False, calibration_text=False,
-    disarm_in_air_result=3, sitl_texts=False, texts_after_ack=False, fence_types=3)
+    disarm_in_air_result=3, sitl_texts=False, texts_after_ack=False, fence_types=3, mount="solo")
 
 PROFILES = {p.name: p for p in (COPTER_4, SOLO)}
 

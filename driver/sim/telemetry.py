@@ -294,6 +294,8 @@ class Telemetry:
         if speaks_mavlink2(self.config):
             caps |= mavlink.MAV_PROTOCOL_CAPABILITY_MAVLINK2
         major, minor, patch, kind = self.profile.version
+        if major >= 4:
+            caps |= mavlink.MAV_PROTOCOL_CAPABILITY_FTP      # @PARAM/param.pck (sim/ftp.py), as 4.6.3 says
         version = (major << 24) | (minor << 16) | (patch << 8) | kind
         return self.factory.autopilot_version_encode(caps, version, 0, 0, 0, [0] * 8, [0] * 8, [0] * 8,
                                                      0x1209, 0x5740, 0x0123456789ABCDEF)

@@ -21,6 +21,7 @@ from .autopilot import Autopilot, SimTruth
 from .clock import RealClock
 from .components import components_of
 from .faults import Faults
+from .gimbal import GIMBAL_COMPONENT
 from .profiles import profile_of
 from .server import LinkServer
 from .signing import Signing
@@ -49,6 +50,7 @@ class SimConfig:
     mavlink2: bool = True                   # False: MAVLink 1 only (the "solo" profile implies it)
     gimbal: bool = False                    # a gimbal (component 154) says HEARTBEAT, in MAVLink 2 always
     companion: bool = False                 # a companion computer (component 191) says HEARTBEAT
+    camera: bool | str = False              # a camera (CAM1_TYPE): True/"mavlink" or "trigger" (gimbal.py)
     system_id: int = 1
     component_id: int = 1
     battery_cells: int = 4
@@ -186,6 +188,8 @@ class SimVehicle:
         for component in self.components:
             for msg in component.step(autopilot.t):
                 self.server.broadcast(msg, component.component_id, component.mavlink2)
+        for msg in autopilot.take_gimbal_messages():     # the Solo's gimbal (154) and its GoPro (gimbal.py)
+            self.server.broadcast(msg, GIMBAL_COMPONENT, True if self.config.gimbal else None)
         self.server.pump()                 # downlink frames whose latency is over
 
     def _run(self) -> None:

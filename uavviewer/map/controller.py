@@ -23,6 +23,7 @@ from PyQt5.QtWidgets import QMessageBox, QWidget
 from driver.rules import MAX_ALTITUDE, MIN_GOTO_ALTITUDE
 from driver.state import CommandResult, VehicleState
 
+from .camera_overlay import CameraOverlay
 from ..dialogs import ask, fly_here_question
 from .geometry import MapFrame, tiles_covering, tile_zoom_for
 from .tiles import MAX_AREA_TILES, TileSource
@@ -105,6 +106,7 @@ class MapController(QObject):
         panel.offlineRequested.connect(self._offline)
         panel.downloadRequested.connect(self.download_area)
         self.view.flyHereRequested.connect(self.ask_fly_here)
+        self.camera = CameraOverlay(self.view, adapter, self)     # footprint, look direction, Look here (ROI)
         adapter.commandFinished.connect(self._command_finished)
         self._show_status()
         replay = adapter.replay
@@ -206,6 +208,7 @@ class MapController(QObject):
         self.view.fence_ceiling = s.fence.ceiling
         self._follow_target(s, where)
         self._fly_here_item(s)
+        self.camera.show_state(s, where)
 
     def _set_frame(self, s: VehicleState) -> None:
         home = s.home
@@ -233,6 +236,20 @@ class MapController(QObject):
         self.cancel()
         self._redraw_trail()
         return going
+
+    def use_connection(self) -> None:
+        """Another connection (File › Connect, Open flight log): its own frame, trail and, for a replay, track."""
+        self.cancel()
+        self._frame = None
+        self._state = None
+        self.trail = Trail()
+        self._name, self._trails = "", {}
+        self._replay_track = False
+        self._pending_track = None
+        self._redraw_trail()
+        replay = self.adapter.replay
+        if replay is not None:
+            replay.track().add_done_callback(self._track_read)
 
     def show_fleet(self, seen) -> None:
         """Every vehicle's (FleetRow, VehicleState or None), a few times a second: the others are drawn from

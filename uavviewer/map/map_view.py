@@ -86,6 +86,8 @@ class MapView(QWidget):
         self._drag_centre = self.centre
         self.paints = 0                              # paint events so far (tests see the UI keeps painting)
         self.drawn_tiles = 0                         # tiles drawn in the last paint
+        self.overlays: list = []                     # parts drawing over the map: f(painter, view) (camera_overlay)
+        self.menu_parts: list = []                   # parts adding to the right-click menu: f(menu, north, east)
 
     # -- what to show ---------------------------------------------------------------------------
     def set_vehicle(self, where: tuple[float, float, float] | None) -> None:
@@ -197,15 +199,21 @@ class MapView(QWidget):
             self.zoom_to(self.mpp * 2 ** (-steps / 2.0), QPointF(event.pos()))
 
     def contextMenuEvent(self, event) -> None:  # noqa: N802
-        if not self.fly_here_text:
+        if not self.fly_here_text and not self.menu_parts:
             return
         east, north = self.view_at(QPointF(event.pos()))
         menu = QMenu(self)
         menu.setAttribute(Qt.WA_DeleteOnClose)            # one per right click: gone once closed
         menu.setObjectName("mapMenu")
-        action = menu.addAction(self.fly_here_text)
-        action.setEnabled(self.fly_here_enabled)
-        action.triggered.connect(lambda: self.flyHereRequested.emit(north, east))
+        if self.fly_here_text:
+            action = menu.addAction(self.fly_here_text)
+            action.setEnabled(self.fly_here_enabled)
+            action.triggered.connect(lambda: self.flyHereRequested.emit(north, east))
+        for part in self.menu_parts:
+            part(menu, north, east)
+        if menu.isEmpty():
+            menu.deleteLater()
+            return
         menu.popup(event.globalPos())
 
     def _tile_ready(self, key) -> None:
@@ -237,6 +245,8 @@ class MapView(QWidget):
             self._paint_target(p)
         for mark in self.others:
             self._paint_other(p, mark)
+        for overlay in self.overlays:
+            overlay(p, self)
         if self.vehicle is not None:
             self._paint_vehicle(p)
         if self.vehicle_name or self.others:

@@ -1,12 +1,13 @@
-"""Play/pause, speed and the flight's clock while watching a recorded flight."""
+"""Play/pause, restart, seek, speed and the flight's clock while watching a recorded flight."""
 from __future__ import annotations
 
 from PyQt5.QtCore import Qt, pyqtSignal
-from PyQt5.QtWidgets import QComboBox, QHBoxLayout, QLabel, QProgressBar, QPushButton, QWidget
+from PyQt5.QtWidgets import QComboBox, QHBoxLayout, QLabel, QPushButton, QSlider, QWidget
 
 __all__ = ["ReplayBar", "SPEEDS"]
 
-SPEEDS = (1.0, 2.0, 4.0)
+SPEEDS = (0.5, 1.0, 2.0, 4.0, 8.0)
+STEPS = 1000                   # the seek bar's resolution
 
 
 def _clock(seconds: float | None) -> str:
@@ -19,6 +20,8 @@ def _clock(seconds: float | None) -> str:
 class ReplayBar(QWidget):
     pauseRequested = pyqtSignal(bool)       # True = pause
     speedRequested = pyqtSignal(float)
+    seekRequested = pyqtSignal(float)       # seconds from the start of the recording
+    restartRequested = pyqtSignal()
 
     def __init__(self, parent: QWidget | None = None) -> None:
         super().__init__(parent)
@@ -31,21 +34,47 @@ class ReplayBar(QWidget):
         self.speed.setFocusPolicy(Qt.NoFocus)
         for s in SPEEDS:
             self.speed.addItem(f"{s:g}×", s)
-        self.progress = QProgressBar()
-        self.progress.setRange(0, 1000)
-        self.progress.setTextVisible(False)
-        self.progress.setMaximumHeight(10)
+        self.restart_button = QPushButton("Restart")
+        self.restart_button.setObjectName("replayRestart")
+        self.restart_button.setFocusPolicy(Qt.NoFocus)
+        self.progress = QSlider(Qt.Horizontal)        # shows where the replay is; dragged, it seeks
+        self.progress.setObjectName("replaySeek")
+        self.progress.setRange(0, STEPS)
+        self.progress.setFocusPolicy(Qt.NoFocus)
+        self.progress.setToolTip("Drag or click to jump in the recording")
+        self._duration = 0.0
         self.clock = QLabel("--:-- / --:--")
         self.clock.setObjectName("replayClock")
         row = QHBoxLayout(self)
         row.setContentsMargins(8, 4, 8, 4)
         row.addWidget(QLabel("Replay"))
         row.addWidget(self.play_button)
+        row.addWidget(self.restart_button)
         row.addWidget(self.speed)
         row.addWidget(self.progress, 1)
         row.addWidget(self.clock)
         self.play_button.clicked.connect(lambda: self.pauseRequested.emit(not self._paused))
         self.speed.activated.connect(lambda i: self.speedRequested.emit(float(self.speed.itemData(i))))
+        self.restart_button.clicked.connect(self.restartRequested)
+        self.progress.sliderReleased.connect(lambda: self._seek(self.progress.value()))
+        self.progress.actionTriggered.connect(self._clicked)
+        self.speed.setCurrentIndex(self.speed.findData(1.0))
+
+    def _clicked(self, action: int) -> None:
+        """A click on the groove (page step) or the keys: seek to where the slider goes."""
+        if action in (QSlider.SliderPageStepAdd, QSlider.SliderPageStepSub, QSlider.SliderSingleStepAdd,
+                      QSlider.SliderSingleStepSub, QSlider.SliderToMinimum, QSlider.SliderToMaximum):
+            self._seek(self.progress.sliderPosition())
+
+    def _seek(self, value: int) -> None:
+        if self._duration > 0:
+            self.seekRequested.emit(self._duration * value / STEPS)
+
+    def seek_to(self, seconds: float) -> None:
+        """Move the bar as the pilot would and ask for that place (tests and the keyboard)."""
+        if self._duration > 0:
+            self.progress.setValue(int(STEPS * max(0.0, min(1.0, seconds / self._duration))))
+            self._seek(self.progress.value())
 
     def set_progress(self, position: float | None, duration: float | None, paused: bool,
                      speed: float | None = None, finished: bool = False) -> None:
@@ -53,9 +82,14 @@ class ReplayBar(QWidget):
         self._paused = paused
         self.play_button.setText("Finished" if finished else ("Play" if paused else "Pause"))
         self.play_button.setEnabled(not finished)
-        if duration:
+        self._duration = duration or 0.0
+        if duration and not self.progress.isSliderDown():
             fraction = 1.0 if finished else (position or 0.0) / duration
-            self.progress.setValue(int(1000 * max(0.0, min(1.0, fraction))))
+            value = int(STEPS * max(0.0, min(1.0, fraction)))
+            if value != self.progress.value():
+                self.progress.blockSignals(True)
+                self.progress.setValue(value)
+                self.progress.blockSignals(False)
         end = "  (finished)" if finished else ""
         self.clock.setText(f"{_clock(duration if finished else position)} / {_clock(duration)}{end}")
         if speed is not None and not self.speed.view().isVisible():

@@ -119,6 +119,8 @@ class TelemetryPanel(QFrame):
         age = s.link.heartbeat_age
         hb_color = DIM if age is None else (GOOD if s.link.status is LinkStatus.OK else BAD)
         self._put("heartbeat", "--" if age is None else f"{age:.1f} s ago", hb_color)
+        if s.link.status is LinkStatus.CLOSED:       # disconnected, or a replay played to its end: none is live
+            self._put("heartbeat", "none (link closed)", DIM)
         if s.link.status is LinkStatus.LOST:
             self._put("packets", "0", BAD)
             self._put("loss", "link lost", BAD)

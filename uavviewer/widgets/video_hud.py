@@ -158,6 +158,8 @@ def _readouts(p: QPainter, rect: QRectF, state: VehicleState, size: int) -> None
     _text(p, right, Qt.AlignRight | Qt.AlignVCenter, f"ALT {_num(state.altitude)} m")
     dist = state.distance_from_home
     _text(p, right.translated(0, line), Qt.AlignRight | Qt.AlignVCenter, f"HOME {_num(dist, 0)} m")
+    gimbal = state.gimbal.pitch_deg                  # the vehicle's camera tilt, as it reports it
+    _text(p, left.translated(0, 2 * line), Qt.AlignLeft | Qt.AlignVCenter, f"CAM {_num(gimbal, 0)}°")
     # mode and arming top-left, battery top-right
     top = QRectF(rect.left() + margin, rect.top() + 4, rect.width() * 0.3, line)
     armed = "ARMED" if state.armed else "DISARMED"

@@ -1,4 +1,7 @@
-"""Video from a JdeRobot ``Camera`` served over Ice (ours or any JdeRobot driver's).
+"""Video from a JdeRobot ``Camera`` served over Ice (ours or any JdeRobot driver's): ``ice:<proxy>``.
+
+It lives with the Ice code and registers its scheme with :func:`driver.camera.uri.register_scheme` when
+imported, so ``driver.camera`` never imports ``driver.ice`` (the dependency runs one way: ice -> camera).
 
 ``getImageData`` always answers with the newest image, so asking too often only
 sends the same image again. After each new image the source waits most of the
@@ -15,7 +18,8 @@ from collections import deque
 
 import numpy as np
 
-from .source import SourceFailed, VideoSource
+from ..camera.source import SourceFailed, VideoSource
+from ..camera.uri import register_scheme
 
 log = logging.getLogger(__name__)
 
@@ -26,6 +30,13 @@ __all__ = ["IceSource"]
 client_properties: dict[str, str] = {}
 LEAD = (0.5, 0.8, 0.95)         # the wait after a new image, as a fraction of the frame interval: min, start, max
 WAIT_S = (0.005, 0.2)           # bounds of any wait between asks
+
+
+def use_client_properties(props) -> None:
+    """Reach Ice cameras as this Ice client is set up (``props``, Ice.Properties): over TLS with its certificate,
+    through its registry's locator (a lab's fleet)."""
+    client_properties.update({k: v for prefix in ("IceSSL.", "Ice.Plugin.IceSSL", "Ice.Default.Locator")
+                              for k, v in props.getPropertiesForPrefix(prefix).items()})
 
 
 class IceSource(VideoSource):
@@ -56,12 +67,12 @@ class IceSource(VideoSource):
 
     def _open(self) -> None:
         import Ice
-        from ..ice import load_slice
+        from . import load_slice
         jderobot, _ = load_slice()
         self._jderobot = jderobot
         init = Ice.InitializationData()
         init.properties = Ice.createProperties()
-        from ..ice.client import CLIENT_MESSAGE_KB          # a 1920x1080 RGB8 picture; Ice's default is 1 MB
+        from .client import CLIENT_MESSAGE_KB          # a 1920x1080 RGB8 picture; Ice's default is 1 MB
         init.properties.setProperty("Ice.MessageSizeMax", str(CLIENT_MESSAGE_KB))
         init.properties.setProperty("Ice.Warn.Connections", "0")
         for key, value in client_properties.items():
@@ -132,3 +143,6 @@ class IceSource(VideoSource):
 
 def _bounded(wait: float) -> float:
     return min(WAIT_S[1], max(WAIT_S[0], wait))
+
+
+register_scheme("ice", lambda rest, image_format, timeout_ms: IceSource(rest.strip(), image_format, timeout_ms=timeout_ms))

@@ -1,0 +1,136 @@
+"""File › Connect, Disconnect, Open flight log: switch the window's vehicle without a restart.
+
+The new drone is opened on a worker thread (an Ice server answers when it answers; a .tlog is read whole) and
+handed to the window on the UI thread; only then is the one left behind closed, also off the UI thread. The
+window keeps flying or showing the old vehicle until the new one is there, and never waits. The last few
+connections that reached a vehicle are kept in the settings, newest first.
+"""
+from __future__ import annotations
+
+import logging
+import threading
+
+from PyQt5.QtCore import QObject, QSettings, pyqtSignal
+
+from driver.vehicle import VehicleConfig
+
+from .choice import Choice, parse_key
+from .opener import Disconnected, Opened, close_quietly, open_choice
+
+__all__ = ["ConnectionController", "RECENT_KEY", "MAX_RECENT"]
+
+log = logging.getLogger(__name__)
+
+RECENT_KEY = "connect/recent"
+MAX_RECENT = 8
+
+
+class ConnectionController(QObject):
+    opened = pyqtSignal(object)              # Opened: the window flies it from now on
+    failed = pyqtSignal(str)                 # why a connection could not be opened
+    busyChanged = pyqtSignal(bool)           # opening one now
+    recentChanged = pyqtSignal()
+    _arrived = pyqtSignal(object, object)    # (Opened or None, error text): from the worker to the UI thread
+
+    def __init__(self, qsettings: QSettings, base: VehicleConfig | None = None, log_dir: str | None = None,
+                 certs: str | None = None, speedup: float = 1.0, parent: QObject | None = None) -> None:
+        super().__init__(parent)
+        self._qsettings = qsettings
+        self.base = base or VehicleConfig()
+        self.log_dir = log_dir
+        self.certs = certs
+        self.speedup = speedup
+        self.current: Opened | None = None
+        self._opening: Choice | None = None
+        self._unconfirmed: Choice | None = None
+        self._closers: list[threading.Thread] = []
+        self._arrived.connect(self._on_arrived)
+
+    # -- what is flown now ------------------------------------------------------------------------------
+    def adopt(self, drone, choice: Choice | None = None, sim=None, fleet=None, first: str = "") -> None:
+        """The drone (or fleet) the window was started with (the command line's): closed like any other when left,
+        and ``choice`` joins the recent connections once a vehicle answers on it."""
+        self.current = Opened(drone, choice, sim, fleet, first)
+        self._unconfirmed = choice
+
+    @property
+    def busy(self) -> bool:
+        return self._opening is not None
+
+    @property
+    def connected(self) -> bool:
+        return self.current is not None and not isinstance(self.current.drone, Disconnected)
+
+    # -- recent connections -----------------------------------------------------------------------------
+    def recent(self) -> list[Choice]:
+        keys = self._qsettings.value(RECENT_KEY, [], type=list) or []
+        return [c for c in (parse_key(str(k)) for k in keys) if c is not None]
+
+    def remember(self, choice: Choice) -> None:
+        keys = [choice.key] + [c.key for c in self.recent() if c.key != choice.key]
+        self._qsettings.setValue(RECENT_KEY, keys[:MAX_RECENT])
+        self._qsettings.sync()
+        self.recentChanged.emit()
+
+    # -- switching ----------------------------------------------------------------------------------------
+    def connect_to(self, choice: Choice) -> bool:
+        """Open ``choice`` in the background; False (and ``failed``) at once if it cannot be one."""
+        problem = choice.problem()
+        if problem:
+            self.failed.emit(problem)
+            return False
+        if self._opening is not None:
+            self.failed.emit(f"still opening {self._opening.label}")
+            return False
+        self._opening = choice
+        self.busyChanged.emit(True)
+        config = self.base
+
+        def work() -> None:
+            try:
+                opened = open_choice(choice, config, self.log_dir, self.certs, self.speedup)
+            except Exception as exc:                 # noqa: BLE001 - said to the pilot, the old link flies on
+                log.info("cannot open %s", choice.label, exc_info=True)
+                self._arrived.emit(None, f"{choice.label}: {' '.join(str(exc).split()) or type(exc).__name__}")
+                return
+            self._arrived.emit(opened, "")
+        threading.Thread(target=work, name="connect", daemon=True).start()
+        return True
+
+    def _on_arrived(self, opened: Opened | None, error: str) -> None:
+        choice, self._opening = self._opening, None
+        self.busyChanged.emit(False)
+        if opened is None:
+            self.failed.emit(error)
+            return
+        self._switch(opened)
+        self._unconfirmed = choice
+
+    def confirm(self, s) -> None:
+        """Every snapshot: the connection joins the recent ones once a vehicle answers on it (a typo never does)."""
+        if self._unconfirmed is not None and s.connected:
+            choice, self._unconfirmed = self._unconfirmed, None
+            self.remember(choice)
+
+    def disconnect(self) -> None:
+        """Leave the vehicle (it is sent zero velocity and hovers, as on quitting) and show no vehicle."""
+        if self.connected:
+            self._unconfirmed = None
+            self._switch(Opened(Disconnected(), None))
+
+    def _switch(self, opened: Opened) -> None:
+        old, self.current = self.current, opened
+        self.opened.emit(opened)                      # the window flies the new one first...
+        if old is not None:                           # ...then the old one is closed, off the UI thread
+            t = threading.Thread(target=close_quietly, args=(old,), name="disconnect", daemon=True)
+            t.start()
+            self._closers.append(t)
+
+    def close(self, wait: float = 5.0) -> None:
+        """Quitting: close what is flown now, and wait for those being closed."""
+        if self.current is not None:
+            close_quietly(self.current)
+            self.current = None
+        for t in self._closers:
+            t.join(timeout=wait)
+        self._closers.clear()

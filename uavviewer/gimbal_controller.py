@@ -1,0 +1,77 @@
+"""Tilting the vehicle's camera from the window: wheel and drag on the video, keys, Level/Down, and its own
+Photo and Record (issue 23; docs/camera.md). Owns no widget logic beyond wiring; the drone does the work."""
+from __future__ import annotations
+
+import time
+
+from PyQt5.QtCore import QEvent, QObject, Qt
+
+from driver.payload.model import GIMBAL_PITCH_RANGE
+from driver.state import VehicleState
+
+__all__ = ["GimbalController", "WHEEL_STEP", "KEY_STEP", "DRAG_DEG_PER_PX"]
+
+WHEEL_STEP = 5.0            # deg a wheel notch tilts
+KEY_STEP = 5.0              # deg a key press tilts
+DRAG_DEG_PER_PX = 0.25      # deg per pixel of vertical drag (dragging up tilts up)
+SEND_INTERVAL = 0.1         # s: a drag sends at most this often, and its last angle on release
+
+
+class GimbalController(QObject):
+    def __init__(self, adapter, view, bar, parent: QObject | None = None) -> None:
+        super().__init__(parent)
+        self._adapter = adapter
+        self._view = view
+        self._bar = bar
+        self._target: float | None = None       # the angle last asked, until the vehicle reports again
+        self._drag_y: float | None = None
+        self._drag_start = 0.0
+        self._sent_at = 0.0
+        view.installEventFilter(self)
+        bar.levelRequested.connect(lambda: self.point(0.0))
+        bar.downRequested.connect(lambda: self.point(-90.0))
+        bar.photoRequested.connect(lambda: adapter.command("take_photo"))
+        bar.recordRequested.connect(lambda on: adapter.command("record_video", on))
+        bar.stopLookingRequested.connect(lambda: adapter.command("stop_looking"))
+
+    def show_state(self, s: VehicleState) -> None:
+        self._bar.show_state(s)
+
+    def _base(self) -> float:
+        if self._target is not None:
+            return self._target
+        pitch = self._adapter.state.gimbal.pitch_deg if self._adapter.state is not None else None
+        return pitch if pitch is not None else 0.0
+
+    def point(self, pitch: float) -> None:
+        pitch = min(max(pitch, GIMBAL_PITCH_RANGE[0]), 0.0)
+        self._target = pitch
+        self._sent_at = time.monotonic()
+        self._adapter.command("point_gimbal", pitch)
+
+    def tilt_by(self, degrees: float) -> None:
+        """Up (positive) or down from where it points (or was last asked to)."""
+        self.point(self._base() + degrees)
+
+    def eventFilter(self, watched, event) -> bool:       # noqa: N802 (Qt's name)
+        kind = event.type()
+        if kind == QEvent.Wheel:
+            notches = event.angleDelta().y() / 120.0
+            if notches:
+                self.tilt_by(notches * WHEEL_STEP)
+            return True
+        if kind == QEvent.MouseButtonPress and event.button() == Qt.LeftButton:
+            self._drag_y, self._drag_start = event.pos().y(), self._base()
+            return True
+        if kind == QEvent.MouseMove and self._drag_y is not None:
+            pitch = self._drag_start + (self._drag_y - event.pos().y()) * DRAG_DEG_PER_PX
+            if time.monotonic() - self._sent_at >= SEND_INTERVAL:
+                self.point(pitch)
+            else:
+                self._target = min(max(pitch, GIMBAL_PITCH_RANGE[0]), 0.0)
+            return True
+        if kind == QEvent.MouseButtonRelease and self._drag_y is not None:
+            self.point(self._drag_start + (self._drag_y - event.pos().y()) * DRAG_DEG_PER_PX)
+            self._drag_y = None
+            return True
+        return False

@@ -1,0 +1,76 @@
+"""The row under the video for the camera ON THE VEHICLE: its gimbal and its own Photo and Record.
+
+Kept apart from the window's Snapshot/Record (which save the video this window receives) by its own row, the
+"On the drone" label and names, and it shows only what the vehicle confirmed.
+"""
+from __future__ import annotations
+
+from PyQt5.QtCore import pyqtSignal
+from PyQt5.QtWidgets import QHBoxLayout, QLabel, QToolButton, QWidget
+
+from driver.state import VehicleState
+
+__all__ = ["GimbalBar"]
+
+
+class GimbalBar(QWidget):
+    """Buttons say what the pilot wants; the gimbal controller does it."""
+
+    levelRequested = pyqtSignal()
+    downRequested = pyqtSignal()
+    photoRequested = pyqtSignal()
+    recordRequested = pyqtSignal(bool)          # the vehicle's camera: start (True) or stop
+    stopLookingRequested = pyqtSignal()         # end the region of interest ("Look here" on the map)
+
+    def __init__(self, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.title = QLabel("<b>On the drone:</b>", self)
+        self.pitch_label = QLabel("Gimbal unknown", self)
+        self.pitch_label.setToolTip("The gimbal's pitch as the vehicle reports it (0 level, -90 straight down)")
+        self.level_button = self._button("Level", "Point the camera level (gimbal pitch 0°)")
+        self.down_button = self._button("Down", "Point the camera straight down (gimbal pitch -90°)")
+        self.photo_button = self._button("Drone photo", "Take a picture with the vehicle's own camera; counted "
+                                         "only when the vehicle confirms it")
+        self.record_button = self._button("Drone video", "Start or stop video on the vehicle's own camera "
+                                          "(not this window's recording)")
+        self.record_button.setCheckable(True)
+        self.stop_looking_button = self._button("Stop looking", "The camera stops looking at the point chosen on "
+                                                "the map (DO_SET_ROI_NONE) and goes back to the pilot")
+        self.stop_looking_button.setStyleSheet("color: #ff6ad5; font-weight: bold")
+        self.stop_looking_button.hide()
+        self.level_button.clicked.connect(self.levelRequested)
+        self.down_button.clicked.connect(self.downRequested)
+        self.photo_button.clicked.connect(self.photoRequested)
+        self.record_button.clicked.connect(lambda: self.recordRequested.emit(self.record_button.isChecked()))
+        self.stop_looking_button.clicked.connect(self.stopLookingRequested)
+        row = QHBoxLayout(self)
+        row.setContentsMargins(0, 0, 0, 0)
+        for w in (self.title, self.pitch_label, self.level_button, self.down_button, self.photo_button,
+                  self.record_button, self.stop_looking_button):
+            row.addWidget(w)
+        row.addStretch(1)
+
+    def _button(self, text: str, tip: str) -> QToolButton:
+        b = QToolButton(self)
+        b.setText(text)
+        b.setToolTip(tip)
+        b.setAutoRaise(True)
+        return b
+
+    def show_state(self, s: VehicleState) -> None:
+        """What the vehicle says about its gimbal and camera; the Record button follows the camera, not the click."""
+        self.pitch_label.setText(f"Gimbal {s.gimbal.describe()}")
+        c = s.camera
+        self.photo_button.setText(f"Drone photo ({c.photos})" if c.photos else "Drone photo")
+        self.record_button.setText("Drone video ●" if c.recording else "Drone video")
+        recording = "unknown" if c.recording is None else "yes" if c.recording else "no"
+        self.photo_button.setToolTip(f"A picture with the vehicle's camera ({c.name or c.kind.value}), counted only "
+                                     f"when it confirms it: {c.photos} so far")
+        self.record_button.setToolTip(f"Video on the vehicle's camera (not this window's recording); recording: "
+                                      f"{recording}")
+        if self.record_button.isChecked() != bool(c.recording):
+            self.record_button.setChecked(bool(c.recording))
+        self.stop_looking_button.setVisible(s.gimbal.roi is not None)
+        for b in (self.level_button, self.down_button, self.photo_button, self.record_button,
+                  self.stop_looking_button):
+            b.setEnabled(s.connected)
