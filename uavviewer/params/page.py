@@ -2,6 +2,8 @@
 download's progress on top and the pending changes at the bottom. It shows and asks; the controller acts."""
 from __future__ import annotations
 
+import re
+
 from PyQt5.QtCore import QItemSelectionModel, QModelIndex, Qt, pyqtSignal
 from PyQt5.QtGui import QKeySequence
 from PyQt5.QtWidgets import (
@@ -17,6 +19,8 @@ from .table_model import Column, NAME_ROLE, ParameterModel
 from .values import group_of
 
 __all__ = ["ParametersPage"]
+
+_OF = re.compile(r"(\d+) of (\d+)")
 
 #: The page's own look, on top of the window's style sheet (resources/style.qss).
 STYLE = """
@@ -177,9 +181,15 @@ class ParametersPage(QWidget):
             self.progress.show()
             text = f"Downloading parameters: {table.received:,} of {expected:,}"
         elif table.downloading:
-            self.progress.setRange(0, 0)             # busy: the count is not known yet
+            # the count is not known yet (the list's first answer, or the whole file over MAVLink FTP): the
+            # driver's own "N of M" (parameters, or the file's bytes) fills the bar, else it just shows it works
+            shown = _OF.search(table.detail)
+            got, total = (int(shown.group(1)), int(shown.group(2))) if shown else (0, 0)
+            self.progress.setRange(0, total)
+            self.progress.setValue(min(got, total))
+            self.progress.setFormat(f"{got:,} of {total:,}" if total else "")
             self.progress.show()
-            text = "Asking the vehicle for its parameters…"
+            text = "Downloading parameters…" if table.detail else "Asking the vehicle for its parameters…"
         else:
             self.progress.hide()
             if table.complete:
