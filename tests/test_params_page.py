@@ -285,7 +285,8 @@ def test_a_reconnect_shows_the_kept_table_at_once_then_reads_it_again(qtbot, sim
     qtbot.waitUntil(lambda: not w.params.model.table.downloading, timeout=DOWNLOAD_MS)
     assert any(t.startswith("1,392 parameters shown, reading them again") for t in seen), sorted(set(seen))
     assert page.select("WPNAV_SPEED") and page.editor.value.text() == "1100"
-    assert any("changed since" in t and "WPNAV_SPEED" in t for t in w.messages.texts())
+    qtbot.waitUntil(lambda: any("changed since" in t and "WPNAV_SPEED" in t for t in w.messages.texts()),
+                    timeout=3000)                                 # the driver names it once the list is read
 
 
 def test_the_page_over_ice(qtbot, sim, vehicle, window_factory, server_factory, drone_factory):
