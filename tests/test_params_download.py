@@ -136,3 +136,16 @@ def test_a_vehicle_whose_ftp_does_not_answer_gets_the_list(sim, vehicle_factory)
     assert result.ok and "over MAVLink FTP" not in result.reason, result
     assert any("no answer to the FTP open" in d and "reading the list" in d for d in seen), seen
     _same_as_sim(vehicle.state().parameters, sim)
+
+
+def test_a_few_lost_heartbeats_pause_the_download_instead_of_ending_it(sim_factory, vehicle_factory):
+    sim = sim_factory(radio_baud=57600)
+    vehicle = vehicle_factory(f"tcp:127.0.0.1:{sim.tcp_port}", loss_timeout=1.0, param_ftp=False)
+    assert vehicle.wait_for(lambda s: s.connected, 10)
+    future = vehicle.fetch_parameters()
+    assert vehicle.wait_for(lambda s: s.parameters.received > 100, 20)
+    sim.faults.outage(1.5)                              # lost for about half a second: under two loss timeouts
+    assert vehicle.wait_for(lambda s: not s.connected, 5)
+    result = future.result(timeout=60)
+    assert result.ok, result
+    _same_as_sim(vehicle.state().parameters, sim)

@@ -176,6 +176,7 @@ class IceDrone(PayloadClient, Drone):
             t = threading.Thread(target=target, name=name, daemon=True)
             t.start()
             self._threads.append(t)
+        threading.Thread(target=lambda: self.parameter_metadata, name="param-metadata", daemon=True).start()
         return self
 
     def _connect(self) -> None:
