@@ -36,6 +36,7 @@ from .pilot_input import Input, InputSelector
 from .pilot_tools import PilotTools
 from .map.controller import MapController, TileSettings
 from .map.plan_controller import PlanController
+from .params import ParamsController
 from .refresh import INSTRUMENTS_HZ, PLOTS_HZ, TEXT_HZ, Refresh
 from .settings import ViewerSettings, default_qsettings, load_settings, load_window, save_settings, save_window
 from .sticks import Axes, MaxSpeeds, axes_from_pads, combine, pad_labels, pads_from_axes, velocity_from_axes
@@ -176,6 +177,9 @@ class MainWindow(QMainWindow):
         self.gamepad.actionPressed.connect(self._key_action)
         self.gamepad.message.connect(self._gamepad_message)
         self.tools = PilotTools(self)                 # connecting, alerts, preflight, guided actions, home arrow
+        self.params = ParamsController(self.adapter, self, say=self.log_message)    # docs/parameters.md
+        self.params.add_to_menu(self)                       # Vehicle › Parameters…
+        self.params.offer_fixes(self.messages)              # a warning naming a parameter: Fix… opens it
 
         self._apply_settings()
         geometry, state = load_window(self._qsettings)

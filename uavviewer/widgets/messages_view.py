@@ -3,9 +3,9 @@ from __future__ import annotations
 
 import time as _time
 
-from PyQt5.QtCore import Qt
+from PyQt5.QtCore import Qt, pyqtSignal
 from PyQt5.QtGui import QBrush, QColor
-from PyQt5.QtWidgets import QAbstractItemView, QHeaderView, QTreeWidget, QTreeWidgetItem, QWidget
+from PyQt5.QtWidgets import QAbstractItemView, QHeaderView, QToolButton, QTreeWidget, QTreeWidgetItem, QWidget
 
 from driver.state import CommandResult, CommandStatus, Severity
 
@@ -28,7 +28,9 @@ def severity_color(severity: Severity) -> str:
 
 
 class MessagesView(QTreeWidget):
-    """Time · source · text, coloured by severity; keeps the last ``limit`` lines."""
+    """Time · source · text, coloured by severity; keeps the last ``limit`` lines. A line naming a parameter
+    can carry a Fix… button (:meth:`offer_fix`) that opens it on the Parameters page."""
+    fixRequested = pyqtSignal(str)             # a line's Fix… was clicked: the parameter it names
 
     def __init__(self, parent: QWidget | None = None, limit: int = 500) -> None:
         super().__init__(parent)
@@ -45,6 +47,7 @@ class MessagesView(QTreeWidget):
         header.setSectionResizeMode(0, QHeaderView.ResizeToContents)
         header.setSectionResizeMode(1, QHeaderView.ResizeToContents)
         header.setStretchLastSection(True)
+        self._fix_column = 3                   # Fix… buttons, added with the first one
 
     def add_message(self, when: float, severity: Severity, text: str, source: str = "vehicle") -> None:
         stamp = _time.strftime("%H:%M:%S", _time.localtime(when))
@@ -62,6 +65,31 @@ class MessagesView(QTreeWidget):
     def add_result(self, result: CommandResult, when: float | None = None) -> None:
         severity = _RESULT_SEVERITY.get(result.status, Severity.INFO)
         self.add_message(_time.time() if when is None else when, severity, str(result), "command")
+
+    def offer_fix(self, item: QTreeWidgetItem, name: str) -> QToolButton:
+        """A Fix… button at the end of ``item``'s line that asks to open parameter ``name``."""
+        if self.columnCount() <= self._fix_column:
+            self.setColumnCount(self._fix_column + 1)
+            self.headerItem().setText(self._fix_column, "")
+            header = self.header()
+            header.setStretchLastSection(False)
+            header.setSectionResizeMode(2, QHeaderView.Stretch)
+            header.setSectionResizeMode(self._fix_column, QHeaderView.ResizeToContents)
+        button = QToolButton()
+        button.setObjectName("fixButton")
+        button.setText("Fix…")
+        button.setToolTip(f"Open {name} on the Parameters page")
+        button.setStyleSheet("QToolButton { color: #8cb8ff; border: 1px solid #34475c; border-radius: 4px;"
+                             " padding: 0 6px; background: #22303f; } QToolButton:hover { background: #2b3d51; }")
+        button.clicked.connect(lambda: self.fixRequested.emit(name))
+        item.setData(self._fix_column, Qt.UserRole, name)
+        self.setItemWidget(item, self._fix_column, button)
+        return button
+
+    def fix_button(self, row: int) -> QToolButton | None:
+        """The Fix… button of line ``row`` (None if it names no parameter)."""
+        item = self.topLevelItem(row)
+        return self.itemWidget(item, self._fix_column) if item is not None else None
 
     # -- for tests ----------------------------------------------------------------------------
     def texts(self) -> list[str]:
