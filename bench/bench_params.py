@@ -34,6 +34,7 @@ from driver.sim import SimConfig, SimVehicle  # noqa: E402
 from driver.sim.ftp import CHUNK, pack_params  # noqa: E402
 from driver.sim.params import FTP_FRAME_BYTES, PARAM_VALUE_BYTES, RECORDED_RATE  # noqa: E402
 from driver.vehicle import Vehicle, VehicleConfig  # noqa: E402
+import tables  # noqa: E402  (bench/tables.py: this script runs from bench/)
 
 LINKS = {"tcp": None, "radio": 57600}
 
@@ -99,14 +100,7 @@ def main() -> int:
                      f"{low:.2f}", f"{seconds / low:.2f}", str(round(statistics.median(c['reads'] for c in cells))),
                      str(round(statistics.median(c['frames'] for c in cells))), str(max(c["wrong"] for c in cells))))
         print(" ".join(rows[-1]), file=sys.stderr, flush=True)
-    if args.markdown:
-        print("| " + " | ".join(head) + " |\n|" + "---|" * len(head))
-        for r in rows:
-            print("| " + " | ".join(r) + " |")
-    else:
-        widths = [max(len(x) for x in col) for col in zip(head, *rows)]
-        for r in (head, *rows):
-            print("  ".join(x.ljust(w) for x, w in zip(r, widths)))
+    print("\n".join(tables.render(head, rows, args.markdown)))
     print(f"(real time; median of {args.runs} run(s); tcp = the recording's 2,300 PARAM_VALUE/s, radio = 57,600 baud; "
           "frames down: every frame the vehicle sent meanwhile, telemetry included)")
     return 0 if ok else 1

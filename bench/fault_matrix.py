@@ -34,6 +34,7 @@ from driver.sim import SimConfig, SimVehicle  # noqa: E402
 from driver.state import CommandStatus, LandedState  # noqa: E402
 from driver.vehicle import Vehicle, VehicleConfig  # noqa: E402
 import param_cells  # noqa: E402
+import tables  # noqa: E402
 from transfer_matrix import run_transfers, transfer_table  # noqa: E402
 
 ALTITUDE = 3.0
@@ -220,12 +221,7 @@ def table(cells: list[Cell], speedup: float, markdown: bool) -> str:
         times = [f"{c.times[k]:.1f}" if k in c.times else "-" for k in ("takeoff", "stopped", "landed")]
         rows.append((c.profile, c.fault, "yes" if c.completed else f"NO ({c.error})", told, *times,
                      f"{c.moved:.1f}", f"{c.off_nose:.0f}", str(c.answers), str(len(c.wrong))))
-    if markdown:
-        out = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
-        out += ["| " + " | ".join(r) + " |" for r in rows]
-    else:
-        widths = [max(len(x) for x in col) for col in zip(head, *rows)]
-        out = ["  ".join(x.ljust(w) for x, w in zip(r, widths)) for r in (head, *rows)]
+    out = tables.render(head, rows, markdown)
     out.append(f"(times in real seconds at sim speed-up {speedup:g}; faults: "
                + "; ".join(f"{k} = {v[0]}" for k, v in FAULTS.items()) + ")")
     for c in cells:
@@ -268,12 +264,7 @@ def main() -> int:
     if checks:
         head, lines = param_cells.rows(checks)
         print("\nParameters:")
-        if args.markdown:
-            print("\n".join(["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
-                            + ["| " + " | ".join(r) + " |" for r in lines]))
-        else:
-            widths = [max(len(x) for x in col) for col in zip(head, *lines)]
-            print("\n".join("  ".join(x.ljust(w) for x, w in zip(r, widths)) for r in (head, *lines)))
+        print("\n".join(tables.render(head, lines, args.markdown)))
         for c in checks:
             for w in c.wrong:
                 print(f"WRONG parameters {c.profile}/{c.fault}: {w}")

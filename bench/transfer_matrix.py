@@ -27,6 +27,7 @@ from driver.mission.plan import MissionItem, Plan, PlanKind  # noqa: E402
 from driver.sim import SimConfig, SimVehicle  # noqa: E402
 from driver.state import CommandStatus  # noqa: E402
 from driver.vehicle import Vehicle, VehicleConfig  # noqa: E402
+import tables  # noqa: E402  (bench/tables.py: this script runs from bench/)
 
 MISSION_ITEMS = 50
 HOME = (40.2839, -3.7940, 664.0, 0.0)
@@ -159,12 +160,7 @@ def transfer_table(cells: list[TransferCell], speedup: float, markdown: bool) ->
         holds = "/".join(c.holds.get(r, "-") for r in ("mission up", "fence up"))
         out_rows.append((c.profile, c.fault, *cols, holds if not c.error else f"ERROR {c.error}", str(c.corrupted),
                          str(len(c.wrong))))
-    if markdown:
-        out = ["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
-        out += ["| " + " | ".join(r) + " |" for r in out_rows]
-    else:
-        widths = [max(len(x) for x in col) for col in zip(head, *out_rows)]
-        out = ["  ".join(x.ljust(w) for x, w in zip(r, widths)) for r in (head, *out_rows)]
+    out = tables.render(head, out_rows, markdown)
     out.append(f"(transfers: a {MISSION_ITEMS}-item mission and a 5-item fence; times in real seconds at sim "
                f"speed-up {speedup:g}, upload = accepted and read back; vehicle holds mission/fence after the upload)")
     for c in cells:
