@@ -843,12 +843,22 @@ class Vehicle(Drone):
         """Download every parameter into ``state().parameters`` (driver.params.download)."""
         if self._replay is not None:
             return self._finish("parameters", CommandStatus.REJECTED, "replaying a recording: no vehicle to ask")
-        s = self.state()
-        cached = None if refresh or self._param_cache is None else self._param_cache.load(s.system_id, s.firmware)
-        with self._lock:
-            future = self._params.fetch(refresh, time.monotonic(), cached)
-        self._wake.set()
-        return future
+        if refresh or self._param_cache is None:
+            with self._lock:
+                future = self._params.fetch(refresh, time.monotonic(), None)
+            self._wake.set()
+            return future
+        outer: Future = Future()
+
+        def with_cache() -> None:             # the cache is a file: read here, never on the caller's (UI) thread
+            s = self.state()
+            cached = self._param_cache.load(s.system_id, s.firmware)
+            with self._lock:
+                inner = self._params.fetch(refresh, time.monotonic(), cached)
+            self._wake.set()
+            inner.add_done_callback(lambda f: outer.set_result(f.result()))
+        threading.Thread(target=with_cache, name="param-cache-read", daemon=True).start()
+        return outer
 
     def _cache_parameters(self, table) -> None:
         """A complete table: kept per vehicle for its next connection (written off the reader's lock)."""

@@ -97,8 +97,8 @@ def test_a_known_vehicle_shows_its_cached_table_at_once_and_names_what_changed(s
     sim.autopilot.params["RTL_ALT"] = 2000                               # changed meanwhile (another station)
     again = vehicle_factory(url, param_cache=folder)
     s = again.wait_for(lambda s: s.connected and s.firmware, 10)
-    future = again.fetch_parameters()
-    shown = again.state().parameters
+    future = again.fetch_parameters()                                    # the cache is read off this thread
+    shown = again.wait_for(lambda s: "from the cache" in s.parameters.detail, 10).parameters
     assert shown.received == 1392 and shown.downloading and "from the cache" in shown.detail
     assert shown.get("RTL_ALT").value == 1500                             # what it was: not checked yet
     assert future.result(timeout=30).ok
