@@ -42,11 +42,12 @@ from .params.metadata import load_metadata, set_problem
 from .mission.control import MissionControl
 from .mission.plan import Plan, PlanKind
 from .rules import COPTER_MODES, MAX_ALTITUDE, MIN_TAKEOFF_ALTITUDE, go_to_problem, takeoff_altitude_problem
+from .sequence import SequenceSlot
 from .setpoints import SetpointStreamer
 from .signing import LinkSigning, SigningConfig
 from .state import (
-    FENCE_PARAMS, Battery, BatteryThresholds, CommandResult, CommandStatus, LinkHealth, LinkStatus, SequencePhase,
-    SequenceProgress, Setpoint, Severity, VehicleState,
+    FENCE_PARAMS, Battery, BatteryThresholds, CommandResult, CommandStatus, LinkHealth, LinkStatus, Setpoint,
+    Severity, VehicleState,
 )
 from .store import StateStore
 from .supervision import LinkSupervisor
@@ -149,8 +150,7 @@ class Vehicle(Drone):
         self._metadata_warned = False
         self._setpoints = SetpointStreamer(cfg.deadman, cfg.setpoint_rate)
         self._payload = Payload(self)         # gimbal, region of interest, camera (driver.payload)
-        self._takeoff: TakeoffSequence | None = None
-        self._stepping_takeoff = False        # the ticker is stepping the sequence: its commands pass
+        self._sequence = SequenceSlot(self._store, self._commands, self._notifier)   # takeoff or mission start
         self._yaw_next = 0.0                  # old firmware: next CONDITION_YAW of a held yaw stick
         self._yaw_held = False                # old firmware: the heading is held by CONDITION_YAW
         self._latest: dict = {}               # newest telemetry message of each type in this read
@@ -218,7 +218,7 @@ class Vehicle(Drone):
         if self._closing.is_set():
             return
         with self._lock:
-            self._abort_takeoff("driver closed")
+            self._sequence.abort("driver closed")
             moving = not self._setpoints.setpoint.is_zero
         if self._started and moving:
             self._send(self._setpoint_message(Setpoint()))   # leave the vehicle hovering, not drifting
@@ -605,7 +605,7 @@ class Vehicle(Drone):
                 while self._outbox:
                     out.append(self._outbox.popleft())
                 with self._lock:
-                    self._step_takeoff(now)
+                    self._sequence.step(now)
                     out += self._stream_setpoint(now)
                     out += self._commands.service(now, self._store.state)
                     out += self._params.service(now, self._link.status)
@@ -687,7 +687,7 @@ class Vehicle(Drone):
 
     def _takeoff_tag(self):
         """Commands the takeoff sequence issues carry its tag: an abort cancels them, so no retry launches."""
-        return self._takeoff if self._stepping_takeoff else None
+        return self._sequence.tag
 
     def _finish(self, command: str, status: CommandStatus, reason: str = "") -> Future:
         f: Future = Future()
@@ -695,7 +695,7 @@ class Vehicle(Drone):
         return f
 
     def _busy(self, command: str) -> Future | None:
-        if self._stepping_takeoff and threading.current_thread() is self._ticker:
+        if self._sequence.stepping and threading.current_thread() is self._ticker:
             return None                               # the sequence's own commands
         if self.state().takeoff.active:
             return self._finish(command, CommandStatus.REJECTED, "takeoff in progress: only Land and Stop")
@@ -745,7 +745,7 @@ class Vehicle(Drone):
     def cancel_takeoff(self) -> Future:
         """The pilot's Cancel before liftoff: the sequence ends, and what it changed is undone (disarm if it
         armed, back to the mode it left); once NAV_TAKEOFF went out it is Stop (hold where it is). Never LAND."""
-        seq = self._takeoff
+        seq = self._sequence.current
         if seq is None or not seq.nothing_flown:
             return self.stop()
         self._abort_takeoff("cancelled before liftoff")
@@ -771,7 +771,7 @@ class Vehicle(Drone):
         flight in another mode (RTL, LOITER, LAND...), GUIDED with zero velocity, where ArduCopter brakes to its
         stopping point and holds it (ModeGuided::init); BRAKE if the vehicle refuses GUIDED (no position).
         During a takeoff that has not left the ground it is :meth:`cancel_takeoff`: the vehicle as it was."""
-        seq = self._takeoff
+        seq = self._sequence.current
         if seq is not None and seq.nothing_flown:
             return self.cancel_takeoff()
         taking_off = self.state().takeoff.active
@@ -1068,12 +1068,12 @@ class Vehicle(Drone):
         if self._replay is not None:
             return self._finish("takeoff", CommandStatus.REJECTED, "replaying a recording: no vehicle to command")
         with self._lock:                              # check and start as one step: never two sequences
-            if self._takeoff is not None:
+            if self._sequence.current is not None:
                 return self._finish("takeoff", CommandStatus.REJECTED, "a takeoff is already running")
             if self.state().flying:
                 return self._finish("takeoff", CommandStatus.REJECTED, "already flying")
-            seq = self._takeoff = TakeoffSequence(self, alt, self.config, time.monotonic())
-            self._progress(seq)
+            seq = TakeoffSequence(self, alt, self.config, time.monotonic())
+            self._sequence.start(seq)
         self._wake.set()
         return seq.future
 
@@ -1081,10 +1081,8 @@ class Vehicle(Drone):
         """Step ``seq`` (a takeoff-like sequence: driver.mission's MissionStart) in the takeoff's place: only
         Land and Stop meanwhile, and Land aborts it."""
         with self._lock:
-            if self._takeoff is not None:
+            if not self._sequence.start(seq):
                 return self._finish(name, CommandStatus.REJECTED, "a takeoff or mission start is already running")
-            self._takeoff = seq
-            self._progress(seq)
         self._wake.set()
         return seq.future
 
@@ -1115,49 +1113,10 @@ class Vehicle(Drone):
     def set_mission_item(self, seq: int) -> Future:
         return self._busy(f"mission item {seq}") or self._missions.go_to_item(seq)
 
-    def _step_takeoff(self, now: float) -> None:
-        seq = self._takeoff
-        if seq is None:
-            return
-        self._stepping_takeoff = True
-        try:
-            outcome = seq.step(now)
-        except Exception as exc:                      # never leave the future unresolved
-            log.exception("takeoff sequence failed")
-            outcome = CommandStatus.REJECTED, f"internal error: {exc}", SequencePhase.FAILED
-        finally:
-            self._stepping_takeoff = False
-        if outcome is None:
-            self._progress(seq)
-            return
-        status, reason, phase = outcome
-        self._takeoff = None
-        self._store.set(takeoff=SequenceProgress(phase, reason, seq.altitude))
-        log.info("takeoff: %s %s", phase.value, reason)
-        self._notifier.settle(seq.future, self._store.record_locked(seq.name, status, reason))
-
-    def _progress(self, seq: TakeoffSequence) -> None:
-        progress = SequenceProgress(seq.phase, seq.detail, seq.altitude)
-        if self.state().takeoff != progress:
-            self._store.set(takeoff=progress)
-            self._store.publish()
-            log.info("takeoff: %s %s", seq.phase.value, seq.detail)
-
     def _abort_takeoff(self, why: str) -> None:
-        """Stop the sequence and cancel what it asked the vehicle, so no retry launches it afterwards."""
+        """End a takeoff or mission start in progress (driver.sequence), cancelling what it asked."""
         with self._lock:
-            seq = self._takeoff
-            if seq is None:
-                return
-            self._takeoff = None
-            sent = self._commands.cancel_tagged(seq, f"takeoff aborted: {why}")
-            if any(command == mavlink.MAV_CMD_NAV_TAKEOFF for command, _ in sent):
-                # a command on its way cannot be called back: say so rather than promise the ground
-                self._store.add_message_locked(Severity.WARNING, "Takeoff aborted after NAV_TAKEOFF went out: if "
-                                               "the vehicle got it, it lifts off (Land brings it down)")
-            self._store.set(takeoff=SequenceProgress(SequencePhase.ABORTED, f"aborted: {why}", seq.altitude))
-            self._notifier.settle(seq.future, self._store.record_locked(
-                seq.name, CommandStatus.ABORTED, f"aborted by the pilot ({why})"))
+            self._sequence.abort(why)
 
 
 #: Events: every one counts (mode/arming changes, the pilot's messages, command answers).
