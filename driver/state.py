@@ -168,13 +168,18 @@ class Battery:
     cells_source: str = ""               # "configured", "vehicle" (per-cell voltages) or "inferred" (from voltage)
     charge_state: int = 0                # MAV_BATTERY_CHARGE_STATE from the autopilot, 0 when it sends none
     reported_remaining: float | None = None   # the autopilot's own percentage, None when it gives none
-    alarm: BatteryAlarm = BatteryAlarm.UNKNOWN   # against the pilot's thresholds, whatever the vehicle's failsafe says
     consumed_mah: float | None = None    # BATTERY_STATUS.current_consumed, None when the vehicle does not count it
     thresholds: BatteryThresholds = field(default_factory=BatteryThresholds)   # what ``alarm`` is judged by
 
     @property
     def cell_voltage(self) -> float | None:
         return None if self.voltage is None or self.cells <= 0 else self.voltage / self.cells
+
+    @property
+    def alarm(self) -> BatteryAlarm:
+        """Against the pilot's thresholds, whatever the vehicle's failsafe says (driver.battery)."""
+        from .battery import battery_alarm
+        return battery_alarm(self)
 
 
 @dataclass(frozen=True)

@@ -13,13 +13,11 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
-from dataclasses import replace
 
 from pymavlink import mavutil
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from . import frames
-from .battery import battery_alarm
 from .state import (
     Attitude, Battery, Environment, GlobalPosition, Gps, LandedState, LocalPosition, Readiness, Velocity,
 )
@@ -86,18 +84,20 @@ def fold_battery_status(view: Mapping, m) -> dict:
     remaining = None if not 0 <= m.battery_remaining <= 100 else float(m.battery_remaining)
     charge_state = getattr(m, "charge_state", 0) or b.charge_state   # MAVLink 2 extension: 0 = not sent
     consumed = float(m.current_consumed) if m.current_consumed >= 0 else None
-    return dict(battery=replace(_battery(b, voltage, current if current is not None else b.current,
-                                         remaining if remaining is not None else b.reported_remaining,
-                                         charge_state, per_cell), consumed_mah=consumed))
+    return dict(battery=_battery(b, voltage, current if current is not None else b.current,
+                                 remaining if remaining is not None else b.reported_remaining,
+                                 charge_state, per_cell, consumed))
 
 
-def _battery(b: Battery, voltage, current, remaining, charge_state: int, cells_reported: int | None) -> Battery:
+def _battery(b: Battery, voltage, current, remaining, charge_state: int, cells_reported: int | None,
+             consumed_mah: float | None = None) -> Battery:
     """The pack as the autopilot reports it; percent estimated from the cell voltage only when it gives none.
 
     The cell count comes from the vehicle (per-cell voltages) or, failing that, from the first voltage heard
     (a pack is not always a Solo's 4S: ArduPilot SITL's is 3S). "Low" is the autopilot's own battery
     failsafe state when it sends one (BATTERY_STATUS.charge_state), else 20 % or 3.7 V a cell (MAVProxy).
-    ``alarm`` is the pilot's own thresholds (``b.thresholds``), whatever the vehicle's failsafe says.
+    ``alarm`` (derived) is the pilot's own thresholds (``b.thresholds``), whatever the vehicle's failsafe says;
+    ``consumed_mah`` stays what it was unless BATTERY_STATUS says.
     """
     cells, source = b.cells, b.cells_source
     if cells_reported and source != "configured":
@@ -110,9 +110,8 @@ def _battery(b: Battery, voltage, current, remaining, charge_state: int, cells_r
         low = charge_state >= mavlink.MAV_BATTERY_CHARGE_STATE_LOW
     else:
         low = (shown is not None and shown < 20.0) or (voltage is not None and cells > 0 and voltage / cells < 3.7)
-    judged = Battery(voltage, current, shown, estimated, cells, low, source, charge_state, remaining,
-                     consumed_mah=b.consumed_mah, thresholds=b.thresholds)
-    return replace(judged, alarm=battery_alarm(judged))
+    return Battery(voltage, current, shown, estimated, cells, low, source, charge_state, remaining,
+                   consumed_mah=b.consumed_mah if consumed_mah is None else consumed_mah, thresholds=b.thresholds)
 
 
 def fold_attitude(view: Mapping, m) -> dict:

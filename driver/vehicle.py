@@ -31,7 +31,6 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from . import frames
 from .api import CEILING, Drone, Limits
-from .battery import battery_alarm
 from .commands import CommandSender, Notifier, command_name
 from .forwarding import Forwarder
 from .payload.control import PAYLOAD_MESSAGES, Payload
@@ -188,8 +187,7 @@ class Vehicle(Drone):
         if problem:
             raise ValueError(problem)
         with self._lock:
-            judged = replace(self._store.view()["battery"], thresholds=thresholds)
-            self._store.set(battery=replace(judged, alarm=battery_alarm(judged)))
+            self._store.set(battery=replace(self._store.view()["battery"], thresholds=thresholds))
             self._store.publish()
         return thresholds
 

@@ -47,8 +47,12 @@ def test_link_lost_and_recovered(model):
 
 
 def test_battery_warning_then_critical_once_each(model):
-    def battery(alarm):
-        return replace(LIVE, battery=Battery(voltage=14.0, remaining=18.0, cells=4, alarm=alarm))
+    def battery(alarm):                             # a pack that the default thresholds judge so
+        volts, remaining = {BatteryAlarm.OK: (16.0, 80.0), BatteryAlarm.WARNING: (15.0, 18.0),
+                            BatteryAlarm.CRITICAL: (14.0, 10.0)}[alarm]
+        state = replace(LIVE, battery=Battery(voltage=volts, remaining=remaining, cells=4))
+        assert state.battery.alarm is alarm
+        return state
     assert kinds(model, battery(BatteryAlarm.OK)) == []
     alert, = model.update(battery(BatteryAlarm.WARNING))
     assert alert.kind is AlertKind.BATTERY_WARNING and "18 percent" in alert.text and alert.critical

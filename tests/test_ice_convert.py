@@ -120,7 +120,7 @@ def test_status_round_trip_keeps_every_field():
     state = flying(time=123.5, system_id=1, vehicle_type=2, attitude=Attitude(0.1, -0.2, 1.3, 0.01, 0.02, 0.03),
                    position=GlobalPosition(-35.36, 149.16, 584.0), home=GlobalPosition(-35.36, 149.17, 581.0),
                    velocity=Velocity(1.0, -2.0, 0.5), heading_deg=74.5, airspeed=2.5,
-                   battery=convert.judged(Battery(15.2, 9.5, 55.0, True, 4, False)),   # judged, as the driver sends it
+                   battery=Battery(15.2, 9.5, 55.0, True, 4, False),                   # its alarm derived on both sides
                    gps=Gps(3, 12, 0.8),
                    readiness=Readiness(True, True, True),
                    environment=Environment((1, 2, 3), (0.0, 0.1, -1.0), 1001.0, 21.0, 2.0, 90.0, 45),

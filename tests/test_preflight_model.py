@@ -2,14 +2,14 @@
 from __future__ import annotations
 
 from driver.state import (
-    Battery, BatteryAlarm, Fence, Gps, LinkHealth, LinkStatus, Message, Readiness, Severity, Signing, SigningStatus,
+    Battery, Fence, Gps, LinkHealth, LinkStatus, Message, Readiness, Severity, Signing, SigningStatus,
     VehicleState, replace,
 )
 from uavviewer.preflight.model import Verdict, overall, preflight
 
 READY = VehicleState(link=LinkHealth(status=LinkStatus.OK, packets_per_s=40.0), mode="GUIDED",
                      readiness=Readiness(prearm_ok=True, ekf_ok=True, gps_ok=True, prearm_reported=True),
-                     gps=Gps(3, 12, 0.8), battery=Battery(16.4, cells=4, remaining=95.0, alarm=BatteryAlarm.OK),
+                     gps=Gps(3, 12, 0.8), battery=Battery(16.4, cells=4, remaining=95.0),
                      signing=Signing(SigningStatus.SIGNING), gcs_failsafe=1,
                      fence=Fence(enabled=True, types=3, radius=150.0, alt_max=60.0, breached=False))
 
@@ -29,7 +29,7 @@ def test_a_ready_vehicle_is_go_on_every_line():
 def test_each_problem_says_why():
     s = replace(READY, readiness=Readiness(prearm_ok=False, ekf_ok=False, gps_ok=False, prearm_reported=True),
                 gps=Gps(1, 3, 9.9), messages=(Message(1, 0.0, Severity.CRITICAL, "PreArm: Compass not calibrated"),),
-                battery=Battery(14.2, cells=4, remaining=15.0, alarm=BatteryAlarm.WARNING),
+                battery=Battery(14.2, cells=4, remaining=20.0),
                 signing=Signing(SigningStatus.MISMATCH), gcs_failsafe=0,
                 fence=Fence(enabled=True, types=3, radius=150.0, alt_max=60.0, breached=True),
                 link=LinkHealth(status=LinkStatus.OK, packets_per_s=10.0, loss_percent=25.0))
@@ -37,7 +37,7 @@ def test_each_problem_says_why():
     assert found["Pre-arm"] == (Verdict.NO_GO, "PreArm: Compass not calibrated")   # the vehicle's own words
     assert found["GPS"] == (Verdict.NO_GO, "No fix, 3 satellites, HDOP 9.9")
     assert found["EKF"][0] is Verdict.NO_GO
-    assert found["Battery"] == (Verdict.NO_GO, "below the warning threshold: 14.20 V, 3.55 V a cell, 15 %")
+    assert found["Battery"] == (Verdict.NO_GO, "below the warning threshold: 14.20 V, 3.55 V a cell, 20 %")
     assert found["Signing"][0] is Verdict.NO_GO and "ignores our commands" in found["Signing"][1]
     assert found["GCS failsafe"][0] is Verdict.CAUTION and "hovers on" in found["GCS failsafe"][1]
     assert found["Fence"] == (Verdict.NO_GO, "breached")
@@ -46,10 +46,10 @@ def test_each_problem_says_why():
 
 
 def test_cautions_and_unknowns():
-    s = replace(READY, battery=Battery(16.4, cells=4), signing=Signing(SigningStatus.OFF), gcs_failsafe=None,
+    s = replace(READY, battery=Battery(), signing=Signing(SigningStatus.OFF), gcs_failsafe=None,
                 fence=Fence(enabled=False, types=3, radius=150.0, alt_max=60.0))
     found = lines(s)
-    assert found["Battery"][0] is Verdict.UNKNOWN                  # no thresholds applied yet: not a GO
+    assert found["Battery"][0] is Verdict.UNKNOWN                  # nothing reported yet: not a GO
     assert found["Signing"][0] is Verdict.CAUTION and "anyone" in found["Signing"][1]
     assert found["GCS failsafe"] == (Verdict.UNKNOWN, "FS_GCS_ENABLE not read yet")
     assert found["Fence"] == (Verdict.CAUTION, "off: nothing stops a fly-away")

@@ -100,6 +100,6 @@ def test_the_pilots_thresholds_reach_the_driver(qtbot, sim, vehicle, window_fact
 def test_the_console_says_the_alarm_and_our_thresholds():
     from driver.console import battery_line
     s = VehicleState(battery=Battery(voltage=11.4, cells=4, remaining=0.0, current=15.0, consumed_mah=150.0,
-                                     reported_remaining=0.0, alarm=BatteryAlarm.CRITICAL))
+                                     reported_remaining=0.0))
     line = battery_line(s)
     assert "150 mAh used" in line and "CRITICAL: land now" in line and "warning 3.6 V/cell or 30 %" in line

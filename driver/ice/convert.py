@@ -7,11 +7,9 @@ servants and the client share and the tests check without a network.
 """
 from __future__ import annotations
 
-import dataclasses
 import math
 import time
 
-from ..battery import battery_alarm
 from ..frames import clamp, enu_quaternion, finite, wrap_pi
 from .plans import mission_from_ice, mission_to_ice
 from ..state import (Attitude, Battery, CommandResult, CommandStatus, Environment, Fence, GlobalPosition, Gps,
@@ -156,11 +154,6 @@ def state_from_jderobot(pose, nav, messages: tuple[Message, ...] = (),
 
 
 # -- mavlinkserver extension: VehicleState <-> VehicleStatus ------------------------------------
-def judged(b: Battery) -> Battery:
-    """The pack as the server sent it, judged here against the pilot's thresholds (default ones)."""
-    return dataclasses.replace(b, alarm=battery_alarm(b))
-
-
 def _opt(value) -> tuple[bool, float]:
     return (value is not None, float(value) if value is not None else 0.0)
 
@@ -296,10 +289,10 @@ def state_from_status(st, messages: tuple[Message, ...], results: tuple[CommandR
         local=LocalPosition(st.localPosition.north, st.localPosition.east, st.localPosition.down) if st.localPosition.valid else None,
         velocity=Velocity(st.velocity.north, st.velocity.east, st.velocity.down),
         altitude=st.altitude, heading_deg=st.headingDeg, airspeed=st.airspeed,
-        battery=judged(Battery(voltage=bat.voltage if bat.hasVoltage else None,
-                               current=bat.current if bat.hasCurrent else None,
-                               remaining=bat.remaining if bat.hasRemaining else None,
-                               remaining_estimated=bat.remainingEstimated, cells=bat.cells, low=bat.low)),
+        battery=Battery(voltage=bat.voltage if bat.hasVoltage else None,      # its alarm: judged here against
+                        current=bat.current if bat.hasCurrent else None,      # the default thresholds
+                        remaining=bat.remaining if bat.hasRemaining else None,
+                        remaining_estimated=bat.remainingEstimated, cells=bat.cells, low=bat.low),
         gps=Gps(fix_type=gps.fixType, satellites=gps.satellites, hdop=gps.hdop if gps.hasHdop else None),
         readiness=Readiness(prearm_ok=st.readiness.prearmOk, ekf_ok=st.readiness.ekfOk, gps_ok=st.readiness.gpsOk),
         environment=Environment(
