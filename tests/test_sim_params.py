@@ -10,6 +10,8 @@ import collections
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
+from driver.sim import SimConfig
+from driver.sim.autopilot import MODES, Autopilot
 from driver.sim.params import SimParams
 from recordings import PARAMS
 from test_sim import GroundStation, airborne, wait_until  # noqa: F401
@@ -151,3 +153,23 @@ def test_fs_options_lets_a_pilot_controlled_mode_carry_on(flying, sim):
     assert sim.truth().mode == "LOITER"                            # FS_OPTIONS 16 (the default): carry on
     sim.faults.uplink.loss = 0.0
     assert flying.wait_for(lambda s: any(m.text == "GCS Failsafe - Continuing Pilot Control" for m in s.messages), 10)
+
+
+def test_a_gcs_failsafe_during_autos_landing_carries_on_landing_with_fs_options_8():
+    """failsafe_gcs_on_event asks copter.flightmode->is_landing(): AUTO's land item is landing too."""
+    sent = []
+    ap = Autopilot(SimConfig(ready_after=0.0), emit=sent.append)
+    ap.step(0.02)
+    factory = mavlink.MAVLink(None, 255, 190)
+    for cmd, *p in ((176, 1, 4), (400, 1), (22, 0, 0, 0, 0, 0, 0, 5)):
+        msg = factory.command_long_encode(1, 1, cmd, 0, *(list(p) + [0] * (7 - len(p))))
+        msg.pack(factory)
+        ap.handle(msg)
+    while ap.landed_state() != mavlink.MAV_LANDED_STATE_IN_AIR and ap.t < 30:
+        ap.step(0.02)
+    ap.mode, ap.auto_stage, ap.rtl_phase = MODES["AUTO"], "land", "land"    # as AUTO's NAV_LAND descends
+    assert ap.landed_state() == mavlink.MAV_LANDED_STATE_LANDING
+    ap.params["FS_GCS_ENABLE"], ap.params["FS_OPTIONS"] = 1, 8               # bit 3 only: continue landing
+    ap._gcs_failsafe_action()
+    texts = [m.text for m in sent if m.get_type() == "STATUSTEXT"]
+    assert "GCS Failsafe - Continuing Landing" in texts and ap.mode == MODES["AUTO"]

@@ -53,7 +53,7 @@ class GcsFailsafe:
 
     def _gcs_failsafe_action(self) -> None:
         options = int(self.params.get("FS_OPTIONS", 0))
-        landing = self.mode == MODES["LAND"] or (self.mode == MODES["RTL"] and self.rtl_phase == "land")
+        landing = self.landed_state() == mavlink.MAV_LANDED_STATE_LANDING      # LAND, RTL's or AUTO's landing
         if not self.armed:
             self._text(mavlink.MAV_SEVERITY_WARNING, "GCS Failsafe")
             return
