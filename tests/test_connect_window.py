@@ -193,3 +193,14 @@ def test_leaving_a_flying_vehicle_is_asked_first(qtbot, sim, flying, connecting)
     leave.click()
     qtbot.waitUntil(lambda: w.adapter.description == "not connected", timeout=5000)
     assert sim.truth().armed and -sim.truth().down > 1.0   # let go of, still in the air: it hovers in GUIDED
+
+
+def test_file_connect_judges_the_new_vehicle_by_the_pilots_battery_thresholds(qtbot, sim, vehicle, sim_factory,
+                                                                               vehicle_factory, connecting):
+    w = connecting(vehicle)
+    other = vehicle_factory(f"tcp:127.0.0.1:{sim_factory().tcp_port}")
+    told = []
+    original = other.set_battery_thresholds
+    other.set_battery_thresholds = lambda thresholds: told.append(thresholds) or original(thresholds)
+    w.use_connection(other)                              # File › Connect's path, as a fleet's pick is
+    assert told == [w.settings.battery_thresholds]

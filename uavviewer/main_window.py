@@ -77,6 +77,8 @@ class MainWindow(QMainWindow):
         self.settings: ViewerSettings = load_settings(self._qsettings)
         self._takeoff_override = takeoff_altitude
         self.adapter = DroneAdapter(drone, rate_hz=rate_hz, parent=self)
+        # every vehicle flown (a fleet's pick, File › Connect) is judged by the pilot's battery thresholds
+        self.adapter.droneChanged.connect(lambda _drone: self._set_battery_thresholds())
         self._speeds = MaxSpeeds()
         self.keyboard = KeyboardSticks()
         self.gamepad = GamepadInput(self.settings, parent=self)
@@ -883,7 +885,6 @@ class MainWindow(QMainWindow):
         self._plot_gap = True
         self.plots.gap(time.monotonic() - self._t0)
         self.adapter.use(drone)
-        self._set_battery_thresholds()          # every vehicle flown is judged by the same thresholds
         self.setWindowTitle(f"UavViewerPy — {name} · {self.fleet.fleet.description}")
         if self._default_cameras and self.camera.uris == self._default_cameras:   # not --camera nor Preferences'
             self._default_cameras = [self.fleet.camera_uri(name)]                 # the picked vehicle's own
