@@ -36,7 +36,7 @@ from .forwarding import Forwarder
 from .payload.control import PAYLOAD_MESSAGES, Payload
 from .link import LinkError, ReplayControl, TlogWriter, Transport, open_transport
 from .params.cache import ParameterCache
-from .params.manager import ParameterManager
+from .params.manager import ParameterManager, param_name
 from .params.metadata import load_metadata, set_problem
 from .mission.control import MissionControl
 from .mission.plan import Plan, PlanKind
@@ -550,10 +550,10 @@ class Vehicle(Drone):
                     "steered with CONDITION_YAW (it ignores body frames and yaw rates)")
 
     def _on_param_value(self, m) -> None:
-        name = m.param_id.rstrip("\x00") if isinstance(m.param_id, str) else bytes(m.param_id).decode(errors="replace")
         if not frames.finite(m.param_value):
             return
-        self._params.on_param_value(m, time.monotonic())
+        name = param_name(m)
+        self._params.on_param_value(m, name, time.monotonic())
         if self._params.reasking:
             self._wake.set()                          # the next read goes out now, not on the next tick
         self._link.param_received(name)

@@ -152,11 +152,9 @@ class ParameterManager:
         if failure:
             self._ftp_failed(failure)
 
-    def on_param_value(self, m, now: float) -> Parameter | None:
-        """A PARAM_VALUE from the autopilot: into the table; it may confirm a write or advance the download."""
-        if not math.isfinite(m.param_value):
-            return None
-        name = param_name(m)
+    def on_param_value(self, m, name: str, now: float) -> Parameter | None:
+        """A PARAM_VALUE from the autopilot, its finite value and its name (:func:`param_name`) checked and
+        decoded by the caller: into the table; it may confirm a write or advance the download."""
         try:
             ptype = ParamType(m.param_type)
         except ValueError:
