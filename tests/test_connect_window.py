@@ -2,9 +2,12 @@
 sockets and a real ArduCopter recording: switching needs no restart, and a finished replay shows no live link."""
 from __future__ import annotations
 
+from dataclasses import replace
+
 import pytest
 from PyQt5.QtCore import Qt
 
+from driver.mission.plan import Plan, PlanKind
 from driver.state import LinkStatus
 from recordings import FLIGHT
 from uavviewer.alerts.model import AlertKind
@@ -204,3 +207,15 @@ def test_file_connect_judges_the_new_vehicle_by_the_pilots_battery_thresholds(qt
     other.set_battery_thresholds = lambda thresholds: told.append(thresholds) or original(thresholds)
     w.use_connection(other)                              # File › Connect's path, as a fleet's pick is
     assert told == [w.settings.battery_thresholds]
+
+
+def test_another_vehicle_starts_with_nothing_known_of_the_previous_one(qtbot, sim, vehicle, sim_factory,
+                                                                        vehicle_factory, connecting):
+    w = connecting(vehicle)
+    qtbot.waitUntil(lambda: w.adapter.state.connected, timeout=10000)
+    w.gimbal.point(-30.0)                                # asked of the first vehicle
+    w.flight_timer.update(replace(w.adapter.state, armed=True))
+    w.plan.on_vehicle[PlanKind.MISSION] = Plan()
+    w.use_connection(vehicle_factory(f"tcp:127.0.0.1:{sim_factory().tcp_port}"))
+    assert w.gimbal._target is None and not w.flight_timer.started and w.flight_timer.seconds == 0
+    assert not w.plan.on_vehicle

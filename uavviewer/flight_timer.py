@@ -36,6 +36,10 @@ class FlightTimer:
             self._last, self._since = now - self._since, None
         return self.seconds
 
+    def reset(self) -> None:
+        """Another vehicle is flown: its time is not the previous one's (it starts anew at its arm)."""
+        self._since, self._last, self.started = None, 0.0, False
+
     @property
     def seconds(self) -> float:
         return self._clock() - self._since if self._since is not None else self._last

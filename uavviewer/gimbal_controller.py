@@ -33,9 +33,14 @@ class GimbalController(QObject):
         bar.photoRequested.connect(lambda: adapter.command("take_photo"))
         bar.recordRequested.connect(lambda on: adapter.command("record_video", on))
         bar.stopLookingRequested.connect(lambda: adapter.command("stop_looking"))
+        adapter.droneChanged.connect(self._vehicle_changed)
 
     def show_state(self, s: VehicleState) -> None:
         self._bar.show_state(s)
+
+    def _vehicle_changed(self, _drone) -> None:
+        """Another vehicle is flown: the angle asked of the previous one is not this one's."""
+        self._target = None
 
     def _base(self) -> float:
         if self._target is not None:

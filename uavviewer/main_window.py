@@ -100,6 +100,7 @@ class MainWindow(QMainWindow):
         self._vehicle_name = ""
         self._t0 = time.monotonic()
         self.flight_timer = FlightTimer()
+        self.adapter.droneChanged.connect(lambda _drone: self.flight_timer.reset())
         self._shown_state: VehicleState | None = None   # the snapshot the views show next (refresh channels)
         # Views redraw at the rate the eye needs and not while minimised (refresh.py); logic follows every snapshot.
         self.refresh = Refresh(self)

@@ -59,8 +59,8 @@ class PlanController(QObject):
         self._outcome: dict[PlanKind, str] = {}         # each kind's last transfer, in words
         self._failed: dict[PlanKind, bool] = {}         # ... and whether the driver refused or failed it
         self._state = VehicleState()
-        self._drone = adapter.drone                     # the vehicle the plans below are known for
         self._shown: tuple | None = None                # what the flying part last showed (redrawn on change)
+        adapter.droneChanged.connect(self._vehicle_changed)     # a fleet's pick, File › Connect
         self._question: QMessageBox | None = None
         p = self.panel
         p.editToggled.connect(self.set_editing)
@@ -202,11 +202,12 @@ class PlanController(QObject):
         return known if known is not None else self.on_vehicle.get(kind)
 
     # -- the vehicle ------------------------------------------------------------------------------------
+    def _vehicle_changed(self, _drone) -> None:
+        """Another vehicle is flown: nothing is known of its plans yet."""
+        for known in (self.on_vehicle, self._sending, self._synced, self._outcome, self._failed):
+            known.clear()
+
     def show_state(self, s: VehicleState) -> None:
-        if self.adapter.drone is not self._drone:     # another vehicle of the fleet: nothing known of its plans yet
-            self._drone = self.adapter.drone
-            for known in (self.on_vehicle, self._sending, self._synced, self._outcome, self._failed):
-                known.clear()
         old_home = self.home
         self._state = s
         self.layer.home = self.editor.home = self.home

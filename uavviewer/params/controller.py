@@ -48,7 +48,6 @@ class ParamsController(QObject):
         self.review: ReviewDialog | None = None
         self.compare: CompareDialog | None = None
         self.question: QMessageBox | None = None
-        self._drone = adapter.drone
         self._state = VehicleState()
         self._wanted = ""                        # a parameter to show once the vehicle reports it (Fix…)
         self._asked = False                      # the download was asked for on this link
@@ -62,6 +61,7 @@ class ParamsController(QObject):
             self.said.connect(say)
         adapter.stateChanged.connect(self.show_state)
         adapter.commandFinished.connect(self._result)
+        adapter.droneChanged.connect(lambda _drone: self._vehicle_changed())   # a fleet's pick, File › Connect
         self._read_metadata(lambda drone: drone.parameter_metadata)
 
     # -- wiring ------------------------------------------------------------------------------------
@@ -135,9 +135,6 @@ class ParamsController(QObject):
         return self.page
 
     def show_state(self, s: VehicleState) -> None:
-        if self.adapter.drone is not self._drone:            # a fleet: another vehicle is picked
-            self._drone = self.adapter.drone
-            self._vehicle_changed()
         if s.link.status is not LinkStatus.OK:
             self._asked = False                              # a new link: ask again when the page wants it
         self._state = s
