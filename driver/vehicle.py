@@ -37,7 +37,7 @@ from .payload.control import PAYLOAD_MESSAGES, Payload
 from .link import LinkError, ReplayControl, TlogWriter, Transport, open_transport
 from .params.cache import ParameterCache
 from .params.manager import ParameterManager, param_name
-from .params.metadata import load_metadata, set_problem
+from .params.metadata import metadata_for, set_problem
 from .mission.control import MissionControl
 from .mission.plan import Plan, PlanKind
 from .rules import COPTER_MODES, MAX_ALTITUDE, MIN_TAKEOFF_ALTITUDE, go_to_problem, takeoff_altitude_problem
@@ -143,10 +143,8 @@ class Vehicle(Drone):
         self._param_cache = ParameterCache(cfg.param_cache or None) if cfg.param_cache is not None else None
         self._params.on_complete = self._cache_parameters
         self._params.use_ftp = cfg.param_ftp
-        self._metadata = None                 # loaded by start() in the background (half a second of XML)
-        self._metadata_loaded = threading.Event()
-        self._metadata_lock = threading.Lock()
-        self._metadata_warned = False
+        self._metadata_warned = False         # the metadata is read by start() in the background (half a second)
+        self._metadata_error_told = False
         self._setpoints = SetpointStreamer(cfg.deadman, cfg.setpoint_rate)
         self._payload = Payload(self)         # gimbal, region of interest, camera (driver.payload)
         self._sequence = SequenceSlot(self._store, self._commands, self._notifier)   # takeoff or mission start
@@ -209,7 +207,7 @@ class Vehicle(Drone):
             if name == "mavlink-ticker":
                 self._ticker = t
         self._threads += self._forwarder.start()
-        threading.Thread(target=self._load_metadata, name="param-metadata", daemon=True).start()
+        threading.Thread(target=self._read_metadata, name="param-metadata", daemon=True).start()
         return self
 
     def close(self) -> None:
@@ -873,7 +871,7 @@ class Vehicle(Drone):
             return self._finish(f"param {name}", CommandStatus.REJECTED, "a parameter name is 1 to 16 ASCII characters")
         if self._replay is not None:
             return self._finish(f"param {name}", CommandStatus.REJECTED, "replaying a recording: no vehicle to command")
-        metadata = self.parameter_metadata
+        metadata = self._read_metadata(wait=False)      # the caller's (the window's) thread never waits for it
         with self._lock:
             problem = self._params.value_problem(name, float(value))
         problem = problem or set_problem(metadata, name, float(value), allow_out_of_bounds)
@@ -890,19 +888,21 @@ class Vehicle(Drone):
 
     @property
     def parameter_metadata(self):
-        if not self._metadata_loaded.is_set():
-            self._load_metadata()
-        return self._metadata
+        return self._read_metadata()
 
-    def _load_metadata(self) -> None:
-        with self._metadata_lock:
-            if self._metadata_loaded.is_set():
-                return
-            try:
-                self._metadata = load_metadata(self.config.param_metadata)
-            except (OSError, ValueError) as e:
-                self._store.add_message(Severity.WARNING, f"Parameter metadata not read: {e}")
-            self._metadata_loaded.set()
+    def _read_metadata(self, wait: bool = True):
+        """The metadata (driver.params.metadata.metadata_for); None when there is none or, without ``wait``,
+        while it is still being read. Why it could not be read is told once."""
+        outcome = metadata_for(self.config.param_metadata, wait)
+        if outcome is None:
+            return None
+        metadata, error = outcome
+        if error:
+            with self._lock:
+                tell, self._metadata_error_told = not self._metadata_error_told, True
+            if tell:
+                self._store.add_message(Severity.WARNING, f"Parameter metadata not read: {error}")
+        return metadata
 
     # ------------------------------------------------------------------------------------------
     # payload: gimbal, region of interest, camera (driver.payload)

@@ -27,7 +27,7 @@ from ..frames import clamp, finite
 from ..state import (CommandResult, CommandStatus, Fence, LinkHealth, LinkStatus, Message, Severity, VehicleState,
                      replace)
 from ..mission.plan import Plan, PlanKind, TransferOutcome
-from ..params.metadata import load_metadata
+from ..params.metadata import metadata_for
 from ..params.model import ParameterTable
 from . import convert, load_slice, plans
 from .params import table_from_ice
@@ -123,8 +123,6 @@ class IceDrone(PayloadClient, Drone):
         self._parameters = ParameterTable()
         self._param_revision = -1              # the server's revision of the table we have
         self._param_polls: int | None = 0      # polls until the parameters are looked at; None: the server has none
-        self._metadata = None
-        self._metadata_lock = threading.Lock()
 
         self._velocity: tuple[float, float, float, float] | None = None
         self._velocity_ready = threading.Condition(threading.Lock())
@@ -643,10 +641,7 @@ class IceDrone(PayloadClient, Drone):
     @property
     def parameter_metadata(self):
         """ArduPilot's metadata from this machine (the per-user cache's, else the shipped copy)."""
-        with self._metadata_lock:
-            if self._metadata is None:
-                self._metadata = load_metadata() or False
-            return self._metadata or None
+        return metadata_for()[0]
 
     # -- missions over the mavlinkserver extension --------------------------------------------------
     def upload_plan(self, plan: Plan) -> Future:

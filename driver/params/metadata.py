@@ -31,7 +31,7 @@ from ..files import private_dir, write_private
 
 log = logging.getLogger(__name__)
 
-__all__ = ["ParamMeta", "ParamMetadata", "load_metadata", "fetch_metadata", "cache_path", "SHIPPED", "METADATA_URL",
+__all__ = ["ParamMeta", "ParamMetadata", "load_metadata", "metadata_for", "fetch_metadata", "cache_path", "SHIPPED", "METADATA_URL",
            "bounds_problem", "set_problem"]
 
 SHIPPED = os.path.join(os.path.dirname(os.path.abspath(__file__)), "data", "apm.pdef.xml.gz")
@@ -212,6 +212,33 @@ def load_metadata(path: str | None = None) -> ParamMetadata | None:
     return None
 
 
+_outcomes: dict[tuple[str, str], tuple[ParamMetadata | None, str]] = {}
+_outcome_lock = threading.Lock()
+
+
+def _outcome_key(path: str | None) -> tuple[str, str]:
+    return ("file", os.path.abspath(path)) if path else ("default", cache_path())
+
+
+def metadata_for(path: str | None = None, wait: bool = True) -> tuple[ParamMetadata | None, str] | None:
+    """What :func:`load_metadata` gives for ``path``, as ``(metadata, error)``, read once per process and
+    remembered, "none found" (None, "") and an unreadable file (None, why) included, so no caller reads it again.
+    With ``wait`` False it never blocks: None while it has not been read yet."""
+    key = _outcome_key(path)
+    outcome = _outcomes.get(key)
+    if outcome is not None or not wait:
+        return outcome
+    with _outcome_lock:
+        outcome = _outcomes.get(key)
+        if outcome is None:
+            try:
+                outcome = (load_metadata(path), "")
+            except (OSError, ValueError) as e:
+                outcome = (None, str(e))
+            _outcomes[key] = outcome
+        return outcome
+
+
 def fetch_metadata(url: str = METADATA_URL, timeout: float = FETCH_TIMEOUT) -> ParamMetadata:
     """Download apm.pdef.xml once into the per-user cache (checked before it replaces anything); OSError or
     ValueError when offline or the answer is not metadata."""
@@ -223,5 +250,7 @@ def fetch_metadata(url: str = METADATA_URL, timeout: float = FETCH_TIMEOUT) -> P
     write_private(target, gzip.decompress(data) if data[:2] == b"\x1f\x8b" else data, 0o644)
     with _load_lock:
         _loaded.pop(os.path.abspath(target), None)
+    with _outcome_lock:
+        _outcomes.pop(_outcome_key(None), None)
     log.info("parameter metadata fetched from %s into %s (%d parameters)", url, target, len(metadata))
     return load_metadata() or metadata
