@@ -25,6 +25,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink
 from .auto import Auto
 from .commands import Commands
 from .circle import CircleNav
+from ..frames import offset_ned
 from .common import (DEFAULT_PARAMS, MODE_NAMES, MODES, NOT_ARMABLE, POSITION_MODES, STREAMS, command_name,
                      wrap_pi)
 from .faults import Faults
@@ -362,6 +363,10 @@ class Autopilot(Telemetry, Commands, ParamProtocol, FtpServer, GcsFailsafe, Miss
                                                                     and self.rtl_phase == "land")):
             return mavlink.MAV_LANDED_STATE_LANDING
         return mavlink.MAV_LANDED_STATE_IN_AIR
+
+    def ned_from(self, lat: float, lon: float) -> tuple[float, float]:
+        """North/east metres of (lat, lon) from home (across the antimeridian too); the sim's one conversion."""
+        return offset_ned(self.home_lat, self.home_lon, lat, lon)
 
     # -- outgoing ----------------------------------------------------------------------------------
     def _text(self, severity: int, text: str) -> None:

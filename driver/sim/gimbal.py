@@ -121,10 +121,8 @@ class Payload:
         self.yaw_slew = math.radians(60.0)
 
     def _roi_offset(self) -> tuple[float, float]:
-        lat, lon, _ = self.mount_roi
-        north = (lat - self.home_lat) * (self.m_per_deg_lon / math.cos(math.radians(self.home_lat))) - self.n
-        east = (lon - self.home_lon) * self.m_per_deg_lon - self.e
-        return north, east
+        north, east = self.ned_from(*self.mount_roi[:2])
+        return north - self.n, east - self.e
 
     def _roi_angles(self) -> tuple[float, float]:
         north, east = self._roi_offset()

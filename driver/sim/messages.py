@@ -14,8 +14,7 @@ import math
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from .common import (MODES, POS_IGNORE, STREAM_PARAMS, STREAMS, VEL_IGNORE, YAW_IGNORE,
-                     YAW_RATE_IGNORE, clamp as _clamp, finite, wrap_lon, wrap_pi)
-from .telemetry import METRES_PER_DEG
+                     YAW_RATE_IGNORE, clamp as _clamp, finite, wrap_pi)
 
 __all__ = ["Messages"]
 
@@ -142,8 +141,7 @@ class Messages:
         if not finite(msg.alt, msg.vx, msg.vy, msg.vz, msg.yaw, msg.yaw_rate):
             return
         if not (mask & POS_IGNORE):
-            north = (msg.lat_int / 1e7 - self.home_lat) * METRES_PER_DEG
-            east = wrap_lon(msg.lon_int / 1e7 - self.home_lon) * self.m_per_deg_lon
+            north, east = self.ned_from(msg.lat_int / 1e7, msg.lon_int / 1e7)
             if msg.coordinate_frame in (mavlink.MAV_FRAME_GLOBAL, mavlink.MAV_FRAME_GLOBAL_INT):
                 down = -(msg.alt - self.home_alt)
             else:

@@ -26,8 +26,6 @@ from dataclasses import dataclass
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from ..mission.limits import fence_shapes
-from .common import wrap_lon
-from .telemetry import METRES_PER_DEG
 
 __all__ = ["Missions", "StoredItem"]
 
@@ -367,8 +365,7 @@ class Missions:
         """North/east metres from home of an item's place; None for 0, 0 (ArduPilot: here)."""
         if item.x == 0 and item.y == 0:
             return None
-        lat, lon = item.north_east
-        return (lat - self.home_lat) * METRES_PER_DEG, wrap_lon(lon - self.home_lon) * self.m_per_deg_lon
+        return self.ned_from(item.lat, item.lon)
 
     def down_of(self, item: StoredItem) -> float:
         """NED down of an item's altitude (relative frames above home, GLOBAL above sea level)."""
