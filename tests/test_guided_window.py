@@ -91,3 +91,37 @@ def test_stop_ends_a_circle_on_its_way(qtbot, sim, flying, window):
     qtbot.waitUntil(lambda: any("circle" in t and "cancelled" in t for t in w.messages.texts()), timeout=5000)
     qtbot.waitUntil(lambda: math.hypot(sim.truth().vn, sim.truth().ve) < 0.2, timeout=20000)
     assert sim.truth().mode == "GUIDED"
+
+
+def test_a_circle_the_vehicle_took_is_drawn_from_the_ui_thread(qtbot):
+    """The circle's answer arrives on a driver thread; the map learns of it on the UI thread (view_changed)."""
+    import threading
+    from concurrent.futures import Future
+
+    from PyQt5.QtCore import QThread
+    from PyQt5.QtWidgets import QWidget
+
+    from driver.state import CommandResult, CommandStatus, VehicleState
+    from uavviewer.guided.controller import GuidedController
+
+    future = Future()
+
+    class Adapter:
+        state = VehicleState()
+        replay = None
+
+        def command(self, *args):
+            return future
+
+    parent = QWidget()
+    qtbot.addWidget(parent)
+    guided = GuidedController(Adapter(), parent)
+    threads = []
+    guided.view_changed.connect(lambda: threads.append(QThread.currentThread()))
+    guided.circle((10.0, 0.0), 5.0)
+    driver = threading.Thread(target=future.set_result, args=(CommandResult("circle", CommandStatus.ACCEPTED),))
+    driver.start()
+    driver.join()
+    assert guided.circling is None                       # not set from the driver's thread
+    qtbot.waitUntil(lambda: guided.circling == (10.0, 0.0, 5.0), timeout=2000)
+    assert threads == [QApplication.instance().thread()]

@@ -21,6 +21,12 @@ __all__ = ["GuidedController"]
 CIRCLE_COLOUR = QColor("#4fc3f7")
 
 
+class _CircleRelay(QObject):
+    """Carries the circle command's finished Future from the driver's thread to the UI thread (a queued signal);
+    parentless, as the adapter's _FutureRelay, so a late answer never emits on a deleted controller."""
+    done = pyqtSignal(object, object)        # the Future, the circle asked (north, east, radius)
+
+
 class GuidedController(QObject):
     asked = pyqtSignal(object)               # the question just opened (a QInputDialog): tests answer it
     view_changed = pyqtSignal()              # the circle drawn on the map came or went
@@ -33,6 +39,8 @@ class GuidedController(QObject):
         self.circling: tuple[float, float, float] | None = None   # north, east, radius of the circle being flown
         self._circle_seen = False                                  # the vehicle has reported CIRCLE since
         self.question: QInputDialog | None = None
+        self._relay = _CircleRelay()
+        self._relay.done.connect(self._circle_answered)
         self.change_altitude_action = QAction("Change &altitude…", window)
         self.change_altitude_action.setObjectName("actionChangeAltitude")
         self.change_altitude_action.triggered.connect(lambda: self.ask_altitude())
@@ -146,8 +154,14 @@ class GuidedController(QObject):
         self._circle_seen = False
         if future is not None:
             wanted = (centre[0], centre[1], float(radius))
-            future.add_done_callback(lambda f: setattr(self, "circling", wanted)
-                                     if not f.cancelled() and f.exception() is None and f.result().ok else None)
+            relay = self._relay                          # not self: the callback runs on a driver thread
+            future.add_done_callback(lambda f: relay.done.emit(f, wanted))
+
+    def _circle_answered(self, future, wanted: tuple[float, float, float]) -> None:
+        """On the UI thread: the vehicle took the circle (and it is still the one asked), so the map draws it."""
+        if future is self._circle and not future.cancelled() and future.exception() is None and future.result().ok:
+            self.circling = wanted
+            self.view_changed.emit()
 
     def paint_circle(self, p, view) -> None:
         """The map: the circle being flown (CIRCLE mode entered through Circle), its centre marked."""
