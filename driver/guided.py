@@ -13,9 +13,9 @@ from __future__ import annotations
 
 import math
 import threading
-import time
 from concurrent.futures import Future
 
+from . import api                # api imports this module too: its names are looked up at call time
 from .state import CommandResult, CommandStatus, VehicleState
 
 __all__ = ["change_altitude", "circle_point", "circle_start", "MIN_CIRCLE_RADIUS", "MAX_CIRCLE_RADIUS"]
@@ -32,7 +32,8 @@ def change_altitude(drone, altitude: float) -> Future:
     position, so the driver's altitude limits, fence and refusals apply as to any go-to."""
     s = drone.state()
     if s.local is None:
-        return _done(f"altitude {altitude:g} m", CommandStatus.REJECTED, "the vehicle has not sent its position yet")
+        return api._answered(CommandResult(f"altitude {altitude:g} m", CommandStatus.REJECTED,
+                                           "the vehicle has not sent its position yet"))
     return drone.go_to(s.local.north, s.local.east, altitude)
 
 
@@ -56,15 +57,16 @@ def circle_point(drone, north: float, east: float, radius: float, altitude: floa
     approach where it is."""
     name = f"circle N{north:.0f} E{east:.0f} r {radius:g} m"
     if not all(map(math.isfinite, (north, east, radius))) or altitude is not None and not math.isfinite(altitude):
-        return _done(name, CommandStatus.REJECTED, "coordinates are not finite numbers")
+        return api._answered(CommandResult(name, CommandStatus.REJECTED, "coordinates are not finite numbers"))
     if not MIN_CIRCLE_RADIUS <= radius <= MAX_CIRCLE_RADIUS:
-        return _done(name, CommandStatus.REJECTED,
-                     f"a circle's radius is {MIN_CIRCLE_RADIUS:g} to {MAX_CIRCLE_RADIUS:g} m")
+        return api._answered(CommandResult(name, CommandStatus.REJECTED,
+                                           f"a circle's radius is {MIN_CIRCLE_RADIUS:g} to {MAX_CIRCLE_RADIUS:g} m"))
     s = drone.state()
     if s.mode != "GUIDED" or not s.flying:
-        return _done(name, CommandStatus.REJECTED, f"needs GUIDED and flying (mode {s.mode or '?'})")
+        return api._answered(CommandResult(name, CommandStatus.REJECTED,
+                                           f"needs GUIDED and flying (mode {s.mode or '?'})"))
     if s.local is None:
-        return _done(name, CommandStatus.REJECTED, "the vehicle has not sent its position yet")
+        return api._answered(CommandResult(name, CommandStatus.REJECTED, "the vehicle has not sent its position yet"))
     future: Future = Future()
     threading.Thread(target=_fly_circle, args=(drone, name, north, east, radius,
                                                s.altitude if altitude is None else altitude, future),
@@ -109,12 +111,10 @@ def _fly_circle(drone, name: str, north: float, east: float, radius: float, alti
 
 def _wait(drone, reached, future: Future, timeout: float = STEP_TIMEOUT) -> str:
     """"" once ``reached(state)``; else why the circle was given up: the pilot took over (another mode, a stick,
-    Stop cancelling ``future``) or time ran out."""
-    deadline = time.monotonic() + timeout
-    while time.monotonic() < deadline:
+    Stop cancelling ``future``) or time ran out. Waits with the drone's own ``wait_for``."""
+    def why(s: VehicleState) -> str | None:
         if future.cancelled():
             return "cancelled"
-        s = drone.state()
         if not s.connected:
             return "the link is down"
         if s.mode != "GUIDED":
@@ -123,13 +123,8 @@ def _wait(drone, reached, future: Future, timeout: float = STEP_TIMEOUT) -> str:
             return "the sticks took over"
         if not s.flying:
             return "the vehicle is no longer flying"
-        if reached(s):
-            return ""
-        time.sleep(0.05)
-    return f"not reached in {timeout:g} s"
+        return "" if reached(s) else None
 
-
-def _done(name: str, status: CommandStatus, reason: str) -> Future:
-    future: Future = Future()
-    future.set_result(CommandResult(name, status, reason))
-    return future
+    s = drone.wait_for(lambda s: why(s) is not None, timeout)
+    reason = why(s if s is not None else drone.state())     # None from wait_for: time ran out, or it closed
+    return reason if reason is not None else f"not reached in {timeout:g} s"
