@@ -45,6 +45,7 @@ def test_tilting_from_the_window_moves_the_simulated_picture(qtbot, vehicle, win
 
     w.gimbal_bar.level_button.click()
     qtbot.waitUntil(near(w, 0), timeout=10000)
+    qtbot.waitUntil(lambda: w.gimbal._target is None, timeout=3000)   # reached: tilting starts from what it says
     qtbot.waitUntil(lambda: abs(row_now(w) - 240) <= 3, timeout=5000)   # level: the horizon across the middle
     level = w.camera_view.frame().image.copy()
 

@@ -15,6 +15,12 @@ WHEEL_STEP = 5.0            # deg a wheel notch tilts
 KEY_STEP = 5.0              # deg a key press tilts
 DRAG_DEG_PER_PX = 0.25      # deg per pixel of vertical drag (dragging up tilts up)
 SEND_INTERVAL = 0.1         # s: a drag sends at most this often, and its last angle on release
+REACHED = 1.0               # deg: the reported pitch this close to the angle asked has reached it
+
+
+def _clamped(pitch: float) -> float:
+    """Within the gimbal's travel: down to its lowest, up to level."""
+    return min(max(pitch, GIMBAL_PITCH_RANGE[0]), 0.0)
 
 
 class GimbalController(QObject):
@@ -23,7 +29,7 @@ class GimbalController(QObject):
         self._adapter = adapter
         self._view = view
         self._bar = bar
-        self._target: float | None = None       # the angle last asked, until the vehicle reports again
+        self._target: float | None = None       # the angle last asked, until the vehicle reports it
         self._drag_y: float | None = None
         self._drag_start = 0.0
         self._sent_at = 0.0
@@ -36,6 +42,9 @@ class GimbalController(QObject):
         adapter.droneChanged.connect(self._vehicle_changed)
 
     def show_state(self, s: VehicleState) -> None:
+        reported = s.gimbal.pitch_deg
+        if self._target is not None and reported is not None and abs(reported - self._target) <= REACHED:
+            self._target = None                 # the vehicle points there: tilt from what it reports again
         self._bar.show_state(s)
 
     def _vehicle_changed(self, _drone) -> None:
@@ -49,7 +58,7 @@ class GimbalController(QObject):
         return pitch if pitch is not None else 0.0
 
     def point(self, pitch: float) -> None:
-        pitch = min(max(pitch, GIMBAL_PITCH_RANGE[0]), 0.0)
+        pitch = _clamped(pitch)
         self._target = pitch
         self._sent_at = time.monotonic()
         self._adapter.command("point_gimbal", pitch)
@@ -73,7 +82,7 @@ class GimbalController(QObject):
             if time.monotonic() - self._sent_at >= SEND_INTERVAL:
                 self.point(pitch)
             else:
-                self._target = min(max(pitch, GIMBAL_PITCH_RANGE[0]), 0.0)
+                self._target = _clamped(pitch)
             return True
         if kind == QEvent.MouseButtonRelease and self._drag_y is not None:
             self.point(self._drag_start + (self._drag_y - event.pos().y()) * DRAG_DEG_PER_PX)
