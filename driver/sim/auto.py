@@ -185,8 +185,8 @@ class Auto:
         self._auto_finish()
 
     def _auto_do(self, item: StoredItem) -> None:
-        if item.command == mavlink.MAV_CMD_DO_CHANGE_SPEED and item.params[1] > 0:
-            self.speed_override = min(float(item.params[1]), 20.0)
+        if item.command == mavlink.MAV_CMD_DO_CHANGE_SPEED:
+            self._cmd_do_change_speed(*item.params)           # commands.py: the same checks as the command
 
     def _auto_start_item(self, seq: int) -> None:
         item = self.plans[MISSION][seq]
