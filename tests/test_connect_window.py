@@ -8,6 +8,7 @@ import pytest
 from PyQt5.QtCore import Qt
 
 from driver.mission.plan import Plan, PlanKind
+from driver.rules import unattended
 from driver.state import LinkStatus
 from recordings import FLIGHT
 from uavviewer.alerts.model import AlertKind
@@ -187,6 +188,8 @@ def test_leaving_a_flying_vehicle_is_asked_first(qtbot, sim, flying, connecting)
     qtbot.waitUntil(lambda: w.tools.leave_box is not None and w.tools.leave_box.isVisible(), timeout=3000)
     box = w.tools.leave_box
     assert "in GUIDED" in box.text() and box.defaultButton() is box.button(box.Cancel)
+    s = w.adapter.state                                  # the same words as the quit question: its GCS failsafe's
+    assert unattended(s.mode, s.gcs_failsafe) in box.text()
     box.button(box.Cancel).click()                       # Cancel: still flying it
     assert w.adapter.drone is flying and w.connections.connected
     w.actionDisconnect.trigger()

@@ -14,6 +14,7 @@ import os
 from PyQt5.QtCore import QObject, Qt
 from PyQt5.QtWidgets import QAction, QDockWidget, QFileDialog, QMenu, QMessageBox
 
+from driver.rules import unattended
 from driver.state import Severity
 
 from .alerts.controller import AlertController
@@ -143,8 +144,8 @@ class PilotTools(QObject):
             self.leave_box.reject()
         box = QMessageBox(QMessageBox.Warning, "The vehicle is flying",
                           f"The vehicle is in the air, in {s.mode or 'an unknown mode'}. Once this window lets go of "
-                          f"it, it is sent zero velocity and nobody commands it: it goes on in {s.mode or 'that mode'} "
-                          "until its own failsafe acts (FS_GCS_ENABLE).", QMessageBox.NoButton, w)
+                          f"it, it is sent zero velocity and nobody commands it: {unattended(s.mode, s.gcs_failsafe)}.",
+                          QMessageBox.NoButton, w)
         box.setObjectName("leaveQuestion")
         leave = box.addButton("Leave it flying", QMessageBox.DestructiveRole)
         box.addButton(QMessageBox.Cancel)
