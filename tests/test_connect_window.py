@@ -12,7 +12,7 @@ from driver.rules import unattended
 from driver.state import LinkStatus
 from recordings import FLIGHT
 from uavviewer.alerts.model import AlertKind
-from uavviewer.connect.choice import Choice, Kind, parse_key
+from uavviewer.connect.choice import Choice, Kind, parse_key, sim_name
 from uavviewer.connect.dialog import KINDS
 from fleet_fixtures import fleet, lab  # noqa: F401  (fixtures)
 from viewer_fixtures import viewer_settings, window_factory  # noqa: F401  (fixtures)
@@ -78,6 +78,7 @@ def test_connect_from_the_dialog_switches_vehicle_then_disconnect(qtbot, sim_fac
 
 def test_connect_to_the_built_in_simulator_and_a_bad_link_keeps_the_old_one(qtbot, sim, vehicle, connecting):
     w = connecting(vehicle)
+    w.name_vehicle("the first vehicle")                  # as --sim names it
     qtbot.waitUntil(lambda: w.adapter.state.connected, timeout=10000)
     failures = []
     w.connections.failed.connect(failures.append)
@@ -88,6 +89,10 @@ def test_connect_to_the_built_in_simulator_and_a_bad_link_keeps_the_old_one(qtbo
     qtbot.waitUntil(lambda: w.adapter.drone is not vehicle and w.adapter.state.connected, timeout=15000)
     assert w.connections.current.sim is not None                      # started for it, stopped with it
     assert w.camera.uris == ["sim"]                                    # and its camera shown, as with --sim
+    assert w.window_name() == sim_name(w.connections.current.sim.config.speedup) and "first" not in w.windowTitle()   # About too
+    w.actionDisconnect.trigger()
+    qtbot.waitUntil(lambda: w.adapter.description == "not connected", timeout=5000)
+    assert w.window_name() == "not connected"                         # no vehicle: no name left over
     qtbot.waitUntil(lambda: vehicle.state().link.status is LinkStatus.CLOSED, timeout=10000)
     assert parse_key(Choice(Kind.SIM).key) == Choice(Kind.SIM)
 

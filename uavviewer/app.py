@@ -22,6 +22,7 @@ from pathlib import Path
 from driver import options
 from driver.sim import DEMO_READY_AFTER
 from driver.version import __version__
+from uavviewer.connect.choice import sim_name
 from uavviewer.settings import TAKEOFF_ALTITUDE_RANGE
 
 SOLO_CONNECTION = "udpin:0.0.0.0:14550"
@@ -289,11 +290,6 @@ def main(argv: list[str] | None = None) -> int:
         window.connections.close()                                # the vehicle (or fleet) flown last, and any left
         if sim is not None:
             sim.stop()
-
-
-def sim_name(speedup: float) -> str:
-    """What the window calls the built-in simulator (its title, About)."""
-    return "simulated ArduCopter (built in)" + (f", {speedup:g}× time" if speedup != 1 else "")
 
 
 def _schedule_screenshot(window, path: Path, after: float, fly: bool) -> None:

@@ -24,6 +24,7 @@ from .dialogs import (
     KeysDialog, SettingsDialog, arm_question, ask, emergency_stop_question, mode_question, takeoff_question,
 )
 from .camera_controller import CameraController, default_media_folder
+from .connect.choice import sim_name
 from .drone_adapter import DroneAdapter
 from .flight_timer import FlightTimer
 from .flight_phase import (
@@ -205,6 +206,8 @@ class MainWindow(QMainWindow):
         fleet with its Fleet panel."""
         self._leave_fleet()
         self.use_connection(opened.drone)
+        if opened.sim is not None:                                 # not a raw tcp:127.0.0.1:port, as with --sim
+            self.name_vehicle(sim_name(opened.sim.config.speedup))
         self.actionDisconnect.setEnabled(self.connections.connected)
         own = ["sim"] if opened.sim is not None else []            # the new vehicle's own camera, if we know it
         if opened.fleet is not None:                               # its cameras through the registry, as app.py
@@ -244,6 +247,7 @@ class MainWindow(QMainWindow):
         self._plot_gap = True
         self.plots.gap(time.monotonic() - self._t0)
         self.adapter.use(drone)
+        self._vehicle_name = ""                 # the previous vehicle's name is not this one's (About, the title)
         self.map.use_connection()
         self.setWindowTitle(f"UavViewerPy — {self.adapter.description}")
         self._signing_unavailable = signing_unavailable(drone)

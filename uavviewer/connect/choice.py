@@ -13,11 +13,16 @@ from dataclasses import dataclass, field
 
 from driver.link import connection_problem
 
-__all__ = ["Kind", "Choice", "parse_key", "from_command_line", "serial_ports", "SITL_TCP", "SOLO_UDP"]
+__all__ = ["Kind", "Choice", "parse_key", "from_command_line", "serial_ports", "sim_name", "SITL_TCP", "SOLO_UDP"]
 
 SITL_TCP = "tcp:127.0.0.1:5760"          # ArduPilot SITL's first serial port (sim_vehicle.py, Mission Planner)
 SOLO_UDP = "udpin:0.0.0.0:14550"         # a 3DR Solo, or any vehicle sending to the GCS port
 
+
+
+def sim_name(speedup: float) -> str:
+    """What the window calls the built-in simulator (its title, About)."""
+    return "simulated ArduCopter (built in)" + (f", {speedup:g}× time" if speedup != 1 else "")
 
 class Kind(enum.Enum):
     MAVLINK = "mavlink"                  # udpin/udpout/tcp/serial
