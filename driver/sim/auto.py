@@ -30,10 +30,8 @@ __all__ = ["Auto", "COMMAND_NAMES"]
 log = logging.getLogger("driver.sim.autopilot")
 
 AUTO = MODES["AUTO"]
-WP_RADIUS = 2.0              # m: WPNAV_RADIUS's default (200 cm)
 ALT_REACHED = 0.3            # m from the target altitude
 JERK = 1.0                   # m/s³: WPNAV_JERK's default; 4.x's S-curves build acceleration up this slowly
-ACCEL = 2.5                  # m/s²: WPNAV_ACCEL's default
 MAX_JUMPS = 100              # DO_JUMPs followed in one walk (a jump loop without a navigation item)
 # AP_Mission::Mission_Command::type(): what "Mission: N NAME" says.
 COMMAND_NAMES = {
@@ -238,8 +236,9 @@ class Auto:
                 and self.plans[MISSION][self.mission_current].command == mavlink.MAV_CMD_NAV_TAKEOFF)
 
     def _auto_acceleration(self) -> float:
-        """The horizontal acceleration AUTO may use this step: ramped up at JERK to ACCEL (S-curves)."""
-        self.auto_accel = min(ACCEL, self.auto_accel + JERK / float(self.config.rate_hz))
+        """The horizontal acceleration AUTO may use this step: ramped up at JERK to WPNAV_ACCEL (S-curves)."""
+        accel = max(0.5, float(self.params.get("WPNAV_ACCEL", 250.0)) / 100.0)     # cm/s², as CIRCLE reads it
+        self.auto_accel = min(accel, self.auto_accel + JERK / float(self.config.rate_hz))
         return self.auto_accel
 
     def _auto(self) -> tuple[float, float, float]:
@@ -296,5 +295,6 @@ class Auto:
         target = self.auto_target
         if target is None:
             return True
-        close = math.hypot(target[0] - self.n, target[1] - self.e) <= WP_RADIUS
+        radius = max(0.05, float(self.params.get("WPNAV_RADIUS", 200.0)) / 100.0)    # cm; ArduPilot's minimum 5
+        close = math.hypot(target[0] - self.n, target[1] - self.e) <= radius
         return close and (not vertical or abs(target[2] - self.d) <= 1.0)
