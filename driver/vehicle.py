@@ -31,7 +31,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from . import frames
 from .api import CEILING, Drone, Limits
-from .commands import CommandSender, Notifier, command_name
+from .commands import CommandSender, Notifier, chain, command_name
 from .forwarding import Forwarder
 from .payload.control import PAYLOAD_MESSAGES, Payload
 from .link import LinkError, ReplayControl, TlogWriter, Transport, open_transport
@@ -791,19 +791,14 @@ class Vehicle(Drone):
         with self._lock:
             self._setpoints.stop(time.monotonic())
             self._store.set(setpoint=self._setpoints.setpoint)
-        outcome: Future = Future()
 
-        def guided_answered(f: Future) -> None:
-            r = f.result()
+        def guided_answered(r: CommandResult):
             if r.ok:
-                outcome.set_result(self._store.record("stop", CommandStatus.ACCEPTED,
-                                                      f"holding position in GUIDED (was {was}): the sticks fly"))
-                return
-            brake = self._set_mode("BRAKE")
-            brake.add_done_callback(lambda b: outcome.set_result(self._store.record(
-                "stop", b.result().status, f"GUIDED refused ({r.reason}): BRAKE, {b.result().reason}")))
-        self._set_mode("GUIDED").add_done_callback(guided_answered)
-        return outcome
+                return self._store.record("stop", CommandStatus.ACCEPTED,
+                                          f"holding position in GUIDED (was {was}): the sticks fly")
+            return chain(self._set_mode("BRAKE"), lambda b: self._store.record(
+                "stop", b.status, f"GUIDED refused ({r.reason}): BRAKE, {b.reason}"), "stop")
+        return chain(self._set_mode("GUIDED"), guided_answered, "stop")
 
     def reboot(self) -> Future:
         problem = _ground_only(self.state())

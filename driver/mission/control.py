@@ -18,6 +18,7 @@ from typing import Callable
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
+from ..commands import chain
 from ..state import CommandResult, CommandStatus, SequencePhase, VehicleState
 from ..takeoff import TakeoffSequence
 from .limits import plan_problems
@@ -188,19 +189,12 @@ class MissionControl:
         if self.transfers.mission_int is False:       # 3.3: no DO_SET_MISSION_CURRENT, the message only
             return self._watch(name, self._set_current_message(seq, name), shown, f"MISSION_CURRENT shows {seq}")
         inner = v.command_long(mavlink.MAV_CMD_DO_SET_MISSION_CURRENT, (seq,), name)
-        future: Future = Future()
 
-        def fallback(f: Future) -> None:
-            r = f.result()
+        def fallback(r: CommandResult) -> Future:
             if not r.ok and "UNSUPPORTED" in r.reason:
-                chained = self._watch(name, self._set_current_message(seq, name), shown,
-                                      f"MISSION_CURRENT shows {seq}")
-                chained.add_done_callback(lambda g: future.set_result(g.result()))
-            else:
-                self._watch(name, f, shown, f"MISSION_CURRENT shows {seq}").add_done_callback(
-                    lambda g: future.set_result(g.result()))
-        inner.add_done_callback(fallback)
-        return future
+                return self._watch(name, self._set_current_message(seq, name), shown, f"MISSION_CURRENT shows {seq}")
+            return self._watch(name, inner, shown, f"MISSION_CURRENT shows {seq}")
+        return chain(inner, fallback, name)
 
     def _set_current_message(self, seq: int, name: str) -> Future:
         v = self._v

@@ -31,6 +31,7 @@ from dataclasses import dataclass, replace
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from .. import frames
+from ..commands import chain
 from ..state import CommandResult, CommandStatus, Severity
 from .model import (
     GIMBAL_PITCH_RANGE, RETRACT_FLAG, YAW_IN_EARTH_FRAME, CameraKind, Gimbal, GimbalControl, VehicleCamera,
@@ -272,23 +273,6 @@ class Payload:
     def _answered(self, name: str, status: CommandStatus, reason: str) -> Future:
         return self._v._finish(name, status, reason)
 
-    def _chain(self, inner: Future, then) -> Future:
-        """A future resolved by ``then(result)`` (a CommandResult, or a Future to follow) once ``inner`` is."""
-        outer: Future = Future()
-
-        def follow(f: Future) -> None:
-            try:
-                nxt = then(f.result())
-            except Exception as exc:               # never leave the caller's future unresolved
-                log.exception("payload step failed")
-                nxt = CommandResult("payload", CommandStatus.REJECTED, f"internal error: {exc}")
-            if isinstance(nxt, Future):
-                nxt.add_done_callback(lambda g: outer.done() or outer.set_result(g.result()))
-            elif not outer.done():
-                outer.set_result(nxt)
-        inner.add_done_callback(follow)
-        return outer
-
     @staticmethod
     def _unsupported(result: CommandResult) -> bool:
         return result.status is CommandStatus.REFUSED and "UNSUPPORTED" in result.reason
@@ -312,12 +296,12 @@ class Payload:
         if protocol == MANAGER:
             inner = self._v._command_long(mavlink.MAV_CMD_DO_GIMBAL_MANAGER_PITCHYAW,
                                           (pitch, yaw or 0.0, 0, 0, 0, 0, 0), f"{name} (DO_GIMBAL_MANAGER_PITCHYAW)")
-            return self._chain(inner, lambda r: self._pointed(r, name, pitch, yaw, GimbalControl.ANGLE, MANAGER))
+            return chain(inner, lambda r: self._pointed(r, name, pitch, yaw, GimbalControl.ANGLE, MANAGER), name)
         if protocol == MOUNT_CMD:
             inner = self._v._command_long(mavlink.MAV_CMD_DO_MOUNT_CONTROL,
                                           (pitch, 0, yaw or 0.0, 0, 0, 0, mavlink.MAV_MOUNT_MODE_MAVLINK_TARGETING),
                                           f"{name} (DO_MOUNT_CONTROL)")
-            return self._chain(inner, lambda r: self._pointed(r, name, pitch, yaw, GimbalControl.ANGLE, MOUNT_CMD))
+            return chain(inner, lambda r: self._pointed(r, name, pitch, yaw, GimbalControl.ANGLE, MOUNT_CMD), name)
         return self._mount_message(name, pitch, yaw)
 
     def _pointed(self, result: CommandResult, name: str, pitch, yaw, control: GimbalControl, protocol: str):
@@ -443,7 +427,7 @@ class Payload:
                     self._store.set(gimbal=replace(self._gimbal(), control=GimbalControl.ROI, roi=(lat, lon, alt)))
                     self._store.publish()
                 return r
-        return self._chain(inner, done)
+        return chain(inner, done, name)
 
     def stop_looking(self) -> Future:
         name = "stop looking (ROI none)"
@@ -462,7 +446,7 @@ class Payload:
                     self._store.set(gimbal=replace(self._gimbal(), control=GimbalControl.RC, roi=None))
                     self._store.publish()
                 return r
-        return self._chain(inner, done)
+        return chain(inner, done, name)
 
     # -- camera -------------------------------------------------------------------------------------------
     def take_photo(self) -> Future:
