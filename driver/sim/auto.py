@@ -23,7 +23,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from .common import MODES
 from .flight import LAND_DISARM_DELAY
-from .missions import MISSION, StoredItem
+from .missions import MISSION, StoredItem, is_nav
 
 __all__ = ["Auto", "COMMAND_NAMES"]
 
@@ -45,10 +45,6 @@ COMMAND_NAMES = {
 _HOLDING = {mavlink.MAV_CMD_NAV_WAYPOINT, mavlink.MAV_CMD_NAV_SPLINE_WAYPOINT, mavlink.MAV_CMD_NAV_LOITER_TIME,
             mavlink.MAV_CMD_NAV_LOITER_TURNS}
 _LANDING = {mavlink.MAV_CMD_NAV_RETURN_TO_LAUNCH, mavlink.MAV_CMD_NAV_LAND}
-
-
-def is_nav(command: int) -> bool:
-    return command <= 95
 
 
 class Auto:

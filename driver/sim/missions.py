@@ -27,7 +27,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from ..mission.limits import fence_shapes
 
-__all__ = ["Missions", "StoredItem"]
+__all__ = ["Missions", "StoredItem", "is_nav"]
 
 log = logging.getLogger("driver.sim.autopilot")
 
@@ -36,13 +36,17 @@ MISSION, FENCE, RALLY = (mavlink.MAV_MISSION_TYPE_MISSION, mavlink.MAV_MISSION_T
 REQUEST_AGAIN = 1.0          # s without the asked item before it is asked again (1000 ms + stream slowdown)
 UPLOAD_TIMEOUT = 8.0         # s after the last item received before the upload is given up
 MAX_ITEMS = {MISSION: 700, FENCE: 84, RALLY: 10}
-_NAV_LAST = 95               # MAV_CMDs up to here (and 5000s fence/rally) are navigation items with a place
 _LOCATED_DO = {mavlink.MAV_CMD_DO_SET_HOME, mavlink.MAV_CMD_DO_LAND_START, mavlink.MAV_CMD_DO_SET_ROI,
                mavlink.MAV_CMD_DO_SET_ROI_LOCATION}
 _NO_PLACE = {mavlink.MAV_CMD_NAV_RETURN_TO_LAUNCH, mavlink.MAV_CMD_NAV_GUIDED_ENABLE, mavlink.MAV_CMD_NAV_DELAY}
 _LOITERS = {mavlink.MAV_CMD_NAV_LOITER_UNLIM, mavlink.MAV_CMD_NAV_LOITER_TURNS, mavlink.MAV_CMD_NAV_LOITER_TIME}
 _RELATIVE = {mavlink.MAV_FRAME_GLOBAL_RELATIVE_ALT, mavlink.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT}
 _TERRAIN = {mavlink.MAV_FRAME_GLOBAL_TERRAIN_ALT, mavlink.MAV_FRAME_GLOBAL_TERRAIN_ALT_INT}
+
+
+def is_nav(command: int) -> bool:
+    """AP_Mission::is_nav_cmd: MAV_CMDs up to 95 (MAV_CMD_NAV_LAST) are navigation items."""
+    return command <= mavlink.MAV_CMD_NAV_LAST
 
 
 @dataclass(frozen=True)
@@ -87,7 +91,7 @@ def stored_as(kind: int, command: int, frame: int, params, x: int, y: int, z: fl
         return StoredItem(command, mavlink.MAV_FRAME_GLOBAL_RELATIVE_ALT, params, x, y, _f32(z), 0)
     if command in _LOITERS:                 # the direction is kept as a flag: read back as 1 or -1 (recording)
         params = (params[0], params[1], -1.0 if params[2] < 0 else 1.0, params[3])
-    if (command <= _NAV_LAST and command not in _NO_PLACE) or command in _LOCATED_DO:
+    if (is_nav(command) and command not in _NO_PLACE) or command in _LOCATED_DO:
         out = (mavlink.MAV_FRAME_GLOBAL_RELATIVE_ALT if frame in _RELATIVE else
                mavlink.MAV_FRAME_GLOBAL_TERRAIN_ALT if frame in _TERRAIN else mavlink.MAV_FRAME_GLOBAL)
         return StoredItem(command, out, params, x, y, _f32(z), 1)
