@@ -46,7 +46,7 @@ class SequenceSlot:
         try:
             outcome = seq.step(now)
         except Exception as exc:                      # never leave the future unresolved
-            log.exception("takeoff sequence failed")
+            log.exception("%s sequence failed", seq.name)
             outcome = CommandStatus.REJECTED, f"internal error: {exc}", SequencePhase.FAILED
         finally:
             self.stepping = False
@@ -56,7 +56,7 @@ class SequenceSlot:
         status, reason, phase = outcome
         self.current = None
         self._store.set(takeoff=SequenceProgress(phase, reason, seq.altitude))
-        log.info("takeoff: %s %s", phase.value, reason)
+        log.info("%s: %s %s", seq.name, phase.value, reason)
         self._notifier.settle(seq.future, self._store.record_locked(seq.name, status, reason))
 
     def progress(self, seq) -> None:
@@ -64,7 +64,7 @@ class SequenceSlot:
         if self._store.state.takeoff != progress:
             self._store.set(takeoff=progress)
             self._store.publish()
-            log.info("takeoff: %s %s", seq.phase.value, seq.detail)
+            log.info("%s: %s %s", seq.name, seq.phase.value, seq.detail)
 
     def abort(self, why: str) -> None:
         """Stop the sequence and cancel what it asked the vehicle, so no retry launches it afterwards."""

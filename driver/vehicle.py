@@ -677,13 +677,9 @@ class Vehicle(Drone):
             return self._finish(name, CommandStatus.REJECTED, "replaying a recording: no vehicle to command")
         with self._lock:
             future = self._commands.submit(name, command, params, time.monotonic(), guard=guard,
-                                           tag=self._takeoff_tag())
+                                           tag=self._sequence.tag)
         self._wake.set()
         return future
-
-    def _takeoff_tag(self):
-        """Commands the takeoff sequence issues carry its tag: an abort cancels them, so no retry launches."""
-        return self._sequence.tag
 
     def _finish(self, command: str, status: CommandStatus, reason: str = "") -> Future:
         f: Future = Future()
@@ -712,7 +708,7 @@ class Vehicle(Drone):
             return self._finish(f"mode {name.upper()}", CommandStatus.ACCEPTED, "already in that mode")
         with self._lock:
             future = self._commands.submit_mode(f"mode {name.upper()}", number, time.monotonic(),
-                                                tag=self._takeoff_tag())
+                                                tag=self._sequence.tag)
         self._wake.set()
         return future
 
