@@ -2,6 +2,8 @@
 the window is minimised (uavviewer/refresh.py)."""
 from __future__ import annotations
 
+from dataclasses import replace
+
 from PyQt5.QtCore import QEvent, QObject
 from PyQt5.QtWidgets import QWidget
 
@@ -60,6 +62,9 @@ def test_minimised_window_paints_nothing_and_stops_the_video(qtbot, vehicle, win
     assert len(frames) == painted and attitude.count == paints
     assert (w._instruments.runs, w._readouts.runs, w._plots_refresh.runs) == runs
     assert w._instruments.pending and w._readouts.pending          # kept for when the pilot looks again
+    assert not w.flight_timer.started
+    w.show_state(replace(w.adapter.state, armed=True))             # an arm while minimised is not missed
+    assert w.flight_timer.started
 
     w.showNormal()
     qtbot.waitUntil(lambda: w.refresh.shown, timeout=3000)

@@ -416,7 +416,8 @@ class MainWindow(QMainWindow):
         if self._emergency_box is not None and not s.armed:
             self._emergency_box.reject()            # the motors have stopped: nothing left to ask
         self.map.show_state(s)                      # cheap; it repaints only on a change it can show
-        self.gimbal.show_state(s)
+        self.gimbal.show_state(s)                   # its bar sets its texts only on a change
+        self.flight_timer.update(s)                 # every arm and disarm, minimised too (shown in the text channel)
         phase = flight_phase(s)
         progress = takeoff_progress(s) if phase is FlightPhase.TAKING_OFF else None
         detail = s.takeoff.phase.value if s.takeoff.active else ""
@@ -477,7 +478,7 @@ class MainWindow(QMainWindow):
             return
         link = s.link
         self.telemetry.set_state(s)
-        self.statusStrip.set_state(s, self.flight_timer.update(s))
+        self.statusStrip.set_state(s, self.flight_timer.seconds)
         self.phaseLabel.setText(self._phase_text(s, flight_phase(s)))
         replay = self.adapter.replay
         if replay is not None:

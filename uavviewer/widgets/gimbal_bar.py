@@ -24,6 +24,7 @@ class GimbalBar(QWidget):
 
     def __init__(self, parent: QWidget | None = None) -> None:
         super().__init__(parent)
+        self._shown: tuple | None = None         # (gimbal, camera, connected) the texts last showed
         self.pitch_label = QLabel("Drone cam ?°", self)   # short: the row fits a 1024-pixel window;
         self.pitch_label.setToolTip("The gimbal's pitch as the vehicle reports it (0 level, -90 straight down)")
         self.level_button = self._button("Level", "Point the camera level (gimbal pitch 0°)")
@@ -58,12 +59,19 @@ class GimbalBar(QWidget):
         return b
 
     def show_state(self, s: VehicleState) -> None:
-        """What the vehicle says about its gimbal and camera; the Record button follows the camera, not the click."""
+        """What the vehicle says about its gimbal and camera; the Record button follows the camera, not the click.
+        Every snapshot: the texts are set only when what they show changed."""
+        c = s.camera
+        if self.record_button.isChecked() != bool(c.recording):     # a click the camera did not follow is undone
+            self.record_button.setChecked(bool(c.recording))
+        shown = (s.gimbal, c, s.connected)
+        if shown == self._shown:
+            return
+        self._shown = shown
         pitch = s.gimbal.pitch_deg
         self.pitch_label.setText("Drone cam " + ("?°" if pitch is None else f"{pitch:.0f}°"))
         self.pitch_label.setToolTip(f"The vehicle's camera: gimbal {s.gimbal.describe()}, the pitch as the vehicle reports it "
                                     "(0 level, -90 straight down)")
-        c = s.camera
         self.photo_button.setText(f"Photo ({c.photos})" if c.photos else "Photo")
         self.record_button.setText("Video ●" if c.recording else "Video")
         recording = "unknown" if c.recording is None else "yes" if c.recording else "no"
@@ -71,8 +79,6 @@ class GimbalBar(QWidget):
                                      f"when it confirms it: {c.photos} so far")
         self.record_button.setToolTip(f"Video on the vehicle's camera (not this window's recording); recording: "
                                       f"{recording}")
-        if self.record_button.isChecked() != bool(c.recording):
-            self.record_button.setChecked(bool(c.recording))
         self.stop_looking_button.setVisible(s.gimbal.roi is not None)
         for b in (self.level_button, self.down_button, self.photo_button, self.record_button,
                   self.stop_looking_button):
