@@ -27,9 +27,14 @@ def offset_latlon(home_lat: float, home_lon: float, north: float, east: float) -
     return lat, wrap_lon(lon)
 
 
+def wrap_180(degrees: float) -> float:
+    """An angle in degrees (a heading, a yaw, a difference of two) in [-180, 180)."""
+    return (degrees + 180.0) % 360.0 - 180.0
+
+
 def wrap_lon(degrees: float) -> float:
     """A longitude (or a difference of two) in [-180, 180), as ArduPilot's wrap_longitude."""
-    return (degrees + 180.0) % 360.0 - 180.0
+    return wrap_180(degrees)
 
 
 def wrap_pi(angle: float) -> float:

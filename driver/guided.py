@@ -15,7 +15,7 @@ import math
 import threading
 from concurrent.futures import Future
 
-from . import api                # api imports this module too: its names are looked up at call time
+from . import api, frames        # api imports this module too: its names are looked up at call time
 from .state import CommandResult, CommandStatus, VehicleState
 
 __all__ = ["change_altitude", "circle_point", "circle_start", "MIN_CIRCLE_RADIUS", "MAX_CIRCLE_RADIUS"]
@@ -92,7 +92,7 @@ def _fly_circle(drone, name: str, north: float, east: float, radius: float, alti
         result = drone.set_yaw(heading).result(timeout=30)
         if not result.ok:
             return finish(result.status, f"turning to the centre: {result.reason or result.status.value}")
-        why = _wait(drone, lambda s: abs((s.heading_deg - heading + 180.0) % 360.0 - 180.0) < FACING, future)
+        why = _wait(drone, lambda s: abs(frames.wrap_180(s.heading_deg - heading)) < FACING, future)
         if why:
             return finish(CommandStatus.ABORTED, f"turning to the centre: {why}")
         if future.cancelled():

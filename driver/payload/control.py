@@ -283,7 +283,7 @@ class Payload:
         if not frames.finite(pitch) or (yaw is not None and not frames.finite(yaw)):
             return self._answered("gimbal", CommandStatus.REJECTED, "angle is not a finite number")
         pitch = min(max(float(pitch), GIMBAL_PITCH_RANGE[0]), GIMBAL_PITCH_RANGE[1])
-        yaw = None if yaw is None else (float(yaw) + 180.0) % 360.0 - 180.0
+        yaw = None if yaw is None else frames.wrap_180(float(yaw))
         state = self._v.state()
         problem = self._problem(state)
         if problem:
@@ -386,7 +386,7 @@ class Payload:
         self._rate_last = now
         pitch = self._rate_target[0] + self._rate[0] * dt
         pitch = min(max(pitch, GIMBAL_PITCH_RANGE[0]), GIMBAL_PITCH_RANGE[1])
-        yaw = (self._rate_target[1] + self._rate[1] * dt + 180.0) % 360.0 - 180.0
+        yaw = frames.wrap_180(self._rate_target[1] + self._rate[1] * dt)
         self._rate_target = (pitch, yaw)
         system, component = self._v._target_ids()
         protocol = self.protocol(state)
