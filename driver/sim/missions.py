@@ -118,8 +118,7 @@ class Missions:
         self.plans: dict[int, list[StoredItem]] = {MISSION: [], FENCE: [], RALLY: []}
         self.uploads: dict[int, _Upload] = {}
         self.warned_float_item = False
-        self.plan_changes = 0          # bumped on every change of a plan
-        self._fence_shapes = None      # (plan_changes, FenceShapes) of the stored fence
+        self._fence_shapes = None      # (the fence plan, its FenceShapes): a fence is only ever replaced whole
 
     # -- what the profile speaks -------------------------------------------------------------------
     @property
@@ -167,7 +166,6 @@ class Missions:
         self.uploads.pop(kind, None)
         if kind != FENCE:
             del self.plans[kind][msg.count:]           # truncate(): what is beyond the new count goes now
-            self.plan_changes += 1
         upload = _Upload(kind, msg.count, msg.get_srcSystem(), msg.get_srcComponent(), self.sender,
                          last_receive=self.t, last_request=self.t, items=[] if kind == FENCE else None)
         if msg.count == 0:
@@ -228,7 +226,6 @@ class Missions:
                 plan[msg.seq] = item
             else:
                 plan.append(item)
-            self.plan_changes += 1
         upload.last_receive = self.t
         upload.next_seq += 1
         if upload.next_seq >= upload.count:
@@ -241,7 +238,6 @@ class Missions:
         kind = upload.kind
         if upload.items is not None:
             self.plans[kind] = upload.items
-            self.plan_changes += 1
         self._ack(msg, mavlink.MAV_MISSION_ACCEPTED, kind, upload.link)
         if kind == RALLY:
             self.params["RALLY_TOTAL"] = len(self.plans[RALLY])      # AP_Rally keeps its count there
@@ -323,7 +319,6 @@ class Missions:
             self._ack(msg, mavlink.MAV_MISSION_ERROR, kind)   # AP_Mission::clear() refuses a running mission
             return
         self.plans[kind] = []
-        self.plan_changes += 1
         if kind == RALLY:
             self.params["RALLY_TOTAL"] = 0
         self._ack(msg, mavlink.MAV_MISSION_ACCEPTED, kind)
@@ -361,8 +356,9 @@ class Missions:
     # -- geometry the AUTO part and the fence use ------------------------------------------------------
     def polygon_fence_breach(self, north: float, east: float) -> str:
         """AC_PolyFence_loader: outside an inclusion shape or inside an exclusion ("" inside the fence)."""
-        if self._fence_shapes is None or self._fence_shapes[0] != self.plan_changes:
-            self._fence_shapes = (self.plan_changes, fence_shapes(self.plans[FENCE], self.home_lat, self.home_lon))
+        fence = self.plans[FENCE]
+        if self._fence_shapes is None or self._fence_shapes[0] is not fence:
+            self._fence_shapes = (fence, fence_shapes(fence, self.home_lat, self.home_lon))
         return self._fence_shapes[1].outside(north, east)
 
     def ned_of(self, item: StoredItem) -> tuple[float, float] | None:
