@@ -242,3 +242,17 @@ def test_a_replay_shows_the_whole_track_and_the_vehicle_moves_along_it(qtbot, wi
                         replay.replay.finished, timeout=30000)
     finally:
         replay.close()
+
+
+def test_the_plan_redraws_the_map_only_when_what_it_draws_changed(qtbot, vehicle, window_factory):
+    w = window_factory(vehicle)
+    qtbot.waitUntil(lambda: w.adapter.state.connected, timeout=10000)
+    updates = []
+    w.plan.view.update = lambda: updates.append(1)      # the plan's own redraws (the map's are not called here)
+    w.plan._shown = None                                 # as if the panel had changed: everything is worked out
+    w.plan._show_vehicle(w.adapter.state)
+    assert updates == []                                 # no mission flown: no current item, no progress drawn
+    w.plan.layer.progress = "Item 1 of 2"                # drawn before, not any more
+    w.plan._shown = None
+    w.plan._show_vehicle(w.adapter.state)
+    assert updates == [1] and w.plan.layer.progress == ""

@@ -235,9 +235,10 @@ class PlanController(QObject):
                            transfer.done, transfer.total, True)
         else:
             p.set_transfer(self._outcome.get(kind, "No transfer yet"), 1 if kind in self._outcome else 0, 1, False)
+        whys = {k: self.sync(k) for k in PlanKind}   # each kind compared once per change
         for k in PlanKind:                      # a dot on each tab whose plan is not the vehicle's
-            p.tabs.setTabText(list(KINDS.values()).index(k), ("● " if self.sync(k) else "") + _TITLES[k])
-        why = self.sync(kind)
+            p.tabs.setTabText(list(KINDS.values()).index(k), ("● " if whys[k] else "") + _TITLES[k])
+        why = whys[kind]
         theirs = self.vehicle_plan(kind)
         failed = f"{self._outcome[kind]}. " if self._failed.get(kind) else ""
         if why:
@@ -261,7 +262,8 @@ class PlanController(QObject):
         p.pauseButton.setEnabled(link_ok and running)
         p.resumeButton.setEnabled(link_ok and held)
         p.skip_allowed = link_ok and count > 0
-        current = m.current if m.current and (running or held) and not self.sync(PlanKind.MISSION) else None
+        current = m.current if m.current and (running or held) and not whys[PlanKind.MISSION] else None
+        drawn = (self.layer.current, self.layer.current_entry, self.layer.progress)
         self.layer.current = current
         entry = self.doc.entry_of_seq(current) if current else None
         if entry != self.layer.current_entry:
@@ -269,7 +271,8 @@ class PlanController(QObject):
             self._refresh_rows_only()
         p.progressLabel.setText(self.progress_text(s, held))
         self.layer.progress = p.progressLabel.text() if running or held else ""
-        self.view.update()
+        if (self.layer.current, self.layer.current_entry, self.layer.progress) != drawn:
+            self.view.update()                  # the map shows the current item and the progress: only on a change
 
     def _refresh_rows_only(self) -> None:
         table = self.panel.tables["mission"]
