@@ -4,17 +4,12 @@ from __future__ import annotations
 from PyQt5.QtCore import Qt, pyqtSignal
 from PyQt5.QtWidgets import QComboBox, QHBoxLayout, QLabel, QPushButton, QSlider, QWidget
 
+from ..flight_timer import clock_text
+
 __all__ = ["ReplayBar", "SPEEDS"]
 
 SPEEDS = (0.5, 1.0, 2.0, 4.0, 8.0)
 STEPS = 1000                   # the seek bar's resolution
-
-
-def _clock(seconds: float | None) -> str:
-    if seconds is None or seconds != seconds:
-        return "--:--"
-    seconds = max(0, int(seconds))
-    return f"{seconds // 60:02d}:{seconds % 60:02d}"
 
 
 class ReplayBar(QWidget):
@@ -91,7 +86,7 @@ class ReplayBar(QWidget):
                 self.progress.setValue(value)
                 self.progress.blockSignals(False)
         end = "  (finished)" if finished else ""
-        self.clock.setText(f"{_clock(duration if finished else position)} / {_clock(duration)}{end}")
+        self.clock.setText(f"{clock_text(duration if finished else position)} / {clock_text(duration)}{end}")
         if speed is not None and not self.speed.view().isVisible():
             i = self.speed.findData(float(speed))
             if i >= 0 and i != self.speed.currentIndex():
