@@ -13,15 +13,14 @@ from driver.battery import time_left
 from driver.state import BatteryAlarm, LinkStatus, Message, Severity, VehicleState
 from ..flight_phase import NO_VEHICLE
 from ..flight_timer import clock_text
+from .messages_view import severity_color
+from .telemetry_panel import BAD, DIM, GOOD, NORMAL, WARN
 
 __all__ = ["StatusStrip", "ALARM_COLOURS", "battery_text", "NO_VEHICLE"]
 
 
-GOOD, WARN, BAD, DIM, NORMAL = "#5fd068", "#ffb020", "#ff4d4d", "#7d8792", "#e6ebf0"
 ALARM_COLOURS = {BatteryAlarm.UNKNOWN: DIM, BatteryAlarm.OK: GOOD, BatteryAlarm.WARNING: WARN,
                  BatteryAlarm.CRITICAL: BAD}
-_SEVERITY_COLOURS = {Severity.EMERGENCY: BAD, Severity.ALERT: BAD, Severity.CRITICAL: BAD, Severity.ERROR: BAD,
-                     Severity.WARNING: WARN}
 
 
 def battery_text(s: VehicleState) -> str:
@@ -140,7 +139,7 @@ class StatusStrip(QFrame):
             return
         ago = max(0.0, now - latest.time)
         when = time.strftime("%H:%M:%S", time.localtime(latest.time))
-        self._put(self.message, f"{when} {latest.text}", _SEVERITY_COLOURS.get(latest.severity,
-                                                                              DIM if ago > 60 else NORMAL))
+        self._put(self.message, f"{when} {latest.text}", severity_color(latest.severity)   # as in Messages
+                  if latest.severity <= Severity.WARNING else DIM if ago > 60 else NORMAL)
         self.message.setToolTip(f"{latest.text}\n\nThe autopilot's latest message, {ago:.0f} s ago "
                                 "(all of them in Messages)")
