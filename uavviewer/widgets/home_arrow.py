@@ -24,7 +24,7 @@ def home_direction(s: VehicleState) -> tuple[float, float] | None:
     if s.local is None:
         return None
     north, east = s.local.north, s.local.east
-    distance = math.hypot(north, east)
+    distance = s.distance_from_home
     bearing = math.degrees(math.atan2(-east, -north))          # from the vehicle to home, clockwise from north
     return (bearing - s.heading_deg + 180.0) % 360.0 - 180.0, distance
 
