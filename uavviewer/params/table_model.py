@@ -194,9 +194,6 @@ class ParameterModel(QAbstractTableModel):
                 self._repaint(name)
         self.pendingChanged.emit()
 
-    def write_state(self, name: str) -> tuple[WriteState, str] | None:
-        return self._writes.get(name)
-
     def set_write_state(self, name: str, state: WriteState, reason: str = "", written: float | None = None) -> None:
         """How the write of ``name`` stands; once confirmed, the change is no longer pending, unless the pilot
         has staged another value meanwhile (``written``: the value that was confirmed)."""
