@@ -131,6 +131,8 @@ class Autopilot(Telemetry, Commands, ParamProtocol, FtpServer, GcsFailsafe, Miss
         self.safety_on = False
         self.chute_released = False
         self.speed_override = None       # DO_CHANGE_SPEED, m/s
+        self.circle: CircleNav | None = None    # CIRCLE's path, made as the mode is entered
+        self.param_links: dict = {}     # link → _LinkParams: what it still has to hear of the parameters (params.py)
         self.rebooting_until: float | None = None
         self.deferred_texts: list | None = None   # STATUSTEXT held until a command's ACK is out
         self.mode_changed = False

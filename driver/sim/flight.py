@@ -204,7 +204,7 @@ class Flight:
             return (*self._rtl(), ACC_XY)
         if mode == MODES["BRAKE"]:
             return (*self._hold(), ACC_XY_BRAKE)
-        if mode == MODES["CIRCLE"] and getattr(self, "circle", None) is not None:
+        if mode == MODES["CIRCLE"] and self.circle is not None:
             vn, ve, vd, self.yaw_rate_cmd = self.circle.step(self.n, self.e, self.d, self.yaw, self.t)
             return vn, ve, vd, ACC_XY
         if mode == MODES["AUTO"]:

@@ -154,8 +154,7 @@ class ParamProtocol:
         return RECORDED_RATE * PARAM_VALUE_BYTES if not baud else min(RECORDED_RATE * PARAM_VALUE_BYTES, baud / 10.0)
 
     def _param_link(self) -> _LinkParams:
-        links = self.__dict__.setdefault("param_links", {})
-        return links.setdefault(self.sender, _LinkParams())
+        return self.param_links.setdefault(self.sender, _LinkParams())
 
     def _on_param_request_list(self, msg) -> None:
         self._banner()
@@ -177,10 +176,9 @@ class ParamProtocol:
     def params_step(self, dt: float) -> None:
         """Each link: the reads' answers first, then an FTP burst (ftp.py), then the list, as many as its
         bandwidth allows this step."""
-        links = self.__dict__.get("param_links") or {}
-        session = getattr(self, "ftp_session", None)
+        links = self.param_links
+        session = self.ftp_session
         if session is not None and session.sending:
-            links = self.__dict__.setdefault("param_links", links)
             links.setdefault(session.peer, _LinkParams())
         if not links:
             return
@@ -195,7 +193,7 @@ class ParamProtocol:
                     self.emit_to(self._param_value(params.names[index], index), peer)
                 elif index < 0 and name in params:
                     self.emit_to(self._param_value(name), peer)
-            session = getattr(self, "ftp_session", None)
+            session = self.ftp_session
             while session is not None and session.peer is peer and session.sending and link.budget >= FTP_FRAME_BYTES:
                 link.budget -= self.ftp_burst_chunk()
             while link.budget >= PARAM_VALUE_BYTES and link.next_index is not None:
