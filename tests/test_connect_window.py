@@ -14,6 +14,7 @@ from recordings import FLIGHT
 from uavviewer.alerts.model import AlertKind
 from uavviewer.connect.choice import Choice, Kind, parse_key, sim_name
 from uavviewer.connect.dialog import KINDS
+from uavviewer.settings import load_settings
 from fleet_fixtures import fleet, lab  # noqa: F401  (fixtures)
 from viewer_fixtures import viewer_settings, window_factory  # noqa: F401  (fixtures)
 
@@ -57,6 +58,7 @@ def test_connect_from_the_dialog_switches_vehicle_then_disconnect(qtbot, sim_fac
     qtbot.waitUntil(lambda: v1.state().link.status is LinkStatus.CLOSED, timeout=10000)   # the old link let go
     qtbot.waitUntil(lambda: w.connections.recent()[:1] == [Choice(Kind.MAVLINK, f"tcp:127.0.0.1:{second.tcp_port}")],
                     timeout=5000)                        # remembered once a vehicle answered on it
+    assert load_settings(w._qsettings).last_connection == f"tcp:127.0.0.1:{second.tcp_port}"   # the next run's
     qtbot.waitUntil(lambda: w.flightControls.arm_button.isEnabled(), timeout=15000)     # and it can be flown
 
     v2 = w.adapter.drone

@@ -99,15 +99,17 @@ def test_an_unwritable_log_folder_is_an_error_not_a_traceback(tmp_path):
 
 def test_the_connection_is_remembered_only_once_a_vehicle_answers(qtbot, sim, vehicle_factory, silent_vehicle,
                                                                    viewer_settings, window_factory):
+    from uavviewer.connect.choice import Choice, Kind
     from uavviewer.settings import load_settings
     w = window_factory(silent_vehicle)
-    w.remember_connection_when_answered("udpin:127.0.0.1:1")         # nobody answers there
+    w.connections.adopt(silent_vehicle, Choice(Kind.MAVLINK, "udpin:127.0.0.1:1"))   # nobody answers there
     qtbot.waitUntil(lambda: w.linkBanner.isVisible(), timeout=3000)
     w.quit_without_asking()
     assert load_settings(viewer_settings).last_connection == ""
     url = f"tcp:127.0.0.1:{sim.tcp_port}"
-    w = window_factory(vehicle_factory(url))
-    w.remember_connection_when_answered(url)
+    v = vehicle_factory(url)
+    w = window_factory(v)
+    w.connections.adopt(v, Choice(Kind.MAVLINK, url))                # as app.py does with the command line's
     qtbot.waitUntil(lambda: load_settings(viewer_settings).last_connection == url, timeout=10000)
 
 

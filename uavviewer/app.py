@@ -262,8 +262,6 @@ def main(argv: list[str] | None = None) -> int:
     if fleet is not None:
         controller = FleetController(fleet, first, parent=window)
         window.attach_fleet(controller)
-    elif args.connect or not (args.sim or args.replay or remote):
-        window.remember_connection_when_answered(connection)
     connections = window.connections                              # File › Connect switches from this one
     connections.base, connections.speedup = config, args.speedup
     connections.log_dir = str(args.log_dir) if args.log_dir is not None else None

@@ -24,7 +24,7 @@ from .dialogs import (
     KeysDialog, SettingsDialog, arm_question, ask, emergency_stop_question, mode_question, takeoff_question,
 )
 from .camera_controller import CameraController, default_media_folder
-from .connect.choice import sim_name
+from .connect.choice import Choice, Kind, sim_name
 from .drone_adapter import DroneAdapter
 from .flight_timer import FlightTimer
 from .flight_phase import (
@@ -97,7 +97,6 @@ class MainWindow(QMainWindow):
         self._settings_dialog: SettingsDialog | None = None
         self._quit_box: QMessageBox | None = None
         self._quitting = False                   # closing without asking (answered, or a signal)
-        self._connection_to_remember = ""
         self._vehicle_name = ""
         self._t0 = time.monotonic()
         self.flight_timer = FlightTimer()
@@ -394,18 +393,16 @@ class MainWindow(QMainWindow):
     def window_name(self) -> str:
         return self._vehicle_name or self.adapter.description
 
-    def remember_connection_when_answered(self, connection: str) -> None:
-        """Save ``connection`` as the next run's default once a vehicle answers on it (not before: a typo
-        must not become the default)."""
-        self._connection_to_remember = connection
+    def remember_last_connection(self, choice: Choice) -> None:
+        """A vehicle answered on ``choice`` (the command line's or File › Connect's: ConnectionController.confirm,
+        never before, so a typo never becomes the default): a MAVLink link is the next run's default."""
+        if choice.kind is Kind.MAVLINK and choice.target != self.settings.last_connection:
+            self._remember(last_connection=choice.target)
 
     # -- state in --------------------------------------------------------------------------------
     def show_state(self, s: VehicleState) -> None:
         """Every snapshot: what must follow the vehicle at once (buttons, sticks, questions, messages, the plots'
         data); the views that only show it redraw through their refresh channels."""
-        if self._connection_to_remember and s.connected:
-            self.settings.last_connection, self._connection_to_remember = self._connection_to_remember, ""
-            save_settings(self._qsettings, self.settings)
         link = s.link
         replay = self.adapter.replay
         finished = replay is not None and replay.finished

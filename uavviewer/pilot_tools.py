@@ -94,6 +94,7 @@ class PilotTools(QObject):
         w.connections.opened.connect(w._connected)
         w.connections.failed.connect(self._failed)
         w.adapter.stateChanged.connect(w.connections.confirm)
+        w.connections.answered.connect(w.remember_last_connection)
         w.actionConnect = QAction("&Connect…", w)
         w.actionConnect.setShortcut("Ctrl+K")
         w.actionConnect.triggered.connect(self.show_connect)

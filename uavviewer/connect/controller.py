@@ -30,6 +30,7 @@ class ConnectionController(QObject):
     failed = pyqtSignal(str)                 # why a connection could not be opened
     busyChanged = pyqtSignal(bool)           # opening one now
     recentChanged = pyqtSignal()
+    answered = pyqtSignal(object)            # Choice: a vehicle answered on it (it joined the recent ones)
     _arrived = pyqtSignal(object, object)    # (Opened or None, error text): from the worker to the UI thread
 
     def __init__(self, qsettings: QSettings, base: VehicleConfig | None = None, log_dir: str | None = None,
@@ -111,6 +112,7 @@ class ConnectionController(QObject):
         if self._unconfirmed is not None and s.connected:
             choice, self._unconfirmed = self._unconfirmed, None
             self.remember(choice)
+            self.answered.emit(choice)
 
     def disconnect(self) -> None:
         """Leave the vehicle (it is sent zero velocity and hovers, as on quitting) and show no vehicle."""
