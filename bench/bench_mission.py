@@ -26,6 +26,7 @@ import os
 import statistics
 import sys
 import time
+from types import SimpleNamespace
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 os.environ["MAVLINK20"] = "1"                # the reference speaks MAVLink 2 (mission_type), as MAVProxy does
@@ -43,7 +44,8 @@ from transfer_matrix import HOME, as_held, held, mission, same  # noqa: E402
 MAVPROXY_TIMEOUT = 10.0      # s without a request before MAVProxy's wp module gives a load up
 
 
-def new_sim(latency: float, loss: float, seed: int) -> SimVehicle:
+def new_sim(seed: int) -> SimVehicle:
+    """A clean link: degrade() slows it once the vehicle is up."""
     sim = SimVehicle(SimConfig(tcp_port=0, speedup=1.0, ready_after=1.0, rate_hz=1000, seed=seed, home=HOME))
     sim.start()
     return sim
@@ -56,7 +58,7 @@ def degrade(sim: SimVehicle, latency: float, loss: float) -> None:
 
 
 def driver_run(items: int, latency: float, loss: float, seed: int) -> dict:
-    sim = new_sim(latency, loss, seed)
+    sim = new_sim(seed)
     vehicle = Vehicle(VehicleConfig(connection=f"tcp:127.0.0.1:{sim.tcp_port}")).start()
     try:
         assert vehicle.wait_for(lambda s: s.connected and s.home is not None and s.firmware, 30), "no vehicle"
@@ -79,7 +81,7 @@ def driver_run(items: int, latency: float, loss: float, seed: int) -> dict:
 
 def reference_run(items: int, latency: float, loss: float, seed: int) -> dict:
     """The MAVProxy-style upload: COUNT once, answer the requests until the last item went, then the ACK."""
-    sim = new_sim(latency, loss, seed)
+    sim = new_sim(seed)
     link = mavutil.mavlink_connection(f"tcp:127.0.0.1:{sim.tcp_port}", source_system=255, source_component=190,
                                       dialect="ardupilotmega")
     try:
@@ -89,7 +91,7 @@ def reference_run(items: int, latency: float, loss: float, seed: int) -> dict:
             link.recv_match(blocking=True, timeout=0.1)
         plan = mission(items)
         lat, lon, alt, _ = HOME
-        wire = [home_slot(type("Home", (), dict(lat=lat, lon=lon, alt=alt))())] + list(plan.items)
+        wire = [home_slot(SimpleNamespace(lat=lat, lon=lon, alt=alt))] + list(plan.items)
         degrade(sim, latency, loss)
         t0 = time.monotonic()
         link.mav.mission_count_send(1, 1, len(wire), mavlink.MAV_MISSION_TYPE_MISSION)

@@ -218,7 +218,7 @@ class Auto:
         self.hold_point = None
         self._send_now("MISSION_CURRENT")
 
-    def _auto_reached(self, item: StoredItem, text: bool) -> None:
+    def _auto_reached(self, text: bool) -> None:
         seq = self.mission_current
         self.emit(self.factory.mission_item_reached_encode(seq))
         if text:
@@ -272,20 +272,20 @@ class Auto:
             if command == mavlink.MAV_CMD_NAV_TAKEOFF:
                 if not self.landed and -self.d >= -self.auto_target[2] - ALT_REACHED:
                     self.hold_point = None
-                    self._auto_reached(item, text=False)
+                    self._auto_reached(text=False)
                 return
             if not self._at_target(vertical=True):
                 return
             if command not in _HOLDING:
                 if command != mavlink.MAV_CMD_NAV_LOITER_UNLIM:
-                    self._auto_reached(item, text=False)
+                    self._auto_reached(text=False)
                 return
             self.auto_stage = "hold"
             self.hold_point = self.auto_target
             hold = item.params[0] if command != mavlink.MAV_CMD_NAV_LOITER_TURNS else 0.0
             self.auto_hold_until = self.t + max(float(hold), 0.0)
         if self.auto_stage == "hold" and self.t >= self.auto_hold_until:
-            self._auto_reached(item, text=True)
+            self._auto_reached(text=True)
 
     def _at_target(self, vertical: bool) -> bool:
         target = self.auto_target

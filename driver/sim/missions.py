@@ -61,10 +61,6 @@ class StoredItem:
     autocontinue: int = 1
 
     @property
-    def north_east(self) -> tuple[float, float]:
-        return self.x / 1e7, self.y / 1e7
-
-    @property
     def param1(self) -> float:
         return self.params[0]
 
@@ -306,9 +302,6 @@ class Missions:
                                                    item.autocontinue, *item.params, item.x / 1e7, item.y / 1e7,
                                                    item.z, kind)
         self.emit_to(out, self.sender)
-
-    def _on_mission_ack(self, msg) -> None:
-        pass                                        # the end of a download: nothing to do on the vehicle
 
     # -- clear ------------------------------------------------------------------------------------------
     def _on_mission_clear_all(self, msg) -> None:
