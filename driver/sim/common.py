@@ -25,6 +25,7 @@ POSITION_MODES = {3, 4, 5, 6, 7, 11, 16, 17, 19, 21, 23, 24}
 NOT_ARMABLE = {3, 6, 7, 9, 19, 21, 23}
 # REQUEST_DATA_STREAM ids → the messages ArduCopter puts in them (GCS_Mavlink.cpp). EXTENDED_SYS_STATE is in
 # none: the 4.7 recording never got it from REQUEST_DATA_STREAM (ask by SET_MESSAGE_INTERVAL), 3.3 had none.
+# MOUNT_STATUS is 3.3's (the Solo's mount, gimbal.py); 4.x sends none, its builder says None there.
 STREAMS = {
     mavlink.MAV_DATA_STREAM_RAW_SENSORS: ("RAW_IMU", "SCALED_IMU2", "SCALED_PRESSURE"),
     mavlink.MAV_DATA_STREAM_EXTENDED_STATUS: ("SYS_STATUS", "POWER_STATUS", "MEMINFO", "MISSION_CURRENT",
@@ -33,7 +34,8 @@ STREAMS = {
     mavlink.MAV_DATA_STREAM_POSITION: ("GLOBAL_POSITION_INT", "LOCAL_POSITION_NED"),
     mavlink.MAV_DATA_STREAM_EXTRA1: ("ATTITUDE",),
     mavlink.MAV_DATA_STREAM_EXTRA2: ("VFR_HUD",),
-    mavlink.MAV_DATA_STREAM_EXTRA3: ("SYSTEM_TIME", "BATTERY_STATUS", "EKF_STATUS_REPORT", "VIBRATION", "WIND"),
+    mavlink.MAV_DATA_STREAM_EXTRA3: ("SYSTEM_TIME", "BATTERY_STATUS", "EKF_STATUS_REPORT", "VIBRATION", "WIND",
+                                     "MOUNT_STATUS"),
 }
 
 # SET_POSITION_TARGET type_mask bits (set = ignore).

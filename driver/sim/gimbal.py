@@ -51,7 +51,6 @@ class Payload:
         self.gopro_mode = mavlink.GOPRO_CAPTURE_MODE_VIDEO
         self.gopro_recording = False
         self.gopro_next = 0.0
-        self.mount_status_next = 0.0
         self.gimbal_outbox: list = []      # messages the gimbal (component 154) says; SimVehicle sends them
 
     @property
@@ -98,10 +97,6 @@ class Payload:
                 flags = mavlink.GOPRO_FLAG_RECORDING if self.gopro_recording else 0
                 self.gimbal_outbox.append(mavlink.MAVLink_gopro_heartbeat_message(
                     mavlink.GOPRO_HEARTBEAT_STATUS_CONNECTED, self.gopro_mode, flags))
-            extra3 = self.intervals.get("EKF_STATUS_REPORT")   # 3.3 sends MOUNT_STATUS in the EXTRA3 stream
-            if extra3 is not None and self.t >= self.mount_status_next and self.initialised:
-                self.mount_status_next = self.t + extra3[0]
-                self.emit(self._msg_mount_status())
 
     def _face_roi(self) -> None:
         """ArduCopter's auto_yaw ROI mode (set by the ROI commands when the mount cannot pan): in GUIDED and AUTO,
@@ -141,6 +136,9 @@ class Payload:
             nan, nan, 1)
 
     def _msg_mount_status(self):
+        """3.3's EXTRA3 stream (common.STREAMS) carries it; 4.x's servo mount sends none."""
+        if not self._solo_mount:
+            return None
         return mavlink.MAVLink_mount_status_message(0, 0, int(round(self.mount_pitch * 100)), 0,
                                                     int(round(self.mount_yaw * 100)), self.mount_mode)
 
