@@ -32,3 +32,15 @@ def test_a_mission_through_ice(sim_factory, vehicle_factory, server_factory, dro
     assert "Mission: 6 RTL" in texts and "Disarming motors" in texts
     assert drone.clear_plan(PlanKind.MISSION).result(10).ok
     assert drone.download_plan(PlanKind.MISSION).result(30).plan == Plan(PlanKind.MISSION)
+
+
+def test_a_plan_of_no_known_kind_is_refused_with_its_reason(sim, vehicle_factory, server_factory,  # noqa: F811
+                                                            drone_factory):  # noqa: F811
+    from driver.ice import load_slice
+    _, mavlinkserver = load_slice()
+    vehicle = vehicle_factory(f"tcp:127.0.0.1:{sim.tcp_port}")
+    drone = drone_factory(server_factory(vehicle))
+    assert drone.wait_for(lambda s: s.connected, 20)
+    answer = drone._vehicle.uploadPlan(mavlinkserver.Plan(kind=7, items=[]))   # as a foreign client could send
+    assert answer.outcome.status == "REJECTED"
+    assert answer.outcome.reason == "no plan kind 7", answer.outcome.reason

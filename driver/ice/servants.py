@@ -444,8 +444,9 @@ class VehicleI(PayloadServant, mavlinkserver.Vehicle):
         try:
             model = plans.plan_from_ice(plan)
         except ValueError as exc:
+            why = str(exc)                  # (exc is gone once the except block ends: the lambda runs later)
             return self._transfer("upload", lambda: _resolved(TransferOutcome(
-                CommandResult("upload", CommandStatus.REJECTED, str(exc)))))
+                CommandResult("upload", CommandStatus.REJECTED, why))))
         return self._transfer(f"upload {model.kind.label}", lambda: self._vehicle.upload_plan(model))
 
     def downloadPlan(self, kind, current=None):

@@ -6,7 +6,6 @@ the filter above never has to sort. A new value repaints its rows only.
 """
 from __future__ import annotations
 
-import bisect
 import enum
 from typing import Mapping
 
