@@ -35,7 +35,9 @@ log = logging.getLogger(__name__)
 MIN_RETRY = 0.1              # s: the shortest re-ask time, whatever the link
 MAX_RETRY = 1.5              # s: the longest (QGroundControl's ack timeout)
 START_ATTEMPTS = 8           # MISSION_COUNT / MISSION_REQUEST_LIST / MISSION_CLEAR_ALL sent this often
-ITEM_ATTEMPTS = 12           # a download's item asked this often before the transfer fails
+ITEM_ATTEMPTS = 12           # a download's item asked this often before the transfer fails ...
+ITEM_PATIENCE = 8.0          # s ... and for this long since it was first asked (ArduPilot's own item timeout):
+                             # on a fast link 12 re-asks take 1.2 s, too short for a loss streak on a radio
 WINDOW = 4                   # a download's requests in flight at once (the vehicle answers each at once)
 SILENCE = 10.0               # s without a word from the vehicle during an upload (it gives up after 8 s)
 FINAL_ACK_WAIT = 3           # re-ask times after the last item before the read-back decides alone ...
@@ -54,7 +56,7 @@ class _Transfer:
     received: dict = field(default_factory=dict)
     asked: int = -1                           # upload: the item the vehicle wants now (its last request)
     top: int = -1                             # upload: the highest item sent
-    waiting: dict = field(default_factory=dict)   # download: item -> [asked at, times asked], in flight
+    waiting: dict = field(default_factory=dict)   # download: item -> [last asked, times asked, first asked], in flight
     attempts: int = 0
     next_send: float = 0.0
     heard: float = 0.0                        # the last time the vehicle said something about this transfer
@@ -167,9 +169,11 @@ class PlanTransfers(LegacyRally):
             for seq, entry in list(t.waiting.items()):
                 if now - entry[0] < self._retry(t):
                     continue
-                if entry[1] >= ITEM_ATTEMPTS:
-                    self._end(t, CommandStatus.TIMED_OUT, f"item {seq} never came ({entry[1]} requests); "
-                              f"{len(t.received)} of {t.count} received")
+                if entry[1] >= ITEM_ATTEMPTS and now - entry[2] >= ITEM_PATIENCE:
+                    accepted = "the vehicle accepted the upload (MISSION_ACK) but reading it back failed: " \
+                        if t.upload is not None and t.upload.acked else ""
+                    self._end(t, CommandStatus.TIMED_OUT, f"{accepted}item {seq} never came ({entry[1]} requests "
+                              f"in {now - entry[2]:.0f} s); {len(t.received)} of {t.count} received")
                     return
                 self._ask_item(t, seq, now)
             return
@@ -218,7 +222,7 @@ class PlanTransfers(LegacyRally):
         c = self._codec
         msg = (c.mission_request_int_encode(system, component, seq, **args) if self.integer else
                c.mission_request_encode(system, component, seq, **args))
-        entry = t.waiting.setdefault(seq, [now, 0])
+        entry = t.waiting.setdefault(seq, [now, 0, now])       # last asked, times asked, first asked
         entry[0], entry[1] = now, entry[1] + 1
         self._out.append(msg)
 
