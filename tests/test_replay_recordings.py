@@ -24,7 +24,6 @@ from driver.supervision import WANTED_PARAMS
 
 from recordings import FTP_PARAMS, FTP_PARAMS_SERIAL1, GIMBAL, MISSION, PARAMS, SETUP  # noqa: E402
 
-SPEEDUP = 10.0          # the recordings' pace, ten times over: a 1,392-parameter list in 0.07 s
 #: Requests the driver makes by itself on every link (driver.supervision, driver.payload) that the recorded
 #: ground stations did not: (MAV_CMD, param1) of COMMAND_LONG, or any REQUEST_DATA_STREAM / those parameters.
 UPKEEP_COMMANDS = {
@@ -51,21 +50,6 @@ def upkeep(request) -> bool:
 def unexpected(replay: ReplayVehicle) -> list:
     """What the driver asked that the recording does not answer, besides the link's upkeep."""
     return [r for r in replay.unanswered if not upkeep(r)]
-
-
-@pytest.fixture
-def replay_factory():
-    """Replay vehicles on ephemeral ports; all are stopped after the test."""
-    replays = []
-
-    def make(recording: str, **options) -> ReplayVehicle:
-        replay = ReplayVehicle(recording + ".tlog", speedup=options.pop("speedup", SPEEDUP), **options).start()
-        replays.append(replay)
-        return replay
-
-    yield make
-    for replay in replays:
-        replay.stop()
 
 
 @pytest.fixture
@@ -148,7 +132,9 @@ def test_an_unanswered_set_before_the_list_is_not_called_an_unknown_name(replay_
     result = v.set_parameter("NO_SUCH_PARAM", 1.0).result(timeout=15)
     assert result.status is CommandStatus.TIMED_OUT, result
     assert "has no parameter" not in result.reason, result.reason
-    assert all(r.key == ("PARAM_SET", "NO_SUCH_PARAM", 1.0) for r in unexpected(replay)), unexpected(replay)
+    # the set's repeats, and reads by name of it (its one recorded read had no answer either)
+    assert {r.key for r in unexpected(replay)} <= {("PARAM_SET", "NO_SUCH_PARAM", 1.0),
+                                                   ("PARAM_REQUEST_READ", "NO_SUCH_PARAM")}, unexpected(replay)
 
 
 @pytest.mark.xfail(strict=True, reason="issue 28 item 1, fixed on branch ftp")

@@ -3,7 +3,8 @@
 The simulator answers as we believed ArduPilot answers; this answers as ArduPilot did. A recording is split into
 
 * the vehicle's own telemetry (HEARTBEAT, ATTITUDE, SYS_STATUS, ...), replayed on its recorded timeline (looped,
-  so a link stays up for as long as a test needs it), and
+  so a link stays up for as long as a test needs it; what it said once before any request, the boot's texts and
+  parameters, is said in the first lap only), and
 * exchanges: each ground station request (system 255: PARAM_*, MISSION_*, COMMAND_LONG, FILE_TRANSFER_PROTOCOL,
   LOG_*, ...) with the vehicle's answers to it (COMMAND_ACK, PARAM_VALUE, MISSION_*, FTP replies, STATUSTEXT,
   ...), each at its delay after the request. An answer belongs to the latest earlier request it can answer (an
@@ -400,7 +401,8 @@ class ReplayVehicle:
                 if due > now:
                     due_next = min(due_next, due)
                     break
-                self._send(msg, version, None)
+                if lap == 0 or msg.get_type() not in ANSWER_TYPES:   # events (boot texts) are said once
+                    self._send(msg, version, None)
                 index += 1
                 if index >= len(telemetry) and lap_length > 0:
                     index, lap = self._loop_start, lap + 1
