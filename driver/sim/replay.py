@@ -28,6 +28,7 @@ import copy
 import heapq
 import logging
 import math
+import signal
 import struct
 import threading
 import time
@@ -51,7 +52,9 @@ ANSWER_TYPES = frozenset({
     "MISSION_REQUEST_INT", "MISSION_ACK", "FILE_TRANSFER_PROTOCOL", "STATUSTEXT", "LOG_ENTRY", "LOG_DATA",
     "AUTOPILOT_VERSION", "COMMAND_LONG", "MAG_CAL_REPORT", "CAMERA_INFORMATION", "GIMBAL_MANAGER_INFORMATION",
     "GIMBAL_DEVICE_INFORMATION", "MESSAGE_INTERVAL", "RALLY_POINT", "FENCE_POINT"})
-NOT_REQUESTS = frozenset({"HEARTBEAT"})          # the ground station's keep-alive asks for nothing
+#: What a ground station sends that asks for no answer: its keep-alive and the streams of setpoints and sticks.
+NOT_REQUESTS = frozenset({"HEARTBEAT", "MANUAL_CONTROL", "RC_CHANNELS_OVERRIDE", "SET_POSITION_TARGET_LOCAL_NED",
+                          "SET_POSITION_TARGET_GLOBAL_INT", "SET_ATTITUDE_TARGET", "GPS_RTCM_DATA"})
 FTP_HEADER = struct.Struct("<HBBBBBBI")          # seq, session, opcode, size, req_opcode, burst_complete, pad, offset
 FTP_PATH_OPCODES = frozenset({3, 4, 6, 7, 8, 9, 10, 12, 13, 14})   # list, open, create, remove, ...: data is a path
 REASKS = frozenset({"MISSION_REQUEST", "MISSION_REQUEST_INT"})
@@ -272,6 +275,10 @@ class ReplayVehicle:
 
     ``skip``: windows (start, end) of recorded seconds whose exchanges are not offered (a test takes another part
     of the session); ``telemetry_from``: where in the recording the telemetry starts (and loops back to).
+    ``faults``: the simulator's link faults (driver.sim.faults), off unless set.
+
+    The telemetry runs on its own timeline: a command's ACK is the recorded one, but the mode, arming or mission
+    state the vehicle then shows is what the recording shows at that moment of its timeline.
     """
 
     def __init__(self, recording: str | Recording, tcp_port: int = 0, speedup: float = 1.0,
@@ -414,13 +421,15 @@ class ReplayVehicle:
                     due_next = min(due_next, self._queue[0][0])
             for _due, _order, msg, version, peer in ready:
                 self._send(msg, version, peer)
+            self.server.pump()                   # what the link's faults (self.faults) held back
             self._wake.wait(max(0.0, due_next - time.monotonic()))
             self._wake.clear()
 
     def _send(self, msg, version: int, peer) -> None:
         if peer is not None and peer.closed:
             return
-        self.server.broadcast(msg, component=msg.get_srcComponent(), mavlink2=version == 2, to=peer)
+        # a copy: packing sets the message's header, and the recording (cached) is shared
+        self.server.broadcast(copy.copy(msg), component=msg.get_srcComponent(), mavlink2=version == 2, to=peer)
         self.sent += 1
 
 
@@ -439,15 +448,13 @@ def main(argv: list[str] | None = None) -> int:
     rec = replay.recording
     log.info("replaying %s (%.0f s, %d exchanges) on tcp:%s:%d", rec.path, rec.duration, len(rec.exchanges),
              args.host, replay.tcp_port)
-    try:
-        while True:
-            time.sleep(1.0)
-    except KeyboardInterrupt:
+    stop = threading.Event()
+    for sig in (signal.SIGINT, signal.SIGTERM):
+        signal.signal(sig, lambda *_: stop.set())
+    while not stop.wait(1.0):
         pass
-    finally:
-        replay.stop()
-        for r in replay.unanswered:
-            log.info("unanswered: %s %s", r.type, r.why)
+    replay.stop()
+    log.info("%d requests, %d unanswered", len(replay.requests), len(replay.unanswered))
     return 0
 
 
