@@ -100,6 +100,9 @@ def test_over_tcp_the_recorded_answers_in_order_and_nothing_else(replay_factory)
             assert [m.to_dict() for m in got] == [m.to_dict() for m in expected]
         assert {m.param_id: m.param_value for _, m, _ in second.answers if m.get_type() == "PARAM_VALUE"}[
             "RTL_ALT"] == 1e9
+        # each answer was due at its recorded delay after the request, at 50 times the pace (0.7 s in 14 ms)
+        for ex, asked in zip((first, second), replay.requests):
+            assert asked.schedule == tuple(dt / 50 for dt, _, _ in ex.answers)
         # asked a third time, or for a name never asked: nothing, and the replay says so
         gs.send(codec.param_request_list_encode(1, 1))
         gs.send(codec.param_request_read_encode(1, 1, b"NOPE_XYZ", -1))

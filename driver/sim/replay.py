@@ -268,6 +268,7 @@ class Request:
     answers: int                   # how many answers went out for it
     why: str                       # for an unanswered one, why; for an equivalent one, which was recorded
     message: object = field(default=None, repr=False, compare=False)   # what the ground station sent
+    schedule: tuple = field(default=(), repr=False)   # s after it each answer was due: recorded delay / speedup
 
 
 class ReplayVehicle:
@@ -350,7 +351,7 @@ class ReplayVehicle:
         key = request_key(msg)
         with self._lock:
             found, withhold, why = self._match(key)
-            answers = 0
+            schedule = []
             if found is not None and msg.get_type().startswith("MISSION_"):
                 self._drop_reasks(getattr(msg, "mission_type", 0))
             if withhold is not None:
@@ -364,9 +365,9 @@ class ReplayVehicle:
                     heapq.heappush(self._queue, (now + delay / self.speedup, self._order,
                                                  rewrite(answer, msg, found.request), answer_version, peer))
                     self._order += 1
-                    answers += 1
-            self.requests.append(Request(now - self._t0, msg.get_type(), key,
-                                         None if found is None else found.t, answers, why, msg))
+                    schedule.append(delay / self.speedup)
+            self.requests.append(Request(now - self._t0, msg.get_type(), key, None if found is None else found.t,
+                                         len(schedule), why, msg, tuple(schedule)))
         if found is None:
             log.info("no recorded answer to %s: %s", key, why)
         self._wake.set()
