@@ -259,12 +259,20 @@ def test_gimbal_commands_answered_as_recorded(replay_factory, connect):
     assert unexpected(replay) == []
 
 
-def test_level_calibration_answered_as_recorded(replay_factory, connect):
+def test_level_calibration_and_arming_answered_as_recorded(replay_factory, connect):
     replay = replay_factory(SETUP)
     v = connect(replay)
-    assert recorded_result(replay, mavlink.MAV_CMD_PREFLIGHT_CALIBRATION, 0.0, 0.0, 0.0, 0.0, 2.0) == mavlink.MAV_RESULT_ACCEPTED
+    assert recorded_result(replay, mavlink.MAV_CMD_PREFLIGHT_CALIBRATION, 0.0, 0.0, 0.0, 0.0, 2.0) == \
+        mavlink.MAV_RESULT_ACCEPTED
     result = v.calibrate_level().result(timeout=10)
     assert result.status is CommandStatus.ACCEPTED, result
     s = v.wait_for(lambda s: any(m.text.startswith("Trim OK") for m in s.messages), 10)
     assert s is not None, [m.text for m in v.state().messages]
+    # the recording armed twice: accepted (58.7 s), then refused after the failed accel calibration (133.3 s),
+    # with the vehicle's own reasons; the driver tells them as the vehicle said them
+    result = v.arm().result(timeout=10)
+    assert result.status is CommandStatus.ACCEPTED, result
+    result = v.arm().result(timeout=10)
+    assert result.status is CommandStatus.REFUSED, result
+    assert "Arm: 3D Accel calibration needed" in result.reason and "MAV_RESULT_FAILED" in result.reason, result
     assert unexpected(replay) == []
