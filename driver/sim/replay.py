@@ -276,7 +276,7 @@ class ReplayVehicle:
 
     ``skip``: windows (start, end) of recorded seconds whose exchanges are not offered (a test takes another part
     of the session); ``telemetry_from``: where in the recording the telemetry starts (and loops back to).
-    ``faults``: the simulator's link faults (driver.sim.faults), off unless set.
+    ``self.faults`` are the simulator's link faults (driver.sim.faults): off unless a test sets them.
 
     The telemetry runs on its own timeline: a command's ACK is the recorded one, but the mode, arming or mission
     state the vehicle then shows is what the recording shows at that moment of its timeline.
