@@ -12,13 +12,13 @@ command is handled at a known sim time however busy the machine is.
 from __future__ import annotations
 
 import re
-import struct
 from dataclasses import dataclass
 
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from driver.sim import ManualClock, SimConfig, SimVehicle
+from driver.sim.replay import read_tlog
 from test_sim import GroundStation, wait_until
 
 from recordings import FLIGHT, MISSION  # noqa: E402
@@ -28,26 +28,6 @@ WINDOW = 0.05            # s: the STATUSTEXT lines that follow an ACK this close
 READY_AFTER = 8.0        # sim s: the recording's 40.6 s start-up, compressed
 SPEEDUP = 10.0
 
-
-
-def read_tlog(path: str) -> list[tuple[float, object]]:
-    """(seconds from the first frame, message) for every frame of a MAVProxy .tlog (8-byte big-endian µs stamp,
-    then the frame). pymavlink's MAVLink 2 codec, fed frame by frame: no process-wide mavutil dialect switch."""
-    data = open(path, "rb").read()
-    codec = mavlink.MAVLink(None)
-    codec.robust_parsing = True
-    out, i, first = [], 0, None
-    while i + 10 <= len(data):
-        stamp = struct.unpack(">Q", data[i:i + 8])[0] / 1e6
-        i += 8
-        magic, length = data[i], data[i + 1]
-        size = length + 8 if magic == mavlink.PROTOCOL_MARKER_V1 else length + 12 + (13 if data[i + 2] & 1 else 0)
-        first = stamp if first is None else first
-        for msg in codec.parse_buffer(data[i:i + size]) or []:
-            if msg.get_type() != "BAD_DATA":
-                out.append((stamp - first, msg))
-        i += size
-    return out
 
 
 def normal(text: str) -> str:
