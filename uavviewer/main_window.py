@@ -838,7 +838,7 @@ class MainWindow(QMainWindow):
         return self._quit_box
 
     def closeEvent(self, event) -> None:  # noqa: N802
-        if self._ask_before_leaving_the_air():
+        if self._ask_before_leaving_the_air() or (not self._quitting and self.plan.ask_before_closing()):
             event.ignore()
             return
         self.centre_sticks()
