@@ -178,6 +178,8 @@ class LinkSupervisor:
             if (c1 - c0) + (l1 - l0) > 0:
                 loss = 100.0 * (l1 - l0) / ((c1 - c0) + (l1 - l0))
         pinned = self._transport.pinned
-        return LinkHealth(status or self.status, self._transport.description, age, rate, loss, self.rx_count,
+        status = status or self.status
+        ended = status is LinkStatus.CLOSED and self._transport.is_replay and self._transport.finished
+        return LinkHealth(status, self._transport.description, age, rate, loss, self.rx_count,
                           self.rx_lost, self.bad_crc, mavlink_version, self.lost_count, self._transport.foreign,
-                          f"{pinned[0]}:{pinned[1]}" if pinned else "")
+                          f"{pinned[0]}:{pinned[1]}" if pinned else "", ended)

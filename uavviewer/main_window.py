@@ -459,8 +459,9 @@ class MainWindow(QMainWindow):
         if s is None:
             return
         if s.link.status in (LinkStatus.LOST, LinkStatus.CLOSED):
-            if self.attitude.values["flag"] != "NO LINK":       # the last attitude is no longer the drone's
-                self.attitude.clear("NO LINK")
+            flag = s.link.ended_words.upper() or "NO LINK"
+            if self.attitude.values["flag"] != flag:            # the last attitude is no longer the drone's
+                self.attitude.clear(flag)
         elif s.link.status is LinkStatus.WAITING or not s.mode:
             if self.attitude.values["flag"] != NO_VEHICLE.upper():
                 self.attitude.clear(NO_VEHICLE.upper())
@@ -496,6 +497,8 @@ class MainWindow(QMainWindow):
             age = s.link.heartbeat_age
             last = {FlightPhase.ON_GROUND: "on the ground", FlightPhase.TAKING_OFF: "taking off",
                     FlightPhase.FLYING: f"flying in {s.mode}", FlightPhase.LANDING: "landing"}[phase]
+            if s.link.replay_ended:
+                return f"{s.link.ended_words} · its last moment: {last}"
             return f"Link lost{f' {age:.0f} s ago' if age is not None else ''} · last heard {last}"
         if phase is FlightPhase.TAKING_OFF and s.takeoff.phase is SequencePhase.WAITING_READY:
             return (f"Take off to {s.takeoff.target_altitude:.1f} m when ready — "

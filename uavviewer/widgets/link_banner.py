@@ -30,7 +30,8 @@ class LinkBanner(QLabel):
         """``replay_finished``: a recorded flight has played to its end; what is shown is its last moment.
         ``warning``: why the vehicle and the viewer may not hear each other (signing), shown with the rest."""
         if replay_finished:
-            text, kind = "Replay finished — the instruments show the recording's last moment", "waiting"
+            text, kind = "Replay ended — the instruments show the recording's last moment; Restart plays it again", \
+                "waiting"
         elif status is LinkStatus.OK:
             text, kind = "", ""
         elif status is LinkStatus.WAITING:

@@ -128,6 +128,8 @@ class StatusStrip(QFrame):
         self._put(self.flight_time, f"Flight {clock_text(flight_seconds)}", DIM if lost or not s.armed else NORMAL)
         if s.link.status is LinkStatus.OK:
             self._put(self.link, f"Link OK · {s.link.packets_per_s:.0f} pkt/s", GOOD)
+        elif s.link.replay_ended:
+            self._put(self.link, s.link.ended_words, DIM)
         elif lost:
             self._put(self.link, "LINK LOST" + (f" · {age:.0f} s" if age is not None else ""), BAD)
         else:

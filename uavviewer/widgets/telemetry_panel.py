@@ -93,6 +93,8 @@ class TelemetryPanel(QFrame):
         age = s.link.heartbeat_age
         stale_text = ("Link lost: the values below are the last heard" +
                       (f", {age:.0f} s old" if age is not None else "")) if self._stale and s.mode else ""
+        if stale_text and s.link.replay_ended:
+            stale_text = f"{s.link.ended_words}: the values below are the recording's last"
         if self.stale_label.text() != stale_text:
             self.stale_label.setText(stale_text)
             self.stale_label.setVisible(bool(stale_text))

@@ -65,6 +65,8 @@ def stale_text(state: VehicleState) -> str:
     """"LINK LOST · values 12 s old" once the link is lost with a vehicle known, else ""."""
     if state.link.status not in (LinkStatus.LOST, LinkStatus.CLOSED) or not state.mode:
         return ""
+    if state.link.replay_ended:
+        return "REPLAY ENDED · its last moment"
     age = state.link.heartbeat_age
     return "LINK LOST · values " + (f"{age:.0f} s old" if age is not None else "stale")
 
