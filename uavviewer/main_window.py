@@ -28,7 +28,7 @@ from .connect.choice import Choice, Kind, sim_name
 from .drone_adapter import DroneAdapter
 from .flight_timer import FlightTimer
 from .flight_phase import (
-    NO_VEHICLE, FlightPhase, flight_phase, readiness_text, stick_hint, takeoff_cancellable, takeoff_progress,
+    NO_VEHICLE, FlightPhase, flight_phase, no_vehicle_words, readiness_text, stick_hint, takeoff_cancellable, takeoff_progress,
 )
 from .gamepad_input import GamepadInput
 from .keyboard import ACTION_KEYS, AXIS_KEYS, KeyboardSticks
@@ -459,7 +459,7 @@ class MainWindow(QMainWindow):
         if s is None:
             return
         if s.link.status in (LinkStatus.LOST, LinkStatus.CLOSED):
-            flag = s.link.ended_words.upper() or "NO LINK"
+            flag = (s.link.ended_words or ("" if s.mode else no_vehicle_words(s))).upper() or "NO LINK"
             if self.attitude.values["flag"] != flag:            # the last attitude is no longer the drone's
                 self.attitude.clear(flag)
         elif s.link.status is LinkStatus.WAITING or not s.mode:
@@ -492,7 +492,7 @@ class MainWindow(QMainWindow):
     @staticmethod
     def _phase_text(s: VehicleState, phase: FlightPhase) -> str:
         if phase is FlightPhase.NO_VEHICLE:
-            return NO_VEHICLE
+            return no_vehicle_words(s)
         if s.link.status in (LinkStatus.LOST, LinkStatus.CLOSED):
             age = s.link.heartbeat_age
             last = {FlightPhase.ON_GROUND: "on the ground", FlightPhase.TAKING_OFF: "taking off",

@@ -11,7 +11,7 @@ from PyQt5.QtWidgets import QFrame, QHBoxLayout, QLabel, QSizePolicy, QVBoxLayou
 
 from driver.battery import time_left
 from driver.state import BatteryAlarm, LinkStatus, Message, Severity, VehicleState
-from ..flight_phase import NO_VEHICLE
+from ..flight_phase import NO_VEHICLE, no_vehicle_words
 from ..flight_timer import clock_text
 from .messages_view import severity_color
 from .telemetry_panel import BAD, DIM, GOOD, NORMAL, WARN
@@ -128,6 +128,8 @@ class StatusStrip(QFrame):
         self._put(self.flight_time, f"Flight {clock_text(flight_seconds)}", DIM if lost or not s.armed else NORMAL)
         if s.link.status is LinkStatus.OK:
             self._put(self.link, f"Link OK · {s.link.packets_per_s:.0f} pkt/s", GOOD)
+        elif lost and not s.mode:
+            self._put(self.link, no_vehicle_words(s), DIM)
         elif s.link.replay_ended:
             self._put(self.link, s.link.ended_words, DIM)
         elif lost:
