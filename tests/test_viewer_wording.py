@@ -30,3 +30,33 @@ def test_disconnect_is_said_one_way(qtbot, vehicle, window_factory):
         for other in ("no vehicle", "link lost", "link closed", "no link", "disconnected"):
             assert other not in text.lower(), (where, text)
     w.connections.close()
+
+
+def wheel_notch(view, notches: int = 1) -> None:
+    centre = QPointF(view.width() / 2, view.height() / 2)
+    QApplication.sendEvent(view, QWheelEvent(centre, view.mapToGlobal(centre.toPoint()), QPoint(0, 0),
+                                             QPoint(0, 120 * notches), Qt.NoButton, Qt.NoModifier,
+                                             Qt.NoScrollPhase, False))
+
+
+def test_a_wheel_gesture_is_one_line_and_repeats_are_counted(qtbot, vehicle, window_factory):
+    w = window_factory(vehicle)
+    qtbot.waitUntil(lambda: w.adapter.state.gimbal.pitch_deg is not None, timeout=10000)
+    w.gimbal_bar.level_button.click()
+    qtbot.waitUntil(lambda: abs(w.adapter.state.gimbal.pitch_deg) < 0.6, timeout=10000)
+    qtbot.waitUntil(lambda: w.gimbal._target is None, timeout=5000)
+    before = len([r for r in vehicle.state().results if r.command.startswith("gimbal pitch")])
+    for _ in range(4):                                   # a wheel turned four notches: four events, four commands
+        wheel_notch(w.camera_view, -1)
+    qtbot.waitUntil(lambda: len([r for r in w.adapter.state.results if r.command.startswith("gimbal pitch")])
+                    == before + 4, timeout=10000)
+    qtbot.waitUntil(lambda: any("gimbal pitch -20°" in t for t in w.messages.texts()), timeout=5000)
+    gimbal_lines = [t for t in w.messages.texts() if t.startswith("gimbal pitch")]
+    # the gesture is one line, its last angle (Level's line before it, unless it came moments before)
+    assert gimbal_lines[-1].startswith("gimbal pitch -20°") and len(gimbal_lines) <= 2, gimbal_lines
+    assert not any(f"gimbal pitch -{a}°" in t for t in gimbal_lines for a in (5, 10, 15)), gimbal_lines
+    # the same line three times in a row: one line, counted
+    for _ in range(3):
+        w.log_message("Camera not found: sim", Severity.WARNING)
+    assert w.messages.texts()[-1] == "Camera not found: sim (×3)"
+    assert sum(t.startswith("Camera not found: sim") for t in w.messages.texts()) == 1
