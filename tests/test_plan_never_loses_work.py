@@ -199,3 +199,21 @@ def test_cruise_speed_is_the_vehicles_from_the_start(qtbot, vehicle, window_fact
     assert plan.editor.perf.cruise == 10.0
     click(qtbot, view, 40, 0)
     assert plan.panel.tables["mission"].item(1, 3).text() == "10"
+
+
+def test_upload_sends_every_plan_that_changed(qtbot, vehicle, window_factory):
+    w, view, plan = planning_window(qtbot, vehicle, window_factory)
+    p = plan.panel
+    for n, e in ((30, 0), (30, 30)):
+        click(qtbot, view, n, e)
+    p.tabs.setCurrentIndex(1)
+    p.toolCombo.setCurrentText("Inclusion circle")
+    click(qtbot, view, 0, 0)
+    p.tables["fence"].item(0, 2).setText("200")
+    p.tabs.setCurrentIndex(0)                        # the Mission tab shown; the fence changed too
+    qtbot.mouseClick(p.uploadButton, Qt.LeftButton)
+    qtbot.waitUntil(lambda: all(plan.vehicle_plan(k) is not None for k in (PlanKind.MISSION, PlanKind.FENCE)),
+                    timeout=30000)
+    assert plan.vehicle_plan(PlanKind.FENCE).items[0].param1 == 200
+    qtbot.waitUntil(lambda: not plan.sync(PlanKind.MISSION) and not plan.sync(PlanKind.FENCE), timeout=10000)
+    assert plan.vehicle_plan(PlanKind.RALLY) is None            # nothing here, nothing sent

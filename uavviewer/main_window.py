@@ -378,7 +378,8 @@ class MainWindow(QMainWindow):
         box = QMessageBox(QMessageBox.Information, "About UavViewerPy",
                           f"UavViewerPy {__version__} — fly a MAVLink drone from a laptop.\n\n"
                           f"Vehicle: {self.window_name()}" + (f", ArduCopter {firmware}" if firmware else "") +
-                          f"\nPyQt {PYQT_VERSION_STR}, Qt {QT_VERSION_STR}, pymavlink {pymavlink_version}",
+                          f"\nPyQt {PYQT_VERSION_STR}, Qt {QT_VERSION_STR}, pymavlink {pymavlink_version}"
+                          f"\n\n{self.logs.about_line()}",
                           QMessageBox.Ok, self)
         box.setObjectName("aboutBox")
         box.setWindowModality(Qt.NonModal)
