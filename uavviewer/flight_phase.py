@@ -10,7 +10,8 @@ NO_VEHICLE = "No vehicle yet"
 #: ... and for "no vehicle at all": after File › Disconnect (the link closed, no vehicle ever heard on it).
 NOT_CONNECTED = "Not connected"
 
-__all__ = ["NO_VEHICLE", "NOT_CONNECTED", "no_vehicle_words", "FlightPhase", "flight_phase", "takeoff_progress", "takeoff_cancellable", "stick_hint",
+__all__ = ["NO_VEHICLE", "NOT_CONNECTED", "no_vehicle_words", "no_link_flag", "link_gone_text", "FlightPhase",
+           "flight_phase", "takeoff_progress", "takeoff_cancellable", "stick_hint",
            "readiness_text"]
 
 
@@ -70,6 +71,19 @@ def no_vehicle_words(s: VehicleState) -> str:
     """"Not connected" once the window holds no link (File › Disconnect), else "No vehicle yet": one wording
     each, on every widget that says there is no vehicle."""
     return NOT_CONNECTED if s.link.status is LinkStatus.CLOSED and not s.mode else NO_VEHICLE
+
+
+def no_link_flag(s: VehicleState) -> str:
+    """The attitude indicator's flag once the link is gone: REPLAY ENDED, NOT CONNECTED or NO LINK."""
+    return (s.link.ended_words or ("" if s.mode else no_vehicle_words(s))).upper() or "NO LINK"
+
+
+def link_gone_text(s: VehicleState, last: str) -> str:
+    """The phase line once the link is gone; ``last``: what the vehicle was last heard doing."""
+    if s.link.replay_ended:
+        return f"{s.link.ended_words} · its last moment: {last}"
+    age = s.link.heartbeat_age
+    return f"Link lost{f' {age:.0f} s ago' if age is not None else ''} · last heard {last}"
 
 
 def stick_hint(s: VehicleState) -> str:

@@ -28,7 +28,8 @@ from .connect.choice import Choice, Kind, sim_name
 from .drone_adapter import DroneAdapter
 from .flight_timer import FlightTimer
 from .flight_phase import (
-    NO_VEHICLE, FlightPhase, flight_phase, no_vehicle_words, readiness_text, stick_hint, takeoff_cancellable, takeoff_progress,
+    NO_VEHICLE, FlightPhase, flight_phase, link_gone_text, no_link_flag, no_vehicle_words, readiness_text, stick_hint,
+    takeoff_cancellable, takeoff_progress,
 )
 from .gamepad_input import GamepadInput
 from .keyboard import ACTION_KEYS, AXIS_KEYS, KeyboardSticks
@@ -460,9 +461,8 @@ class MainWindow(QMainWindow):
         if s is None:
             return
         if s.link.status in (LinkStatus.LOST, LinkStatus.CLOSED):
-            flag = (s.link.ended_words or ("" if s.mode else no_vehicle_words(s))).upper() or "NO LINK"
-            if self.attitude.values["flag"] != flag:            # the last attitude is no longer the drone's
-                self.attitude.clear(flag)
+            if self.attitude.values["flag"] != no_link_flag(s):     # the last attitude is no longer the drone's
+                self.attitude.clear(no_link_flag(s))
         elif s.link.status is LinkStatus.WAITING or not s.mode:
             if self.attitude.values["flag"] != NO_VEHICLE.upper():
                 self.attitude.clear(NO_VEHICLE.upper())
@@ -495,12 +495,8 @@ class MainWindow(QMainWindow):
         if phase is FlightPhase.NO_VEHICLE:
             return no_vehicle_words(s)
         if s.link.status in (LinkStatus.LOST, LinkStatus.CLOSED):
-            age = s.link.heartbeat_age
-            last = {FlightPhase.ON_GROUND: "on the ground", FlightPhase.TAKING_OFF: "taking off",
-                    FlightPhase.FLYING: f"flying in {s.mode}", FlightPhase.LANDING: "landing"}[phase]
-            if s.link.replay_ended:
-                return f"{s.link.ended_words} · its last moment: {last}"
-            return f"Link lost{f' {age:.0f} s ago' if age is not None else ''} · last heard {last}"
+            return link_gone_text(s, {FlightPhase.ON_GROUND: "on the ground", FlightPhase.TAKING_OFF: "taking off",
+                                      FlightPhase.FLYING: f"flying in {s.mode}", FlightPhase.LANDING: "landing"}[phase])
         if phase is FlightPhase.TAKING_OFF and s.takeoff.phase is SequencePhase.WAITING_READY:
             return (f"Take off to {s.takeoff.target_altitude:.1f} m when ready — "
                     + (readiness_text(s) if s.connected and s.readiness.missing else "waiting for the vehicle"))

@@ -17,8 +17,8 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from .plan import MissionItem, Plan, PlanKind
 
-__all__ = ["PlanFile", "ComplexItem", "load_plan_file", "save_plan_file", "to_qgc_plan", "from_qgc_plan", "to_wpl", "from_wpl",
-           "PlanFileError"]
+__all__ = ["PlanFile", "ComplexItem", "load_plan_file", "save_plan_file", "to_qgc_plan", "from_qgc_plan", "to_wpl",
+           "from_wpl", "PlanFileError"]
 
 WPL_HEADER = "QGC WPL 110"
 _INCLUSION = mavlink.MAV_CMD_NAV_FENCE_POLYGON_VERTEX_INCLUSION

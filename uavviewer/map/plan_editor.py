@@ -320,8 +320,9 @@ class PlanEditor(QObject):
             p.surveyBox.setVisible(self.tool == "Survey area" and p.layer == "mission")
         p.finishButton.setVisible(self.tool in ("Survey area", "Inclusion polygon", "Exclusion polygon"))
         totals = doc.totals(self.home, self.perf)
-        p.totalsLabel.setText((("Plan: " + totals.text()) if self.home is not None else
-                               "Plan totals need the vehicle's home position") + f" · cruise {self.perf.cruise_text()}")
+        totals_text = ("Plan: " + totals.text()) if self.home is not None else \
+            "Plan totals need the vehicle's home position"
+        p.totalsLabel.setText(f"{totals_text} · cruise {self.perf.cruise_text()}")
         p.totalsLabel.setStyleSheet("color: #ff4d4d;" if totals.beyond_reserve else "")
         self.refreshed.emit()
 
