@@ -46,6 +46,7 @@ class PlanEditor(QObject):
         p.finishRequested.connect(self.finish_shape)
         p.rowSelected.connect(self.select)
         p.moveRequested.connect(self.move_selected)
+        p.rowsDropped.connect(self.move_rows)
         p.cellEdited.connect(self.edit_cell)
         p.surveyEdited.connect(self._survey_edited)
         layer.clicked.connect(self.click)
@@ -162,6 +163,20 @@ class PlanEditor(QObject):
         self._select(layer, rows[-1] + step if step > 0 else rows[0] + step)
         self._changed("Move up" if step < 0 else "Move down")
         self.panel.select_rows(layer, [r + step for r in rows])
+
+    def move_rows(self, layer: str, rows: list[int], before: int) -> None:
+        """Rows dragged in the list: their items go before row ``before`` (as it was counted before the move)."""
+        items = self._items(layer)
+        rows = sorted(r for r in set(rows) if 0 <= r < len(items))
+        if not rows:
+            return
+        moving = [items[r] for r in rows]
+        at = max(0, min(before, len(items))) - sum(r < before for r in rows)
+        rest = [item for r, item in enumerate(items) if r not in rows]
+        items[:] = rest[:at] + moving + rest[at:]
+        self._select(layer, at)
+        self._changed("Move by dragging")
+        self.panel.select_rows(layer, list(range(at, at + len(moving))))
 
     def clear_layer(self, layer: str) -> None:
         """Clear the editor's tab (the vehicle keeps what it holds): one undoable step."""

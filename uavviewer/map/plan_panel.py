@@ -13,6 +13,7 @@ from PyQt5.QtWidgets import (
     QToolButton, QVBoxLayout, QWidget,
 )
 
+from .plan_table import PlanTable
 from .survey import CAMERAS
 
 __all__ = ["PlanPanel", "LAYERS", "TOOLS"]
@@ -40,6 +41,7 @@ class PlanPanel(QWidget):
     finishRequested = pyqtSignal()               # end the polygon being drawn
     rowSelected = pyqtSignal(str, int)           # layer, row
     moveRequested = pyqtSignal(int)              # the selected item(s) one place up (-1) or down (+1)
+    rowsDropped = pyqtSignal(str, list, int)     # layer, rows dragged in the list, the row they go before
     cellEdited = pyqtSignal(str, int, str, float)   # layer, row, column name, value
     surveyEdited = pyqtSignal(object)            # dict: camera, altitude, front, side, angle
     transferRequested = pyqtSignal(str)          # "upload", "download", "clear" (of the tab's plan)
@@ -147,7 +149,7 @@ class PlanPanel(QWidget):
         self.tabs = QTabWidget()
         self.tables: dict[str, QTableWidget] = {}
         for layer, title in zip(LAYERS, ("Mission", "Fence", "Rally")):
-            table = QTableWidget(0, len(COLUMNS[layer]))
+            table = PlanTable(0, len(COLUMNS[layer]))
             table.setObjectName(f"{layer}Table")
             table.setMinimumHeight(110)
             table.verticalHeader().setDefaultSectionSize(table.fontMetrics().height() + 6)
@@ -164,6 +166,7 @@ class PlanPanel(QWidget):
             table.customContextMenuRequested.connect(lambda pos, l=layer: self._table_menu(l, pos))
             table.itemSelectionChanged.connect(lambda l=layer: self._selection(l))
             table.itemChanged.connect(lambda item, l=layer: self._edited(l, item))
+            table.rowsDropped.connect(lambda rows, before, l=layer: self.rowsDropped.emit(l, rows, before))
             QShortcut(QKeySequence.Delete, table, self.deleteRequested.emit, context=Qt.WidgetShortcut)
             self.tables[layer] = table
             self.tabs.addTab(table, title)
