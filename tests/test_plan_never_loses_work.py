@@ -138,6 +138,9 @@ def test_undo_redo_move_new_clear_and_remove(qtbot, vehicle, window_factory):
     w.close()
     answer(qtbot, lambda: plan.discard_question, "Cancel")
     assert w.isVisible()
+    w.close()
+    answer(qtbot, lambda: plan.discard_question, "Discard edits")
+    qtbot.waitUntil(lambda: not w.isVisible())
 
 
 def test_a_saved_survey_opens_as_a_survey(qtbot, vehicle, window_factory, tmp_path):
