@@ -115,6 +115,7 @@ class PlanPanel(QWidget):
 
         transfers = QHBoxLayout()
         self.uploadButton = QPushButton("Upload")
+        self.uploadButton.setToolTip("Upload the tab's plan, and every other plan here that differs from the vehicle's")
         self.downloadButton = QPushButton("Download")
         self.clearButton = QPushButton("Remove…")
         self.clearButton.setToolTip("Remove the tab's plan from the vehicle (asks first); the list here stays")

@@ -6,6 +6,7 @@ shows the burst's latest outcome: one line per gesture.
 """
 from __future__ import annotations
 
+import re
 import time as _time
 
 from PyQt5.QtCore import Qt, pyqtSignal
@@ -18,6 +19,7 @@ __all__ = ["MessagesView", "severity_color", "GESTURE_GAP"]
 
 GESTURE_GAP = 2.0              # s: the same command's outcomes closer than this are one gesture, one line
 _COUNT, _BASE, _GESTURE = Qt.UserRole + 1, Qt.UserRole + 2, Qt.UserRole + 3
+_NUMBER = re.compile(r"^[-+]?\d+(\.\d+)?[°%a-z/]*,?$")    # "-35°", "3", "40.28," (a name like "solo-1:" is not)
 
 _COLORS = {
     Severity.EMERGENCY: "#ff3b3b", Severity.ALERT: "#ff3b3b", Severity.CRITICAL: "#ff3b3b",
@@ -96,7 +98,7 @@ class MessagesView(QTreeWidget):
 
     def add_result(self, result: CommandResult, when: float | None = None) -> None:
         severity = _RESULT_SEVERITY.get(result.status, Severity.INFO)
-        gesture = " ".join(w for w in result.command.split() if not any(c.isdigit() for c in w))
+        gesture = " ".join(w for w in result.command.split() if not _NUMBER.match(w))
         self.add_message(_time.time() if when is None else when, severity, str(result), "command", gesture)
 
     def offer_fix(self, item: QTreeWidgetItem, name: str) -> QToolButton:
