@@ -412,16 +412,17 @@ class PlanController(QObject):
         return d, d / max(speed, 0.1)
 
     # -- transfers ----------------------------------------------------------------------------------
-    def transfer(self, action: str) -> None:
+    def transfer(self, action: str, confirmed: PlanKind | None = None) -> None:
         """Upload every plan that differs from the vehicle's (the tab shown's at least), Download the tab's, or
-        Remove it from the vehicle (asked first); the driver's answers come back by themselves."""
-        kind = KINDS[self.panel.layer]
+        Remove it from the vehicle (asked first; ``confirmed``: the kind the pilot said yes to); the driver's answers
+        come back by themselves."""
+        kind = confirmed or KINDS[self.panel.layer]
         if action == "upload":
             for k in self.to_upload():
                 self._outcome[k] = f"Uploading the {k.label}…"
                 self._sending[k] = self.doc.plan(k)
                 self.adapter.command("upload_plan", self._sending[k])
-        elif action == "clear" and not self._removal_confirmed:
+        elif action == "clear" and not confirmed:
             self._ask_removal(kind)
             return
         elif action == "download":
@@ -439,8 +440,6 @@ class PlanController(QObject):
         shown = KINDS[self.panel.layer]
         return [k for k in PlanKind if k is shown or (self.sync(k) and self.doc.plan(k).items)]
 
-    _removal_confirmed = False
-
     def _ask_removal(self, kind: PlanKind) -> None:
         """Remove from vehicle asks first: it cannot be undone here (the list stays, Upload puts it back)."""
         theirs = self.vehicle_plan(kind)
@@ -452,12 +451,8 @@ class PlanController(QObject):
 
         def answered(b: QMessageBox) -> None:
             b.deleteLater()
-            if b.clickedButton() is remove and KINDS[self.panel.layer] is kind:
-                self._removal_confirmed = True
-                try:
-                    self.transfer("clear")
-                finally:
-                    self._removal_confirmed = False
+            if b.clickedButton() is remove:
+                self.transfer("clear", confirmed=kind)
         self.remove_question = ask(box, answered)
 
     def _transfer_finished(self, name: str, outcome) -> None:
