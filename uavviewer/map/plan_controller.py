@@ -416,13 +416,13 @@ class PlanController(QObject):
         """Upload every plan that differs from the vehicle's (the tab shown's at least), Download the tab's, or
         Remove it from the vehicle (asked first; ``confirmed``: the kind the pilot said yes to); the driver's answers
         come back by themselves."""
-        kind = confirmed or KINDS[self.panel.layer]
+        kind = confirmed if confirmed is not None else KINDS[self.panel.layer]
         if action == "upload":
             for k in self.to_upload():
                 self._outcome[k] = f"Uploading the {k.label}…"
                 self._sending[k] = self.doc.plan(k)
                 self.adapter.command("upload_plan", self._sending[k])
-        elif action == "clear" and not confirmed:
+        elif action == "clear" and confirmed is None:
             self._ask_removal(kind)
             return
         elif action == "download":
