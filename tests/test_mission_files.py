@@ -92,6 +92,14 @@ def test_a_complex_item_keeps_its_settings_and_is_written_back_as_one(tmp_path):
     assert out["complexItemType"] == "survey" and out["polygon"] == survey["polygon"] and out["angle"] == 30
     assert [i["command"] for i in out["TransectStyleComplexItem"]["Items"]] == [16, 206]
     assert load_plan_file(tmp_path / "out.plan") == got
+    # a structure scan carries its items at its top: written back the same way
+    scan = {"type": "ComplexItem", "complexItemType": "StructureScan", "Altitude": 20,
+            "Items": survey["TransectStyleComplexItem"]["Items"]}
+    (tmp_path / "scan.plan").write_text(json.dumps({"fileType": "Plan", "mission": {"items": [scan]}}))
+    got = load_plan_file(tmp_path / "scan.plan")
+    save_plan_file(tmp_path / "scan-out.plan", got.plans, got.home, got.complex_items)
+    (out,) = json.loads((tmp_path / "scan-out.plan").read_text())["mission"]["items"]
+    assert out["Altitude"] == 20 and len(out["Items"]) == 2 and "TransectStyleComplexItem" not in out
 
 
 def test_wpl_round_trips_and_loads_in_pymavlink(tmp_path):

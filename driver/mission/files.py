@@ -83,7 +83,10 @@ def to_qgc_plan(plans, home=None, complex_items=()) -> dict:
             continue
         inner = [_simple_json(i + n + 1, item) for n, item in enumerate(mission.items[i:i + group.count])]
         entry = {**group.settings, "type": "ComplexItem", "complexItemType": group.kind}
-        entry["TransectStyleComplexItem"] = {**group.settings.get("TransectStyleComplexItem", {}), "Items": inner}
+        if "TransectStyleComplexItem" in group.settings:          # survey, corridor scan
+            entry["TransectStyleComplexItem"] = {**group.settings["TransectStyleComplexItem"], "Items": inner}
+        else:                                                     # the items at the top (a structure scan)
+            entry["Items"] = inner
         items.append(entry)
         i += group.count
     polygons, circles = [], []
@@ -136,7 +139,7 @@ def _mission_items(entries, groups: list[ComplexItem] | None = None) -> list[Mis
                 raise PlanFileError(f"a {entry.get('complexItemType', 'complex')} item without its waypoints")
             items = _mission_items(inner)
             if groups is not None:
-                settings = {k: v for k, v in entry.items() if k not in ("type", "complexItemType")}
+                settings = {k: v for k, v in entry.items() if k not in ("type", "complexItemType", "Items")}
                 if "TransectStyleComplexItem" in settings:
                     settings["TransectStyleComplexItem"] = {k: v for k, v in transect.items() if k != "Items"}
                 groups.append(ComplexItem(len(out), len(items), str(entry.get("complexItemType", "")), settings))
