@@ -84,8 +84,10 @@ def mission_entries(got: PlanFile) -> tuple[list, list[str]]:
             i += group.count
             continue
         if group is not None:
+            why = ("its settings make other passes here" if group.kind == SURVEY else
+                   "this planner edits surveys only")
             notes.append(f"the {group.kind or 'complex item'} at item {i + 1} is opened as its {group.count} "
-                         "waypoints (its settings do not make the same passes here)")
+                         f"items ({why}); saved from here it is those items")
             entries += items[i:i + group.count]
             i += group.count
             continue
