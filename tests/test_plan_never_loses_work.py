@@ -243,3 +243,18 @@ def test_rows_dragged_in_the_list_move_their_items(qtbot, vehicle, window_factor
     assert table.rowCount() == 4 and plan.panel.selected_rows("mission") == [1]
     plan.undo_action.trigger()
     assert plan.doc.entries == before
+
+
+def test_a_survey_planned_elsewhere_opens_as_its_waypoints_and_says_so(qtbot, vehicle, window_factory, tmp_path):
+    w, view, plan = planning_window(qtbot, vehicle, window_factory)
+    items = [{"type": "SimpleItem", "command": 16, "frame": 3, "params": [0, 0, 0, None, 40.2842, -3.794, 30]},
+             {"type": "SimpleItem", "command": 206, "frame": 2, "params": [25, 0, 1, 0, 0, 0, 0]}]
+    qgc = {"type": "ComplexItem", "complexItemType": "survey", "angle": 0,
+           "polygon": [[40.284, -3.794], [40.284, -3.793], [40.285, -3.793]],
+           "TransectStyleComplexItem": {"CameraCalc": {"CameraName": "Sony a6000 16 mm", "DistanceToSurface": 50,
+                                                       "FrontalOverlap": 70, "SideOverlap": 60}, "Items": items}}
+    (tmp_path / "qgc.plan").write_text(json.dumps({"fileType": "Plan", "mission": {"items": [qgc]}}))
+    plan.files.open(str(tmp_path / "qgc.plan"))
+    assert [e.command for e in plan.doc.entries] == [16, 206]       # flown as the file says
+    assert any("the survey at item 1 is opened as its 2 items (its settings make other passes here)" in t
+               for t in logged(w))
