@@ -63,7 +63,7 @@ def test_connect_from_the_dialog_switches_vehicle_then_disconnect(qtbot, sim_fac
 
     v2 = w.adapter.drone
     w.actionDisconnect.trigger()
-    qtbot.waitUntil(lambda: w.adapter.description == "not connected", timeout=5000)
+    qtbot.waitUntil(lambda: w.adapter.description == "Not connected", timeout=5000)
     assert not w.flightControls.main_button.isEnabled() and not w.flightControls.arm_button.isEnabled()
     assert w.linkBanner.isVisible() and w.linkBanner.text().startswith("Not connected")
     qtbot.waitUntil(lambda: v2.state().link.status is LinkStatus.CLOSED, timeout=10000)
@@ -93,8 +93,8 @@ def test_connect_to_the_built_in_simulator_and_a_bad_link_keeps_the_old_one(qtbo
     assert w.camera.uris == ["sim"]                                    # and its camera shown, as with --sim
     assert w.window_name() == sim_name(w.connections.current.sim.config.speedup) and "first" not in w.windowTitle()   # About too
     w.actionDisconnect.trigger()
-    qtbot.waitUntil(lambda: w.adapter.description == "not connected", timeout=5000)
-    assert w.window_name() == "not connected"                         # no vehicle: no name left over
+    qtbot.waitUntil(lambda: w.adapter.description == "Not connected", timeout=5000)
+    assert w.window_name() == "Not connected"                         # no vehicle: no name left over
     qtbot.waitUntil(lambda: vehicle.state().link.status is LinkStatus.CLOSED, timeout=10000)
     assert parse_key(Choice(Kind.SIM).key) == Choice(Kind.SIM)
 
@@ -204,7 +204,7 @@ def test_leaving_a_flying_vehicle_is_asked_first(qtbot, sim, flying, connecting)
     qtbot.waitUntil(box.isVisible, timeout=3000)
     leave = next(b for b in box.buttons() if b.text() == "Leave it flying")
     leave.click()
-    qtbot.waitUntil(lambda: w.adapter.description == "not connected", timeout=5000)
+    qtbot.waitUntil(lambda: w.adapter.description == "Not connected", timeout=5000)
     assert sim.truth().armed and -sim.truth().down > 1.0   # let go of, still in the air: it hovers in GUIDED
 
 
