@@ -227,6 +227,12 @@ class LinkHealth:
     lost_count: int = 0                  # how many times the link was declared lost
     foreign_packets: int = 0             # UDP datagrams dropped because they did not come from the vehicle
     pinned_to: str = ""                  # UDP: the vehicle's "ip:port", the only address we send to
+    replay_ended: bool = False           # a replayed recording has played to its end: CLOSED, nothing was lost
+
+    @property
+    def ended_words(self) -> str:
+        """"Replay ended" for a recording played to its end, else "" (its silence is not a lost link)."""
+        return "Replay ended" if self.replay_ended else ""
 
 
 class SigningStatus(enum.Enum):

@@ -4,8 +4,11 @@ Counts frames and sequence gaps per component, ages the autopilot's heartbeat, d
 and recovered, decides when a half-open TCP link must be reopened, and asks the vehicle for what a
 ground station needs and does not get unasked: its streams (again when it forgets them, e.g. after a
 reboot), its firmware version (AUTOPILOT_VERSION), its home position (REQUEST_MESSAGE, or MAV_CMD_GET_HOME_POSITION on firmware without it, again
-after arming since arming sets home), FS_GCS_ENABLE (is there a GCS failsafe if we go away?) and the fence's
-parameters (FENCE_ENABLE, FENCE_TYPE, FENCE_RADIUS, FENCE_ALT_MAX: where the vehicle itself will not go).
+after arming since arming sets home), FS_GCS_ENABLE (is there a GCS failsafe if we go away?), the fence's
+parameters (FENCE_ENABLE, FENCE_TYPE, FENCE_RADIUS, FENCE_ALT_MAX: where the vehicle itself will not go) and what
+a mission plan's times rest on (WPNAV_SPEED and the rest of PLAN_PARAMS: a plan is timed at the vehicle's own
+speeds from the start, not at defaults until the whole table is read). Each is read by name (PARAM_REQUEST_READ)
+into the parameter table, state().parameters.
 Runs with the driver's state lock held and returns the MAVLink messages to send; sends nothing itself.
 """
 from __future__ import annotations
@@ -24,7 +27,8 @@ PARAM_RETRY = 3.0            # s between reads of the parameters below while som
 PARAM_TRIES = 3
 STREAM_SILENCE = 3.0         # s without ATTITUDE before the streams are asked for again
 REOPEN_AFTER = 5.0           # s past the loss timeout before a reconnectable link is reopened
-WANTED_PARAMS = ("FS_GCS_ENABLE",) + FENCE_PARAMS
+PLAN_PARAMS = ("WPNAV_SPEED", "WPNAV_SPEED_UP", "WPNAV_SPEED_DN", "LAND_SPEED", "RTL_ALT", "BATT_CAPACITY")
+WANTED_PARAMS = ("FS_GCS_ENABLE",) + FENCE_PARAMS + PLAN_PARAMS
 
 
 class LinkSupervisor:
@@ -174,6 +178,8 @@ class LinkSupervisor:
             if (c1 - c0) + (l1 - l0) > 0:
                 loss = 100.0 * (l1 - l0) / ((c1 - c0) + (l1 - l0))
         pinned = self._transport.pinned
-        return LinkHealth(status or self.status, self._transport.description, age, rate, loss, self.rx_count,
+        status = status or self.status
+        ended = status is LinkStatus.CLOSED and self._transport.is_replay and self._transport.finished
+        return LinkHealth(status, self._transport.description, age, rate, loss, self.rx_count,
                           self.rx_lost, self.bad_crc, mavlink_version, self.lost_count, self._transport.foreign,
-                          f"{pinned[0]}:{pinned[1]}" if pinned else "")
+                          f"{pinned[0]}:{pinned[1]}" if pinned else "", ended)

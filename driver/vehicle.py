@@ -644,7 +644,7 @@ class Vehicle(Drone):
             self._commands.link_lost()
             self._params.link_lost()
         elif event == "finished":
-            store.add_message_locked(Severity.NOTICE, "Replay finished: the recording has ended")
+            store.add_message_locked(Severity.NOTICE, "Replay ended: the whole recording has been played")
         return out
 
     def _stream_setpoint(self, now: float) -> list:

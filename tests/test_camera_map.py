@@ -65,7 +65,9 @@ def test_look_here_on_the_map_and_stop_looking(qtbot, sim, vehicle, window_facto
 
     menu_action(qtbot, view, east + 5.0, north, "Stop looking")
     qtbot.waitUntil(lambda: vehicle.state().gimbal.roi is None, timeout=10000)
-    assert sim.autopilot.mount_mode == mavlink.MAV_MOUNT_MODE_RC_TARGETING
+    # the ROI is gone on the vehicle; the window then points the camera back where it was (MAVLink targeting)
+    assert sim.autopilot.mount_roi is None
+    qtbot.waitUntil(lambda: sim.autopilot.mount_mode == mavlink.MAV_MOUNT_MODE_MAVLINK_TARGETING, timeout=10000)
     qtbot.waitUntil(lambda: not w.gimbal_bar.stop_looking_button.isVisible() and overlay.roi_view() is None,
                     timeout=5000)
 

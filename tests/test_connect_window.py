@@ -63,9 +63,9 @@ def test_connect_from_the_dialog_switches_vehicle_then_disconnect(qtbot, sim_fac
 
     v2 = w.adapter.drone
     w.actionDisconnect.trigger()
-    qtbot.waitUntil(lambda: w.adapter.description == "not connected", timeout=5000)
+    qtbot.waitUntil(lambda: w.adapter.description == "Not connected", timeout=5000)
     assert not w.flightControls.main_button.isEnabled() and not w.flightControls.arm_button.isEnabled()
-    assert w.linkBanner.isVisible() and "not connected" in w.linkBanner.text()
+    assert w.linkBanner.isVisible() and w.linkBanner.text().startswith("Not connected")
     qtbot.waitUntil(lambda: v2.state().link.status is LinkStatus.CLOSED, timeout=10000)
 
     w.tools.show_connect()                                     # the recent connection is offered first
@@ -93,8 +93,8 @@ def test_connect_to_the_built_in_simulator_and_a_bad_link_keeps_the_old_one(qtbo
     assert w.camera.uris == ["sim"]                                    # and its camera shown, as with --sim
     assert w.window_name() == sim_name(w.connections.current.sim.config.speedup) and "first" not in w.windowTitle()   # About too
     w.actionDisconnect.trigger()
-    qtbot.waitUntil(lambda: w.adapter.description == "not connected", timeout=5000)
-    assert w.window_name() == "not connected"                         # no vehicle: no name left over
+    qtbot.waitUntil(lambda: w.adapter.description == "Not connected", timeout=5000)
+    assert w.window_name() == "Not connected"                         # no vehicle: no name left over
     qtbot.waitUntil(lambda: vehicle.state().link.status is LinkStatus.CLOSED, timeout=10000)
     assert parse_key(Choice(Kind.SIM).key) == Choice(Kind.SIM)
 
@@ -115,10 +115,10 @@ def test_open_flight_log_seeks_restarts_and_ends_without_a_live_heartbeat(qtbot,
 
     qtbot.waitUntil(lambda: replay.finished, timeout=15000)
     qtbot.waitUntil(lambda: w.adapter.state.link.status is LinkStatus.CLOSED, timeout=5000)   # no live heartbeat
-    qtbot.waitUntil(lambda: "Replay finished" in w.linkBanner.text(), timeout=5000)
-    qtbot.waitUntil(lambda: w.replayBar.play_button.text() == "Finished", timeout=5000)   # its own refresh
-    assert any("Replay finished" in t for t in w.messages.texts())
-    qtbot.waitUntil(lambda: w.telemetry.text("heartbeat") == "none (link closed)", timeout=5000)
+    qtbot.waitUntil(lambda: "Replay ended" in w.linkBanner.text(), timeout=5000)
+    qtbot.waitUntil(lambda: w.replayBar.play_button.text() == "Restart", timeout=5000)   # its own refresh
+    assert any("Replay ended" in t for t in w.messages.texts())
+    qtbot.waitUntil(lambda: w.telemetry.text("heartbeat") == "none (replay ended)", timeout=5000)
 
     qtbot.mouseClick(w.replayBar.restart_button, Qt.LeftButton)      # from the start again
     assert not replay.finished and replay.position < 2.0
@@ -204,7 +204,7 @@ def test_leaving_a_flying_vehicle_is_asked_first(qtbot, sim, flying, connecting)
     qtbot.waitUntil(box.isVisible, timeout=3000)
     leave = next(b for b in box.buttons() if b.text() == "Leave it flying")
     leave.click()
-    qtbot.waitUntil(lambda: w.adapter.description == "not connected", timeout=5000)
+    qtbot.waitUntil(lambda: w.adapter.description == "Not connected", timeout=5000)
     assert sim.truth().armed and -sim.truth().down > 1.0   # let go of, still in the air: it hovers in GUIDED
 
 

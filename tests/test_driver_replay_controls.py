@@ -17,7 +17,7 @@ def test_seek_to_the_end_closes_the_link_and_restart_opens_it(vehicle_factory):
     assert replay.duration - 2.5 <= replay.position <= replay.duration
     s = v.wait_for(lambda s: s.link.status is LinkStatus.CLOSED, 10)      # no heartbeat is live after the end
     assert s is not None and replay.finished
-    assert any(m.text == "Replay finished: the recording has ended" for m in s.messages)
+    assert any(m.text == "Replay ended: the whole recording has been played" for m in s.messages)
     replay.restart()
     assert not replay.finished and replay.position < 1.0
     assert v.wait_for(lambda s: s.link.status is LinkStatus.OK, 10)        # its first heartbeat again

@@ -68,6 +68,40 @@ def test_qgc_survey_items_are_read_as_their_waypoints(tmp_path):
     assert [i.command for i in plan.items] == [16, 206]
 
 
+def test_a_complex_item_keeps_its_settings_and_is_written_back_as_one(tmp_path):
+    """A QGroundControl survey: read as its waypoints, and where they are with its own settings (polygon, camera);
+    saved again, it is a ComplexItem again, its settings as they were."""
+    survey = {"type": "ComplexItem", "complexItemType": "survey", "version": 5, "angle": 30,
+              "polygon": [[-35.36, 149.16], [-35.36, 149.17], [-35.37, 149.17]],
+              "TransectStyleComplexItem": {"CameraCalc": {"DistanceToSurface": 30, "CameraName": "Sony"}, "Items": [
+                  {"type": "SimpleItem", "command": 16, "frame": 3, "params": [0, 0, 0, None, -35.36, 149.16, 30]},
+                  {"type": "SimpleItem", "command": 206, "frame": 2, "params": [25, 0, 1, 0, 0, 0, 0]}]}}
+    takeoff = {"type": "SimpleItem", "command": 22, "frame": 3, "params": [0, 0, 0, None, 0, 0, 10]}
+    (tmp_path / "in.plan").write_text(json.dumps({"fileType": "Plan", "mission": {"items": [takeoff, survey]}}))
+    got = load_plan_file(tmp_path / "in.plan")
+    assert [i.command for i in got.plan(PlanKind.MISSION).items] == [22, 16, 206]
+    (group,) = got.complex_items
+    assert (group.start, group.count, group.kind) == (1, 2, "survey")
+    assert group.settings["polygon"] == survey["polygon"] and group.settings["angle"] == 30
+    assert group.settings["TransectStyleComplexItem"]["CameraCalc"]["CameraName"] == "Sony"
+    assert "Items" not in group.settings["TransectStyleComplexItem"]
+    save_plan_file(tmp_path / "out.plan", got.plans, got.home, got.complex_items)
+    items = json.loads((tmp_path / "out.plan").read_text())["mission"]["items"]
+    assert [i["type"] for i in items] == ["SimpleItem", "ComplexItem"]
+    out = items[1]
+    assert out["complexItemType"] == "survey" and out["polygon"] == survey["polygon"] and out["angle"] == 30
+    assert [i["command"] for i in out["TransectStyleComplexItem"]["Items"]] == [16, 206]
+    assert load_plan_file(tmp_path / "out.plan") == got
+    # a structure scan carries its items at its top: written back the same way
+    scan = {"type": "ComplexItem", "complexItemType": "StructureScan", "Altitude": 20,
+            "Items": survey["TransectStyleComplexItem"]["Items"]}
+    (tmp_path / "scan.plan").write_text(json.dumps({"fileType": "Plan", "mission": {"items": [scan]}}))
+    got = load_plan_file(tmp_path / "scan.plan")
+    save_plan_file(tmp_path / "scan-out.plan", got.plans, got.home, got.complex_items)
+    (out,) = json.loads((tmp_path / "scan-out.plan").read_text())["mission"]["items"]
+    assert out["Altitude"] == 20 and len(out["Items"]) == 2 and "TransectStyleComplexItem" not in out
+
+
 def test_wpl_round_trips_and_loads_in_pymavlink(tmp_path):
     path = tmp_path / "mission.waypoints"
     save_plan_file(path, (mission(),), HOME)

@@ -134,9 +134,12 @@ def test_download_clear_and_a_fence(qtbot, fast_vehicle, window_factory):
     assert [e.command for e in plan.doc.entries] == [i.command for i in sent.items]
     assert p.tables["mission"].rowCount() == 3 and p.syncLabel.text().startswith("Same")
 
-    # Clear: the vehicle holds no mission; the plan here is kept and now differs
+    # Remove from vehicle (asked first): the vehicle holds no mission; the plan here is kept and now differs
     qtbot.waitUntil(p.clearButton.isEnabled)
     qtbot.mouseClick(p.clearButton, Qt.LeftButton)
+    qtbot.waitUntil(lambda: plan.remove_question is not None and plan.remove_question.isVisible())
+    qtbot.mouseClick(next(b for b in plan.remove_question.buttons() if b.text() == "Remove from vehicle"),
+                     Qt.LeftButton)
     qtbot.waitUntil(lambda: p.progressBar.format() == "clear mission: accepted", timeout=30000)
     qtbot.waitUntil(lambda: "0 items there, 3 here" in p.syncLabel.text())
     assert not p.startButton.isEnabled()

@@ -95,7 +95,7 @@ def test_plan_a_mission_with_the_mouse_and_the_list(qtbot, vehicle, window_facto
     assert plan.doc.entries[2].param1 == 7.0
     table.item(2, 3).setText("3")
     assert plan.doc.entries[2].command == mavlink.MAV_CMD_DO_CHANGE_SPEED and plan.doc.entries[2].param2 == 3.0
-    assert table.rowCount() == 4 and table.item(3, 3).text() == "3" and table.item(1, 3).text() == "5"
+    assert table.rowCount() == 4 and table.item(3, 3).text() == "3" and table.item(1, 3).text() == "10"   # WPNAV_SPEED
 
     # insert: with waypoint 2 selected and Insert on, a click goes before it
     table.selectRow(1)

@@ -94,16 +94,17 @@ def test_a_known_vehicle_shows_its_cached_table_at_once_and_names_what_changed(s
     saved = ParameterCache(folder).path(1, first.state().firmware)
     assert eventually(lambda: os.path.exists(saved), 5)                  # written off the reader's lock
     first.close()
-    sim.autopilot.params["RTL_ALT"] = 2000                               # changed meanwhile (another station)
+    # changed meanwhile (another station); RTL_LOIT_TIME is not one of the few read by name at connect
+    sim.autopilot.params["RTL_LOIT_TIME"] = 7000
     again = vehicle_factory(url, param_cache=folder)
     s = again.wait_for(lambda s: s.connected and s.firmware, 10)
     future = again.fetch_parameters()                                    # the cache is read off this thread
     shown = again.wait_for(lambda s: "from the cache" in s.parameters.detail, 10).parameters
     assert shown.received == 1392 and shown.downloading and "from the cache" in shown.detail
-    assert shown.get("RTL_ALT").value == 1500                             # what it was: not checked yet
+    assert shown.get("RTL_LOIT_TIME").value == 5000                       # what it was: not checked yet
     assert future.result(timeout=30).ok
-    assert again.state().parameters.get("RTL_ALT").value == 2000
-    assert any("1 changed since this vehicle was last seen: RTL_ALT" in m.text for m in again.state().messages)
+    assert again.state().parameters.get("RTL_LOIT_TIME").value == 7000
+    assert any("1 changed since this vehicle was last seen: RTL_LOIT_TIME" in m.text for m in again.state().messages)
     other = vehicle_factory(url, param_cache=folder)                       # refresh: the cache is not shown
     assert other.wait_for(lambda s: s.connected and s.firmware, 10)
     other.fetch_parameters(refresh=True)

@@ -264,12 +264,14 @@ def test_link_banner_says_when_a_replay_is_finished(qtbot):
     b.set_link(LinkStatus.OK, "flight.tlog", 0.0)
     assert b.isHidden()
     b.set_link(LinkStatus.OK, "flight.tlog", 0.0, replay_finished=True)
-    assert not b.isHidden() and "Replay finished" in b.text()
+    assert not b.isHidden() and "Replay ended" in b.text() and "Restart" in b.text()
 
 
 def test_replay_bar_says_when_the_log_is_finished(qtbot):
     r = make(ReplayBar, qtbot)
     r.set_progress(129.6, 130.0, paused=False, speed=1.0, finished=True)
-    assert r.clock.text() == "02:10 / 02:10  (finished)"
-    assert r.play_button.text() == "Finished" and not r.play_button.isEnabled()
+    assert r.clock.text() == "02:10 / 02:10  (replay ended)"
+    assert r.play_button.text() == "Restart" and r.play_button.isEnabled()
+    with qtbot.waitSignal(r.restartRequested, timeout=1000):
+        r.play_button.click()
     assert r.progress.value() == 1000

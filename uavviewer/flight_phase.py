@@ -7,8 +7,11 @@ from driver.state import LandedState, LinkStatus, VehicleState
 
 #: The one wording, everywhere in the window, for "nothing heard from a vehicle yet".
 NO_VEHICLE = "No vehicle yet"
+#: ... and for "no vehicle at all": after File › Disconnect (the link closed, no vehicle ever heard on it).
+NOT_CONNECTED = "Not connected"
 
-__all__ = ["NO_VEHICLE", "FlightPhase", "flight_phase", "takeoff_progress", "takeoff_cancellable", "stick_hint",
+__all__ = ["NO_VEHICLE", "NOT_CONNECTED", "no_vehicle_words", "no_link_flag", "link_gone_text", "FlightPhase",
+           "flight_phase", "takeoff_progress", "takeoff_cancellable", "stick_hint",
            "readiness_text"]
 
 
@@ -64,11 +67,30 @@ _STICK_HINTS = {"no link": "No link", "on the ground": "Take off to fly", "takin
                 "landing": "Landing…"}
 
 
+def no_vehicle_words(s: VehicleState) -> str:
+    """"Not connected" once the window holds no link (File › Disconnect), else "No vehicle yet": one wording
+    each, on every widget that says there is no vehicle."""
+    return NOT_CONNECTED if s.link.status is LinkStatus.CLOSED and not s.mode else NO_VEHICLE
+
+
+def no_link_flag(s: VehicleState) -> str:
+    """The attitude indicator's flag once the link is gone: REPLAY ENDED, NOT CONNECTED or NO LINK."""
+    return (s.link.ended_words or ("" if s.mode else no_vehicle_words(s))).upper() or "NO LINK"
+
+
+def link_gone_text(s: VehicleState, last: str) -> str:
+    """The phase line once the link is gone; ``last``: what the vehicle was last heard doing."""
+    if s.link.replay_ended:
+        return f"{s.link.ended_words} · its last moment: {last}"
+    age = s.link.heartbeat_age
+    return f"Link lost{f' {age:.0f} s ago' if age is not None else ''} · last heard {last}"
+
+
 def stick_hint(s: VehicleState) -> str:
     """Why the sticks are inert, or "" when they fly the vehicle."""
     why = s.velocity_blocker
-    if why == "no link" and s.link.status is LinkStatus.WAITING:
-        return NO_VEHICLE
+    if why == "no link" and (s.link.status is LinkStatus.WAITING or not s.mode):
+        return no_vehicle_words(s)
     if why == "not GUIDED":
         return f"Sticks fly in GUIDED\n(mode is {s.mode or '?'})"
     return _STICK_HINTS.get(why, why)

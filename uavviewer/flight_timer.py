@@ -19,25 +19,34 @@ def clock_text(seconds: float | None) -> str:
 
 class FlightTimer:
     """Runs while the vehicle reports armed; keeps the last flight's time once disarmed, restarts at the next arm.
-    ``clock``: a monotonic clock (tests may pass their own)."""
+    A reconnection to the same vehicle (same link and system id) that finds it still armed goes on with the flight
+    it left. ``clock``: a monotonic clock (tests may pass their own)."""
 
     def __init__(self, clock=time.monotonic) -> None:
         self._clock = clock
         self._since: float | None = None       # the clock when the vehicle armed, None while disarmed
         self._last = 0.0                        # the previous flight's seconds, shown while disarmed
         self.started = False                    # armed at least once
+        self._vehicle: tuple = ()               # (link address, system id) of the vehicle timed
+        self._left: tuple | None = None         # (vehicle, since) of a flight under way when the window left it
 
     def update(self, s: VehicleState) -> float:
         """The flight time now, following ``s.armed`` (never a flag of ours)."""
         now = self._clock()
+        if s.system_id:
+            self._vehicle = (s.link.address, s.system_id)
         if s.armed and self._since is None:
-            self._since, self.started = now, True
+            left, self._left = self._left, None
+            self._since = left[1] if left is not None and left[0] == self._vehicle else now
+            self.started = True
         elif not s.armed and self._since is not None:
             self._last, self._since = now - self._since, None
         return self.seconds
 
     def reset(self) -> None:
-        """Another vehicle is flown: its time is not the previous one's (it starts anew at its arm)."""
+        """Another connection: its time starts anew at its arm, unless it is the same vehicle still flying."""
+        if self._since is not None:
+            self._left = (self._vehicle, self._since)
         self._since, self._last, self.started = None, 0.0, False
 
     @property

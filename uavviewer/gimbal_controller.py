@@ -33,6 +33,8 @@ class GimbalController(QObject):
         self._drag_y: float | None = None
         self._drag_start = 0.0
         self._sent_at = 0.0
+        self._before_roi: float | None = None   # the pitch while no point is looked at
+        self._restore: float | None = None      # ... as it was when a point began to be looked at: Stop looking
         view.installEventFilter(self)
         bar.levelRequested.connect(lambda: self.point(0.0))
         bar.downRequested.connect(lambda: self.point(-90.0))
@@ -40,16 +42,29 @@ class GimbalController(QObject):
         bar.recordRequested.connect(lambda on: adapter.command("record_video", on))
         bar.stopLookingRequested.connect(lambda: adapter.command("stop_looking"))
         adapter.droneChanged.connect(self._vehicle_changed)
+        adapter.commandFinished.connect(self._command_finished)
 
     def show_state(self, s: VehicleState) -> None:
         reported = s.gimbal.pitch_deg
         if self._target is not None and reported is not None and abs(reported - self._target) <= REACHED:
             self._target = None                 # the vehicle points there: tilt from what it reports again
+        if s.gimbal.roi is None:
+            if reported is not None and self._target is None:
+                self._before_roi = reported
+        elif self._restore is None:
+            self._restore = self._before_roi    # looking at a point moves it: this is where it was
         self._bar.show_state(s)
 
     def _vehicle_changed(self, _drone) -> None:
         """Another vehicle is flown: the angle asked of the previous one is not this one's."""
-        self._target = None
+        self._target = self._before_roi = self._restore = None
+
+    def _command_finished(self, result) -> None:
+        """Stop looking done (the bar's button or the map's): the mount fell back to its default (straight down
+        on ArduCopter's RC targeting); the camera goes back to the pitch it had before it looked at the point."""
+        if result.command.startswith("stop looking") and result.ok and self._restore is not None:
+            pitch, self._restore = self._restore, None
+            self.point(pitch)
 
     def _base(self) -> float:
         if self._target is not None:

@@ -28,7 +28,8 @@ from .connect.choice import Choice, Kind, sim_name
 from .drone_adapter import DroneAdapter
 from .flight_timer import FlightTimer
 from .flight_phase import (
-    NO_VEHICLE, FlightPhase, flight_phase, readiness_text, stick_hint, takeoff_cancellable, takeoff_progress,
+    NO_VEHICLE, FlightPhase, flight_phase, link_gone_text, no_link_flag, no_vehicle_words, readiness_text, stick_hint,
+    takeoff_cancellable, takeoff_progress,
 )
 from .gamepad_input import GamepadInput
 from .keyboard import ACTION_KEYS, AXIS_KEYS, KeyboardSticks
@@ -378,7 +379,8 @@ class MainWindow(QMainWindow):
         box = QMessageBox(QMessageBox.Information, "About UavViewerPy",
                           f"UavViewerPy {__version__} — fly a MAVLink drone from a laptop.\n\n"
                           f"Vehicle: {self.window_name()}" + (f", ArduCopter {firmware}" if firmware else "") +
-                          f"\nPyQt {PYQT_VERSION_STR}, Qt {QT_VERSION_STR}, pymavlink {pymavlink_version}",
+                          f"\nPyQt {PYQT_VERSION_STR}, Qt {QT_VERSION_STR}, pymavlink {pymavlink_version}"
+                          f"\n\n{self.logs.about_line()}",
                           QMessageBox.Ok, self)
         box.setObjectName("aboutBox")
         box.setWindowModality(Qt.NonModal)
@@ -459,8 +461,8 @@ class MainWindow(QMainWindow):
         if s is None:
             return
         if s.link.status in (LinkStatus.LOST, LinkStatus.CLOSED):
-            if self.attitude.values["flag"] != "NO LINK":       # the last attitude is no longer the drone's
-                self.attitude.clear("NO LINK")
+            if self.attitude.values["flag"] != no_link_flag(s):     # the last attitude is no longer the drone's
+                self.attitude.clear(no_link_flag(s))
         elif s.link.status is LinkStatus.WAITING or not s.mode:
             if self.attitude.values["flag"] != NO_VEHICLE.upper():
                 self.attitude.clear(NO_VEHICLE.upper())
@@ -491,12 +493,10 @@ class MainWindow(QMainWindow):
     @staticmethod
     def _phase_text(s: VehicleState, phase: FlightPhase) -> str:
         if phase is FlightPhase.NO_VEHICLE:
-            return NO_VEHICLE
+            return no_vehicle_words(s)
         if s.link.status in (LinkStatus.LOST, LinkStatus.CLOSED):
-            age = s.link.heartbeat_age
-            last = {FlightPhase.ON_GROUND: "on the ground", FlightPhase.TAKING_OFF: "taking off",
-                    FlightPhase.FLYING: f"flying in {s.mode}", FlightPhase.LANDING: "landing"}[phase]
-            return f"Link lost{f' {age:.0f} s ago' if age is not None else ''} · last heard {last}"
+            return link_gone_text(s, {FlightPhase.ON_GROUND: "on the ground", FlightPhase.TAKING_OFF: "taking off",
+                                      FlightPhase.FLYING: f"flying in {s.mode}", FlightPhase.LANDING: "landing"}[phase])
         if phase is FlightPhase.TAKING_OFF and s.takeoff.phase is SequencePhase.WAITING_READY:
             return (f"Take off to {s.takeoff.target_altitude:.1f} m when ready — "
                     + (readiness_text(s) if s.connected and s.readiness.missing else "waiting for the vehicle"))
@@ -838,7 +838,7 @@ class MainWindow(QMainWindow):
         return self._quit_box
 
     def closeEvent(self, event) -> None:  # noqa: N802
-        if self._ask_before_leaving_the_air():
+        if self._ask_before_leaving_the_air() or (not self._quitting and self.plan.ask_before_closing()):
             event.ignore()
             return
         self.centre_sticks()

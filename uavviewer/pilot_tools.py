@@ -24,6 +24,7 @@ from .connect.dialog import ConnectDialog
 from .dialogs import ask
 from .flight_phase import flight_phase
 from .guided.controller import GuidedController
+from .logs_folder import LogsFolder
 from .preflight.model import overall, preflight
 from .refresh import TEXT_HZ
 from .widgets.alert_banner import AlertBanner
@@ -108,8 +109,9 @@ class PilotTools(QObject):
         w.connections.recentChanged.connect(self.show_recent)
         self.show_recent()
         first = w.menuFile.actions()[0] if w.menuFile.actions() else None      # above Quit
+        w.logs = LogsFolder(w, w)                # File › Open logs folder; its path in Help › About
         w.menuFile.insertActions(first, [w.actionConnect, w.menuRecent.menuAction(), w.actionDisconnect,
-                                         w.actionOpenLog])
+                                         w.actionOpenLog, w.logs.action])
         w.menuFile.insertSeparator(first)
         w.menuFile.insertAction(first, w.actionMute)
         w.menuFile.insertSeparator(first)

@@ -2,7 +2,9 @@
 the ``QGC WPL 110`` text that Mission Planner and MAVProxy save (pymavlink's mavwp.MAVWPLoader reads ours).
 
 A ``.plan`` holds all three plans and the planned home; a WPL file holds one plan, its line 0 the home slot
-for a mission. QGroundControl's complex items (survey, corridor scan) are read as the waypoints they carry.
+for a mission. QGroundControl's complex items (survey, corridor scan) are read as the waypoints they carry, and
+kept as :class:`ComplexItem` (where their items are, and their own settings) so that a planner can open a survey
+as a survey again; written back, they are complex items again, as QGroundControl writes them.
 """
 from __future__ import annotations
 
@@ -15,8 +17,8 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from .plan import MissionItem, Plan, PlanKind
 
-__all__ = ["PlanFile", "load_plan_file", "save_plan_file", "to_qgc_plan", "from_qgc_plan", "to_wpl", "from_wpl",
-           "PlanFileError"]
+__all__ = ["PlanFile", "ComplexItem", "load_plan_file", "save_plan_file", "to_qgc_plan", "from_qgc_plan", "to_wpl",
+           "from_wpl", "PlanFileError"]
 
 WPL_HEADER = "QGC WPL 110"
 _INCLUSION = mavlink.MAV_CMD_NAV_FENCE_POLYGON_VERTEX_INCLUSION
@@ -31,9 +33,21 @@ class PlanFileError(ValueError):
 
 
 @dataclass(frozen=True)
+class ComplexItem:
+    """A QGroundControl complex item of the mission: its ``count`` items from index ``start`` of the mission's
+    items, its ``complexItemType`` ("survey", "CorridorScan") and its own settings (the JSON object as the file
+    has it, without the items: polygon, angle, camera ...)."""
+    start: int
+    count: int
+    kind: str
+    settings: dict
+
+
+@dataclass(frozen=True)
 class PlanFile:
     plans: tuple[Plan, ...] = ()
     home: tuple[float, float, float] | None = None   # lat, lon, alt above sea level
+    complex_items: tuple[ComplexItem, ...] = ()       # a .plan's surveys and corridor scans, in order
 
     def plan(self, kind: PlanKind) -> Plan | None:
         return next((p for p in self.plans if p.kind is kind), None)
@@ -48,14 +62,33 @@ def _json_param(value: float):
     return None if math.isnan(value) else value
 
 
-def to_qgc_plan(plans, home=None) -> dict:
+def _simple_json(number: int, item: MissionItem) -> dict:
+    return {"type": "SimpleItem", "autoContinue": item.autocontinue, "command": item.command,
+            "doJumpId": number, "frame": item.frame,
+            "params": [_json_param(v) for v in (*item.params, item.lat, item.lon, item.alt)]}
+
+
+def to_qgc_plan(plans, home=None, complex_items=()) -> dict:
+    """``complex_items``: where the mission's items come from a survey or a corridor scan (written as
+    QGroundControl's ComplexItem, its items in its TransectStyleComplexItem)."""
     by_kind = {p.kind: p for p in plans}
     mission = by_kind.get(PlanKind.MISSION, Plan(PlanKind.MISSION))
-    items = []
-    for number, item in enumerate(mission.items, 1):
-        items.append({"type": "SimpleItem", "autoContinue": item.autocontinue, "command": item.command,
-                      "doJumpId": number, "frame": item.frame,
-                      "params": [_json_param(v) for v in (*item.params, item.lat, item.lon, item.alt)]})
+    groups = {c.start: c for c in complex_items}
+    items, i = [], 0
+    while i < len(mission.items):
+        group = groups.get(i)
+        if group is None or group.count < 1 or i + group.count > len(mission.items):
+            items.append(_simple_json(i + 1, mission.items[i]))
+            i += 1
+            continue
+        inner = [_simple_json(i + n + 1, item) for n, item in enumerate(mission.items[i:i + group.count])]
+        entry = {**group.settings, "type": "ComplexItem", "complexItemType": group.kind}
+        if "TransectStyleComplexItem" in group.settings:          # survey, corridor scan
+            entry["TransectStyleComplexItem"] = {**group.settings["TransectStyleComplexItem"], "Items": inner}
+        else:                                                     # the items at the top (a structure scan)
+            entry["Items"] = inner
+        items.append(entry)
+        i += group.count
     polygons, circles = [], []
     fence = by_kind.get(PlanKind.FENCE, Plan(PlanKind.FENCE)).items
     i = 0
@@ -93,17 +126,24 @@ def _simple(entry: dict) -> MissionItem:
                        autocontinue=bool(entry.get("autoContinue", True)))
 
 
-def _mission_items(entries) -> list[MissionItem]:
+def _mission_items(entries, groups: list[ComplexItem] | None = None) -> list[MissionItem]:
     out = []
     for entry in entries:
         kind = entry.get("type")
         if kind == "SimpleItem":
             out.append(_simple(entry))
-        elif kind == "ComplexItem":       # survey / corridor: the items it generated
-            inner = entry.get("TransectStyleComplexItem", entry).get("Items", [])
+        elif kind == "ComplexItem":       # survey / corridor: the items it generated, and what it is
+            transect = entry.get("TransectStyleComplexItem", entry)
+            inner = transect.get("Items", [])
             if not inner:
                 raise PlanFileError(f"a {entry.get('complexItemType', 'complex')} item without its waypoints")
-            out += _mission_items(inner)
+            items = _mission_items(inner)
+            if groups is not None:
+                settings = {k: v for k, v in entry.items() if k not in ("type", "complexItemType", "Items")}
+                if "TransectStyleComplexItem" in settings:
+                    settings["TransectStyleComplexItem"] = {k: v for k, v in transect.items() if k != "Items"}
+                groups.append(ComplexItem(len(out), len(items), str(entry.get("complexItemType", "")), settings))
+            out += items
         else:
             raise PlanFileError(f"unknown mission item type {kind!r}")
     return out
@@ -114,7 +154,8 @@ def from_qgc_plan(data: dict) -> PlanFile:
         raise PlanFileError("not a QGroundControl plan (fileType is not \"Plan\")")
     try:
         mission = data.get("mission", {})
-        items = _mission_items(mission.get("items", []))
+        groups: list[ComplexItem] = []
+        items = _mission_items(mission.get("items", []), groups)
         fence: list[MissionItem] = []
         for poly in data.get("geoFence", {}).get("polygons", []):
             command = _INCLUSION if poly.get("inclusion", True) else _EXCLUSION
@@ -134,7 +175,7 @@ def from_qgc_plan(data: dict) -> PlanFile:
         raise PlanFileError(f"a malformed plan: {exc}") from None
     home = tuple(float(v) for v in home) if home and any(home) else None
     return PlanFile((Plan(PlanKind.MISSION, tuple(items)), Plan(PlanKind.FENCE, tuple(fence)),
-                     Plan(PlanKind.RALLY, tuple(rally))), home)
+                     Plan(PlanKind.RALLY, tuple(rally))), home, tuple(groups))
 
 
 # -- QGC WPL 110 ------------------------------------------------------------------------------------------
@@ -191,12 +232,13 @@ def load_plan_file(path) -> PlanFile:
     return from_wpl(text)
 
 
-def save_plan_file(path, plans, home=None) -> None:
-    """``.plan``: every plan given, as QGroundControl writes it; any other name: WPL of the one plan given."""
+def save_plan_file(path, plans, home=None, complex_items=()) -> None:
+    """``.plan``: every plan given, as QGroundControl writes it (``complex_items``: its surveys); any other name:
+    WPL of the one plan given."""
     path = Path(path)
     plans = tuple(plans)
     if path.suffix.lower() == ".plan":
-        text = json.dumps(to_qgc_plan(plans, home), indent=4)
+        text = json.dumps(to_qgc_plan(plans, home, complex_items), indent=4)
     else:
         if len(plans) != 1:
             raise PlanFileError("a WPL file holds one plan: save a mission, a fence or rally points")

@@ -181,6 +181,8 @@ class Auto:
     def _auto_do(self, item: StoredItem) -> None:
         if item.command == mavlink.MAV_CMD_DO_CHANGE_SPEED:
             self._cmd_do_change_speed(*item.params)           # commands.py: the same checks as the command
+        elif item.command == mavlink.MAV_CMD_DO_SET_CAM_TRIGG_DIST:   # AP_Mission::start_command_camera
+            self.set_trigger_distance(item.params[0], now=int(item.params[2]) == 1)
 
     def _auto_start_item(self, seq: int) -> None:
         item = self.plans[MISSION][seq]

@@ -47,6 +47,8 @@ class Payload:
         self.mount_roi: tuple[float, float, float] | None = None
         self.roi_yaw = False               # the vehicle turns its nose to the ROI (the mount has no yaw axis)
         self.images = 0
+        self.trigg_dist = 0.0              # m, DO_SET_CAM_TRIGG_DIST (CAM1_TRIGG_DIST): a picture every so far
+        self.trigg_from: tuple[float, float] | None = None   # (north, east) of the last picture (or the start)
         self.video = False
         self.gopro_mode = mavlink.GOPRO_CAPTURE_MODE_VIDEO
         self.gopro_recording = False
@@ -87,6 +89,7 @@ class Payload:
         else:
             target = self.mount_target
         self._face_roi()
+        self._trigger_by_distance()
         pitch = min(max(target[0], PITCH_LIMITS[0]), PITCH_LIMITS[1])
         self.mount_target = (pitch, 0.0)          # neither mount has a yaw axis: the vehicle turns
         step = MOUNT_SLEW * dt
@@ -97,6 +100,29 @@ class Payload:
                 flags = mavlink.GOPRO_FLAG_RECORDING if self.gopro_recording else 0
                 self.gimbal_outbox.append(mavlink.MAVLink_gopro_heartbeat_message(
                     mavlink.GOPRO_HEARTBEAT_STATUS_CONNECTED, self.gopro_mode, flags))
+
+    def set_trigger_distance(self, metres: float, now: bool = False) -> None:
+        """DO_SET_CAM_TRIGG_DIST as AP_Mission runs it: the distance (0 stops), and a picture at once when its
+        param3 is 1. With no camera nothing happens (AP_Camera has no backend)."""
+        if not self._camera_kind or not finite(metres):
+            return
+        self.trigg_dist = max(0.0, float(metres))
+        self.trigg_from = None
+        if now:
+            self._picture(captured=self._camera_kind == "mavlink")
+
+    def _trigger_by_distance(self) -> None:
+        """AP_Camera_Backend::update: the first pass notes where the vehicle is; a picture each time it has moved
+        the trigger distance from the last picture (CAM_AUTO_ONLY 0: in any mode)."""
+        if self.trigg_dist <= 0 or not self._camera_kind:
+            self.trigg_from = None
+            return
+        here = (self.n, self.e)
+        if self.trigg_from is None:
+            self.trigg_from = here
+        elif math.hypot(here[0] - self.trigg_from[0], here[1] - self.trigg_from[1]) >= self.trigg_dist:
+            self._picture(captured=self._camera_kind == "mavlink")
+            self.trigg_from = here
 
     def _face_roi(self) -> None:
         """ArduCopter's auto_yaw ROI mode (set by the ROI commands when the mount cannot pan): in GUIDED and AUTO,

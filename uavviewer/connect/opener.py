@@ -12,6 +12,7 @@ from pathlib import Path
 from driver.api import CEILING, Drone, Limits
 from driver.state import CommandResult, CommandStatus, LinkHealth, LinkStatus, VehicleState
 
+from ..flight_phase import NOT_CONNECTED
 from .choice import Choice, Kind
 
 __all__ = ["Opened", "Disconnected", "open_choice", "close_quietly"]
@@ -41,7 +42,7 @@ class Disconnected(Drone):
 
     @property
     def description(self) -> str:
-        return "not connected"
+        return NOT_CONNECTED                # the title, About and the status bar say it as everything else
 
     def _refuse(self, name: str):
         from concurrent.futures import Future

@@ -12,7 +12,7 @@ import math
 
 from PyQt5.QtCore import QObject, Qt, pyqtSignal
 from PyQt5.QtGui import QKeySequence
-from PyQt5.QtWidgets import QAction, QDockWidget, QMessageBox, QScrollArea, QToolButton
+from PyQt5.QtWidgets import QAction, QDockWidget, QMenu, QMessageBox, QScrollArea, QToolButton
 
 from driver.frames import offset_ned
 from driver.mission.plan import MissionItem, MissionRunState, Plan, PlanKind, TransferDirection
@@ -25,6 +25,7 @@ from .plan_files import PlanFiles
 from .plan_layer import PlanLayer
 from .plan_model import Performance, PlanDocument
 from .plan_panel import PlanPanel
+from .survey_file import complex_items, mission_entries
 
 __all__ = ["PlanController"]
 
@@ -53,6 +54,10 @@ class PlanController(QObject):
         self.dock = self._dock(window)
         self.plan_button = self._map_button(map_controller.panel)
         self.editor = PlanEditor(self.doc, self.layer, self.panel, self.view, self)
+        self.history = self.editor.history
+        self.discard_question: QMessageBox | None = None    # "edits not saved" (tests answer it)
+        self.remove_question: QMessageBox | None = None     # "Remove the mission from the vehicle?"
+        self._may_close = False                              # the pilot said their edits may go
         self.on_vehicle: dict[PlanKind, Plan] = {}      # what each transfer last confirmed the vehicle holds
         self._sending: dict[PlanKind, Plan] = {}        # each kind's upload under way
         self._synced: dict[PlanKind, tuple[Plan, Plan]] = {}   # (here, there) the driver last found the same
@@ -78,9 +83,13 @@ class PlanController(QObject):
         self.files = PlanFiles(window, self)
         self.files.loaded.connect(self._file_loaded)
         self.files.said.connect(window.log_message)
-        p.openRequested.connect(self.files.ask_open)
+        self.files.saved.connect(lambda _path: self.history.mark_saved())
+        p.openRequested.connect(self.ask_open)
         p.saveRequested.connect(self.ask_save)
+        p.newRequested.connect(self.ask_new)
+        p.clearListRequested.connect(self.editor.clear_layer)
         self._file_menu(window)
+        self._plan_menu(window)
         self.editor.refresh()
 
     # -- the dock and the map's button -----------------------------------------------------------
@@ -119,23 +128,109 @@ class PlanController(QObject):
         """File › Open plan… / Save plan…, above Quit."""
         menu = window.menuFile
         # Ctrl+O is File › Open flight log's (the pilot's tools): the plan's is Ctrl+Shift+O
+        self.new_action = QAction("New plan", window, shortcut=QKeySequence.New, triggered=self.ask_new)
         self.open_action = QAction("Open plan…", window, shortcut=QKeySequence("Ctrl+Shift+O"),
-                                   triggered=self.files.ask_open)
+                                   triggered=self.ask_open)
         self.save_action = QAction("Save plan…", window, shortcut=QKeySequence.Save, triggered=self.ask_save)
         quit_action = window.actionQuit
+        menu.insertAction(quit_action, self.new_action)
         menu.insertAction(quit_action, self.open_action)
         menu.insertAction(quit_action, self.save_action)
         menu.insertSeparator(quit_action)
 
+    def _plan_menu(self, window) -> None:
+        """Plan: undo and redo (Ctrl+Z, Ctrl+Shift+Z) of every edit, the list's own actions, and Remove from
+        vehicle, which is not an edit of the list."""
+        menu = window.menuPlan = QMenu("&Plan", window)
+        menu.setObjectName("menuPlan")
+        stack = self.history.stack
+        self.undo_action = stack.createUndoAction(window, "Undo")
+        self.undo_action.setShortcut(QKeySequence("Ctrl+Z"))
+        self.redo_action = stack.createRedoAction(window, "Redo")
+        self.redo_action.setShortcuts([QKeySequence("Ctrl+Shift+Z"), QKeySequence("Ctrl+Y")])
+        for action in (self.undo_action, self.redo_action):
+            action.setShortcutContext(Qt.WindowShortcut)
+            window.addAction(action)                    # the keys work with the menu closed
+            menu.addAction(action)
+        menu.addSeparator()
+        menu.addAction(self.new_action)
+        p = self.panel
+        menu.addAction("Clear the list", lambda: self.editor.clear_layer(p.layer))
+        menu.addAction("Move up", lambda: self.editor.move_selected(-1))
+        menu.addAction("Move down", lambda: self.editor.move_selected(1))
+        menu.addSeparator()
+        menu.addAction("Remove from vehicle…", lambda: self.transfer("clear"))
+        window.menuBar().insertMenu(window.menuSettings.menuAction(), menu)
+
     def ask_save(self) -> None:
         h = self._state.home
         self.files.ask_save([self.doc.plan(k) for k in PlanKind], (h.lat, h.lon, h.alt) if h is not None else None,
-                            self.doc.plan(KINDS[self.panel.layer]))
+                            complex_items(self.doc))
+
+    def ask_open(self) -> None:
+        self._unless_losing_edits("Open another plan", self.files.ask_open)
+
+    def ask_new(self) -> None:
+        self._unless_losing_edits("Start a new plan", self._new)
+
+    def _new(self) -> None:
+        self.editor.new_plan()
+        self.history.mark_saved()                # nothing to lose in an empty plan (Undo brings the old one back)
+
+    def _unless_losing_edits(self, what: str, then) -> None:
+        """``then()`` at once when every edit is saved; else ask: Save…, Discard edits, or Cancel (the default)."""
+        if not self.history.modified:
+            then()
+            return
+        if self.discard_question is not None:
+            self.discard_question.reject()
+        box, (save, discard) = self._warning("planDiscardQuestion", "Edits not saved",
+                                             f"The plan has edits not saved to a file. {what} and lose them?",
+                                             ("Save…", QMessageBox.AcceptRole),
+                                             ("Discard edits", QMessageBox.DestructiveRole))
+
+        def answered(b: QMessageBox) -> None:
+            if self.discard_question is b:
+                self.discard_question = None
+            b.deleteLater()
+            if b.clickedButton() is discard:
+                then()
+            elif b.clickedButton() is save:
+                self.ask_save()
+        self.discard_question = ask(box, answered)
+
+    def _warning(self, name: str, title: str, text: str, *buttons) -> tuple[QMessageBox, list]:
+        """A question whose default (Enter, Escape) is Cancel: nothing is lost by a key pressed too soon."""
+        box = QMessageBox(QMessageBox.Warning, title, text, QMessageBox.NoButton, self._window)
+        box.setObjectName(name)
+        added = [box.addButton(label, role) for label, role in buttons]
+        box.addButton(QMessageBox.Cancel)
+        box.setDefaultButton(QMessageBox.Cancel)
+        box.setEscapeButton(QMessageBox.Cancel)
+        return box, added
+
+    def ask_before_closing(self) -> bool:
+        """Quitting with edits not saved: ask, and keep the window (True) until the pilot lets them go."""
+        if self._may_close or not self.history.modified:
+            return False
+
+        def close() -> None:
+            self._may_close = True
+            self._window.close()
+        self._unless_losing_edits("Quit", close)
+        return True
 
     def _file_loaded(self, got) -> None:
-        """An opened file replaces the plans it holds (a WPL file: one; a .plan: all three)."""
+        """An opened file replaces the plans it holds (a WPL file: one; a .plan: all three, its surveys kept)."""
         for plan in got.plans:
-            self.editor.load(plan)
+            if plan.kind is PlanKind.MISSION:
+                entries, notes = mission_entries(got)
+                self.editor.load_entries(entries)
+                for note in notes:
+                    self._window.log_message(f"Plan opened: {note}", Severity.NOTICE)
+            else:
+                self.editor.load(plan)
+        self.history.mark_saved()
         if not self.dock.isVisible():
             self.show_plan(True)
 
@@ -317,13 +412,19 @@ class PlanController(QObject):
         return d, d / max(speed, 0.1)
 
     # -- transfers ----------------------------------------------------------------------------------
-    def transfer(self, action: str) -> None:
-        """Upload, Download or Clear the plan of the tab shown; the driver's answer comes back by itself."""
-        kind = KINDS[self.panel.layer]
+    def transfer(self, action: str, confirmed: PlanKind | None = None) -> None:
+        """Upload every plan that differs from the vehicle's (the tab shown's at least), Download the tab's, or
+        Remove it from the vehicle (asked first; ``confirmed``: the kind the pilot said yes to); the driver's answers
+        come back by themselves."""
+        kind = confirmed if confirmed is not None else KINDS[self.panel.layer]
         if action == "upload":
-            self._outcome[kind] = f"Uploading the {kind.label}…"
-            self._sending[kind] = self.doc.plan(kind)
-            self.adapter.command("upload_plan", self._sending[kind])
+            for k in self.to_upload():
+                self._outcome[k] = f"Uploading the {k.label}…"
+                self._sending[k] = self.doc.plan(k)
+                self.adapter.command("upload_plan", self._sending[k])
+        elif action == "clear" and confirmed is None:
+            self._ask_removal(kind)
+            return
         elif action == "download":
             self._outcome[kind] = f"Downloading the {kind.label}…"
             self.adapter.command("download_plan", kind)
@@ -332,6 +433,27 @@ class PlanController(QObject):
             self.adapter.command("clear_plan", kind)
         self._shown = None
         self._show_vehicle(self._state)
+
+    def to_upload(self) -> list[PlanKind]:
+        """The tab shown, and every other plan here that is not the vehicle's (one the vehicle holds but that is
+        empty here is left there: removing is Remove from vehicle's, asked first)."""
+        shown = KINDS[self.panel.layer]
+        return [k for k in PlanKind if k is shown or (self.sync(k) and self.doc.plan(k).items)]
+
+    def _ask_removal(self, kind: PlanKind) -> None:
+        """Remove from vehicle asks first: it cannot be undone here (the list stays, Upload puts it back)."""
+        theirs = self.vehicle_plan(kind)
+        held = f"It holds {len(theirs)} items." if theirs is not None else "What it holds has not been read."
+        box, (remove,) = self._warning("removeQuestion", f"Remove the {kind.label} from the vehicle",
+                                       f"Remove the {kind.label} from the vehicle? {held}\n\n"
+                                       "The list here stays as it is.",
+                                       ("Remove from vehicle", QMessageBox.DestructiveRole))
+
+        def answered(b: QMessageBox) -> None:
+            b.deleteLater()
+            if b.clickedButton() is remove:
+                self.transfer("clear", confirmed=kind)
+        self.remove_question = ask(box, answered)
 
     def _transfer_finished(self, name: str, outcome) -> None:
         result: CommandResult = outcome.result

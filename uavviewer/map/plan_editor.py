@@ -13,6 +13,8 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from driver.mission.plan import MissionItem, Plan, PlanKind
 
+from .plan_checks import unreachable
+from .plan_history import PlanHistory
 from .plan_model import ITEM_KINDS, FenceShape, Performance, PlanDocument, is_nav, new_item
 from .survey import SurveySpec, camera_named
 
@@ -33,6 +35,9 @@ class PlanEditor(QObject):
         self.selected: tuple[str, int] | None = None
         self.home: tuple[float, float] | None = None     # the vehicle's; totals and the path start there
         self.perf = Performance()
+        self.history = PlanHistory(doc, self)
+        self.history.restored.connect(self._restored)
+        self._gesture = 0                                # each press on an item starts a new drag (undo step)
         p = panel
         p.toolChanged.connect(self._tool)
         p.layerChanged.connect(lambda _layer: self.refresh())
@@ -40,10 +45,12 @@ class PlanEditor(QObject):
         p.deleteRequested.connect(self.delete_selected)
         p.finishRequested.connect(self.finish_shape)
         p.rowSelected.connect(self.select)
+        p.moveRequested.connect(self.move_selected)
+        p.rowsDropped.connect(self.move_rows)
         p.cellEdited.connect(self.edit_cell)
         p.surveyEdited.connect(self._survey_edited)
         layer.clicked.connect(self.click)
-        layer.picked.connect(self.select)
+        layer.picked.connect(self._picked)
         layer.dragged.connect(self.drag)
 
     # -- editing ------------------------------------------------------------------------------------
@@ -92,7 +99,7 @@ class PlanEditor(QObject):
             self._select("rally", len(self.doc.rally) - 1)
         else:                                       # a corner of a survey area or a fence polygon
             self.layer.draft.append((lat, lon))
-        self._changed()
+        self._changed(f"Add {tool}")
 
     def finish_shape(self) -> None:
         """The polygon being drawn becomes a survey or a fence polygon (three corners at least)."""
@@ -106,7 +113,7 @@ class PlanEditor(QObject):
             else:
                 self.doc.fence.append(FenceShape(self.tool.startswith("Inclusion"), tuple(draft)))
                 self._select("fence", len(self.doc.fence) - 1)
-        self._changed()
+        self._changed(f"Add {self.tool}")
 
     def add_without_place(self, what: str) -> None:
         """+ Takeoff (first), + RTL, + Speed (before the selected item, else at the end)."""
@@ -119,17 +126,79 @@ class PlanEditor(QObject):
                 else self._where()
             alt = 0.0
         self._select("mission", self.doc.insert(index, new_item(command, alt=alt, speed=self.perf.cruise)))
-        self._changed()
+        self._changed(f"Add {what}")
+
+    def _items(self, layer: str) -> list:
+        return {"mission": self.doc.entries, "fence": self.doc.fence, "rally": self.doc.rally}[layer]
+
+    def _rows(self) -> tuple[str, list[int]]:
+        """The tab's selected rows (several with Shift or Ctrl), else the item selected on the map."""
+        layer = self.panel.layer
+        rows = self.panel.selected_rows(layer)
+        if not rows and self.selected is not None:
+            layer, rows = self.selected[0], [self.selected[1]]
+        return layer, [r for r in rows if 0 <= r < len(self._items(layer))]
 
     def delete_selected(self) -> None:
-        if self.selected is None:
+        """Delete the selected item(s): the list's selected rows, or the item picked on the map."""
+        layer, rows = self._rows()
+        if not rows:
             return
-        layer, i = self.selected
-        items = {"mission": self.doc.entries, "fence": self.doc.fence, "rally": self.doc.rally}[layer]
-        if 0 <= i < len(items):
-            del items[i]
-        self._select(layer, min(i, len(items) - 1) if items else None)
-        self._changed()
+        items = self._items(layer)
+        for r in sorted(rows, reverse=True):
+            del items[r]
+        first = min(rows)
+        self._select(layer, min(first, len(items) - 1) if items else None)
+        self._changed("Delete" if len(rows) == 1 else f"Delete {len(rows)} items")
+
+    def move_selected(self, step: int) -> None:
+        """The selected item(s) one place up (``step`` -1) or down (+1) in their list."""
+        layer, rows = self._rows()
+        items = self._items(layer)
+        if not rows or min(rows) + step < 0 or max(rows) + step >= len(items):
+            return
+        rows = sorted(rows, reverse=step > 0)
+        for r in rows:
+            items[r], items[r + step] = items[r + step], items[r]
+        self._select(layer, rows[-1] + step if step > 0 else rows[0] + step)
+        self._changed("Move up" if step < 0 else "Move down")
+        self.panel.select_rows(layer, [r + step for r in rows])
+
+    def move_rows(self, layer: str, rows: list[int], before: int) -> None:
+        """Rows dragged in the list: their items go before row ``before`` (as it was counted before the move)."""
+        items = self._items(layer)
+        rows = sorted(r for r in set(rows) if 0 <= r < len(items))
+        if not rows:
+            return
+        moving = [items[r] for r in rows]
+        at = max(0, min(before, len(items))) - sum(r < before for r in rows)
+        rest = [item for r, item in enumerate(items) if r not in rows]
+        items[:] = rest[:at] + moving + rest[at:]
+        self._select(layer, at)
+        self._changed("Move by dragging")
+        self.panel.select_rows(layer, list(range(at, at + len(moving))))
+
+    def clear_layer(self, layer: str) -> None:
+        """Clear the editor's tab (the vehicle keeps what it holds): one undoable step."""
+        self._items(layer).clear()
+        if layer == "fence":
+            self.doc.fence_extra.clear()
+        self.layer.draft = []
+        self._select(layer, None)
+        self._changed(f"Clear the {layer}")
+
+    def new_plan(self) -> None:
+        """Everything empty: mission, fence and rally points (undoable; the vehicle keeps what it holds)."""
+        for layer in LAYER_OF.values():
+            self._items(layer).clear()
+        self.doc.fence_extra.clear()
+        self.layer.draft = []
+        self._select("mission", None)
+        self._changed("New plan")
+
+    def _picked(self, layer: str, index: int) -> None:
+        self._gesture += 1                          # a drag that follows is one undo step of its own
+        self.select(layer, index)
 
     def drag(self, layer: str, index: int, vertex: int, lat: float, lon: float) -> None:
         if layer == "mission":
@@ -147,7 +216,7 @@ class PlanEditor(QObject):
             self.doc.fence[index] = replace(shape, vertices=tuple(vertices))
         else:
             self.doc.rally[index] = replace(self.doc.rally[index], lat=lat, lon=lon)
-        self._changed()
+        self._changed("Move on the map", ("drag", self._gesture, layer, index, vertex))
 
     def select(self, layer: str, index: int) -> None:
         if layer != self.panel.layer:
@@ -177,7 +246,7 @@ class PlanEditor(QObject):
             self.doc.fence[row] = replace(self.doc.fence[row], radius=value)
         elif layer == "rally" and column == "Alt m" and 0 <= row < len(self.doc.rally) and value > 0:
             self.doc.rally[row] = replace(self.doc.rally[row], alt=value)
-        self._changed()
+        self._changed(f"Edit {column}")
 
     def _survey_edited(self, v: dict) -> None:
         if self.selected and self.selected[0] == "mission":
@@ -186,15 +255,31 @@ class PlanEditor(QObject):
                 self.doc.entries[self.selected[1]] = replace(
                     entry, altitude=v["altitude"], camera=camera_named(v["camera"]), front_overlap=v["front"],
                     side_overlap=v["side"], angle=v["angle"])
-                self._changed()
+                self._changed("Edit the survey", ("survey", self.selected[1]))
 
     def load(self, plan: Plan) -> None:
         """A plan from the vehicle or a file replaces the one of its kind being edited."""
         self.doc.load(plan)
         self._select(LAYER_OF[plan.kind], None)
-        self._changed()
+        self._changed(f"Load the {plan.kind.label}")
 
-    def _changed(self) -> None:
+    def load_entries(self, entries: list) -> None:
+        """A mission opened from a file, its surveys kept surveys (uavviewer.map.survey_file)."""
+        self.doc.entries = list(entries)
+        self._select("mission", None)
+        self._changed("Open the mission")
+
+    def _changed(self, what: str = "Edit", merge=None) -> None:
+        """After every edit: one undo step (``merge``: steps with the same key in a row are one), shown again."""
+        self.history.record(what, merge)
+        self.refresh()
+        self.view.update()
+
+    def _restored(self) -> None:
+        """An undo or redo replaced the document: the selection is kept where it still exists."""
+        if self.selected is not None and not 0 <= self.selected[1] < len(self._items(self.selected[0])):
+            self._select(self.selected[0], None)
+        self.layer.draft = []
         self.refresh()
         self.view.update()
 
@@ -229,7 +314,8 @@ class PlanEditor(QObject):
             editable.append((False, False, alt_ok, speed is not None, hold is not None))
         sel = self.selected
         current_entry = self.layer.current_entry
-        p.set_rows("mission", rows, editable, sel[1] if sel and sel[0] == "mission" else None, current_entry)
+        p.set_rows("mission", rows, editable, sel[1] if sel and sel[0] == "mission" else None, current_entry,
+                   unreachable(doc.entries, seqs))
         p.set_rows("fence", [(s.label, len(s.vertices) if not s.circle else "", f"{s.radius:g}" if s.circle else "")
                              for s in doc.fence], [(False, False, s.circle) for s in doc.fence],
                    sel[1] if sel and sel[0] == "fence" else None)
@@ -249,8 +335,9 @@ class PlanEditor(QObject):
             p.surveyBox.setVisible(self.tool == "Survey area" and p.layer == "mission")
         p.finishButton.setVisible(self.tool in ("Survey area", "Inclusion polygon", "Exclusion polygon"))
         totals = doc.totals(self.home, self.perf)
-        p.totalsLabel.setText(("Plan: " + totals.text()) if self.home is not None else
-                              "Plan totals need the vehicle's home position")
+        totals_text = ("Plan: " + totals.text()) if self.home is not None else \
+            "Plan totals need the vehicle's home position"
+        p.totalsLabel.setText(f"{totals_text} · cruise {self.perf.cruise_text()}")
         p.totalsLabel.setStyleSheet("color: #ff4d4d;" if totals.beyond_reserve else "")
         self.refreshed.emit()
 

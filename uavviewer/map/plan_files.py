@@ -1,5 +1,10 @@
-"""File › Open plan… and Save plan…: QGroundControl ``.plan`` files (mission, fence and rally points together) and
-``QGC WPL 110`` waypoint files (one plan), read and written by the driver's own readers (driver.mission.files).
+"""File › Open plan… and Save plan…: QGroundControl ``.plan`` files (mission, fence and rally points together, its
+surveys as surveys) and ``QGC WPL 110`` waypoint files, read and written by the driver's own readers
+(driver.mission.files).
+
+The type chosen in the chooser is the type written (a name typed without its ending gets the chosen type's), and
+a WPL file is always the mission, whichever tab is shown: the format holds one plan, and Mission Planner and
+MAVProxy read it as a mission. What it cannot hold (a fence, rally points, a survey's settings) is said.
 
 The choosers are Qt's own, opened without waiting on them: the window keeps flying while one is open.
 """
@@ -8,20 +13,23 @@ from __future__ import annotations
 import os
 
 from PyQt5.QtCore import QObject, pyqtSignal
-from PyQt5.QtWidgets import QFileDialog, QWidget
+from PyQt5.QtWidgets import QComboBox, QFileDialog, QWidget
 
 from driver.mission.files import PlanFile, PlanFileError, load_plan_file, save_plan_file
-from driver.mission.plan import Plan
+from driver.mission.plan import Plan, PlanKind
 from driver.state import Severity
 
 __all__ = ["PlanFiles", "FILTERS"]
 
-FILTERS = "QGroundControl plan (*.plan);;Waypoint file, QGC WPL 110 (*.waypoints *.txt *.mission);;All files (*)"
+PLAN_FILTER = "QGroundControl plan (*.plan)"
+WPL_FILTER = "Waypoint file, QGC WPL 110: the mission only (*.waypoints *.txt *.mission)"
+FILTERS = f"{PLAN_FILTER};;{WPL_FILTER};;All files (*)"
 
 
 class PlanFiles(QObject):
     loaded = pyqtSignal(object)              # PlanFile: every plan the file holds
     said = pyqtSignal(str, object)           # what happened, Severity
+    saved = pyqtSignal(str)                  # the path written (the plan's edits are safe there)
 
     def __init__(self, parent_window: QWidget, parent: QObject | None = None) -> None:
         super().__init__(parent)
@@ -36,11 +44,15 @@ class PlanFiles(QObject):
         dialog.open()
         return dialog
 
-    def ask_save(self, plans, home, one: Plan) -> QFileDialog:
-        """``plans``: all three, for a .plan; ``one``: the plan of the tab shown, for a WPL file."""
+    def ask_save(self, plans, home, complex_items=()) -> QFileDialog:
+        """``plans``: all three (a WPL file takes the mission); ``complex_items``: the mission's surveys."""
         dialog = self._dialog("Save plan", QFileDialog.AcceptSave)
         dialog.setDefaultSuffix("plan")
-        dialog.fileSelected.connect(lambda path: self.save(path, plans, home, one))
+        # a name typed without its ending gets the type chosen (Qt's dialog appends the default suffix); the
+        # type list is followed however it changes (a click, the keys, selectNameFilter)
+        types = dialog.findChild(QComboBox, "fileTypeCombo")
+        types.currentTextChanged.connect(lambda f: dialog.setDefaultSuffix("waypoints" if f == WPL_FILTER else "plan"))
+        dialog.fileSelected.connect(lambda path: self.save(path, plans, home, complex_items))
         dialog.open()
         return dialog
 
@@ -66,14 +78,27 @@ class PlanFiles(QObject):
         self.said.emit(f"Plan opened from {path}: {counts}", Severity.INFO)
         return got
 
-    def save(self, path: str, plans, home, one: Plan) -> bool:
+    def save(self, path: str, plans, home, complex_items=()) -> bool:
         wpl = not path.lower().endswith(".plan")
+        plans = tuple(plans)
+        mission = next((p for p in plans if p.kind is PlanKind.MISSION), Plan(PlanKind.MISSION))
         try:
-            save_plan_file(path, (one,) if wpl else tuple(plans), home)
+            if wpl:
+                save_plan_file(path, (mission,), home)
+            else:
+                save_plan_file(path, plans, home, complex_items)
         except (OSError, PlanFileError) as exc:
             self.said.emit(f"Plan not saved: {exc}", Severity.WARNING)
             return False
         self.folder = os.path.dirname(path)
-        what = f"the {one.kind.label} ({len(one)} items) as a WPL file" if wpl else "mission, fence and rally points"
-        self.said.emit(f"Plan saved to {path}: {what}", Severity.INFO)
+        if wpl:
+            left = [f"the {p.kind.label} ({len(p)} items)" for p in plans if p.kind is not PlanKind.MISSION and p.items]
+            left += ["the surveys' settings (they are saved as their waypoints)"] if complex_items else []
+            what = f"the mission ({len(mission)} items) as a WPL file" + (
+                f"; a WPL file cannot hold {' and '.join(left)}: save a .plan to keep them" if left else "")
+            severity = Severity.WARNING if left else Severity.INFO
+        else:
+            what, severity = "mission, fence and rally points", Severity.INFO
+        self.said.emit(f"Plan saved to {path}: {what}", severity)
+        self.saved.emit(path)
         return True

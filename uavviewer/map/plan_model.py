@@ -95,20 +95,32 @@ class Performance:
     capacity_mah: float = 5200.0               # BATT_CAPACITY (the Solo's pack)
     hover_amps: float = 15.0                   # a Solo hovers on ~15 A: 5.2 Ah in about 20 minutes
     amps_per_ms: float = 0.6                   # ... and draws this much more per m/s of speed
+    known: frozenset = frozenset()             # the parameters above the vehicle reported (the rest: defaults)
 
     @classmethod
     def from_parameters(cls, table, base: "Performance | None" = None) -> "Performance":
         """The vehicle's own values where its parameter table has them."""
         p = base or cls()
+        known = set()
 
         def value(name: str, scale: float, default: float) -> float:
             got = table.get(name) if table is not None else None
             v = getattr(got, "value", None)
-            return v * scale if isinstance(v, (int, float)) and math.isfinite(v) and v > 0 else default
-        return replace(p, cruise=value("WPNAV_SPEED", 0.01, p.cruise), climb=value("WPNAV_SPEED_UP", 0.01, p.climb),
-                       descent=value("WPNAV_SPEED_DN", 0.01, p.descent),
-                       land_speed=value("LAND_SPEED", 0.01, p.land_speed), rtl_alt=value("RTL_ALT", 0.01, p.rtl_alt),
-                       capacity_mah=value("BATT_CAPACITY", 1.0, p.capacity_mah))
+            if isinstance(v, (int, float)) and math.isfinite(v) and v > 0:
+                known.add(name)
+                return v * scale
+            return default
+        out = replace(p, cruise=value("WPNAV_SPEED", 0.01, p.cruise), climb=value("WPNAV_SPEED_UP", 0.01, p.climb),
+                      descent=value("WPNAV_SPEED_DN", 0.01, p.descent),
+                      land_speed=value("LAND_SPEED", 0.01, p.land_speed), rtl_alt=value("RTL_ALT", 0.01, p.rtl_alt),
+                      capacity_mah=value("BATT_CAPACITY", 1.0, p.capacity_mah))
+        return replace(out, known=frozenset(known))
+
+    def cruise_text(self) -> str:
+        """The cruise speed and where it comes from: "10 m/s, WPNAV_SPEED from the vehicle" or "5 m/s assumed"."""
+        if "WPNAV_SPEED" in self.known:
+            return f"{self.cruise:g} m/s, WPNAV_SPEED from the vehicle"
+        return f"{self.cruise:g} m/s assumed (ArduCopter's default; the vehicle has not said its WPNAV_SPEED)"
 
 
 @dataclass(frozen=True)

@@ -5,14 +5,15 @@ It says what the pilot wants through its signals and shows what it is given; the
 """
 from __future__ import annotations
 
-from PyQt5.QtCore import Qt, pyqtSignal
-from PyQt5.QtGui import QKeySequence
+from PyQt5.QtCore import QItemSelectionModel, Qt, pyqtSignal
+from PyQt5.QtGui import QBrush, QColor, QKeySequence
 from PyQt5.QtWidgets import (
     QAbstractItemView, QCheckBox, QComboBox, QDoubleSpinBox, QFormLayout, QGroupBox, QHBoxLayout, QHeaderView,
     QLabel, QMenu, QProgressBar, QPushButton, QShortcut, QSizePolicy, QTabWidget, QTableWidget, QTableWidgetItem,
     QToolButton, QVBoxLayout, QWidget,
 )
 
+from .plan_table import PlanTable
 from .survey import CAMERAS
 
 __all__ = ["PlanPanel", "LAYERS", "TOOLS"]
@@ -39,6 +40,8 @@ class PlanPanel(QWidget):
     deleteRequested = pyqtSignal()
     finishRequested = pyqtSignal()               # end the polygon being drawn
     rowSelected = pyqtSignal(str, int)           # layer, row
+    moveRequested = pyqtSignal(int)              # the selected item(s) one place up (-1) or down (+1)
+    rowsDropped = pyqtSignal(str, list, int)     # layer, rows dragged in the list, the row they go before
     cellEdited = pyqtSignal(str, int, str, float)   # layer, row, column name, value
     surveyEdited = pyqtSignal(object)            # dict: camera, altitude, front, side, angle
     transferRequested = pyqtSignal(str)          # "upload", "download", "clear" (of the tab's plan)
@@ -49,6 +52,8 @@ class PlanPanel(QWidget):
     skipRequested = pyqtSignal(int)              # the vehicle's item number
     openRequested = pyqtSignal()
     saveRequested = pyqtSignal()
+    newRequested = pyqtSignal()                  # an empty plan (asks first when edits are not saved)
+    clearListRequested = pyqtSignal(str)         # empty the tab's list here (the vehicle keeps its own)
 
     def __init__(self, parent: QWidget | None = None) -> None:
         super().__init__(parent)
@@ -84,13 +89,21 @@ class PlanPanel(QWidget):
         self.insertCheck = QCheckBox("Insert")
         self.insertCheck.setToolTip("Add before the selected item instead of at the end")
         self.deleteButton = QToolButton(text="Delete")
+        self.deleteButton.setToolTip("Delete the selected item(s) (Delete key)")
+        self.upButton = QToolButton(text="↑")
+        self.upButton.setToolTip("Move the selected item(s) up")
+        self.downButton = QToolButton(text="↓")
+        self.downButton.setToolTip("Move the selected item(s) down")
+        self.newButton = QToolButton(text="New")
+        self.newButton.setToolTip("A new, empty plan: mission, fence and rally points (the vehicle keeps its own)")
         self.openButton = QToolButton(text="Open…")
         self.openButton.setToolTip("Open a plan file (QGroundControl .plan, or a WPL waypoint file)")
         self.saveButton = QToolButton(text="Save…")
         self.saveButton.setToolTip("Save the plan (QGroundControl .plan, or the mission as a WPL waypoint file)")
-        for w in (self.addButton, self.insertCheck, self.deleteButton):
+        for w in (self.addButton, self.insertCheck, self.deleteButton, self.upButton, self.downButton):
             adds.addWidget(w)
         adds.addStretch(1)
+        adds.addWidget(self.newButton)
         adds.addWidget(self.openButton)
         adds.addWidget(self.saveButton)
         lay.addLayout(adds)
@@ -102,8 +115,10 @@ class PlanPanel(QWidget):
 
         transfers = QHBoxLayout()
         self.uploadButton = QPushButton("Upload")
+        self.uploadButton.setToolTip("Upload the tab's plan, and every other plan here that differs from the vehicle's")
         self.downloadButton = QPushButton("Download")
-        self.clearButton = QPushButton("Clear")
+        self.clearButton = QPushButton("Remove…")
+        self.clearButton.setToolTip("Remove the tab's plan from the vehicle (asks first); the list here stays")
         self.cancelButton = QToolButton(text="✕")
         self.cancelButton.setToolTip("Cancel the transfer")
         self.progressBar = QProgressBar()
@@ -135,14 +150,14 @@ class PlanPanel(QWidget):
         self.tabs = QTabWidget()
         self.tables: dict[str, QTableWidget] = {}
         for layer, title in zip(LAYERS, ("Mission", "Fence", "Rally")):
-            table = QTableWidget(0, len(COLUMNS[layer]))
+            table = PlanTable(0, len(COLUMNS[layer]))
             table.setObjectName(f"{layer}Table")
             table.setMinimumHeight(110)
             table.verticalHeader().setDefaultSectionSize(table.fontMetrics().height() + 6)
             table.setHorizontalHeaderLabels(COLUMNS[layer])
             table.verticalHeader().hide()
             table.setSelectionBehavior(QAbstractItemView.SelectRows)
-            table.setSelectionMode(QAbstractItemView.SingleSelection)
+            table.setSelectionMode(QAbstractItemView.ExtendedSelection)      # Shift/Ctrl: several to delete or move
             table.setEditTriggers(QAbstractItemView.DoubleClicked | QAbstractItemView.EditKeyPressed
                                   | QAbstractItemView.AnyKeyPressed)
             header = table.horizontalHeader()
@@ -152,6 +167,7 @@ class PlanPanel(QWidget):
             table.customContextMenuRequested.connect(lambda pos, l=layer: self._table_menu(l, pos))
             table.itemSelectionChanged.connect(lambda l=layer: self._selection(l))
             table.itemChanged.connect(lambda item, l=layer: self._edited(l, item))
+            table.rowsDropped.connect(lambda rows, before, l=layer: self.rowsDropped.emit(l, rows, before))
             QShortcut(QKeySequence.Delete, table, self.deleteRequested.emit, context=Qt.WidgetShortcut)
             self.tables[layer] = table
             self.tabs.addTab(table, title)
@@ -186,13 +202,18 @@ class PlanPanel(QWidget):
         lay.addWidget(self.surveyBox)
 
         for w in self.findChildren(QWidget):
-            if not isinstance(w, QTableWidget) and not isinstance(w, (QDoubleSpinBox, QComboBox)):
+            # a table's viewport passes its focus policy on to the table (its focus proxy): left alone, or a
+            # click in the list would leave the focus elsewhere and Delete would not reach it
+            if not isinstance(w, (QTableWidget, QDoubleSpinBox, QComboBox)) and w.focusProxy() is None:
                 w.setFocusPolicy(Qt.NoFocus)          # keys keep flying the drone
         self.editCheck.toggled.connect(self.editToggled.emit)
         self.toolCombo.currentTextChanged.connect(lambda t: t and self.toolChanged.emit(t))
         self.tabs.currentChanged.connect(self._tab)
         self.finishButton.clicked.connect(self.finishRequested.emit)
         self.deleteButton.clicked.connect(self.deleteRequested.emit)
+        self.upButton.clicked.connect(lambda: self.moveRequested.emit(-1))
+        self.downButton.clicked.connect(lambda: self.moveRequested.emit(1))
+        self.newButton.clicked.connect(self.newRequested.emit)
         self.uploadButton.clicked.connect(lambda: self.transferRequested.emit("upload"))
         self.downloadButton.clicked.connect(lambda: self.transferRequested.emit("download"))
         self.clearButton.clicked.connect(lambda: self.transferRequested.emit("clear"))
@@ -264,7 +285,8 @@ class PlanPanel(QWidget):
         row = table.rowAt(pos.y())
         if row < 0:
             return
-        table.selectRow(row)
+        if row not in self.selected_rows(layer):
+            table.selectRow(row)
         menu = QMenu(table)
         menu.setAttribute(Qt.WA_DeleteOnClose)
         menu.setObjectName("planMenu")
@@ -274,12 +296,33 @@ class PlanPanel(QWidget):
                 menu.addAction(f"Skip to item {seq}", lambda: self.skipRequested.emit(seq)).setEnabled(
                     self.skip_allowed)
         menu.addAction("Delete", self.deleteRequested.emit)
+        menu.addAction("Move up", lambda: self.moveRequested.emit(-1))
+        menu.addAction("Move down", lambda: self.moveRequested.emit(1))
+        menu.addSeparator()
+        menu.addAction("Clear the list", lambda: self.clearListRequested.emit(layer))
         menu.popup(table.viewport().mapToGlobal(pos))
 
     # -- what it shows ----------------------------------------------------------------------------
+    def selected_rows(self, layer: str) -> list[int]:
+        return sorted(i.row() for i in self.tables[layer].selectionModel().selectedRows())
+
+    def select_rows(self, layer: str, rows: list[int]) -> None:
+        table = self.tables[layer]
+        self._filling = True
+        try:
+            table.clearSelection()
+            for r in rows:
+                table.selectionModel().select(table.model().index(r, 0),
+                                              QItemSelectionModel.Select | QItemSelectionModel.Rows)
+        finally:
+            self._filling = False
+
     def set_rows(self, layer: str, rows: list[tuple], editable: list[tuple[bool, ...]] | None = None,
-                 selected: int | None = None, current: int | None = None) -> None:
-        """Rows of cell texts; ``editable`` per cell; ``current``: the row the vehicle flies now (highlighted)."""
+                 selected: int | None = None, current: int | None = None,
+                 warnings: dict[int, str] | None = None) -> None:
+        """Rows of cell texts; ``editable`` per cell; ``current``: the row the vehicle flies now (highlighted);
+        ``warnings``: what is wrong with a row, marked ⚠ on it and said in its tooltip."""
+        warnings = warnings or {}
         table = self.tables[layer]
         self._filling = True
         try:
@@ -290,14 +333,18 @@ class PlanPanel(QWidget):
                     if item is None:
                         item = QTableWidgetItem()
                         table.setItem(r, c, item)
-                    item.setText(str(text))
+                    warning = warnings.get(r, "")
+                    item.setText(f"⚠ {text}" if warning and c == 1 else str(text))
+                    item.setToolTip(warning)
+                    item.setForeground(QColor("#ffb020") if warning else QBrush())
                     flags = Qt.ItemIsSelectable | Qt.ItemIsEnabled
                     if editable is not None and editable[r][c]:
                         flags |= Qt.ItemIsEditable
                     item.setFlags(flags)
                     item.setBackground(Qt.darkGreen if r == current else Qt.transparent)
             if selected is not None and 0 <= selected < len(rows):
-                table.selectRow(selected)
+                if selected not in self.selected_rows(layer):    # a multiple selection stays as it is
+                    table.selectRow(selected)
             elif selected is None:
                 table.clearSelection()
         finally:

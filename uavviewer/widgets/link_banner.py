@@ -5,7 +5,7 @@ from PyQt5.QtCore import Qt
 from PyQt5.QtWidgets import QLabel, QWidget
 
 from driver.state import LinkStatus
-from ..flight_phase import NO_VEHICLE
+from ..flight_phase import NO_VEHICLE, NOT_CONNECTED
 
 __all__ = ["LinkBanner"]
 
@@ -30,7 +30,8 @@ class LinkBanner(QLabel):
         """``replay_finished``: a recorded flight has played to its end; what is shown is its last moment.
         ``warning``: why the vehicle and the viewer may not hear each other (signing), shown with the rest."""
         if replay_finished:
-            text, kind = "Replay finished — the instruments show the recording's last moment", "waiting"
+            text, kind = "Replay ended — the instruments show the recording's last moment; Restart plays it again", \
+                "waiting"
         elif status is LinkStatus.OK:
             text, kind = "", ""
         elif status is LinkStatus.WAITING:
@@ -38,8 +39,8 @@ class LinkBanner(QLabel):
         elif status is LinkStatus.LOST:
             since = "" if heartbeat_age is None else f" — {heartbeat_age:.0f} s since the last heartbeat"
             text, kind = f"Link lost{since}", "lost"
-        else:
-            text, kind = f"Link closed ({address})", "lost"
+        else:                                   # only File › Disconnect closes the link the window shows
+            text, kind = f"{NOT_CONNECTED} — File › Connect picks a vehicle", "lost"
         if warning and status is not LinkStatus.CLOSED and not replay_finished:
             text, kind = (f"{text} — {warning}", kind) if text else (warning, "warning")
         if (status, kind) != (self._status, self.property("kind")):

@@ -1,6 +1,12 @@
-"""The autopilot's words and the outcome of every command, newest at the bottom."""
+"""The autopilot's words and the outcome of every command, newest at the bottom.
+
+Quiet by design: a line said again right after itself is counted on that line ("PreArm: GPS 1: Bad fix (×3)"),
+and a burst of the same command (a wheel turned notch by notch: gimbal pitch -5°, -10°, -15°) is one line that
+shows the burst's latest outcome: one line per gesture.
+"""
 from __future__ import annotations
 
+import re
 import time as _time
 
 from PyQt5.QtCore import Qt, pyqtSignal
@@ -9,7 +15,11 @@ from PyQt5.QtWidgets import QAbstractItemView, QHeaderView, QToolButton, QTreeWi
 
 from driver.state import CommandResult, CommandStatus, Severity
 
-__all__ = ["MessagesView", "severity_color"]
+__all__ = ["MessagesView", "severity_color", "GESTURE_GAP"]
+
+GESTURE_GAP = 2.0              # s: the same command's outcomes closer than this are one gesture, one line
+_COUNT, _BASE, _GESTURE = Qt.UserRole + 1, Qt.UserRole + 2, Qt.UserRole + 3
+_NUMBER = re.compile(r"^[-+]?\d+(\.\d+)?[°%a-z/]*,?$")    # "-35°", "3", "40.28," (a name like "solo-1:" is not)
 
 _COLORS = {
     Severity.EMERGENCY: "#ff3b3b", Severity.ALERT: "#ff3b3b", Severity.CRITICAL: "#ff3b3b",
@@ -49,22 +59,47 @@ class MessagesView(QTreeWidget):
         header.setStretchLastSection(True)
         self._fix_column = 3                   # Fix… buttons, added with the first one
 
-    def add_message(self, when: float, severity: Severity, text: str, source: str = "vehicle") -> None:
-        stamp = _time.strftime("%H:%M:%S", _time.localtime(when))
-        item = QTreeWidgetItem([stamp, source, text])
-        brush = QBrush(QColor(severity_color(severity)))
-        for col in range(3):
-            item.setForeground(col, brush)
-        item.setData(0, Qt.UserRole, int(severity))
-        item.setToolTip(2, text)
+    def add_message(self, when: float, severity: Severity, text: str, source: str = "vehicle",
+                    gesture: str = "") -> QTreeWidgetItem:
+        """A line; the same line as the last one is counted on it instead (×N). ``gesture``: a command's kind
+        (its name without numbers): its outcome replaces the last line's when that was the same kind, moments
+        ago."""
+        last = self.topLevelItem(self.topLevelItemCount() - 1) if self.topLevelItemCount() else None
+        if last is not None and last.text(1) == source and last.data(0, Qt.UserRole) == int(severity) \
+                and last.data(0, _BASE) == text:
+            self._put(last, when, severity, text, last.data(0, _COUNT) + 1)
+            return last
+        if gesture and last is not None and last.data(0, _GESTURE) == gesture \
+                and when - last.data(0, _GESTURE + 1) <= GESTURE_GAP:
+            self._put(last, when, severity, text, 1)
+            return last
+        item = QTreeWidgetItem(["", source, ""])
+        item.setData(0, _GESTURE, gesture)
+        self._put(item, when, severity, text, 1)
         self.addTopLevelItem(item)
         while self.topLevelItemCount() > self._limit:
             self.takeTopLevelItem(0)
         self.scrollToBottom()
+        return item
+
+    @staticmethod
+    def _put(item: QTreeWidgetItem, when: float, severity: Severity, text: str, count: int) -> None:
+        shown = f"{text} (×{count})" if count > 1 else text
+        item.setText(0, _time.strftime("%H:%M:%S", _time.localtime(when)))
+        item.setText(2, shown)
+        brush = QBrush(QColor(severity_color(severity)))
+        for col in range(3):
+            item.setForeground(col, brush)
+        item.setData(0, Qt.UserRole, int(severity))
+        item.setData(0, _COUNT, count)
+        item.setData(0, _BASE, text)
+        item.setData(0, _GESTURE + 1, when)
+        item.setToolTip(2, shown)
 
     def add_result(self, result: CommandResult, when: float | None = None) -> None:
         severity = _RESULT_SEVERITY.get(result.status, Severity.INFO)
-        self.add_message(_time.time() if when is None else when, severity, str(result), "command")
+        gesture = " ".join(w for w in result.command.split() if not _NUMBER.match(w))
+        self.add_message(_time.time() if when is None else when, severity, str(result), "command", gesture)
 
     def offer_fix(self, item: QTreeWidgetItem, name: str) -> QToolButton:
         """A Fix… button at the end of ``item``'s line that asks to open parameter ``name``."""

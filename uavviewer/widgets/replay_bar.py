@@ -5,6 +5,7 @@ from PyQt5.QtCore import Qt, pyqtSignal
 from PyQt5.QtWidgets import QComboBox, QHBoxLayout, QLabel, QPushButton, QSlider, QWidget
 
 from ..flight_timer import clock_text
+from .seek_slider import SeekSlider
 
 __all__ = ["ReplayBar", "SPEEDS"]
 
@@ -32,7 +33,7 @@ class ReplayBar(QWidget):
         self.restart_button = QPushButton("Restart")
         self.restart_button.setObjectName("replayRestart")
         self.restart_button.setFocusPolicy(Qt.NoFocus)
-        self.progress = QSlider(Qt.Horizontal)        # shows where the replay is; dragged, it seeks
+        self.progress = SeekSlider()                  # shows where the replay is; clicked or dragged, it seeks
         self.progress.setObjectName("replaySeek")
         self.progress.setRange(0, STEPS)
         self.progress.setFocusPolicy(Qt.NoFocus)
@@ -48,12 +49,20 @@ class ReplayBar(QWidget):
         row.addWidget(self.speed)
         row.addWidget(self.progress, 1)
         row.addWidget(self.clock)
-        self.play_button.clicked.connect(lambda: self.pauseRequested.emit(not self._paused))
+        self._finished = False
+        self.play_button.clicked.connect(self._play_clicked)
         self.speed.activated.connect(lambda i: self.speedRequested.emit(float(self.speed.itemData(i))))
         self.restart_button.clicked.connect(self.restartRequested)
         self.progress.sliderReleased.connect(lambda: self._seek(self.progress.value()))
         self.progress.actionTriggered.connect(self._clicked)
         self.speed.setCurrentIndex(self.speed.findData(1.0))
+
+    def _play_clicked(self) -> None:
+        """Pause / Play; once the recording has ended, Restart."""
+        if self._finished:
+            self.restartRequested.emit()
+        else:
+            self.pauseRequested.emit(not self._paused)
 
     def _clicked(self, action: int) -> None:
         """A click on the groove (page step) or the keys: seek to where the slider goes."""
@@ -74,9 +83,8 @@ class ReplayBar(QWidget):
     def set_progress(self, position: float | None, duration: float | None, paused: bool,
                      speed: float | None = None, finished: bool = False) -> None:
         """``finished``: the whole log has been played; nothing more will come."""
-        self._paused = paused
-        self.play_button.setText("Finished" if finished else ("Play" if paused else "Pause"))
-        self.play_button.setEnabled(not finished)
+        self._paused, self._finished = paused, finished
+        self.play_button.setText("Restart" if finished else ("Play" if paused else "Pause"))
         self._duration = duration or 0.0
         if duration and not self.progress.isSliderDown():
             fraction = 1.0 if finished else (position or 0.0) / duration
@@ -85,7 +93,7 @@ class ReplayBar(QWidget):
                 self.progress.blockSignals(True)
                 self.progress.setValue(value)
                 self.progress.blockSignals(False)
-        end = "  (finished)" if finished else ""
+        end = "  (replay ended)" if finished else ""
         self.clock.setText(f"{clock_text(duration if finished else position)} / {clock_text(duration)}{end}")
         if speed is not None and not self.speed.view().isVisible():
             i = self.speed.findData(float(speed))

@@ -11,7 +11,7 @@ from PyQt5.QtWidgets import QFrame, QHBoxLayout, QLabel, QSizePolicy, QVBoxLayou
 
 from driver.battery import time_left
 from driver.state import BatteryAlarm, LinkStatus, Message, Severity, VehicleState
-from ..flight_phase import NO_VEHICLE
+from ..flight_phase import NO_VEHICLE, flight_phase, no_vehicle_words
 from ..flight_timer import clock_text
 from .messages_view import severity_color
 from .telemetry_panel import BAD, DIM, GOOD, NORMAL, WARN
@@ -34,7 +34,7 @@ def battery_text(s: VehicleState) -> str:
     text = " ".join(parts) or "--"
     if b.consumed_mah is not None:
         text += f" · {b.consumed_mah:.0f} mAh"
-    left = time_left(b)
+    left = time_left(b) if flight_phase(s).airborne else None    # on the ground nothing is being used up
     if left is not None:
         text += (f" · {left / 60:.0f} min left" if left >= 60 else f" · {left:.0f} s left" if left > 0
                  else " · down to the reserve")
@@ -128,6 +128,10 @@ class StatusStrip(QFrame):
         self._put(self.flight_time, f"Flight {clock_text(flight_seconds)}", DIM if lost or not s.armed else NORMAL)
         if s.link.status is LinkStatus.OK:
             self._put(self.link, f"Link OK · {s.link.packets_per_s:.0f} pkt/s", GOOD)
+        elif lost and not s.mode:
+            self._put(self.link, no_vehicle_words(s), DIM)
+        elif s.link.replay_ended:
+            self._put(self.link, s.link.ended_words, DIM)
         elif lost:
             self._put(self.link, "LINK LOST" + (f" · {age:.0f} s" if age is not None else ""), BAD)
         else:

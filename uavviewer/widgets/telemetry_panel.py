@@ -5,6 +5,7 @@ from PyQt5.QtCore import Qt
 from PyQt5.QtWidgets import QFrame, QGridLayout, QLabel, QSizePolicy, QWidget
 
 from driver.state import BatteryAlarm, LandedState, LinkStatus, SigningStatus, VehicleState
+from ..flight_phase import no_vehicle_words
 from ..link_security import SIGNING_WARNINGS, foreign_text, foreign_tooltip, signed_frames
 from ..units import fmt
 
@@ -93,6 +94,8 @@ class TelemetryPanel(QFrame):
         age = s.link.heartbeat_age
         stale_text = ("Link lost: the values below are the last heard" +
                       (f", {age:.0f} s old" if age is not None else "")) if self._stale and s.mode else ""
+        if stale_text and s.link.replay_ended:
+            stale_text = f"{s.link.ended_words}: the values below are the recording's last"
         if self.stale_label.text() != stale_text:
             self.stale_label.setText(stale_text)
             self.stale_label.setVisible(bool(stale_text))
@@ -130,7 +133,8 @@ class TelemetryPanel(QFrame):
         hb_color = DIM if age is None else (GOOD if s.link.status is LinkStatus.OK else BAD)
         self._put("heartbeat", "--" if age is None else f"{age:.1f} s ago", hb_color)
         if s.link.status is LinkStatus.CLOSED:       # disconnected, or a replay played to its end: none is live
-            self._put("heartbeat", "none (link closed)", DIM)
+            self._put("heartbeat", f"none ({s.link.ended_words.lower() or 'link closed'})" if s.mode else
+                      f"none ({no_vehicle_words(s).lower()})", DIM)
         if s.link.status is LinkStatus.LOST:
             self._put("packets", "0", BAD)
             self._put("loss", "link lost", BAD)

@@ -15,7 +15,7 @@ from PyQt5.QtCore import QPointF, QRectF, Qt
 from PyQt5.QtGui import QColor, QFont, QPainter, QPen, QRegion
 
 from driver.state import BatteryAlarm, LinkStatus, VehicleState
-from ..flight_phase import NO_VEHICLE
+from ..flight_phase import no_vehicle_words
 from ..units import fmt as _num
 
 __all__ = ["paint_hud", "text_rows", "HUD_COLOUR", "STALE_COLOUR", "hud_colour", "stale_text"]
@@ -65,6 +65,8 @@ def stale_text(state: VehicleState) -> str:
     """"LINK LOST · values 12 s old" once the link is lost with a vehicle known, else ""."""
     if state.link.status not in (LinkStatus.LOST, LinkStatus.CLOSED) or not state.mode:
         return ""
+    if state.link.replay_ended:
+        return "REPLAY ENDED · its last moment"
     age = state.link.heartbeat_age
     return "LINK LOST · values " + (f"{age:.0f} s old" if age is not None else "stale")
 
@@ -184,7 +186,7 @@ def _readouts(p: QPainter, rect: QRectF, state: VehicleState, size: int) -> None
     # mode and arming top-left, battery top-right
     top = QRectF(rect.left() + margin, rect.top() + 4, rect.width() * 0.3, line)
     armed = "ARMED" if state.armed else "DISARMED"
-    _text(p, top, Qt.AlignLeft | Qt.AlignVCenter, state.mode or NO_VEHICLE,
+    _text(p, top, Qt.AlignLeft | Qt.AlignVCenter, state.mode or no_vehicle_words(state),
           colour if stale else (HUD_COLOUR if state.connected else WARN))
     _text(p, top.translated(0, line), Qt.AlignLeft | Qt.AlignVCenter, armed,
           colour if stale else (WARN if state.armed else HUD_COLOUR))
