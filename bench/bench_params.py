@@ -31,7 +31,7 @@ import time
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 from driver.sim import SimConfig, SimVehicle  # noqa: E402
-from driver.sim.ftp import CHUNK, pack_params  # noqa: E402
+from driver.sim.ftp import CHUNK, PACKET_INTERVAL, pack, sim_entries  # noqa: E402
 from driver.sim.params import FTP_FRAME_BYTES, PARAM_VALUE_BYTES, RECORDED_RATE  # noqa: E402
 from driver.vehicle import Vehicle, VehicleConfig  # noqa: E402
 import tables  # noqa: E402  (bench/tables.py: this script runs from bench/)
@@ -40,11 +40,13 @@ LINKS = {"tcp": None, "radio": 57600}
 
 
 def floor(link: str, count: int, loss: float, pck_bytes: int | None = None) -> float:
-    """Seconds the link's bandwidth needs for the list's frames (or, with ``pck_bytes``, the FTP file's)."""
+    """Seconds the link's bandwidth needs for the list's frames (or, with ``pck_bytes``, the FTP file's, which
+    ArduPilot's FTP worker also paces at one packet every PACKET_INTERVAL)."""
     baud = LINKS[link]
     rate = RECORDED_RATE * PARAM_VALUE_BYTES if baud is None else min(RECORDED_RATE * PARAM_VALUE_BYTES, baud / 10.0)
     frames = count * PARAM_VALUE_BYTES if pck_bytes is None else -(-pck_bytes // CHUNK) * FTP_FRAME_BYTES
-    return frames / rate / (1.0 - loss)
+    paced = 0.0 if pck_bytes is None else -(-pck_bytes // CHUNK) * PACKET_INTERVAL
+    return max(frames / rate, paced) / (1.0 - loss)
 
 
 def run(link: str, loss: float, seed: int, method: str) -> dict:
@@ -66,7 +68,7 @@ def run(link: str, loss: float, seed: int, method: str) -> dict:
             not n.startswith("SR0_") and abs(table.get(n).value - params[n]) > 1e-6 * max(1.0, abs(params[n])))]
         reads = re.search(r"\((\d+) asked again", result.reason)
         return dict(ok=result.ok and table.complete and not wrong, seconds=seconds, count=len(params),
-                    pck=len(pack_params(params)),
+                    pck=len(pack(sim_entries(params), CHUNK)),
                     reads=int(reads.group(1)) if reads else 0, wrong=len(wrong), reason=result.reason,
                     frames=sim.faults.counters.downlink.frames - frames_before)
     finally:
@@ -94,7 +96,7 @@ def main() -> int:
         seconds = statistics.median(c["seconds"] for c in cells)
         done = all(c["ok"] for c in cells)
         ok &= done
-        used = "ftp" if all("FTP" in c["reason"] for c in cells) else "list" if method == "list" else "ftp→list"
+        used = "ftp" if all("over MAVLink FTP" in c["reason"] for c in cells) else "list" if method == "list" else "ftp→list"
         low = floor(link, cells[0]["count"], loss, cells[0]["pck"] if used == "ftp" else None)
         rows.append((link, used, f"{loss:.0%}", "yes" if done else f"NO ({cells[0]['reason']})", f"{seconds:.2f}",
                      f"{low:.2f}", f"{seconds / low:.2f}", str(round(statistics.median(c['reads'] for c in cells))),

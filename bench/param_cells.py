@@ -66,7 +66,7 @@ def check(profile: str, fault: str, speedup: float, apply_fault) -> ParamCell:
         cell.expected = len(params)
         cell.downloaded = sum(1 for n in params.names if table.get(n) is not None and (
             n.startswith("SR0_") or _holds(sim, n, table.get(n).value)))
-        cell.told.append(f"{'ftp' if 'FTP' in result.reason else 'list'} {result.status.value}")
+        cell.told.append(f"{'ftp' if 'over MAVLink FTP' in result.reason else 'list'} {result.status.value}")
         if result.ok and cell.downloaded != cell.expected:
             cell.wrong.append(f"{result} but {cell.expected - cell.downloaded} values are not the vehicle's")
         if not result.ok:
