@@ -15,7 +15,7 @@ average (a lost frame is asked again, and a lost request too; the floor counts t
 the file's 64 frames of 266 bytes, the same way.
 
 Methods: ``list`` is PARAM_REQUEST_LIST and re-asks by index; ``ftp`` reads ``@PARAM/param.pck`` over MAVLink FTP
-(driver/params/ftp.py: 15,244 bytes in 64 chunks for the same table), falling back to the list if FTP fails.
+(driver/params/ftp.py: 15,258 bytes in 64 packets for the same table, paced by the sim as the recording: 5.5 ms a packet), falling back to the list if FTP fails.
 """
 from __future__ import annotations
 

@@ -43,7 +43,7 @@ ERR_FAIL, ERR_EOF = 1, 6
 NAK_TEXT = {1: "failed", 2: "failed (errno)", 3: "invalid size", 4: "invalid session", 5: "no session available",
             6: "end of file", 7: "unknown command", 10: "file not found"}
 STALL_SECONDS = 3.0        # no FTP progress (an answer to the open, a new byte of the file) this long: the list instead
-OPEN_RETRY = 0.5           # s between OpenFileRO tries
+OPEN_RETRY = 0.25          # s between OpenFileRO tries (a retry after a lost ACK is refused: the file is open)
 BURST_QUIET = 0.3          # s without a packet before a burst counts as over (its end lost): gaps are then read
 READ_WINDOW = 4            # ReadFiles out at once (ArduPilot queues 5 FTP requests and drops one more)
 READ_TIMEOUT_MIN = 0.2     # s before a ReadFile is asked again (or 3 round trips, whichever is longer)
@@ -127,17 +127,29 @@ class FtpDownload:
                 self.progress = now
             if len(data) < CHUNK:
                 self.end = offset + len(data)
+                if req_opcode == OP_BURST and self.burst is not None:
+                    self.sent.pop(self.burst, None)     # only its NAK EOF can follow: the gaps are read now
+                    self.burst = None
             sent = self.asked.pop(offset, None)
             if sent is not None and self.tries.get(offset) == 1:
                 self.rtt = 0.8 * self.rtt + 0.2 * max(0.0, now - sent)
             if req_opcode == OP_READ:
-                self.sent.pop((seq - 1) & 0xFFFF, None)
+                self._answered_read((seq - 1) & 0xFFFF)
             elif burst_complete and self.burst is not None:
                 self.sent.pop(self.burst, None)
                 self.burst = None
                 self.next_burst = offset + CHUNK        # the vehicle stopped at 500 packets: ask for more
             self._learn_end()
         return None
+
+    def _answered_read(self, request: int) -> None:
+        """The vehicle answers its queue in order: a ReadFile sent before this one and still unanswered was lost,
+        or its answer was: it is asked again at once."""
+        self.sent.pop(request, None)
+        for seq, (opcode, offset, _) in list(self.sent.items()):
+            if opcode == OP_READ and 0 < (request - seq) & 0xFFFF < 1000:
+                del self.sent[seq]
+                self.asked.pop(offset, None)
 
     def _opened(self, now: float) -> None:
         self.phase, self.progress = "read", now
@@ -152,7 +164,8 @@ class FtpDownload:
                 return None
             return f"was refused: the vehicle said {NAK_TEXT.get(error, error)} to the open of {PARAM_FILE.decode()}"
         if req_opcode == OP_READ:
-            request = self.sent.pop((seq - 1) & 0xFFFF, None)
+            request = self.sent.get((seq - 1) & 0xFFFF)
+            self._answered_read((seq - 1) & 0xFFFF)
         elif req_opcode == OP_BURST:                    # the burst's seqs count up from its request's
             mine = [s for s, (op, _, _) in self.sent.items() if op == OP_BURST and 0 < (seq - s) & 0xFFFF < 1000]
             request = self.sent.pop(min(mine, key=lambda s: (seq - s) & 0xFFFF)) if mine else None
