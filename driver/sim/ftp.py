@@ -10,7 +10,8 @@ depends on the packet size, which the first read of an open fixes. pymavlink's `
 
 Answered as ArduCopter 4.6.3 does in tests/data/recordings/arducopter-4.6-sitl-ftp-params.* (one file open at a
 time, one worker answering the requests in order from a queue of :data:`REQUEST_QUEUE`, one packet every
-:data:`PACKET_INTERVAL` of sim time, as the recording's TCP link shows; a radio's bandwidth limits it further):
+:data:`PACKET_INTERVAL` of sim time, as the recording's TCP link shows; on a radio a burst takes a third of its
+bandwidth, as GCS_FTP's burst delay makes it):
 
 * OpenFileRO: ACK size 4 with the file's size as ArduPilot *estimates* it, 12 bytes a parameter (the real file is
   smaller), then the version banner; another path: NAK 10 (FileNotFound); while a file is open: NAK 1 (Fail) to the
@@ -46,6 +47,8 @@ PACKET_INTERVAL = 0.0055          # s of sim time between FTP packets (the recor
 REQUEST_QUEUE = 5                 # requests waiting for the worker; one more is dropped (ArduPilot's ObjectBuffer)
 SESSION_TIMEOUT = 3.0             # s idle before another session may take the open file over
 SIZE_ESTIMATE = 12                # bytes a parameter: the size OpenFileRO reports (AP_Filesystem_Param::stat)
+FRAME_OVERHEAD = 12 + 3 + 12      # a FILE_TRANSFER_PROTOCOL frame's bytes besides the data (MAVLink 2, FTP header)
+BURST_SHARE = 3                   # a burst on a radio leaves the link 2/3 free (burst_delay_ms)
 MAGIC, MAGIC_DEFAULTS = 0x671B, 0x671C
 _PCK_TYPES = {mavlink.MAV_PARAM_TYPE_INT8: 1, mavlink.MAV_PARAM_TYPE_INT16: 2,
               mavlink.MAV_PARAM_TYPE_INT32: 3, mavlink.MAV_PARAM_TYPE_REAL32: 4}
@@ -158,8 +161,14 @@ class FtpServer:
         return self.ftp_queue[0][2] if self.ftp_queue else None
 
     def ftp_tick(self, dt: float) -> None:
-        """Sim time passes: the worker may send one packet every :data:`PACKET_INTERVAL`."""
-        self.ftp_credit = min(self.ftp_credit + dt / PACKET_INTERVAL, 8.0) if self.ftp_busy else 0.0
+        """Sim time passes: the worker may send one packet every :data:`PACKET_INTERVAL`; on a radio (no flow
+        control) ArduPilot also waits between a burst's packets so that FTP takes at most a third of the link
+        (GCS_FTP's burst_delay_ms = 3000 * packet bytes / link bytes a second)."""
+        interval = PACKET_INTERVAL
+        baud = getattr(self.config, "radio_baud", None)
+        if baud and self.ftp_burst is not None:
+            interval = max(interval, BURST_SHARE * (FRAME_OVERHEAD + self.ftp_burst[2]) / (baud / 10.0))
+        self.ftp_credit = min(self.ftp_credit + dt / interval, 8.0) if self.ftp_busy else 0.0
 
     def ftp_packet(self, paced: bool = True) -> int:
         """Send the worker's next packet; returns its frame's bytes (0: none due)."""
@@ -178,7 +187,7 @@ class FtpServer:
         self._ftp_send(reply)
         if reply.req_opcode == OP_OPEN_RO and reply.opcode == OP_ACK and self.ftp_file is not None:
             self._banner()                          # send_banner() after the open of param.pck, as 4.6.3 does
-        return 12 + 3 + 12 + len(reply.data)
+        return FRAME_OVERHEAD + len(reply.data)
 
     # -- the worker ---------------------------------------------------------------------------------------
     def _ftp_send(self, reply: _Reply) -> None:
