@@ -45,6 +45,7 @@ NAK_TEXT = {1: "failed", 2: "failed (errno)", 3: "invalid size", 4: "invalid ses
 STALL_SECONDS = 3.0        # no FTP progress (an answer to the open, a new byte of the file) this long: the list instead
 OPEN_RETRY = 0.25          # s between OpenFileRO tries (a retry after a lost ACK is refused: the file is open)
 BURST_QUIET = 0.3          # s without a packet before a burst counts as over (its end lost): gaps are then read
+BURST_GAPS = 8             # ... or this many of its packet intervals (a radio's burst sends one every 140 ms)
 READ_WINDOW = 4            # ReadFiles out at once (ArduPilot queues 5 FTP requests and drops one more)
 READ_TIMEOUT_MIN = 0.2     # s before a ReadFile is asked again (or 3 round trips, whichever is longer)
 READ_TRIES = 20            # ReadFiles for one chunk before FTP is given up
@@ -69,6 +70,8 @@ class FtpDownload:
     reset: bool = False                  # the file was open already: ResetSessions before the next open
     bursts: int = 0
     heard: float = 0.0                   # last FTP frame from the vehicle
+    gap: float = 0.0                     # smoothed time between a burst's packets (by their seqs)
+    last_packet: tuple[int, float] | None = None              # (seq, when) of the last burst packet heard
     progress: float = 0.0                # last answer to the open or new byte of the file
     asked: dict[int, float] = field(default_factory=dict)     # gap offset -> when asked
     tries: dict[int, int] = field(default_factory=dict)       # gap offset -> ReadFiles sent
@@ -122,6 +125,8 @@ class FtpDownload:
             self.estimate = struct.unpack("<I", data[:4])[0]
             self._opened(now)
         elif req_opcode in (OP_READ, OP_BURST) and self.phase == "read" and offset % CHUNK == 0 and data:
+            if req_opcode == OP_BURST:
+                self._burst_packet(seq, now)
             if offset not in self.chunks:
                 self.chunks[offset] = data
                 self.progress = now
@@ -141,6 +146,17 @@ class FtpDownload:
                 self.next_burst = offset + CHUNK        # the vehicle stopped at 500 packets: ask for more
             self._learn_end()
         return None
+
+    def _burst_packet(self, seq: int, now: float) -> None:
+        """Learn the burst's pace; a packet after the burst was judged over says the vehicle is still bursting:
+        the ReadFiles sent meanwhile wait behind it in its queue, so their time starts again."""
+        if self.last_packet is not None and 0 < (seq - self.last_packet[0]) & 0xFFFF < 50:
+            each = (now - self.last_packet[1]) / ((seq - self.last_packet[0]) & 0xFFFF)
+            self.gap = each if not self.gap else 0.7 * self.gap + 0.3 * each
+        self.last_packet = (seq, now)
+        if self.burst is None:
+            for offset in self.asked:
+                self.asked[offset] = now
 
     def _answered_read(self, request: int) -> None:
         """The vehicle answers its queue in order: a ReadFile sent before this one and still unanswered was lost,
@@ -219,7 +235,7 @@ class FtpDownload:
             self.burst, self.next_burst, self.heard = self.seq, None, now
             return out, None
         if self.burst is not None:
-            if now - self.heard < max(BURST_QUIET, 4 * self.rtt):
+            if now - self.heard < max(BURST_QUIET, 4 * self.rtt, BURST_GAPS * self.gap):
                 return [], None
             self.sent.pop(self.burst, None)             # its end was lost, or it stalled: read what is missing
             self.burst = None

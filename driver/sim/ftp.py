@@ -166,9 +166,11 @@ class FtpServer:
         (GCS_FTP's burst_delay_ms = 3000 * packet bytes / link bytes a second)."""
         interval = PACKET_INTERVAL
         baud = getattr(self.config, "radio_baud", None)
-        if baud and self.ftp_burst is not None:
-            interval = max(interval, BURST_SHARE * (FRAME_OVERHEAD + self.ftp_burst[2]) / (baud / 10.0))
-        self.ftp_credit = min(self.ftp_credit + dt / interval, 8.0) if self.ftp_busy else 0.0
+        burst = self.ftp_burst[0] if self.ftp_burst is not None else \
+            self.ftp_queue[0][0] if self.ftp_queue and self.ftp_queue[0][0][2] == OP_BURST else None
+        if baud and burst is not None:
+            interval = max(interval, BURST_SHARE * (FRAME_OVERHEAD + (burst[3] or CHUNK)) / (baud / 10.0))
+        self.ftp_credit = min(self.ftp_credit + dt / interval, 1.0 + dt / interval) if self.ftp_busy else 0.0
 
     def ftp_packet(self, paced: bool = True) -> int:
         """Send the worker's next packet; returns its frame's bytes (0: none due)."""
