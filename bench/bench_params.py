@@ -31,7 +31,7 @@ import time
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 from driver.sim import SimConfig, SimVehicle  # noqa: E402
-from driver.sim.ftp import CHUNK, PACKET_INTERVAL, pack, sim_entries  # noqa: E402
+from driver.sim.ftp import BURST_SHARE, CHUNK, PACKET_INTERVAL, pack, sim_entries  # noqa: E402
 from driver.sim.params import FTP_FRAME_BYTES, PARAM_VALUE_BYTES, RECORDED_RATE  # noqa: E402
 from driver.vehicle import Vehicle, VehicleConfig  # noqa: E402
 import tables  # noqa: E402  (bench/tables.py: this script runs from bench/)
@@ -40,13 +40,15 @@ LINKS = {"tcp": None, "radio": 57600}
 
 
 def floor(link: str, count: int, loss: float, pck_bytes: int | None = None) -> float:
-    """Seconds the link's bandwidth needs for the list's frames (or, with ``pck_bytes``, the FTP file's, which
-    ArduPilot's FTP worker also paces at one packet every PACKET_INTERVAL)."""
+    """Seconds the link's bandwidth needs for the list's frames (or, with ``pck_bytes``, the FTP file's, whose burst
+    ArduPilot's FTP worker paces: one packet every PACKET_INTERVAL, and on a radio a third of its bandwidth; the
+    packets a loss takes are read again unpaced, so that part does not grow with the loss)."""
     baud = LINKS[link]
     rate = RECORDED_RATE * PARAM_VALUE_BYTES if baud is None else min(RECORDED_RATE * PARAM_VALUE_BYTES, baud / 10.0)
     frames = count * PARAM_VALUE_BYTES if pck_bytes is None else -(-pck_bytes // CHUNK) * FTP_FRAME_BYTES
-    paced = 0.0 if pck_bytes is None else -(-pck_bytes // CHUNK) * PACKET_INTERVAL
-    return max(frames / rate, paced) / (1.0 - loss)
+    interval = PACKET_INTERVAL if baud is None else max(PACKET_INTERVAL, BURST_SHARE * FTP_FRAME_BYTES / rate)
+    paced = 0.0 if pck_bytes is None else -(-pck_bytes // CHUNK) * interval
+    return max(frames / rate / (1.0 - loss), paced)
 
 
 def run(link: str, loss: float, seed: int, method: str) -> dict:
