@@ -12,10 +12,11 @@ telemetry radio (SiK's default), which ArduPilot's queued_param_send keeps the l
 that: ``SimConfig.radio_baud``). The floor is what the link's bandwidth allows for the list alone: 1,392
 PARAM_VALUE frames of 37 bytes (MAVLink 2), and at a loss p each way every frame is needed 1/(1 - p) times on
 average (a lost frame is asked again, and a lost request too; the floor counts the frames only). FTP's floor is
-the file's 64 frames of 266 bytes, the same way.
+the file's 64 frames of 266 bytes, the same way, but never below the burst's own pace (ArduPilot's: 5.5 ms a packet
+over TCP, a third of a radio's bandwidth), which no loss lengthens: lost packets are read again unpaced.
 
 Methods: ``list`` is PARAM_REQUEST_LIST and re-asks by index; ``ftp`` reads ``@PARAM/param.pck`` over MAVLink FTP
-(driver/params/ftp.py: 15,258 bytes in 64 packets for the same table, paced by the sim as the recording: 5.5 ms a packet), falling back to the list if FTP fails.
+(driver/params/ftp.py: 15,258 bytes in 64 packets for the same table), falling back to the list if FTP fails.
 """
 from __future__ import annotations
 

@@ -275,11 +275,27 @@ def test_a_stalled_ftp_read_falls_back_to_the_list_and_the_pilot_is_told_why(sim
 def test_a_refused_ftp_read_falls_back_to_the_list_at_once(sim, vehicle_factory, monkeypatch):
     """A NAK other than EOF (here the vehicle's errno answer to a read) gives FTP up: the list is read."""
     monkeypatch.setattr(simftp._OpenFile, "read", lambda self, offset, count: None)
+    requests = _requests(sim)
     vehicle, result, seen = _fall_back(sim, vehicle_factory)
+    assert eventually(lambda: any(op == simftp.OP_TERMINATE for op, _, _ in requests), 5), requests
     assert result.ok and "over MAVLink FTP" not in result.reason, result
     assert "MAVLink FTP was refused: the vehicle said failed (errno) to a read at byte 0" in result.reason, result
     assert any("was refused" in d and "reading the list instead" in d for d in seen), seen
     _holds_entries(vehicle.state().parameters, simftp.sim_entries(sim.autopilot.params))
+
+
+def test_a_file_left_open_by_an_earlier_session_is_reset_and_read(sim, vehicle_factory):
+    """The vehicle still has param.pck open in our session (a fetch given up before its TerminateSession got
+    through): the open gets NAK 1, ResetSessions closes it, the next open reads the file over FTP."""
+    vehicle = _ftp_vehicle(sim, vehicle_factory)
+    autopilot = sim.autopilot
+    autopilot.ftp_file = simftp._OpenFile(autopilot.ftp_entries(), False)
+    autopilot.ftp_session, autopilot.ftp_last_send = 0, autopilot.t + 60.0       # open, and not idle
+    requests = _requests(sim)
+    result = vehicle.fetch_parameters(refresh=True).result(timeout=30)
+    assert result.ok and "over MAVLink FTP" in result.reason, result
+    ops = [op for op, _, _ in requests]
+    assert ops[:4] == [simftp.OP_OPEN_RO, simftp.OP_RESET, simftp.OP_OPEN_RO, simftp.OP_BURST], requests
 
 
 def test_the_consoles_param_fetch_reads_over_ftp(sim, vehicle_factory):

@@ -55,6 +55,7 @@ class ParameterManager:
         self._cached: ParameterTable | None = None   # shown while the vehicle's own list is read
         self._ftp: FtpDownload | None = None         # @PARAM/param.pck on its way (driver.params.ftp)
         self._ftp_note = ""                          # why this download reads the list though FTP was offered
+        self._ftp_given_up: FtpDownload | None = None   # its TerminateSession goes out on the next tick
         self.use_ftp = True                          # read the whole table over MAVLink FTP where it is offered
         self.ftp_capable: bool | None = None         # AUTOPILOT_VERSION's MAV_PROTOCOL_CAPABILITY_FTP
         self.on_complete: Callable[[ParameterTable], None] | None = None   # the cache's hook
@@ -207,6 +208,9 @@ class ParameterManager:
         if link is not LinkStatus.OK:
             return out                            # no vehicle yet: its answers would go nowhere
         target = self._target()
+        if self._ftp_given_up is not None:           # the vehicle closes the file FTP gave up on
+            out.append(self._ftp_given_up.terminate(target))
+            self._ftp_given_up = None
         download = self._download
         if download is not None and self._ftp is not None:
             out += self._service_ftp(now, target)
@@ -244,7 +248,7 @@ class ParameterManager:
         msgs, failure = ftp.service(now, target)
         if failure:
             self._ftp_failed(failure, now)
-            return msgs + [ftp.terminate(target)]     # the vehicle closes the file
+            return msgs
         if ftp.done:
             got = ftp.parameters()
             if isinstance(got, str):
@@ -269,7 +273,7 @@ class ParameterManager:
         """FTP did not work: the classic list from here on (for this vehicle until it says FTP again), and the
         pilot is told why, in the download's progress (the Parameters page), its result and the messages (the
         console prints them)."""
-        self._ftp = None
+        self._ftp_given_up, self._ftp = self._ftp, None
         self.ftp_capable = False
         self._ftp_note = f"MAVLink FTP {reason}; reading the list instead"
         self._detail = self._ftp_note
