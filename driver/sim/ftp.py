@@ -155,7 +155,7 @@ class FtpServer:
         return self.ftp_burst is not None or bool(self.ftp_queue)
 
     def ftp_peer(self):
-        """The link the worker's next packet goes to (None: nothing to send)."""
+        """The link the worker's next packet goes to (while :attr:`ftp_busy`)."""
         if self.ftp_burst is not None:
             return self.ftp_burst[1].peer
         return self.ftp_queue[0][2] if self.ftp_queue else None

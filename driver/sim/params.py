@@ -178,9 +178,8 @@ class ParamProtocol:
         within the link's bandwidth), then the list, as many as its bandwidth allows this step."""
         links = self.param_links
         self.ftp_tick(dt)
-        ftp_peer = self.ftp_peer()
-        if ftp_peer is not None:
-            links.setdefault(ftp_peer, _LinkParams())
+        if self.ftp_busy:
+            links.setdefault(self.ftp_peer(), _LinkParams())
         if not links:
             return
         params: SimParams = self.params
@@ -194,7 +193,7 @@ class ParamProtocol:
                     self.emit_to(self._param_value(params.names[index], index), peer)
                 elif index < 0 and name in params:
                     self.emit_to(self._param_value(name), peer)
-            while self.ftp_peer() is peer and link.budget >= FTP_FRAME_BYTES:
+            while self.ftp_busy and self.ftp_peer() is peer and link.budget >= FTP_FRAME_BYTES:
                 sent = self.ftp_packet()
                 if not sent:
                     break
@@ -205,5 +204,5 @@ class ParamProtocol:
                 link.next_index += 1
                 if link.next_index >= len(params):
                     link.next_index = None
-            if not link.reads and link.next_index is None and self.ftp_peer() is not peer:
+            if not link.reads and link.next_index is None and not (self.ftp_busy and self.ftp_peer() is peer):
                 del links[peer]
