@@ -117,6 +117,10 @@ class FtpDownload:
         data = payload[12:12 + size]
         self.frames += 1
         self.heard = now
+        if 0 < (seq - self.seq) & 0xFFFF < 0x8000:
+            # the next request follows the vehicle's last seq, as pymavlink's MAVFTP does: ArduPilot answers a
+            # request whose seq is one below its last reply's with that reply again (a re-request)
+            self.seq = seq
         if opcode == OP_NAK:
             return self._on_nak(seq, req_opcode, offset, data[0] if data else 0, now)
         if opcode != OP_ACK:
