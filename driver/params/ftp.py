@@ -16,7 +16,8 @@ What ArduCopter 4.6.3 does (tests/data/recordings/README.md, "MAVFTP parameter d
 * the first read fixes the packet size (pad bytes keep every value inside one packet): every read here asks for
   :data:`CHUNK` bytes, and a ReadFile fills each gap the radio left;
 * a second OpenFileRO while the file is open is refused (NAK 1): after a lost ACK the file is open, so reading
-  goes on; TerminateSession ends it.
+  goes on; to the first open it means a file left open before (a fetch given up), so ResetSessions closes it and
+  the open is sent again; TerminateSession ends every read, given up or not.
 
 Any trouble (no progress for :data:`STALL_SECONDS`, a NAK other than EOF, a chunk asked :data:`READ_TRIES` times,
 a file that does not decode or whose count is not its header's) ends it with a reason: the caller then reads the
