@@ -12,10 +12,11 @@ telemetry radio (SiK's default), which ArduPilot's queued_param_send keeps the l
 that: ``SimConfig.radio_baud``). The floor is what the link's bandwidth allows for the list alone: 1,392
 PARAM_VALUE frames of 37 bytes (MAVLink 2), and at a loss p each way every frame is needed 1/(1 - p) times on
 average (a lost frame is asked again, and a lost request too; the floor counts the frames only). FTP's floor is
-the file's 64 frames of 266 bytes, the same way.
+the file's 64 frames of 266 bytes, the same way, but never below the burst's own pace (ArduPilot's: 5.5 ms a packet
+over TCP, a third of a radio's bandwidth), which no loss lengthens: lost packets are read again unpaced.
 
 Methods: ``list`` is PARAM_REQUEST_LIST and re-asks by index; ``ftp`` reads ``@PARAM/param.pck`` over MAVLink FTP
-(driver/params/ftp.py: 15,244 bytes in 64 chunks for the same table), falling back to the list if FTP fails.
+(driver/params/ftp.py: 15,258 bytes in 64 packets for the same table), falling back to the list if FTP fails.
 """
 from __future__ import annotations
 
@@ -31,7 +32,7 @@ import time
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 from driver.sim import SimConfig, SimVehicle  # noqa: E402
-from driver.sim.ftp import CHUNK, pack_params  # noqa: E402
+from driver.sim.ftp import BURST_SHARE, CHUNK, PACKET_INTERVAL, pack, sim_entries  # noqa: E402
 from driver.sim.params import FTP_FRAME_BYTES, PARAM_VALUE_BYTES, RECORDED_RATE  # noqa: E402
 from driver.vehicle import Vehicle, VehicleConfig  # noqa: E402
 import tables  # noqa: E402  (bench/tables.py: this script runs from bench/)
@@ -40,11 +41,15 @@ LINKS = {"tcp": None, "radio": 57600}
 
 
 def floor(link: str, count: int, loss: float, pck_bytes: int | None = None) -> float:
-    """Seconds the link's bandwidth needs for the list's frames (or, with ``pck_bytes``, the FTP file's)."""
+    """Seconds the link's bandwidth needs for the list's frames (or, with ``pck_bytes``, the FTP file's, whose burst
+    ArduPilot's FTP worker paces: one packet every PACKET_INTERVAL, and on a radio a third of its bandwidth; the
+    packets a loss takes are read again unpaced, so that part does not grow with the loss)."""
     baud = LINKS[link]
     rate = RECORDED_RATE * PARAM_VALUE_BYTES if baud is None else min(RECORDED_RATE * PARAM_VALUE_BYTES, baud / 10.0)
     frames = count * PARAM_VALUE_BYTES if pck_bytes is None else -(-pck_bytes // CHUNK) * FTP_FRAME_BYTES
-    return frames / rate / (1.0 - loss)
+    interval = PACKET_INTERVAL if baud is None else max(PACKET_INTERVAL, BURST_SHARE * FTP_FRAME_BYTES / rate)
+    paced = 0.0 if pck_bytes is None else -(-pck_bytes // CHUNK) * interval
+    return max(frames / rate / (1.0 - loss), paced)
 
 
 def run(link: str, loss: float, seed: int, method: str) -> dict:
@@ -66,7 +71,7 @@ def run(link: str, loss: float, seed: int, method: str) -> dict:
             not n.startswith("SR0_") and abs(table.get(n).value - params[n]) > 1e-6 * max(1.0, abs(params[n])))]
         reads = re.search(r"\((\d+) asked again", result.reason)
         return dict(ok=result.ok and table.complete and not wrong, seconds=seconds, count=len(params),
-                    pck=len(pack_params(params)),
+                    pck=len(pack(sim_entries(params), CHUNK)),
                     reads=int(reads.group(1)) if reads else 0, wrong=len(wrong), reason=result.reason,
                     frames=sim.faults.counters.downlink.frames - frames_before)
     finally:
@@ -94,7 +99,7 @@ def main() -> int:
         seconds = statistics.median(c["seconds"] for c in cells)
         done = all(c["ok"] for c in cells)
         ok &= done
-        used = "ftp" if all("FTP" in c["reason"] for c in cells) else "list" if method == "list" else "ftp→list"
+        used = "ftp" if all("over MAVLink FTP" in c["reason"] for c in cells) else "list" if method == "list" else "ftp→list"
         low = floor(link, cells[0]["count"], loss, cells[0]["pck"] if used == "ftp" else None)
         rows.append((link, used, f"{loss:.0%}", "yes" if done else f"NO ({cells[0]['reason']})", f"{seconds:.2f}",
                      f"{low:.2f}", f"{seconds / low:.2f}", str(round(statistics.median(c['reads'] for c in cells))),

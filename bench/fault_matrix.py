@@ -14,8 +14,8 @@ moment the driver gives it. Target: no wrong report anywhere; every cell up to 3
 
 The transfer rows (bench/transfer_matrix.py) follow: a 50-item mission and a fence uploaded and downloaded in
 each cell, each answer checked against what the vehicle holds; target 0 corrupted plans, 0 wrong reports.
-The parameter row (bench/param_cells.py): per profile and fault, every parameter
-downloaded and no wrong "set" report.
+The parameter row (bench/param_cells.py): per profile, read path (MAVLink FTP in the recorded ArduCopter 4.6.3
+shape, and the list) and fault, every parameter downloaded and no wrong "set" report.
 """
 from __future__ import annotations
 
@@ -257,10 +257,12 @@ def main() -> int:
         print(transfer_table(transfers, args.speedup, args.markdown))
     checks = []
     for profile in args.profiles.split(",") if "params" in rows else ():
-        for fault in args.faults.split(","):
-            checks.append(param_cells.check(profile, fault, args.speedup, FAULTS[fault][1]))
-            print(f"{profile:9s} {fault:11s} parameters {checks[-1].downloaded}/{checks[-1].expected} "
-                  f"wrong={len(checks[-1].wrong)}", file=sys.stderr, flush=True)
+        for method in param_cells.methods(profile):
+            for fault in args.faults.split(","):
+                checks.append(param_cells.check(profile, fault, args.speedup, FAULTS[fault][1], method))
+                print(f"{profile:9s} {fault:11s} parameters over {method}: {checks[-1].downloaded}/"
+                      f"{checks[-1].expected} ({checks[-1].used}) wrong={len(checks[-1].wrong)}", file=sys.stderr,
+                      flush=True)
     if checks:
         head, lines = param_cells.rows(checks)
         print("\nParameters:")

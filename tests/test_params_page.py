@@ -318,3 +318,23 @@ def test_fix_on_a_go_to_refused_by_the_fence_opens_its_parameter(qtbot, sim_fact
     page = w.params.page
     qtbot.waitUntil(lambda: page.isVisible() and page.current_name() == "FENCE_ALT_MAX", timeout=DOWNLOAD_MS)
     assert page.editor.value.text() == "50"
+
+
+def test_an_ftp_read_that_stalls_says_why_the_list_is_read_instead(qtbot, sim, vehicle_factory, window_factory):
+    """The vehicle offers MAVLink FTP, then goes silent on it after ten packets: the page's progress says FTP
+    stalled and the list is read instead, the messages say so too, and the table still ends complete."""
+    autopilot = sim.autopilot
+    send, sent = autopilot._ftp_send, []
+    autopilot._ftp_send = lambda reply: sent.append(reply) or len(sent) > 10 or send(reply)
+    vehicle = vehicle_factory(f"tcp:127.0.0.1:{sim.tcp_port}")
+    assert vehicle.wait_for(lambda s: s.connected and s.firmware, 10)     # AUTOPILOT_VERSION offers FTP
+    w = window_factory(vehicle)
+    seen: list[str] = []
+    w.adapter.stateChanged.connect(lambda _s: w.params.page is not None and seen.append(w.params.page.status.text()))
+    action = w.findChild(type(w.menuBar().actions()[0]), "actionParameters")
+    action.trigger()
+    page = w.params.page
+    qtbot.waitUntil(lambda: page.status.text().startswith("1,392 parameters, all read"), timeout=2 * DOWNLOAD_MS)
+    assert len(sent) > 10
+    assert any("MAVLink FTP stalled at byte" in t and "reading the list instead" in t for t in seen), sorted(set(seen))
+    qtbot.waitUntil(lambda: any("Parameters: MAVLink FTP stalled" in t for t in w.messages.texts()), timeout=3000)

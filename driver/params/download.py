@@ -88,7 +88,8 @@ class Download:
     def service(self, now: float, target: tuple[int, int]) -> tuple[list, str | None]:
         """Messages to send now, and why the download failed (None while it goes on)."""
         system, component = target
-        if self.expected is None:                            # nothing heard yet: (re)ask for the list
+        if self.expected is None or (self.listing and not self.list_tries):
+            # nothing heard yet, or only a stray value (while MAVLink FTP was tried): (re)ask for the list
             if self.list_sent < 0 or now - self.list_sent >= LIST_RETRY:
                 if self.list_tries >= LIST_TRIES:
                     return [], f"the vehicle did not answer PARAM_REQUEST_LIST ({self.list_tries} times)"

@@ -54,6 +54,8 @@ class ParameterManager:
         self._detail = ""
         self._cached: ParameterTable | None = None   # shown while the vehicle's own list is read
         self._ftp: FtpDownload | None = None         # @PARAM/param.pck on its way (driver.params.ftp)
+        self._ftp_note = ""                          # why this download reads the list though FTP was offered
+        self._ftp_given_up: FtpDownload | None = None   # its TerminateSession goes out on the next tick
         self.use_ftp = True                          # read the whole table over MAVLink FTP where it is offered
         self.ftp_capable: bool | None = None         # AUTOPILOT_VERSION's MAV_PROTOCOL_CAPABILITY_FTP
         self.on_complete: Callable[[ParameterTable], None] | None = None   # the cache's hook
@@ -84,6 +86,7 @@ class ParameterManager:
         self._download = download
         self._waiting.append(future)
         self._detail = "asking for the list" if download.listing else f"asking for {download.missing} missing"
+        self._ftp_note = ""
         if download.listing and self.use_ftp and self.ftp_capable:
             self._ftp = FtpDownload(now)
             self._detail = "reading @PARAM/param.pck over MAVLink FTP"
@@ -150,7 +153,7 @@ class ParameterManager:
             return
         failure = ftp.on_message(m, now)
         if failure:
-            self._ftp_failed(failure)
+            self._ftp_failed(failure, now)
 
     def on_param_value(self, m, name: str, now: float) -> Parameter | None:
         """A PARAM_VALUE from the autopilot, its finite value and its name (:func:`param_name`) checked and
@@ -205,6 +208,9 @@ class ParameterManager:
         if link is not LinkStatus.OK:
             return out                            # no vehicle yet: its answers would go nowhere
         target = self._target()
+        if self._ftp_given_up is not None:           # the vehicle closes the file FTP gave up on
+            out.append(self._ftp_given_up.terminate(target))
+            self._ftp_given_up = None
         download = self._download
         if download is not None and self._ftp is not None:
             out += self._service_ftp(now, target)
@@ -216,6 +222,8 @@ class ParameterManager:
             else:
                 detail = (f"{len(download.have)} of {download.expected}" if download.listing and download.expected
                           else f"re-asking {download.missing} missing" if download.expected else "asking for the list")
+                if self._ftp_note:
+                    detail += f" · {self._ftp_note}"
                 if detail != self._detail:
                     self._detail = detail
                     self._dirty = True
@@ -239,33 +247,38 @@ class ParameterManager:
         ftp = self._ftp
         msgs, failure = ftp.service(now, target)
         if failure:
-            self._ftp_failed(failure)
+            self._ftp_failed(failure, now)
             return msgs
         if ftp.done:
             got = ftp.parameters()
             if isinstance(got, str):
-                self._ftp_failed(got)
+                self._ftp_failed(got, now)
                 return msgs
             values, count = got
             self._ftp = None
             self._values = {**{n: p for n, p in self._values.items() if p.index < 0 and n not in values}, **values}
             self._expected = count
-            self._end_download(CommandStatus.ACCEPTED, f"{len(values)} parameters over MAVLink FTP ({ftp.size} bytes in "
-                               f"{ftp.frames} frames)", now)
+            self._end_download(CommandStatus.ACCEPTED, f"{len(values)} parameters over MAVLink FTP ({ftp.end:,} bytes "
+                               f"in {ftp.frames} frames)", now)
             return msgs
-        detail = f"FTP: {ftp.received} of {ftp.size} bytes" if ftp.size else "opening @PARAM/param.pck (FTP)"
+        # the bar's "N of M": the file's real size once known, else the vehicle's estimate (never relied on)
+        detail = f"FTP: {ftp.received} of {max(ftp.total, ftp.received)} bytes" if ftp.total else \
+            "opening @PARAM/param.pck (FTP)"
         if detail != self._detail and not self._detail.startswith("from the cache"):
             self._detail = detail
             self._dirty = True
         return msgs
 
-    def _ftp_failed(self, reason: str) -> None:
-        """FTP did not work: the classic list from here on (and for this vehicle from now on)."""
-        log.info("parameters over FTP: %s; reading the list", reason)
-        self._ftp = None
+    def _ftp_failed(self, reason: str, now: float) -> None:
+        """FTP did not work: the classic list from here on (for this vehicle until it says FTP again), and the
+        pilot is told why, in the download's progress (the Parameters page), its result and the messages (the
+        console prints them)."""
+        self._ftp_given_up, self._ftp = self._ftp, None
         self.ftp_capable = False
-        self._detail = f"FTP: {reason}; reading the list"
-        self._dirty = True
+        self._ftp_note = f"MAVLink FTP {reason}; reading the list instead"
+        self._detail = self._ftp_note
+        self._store.add_message_locked(Severity.NOTICE, f"Parameters: {self._ftp_note}")
+        self._publish(now, force=True)
 
     def _complete(self) -> bool:
         if self._expected is None:
@@ -279,6 +292,9 @@ class ParameterManager:
         cached, self._cached = self._cached, None
         if d is not None and d.reads:
             reason += f" ({d.reads} asked again by index)"
+        if self._ftp_note:
+            reason += f" ({self._ftp_note.replace('reading the list instead', 'read the list instead')})"
+            self._ftp_note = ""
         self._detail = "" if status is CommandStatus.ACCEPTED else reason
         self._publish(now, force=True)
         if cached is not None and status is CommandStatus.ACCEPTED:

@@ -174,12 +174,12 @@ class ParamProtocol:
         self.emit(self._param_value(name))                # every link hears a change (send_parameter_value)
 
     def params_step(self, dt: float) -> None:
-        """Each link: the reads' answers first, then an FTP burst (ftp.py), then the list, as many as its
-        bandwidth allows this step."""
+        """Each link: the reads' answers first, then the FTP worker's packets (ftp.py: paced as ArduPilot's,
+        within the link's bandwidth), then the list, as many as its bandwidth allows this step."""
         links = self.param_links
-        session = self.ftp_session
-        if session is not None and session.sending:
-            links.setdefault(session.peer, _LinkParams())
+        self.ftp_tick(dt)
+        if self.ftp_busy:
+            links.setdefault(self.ftp_peer(), _LinkParams())
         if not links:
             return
         params: SimParams = self.params
@@ -193,15 +193,16 @@ class ParamProtocol:
                     self.emit_to(self._param_value(params.names[index], index), peer)
                 elif index < 0 and name in params:
                     self.emit_to(self._param_value(name), peer)
-            session = self.ftp_session
-            while session is not None and session.peer is peer and session.sending and link.budget >= FTP_FRAME_BYTES:
-                link.budget -= self.ftp_burst_chunk()
+            while self.ftp_busy and self.ftp_peer() is peer and link.budget >= FTP_FRAME_BYTES:
+                sent = self.ftp_packet()
+                if not sent:
+                    break
+                link.budget -= sent
             while link.budget >= PARAM_VALUE_BYTES and link.next_index is not None:
                 self.emit_to(self._param_value(params.names[link.next_index], link.next_index), peer)
                 link.budget -= PARAM_VALUE_BYTES
                 link.next_index += 1
                 if link.next_index >= len(params):
                     link.next_index = None
-            if not link.reads and link.next_index is None and not (
-                    session is not None and session.peer is peer and session.sending):
+            if not link.reads and link.next_index is None and not (self.ftp_busy and self.ftp_peer() is peer):
                 del links[peer]
