@@ -137,7 +137,6 @@ def test_an_unanswered_set_before_the_list_is_not_called_an_unknown_name(replay_
                                                    ("PARAM_REQUEST_READ", "NO_SUCH_PARAM")}, unexpected(replay)
 
 
-@pytest.mark.xfail(strict=True, reason="issue 28 item 1, fixed on branch ftp")
 def test_parameters_over_mavlink_ftp_as_recorded(replay_factory, connect):
     replay = replay_factory(FTP_PARAMS)
     v = connect(replay)
