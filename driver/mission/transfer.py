@@ -49,6 +49,8 @@ WINDOW = 4                   # a download's requests in flight at once (the vehi
 SILENCE = 10.0               # s without a word from the vehicle during an upload (it gives up after 8 s)
 FINAL_ACK_WAIT = 3           # re-ask times after the last item before the read-back decides alone ...
 FINAL_ACK_MIN = 1.5          # s, and at least this: the vehicle asks a lost last item again after 1 s
+REASON_WAIT = 1.0            # s a NO_SPACE refusal waits for the vehicle's text that says why (it follows the ACK:
+                             # "Only 0 items are supported" before "ArduPilot Ready")
 
 
 @dataclass(eq=False)
@@ -58,7 +60,7 @@ class _Transfer:
     future: Future
     plan: Plan | None = None                  # upload: what is sent (mission: without the home slot)
     wire: list = field(default_factory=list)  # upload: the items on the wire (mission: home slot first)
-    stage: str = "start"                      # start | items | readback | done
+    stage: str = "start"                      # start | items | readback | refused (waiting for the reason) | done
     count: int | None = None
     received: dict = field(default_factory=dict)
     asked: int = -1                           # upload: the item the vehicle wants now (its last request)
@@ -172,6 +174,10 @@ class PlanTransfers(LegacyRally):
     def _service(self, t: _Transfer, now: float) -> None:
         if t.legacy:
             self._legacy_service(t, now)
+            return
+        if t.stage == "refused":
+            if now >= t.next_send:
+                self._end(t, CommandStatus.REFUSED, t.said)
             return
         if t.stage == "items" and t.direction is TransferDirection.DOWNLOAD:
             for seq, entry in list(t.waiting.items()):
@@ -295,7 +301,7 @@ class PlanTransfers(LegacyRally):
     def _on_request(self, t: _Transfer, seq: int, now: float) -> None:
         if self._resumable(t):
             t = self._resume_upload(t, now)       # a read-back begun on a lost final ACK, but the vehicle asks
-        if t.direction is not TransferDirection.UPLOAD or t.upload is not None or t.stage == "readback":
+        if t.direction is not TransferDirection.UPLOAD or t.upload is not None or t.stage in ("readback", "refused"):
             return
         if not 0 <= seq < (t.count or 0):
             return
@@ -393,8 +399,18 @@ class PlanTransfers(LegacyRally):
             t.acked, t.said = True, ""
             self._read_back(t, now)
             return
-        if t.stage in ("start", "items"):
+        if t.stage in ("start", "items") and result == mavlink.MAV_MISSION_NO_SPACE:
+            t.stage, t.said, t.next_send = "refused", result_meaning(result), now + REASON_WAIT
+        elif t.stage in ("start", "items"):
             self._end(t, CommandStatus.REFUSED, result_meaning(result))
+
+    def on_text(self, text: str) -> None:
+        """A STATUSTEXT (lock held): the reason of a refusal waiting for it ("Only 0 items are supported")."""
+        if "items are supported" not in text:
+            return
+        for t in list(self._running.values()):
+            if t.stage == "refused":
+                self._end(t, CommandStatus.REFUSED, f"{t.said}; the vehicle says: {text}")
 
     def _on_error(self, t: _Transfer, result: int, now: float) -> None:
         """MISSION_ACK ERROR: a late answer to a repeated item as often as a failure (see the module's text)."""
