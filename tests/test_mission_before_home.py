@@ -58,8 +58,9 @@ def test_a_mission_goes_up_before_home_and_is_checked_when_home_arrives(ready_wi
     assert s is not None, vehicle.state().mission
     assert s.mission.limit_problems == ("item 3 (WAYPOINT): 800 m from home, beyond the 500 m limit",)
     assert any("beyond the limits" in m.text and "item 3 (WAYPOINT)" in m.text for m in s.messages)
-    refused = vehicle.start_mission().result(5)
-    assert refused.status is CommandStatus.REJECTED and "item 3 (WAYPOINT): 800 m" in refused.reason, refused
+    run_commands(console, "wp start")
+    assert eventually(lambda: "mission start: rejected (the mission is not started: item 3 (WAYPOINT): 800 m"
+                      in out.getvalue(), 10), out.getvalue()
     assert not sim.autopilot.armed
 
 
