@@ -143,3 +143,24 @@ def test_an_unlisted_name_that_never_answers_is_not_confirmed_not_unknown(vehicl
     result = vehicle.set_parameter("NO_SUCH_PARAM", 1.0).result(timeout=30)
     assert result.status is CommandStatus.TIMED_OUT, result
     assert result.reason.startswith("not confirmed") and "has no parameter" not in result.reason, result
+
+
+def test_a_read_back_showing_the_old_value_sends_the_set_again(vehicle, sim):
+    """Before the list: the relay loses the first three PARAM_SETs. The read-back by name shows the old value, so
+    the vehicle has that name and has not taken ours yet: the set goes again (a listed name's tries) and is
+    confirmed by its echo, never called impossible."""
+    autopilot = sim.autopilot
+    original, lost = autopilot._on_param_set, []
+
+    def relay(msg):
+        if len(lost) < 3:
+            lost.append(msg.param_id)                   # never reached the vehicle
+            return
+        original(msg)
+    autopilot._on_param_set = relay
+    try:
+        result = vehicle.set_parameter("WPNAV_SPEED", 650).result(timeout=30)
+    finally:
+        autopilot._on_param_set = original
+    assert result.status is CommandStatus.ACCEPTED and result.attempts == 4, result
+    assert sim.autopilot.params["WPNAV_SPEED"] == 650

@@ -176,7 +176,10 @@ class ParameterManager:
         if pending is not None and pending.attempts:
             pending.ptype = ptype                 # the vehicle's own type, whatever we assumed
             confirmed = pending.confirms(ptype, param.value)
-            if confirmed or pending.reading:      # read back: what the vehicle holds is the answer
+            if pending.reading and not confirmed and not pending.known:
+                pending.known, pending.reads = True, 0    # it has the name, not our value: a listed name's tries
+                pending.next_send = now
+            elif confirmed or pending.reading:    # read back: what the vehicle holds is the answer
                 del self._sets[name]
                 read = f"read back after {pending.attempts} unechoed PARAM_SET" if pending.reading else ""
                 self._settle(pending.future, CommandStatus.ACCEPTED if confirmed else CommandStatus.REFUSED,

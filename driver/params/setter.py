@@ -9,7 +9,8 @@
   harmless): a name the vehicle listed gets many tries, one not (yet) listed a few.
 * A set never echoed is not confirmed, and nothing is said yet: the value is read back by name
   (PARAM_REQUEST_READ; the answer carries param_index 65535). The read-back showing the value confirms it; showing
-  another value, the vehicle does not hold ours. A name the vehicle does not have gets no answer at all, to a set
+  another value for a name not listed yet, the vehicle has the name but not our value: the set goes again with a
+  listed name's tries (after those, another value is the answer: refused with it). A name the vehicle does not have gets no answer at all, to a set
   or a read (the recording), but so does every name over a radio that loses everything: "no such parameter" is
   said only when the vehicle's COMPLETE list lacks it (then nothing is read back); otherwise the result says the
   set is not confirmed.
