@@ -123,3 +123,38 @@ def test_the_vehicles_refusals_are_shown_with_their_meaning(homed, sim):
     assert refused.status is CommandStatus.REFUSED
     assert refused.reason.startswith("NO_SPACE: more items than the vehicle can store")
     assert homed.wait_for(lambda s: any(m.text == "Only 700 items are supported" for m in s.messages), 5)
+
+
+def test_an_error_for_the_last_item_sent_again_is_no_refusal_when_the_vehicle_holds_the_plan(homed, sim,
+                                                                                           monkeypatch):
+    """The relay loses the vehicle's MISSION_ACK ACCEPTED of a fence: the driver sends the last vertex again, and
+    ArduPilot, no longer receiving, answers it MISSION_ACK ERROR (GCS_Common.cpp, GCS_MAVLINK::handle_mission_item:
+    ``if (!prot->receiving)``). The vehicle holds the fence: the read-back decides, not that late ERROR."""
+    autopilot = sim.autopilot
+    ack, answers = autopilot._ack, []
+
+    def relay(msg, result, kind, link=None):
+        answers.append((kind, result))
+        if (kind, result) == (PlanKind.FENCE, mavlink.MAV_MISSION_ACCEPTED) and answers.count((kind, result)) == 1:
+            return                                              # lost on the way
+        ack(msg, result, kind, link)
+    monkeypatch.setattr(autopilot, "_ack", relay)
+    plan = fence_plan(homed)
+    outcome = homed.upload_plan(plan).result(30)
+    assert (PlanKind.FENCE, mavlink.MAV_MISSION_ERROR) in answers          # the late answer did come
+    assert outcome.result.status is CommandStatus.ACCEPTED, str(outcome.result)
+    assert "read back as sent" in outcome.result.reason
+    assert len(autopilot.plans[PlanKind.FENCE]) == 5
+    assert homed.wait_for(lambda s: s.mission.vehicle_plan(PlanKind.FENCE) == outcome.plan, 5)
+
+
+def test_clearing_a_running_mission_is_refused_with_the_vehicles_word_after_reading_it_back(homed, sim):
+    """MISSION_CLEAR_ALL of a running mission: ArduPilot answers ERROR (AP_Mission::clear refuses). An ERROR may
+    also be a late answer to a repeated item, so the plan is read back: it is still there, so refused."""
+    plan = survey_mission(homed, 4)
+    assert homed.upload_plan(plan).result(30).result.ok
+    sim.autopilot.mission_running = lambda: True
+    result = homed.clear_plan(PlanKind.MISSION).result(10)
+    assert result.status is CommandStatus.REFUSED, str(result)
+    assert result.reason == "ERROR: the vehicle reported an error; the vehicle still holds 4 items"
+    assert len(sim.autopilot.plans[PlanKind.MISSION]) == 5

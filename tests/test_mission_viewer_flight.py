@@ -155,3 +155,31 @@ def test_download_clear_and_a_fence(qtbot, fast_vehicle, window_factory):
     qtbot.waitUntil(lambda: p.syncLabel.text().startswith("Same as the vehicle's fence (4 items)"), timeout=30000)
     fence = vehicle.state().mission.vehicle_plan(PlanKind.FENCE)
     assert [i.command for i in fence.items] == [mavlink.MAV_CMD_NAV_FENCE_POLYGON_VERTEX_INCLUSION] * 4
+
+
+def test_start_is_refused_while_the_vehicles_mission_goes_beyond_the_limits(qtbot, sim_factory, vehicle_factory,
+                                                                           window_factory):
+    """Another ground station left a mission with a waypoint 900 m out on the vehicle: downloaded, the driver
+    names that item, and the Start button stays off with that reason (the driver refuses it too)."""
+    from driver import frames
+    from driver.sim.missions import stored_as
+    sim = sim_factory(speedup=8.0)
+    vehicle = vehicle_factory(f"tcp:127.0.0.1:{sim.tcp_port}")
+    assert vehicle.wait_for(lambda s: s.connected and s.home is not None, 20)
+    w, view, plan = planning_window(qtbot, vehicle, window_factory)
+    autopilot = sim.autopilot
+    home = vehicle.state().home
+    lat, lon = frames.offset_latlon(home.lat, home.lon, 900, 0)
+    autopilot.plans[PlanKind.MISSION] = [
+        autopilot.mission_home_item(),
+        stored_as(PlanKind.MISSION, mavlink.MAV_CMD_NAV_TAKEOFF, mavlink.MAV_FRAME_GLOBAL_RELATIVE_ALT, (0,) * 4,
+                  0, 0, 10),
+        stored_as(PlanKind.MISSION, mavlink.MAV_CMD_NAV_WAYPOINT, mavlink.MAV_FRAME_GLOBAL_RELATIVE_ALT, (0,) * 4,
+                  round(lat * 1e7), round(lon * 1e7), 20)]
+    p = plan.panel
+    qtbot.waitUntil(p.downloadButton.isEnabled)
+    qtbot.mouseClick(p.downloadButton, Qt.LeftButton)
+    qtbot.waitUntil(lambda: "item 2 (WAYPOINT): 900 m from home" in p.startButton.toolTip(), timeout=30000)
+    assert not p.startButton.isEnabled()
+    refused = vehicle.start_mission().result(5)
+    assert refused.reason == "the mission is not started: item 2 (WAYPOINT): 900 m from home, beyond the 500 m limit"

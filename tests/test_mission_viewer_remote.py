@@ -102,7 +102,7 @@ def test_picking_another_vehicle_forgets_what_the_first_one_holds(qtbot, sim_fac
         assert v.wait_for(lambda s: s.connected and s.home is not None, 20)
     w, view, plan = planning_window(qtbot, first, window_factory)
     plan_and_upload(qtbot, w, view, plan)
-    qtbot.waitUntil(plan.panel.startButton.isEnabled)          # MISSION_CURRENT counts the new mission
+    qtbot.waitUntil(plan.panel.startButton.isEnabled, timeout=5000)     # once MISSION_CURRENT counts it too
     w.adapter.use(second)                              # what the window does when the Fleet panel picks another
     qtbot.waitUntil(lambda: "not known yet" in plan.panel.syncLabel.text() and plan.panel.tabs.tabText(0)[0] == "●")
     assert not plan.panel.startButton.isEnabled() and plan.panel.progressBar.format() == "No transfer yet"

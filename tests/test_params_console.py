@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import io
 
-from driver.console import Console
+from driver.console import Console, run_commands
 
 from ice_fixtures import eventually
 
@@ -11,8 +11,6 @@ from ice_fixtures import eventually
 def test_fetch_show_set_save_diff_and_load(vehicle, sim, tmp_path):
     out = io.StringIO()
     console = Console(vehicle, stdout=out)
-    console.onecmd("param show RTL_*")
-    assert "param fetch reads them all" in out.getvalue()
     console.onecmd("param fetch")
     assert eventually(lambda: "parameters: accepted" in out.getvalue(), 30), out.getvalue()
     console.onecmd("param show fs_gcs*")
@@ -43,3 +41,20 @@ def test_fetch_show_set_save_diff_and_load(vehicle, sim, tmp_path):
     console.onecmd("param frobnicate")
     console.onecmd(f"param diff {tmp_path / 'missing.param'}")
     assert "usage: param fetch" in out.getvalue() and "cannot read" in out.getvalue()
+
+
+def test_save_diff_and_show_at_connect_read_the_whole_list_first(vehicle, sim, tmp_path):
+    """``--cmd "param save FILE; param diff FILE; param show RTL_ALT"`` right after connecting: nothing is known
+    yet, so each reads the list first (saying how far it is) and then acts on all 1,392 parameters."""
+    out = io.StringIO()
+    console = Console(vehicle, stdout=out)
+    saved, mine = tmp_path / "at-connect.param", tmp_path / "mine.param"
+    mine.write_text("RTL_ALT 2500\nFS_GCS_ENABLE 0\n")
+    run_commands(console, f"param save {saved}; param diff {mine}; param show RTL_ALT")
+    assert eventually(lambda: all(w in out.getvalue() for w in ("RTL_ALT          1500", "differences", "saved ")),
+                      60), out.getvalue()
+    text = out.getvalue()
+    assert "param save: reading the vehicle's parameters first" in text
+    assert f"saved {len(sim.autopilot.params)} parameters" in text and "saved 0 parameters" not in text
+    assert len([line for line in saved.read_text().splitlines() if line.strip()]) == len(sim.autopilot.params)
+    assert "RTL_ALT                  2500         1500" in text and "1 differences" in text

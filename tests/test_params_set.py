@@ -114,3 +114,53 @@ def test_a_users_metadata_file_is_used_and_without_metadata_editing_warns(sim, v
     assert none.set_parameter("RTL_ALT", 100).result(timeout=10).ok
     texts = [m.text for m in none.state().messages]
     assert any("not read" in t for t in texts) and any("without checking their bounds" in t for t in texts)
+
+
+def test_a_set_whose_echoes_are_lost_is_read_back_before_anything_is_said(vehicle, sim):
+    """At connect, before the list: the relay loses every echo of PARAM_SET WPNAV_SPEED (the vehicle stores it).
+    Unechoed is not confirmed: the driver reads WPNAV_SPEED back by name (the answer has param_index 65535) and
+    the value read back is the answer; never "the vehicle has no parameter" from a table not yet complete."""
+    autopilot = sim.autopilot
+    original = autopilot._on_param_set
+
+    def echo_lost(msg):
+        autopilot.params[msg.param_id] = msg.param_value          # obeyed; its PARAM_VALUE lost on the way
+    autopilot._on_param_set = echo_lost
+    try:
+        result = vehicle.set_parameter("WPNAV_SPEED", 650).result(timeout=30)
+    finally:
+        autopilot._on_param_set = original
+    assert sim.autopilot.params["WPNAV_SPEED"] == 650
+    assert result.status is CommandStatus.ACCEPTED, result
+    assert "read back" in result.reason
+    reads = [m for _, kind, m in sim.received_messages if kind == "PARAM_REQUEST_READ"]
+    assert reads, "no read by name"
+    assert vehicle.state().parameters.get("WPNAV_SPEED").value == 650
+
+
+def test_an_unlisted_name_that_never_answers_is_not_confirmed_not_unknown(vehicle, sim):
+    """Without the complete list, silence to the sets and to the reads by name proves nothing about the name."""
+    result = vehicle.set_parameter("NO_SUCH_PARAM", 1.0).result(timeout=30)
+    assert result.status is CommandStatus.TIMED_OUT, result
+    assert result.reason.startswith("not confirmed") and "has no parameter" not in result.reason, result
+
+
+def test_a_read_back_showing_the_old_value_sends_the_set_again(vehicle, sim):
+    """Before the list: the relay loses the first three PARAM_SETs. The read-back by name shows the old value, so
+    the vehicle has that name and has not taken ours yet: the set goes again (a listed name's tries) and is
+    confirmed by its echo, never called impossible."""
+    autopilot = sim.autopilot
+    original, lost = autopilot._on_param_set, []
+
+    def relay(msg):
+        if len(lost) < 3:
+            lost.append(msg.param_id)                   # never reached the vehicle
+            return
+        original(msg)
+    autopilot._on_param_set = relay
+    try:
+        result = vehicle.set_parameter("WPNAV_SPEED", 650).result(timeout=30)
+    finally:
+        autopilot._on_param_set = original
+    assert result.status is CommandStatus.ACCEPTED and result.attempts == 4, result
+    assert sim.autopilot.params["WPNAV_SPEED"] == 650

@@ -19,9 +19,9 @@ from typing import Callable
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from ..commands import chain
-from ..state import CommandResult, CommandStatus, SequencePhase, VehicleState
+from ..state import CommandResult, CommandStatus, SequencePhase, Severity, VehicleState
 from ..takeoff import TakeoffSequence
-from .limits import plan_problems
+from .limits import UNCHECKED, held_mission_problems, plan_problems, unchecked
 from .plan import MissionRunState, Plan, PlanKind, TransferOutcome
 from .progress import fold_item_reached, fold_mission_current, fold_text, fold_transfer_end
 from .transfer import PlanTransfers
@@ -104,6 +104,7 @@ class MissionControl:
                                        lambda: vehicle._store.state.home, lambda: vehicle._v2)
         self._watches: list[_Watch] = []
         self._currents: collections.deque = collections.deque(maxlen=64)   # (time, item) as the vehicle says
+        self._limits_of: tuple = (None, None, None)   # (home, mission held, fence) the limits were checked for
 
     # -- transfers (any thread) -------------------------------------------------------------------------
     def _refusal(self, kind: PlanKind) -> str:
@@ -116,8 +117,12 @@ class MissionControl:
 
     def upload(self, plan: Plan) -> Future:
         name = f"upload {plan.kind.label}"
-        problems = plan_problems(plan, self._v.state(), self._v.config)
-        problem = "; ".join(problems[:5]) + (f" (and {len(problems) - 5} more)" if len(problems) > 5 else "")
+        s = self._v.state()
+        problems = plan_problems(plan, s, self._v.config)
+        problem = _joined(problems)
+        if not problem and unchecked(plan, s.home):
+            self._v._store.add_message(Severity.NOTICE, f"Mission uploaded before the vehicle's home is known: "
+                                       f"{UNCHECKED}; they are checked when it is, and it is not started until then")
         return self._start(name, plan.kind, problem,
                            lambda now: self.transfers.upload(plan, now), outcome=True)
 
@@ -153,8 +158,11 @@ class MissionControl:
     def start(self) -> Future:
         v = self._v
         s = v.state()
+        limits = held_mission_problems(s, v.config)
         problem = ("replaying a recording: no vehicle to command" if v._replay is not None else
-                   "no mission on the vehicle: upload one first" if s.mission.count == 0 else "")
+                   "no mission on the vehicle: upload one first" if s.mission.count == 0 else
+                   f"the mission is not started: {UNCHECKED}" if limits == (UNCHECKED,) else
+                   f"the mission is not started: {_joined(limits)}" if limits else "")
         if problem:
             return v._finish("mission start", CommandStatus.REJECTED, problem)
         return v._run_sequence(MissionStart(v, v.config, time.monotonic()), "mission start")
@@ -235,6 +243,9 @@ class MissionControl:
             self._publish()
 
     def on_text(self, text: str) -> None:
+        self.transfers.on_text(text)
+        if self.transfers.changed:
+            self._publish()
         store = self._v._store
         folded = fold_text(store.view()["mission"], text)
         if folded is not None:
@@ -246,6 +257,7 @@ class MissionControl:
 
     def service(self, now: float, state: VehicleState) -> list:
         out = self.transfers.service(now)
+        self._check_limits(state)
         if self.transfers.changed:
             self._publish()
         for w in list(self._watches):
@@ -262,6 +274,27 @@ class MissionControl:
                 self._settle(w, self._v._store.record_locked(
                     w.name, CommandStatus.TIMED_OUT, f"{r.command} was accepted but {w.what} never happened"))
         return out
+
+    def _check_limits(self, s: VehicleState) -> None:
+        """The mission the vehicle holds against the limits whenever it, home or the fence changes; what changes
+        the verdict is told to the pilot and kept in ``mission.limit_problems``."""
+        key = (s.home, s.mission.vehicle_plan(PlanKind.MISSION), s.fence)
+        if all(a is b for a, b in zip(key, self._limits_of)):
+            return
+        self._limits_of = key
+        problems = held_mission_problems(s, self._v.config)
+        store = self._v._store
+        before = store.view()["mission"].limit_problems
+        if problems == before:
+            return
+        store.set(mission=replace(store.view()["mission"], limit_problems=problems))
+        if problems and problems != (UNCHECKED,):
+            store.add_message_locked(Severity.WARNING, f"Mission on the vehicle beyond the limits, not to be "
+                                     f"started: {_joined(problems)}")
+        elif not problems and before == (UNCHECKED,):
+            store.add_message_locked(Severity.INFO, "Mission checked now that the vehicle's home is known: every "
+                                     "item within the limits")
+        store.publish()
 
     def _settle(self, w: _Watch, result: CommandResult) -> None:
         self._watches.remove(w)
@@ -283,6 +316,10 @@ class MissionControl:
         t.changed = False
         store.set(mission=replace(p, transfers=t.progress()))
         store.publish()
+
+
+def _joined(problems) -> str:
+    return "; ".join(problems[:5]) + (f" (and {len(problems) - 5} more)" if len(problems) > 5 else "")
 
 
 def _running(s: VehicleState) -> bool:

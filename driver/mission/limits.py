@@ -2,6 +2,11 @@
 ceiling, and the fence (the vehicle's FENCE_RADIUS / FENCE_ALT_MAX and the polygon fence it holds). Each
 refusal names the item (the vehicle's numbering) and the reason.
 
+Before the vehicle has a home (no GPS fix yet) a distance cannot be checked, but a mission may still go up, as
+ArduPilot, QGroundControl and MAVProxy allow (ArduPilot puts its home in item 0 anyway): the items wait, and
+:func:`held_mission_problems` checks the mission the vehicle holds as soon as home is known; until then, and
+while an item is beyond the limits, the mission is not started (:class:`driver.mission.control.MissionControl`).
+
 The fence's shapes (:func:`fence_shapes`, :meth:`FenceShapes.outside`) are also what the simulated vehicle
 enforces, as AC_Fence does: outside every inclusion polygon or circle, or inside an exclusion, is a breach.
 """
@@ -15,9 +20,11 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink
 from .. import frames
 from .plan import MissionItem, Plan, PlanKind
 
-__all__ = ["plan_problems", "fence_shapes", "FenceShapes", "inside_polygon"]
+__all__ = ["plan_problems", "held_mission_problems", "unchecked", "UNCHECKED", "fence_shapes", "FenceShapes",
+           "inside_polygon"]
 
 _GLOBAL = {mavlink.MAV_FRAME_GLOBAL, mavlink.MAV_FRAME_GLOBAL_INT}
+UNCHECKED = "its items are not checked against the distance limits: the vehicle has not sent its home yet"
 
 
 def inside_polygon(point: tuple[float, float], polygon: list[tuple[float, float]]) -> bool:
@@ -99,22 +106,45 @@ def _altitude_above_home(item: MissionItem, home) -> float:
     return item.alt - home.alt if item.frame in _GLOBAL else item.alt
 
 
+def _placed(item: MissionItem) -> bool:
+    """An item at a place (0, 0 is ArduPilot's "here")."""
+    return item.has_position and not (item.lat == 0 and item.lon == 0)
+
+
+def unchecked(plan: Plan, home) -> bool:
+    """Whether items of ``plan`` wait for the vehicle's home before their distance can be checked."""
+    return home is None and plan.kind is PlanKind.MISSION and any(_placed(item) for item in plan.items)
+
+
+def held_mission_problems(state, config) -> tuple[str, ...]:
+    """What the limits say of the mission the vehicle holds (as read back): one line per item beyond them, or
+    :data:`UNCHECKED` before home is known; empty when it may be flown or is not known."""
+    plan = state.mission.vehicle_plan(PlanKind.MISSION)
+    if plan is None:
+        return ()
+    if unchecked(plan, state.home):
+        return (UNCHECKED,)
+    return tuple(plan_problems(plan, state, config))
+
+
 def plan_problems(plan: Plan, state, config) -> list[str]:
-    """Why ``plan`` may not go to the vehicle: one line per item refused (empty: it may)."""
+    """Why ``plan`` may not go to the vehicle: one line per item refused (empty: it may). Before home is known
+    the distances are not checked here (:func:`unchecked`)."""
     first = 1 if plan.kind is PlanKind.MISSION else 0
     home = state.home
     problems: list[str] = []
     fence = state.fence
     held = state.mission.vehicle_plan(PlanKind.FENCE)
     shapes = fence_shapes(held.items, home.lat, home.lon) if held is not None and home is not None else None
-    if plan.kind is PlanKind.FENCE and home is not None:
-        problems += list(fence_shapes(plan.items, home.lat, home.lon).problems)
+    if plan.kind is PlanKind.FENCE:                  # its shapes' structure; any reference point will do for it
+        problems += list(fence_shapes(plan.items, *((home.lat, home.lon) if home is not None else (0.0, 0.0)))
+                         .problems)
     for index, item in enumerate(plan.items, first):
         label = f"item {index} ({item.name})"
         if not item.finite():
             problems.append(f"{label}: a value is not a finite number")
             continue
-        if not item.has_position or (item.lat == 0 and item.lon == 0):
+        if not _placed(item):
             if plan.kind is PlanKind.MISSION and item.has_position and item.alt > config.max_altitude:
                 problems.append(f"{label}: {item.alt:g} m is above the {config.max_altitude:g} m ceiling")
             continue
@@ -122,8 +152,7 @@ def plan_problems(plan: Plan, state, config) -> list[str]:
             problems.append(f"{label}: latitude/longitude out of range")
             continue
         if home is None:
-            problems.append(f"{label}: the vehicle has not sent its home yet, so its distance cannot be checked")
-            continue
+            continue                         # checked once home is known (held_mission_problems)
         north, east = frames.offset_ned(home.lat, home.lon, item.lat, item.lon)
         distance = math.hypot(north, east)
         if plan.kind is PlanKind.FENCE:

@@ -138,6 +138,8 @@ class MissionProgress:
     current_name: str = ""                       # from "Mission: 3 WP", when the vehicle says it
     transfers: tuple[TransferProgress, ...] = field(default_factory=tuple)
     on_vehicle: tuple[Plan, ...] = ()            # the last plans known to be on the vehicle (read back/downloaded)
+    limit_problems: tuple[str, ...] = ()         # the driver's limits on the mission the vehicle holds: each item
+                                                 # beyond them, or not checked (no home yet); it is not started then
 
     def transfer(self, kind: PlanKind) -> TransferProgress | None:
         return next((t for t in self.transfers if t.kind is kind), None)

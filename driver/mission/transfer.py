@@ -11,6 +11,13 @@ count, each missing item of a download, and the item last sent while the vehicle
 vehicle answers INVALID_SEQUENCE, which does not end an upload and tells us it wants the next item). The re-ask time follows the link: three
 round trips measured on this transfer, between :data:`MIN_RETRY` and :data:`MAX_RETRY`.
 
+MISSION_ACK ERROR proves nothing by itself: ArduPilot sends it for every item that arrives while it is not
+receiving that plan (GCS_Common.cpp, GCS_MAVLINK::handle_mission_item, ``if (!prot->receiving)``), so our last
+item sent again after the vehicle completed the upload (its ACCEPTED lost on the way), or a duplicate of it,
+brings an ERROR for a plan the vehicle holds. In doubt the vehicle's plan decides: an upload or a clear answered
+ERROR is read back, and refused (with the vehicle's word) only if the vehicle does not hold it; a download never
+takes ERROR for an answer (MISSION_REQUEST_LIST is never answered with it), it keeps asking.
+
 :class:`PlanTransfers` runs on the driver's ticker and reader with the state lock held: ``service`` and
 ``on_message`` only *return* the messages to send; futures settle on the driver's :class:`Notifier`.
 """
@@ -42,6 +49,8 @@ WINDOW = 4                   # a download's requests in flight at once (the vehi
 SILENCE = 10.0               # s without a word from the vehicle during an upload (it gives up after 8 s)
 FINAL_ACK_WAIT = 3           # re-ask times after the last item before the read-back decides alone ...
 FINAL_ACK_MIN = 1.5          # s, and at least this: the vehicle asks a lost last item again after 1 s
+REASON_WAIT = 1.0            # s a NO_SPACE refusal waits for the vehicle's text that says why (it follows the ACK:
+                             # "Only 0 items are supported" before "ArduPilot Ready")
 
 
 @dataclass(eq=False)
@@ -51,7 +60,7 @@ class _Transfer:
     future: Future
     plan: Plan | None = None                  # upload: what is sent (mission: without the home slot)
     wire: list = field(default_factory=list)  # upload: the items on the wire (mission: home slot first)
-    stage: str = "start"                      # start | items | readback | done
+    stage: str = "start"                      # start | items | readback | refused (waiting for the reason) | done
     count: int | None = None
     received: dict = field(default_factory=dict)
     asked: int = -1                           # upload: the item the vehicle wants now (its last request)
@@ -70,6 +79,7 @@ class _Transfer:
     probing: int | None = None                # upload: the item sent again unasked (its INVALID_SEQUENCE means
                                               # the vehicle has it); None once the vehicle asked anything
     resent: int = 0
+    said: str = ""                            # a MISSION_ACK ERROR the vehicle sent, kept until the plan decides
 
 
 class PlanTransfers(LegacyRally):
@@ -122,7 +132,7 @@ class PlanTransfers(LegacyRally):
         return self._begin(_Transfer(kind, TransferDirection.DOWNLOAD, Future()), now)
 
     def clear(self, kind: PlanKind, now: float) -> Future:
-        return self._begin(_Transfer(kind, TransferDirection.CLEAR, Future()), now)
+        return self._begin(_Transfer(kind, TransferDirection.CLEAR, Future(), plan=Plan(kind)), now)
 
     def _begin(self, t: _Transfer, now: float) -> Future:
         t.heard = now
@@ -165,13 +175,20 @@ class PlanTransfers(LegacyRally):
         if t.legacy:
             self._legacy_service(t, now)
             return
+        if t.stage == "refused":
+            if now >= t.next_send:
+                self._end(t, CommandStatus.REFUSED, t.said)
+            return
         if t.stage == "items" and t.direction is TransferDirection.DOWNLOAD:
             for seq, entry in list(t.waiting.items()):
                 if now - entry[0] < self._retry(t):
                     continue
                 if entry[1] >= ITEM_ATTEMPTS and now - entry[2] >= ITEM_PATIENCE:
                     accepted = "the vehicle accepted the upload (MISSION_ACK) but reading it back failed: " \
-                        if t.upload is not None and t.upload.acked else ""
+                        if t.upload is not None and t.upload.acked else \
+                        f"the vehicle answered {t.upload.said}; reading back failed: " \
+                        if t.upload is not None and t.upload.said else \
+                        f"the vehicle answered {t.said}; " if t.said else ""
                     self._end(t, CommandStatus.TIMED_OUT, f"{accepted}item {seq} never came ({entry[1]} requests "
                               f"in {now - entry[2]:.0f} s); {len(t.received)} of {t.count} received")
                     return
@@ -183,7 +200,8 @@ class PlanTransfers(LegacyRally):
             if t.attempts >= START_ATTEMPTS:
                 what = {TransferDirection.UPLOAD: "MISSION_COUNT", TransferDirection.DOWNLOAD: "MISSION_REQUEST_LIST",
                         TransferDirection.CLEAR: "MISSION_CLEAR_ALL"}[t.direction]
-                self._end(t, CommandStatus.TIMED_OUT, f"no answer to {what} after {t.attempts} attempts")
+                said = f" (the vehicle answered {t.said})" if t.said else ""
+                self._end(t, CommandStatus.TIMED_OUT, f"no answer to {what} after {t.attempts} attempts{said}")
                 return
             self._send_start(t, now)
         elif t.stage == "items":                                  # upload: the vehicle leads
@@ -281,9 +299,9 @@ class PlanTransfers(LegacyRally):
         t.heard = now
 
     def _on_request(self, t: _Transfer, seq: int, now: float) -> None:
-        if t.upload is not None and not t.upload.acked and t.stage == "start":
+        if self._resumable(t):
             t = self._resume_upload(t, now)       # a read-back begun on a lost final ACK, but the vehicle asks
-        if t.direction is not TransferDirection.UPLOAD or t.upload is not None or t.stage == "readback":
+        if t.direction is not TransferDirection.UPLOAD or t.upload is not None or t.stage in ("readback", "refused"):
             return
         if not 0 <= seq < (t.count or 0):
             return
@@ -296,6 +314,12 @@ class PlanTransfers(LegacyRally):
         t.asked = seq                             # what the vehicle asks for is what it holds up to
         self.changed = True
         self._send_item(t, seq, now)
+
+    @staticmethod
+    def _resumable(t: _Transfer) -> bool:
+        """A read-back begun while its upload was not acknowledged, still waiting for the count."""
+        return (t.upload is not None and t.upload.direction is TransferDirection.UPLOAD and not t.upload.acked
+                and t.stage == "start")
 
     def _resume_upload(self, check: _Transfer, now: float) -> _Transfer:
         """Back from a read-back to its upload: the vehicle is still receiving (our last item was lost)."""
@@ -334,13 +358,15 @@ class PlanTransfers(LegacyRally):
         self._ask_more(t, now)
 
     def _on_ack(self, t: _Transfer, result: int, now: float) -> None:
-        upload = t.upload
-        if upload is not None and not upload.acked and result == mavlink.MAV_MISSION_DENIED and t.stage == "start":
+        if self._resumable(t) and result == mavlink.MAV_MISSION_DENIED:
             # a read-back begun on a lost final ACK, DENIED: the vehicle is still receiving (an item of ours was
             # lost, not its ACK): back to the upload, the last item asked again
             upload = self._resume_upload(t, now)
             self._send_item(upload, upload.asked, now)
             upload.last_sent_at = now
+            return
+        if result == mavlink.MAV_MISSION_ERROR:
+            self._on_error(t, result, now)
             return
         if t.direction is TransferDirection.DOWNLOAD:
             if t.stage == "start" and result != mavlink.MAV_MISSION_ACCEPTED:
@@ -370,11 +396,31 @@ class PlanTransfers(LegacyRally):
         if result == mavlink.MAV_MISSION_ACCEPTED:
             if (t.count and t.top < t.count - 1) or t.stage == "readback" or (not t.count and t.attempts == 0):
                 return                    # not for this upload: items are still to come, or nothing asked yet
-            t.acked = True
+            t.acked, t.said = True, ""
             self._read_back(t, now)
             return
-        if t.stage in ("start", "items"):
+        if t.stage in ("start", "items") and result == mavlink.MAV_MISSION_NO_SPACE:
+            t.stage, t.said, t.next_send = "refused", result_meaning(result), now + REASON_WAIT
+        elif t.stage in ("start", "items"):
             self._end(t, CommandStatus.REFUSED, result_meaning(result))
+
+    def on_text(self, text: str) -> None:
+        """A STATUSTEXT (lock held): the reason of a refusal waiting for it ("Only 0 items are supported")."""
+        if "items are supported" not in text:
+            return
+        for t in list(self._running.values()):
+            if t.stage == "refused":
+                self._end(t, CommandStatus.REFUSED, f"{t.said}; the vehicle says: {text}")
+
+    def _on_error(self, t: _Transfer, result: int, now: float) -> None:
+        """MISSION_ACK ERROR: a late answer to a repeated item as often as a failure (see the module's text)."""
+        t.said = result_meaning(result)
+        if t.direction is TransferDirection.DOWNLOAD:
+            return                                # the requests go on; a timeout tells what the vehicle said
+        started = t.attempts > 0 if t.direction is TransferDirection.CLEAR else t.asked >= 0
+        if started:                               # (an upload not asked for anything yet: a late answer to an
+            t.detail = f"the vehicle answered {t.said}: reading back what it holds"   # earlier transfer)
+            self._read_back(t, now)
 
     # -- endings -----------------------------------------------------------------------------------------
     def _read_back(self, upload: _Transfer, now: float) -> None:
@@ -398,8 +444,18 @@ class PlanTransfers(LegacyRally):
             self._end(t, CommandStatus.ACCEPTED, f"{len(plan)} items", plan)
             return
         why = difference(upload.plan, plan, self.integer)
-        if why:
-            self._end(t, CommandStatus.REFUSED, f"the plan read back differs: {why}", plan)
+        said = f"{upload.said}; " if upload.said else ""
+        if upload.direction is TransferDirection.CLEAR:
+            if why:
+                self._end(t, CommandStatus.REFUSED, f"{said}the vehicle still holds {len(plan)} items", plan)
+            else:
+                self._end(t, CommandStatus.ACCEPTED, f"cleared (read back empty; the vehicle had answered "
+                          f"{upload.said})", plan)
+        elif why:
+            self._end(t, CommandStatus.REFUSED, f"{said}the plan read back differs: {why}", plan)
+        elif upload.said:
+            self._end(t, CommandStatus.ACCEPTED, f"{len(plan)} items read back as sent (the vehicle answered "
+                      f"{upload.said} to an item sent again after it had the plan)", plan)
         elif upload.acked:
             self._end(t, CommandStatus.ACCEPTED, f"{len(plan)} items, accepted and read back", plan)
         else:

@@ -139,6 +139,7 @@ class ParameterManager:
         """Writes keep their tries for when the link is back (none is spent on a dead link)."""
         for pending in self._sets.values():
             pending.attempts = min(pending.attempts, max(0, pending.tries - 2))
+            pending.reads = 0
 
     @property
     def reasking(self) -> bool:
@@ -177,9 +178,15 @@ class ParameterManager:
         pending = self._sets.get(name)
         if pending is not None and pending.attempts:
             pending.ptype = ptype                 # the vehicle's own type, whatever we assumed
-            if pending.confirms(ptype, param.value):
+            confirmed = pending.confirms(ptype, param.value)
+            if pending.reading and not confirmed and not pending.known:
+                pending.known, pending.reads = True, 0    # it has the name, not our value: a listed name's tries
+                pending.next_send = now
+            elif confirmed or pending.reading:    # read back: what the vehicle holds is the answer
                 del self._sets[name]
-                self._settle(pending.future, CommandStatus.ACCEPTED, "", pending.command, pending.attempts)
+                read = f"read back after {pending.attempts} unechoed PARAM_SET" if pending.reading else ""
+                self._settle(pending.future, CommandStatus.ACCEPTED if confirmed else CommandStatus.REFUSED,
+                             read if confirmed else pending.failure(), pending.command, pending.attempts)
                 self._publish(now, force=True)
                 return param
         self._dirty = True
@@ -229,6 +236,11 @@ class ParameterManager:
                     self._dirty = True
         for pending in list(self._sets.values()):
             if not pending.due(now) and not pending.answered_otherwise:
+                continue
+            if pending.attempts >= pending.tries and not pending.answered_otherwise and pending.can_read_back:
+                out.append(pending.read_message(target))      # never echoed: what does the vehicle hold?
+                pending.reads += 1
+                pending.next_send = now + SET_RETRY
                 continue
             if pending.attempts >= pending.tries or pending.answered_otherwise:
                 del self._sets[pending.name]

@@ -6,8 +6,14 @@
   confirms nothing (it may be the list's stream, or another ground station): the set is sent again, and if
   the vehicle keeps reporting another value the result says which.
 * Unanswered, the set is sent again (a lost PARAM_SET and a lost echo look the same; setting twice is
-  harmless). A name the vehicle does not have gets no answer at all (the recording): after a few tries the
-  result says so; a name the vehicle listed gets many more tries, so a bad radio is not taken for a bad name.
+  harmless): a name the vehicle listed gets many tries, one not (yet) listed a few.
+* A set never echoed is not confirmed, and nothing is said yet: the value is read back by name
+  (PARAM_REQUEST_READ; the answer carries param_index 65535). The read-back showing the value confirms it; showing
+  another value for a name not listed yet, the vehicle has the name but not our value: the set goes again with a
+  listed name's tries (after those, another value is the answer: refused with it). A name the vehicle does not have gets no answer at all, to a set
+  or a read (the recording), but so does every name over a radio that loses everything: "no such parameter" is
+  said only when the vehicle's COMPLETE list lacks it (then nothing is read back); otherwise the result says the
+  set is not confirmed.
 
 All methods run with the driver's state lock held.
 """
@@ -26,6 +32,7 @@ __all__ = ["PendingSet", "SET_RETRY", "KNOWN_TRIES", "UNKNOWN_TRIES"]
 SET_RETRY = 1.0          # s without the echo before PARAM_SET goes again (MAVProxy waits 1 s)
 KNOWN_TRIES = 10         # a listed parameter: 30 % loss each way loses all ten with a chance under 0.1 %
 UNKNOWN_TRIES = 3        # a name the vehicle never listed
+READ_TRIES = 5           # reads by name of a set never echoed: 30 % loss each way loses all five with a chance of 3 %
 OTHER_VALUE_ECHOES = 3   # echoes of another value, each after a PARAM_SET of ours: the vehicle's answer
 
 
@@ -41,10 +48,24 @@ class PendingSet:
     next_send: float = 0.0
     reported: float | None = None        # another value the vehicle reported meanwhile
     other_echoes: int = 0                # how many times
+    reads: int = 0                       # PARAM_REQUEST_READ sent once the sets went unanswered
 
     @property
     def command(self) -> str:
         return f"param {self.name}={format_value(self.ptype, self.value)}"
+
+    @property
+    def reading(self) -> bool:
+        """Every PARAM_SET went unechoed: the value is being read back by name."""
+        return self.reads > 0
+
+    @property
+    def can_read_back(self) -> bool:
+        """Whether a read by name may still tell (not when the complete list lacks the name)."""
+        return not self.listed_complete and self.reads < READ_TRIES
+
+    def read_message(self, target: tuple[int, int]):
+        return mavlink.MAVLink_param_request_read_message(target[0], target[1], self.name.encode(), -1)
 
     def message(self, target: tuple[int, int]):
         ptype = int(self.ptype) if self.ptype is not None else mavlink.MAV_PARAM_TYPE_REAL32
@@ -72,12 +93,14 @@ class PendingSet:
 
     def failure(self) -> str:
         """Why the set ended unconfirmed."""
+        read = f" and {self.reads} reads by name" if self.reads else ""
         if self.reported is not None:
             return (f"the vehicle reports {self.name} = {format_value(self.ptype, self.reported)}, not "
-                    f"{format_value(self.ptype, self.value)}, after {self.attempts} attempts")
-        if not self.known:
-            listed = " and it is not in the vehicle's list" if self.listed_complete else ""
-            return (f"no answer after {self.attempts} attempts: the vehicle has no parameter {self.name}{listed} "
-                    "(ArduPilot does not answer an unknown name)")
-        return (f"no PARAM_VALUE echo after {self.attempts} attempts: the link lost every one; the vehicle may or "
-                "may not have the new value (read it again)")
+                    f"{format_value(self.ptype, self.value)}, after {self.attempts} attempts{read}")
+        if self.listed_complete:
+            return (f"no answer after {self.attempts} attempts: the vehicle has no parameter {self.name} and it is "
+                    "not in the vehicle's list (ArduPilot does not answer an unknown name)")
+        unlisted = "" if self.known else (f"; {self.name} is not in the part of the vehicle's list read so far, "
+                                          "and ArduPilot does not answer a name it does not have")
+        return (f"not confirmed: no answer to {self.attempts} PARAM_SET{read}: the link lost them, the vehicle may "
+                f"or may not have the new value{unlisted}")

@@ -2,18 +2,28 @@
 
 They work on any :class:`~driver.api.Drone` (the embedded driver or an Ice client): the table read is
 ``state().parameters``, every write goes through ``set_parameter`` and is confirmed by the vehicle.
+
+``show``, ``save``, ``diff`` and ``load`` act on the vehicle's whole list: when it is not all known (right after
+connecting, as with ``--cmd "param save FILE"``) they read it first, print how far that is, and act when it is
+complete; a file of 0 parameters, or a diff against a few, would say something false about the vehicle.
 """
 from __future__ import annotations
 
 import fnmatch
-from concurrent.futures import Future
+import threading
+from concurrent.futures import Future, wait
 from typing import Callable
+
+from .model import ParameterTable
 
 from .files import ParamFormat, compare, read_param_file, write_param_file
 from .metadata import ParamMeta
 from .values import format_value
 
 __all__ = ["ParamVerbs", "USAGE"]
+
+PROGRESS_EVERY = 1.0     # s between progress lines while the list is read
+COMPLETE_WAIT = 5.0      # s for the state to show the complete table once the read ended (an Ice client's lags)
 
 USAGE = ("param fetch | param show [PATTERN] | param help NAME | param set NAME VALUE [force] | "
          "param load FILE [PATTERN] [force] | param save FILE [PATTERN] [missionplanner] | param diff FILE [PATTERN]")
@@ -44,17 +54,16 @@ class ParamVerbs:
 
     def _show(self, rest: list[str]) -> None:
         pattern = (rest[0] if rest else "*").upper()
-        table = self.drone.state().parameters
+        self._with_all("param show", lambda table: self._show_table(table, pattern))
+
+    def _show_table(self, table: ParameterTable, pattern: str) -> None:
         meta = self.drone.parameter_metadata
         names = [n for n in sorted(table.values) if fnmatch.fnmatchcase(n, pattern)]
         for name in names:
             p = table.values[name]
             info = meta.get(name) if meta is not None else None
             self.say(f"{name:<16} {format_value(p.type, p.value)}{_meaning(info, p.value)}")
-        if not table.complete:
-            have = f"{table.received} of {table.expected}" if table.expected else "none"
-            self.say(f"({have} parameters known: param fetch reads them all)")
-        elif not names:
+        if not names:
             self.say(f"no parameter matches {pattern}")
 
     def _help(self, rest: list[str]) -> None:
@@ -98,10 +107,10 @@ class ParamVerbs:
             rest = rest[:-1]
         if not 1 <= len(rest) <= 2:
             raise ValueError("usage: param load FILE [PATTERN] [force]")
-        table = self.drone.state().parameters
-        if not table.complete:
-            raise ValueError("the vehicle's parameters are not all known yet: param fetch first")
         f = self._read(rest[0])
+        self._with_all("param load", lambda table: self._load_table(table, f, rest, force))
+
+    def _load_table(self, table: ParameterTable, f, rest: list[str], force: bool) -> None:
         changes = compare(f.values, table, rest[1] if len(rest) > 1 else "*")
         unknown = [d.name for d in changes if d.vehicle_value is None]
         if unknown:
@@ -117,9 +126,9 @@ class ParamVerbs:
             rest = rest[:-1]
         if not 1 <= len(rest) <= 2:
             raise ValueError("usage: param save FILE [PATTERN] [missionplanner]")
-        table = self.drone.state().parameters
-        if not table.complete:
-            self.say(f"warning: only {table.received} of {table.expected or '?'} parameters are known")
+        self._with_all("param save", lambda table: self._save_table(table, rest, fmt))
+
+    def _save_table(self, table: ParameterTable, rest: list[str], fmt: ParamFormat) -> None:
         try:
             count = write_param_file(rest[0], table, fmt, rest[1] if len(rest) > 1 else "*")
         except OSError as e:
@@ -130,7 +139,9 @@ class ParamVerbs:
         if not 1 <= len(rest) <= 2:
             raise ValueError("usage: param diff FILE [PATTERN]")
         f = self._read(rest[0])
-        table = self.drone.state().parameters
+        self._with_all("param diff", lambda table: self._diff_table(table, f, rest))
+
+    def _diff_table(self, table: ParameterTable, f, rest: list[str]) -> None:
         changes = compare(f.values, table, rest[1] if len(rest) > 1 else "*")
         self.say(f"{'PARAMETER':<16} {'FILE':>12} {'VEHICLE':>12}")
         for d in changes:
@@ -138,6 +149,44 @@ class ParamVerbs:
             theirs = format_value(d.type, d.vehicle_value) if d.vehicle_value is not None else "-"
             self.say(f"{d.name:<16} {mine:>12} {theirs:>12}")
         self.say(f"{len(changes)} differences")
+
+    # -- the whole list first ----------------------------------------------------------------------------
+    def _with_all(self, verb: str, act: Callable[[ParameterTable], None]) -> None:
+        """``act`` on the vehicle's complete list: at once when it is known, else once it has been read."""
+        table = self.drone.state().parameters
+        if table.complete and not table.downloading:
+            act(table)
+            return
+        self.say(f"{verb}: reading the vehicle's parameters first ({_known(table)})")
+        future = self.drone.fetch_parameters()
+        self._progress(future)
+
+        def done(f: Future) -> None:
+            try:
+                result = f.result()
+            except Exception as exc:  # noqa: BLE001 - said at the console, which stays alive
+                self.say(f"{verb}: error: {exc}")
+                return
+            s = self.drone.wait_for(lambda s: s.parameters.complete, COMPLETE_WAIT) if result.ok else None
+            if s is None:
+                self.say(f"{verb}: not done, the vehicle's parameters were not all read ({result})")
+                return
+            try:
+                act(s.parameters)
+            except ValueError as exc:
+                self.say(f"error: {exc}")
+        future.add_done_callback(done)
+
+    def _progress(self, future: Future) -> None:
+        """A line whenever the count read has moved, at most every :data:`PROGRESS_EVERY`, until the end."""
+        def run() -> None:
+            last = ""
+            while not wait([future], PROGRESS_EVERY).done:
+                line = f"parameters: {_known(self.drone.state().parameters)}"
+                if line != last:
+                    self.say(line)
+                    last = line
+        threading.Thread(target=run, name="param-progress", daemon=True).start()
 
     def _read(self, path: str):
         try:
@@ -147,6 +196,12 @@ class ParamVerbs:
         for problem in f.problems:
             self.say(f"{path} {problem}")
         return f
+
+
+def _known(table: ParameterTable) -> str:
+    if table.expected:
+        return f"{table.received} of {table.expected}"
+    return table.detail or f"{table.received} known"
 
 
 def _value(text: str) -> float:

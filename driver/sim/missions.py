@@ -7,6 +7,8 @@ Mixed into :class:`~driver.sim.autopilot.Autopilot`. Follows ArduPilot's Mission
   8 s after the last item with MISSION_ACK OPERATION_CANCELLED and "Mission upload timeout";
 * an item with the wrong seq gets INVALID_SEQUENCE without ending the upload; a download, a clear or another
   ground station's upload asked meanwhile gets DENIED;
+* an item when no upload of its plan runs (the last item sent again after the upload completed, a duplicate)
+  gets MISSION_ACK ERROR (GCS_Common.cpp, GCS_MAVLINK::handle_mission_item: ``if (!prot->receiving)``);
 * before "ArduPilot Ready" the storage is not there: NO_SPACE and "Only 0 items are supported";
 * mission items are written as they arrive (a failed upload leaves what arrived), fences only once complete;
 * item 0 of the mission is home (what is uploaded there is replaced); read back, frames and autocontinue are
@@ -200,7 +202,12 @@ class Missions:
         kind = self._kind(msg)
         upload = self.uploads.get(kind) if kind is not None else None
         if upload is None:
-            return                                  # nobody is uploading: MissionItemProtocol has no link
+            # GCS_MAVLINK::handle_mission_item (GCS_Common.cpp): an item while that plan is not being received -
+            # a repeat of the last item after the upload completed, a duplicate, a late one - gets MISSION_ACK
+            # ERROR for its mission_type (3.3: the same, "if (!waypoint_receiving)")
+            if kind is not None:
+                self._ack(msg, mavlink.MAV_MISSION_ERROR, kind)
+            return
         if msg.seq != upload.next_seq:
             self._ack(msg, mavlink.MAV_MISSION_INVALID_SEQUENCE, kind, upload.link)
             return

@@ -353,7 +353,9 @@ class PlanController(QObject):
         running = s.mode == "AUTO" and s.flying and m.state is not MissionRunState.COMPLETE
         held = (s.flying and s.mode != "AUTO" and bool(m.current) and count > 0
                 and m.state is not MissionRunState.COMPLETE)
-        p.startButton.setEnabled(link_ok and count > 0 and not running)
+        limits = m.limit_problems                # the driver's limits on the held mission (or no home yet)
+        p.startButton.setEnabled(link_ok and count > 0 and not running and not limits)
+        p.startButton.setToolTip(f"Not started: the mission's {'; '.join(limits)}" if limits else "")
         p.pauseButton.setEnabled(link_ok and running)
         p.resumeButton.setEnabled(link_ok and held)
         p.skip_allowed = link_ok and count > 0
