@@ -122,6 +122,9 @@ def test_a_set_whose_echoes_are_lost_is_read_back_before_anything_is_said(vehicl
     the value read back is the answer; never "the vehicle has no parameter" from a table not yet complete."""
     autopilot = sim.autopilot
     original = autopilot._on_param_set
+    # the plan's parameters are read by name at connect: let that read end first, or its answer (650, once the
+    # set is obeyed) is an echo in all but name
+    assert vehicle.wait_for(lambda s: s.parameters.get("WPNAV_SPEED") is not None, 10)
 
     def echo_lost(msg):
         autopilot.params[msg.param_id] = msg.param_value          # obeyed; its PARAM_VALUE lost on the way

@@ -123,7 +123,6 @@ def test_parameter_list_read_and_sets_as_recorded(replay_factory, connect):
         [(("PARAM_SET", "NO_SUCH_PARAM", 1.0), "its 1 recorded answer(s) are used up")] * 2
 
 
-@pytest.mark.xfail(strict=True, reason="issue 28 item 3, fixed on branch transfer")
 def test_an_unanswered_set_before_the_list_is_not_called_an_unknown_name(replay_factory, connect):
     """ArduPilot answers an unknown name with silence, and so does a lost link: before the complete list says
     the name is not there, silence proves nothing."""
