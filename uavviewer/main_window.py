@@ -16,16 +16,17 @@ from PyQt5.QtCore import QEvent, QObject, QSettings, Qt
 from PyQt5.QtWidgets import QApplication, QDialog, QLabel, QMainWindow, QMessageBox, QSizePolicy, QWidget
 
 from driver.api import Drone, Limits
-from driver.rules import arming_consequence, mode_warning, unattended
+from driver.rules import mode_warning, unattended
 from driver.state import LinkStatus, SequencePhase, Severity, VehicleState
 
 from . import RESOURCES
 from .dialogs import (
-    KeysDialog, SettingsDialog, arm_question, ask, emergency_stop_question, mode_question, takeoff_question,
+    KeysDialog, SettingsDialog, ask, emergency_stop_question, mode_question, takeoff_question,
 )
 from .camera_controller import CameraController, default_media_folder
 from .connect.choice import Choice, Kind, sim_name
 from .drone_adapter import DroneAdapter
+from .flight.arming import Arming
 from .flight_timer import FlightTimer
 from .flight_phase import (
     NO_VEHICLE, FlightPhase, flight_phase, readiness_text, stick_hint, takeoff_cancellable, takeoff_progress,
@@ -93,7 +94,7 @@ class MainWindow(QMainWindow):
         self._takeoff_box: QMessageBox | None = None
         self._mode_box: QMessageBox | None = None
         self._emergency_box: QMessageBox | None = None
-        self._arm_box: QMessageBox | None = None
+        self.arming = Arming(self)
         self._settings_dialog: SettingsDialog | None = None
         self._quit_box: QMessageBox | None = None
         self._quitting = False                   # closing without asking (answered, or a signal)
@@ -711,24 +712,13 @@ class MainWindow(QMainWindow):
         self._command("cancel_takeoff")
 
     def request_arm(self) -> None:
-        """Arm only after a question that says what happens next in this mode (the driver's words)."""
-        if self._arm_box is not None and self._arm_box.isVisible():
-            return
-        mode = self.adapter.state.mode
-        self._arm_box = ask(arm_question(self, mode, arming_consequence(mode)), self._arm_answered)
-
-    def _arm_answered(self, box: QMessageBox) -> None:
-        if box.clickedButton() is box.button(QMessageBox.Yes):
-            s = self.adapter.state
-            if s.connected and not s.armed and not flight_phase(s).airborne:
-                self._command("arm")
-        box.deleteLater()
-        if self._arm_box is box:
-            self._arm_box = None
+        """Arm only after a question that says what happens next in this mode, or how to get to a mode that arms
+        (uavviewer/flight/arming.py)."""
+        self.arming.request()
 
     @property
     def arm_box(self) -> QMessageBox | None:
-        return self._arm_box
+        return self.arming.box
 
     def request_disarm(self) -> None:
         """On the ground, a disarm. In the air, disarming stops the motors and the drone falls: the pilot is

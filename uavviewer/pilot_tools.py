@@ -44,6 +44,7 @@ class PilotTools(QObject):
         w.home_arrow = HomeArrow(w.attitude)
         self._guided(w)
         self._connecting(w)
+        w.plan.panel.editToggled.connect(w.mapPanel.hold_still)     # editing a plan: the map stays still
         w.replayBar.seekRequested.connect(lambda t: w.adapter.replay and w.adapter.replay.seek(t))
         w.replayBar.restartRequested.connect(lambda: w.adapter.replay and w.adapter.replay.restart())
         channel = w.refresh.add(TEXT_HZ, self.show)
