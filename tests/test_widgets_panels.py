@@ -98,7 +98,9 @@ def test_telemetry_with_the_link_lost_is_stale(qtbot):
 def test_link_banner_text(qtbot):
     b = make(LinkBanner, qtbot)
     b.set_link(LinkStatus.WAITING, "udpin:0.0.0.0:14550", None)
-    assert not b.isHidden() and b.text() == "No vehicle yet — listening on udpin:0.0.0.0:14550…"
+    assert not b.isHidden() and b.text() == "No vehicle yet — listening on UDP 0.0.0.0:14550…"
+    b.set_link(LinkStatus.WAITING, "tcp:127.0.0.1:5760", None)            # an outgoing link never listens
+    assert b.text() == "No vehicle yet — connecting to 127.0.0.1:5760…"
     b.set_link(LinkStatus.LOST, "udpin:0.0.0.0:14550", 7.4)
     assert not b.isHidden() and b.text().startswith("Link lost") and "7 s" in b.text()
     assert b.property("kind") == "lost"

@@ -5,6 +5,7 @@ from PyQt5.QtCore import Qt
 from PyQt5.QtWidgets import QLabel, QWidget
 
 from driver.state import LinkStatus
+from ..connect.choice import waiting_words
 from ..flight_phase import NO_VEHICLE
 
 __all__ = ["LinkBanner"]
@@ -34,7 +35,7 @@ class LinkBanner(QLabel):
         elif status is LinkStatus.OK:
             text, kind = "", ""
         elif status is LinkStatus.WAITING:
-            text, kind = f"{NO_VEHICLE} — listening on {address}…", "waiting"
+            text, kind = f"{NO_VEHICLE} — {waiting_words(address)}…", "waiting"
         elif status is LinkStatus.LOST:
             since = "" if heartbeat_age is None else f" — {heartbeat_age:.0f} s since the last heartbeat"
             text, kind = f"Link lost{since}", "lost"
