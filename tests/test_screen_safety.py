@@ -65,7 +65,7 @@ def test_flying_without_a_gcs_failsafe_is_said_in_the_banner(qtbot, sim, vehicle
     assert not w.alert_banner.isVisible()                      # on the ground it is only a preflight line
     assert vehicle.takeoff(3.0).result(timeout=60).ok
     qtbot.waitUntil(lambda: w.alert_banner.isVisible(), timeout=10000)
-    assert "FS_GCS_ENABLE = 0" in w.alert_banner.text and "link is lost" in w.alert_banner.text
+    assert "FS_GCS_ENABLE = 0" in w.alert_banner.text and "link loss" in w.alert_banner.text
 
 
 def test_a_vehicle_found_flying_without_a_gcs_failsafe_is_said_in_the_banner(qtbot, sim, flying, window_factory):

@@ -13,7 +13,7 @@ from dataclasses import replace
 
 from PyQt5 import uic
 from PyQt5.QtCore import QEvent, QObject, QSettings, Qt
-from PyQt5.QtWidgets import QApplication, QDialog, QLabel, QMainWindow, QMessageBox, QSizePolicy, QWidget
+from PyQt5.QtWidgets import QApplication, QDialog, QLabel, QMainWindow, QMessageBox, QWidget
 
 from driver.api import Drone, Limits
 from driver.rules import mode_warning, unattended
@@ -43,7 +43,7 @@ from .refresh import INSTRUMENTS_HZ, PLOTS_HZ, TEXT_HZ, Refresh
 from .settings import ViewerSettings, default_qsettings, load_settings, load_window, save_settings, save_window
 from .sticks import Axes, MaxSpeeds, axes_from_pads, combine, pad_labels, pads_from_axes, velocity_from_axes
 from .gimbal_controller import KEY_STEP, GimbalController
-from .layout import fit_screen
+from .layout import fit_restored, fit_screen, show_replay_bar, steady_slots
 from .widgets.camera_panel import CameraPanel
 from .widgets.gimbal_bar import GimbalBar
 from .widgets.gamepad_page import GamepadPage
@@ -127,6 +127,7 @@ class MainWindow(QMainWindow):
         self.refresh.shownChanged.connect(self.camera.set_shown)
         self.gimbal_bar = GimbalBar()                 # the camera on the vehicle: tilt, its own photo and video
         self.camera_panel.layout().addWidget(self.gimbal_bar)
+        self.camera_panel.add_overlay(self.gimbal_bar.stop_looking_button)
         self.gimbal = GimbalController(self.adapter, self.camera_view, self.gimbal_bar, self)
         self.camera_panel.hud_button.setChecked(self.settings.hud)
         self.menuView.addAction(self.telemetryDock.toggleViewAction())
@@ -146,13 +147,7 @@ class MainWindow(QMainWindow):
         self.mapDock.raise_()
         self.instrumentSplitter.setStretchFactor(0, 3)
         self.instrumentSplitter.setStretchFactor(1, 2)
-        self.phaseLabel.setObjectName("phaseLabel")
-        # two lines always: a long phase ("waiting for GPS fix, EKF, pre-arm checks") wraps without
-        # squeezing the buttons below it (layouts do not ask a wrapping label its height for a width)
-        # the setpoint line never widens the window: at worst it is cut at the end (it repeats the sticks)
-        self.setpointLabel.setSizePolicy(QSizePolicy.Ignored, self.setpointLabel.sizePolicy().verticalPolicy())
-        self.phaseLabel.ensurePolished()          # the style sheet's font, not the default one
-        self.phaseLabel.setMinimumHeight(2 * self.phaseLabel.fontMetrics().lineSpacing() + 2)
+        steady_slots(self)                        # nothing moves under the cursor as the state changes
         self.link_status = QLabel()
         self.statusbar.addPermanentWidget(self.link_status)
 
@@ -169,7 +164,7 @@ class MainWindow(QMainWindow):
         self.modeSelector.modeRequested.connect(self.request_mode)
         self.replayBar.pauseRequested.connect(self._replay_pause)
         self.replayBar.speedRequested.connect(self._replay_speed)
-        self.replayBar.setVisible(self.adapter.replay is not None)
+        show_replay_bar(self, self.adapter.replay is not None)
         self.controlsRow.setEnabled(self.adapter.replay is None)     # a recording cannot be flown
         self.actionQuit.triggered.connect(self.close)
         self.actionPreferences.triggered.connect(self.edit_settings)
@@ -187,14 +182,15 @@ class MainWindow(QMainWindow):
 
         self._apply_settings()
         geometry, state = load_window(self._qsettings)
-        if geometry is not None:
-            self.restoreGeometry(geometry)
-        else:
-            fit_screen(self)
         if state is not None:
             self.restoreState(state)
             if "preflightDock".encode("utf-16-be") not in bytes(state):   # saved before the dock existed
                 self.tools.tab_preflight()
+        if geometry is not None:
+            self.restoreGeometry(geometry)
+            fit_restored(self)                    # saved on a larger screen: it still fits this one
+        else:
+            fit_screen(self)
         self.setFocusPolicy(Qt.StrongFocus)
         QApplication.instance().installEventFilter(self)
         self.show_state(VehicleState(link=self.adapter.state.link))
@@ -254,7 +250,7 @@ class MainWindow(QMainWindow):
         self.telemetry.set_security_unknown(self._signing_unavailable)
         self._speeds = self._set_limits(self.settings.speeds)
         replay = self.adapter.replay is not None
-        self.replayBar.setVisible(replay)
+        show_replay_bar(self, replay)
         self.controlsRow.setEnabled(not replay)
         self.attitude.clear("NO LINK")
         self.show_state(self.adapter.state)

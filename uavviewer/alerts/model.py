@@ -131,8 +131,8 @@ def _no_gcs_failsafe(prev: VehicleState | None, s: VehicleState) -> list[Alert]:
     """Once a flight starts without a GCS failsafe (or the window finds one so): in the banner, not only spoken."""
     if not _unprotected(s) or _unprotected(prev):
         return []
-    return [Alert(AlertKind.NO_GCS_FAILSAFE, f"No GCS failsafe ({gcs_failsafe_setting(0)}): if this link is lost the "
-                  "vehicle keeps flying until its battery failsafe", Severity.WARNING)]
+    return [Alert(AlertKind.NO_GCS_FAILSAFE, f"No GCS failsafe ({gcs_failsafe_setting(0)}): on link loss it flies on "
+                  "until its battery failsafe", Severity.WARNING)]
 
 
 def _has_vehicle(s: VehicleState) -> bool:

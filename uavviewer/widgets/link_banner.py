@@ -2,7 +2,7 @@
 from __future__ import annotations
 
 from PyQt5.QtCore import Qt
-from PyQt5.QtWidgets import QLabel, QWidget
+from PyQt5.QtWidgets import QLabel, QSizePolicy, QWidget
 
 from driver.state import LinkStatus
 from ..connect.choice import waiting_words
@@ -18,7 +18,7 @@ class LinkBanner(QLabel):
         super().__init__(parent)
         self.setObjectName("linkBanner")
         self.setAlignment(Qt.AlignCenter)
-        self.setMinimumHeight(34)
+        self.setSizePolicy(QSizePolicy.Ignored, QSizePolicy.Fixed)   # a long text is cut, never widens the window
         self._status: LinkStatus | None = None
         self.setVisible(False)
 
@@ -50,4 +50,5 @@ class LinkBanner(QLabel):
             self.style().polish(self)
         if self.text() != text:
             self.setText(text)
+            self.setToolTip(text)
         self.setVisible(bool(text))

@@ -5,6 +5,7 @@ from PyQt5.QtCore import Qt, pyqtSignal
 from PyQt5.QtWidgets import QComboBox, QHBoxLayout, QLabel, QPushButton, QSlider, QWidget
 
 from ..flight_timer import clock_text
+from .text_width import width_for
 
 __all__ = ["ReplayBar", "SPEEDS"]
 
@@ -41,13 +42,16 @@ class ReplayBar(QWidget):
         self.clock = QLabel("--:-- / --:--")
         self.clock.setObjectName("replayClock")
         row = QHBoxLayout(self)
-        row.setContentsMargins(8, 4, 8, 4)
+        row.setContentsMargins(8, 0, 8, 0)          # as tall as the stick line it stands in for
         row.addWidget(QLabel("Replay"))
         row.addWidget(self.play_button)
         row.addWidget(self.restart_button)
         row.addWidget(self.speed)
         row.addWidget(self.progress, 1)
         row.addWidget(self.clock)
+        # as wide as their longest texts from the start: Pause/Play/Finished and the clock never move the seek bar
+        self.play_button.setMinimumWidth(max(width_for(self.play_button, t) for t in ("Pause", "Play", "Finished")))
+        self.clock.setMinimumWidth(width_for(self.clock, "8:88:88 / 8:88:88"))
         self.play_button.clicked.connect(lambda: self.pauseRequested.emit(not self._paused))
         self.speed.activated.connect(lambda i: self.speedRequested.emit(float(self.speed.itemData(i))))
         self.restart_button.clicked.connect(self.restartRequested)
@@ -85,9 +89,10 @@ class ReplayBar(QWidget):
                 self.progress.blockSignals(True)
                 self.progress.setValue(value)
                 self.progress.blockSignals(False)
-        end = "  (finished)" if finished else ""
-        self.clock.setText(f"{clock_text(duration if finished else position)} / {clock_text(duration)}{end}")
+        # "Finished" is the play button's: a longer clock would squeeze the seek bar at the end
+        self.clock.setText(f"{clock_text(duration if finished else position)} / {clock_text(duration)}")
         if speed is not None and not self.speed.view().isVisible():
             i = self.speed.findData(float(speed))
             if i >= 0 and i != self.speed.currentIndex():
                 self.speed.setCurrentIndex(i)
+
