@@ -12,22 +12,12 @@ from PyQt5.QtCore import QPoint, QRect
 from PyQt5.QtWidgets import QApplication, QWidget
 
 from uavviewer.layout import MIN_SIZE, essential_widgets
-from uavviewer.main_window import load_style
 
-from viewer_fixtures import viewer_settings, window, window_factory  # noqa: F401  (fixtures)
+from viewer_fixtures import app_style, viewer_settings, window, window_factory  # noqa: F401  (fixtures)
 
-pytestmark = pytest.mark.timeout(90)
+pytestmark = [pytest.mark.timeout(90), pytest.mark.usefixtures("app_style")]
 
 SIZES = [(1366, 768), (1280, 720), (1024, 600)]
-
-
-@pytest.fixture(autouse=True)
-def app_style(qapp):
-    """The style the app runs with (main.py sets it): its fonts and paddings decide what fits."""
-    before = qapp.styleSheet()
-    qapp.setStyleSheet(load_style())
-    yield
-    qapp.setStyleSheet(before)
 
 
 def _within(child: QWidget | None, widget: QWidget) -> bool:

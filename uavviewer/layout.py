@@ -16,6 +16,7 @@ __all__ = ["FIRST_SIZE", "MIN_SIZE", "fit_screen", "fit_restored", "essential_wi
 FIRST_SIZE = QSize(1366, 768)      # at most: a laptop's screen
 MIN_SIZE = QSize(1024, 600)        # a netbook's: still flyable
 FRAME_ALLOWANCE = 40               # px a window manager's title bar and borders take
+CONTROLS_WIDTH = 270               # px: the buttons' column between the sticks, fixed (it fits 1024×600)
 BANNER_HEIGHT = 26                 # px: the row the link and alert banners share, there when both are hidden
 
 
@@ -29,11 +30,16 @@ def steady_slots(window) -> None:
     # the stick and input lines never widen the window: at worst they are cut at the end (they repeat the sticks)
     for label in (window.setpointLabel, window.inputLabel):
         label.setSizePolicy(QSizePolicy.Ignored, QSizePolicy.Preferred)
-    # two lines always: a long phase ("waiting for GPS fix, EKF, pre-arm checks") wraps without
-    # squeezing the buttons below it (layouts do not ask a wrapping label its height for a width)
+    # the buttons' column keeps its width whatever the phase says (a long phase wrapped wider and moved every
+    # button and both sticks): the phase wraps inside it
+    window.phaseLabel.setSizePolicy(QSizePolicy.Ignored, QSizePolicy.Preferred)
+    frame = window.controlsFrame
+    frame.setFixedWidth(max(frame.minimumSizeHint().width(), CONTROLS_WIDTH))
+    # two lines, always: a long phase ("waiting for GPS fix, EKF, pre-arm checks") wraps without pushing the
+    # buttons below it (layouts do not ask a wrapping label its height for a width); all of it is in its tooltip
     window.phaseLabel.setObjectName("phaseLabel")
     window.phaseLabel.ensurePolished()        # the style sheet's font, not the default one
-    window.phaseLabel.setMinimumHeight(2 * window.phaseLabel.fontMetrics().lineSpacing() + 2)
+    window.phaseLabel.setFixedHeight(2 * window.phaseLabel.fontMetrics().lineSpacing() + 2)   # a third is cut
 
 
 def show_replay_bar(window, replay: bool) -> None:

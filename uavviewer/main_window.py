@@ -473,7 +473,10 @@ class MainWindow(QMainWindow):
         link = s.link
         self.telemetry.set_state(s)
         self.statusStrip.set_state(s, self.flight_timer.seconds)
-        self.phaseLabel.setText(self._phase_text(s, flight_phase(s)))
+        phase = self._phase_text(s, flight_phase(s))
+        if phase != self.phaseLabel.text():
+            self.phaseLabel.setText(phase)
+            self.phaseLabel.setToolTip(phase)
         replay = self.adapter.replay
         if replay is not None:
             try:

@@ -31,7 +31,6 @@ __all__ = ["PlanController"]
 log = logging.getLogger(__name__)
 
 KINDS = {"mission": PlanKind.MISSION, "fence": PlanKind.FENCE, "rally": PlanKind.RALLY}
-PLAN_WIDTH = 520             # px: the list's columns and a map to plan on, beside the instruments
 _TITLES = {PlanKind.MISSION: "Mission", PlanKind.FENCE: "Fence", PlanKind.RALLY: "Rally"}
 _DIRECTION = {TransferDirection.UPLOAD: "Uploading", TransferDirection.DOWNLOAD: "Downloading",
               TransferDirection.CLEAR: "Clearing"}
@@ -154,8 +153,7 @@ class PlanController(QObject):
             w = self._window
             w.mapDock.raise_()
             self.dock.raise_()
-            w.resizeDocks([self.dock, w.mapDock], [1, 1], Qt.Vertical)
-            w.resizeDocks([self.dock], [PLAN_WIDTH], Qt.Horizontal)
+            w.resizeDocks([self.dock, w.mapDock], [1, 1], Qt.Vertical)    # not wider: the controls stay put
         self.set_editing(on)
 
     def _dock_shown(self, shown: bool) -> None:
