@@ -25,6 +25,7 @@ from .dialogs import (
 )
 from .camera_controller import CameraController, default_media_folder
 from .connect.choice import Choice, Kind, sim_name
+from .dialog_fit import fit_dialog
 from .drone_adapter import DroneAdapter
 from .flight.arming import Arming
 from .flight_timer import FlightTimer
@@ -595,6 +596,8 @@ class MainWindow(QMainWindow):
             if self.keyboard.release(event.key()):
                 self._fly()
         elif kind == QEvent.Show and self._interrupts(watched):
+            if isinstance(watched, QDialog):
+                fit_dialog(watched)                 # every dialog fits the screen, its buttons in reach
             self.centre_sticks()
             return False
         if kind in (QEvent.KeyPress, QEvent.KeyRelease) and self._owns(watched) and self.adapter.replay is None:
