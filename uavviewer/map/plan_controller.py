@@ -12,7 +12,7 @@ import math
 
 from PyQt5.QtCore import QObject, Qt, pyqtSignal
 from PyQt5.QtGui import QKeySequence
-from PyQt5.QtWidgets import QAction, QDockWidget, QMessageBox, QScrollArea, QToolButton
+from PyQt5.QtWidgets import QAction, QDockWidget, QMessageBox, QScrollArea, QToolButton, QWidget
 
 from driver.frames import offset_ned
 from driver.mission.plan import MissionItem, MissionRunState, Plan, PlanKind, TransferDirection
@@ -24,6 +24,7 @@ from .plan_editor import PlanEditor
 from .plan_files import PlanFiles
 from .plan_layer import PlanLayer
 from .plan_model import Performance, PlanDocument
+from .plan_room import make_room_for_plan
 from .plan_panel import PlanPanel
 
 __all__ = ["PlanController"]
@@ -93,7 +94,8 @@ class PlanController(QObject):
         scroll.setFrameShape(QScrollArea.NoFrame)
         scroll.setWidget(self.panel)
         dock.setWidget(scroll)
-        dock.hide()
+        dock.setTitleBarWidget(QWidget())       # no title bar: its height goes to the list (the map's Plan button
+        dock.hide()                             # and View › Plan show and hide it)
         # tabbed with Telemetry when first shown (show_plan): tabbed now, the window would lay out for a tab bar
         window.addDockWidget(Qt.RightDockWidgetArea, dock)
         window.menuView.addAction(dock.toggleViewAction())
@@ -149,11 +151,7 @@ class PlanController(QObject):
         leaving.hide()                          # first: never both shown, so never a tab bar's height more
         coming.show()
         coming.raise_()                         # the front tab where others share the place (Preflight on main)
-        if on:                                  # the map beside the list, as tall as the list
-            w = self._window
-            w.mapDock.raise_()
-            self.dock.raise_()
-            w.resizeDocks([self.dock, w.mapDock], [1, 1], Qt.Vertical)    # not wider: the controls stay put
+        make_room_for_plan(self._window, self.dock, on)
         self.set_editing(on)
 
     def _dock_shown(self, shown: bool) -> None:

@@ -18,6 +18,7 @@ from .survey import CAMERAS
 __all__ = ["PlanPanel", "LAYERS", "TOOLS"]
 
 LAYERS = ("mission", "fence", "rally")
+ROWS_IN_VIEW = 6                   # the list's rows always in view (its dock is made tall enough: plan_controller)
 #: What a click on the map adds, for each tab.
 TOOLS = {
     "mission": ("Waypoint", "ROI", "Land", "Loiter (time)", "Survey area"),
@@ -98,7 +99,6 @@ class PlanPanel(QWidget):
         self.totalsLabel = QLabel("Empty plan")
         self.totalsLabel.setObjectName("planTotals")
         self.totalsLabel.setWordWrap(True)
-        lay.addWidget(self.totalsLabel)
 
         transfers = QHBoxLayout()
         self.uploadButton = QPushButton("Upload")
@@ -117,7 +117,10 @@ class PlanPanel(QWidget):
         self.syncLabel = QLabel()
         self.syncLabel.setObjectName("planSync")
         self.syncLabel.setWordWrap(True)
-        lay.addWidget(self.syncLabel)
+        facts = QHBoxLayout()                    # the plan's totals and where it stands with the vehicle: one row,
+        facts.addWidget(self.totalsLabel, 1)     # so that the list keeps six rows in view at 1280×720
+        facts.addWidget(self.syncLabel, 1)
+        lay.addLayout(facts)
 
         fly = QHBoxLayout()
         self.startButton = QPushButton("Start mission")
@@ -126,19 +129,23 @@ class PlanPanel(QWidget):
         self.resumeButton = QPushButton("Resume")
         for w in (self.startButton, self.pauseButton, self.resumeButton):
             fly.addWidget(w)
-        lay.addLayout(fly)
+        for b in (self.uploadButton, self.downloadButton, self.clearButton, self.startButton, self.pauseButton,
+                  self.resumeButton):
+            b.setStyleSheet("padding: 2px 8px")  # as tall as the tool buttons: the list keeps its rows
         self.progressLabel = QLabel()
         self.progressLabel.setObjectName("missionProgress")
         self.progressLabel.setWordWrap(True)
-        lay.addWidget(self.progressLabel)
+        fly.addWidget(self.progressLabel, 1)     # beside the buttons it follows: one row less above the list
+        lay.addLayout(fly)
 
         self.tabs = QTabWidget()
         self.tables: dict[str, QTableWidget] = {}
         for layer, title in zip(LAYERS, ("Mission", "Fence", "Rally")):
             table = QTableWidget(0, len(COLUMNS[layer]))
             table.setObjectName(f"{layer}Table")
-            table.setMinimumHeight(110)
-            table.verticalHeader().setDefaultSectionSize(table.fontMetrics().height() + 6)
+            table.verticalHeader().setDefaultSectionSize(table.fontMetrics().height() + 2)   # compact rows
+            table.setMinimumHeight(table.horizontalHeader().sizeHint().height() + 2 * table.frameWidth()
+                                   + ROWS_IN_VIEW * table.verticalHeader().defaultSectionSize())
             table.setHorizontalHeaderLabels(COLUMNS[layer])
             table.verticalHeader().hide()
             table.setSelectionBehavior(QAbstractItemView.SelectRows)
@@ -155,6 +162,10 @@ class PlanPanel(QWidget):
             QShortcut(QKeySequence.Delete, table, self.deleteRequested.emit, context=Qt.WidgetShortcut)
             self.tables[layer] = table
             self.tabs.addTab(table, title)
+        # the list asks for no more than its minimum (six rows): the Plan dock is sized to it (plan_room.py)
+        self.tabs.ensurePolished()
+        self.tabs.setMinimumHeight(self.tabs.minimumSizeHint().height())
+        self.tabs.setSizePolicy(QSizePolicy.Preferred, QSizePolicy.Ignored)
         lay.addWidget(self.tabs, 1)
 
         self.surveyBox = QGroupBox("Survey")
