@@ -53,3 +53,13 @@ def test_the_plan_list_shows_six_rows_beside_a_usable_map(qtbot, vehicle, window
     assert rows_in_view(table, w) >= ROWS, f"at {size}: {rows_in_view(table, w)} rows of the plan in view"
     shown = in_view(view, w)
     assert shown.width() >= MAP_USABLE[0] and shown.height() >= MAP_USABLE[1], f"at {size}: map {shown.size()}"
+
+
+def test_quitting_in_plan_mode_brings_back_the_tabs_that_stepped_out(qtbot, vehicle, window_factory):
+    w = window_factory(vehicle)
+    qtbot.mouseClick(w.plan.plan_button, Qt.LeftButton)
+    qtbot.waitUntil(w.plan.dock.isVisible, timeout=3000)
+    assert not w.plotsDock.toggleViewAction().isChecked()             # stepped out while planning
+    w.quit_without_asking()
+    again = window_factory(vehicle)                                   # the next run: the same settings file
+    assert again.plotsDock.toggleViewAction().isChecked() and again.preflightDock.toggleViewAction().isChecked()

@@ -834,6 +834,7 @@ class MainWindow(QMainWindow):
             event.ignore()
             return
         self.centre_sticks()
+        self.plan.show_plan(False)                # the docks that stepped out for Plan are saved as they were
         save_settings(self._qsettings, self.settings)
         save_window(self._qsettings, self.saveGeometry(), self.saveState())
         QApplication.instance().removeEventFilter(self)
