@@ -121,6 +121,8 @@ class PlanPanel(QWidget):
         facts.addWidget(self.totalsLabel, 1)     # so that the list keeps six rows in view at 1280×720
         facts.addWidget(self.syncLabel, 1)
         lay.addLayout(facts)
+        for label, lines in ((self.totalsLabel, 3), (self.syncLabel, 3)):
+            _fixed_lines(label, lines)           # a longer text never pushes the list (and the map) while editing
 
         fly = QHBoxLayout()
         self.startButton = QPushButton("Start mission")
@@ -136,6 +138,7 @@ class PlanPanel(QWidget):
         self.progressLabel.setObjectName("missionProgress")
         self.progressLabel.setWordWrap(True)
         fly.addWidget(self.progressLabel, 1)     # beside the buttons it follows: one row less above the list
+        _fixed_lines(self.progressLabel, 2)     # as tall as the buttons beside it
         lay.addLayout(fly)
 
         self.tabs = QTabWidget()
@@ -338,3 +341,12 @@ class PlanPanel(QWidget):
         self.cancelButton.setEnabled(active)
         for w in (self.uploadButton, self.downloadButton, self.clearButton):
             w.setEnabled(not active)
+
+
+def _fixed_lines(label: QLabel, lines: int) -> None:
+    """As tall as ``lines`` wrapped lines, whatever it says (the rest is cut): the Plan dock is sized once, as it
+    opens (plan_room.py), and nothing in it moves afterwards."""
+    label.ensurePolished()
+    label.setFixedHeight(lines * label.fontMetrics().lineSpacing() + 2)
+    label.setAlignment(Qt.AlignLeft | Qt.AlignTop)
+
