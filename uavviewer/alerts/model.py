@@ -123,8 +123,8 @@ class AlertModel:
 
 
 def _unprotected(s: VehicleState | None) -> bool:
-    """In the air (or climbing out) from this link with FS_GCS_ENABLE 0."""
-    return s is not None and s.gcs_failsafe == 0 and (s.flying or s.takeoff.active) and s.connected
+    """In the air (or climbing out) with FS_GCS_ENABLE 0, as last heard (a lost link and its return are no news)."""
+    return s is not None and s.gcs_failsafe == 0 and (s.flying or s.takeoff.active)
 
 
 def _no_gcs_failsafe(prev: VehicleState | None, s: VehicleState) -> list[Alert]:
