@@ -11,7 +11,8 @@ from . import frames
 
 __all__ = ["COPTER_MODES", "MIN_TAKEOFF_ALTITUDE", "MAX_TAKEOFF_ALTITUDE", "TAKEOFF_ALTITUDE_RANGE", "MAX_ALTITUDE",
            "MIN_GOTO_ALTITUDE", "THROTTLE_MODES", "takeoff_altitude_problem", "go_to_problem", "mode_warning",
-           "arming_consequence", "DISARM_DELAY", "unattended", "GCS_FAILSAFE_ACTIONS"]
+           "arming_consequence", "DISARM_DELAY", "unattended", "GCS_FAILSAFE_ACTIONS", "NOT_ARMABLE_MODES",
+           "ARM_IN", "arming_refusal", "gcs_failsafe_setting"]
 
 #: ArduCopter custom_mode numbers by name, from pymavlink's own table.
 COPTER_MODES: dict[str, int] = {name: number for number, name in mavutil.mode_mapping_acm.items()}
@@ -57,6 +58,20 @@ def go_to_problem(north: float, east: float, altitude: float, max_altitude: floa
 DISARM_DELAY = 10.0                # s: ArduCopter's default DISARM_DELAY, armed on the ground without a takeoff
 
 
+#: Modes ArduCopter refuses to arm in ("Arm: Mode not armable": their Mode::allows_arming is false; AUTO only with
+#: AUTO_OPTIONS' allow-arming bit, off by default). The simulator refuses the same ones (driver/sim/common.py).
+NOT_ARMABLE_MODES = frozenset({"AUTO", "RTL", "CIRCLE", "LAND", "AVOID_ADSB", "SMART_RTL", "FOLLOW"})
+#: The modes a pilot on a laptop arms in: GUIDED (Take off, the sticks) or LOITER (holds with no RC).
+ARM_IN = ("GUIDED", "LOITER")
+
+
+def arming_refusal(mode: str) -> str | None:
+    """Why arming in ``mode`` will be refused, said before anyone asks the vehicle; None when it may arm."""
+    if mode.upper() not in NOT_ARMABLE_MODES:
+        return None
+    return f"switch to {' or '.join(ARM_IN)} to arm"
+
+
 def arming_consequence(mode: str) -> str:
     """What arming on the ground in ``mode`` does, in a pilot's words (one wording for every front end)."""
     why = THROTTLE_MODES.get(mode.upper())
@@ -79,6 +94,15 @@ _UNATTENDED = {
     "SMART_RTL": "goes on returning along its path and lands (SmartRTL)", "LAND": "goes on landing where it is",
     "AUTO": "flies on with its mission (AUTO)", "CIRCLE": "goes on circling (CIRCLE)",
 }
+
+
+def gcs_failsafe_setting(gcs_failsafe: int | None) -> str:
+    """The vehicle's GCS failsafe as the pilot reads it: "FS_GCS_ENABLE = 0, none"."""
+    if gcs_failsafe is None:
+        return "FS_GCS_ENABLE not read yet"
+    if gcs_failsafe == 0:
+        return "FS_GCS_ENABLE = 0, none"
+    return f"FS_GCS_ENABLE = {gcs_failsafe}, {GCS_FAILSAFE_ACTIONS.get(gcs_failsafe, 'see its documentation')}"
 
 
 def unattended(mode: str, gcs_failsafe: int | None) -> str:

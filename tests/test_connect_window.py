@@ -229,3 +229,46 @@ def test_another_vehicle_starts_with_nothing_known_of_the_previous_one(qtbot, si
     w.use_connection(vehicle_factory(f"tcp:127.0.0.1:{sim_factory().tcp_port}"))
     assert w.gimbal._target is None and not w.flight_timer.started and w.flight_timer.seconds == 0
     assert not w.plan.on_vehicle
+
+
+def _dead_tcp_address() -> str:
+    """A local TCP port nobody listens on (bound, then let go)."""
+    import socket
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        return f"tcp:127.0.0.1:{s.getsockname()[1]}"
+
+
+def test_a_dead_address_keeps_the_flying_vehicle_flown_and_ends_in_a_clear_error(qtbot, sim, flying, connecting):
+    w = connecting(flying)
+    qtbot.waitUntil(lambda: w.adapter.state.flying and w.adapter.state.gcs_failsafe is not None, timeout=10000)
+    w.connections.answer_timeout = 2.0                  # ANSWER_TIMEOUT (15 s), shortened for the test
+    failures = []
+    w.connections.failed.connect(failures.append)
+    dead = _dead_tcp_address()
+    w.tools.connect_to(Choice(Kind.MAVLINK, dead))      # File › Connect to an address where nothing answers
+    qtbot.waitUntil(lambda: w.tools.leave_box is not None and w.tools.leave_box.isVisible(), timeout=3000)
+    text = w.tools.leave_box.text()                      # asked first, naming its state and its own failsafe
+    assert "airborne at 3 m in GUIDED" in text and "GCS failsafe: FS_GCS_ENABLE = 0, none" in text
+    leave = next(b for b in w.tools.leave_box.buttons() if b.text() == "Leave it flying")
+    qtbot.mouseClick(leave, Qt.LeftButton)
+    assert w.connections.busy and w.adapter.drone is flying          # tried beside it: the old link stays
+    assert "Connecting to" in w.statusbar.currentMessage()
+    w.request_mode("LOITER")                                         # and keeps flying meanwhile
+    qtbot.waitUntil(lambda: sim.truth().mode == "LOITER", timeout=10000)
+    assert w.connections.busy and w.adapter.drone is flying
+
+    qtbot.waitUntil(lambda: bool(failures), timeout=20000)                 # a clear error after the stated time
+    assert dead in failures[0] and "no heartbeat in 2 s" in failures[0] and "still connected to" in failures[0]
+    assert w.adapter.drone is flying and w.connections.current.drone is flying and not w.connections.busy
+    assert any("no heartbeat" in t for t in w.messages.texts())
+    qtbot.mouseClick(w.flightControls.rtl_button, Qt.LeftButton)     # still controllable
+    qtbot.waitUntil(lambda: sim.truth().mode == "RTL", timeout=10000)
+    assert flying.state().connected
+
+
+def test_an_outgoing_tcp_link_says_connecting_never_listening(qtbot, vehicle_factory, window_factory):
+    dead = _dead_tcp_address()
+    w = window_factory(vehicle_factory(dead))
+    qtbot.waitUntil(w.linkBanner.isVisible, timeout=5000)
+    assert f"connecting to {dead[len('tcp:'):]}" in w.linkBanner.text() and "listening" not in w.linkBanner.text()

@@ -12,22 +12,12 @@ from PyQt5.QtCore import QPoint, QRect
 from PyQt5.QtWidgets import QApplication, QWidget
 
 from uavviewer.layout import MIN_SIZE, essential_widgets
-from uavviewer.main_window import load_style
 
-from viewer_fixtures import viewer_settings, window, window_factory  # noqa: F401  (fixtures)
+from viewer_fixtures import app_style, viewer_settings, window, window_factory  # noqa: F401  (fixtures)
 
-pytestmark = pytest.mark.timeout(90)
+pytestmark = [pytest.mark.timeout(90), pytest.mark.usefixtures("app_style")]
 
 SIZES = [(1366, 768), (1280, 720), (1024, 600)]
-
-
-@pytest.fixture(autouse=True)
-def app_style(qapp):
-    """The style the app runs with (main.py sets it): its fonts and paddings decide what fits."""
-    before = qapp.styleSheet()
-    qapp.setStyleSheet(load_style())
-    yield
-    qapp.setStyleSheet(before)
 
 
 def _within(child: QWidget | None, widget: QWidget) -> bool:
@@ -95,3 +85,49 @@ def test_the_first_size_fits_the_screen(qtbot, sim, vehicle, viewer_settings):
     free = QApplication.primaryScreen().availableGeometry()
     assert w.width() <= max(free.width(), MIN_SIZE.width()) and w.height() <= max(free.height(), MIN_SIZE.height())
     assert w.width() <= 1366 and w.height() <= 768
+
+
+def _own_window(qtbot, drone, viewer_settings):
+    from uavviewer.main_window import MainWindow
+    w = MainWindow(drone, qsettings=viewer_settings)
+    qtbot.addWidget(w, before_close_func=MainWindow.quit_without_asking)
+    w.show()
+    qtbot.waitExposed(w)
+    return w
+
+
+def test_a_fresh_profile_on_a_600_pixel_screen_fits_title_bar_included(qtbot, sim, flying, viewer_settings):
+    """Issue 29, item 7: the test screen (Qt's offscreen platform) is 600 px tall, as a 1024×600 netbook's; a fresh
+    profile opened 629 px tall there, its bottom cut. Now it fits with a title bar, and everything a pilot needs is
+    in view at that size."""
+    from uavviewer.layout import FRAME_ALLOWANCE
+    w = _own_window(qtbot, flying, viewer_settings)
+    free = QApplication.primaryScreen().availableGeometry()
+    assert free.height() <= 600
+    assert w.height() + FRAME_ALLOWANCE <= free.height(), f"{w.size()} on {free}"
+    qtbot.waitUntil(lambda: w.adapter.state.can_fly_velocity, timeout=20000)
+    problems = layout_problems(w)
+    assert not problems, "\n".join(problems)
+
+
+def test_a_window_saved_on_a_larger_screen_is_restored_inside_this_one(qtbot, vehicle, viewer_settings):
+    """Issue 29, item 6: saved at 1366×728 (a larger screen), restored on a smaller one, it came back 1366×728."""
+    from uavviewer.layout import FRAME_ALLOWANCE
+    w = _own_window(qtbot, vehicle, viewer_settings)
+    w.setMinimumSize(0, 0)
+    w.resize(1366, 728)
+    w.move(40, 30)
+    qtbot.waitUntil(lambda: w.height() == 728, timeout=3000)
+    w.quit_without_asking()                             # saves its geometry, as on quitting
+    again = _own_window(qtbot, vehicle, viewer_settings)
+    free = QApplication.primaryScreen().availableGeometry()
+    least = again.minimumSizeHint()
+    assert again.width() <= max(free.width(), least.width()), f"{again.geometry()} on {free}"
+    assert again.height() + FRAME_ALLOWANCE <= free.height(), f"{again.geometry()} on {free}"
+    assert free.contains(again.frameGeometry().topLeft())
+    try:
+        qtbot.waitUntil(lambda: not layout_problems(again), timeout=3000)     # laid out at its restored size
+    except AssertionError:
+        pass
+    problems = layout_problems(again)
+    assert not problems, "\n".join(problems)

@@ -13,22 +13,13 @@ from driver.rules import TAKEOFF_ALTITUDE_RANGE, takeoff_altitude_problem
 from driver.version import __version__
 from uavviewer.dialogs import KeysDialog, SettingsDialog
 from uavviewer.flight_phase import NO_VEHICLE
-from uavviewer.main_window import load_style
 from uavviewer.settings import ViewerSettings
 from uavviewer.widgets.icons import DISABLED_COLOUR
 
 from test_viewer_window import silent_vehicle  # noqa: F401  (fixture)
-from viewer_fixtures import viewer_settings, window_factory  # noqa: F401  (fixtures)
+from viewer_fixtures import app_style, viewer_settings, window_factory  # noqa: F401  (fixtures)
 
 pytestmark = pytest.mark.timeout(90)
-
-
-@pytest.fixture
-def app_style(qapp):
-    """The style the app runs with: its fonts decide what fits."""
-    qapp.setStyleSheet(load_style())
-    yield
-    qapp.setStyleSheet("")
 
 
 def test_help_keys_shows_its_last_row(qtbot, app_style, silent_vehicle, window_factory):

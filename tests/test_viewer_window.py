@@ -36,7 +36,8 @@ def silent_vehicle():
 def test_waiting_banner_and_inert_controls(qtbot, silent_vehicle, window_factory):
     w = window_factory(silent_vehicle)
     qtbot.waitUntil(lambda: w.linkBanner.isVisible(), timeout=3000)
-    assert w.linkBanner.text() == f"No vehicle yet — listening on {silent_vehicle.description}…"
+    address = silent_vehicle.description.split(":", 1)[1]
+    assert w.linkBanner.text() == f"No vehicle yet — listening on UDP {address}…"
     assert not w.flightControls.main_button.isEnabled()
     assert not w.leftStick.isEnabled() and not w.rightStick.isEnabled()
     assert not w.attitude.values["valid"]

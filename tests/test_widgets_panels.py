@@ -98,7 +98,9 @@ def test_telemetry_with_the_link_lost_is_stale(qtbot):
 def test_link_banner_text(qtbot):
     b = make(LinkBanner, qtbot)
     b.set_link(LinkStatus.WAITING, "udpin:0.0.0.0:14550", None)
-    assert not b.isHidden() and b.text() == "No vehicle yet — listening on udpin:0.0.0.0:14550…"
+    assert not b.isHidden() and b.text() == "No vehicle yet — listening on UDP 0.0.0.0:14550…"
+    b.set_link(LinkStatus.WAITING, "tcp:127.0.0.1:5760", None)            # an outgoing link never listens
+    assert b.text() == "No vehicle yet — connecting to 127.0.0.1:5760…"
     b.set_link(LinkStatus.LOST, "udpin:0.0.0.0:14550", 7.4)
     assert not b.isHidden() and b.text().startswith("Link lost") and "7 s" in b.text()
     assert b.property("kind") == "lost"
@@ -270,7 +272,7 @@ def test_link_banner_says_when_a_replay_is_finished(qtbot):
 def test_replay_bar_says_when_the_log_is_finished(qtbot):
     r = make(ReplayBar, qtbot)
     r.set_progress(129.6, 130.0, paused=False, speed=1.0, finished=True)
-    assert r.clock.text() == "02:10 / 02:10  (replay ended)"
+    assert r.clock.text() == "02:10 / 02:10"      # the end is said by the banner and Restart, not a longer clock
     assert r.play_button.text() == "Restart" and r.play_button.isEnabled()
     with qtbot.waitSignal(r.restartRequested, timeout=1000):
         r.play_button.click()

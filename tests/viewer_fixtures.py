@@ -8,7 +8,16 @@ from __future__ import annotations
 import pytest
 from PyQt5.QtCore import QSettings, Qt
 
-from uavviewer.main_window import MainWindow
+from uavviewer.main_window import MainWindow, load_style
+
+
+@pytest.fixture
+def app_style(qapp):
+    """The style the app runs with (main.py sets it): its fonts and paddings decide what fits."""
+    before = qapp.styleSheet()
+    qapp.setStyleSheet(load_style())
+    yield
+    qapp.setStyleSheet(before)
 
 
 @pytest.fixture

@@ -17,6 +17,8 @@ from driver.state import CommandResult, Signing, SigningStatus
 
 from . import RESOURCES
 from .camera_controller import default_media_folder
+from .dialog_fit import scrollable
+from .layout import FRAME_ALLOWANCE
 from .gamepad_mapping import ACTIONS, CONTROLLER_BUTTONS
 from .keyboard import key_help
 from .link_security import SIGNING_WARNINGS
@@ -46,6 +48,10 @@ class SettingsDialog(QDialog):
                  signing_unavailable: str = "") -> None:
         super().__init__(parent)
         uic.loadUi(str(RESOURCES / "ui" / "settings_dialog.ui"), self)
+        form = QDialog.layout(self)               # the pages scroll on a short screen; OK and Cancel stay in view
+        at = form.indexOf(self.pages)
+        form.removeWidget(self.pages)
+        form.insertWidget(at, scrollable(self.pages), 1)
         self._settings = settings
         for mode in StickMode:
             self.stickMode.addItem(mode.title, mode.value)
@@ -287,7 +293,8 @@ class KeysDialog(QDialog):
         needed = t.horizontalHeader().sizeHint().height() + 2 * t.frameWidth() + \
             sum(t.rowHeight(i) for i in range(t.rowCount())) + 6      # + the header's border
         screen = self.screen() if hasattr(self, "screen") else None
-        limit = screen.availableGeometry().height() - 110 if screen is not None else needed   # intro, buttons
+        limit = (screen.availableGeometry().height() - 110 - FRAME_ALLOWANCE if screen is not None  # intro, buttons,
+                 else needed)                                                                      # a title bar
         t.setMinimumHeight(max(120, min(needed, limit)))
         self.adjustSize()                       # (Qt caps this at 2/3 of the screen: grow to what the rows need)
         if screen is not None:

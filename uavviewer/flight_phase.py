@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import enum
 
+from driver.rules import arming_refusal
 from driver.state import LandedState, LinkStatus, VehicleState
 
 #: The one wording, everywhere in the window, for "nothing heard from a vehicle yet".
@@ -97,6 +98,9 @@ def stick_hint(s: VehicleState) -> str:
 
 
 def readiness_text(s: VehicleState) -> str:
-    """On the ground: what the autopilot still waits for before it can arm, or "ready to arm"."""
+    """On the ground: what the autopilot still waits for before it can arm, the mode to switch to when this one
+    cannot be armed (RTL, LAND, ...), or "ready to arm"."""
     missing = s.readiness.missing
-    return "waiting for " + ", ".join(missing) if missing else "ready to arm"
+    if missing:
+        return "waiting for " + ", ".join(missing)
+    return arming_refusal(s.mode) or "ready to arm"

@@ -13,19 +13,21 @@ from dataclasses import replace
 
 from PyQt5 import uic
 from PyQt5.QtCore import QEvent, QObject, QSettings, Qt
-from PyQt5.QtWidgets import QApplication, QDialog, QLabel, QMainWindow, QMessageBox, QSizePolicy, QWidget
+from PyQt5.QtWidgets import QApplication, QDialog, QLabel, QMainWindow, QMessageBox, QWidget
 
 from driver.api import Drone, Limits
-from driver.rules import arming_consequence, mode_warning, unattended
+from driver.rules import mode_warning, unattended
 from driver.state import LinkStatus, SequencePhase, Severity, VehicleState
 
 from . import RESOURCES
 from .dialogs import (
-    KeysDialog, SettingsDialog, arm_question, ask, emergency_stop_question, mode_question, takeoff_question,
+    KeysDialog, SettingsDialog, ask, emergency_stop_question, mode_question, takeoff_question,
 )
 from .camera_controller import CameraController, default_media_folder
 from .connect.choice import Choice, Kind, sim_name
+from .dialog_fit import fit_dialog
 from .drone_adapter import DroneAdapter
+from .flight.arming import Arming
 from .flight_timer import FlightTimer
 from .flight_phase import (
     NO_VEHICLE, FlightPhase, flight_phase, link_gone_text, no_link_flag, no_vehicle_words, readiness_text, stick_hint,
@@ -43,7 +45,7 @@ from .refresh import INSTRUMENTS_HZ, PLOTS_HZ, TEXT_HZ, Refresh
 from .settings import ViewerSettings, default_qsettings, load_settings, load_window, save_settings, save_window
 from .sticks import Axes, MaxSpeeds, axes_from_pads, combine, pad_labels, pads_from_axes, velocity_from_axes
 from .gimbal_controller import KEY_STEP, GimbalController
-from .layout import fit_screen
+from .layout import fit_restored, fit_screen, show_replay_bar, steady_slots
 from .widgets.camera_panel import CameraPanel
 from .widgets.gimbal_bar import GimbalBar
 from .widgets.gamepad_page import GamepadPage
@@ -94,7 +96,7 @@ class MainWindow(QMainWindow):
         self._takeoff_box: QMessageBox | None = None
         self._mode_box: QMessageBox | None = None
         self._emergency_box: QMessageBox | None = None
-        self._arm_box: QMessageBox | None = None
+        self.arming = Arming(self)
         self._settings_dialog: SettingsDialog | None = None
         self._quit_box: QMessageBox | None = None
         self._quitting = False                   # closing without asking (answered, or a signal)
@@ -127,6 +129,7 @@ class MainWindow(QMainWindow):
         self.refresh.shownChanged.connect(self.camera.set_shown)
         self.gimbal_bar = GimbalBar()                 # the camera on the vehicle: tilt, its own photo and video
         self.camera_panel.layout().addWidget(self.gimbal_bar)
+        self.camera_panel.add_overlay(self.gimbal_bar.stop_looking_button)
         self.gimbal = GimbalController(self.adapter, self.camera_view, self.gimbal_bar, self)
         self.camera_panel.hud_button.setChecked(self.settings.hud)
         self.menuView.addAction(self.telemetryDock.toggleViewAction())
@@ -146,13 +149,7 @@ class MainWindow(QMainWindow):
         self.mapDock.raise_()
         self.instrumentSplitter.setStretchFactor(0, 3)
         self.instrumentSplitter.setStretchFactor(1, 2)
-        self.phaseLabel.setObjectName("phaseLabel")
-        # two lines always: a long phase ("waiting for GPS fix, EKF, pre-arm checks") wraps without
-        # squeezing the buttons below it (layouts do not ask a wrapping label its height for a width)
-        # the setpoint line never widens the window: at worst it is cut at the end (it repeats the sticks)
-        self.setpointLabel.setSizePolicy(QSizePolicy.Ignored, self.setpointLabel.sizePolicy().verticalPolicy())
-        self.phaseLabel.ensurePolished()          # the style sheet's font, not the default one
-        self.phaseLabel.setMinimumHeight(2 * self.phaseLabel.fontMetrics().lineSpacing() + 2)
+        steady_slots(self)                        # nothing moves under the cursor as the state changes
         self.link_status = QLabel()
         self.statusbar.addPermanentWidget(self.link_status)
 
@@ -169,7 +166,7 @@ class MainWindow(QMainWindow):
         self.modeSelector.modeRequested.connect(self.request_mode)
         self.replayBar.pauseRequested.connect(self._replay_pause)
         self.replayBar.speedRequested.connect(self._replay_speed)
-        self.replayBar.setVisible(self.adapter.replay is not None)
+        show_replay_bar(self, self.adapter.replay is not None)
         self.controlsRow.setEnabled(self.adapter.replay is None)     # a recording cannot be flown
         self.actionQuit.triggered.connect(self.close)
         self.actionPreferences.triggered.connect(self.edit_settings)
@@ -187,14 +184,15 @@ class MainWindow(QMainWindow):
 
         self._apply_settings()
         geometry, state = load_window(self._qsettings)
-        if geometry is not None:
-            self.restoreGeometry(geometry)
-        else:
-            fit_screen(self)
         if state is not None:
             self.restoreState(state)
             if "preflightDock".encode("utf-16-be") not in bytes(state):   # saved before the dock existed
                 self.tools.tab_preflight()
+        if geometry is not None:
+            self.restoreGeometry(geometry)
+            fit_restored(self)                    # saved on a larger screen: it still fits this one
+        else:
+            fit_screen(self)
         self.setFocusPolicy(Qt.StrongFocus)
         QApplication.instance().installEventFilter(self)
         self.show_state(VehicleState(link=self.adapter.state.link))
@@ -254,7 +252,7 @@ class MainWindow(QMainWindow):
         self.telemetry.set_security_unknown(self._signing_unavailable)
         self._speeds = self._set_limits(self.settings.speeds)
         replay = self.adapter.replay is not None
-        self.replayBar.setVisible(replay)
+        show_replay_bar(self, replay)
         self.controlsRow.setEnabled(not replay)
         self.attitude.clear("NO LINK")
         self.show_state(self.adapter.state)
@@ -478,7 +476,10 @@ class MainWindow(QMainWindow):
         link = s.link
         self.telemetry.set_state(s)
         self.statusStrip.set_state(s, self.flight_timer.seconds)
-        self.phaseLabel.setText(self._phase_text(s, flight_phase(s)))
+        phase = self._phase_text(s, flight_phase(s))
+        if phase != self.phaseLabel.text():
+            self.phaseLabel.setText(phase)
+            self.phaseLabel.setToolTip(phase)
         replay = self.adapter.replay
         if replay is not None:
             try:
@@ -595,6 +596,8 @@ class MainWindow(QMainWindow):
             if self.keyboard.release(event.key()):
                 self._fly()
         elif kind == QEvent.Show and self._interrupts(watched):
+            if isinstance(watched, QDialog):
+                fit_dialog(watched)                 # every dialog fits the screen, its buttons in reach
             self.centre_sticks()
             return False
         if kind in (QEvent.KeyPress, QEvent.KeyRelease) and self._owns(watched) and self.adapter.replay is None:
@@ -711,24 +714,13 @@ class MainWindow(QMainWindow):
         self._command("cancel_takeoff")
 
     def request_arm(self) -> None:
-        """Arm only after a question that says what happens next in this mode (the driver's words)."""
-        if self._arm_box is not None and self._arm_box.isVisible():
-            return
-        mode = self.adapter.state.mode
-        self._arm_box = ask(arm_question(self, mode, arming_consequence(mode)), self._arm_answered)
-
-    def _arm_answered(self, box: QMessageBox) -> None:
-        if box.clickedButton() is box.button(QMessageBox.Yes):
-            s = self.adapter.state
-            if s.connected and not s.armed and not flight_phase(s).airborne:
-                self._command("arm")
-        box.deleteLater()
-        if self._arm_box is box:
-            self._arm_box = None
+        """Arm only after a question that says what happens next in this mode, or how to get to a mode that arms
+        (uavviewer/flight/arming.py)."""
+        self.arming.request()
 
     @property
     def arm_box(self) -> QMessageBox | None:
-        return self._arm_box
+        return self.arming.box
 
     def request_disarm(self) -> None:
         """On the ground, a disarm. In the air, disarming stops the motors and the drone falls: the pilot is
@@ -842,6 +834,7 @@ class MainWindow(QMainWindow):
             event.ignore()
             return
         self.centre_sticks()
+        self.plan.show_plan(False)                # the docks that stepped out for Plan are saved as they were
         save_settings(self._qsettings, self.settings)
         save_window(self._qsettings, self.saveGeometry(), self.saveState())
         QApplication.instance().removeEventFilter(self)

@@ -14,13 +14,13 @@ import os
 from PyQt5.QtCore import QObject, Qt
 from PyQt5.QtWidgets import QAction, QDockWidget, QFileDialog, QMenu, QMessageBox
 
-from driver.rules import unattended
 from driver.state import Severity
 
 from .alerts.controller import AlertController
 from .connect.choice import Choice, Kind
 from .connect.controller import ConnectionController
 from .connect.dialog import ConnectDialog
+from .connect.leaving import leaving_words
 from .dialogs import ask
 from .flight_phase import flight_phase
 from .guided.controller import GuidedController
@@ -45,6 +45,7 @@ class PilotTools(QObject):
         w.home_arrow = HomeArrow(w.attitude)
         self._guided(w)
         self._connecting(w)
+        w.plan.panel.editToggled.connect(w.mapPanel.hold_still)     # editing a plan: the map stays still
         w.replayBar.seekRequested.connect(lambda t: w.adapter.replay and w.adapter.replay.seek(t))
         w.replayBar.restartRequested.connect(lambda: w.adapter.replay and w.adapter.replay.restart())
         channel = w.refresh.add(TEXT_HZ, self.show)
@@ -94,6 +95,7 @@ class PilotTools(QObject):
         w.connections = ConnectionController(w._qsettings, parent=w)
         w.connections.opened.connect(w._connected)
         w.connections.failed.connect(self._failed)
+        w.connections.busyChanged.connect(self._opening)
         w.adapter.stateChanged.connect(w.connections.confirm)
         w.connections.answered.connect(w.remember_last_connection)
         w.actionConnect = QAction("&Connect…", w)
@@ -133,6 +135,15 @@ class PilotTools(QObject):
         self.window.log_message(f"Not connected: {why}", Severity.WARNING)
         self.window.statusbar.showMessage(f"Not connected: {why}", 8000)
 
+    def _opening(self, busy: bool) -> None:
+        """While a new link is tried beside the old one, the status bar says both."""
+        c = self.window.connections
+        if busy and c._opening is not None:
+            still = f" (still flying {c.current.drone.description})" if c.connected else ""
+            self.window.statusbar.showMessage(f"Connecting to {c._opening.label}…{still}")
+        else:
+            self.window.statusbar.clearMessage()
+
     def connect_to(self, choice: Choice) -> None:
         self.leave_then(lambda: self.window.connections.connect_to(choice))
 
@@ -145,10 +156,7 @@ class PilotTools(QObject):
             return
         if self.leave_box is not None:
             self.leave_box.reject()
-        box = QMessageBox(QMessageBox.Warning, "The vehicle is flying",
-                          f"The vehicle is in the air, in {s.mode or 'an unknown mode'}. Once this window lets go of "
-                          f"it, it is sent zero velocity and nobody commands it: {unattended(s.mode, s.gcs_failsafe)}.",
-                          QMessageBox.NoButton, w)
+        box = QMessageBox(QMessageBox.Warning, "Leave the flying vehicle?", leaving_words(s), QMessageBox.NoButton, w)
         box.setObjectName("leaveQuestion")
         leave = box.addButton("Leave it flying", QMessageBox.DestructiveRole)
         box.addButton(QMessageBox.Cancel)

@@ -3,7 +3,9 @@
 :class:`AlertModel` compares each snapshot with the one before and says what changed that a pilot
 would want spoken: the link lost and back, the battery at warning and at critical (``Battery.alarm``, the pilot's
 own thresholds), a failsafe (the autopilot's heartbeat state CRITICAL/EMERGENCY; a fence breach, FENCE_STATUS) and
-the autopilot's messages of severity WARNING or worse, arming and disarming, mode changes and a finished takeoff.
+the autopilot's messages of severity WARNING or worse, arming and disarming, mode changes and a finished takeoff,
+and a vehicle in the air with no GCS failsafe (FS_GCS_ENABLE 0: if this laptop's link goes, nothing brings it back
+but its battery failsafe), also when it was already flying as the window connected.
 The first snapshot with a vehicle only sets the baseline: connecting to a vehicle already armed in LOITER says "Connected", not "Armed".
 """
 from __future__ import annotations
@@ -11,6 +13,7 @@ from __future__ import annotations
 import enum
 from dataclasses import dataclass, replace
 
+from driver.rules import gcs_failsafe_setting
 from driver.state import BatteryAlarm, LinkStatus, SequencePhase, Severity, VehicleState
 
 __all__ = ["Alert", "AlertKind", "AlertModel", "MAV_STATE_CRITICAL", "MAV_STATE_EMERGENCY"]
@@ -32,11 +35,12 @@ class AlertKind(enum.Enum):
     MODE = "mode"
     TAKEOFF_COMPLETE = "takeoff complete"
     CONNECTED = "connected"
+    NO_GCS_FAILSAFE = "no GCS failsafe in flight"
 
 
 #: Kinds that also go to the banner in the pilot's eye line (the rest are spoken only)
 CRITICAL_KINDS = {AlertKind.LINK_LOST, AlertKind.BATTERY_WARNING, AlertKind.BATTERY_CRITICAL, AlertKind.FAILSAFE,
-                  AlertKind.FENCE, AlertKind.MESSAGE}
+                  AlertKind.FENCE, AlertKind.MESSAGE, AlertKind.NO_GCS_FAILSAFE}
 
 
 @dataclass(frozen=True)
@@ -78,6 +82,7 @@ class AlertModel:
                 self._battery = s.battery.alarm
                 out.append(Alert(AlertKind.CONNECTED, f"Connected. {_mode_words(s.mode)}, "
                                  f"{'armed' if s.armed else 'disarmed'}", Severity.INFO))
+                out += _no_gcs_failsafe(None, s)
             return out
         link_was, link = prev.link.status, s.link.status
         if link_was is LinkStatus.OK and link is LinkStatus.LOST:
@@ -100,6 +105,7 @@ class AlertModel:
                                  "Armed" if s.armed else "Disarmed", Severity.NOTICE))
             if s.mode and prev.mode and s.mode != prev.mode:
                 out.append(Alert(AlertKind.MODE, _mode_words(s.mode), Severity.INFO))
+        out += _no_gcs_failsafe(prev, s)
         if s.takeoff.phase is SequencePhase.DONE and prev.takeoff.phase is not SequencePhase.DONE:
             out.append(Alert(AlertKind.TAKEOFF_COMPLETE, f"Takeoff complete, {s.altitude:.0f} metres", Severity.INFO))
         return sorted((a if a.time else replace(a, time=s.time) for a in out), key=lambda a: a.severity)
@@ -114,6 +120,19 @@ class AlertModel:
         if alarm is BatteryAlarm.CRITICAL:
             return [Alert(AlertKind.BATTERY_CRITICAL, f"Battery critical{left}. Land now", Severity.CRITICAL)]
         return [Alert(AlertKind.BATTERY_WARNING, f"Battery low{left}", Severity.WARNING)]
+
+
+def _unprotected(s: VehicleState | None) -> bool:
+    """In the air (or climbing out) with FS_GCS_ENABLE 0, as last heard (a lost link and its return are no news)."""
+    return s is not None and s.gcs_failsafe == 0 and (s.flying or s.takeoff.active)
+
+
+def _no_gcs_failsafe(prev: VehicleState | None, s: VehicleState) -> list[Alert]:
+    """Once a flight starts without a GCS failsafe (or the window finds one so): in the banner, not only spoken."""
+    if not _unprotected(s) or _unprotected(prev):
+        return []
+    return [Alert(AlertKind.NO_GCS_FAILSAFE, f"No GCS failsafe ({gcs_failsafe_setting(0)}): on link loss it flies on "
+                  "until its battery failsafe", Severity.WARNING)]
 
 
 def _has_vehicle(s: VehicleState) -> bool:

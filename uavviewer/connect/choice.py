@@ -13,7 +13,8 @@ from dataclasses import dataclass, field
 
 from driver.link import connection_problem
 
-__all__ = ["Kind", "Choice", "parse_key", "from_command_line", "serial_ports", "sim_name", "SITL_TCP", "SOLO_UDP"]
+__all__ = ["Kind", "Choice", "parse_key", "from_command_line", "serial_ports", "sim_name", "SITL_TCP", "SOLO_UDP",
+           "waiting_words"]
 
 SITL_TCP = "tcp:127.0.0.1:5760"          # ArduPilot SITL's first serial port (sim_vehicle.py, Mission Planner)
 SOLO_UDP = "udpin:0.0.0.0:14550"         # a 3DR Solo, or any vehicle sending to the GCS port
@@ -23,6 +24,22 @@ SOLO_UDP = "udpin:0.0.0.0:14550"         # a 3DR Solo, or any vehicle sending to
 def sim_name(speedup: float) -> str:
     """What the window calls the built-in simulator (its title, About)."""
     return "simulated ArduCopter (built in)" + (f", {speedup:g}× time" if speedup != 1 else "")
+
+def waiting_words(address: str) -> str:
+    """What a link does while no vehicle has answered, by its connection string: an outgoing TCP link connects
+    ("connecting to 127.0.0.1:5760"), it never listens; udpin listens; udpout sends; a serial port waits."""
+    scheme, _, rest = address.partition(":")
+    scheme = scheme.lower()
+    if scheme in ("tcp", "tcpout"):
+        return f"connecting to {rest}"
+    if scheme == "tcpin":
+        return f"waiting for a TCP connection on {rest}"
+    if scheme in ("udpin", "udp"):
+        return f"listening on UDP {rest}"
+    if scheme in ("udpout", "udpbcast"):
+        return f"sending to UDP {rest}"
+    return f"waiting on {address}"
+
 
 class Kind(enum.Enum):
     MAVLINK = "mavlink"                  # udpin/udpout/tcp/serial

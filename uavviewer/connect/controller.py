@@ -1,14 +1,17 @@
 """File › Connect, Disconnect, Open flight log: switch the window's vehicle without a restart.
 
-The new drone is opened on a worker thread (an Ice server answers when it answers; a .tlog is read whole) and
-handed to the window on the UI thread; only then is the one left behind closed, also off the UI thread. The
-window keeps flying or showing the old vehicle until the new one is there, and never waits. The last few
+The new drone is opened on a worker thread (an Ice server answers when it answers; a .tlog is read whole) BESIDE
+the one flown now, and handed to the window on the UI thread only once a heartbeat came in on it; only then is the
+one left behind closed, also off the UI thread. The window keeps flying the old vehicle until the new one has
+answered, and never waits. A new link that stays silent for :data:`ANSWER_TIMEOUT` s is closed with a clear
+error; the old vehicle was never let go of (a dead address used to drop a flying vehicle at once). The last few
 connections that reached a vehicle are kept in the settings, newest first.
 """
 from __future__ import annotations
 
 import logging
 import threading
+import time
 
 from PyQt5.QtCore import QObject, QSettings, pyqtSignal
 
@@ -17,12 +20,16 @@ from driver.vehicle import VehicleConfig
 from .choice import Choice, parse_key
 from .opener import Disconnected, Opened, close_quietly, open_choice
 
-__all__ = ["ConnectionController", "RECENT_KEY", "MAX_RECENT"]
+__all__ = ["ConnectionController", "RECENT_KEY", "MAX_RECENT", "ANSWER_TIMEOUT"]
 
 log = logging.getLogger(__name__)
 
 RECENT_KEY = "connect/recent"
 MAX_RECENT = 8
+#: s a new connection has to hear its first heartbeat (ArduPilot sends one a second; a radio link may take a few)
+#: before it is given up, the vehicle flown now still flown. A lab registry's own wait for a vehicle comes first.
+ANSWER_TIMEOUT = 15.0
+POLL = 0.05                              # s between looks at the new link's state, on the worker thread
 
 
 class ConnectionController(QObject):
@@ -45,6 +52,7 @@ class ConnectionController(QObject):
         self._opening: Choice | None = None
         self._unconfirmed: Choice | None = None
         self._closers: list[threading.Thread] = []
+        self.answer_timeout = ANSWER_TIMEOUT
         self._arrived.connect(self._on_arrived)
 
     # -- what is flown now ------------------------------------------------------------------------------
@@ -85,20 +93,34 @@ class ConnectionController(QObject):
             return False
         self._opening = choice
         self.busyChanged.emit(True)
-        config = self.base
+        config, wait = self.base, self.answer_timeout
+        still = (f"; still connected to {self.current.drone.description}" if self.connected else "")
 
         def work() -> None:
             try:
                 opened = open_choice(choice, config, self.log_dir, self.certs, self.speedup)
             except Exception as exc:                 # noqa: BLE001 - said to the pilot, the old link flies on
                 log.info("cannot open %s", choice.label, exc_info=True)
-                self._arrived.emit(None, f"{choice.label}: {' '.join(str(exc).split()) or type(exc).__name__}")
+                self._hand_over(None, f"{choice.label}: {' '.join(str(exc).split()) or type(exc).__name__}{still}")
                 return
-            self._arrived.emit(opened, "")
+            if not _answers(opened, wait):
+                close_quietly(opened)
+                self._hand_over(None, f"{choice.label}: no heartbeat in {wait:g} s, link closed{still}")
+            elif not self._hand_over(opened, ""):
+                close_quietly(opened)               # the window closed meanwhile: nobody flies it
         threading.Thread(target=work, name="connect", daemon=True).start()
         return True
 
+    def _hand_over(self, opened: Opened | None, error: str) -> bool:
+        """From the worker to the UI thread; False when the window (and this controller) went meanwhile."""
+        try:
+            self._arrived.emit(opened, error)
+        except RuntimeError:                         # the wrapped QObject was deleted
+            return False
+        return True
+
     def _on_arrived(self, opened: Opened | None, error: str) -> None:
+        """On the UI thread: the new link answered (switch to it) or did not (say why; nothing else changes)."""
         choice, self._opening = self._opening, None
         self.busyChanged.emit(False)
         if opened is None:
@@ -136,3 +158,13 @@ class ConnectionController(QObject):
         for t in self._closers:
             t.join(timeout=wait)
         self._closers.clear()
+
+
+def _answers(opened: Opened, wait: float) -> bool:
+    """On the worker thread: whether a heartbeat comes in on the new link within ``wait`` s."""
+    deadline = time.monotonic() + wait
+    while not opened.drone.state().connected:
+        if time.monotonic() > deadline:
+            return False
+        time.sleep(POLL)
+    return True

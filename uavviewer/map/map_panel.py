@@ -32,6 +32,20 @@ class MapPanel(QWidget):
         self.downloadButton.clicked.connect(self.downloadRequested.emit)
         self.set_tiles_available(False)
 
+    def hold_still(self, on: bool) -> None:
+        """Plan editing (``on``): the map never moves under the pointer, so a click lands where it was aimed; Follow
+        is off and cannot be turned on. Editing over: Follow as it was before."""
+        button = self.followButton
+        if on and button.isEnabled():
+            self._followed, self._follow_tip = button.isChecked(), button.toolTip()
+            button.setChecked(False)
+            button.setEnabled(False)
+            button.setToolTip("Off while the plan is edited: the map stays still under the pointer")
+        elif not on and not button.isEnabled():
+            button.setEnabled(True)
+            button.setToolTip(self._follow_tip)
+            button.setChecked(self._followed)
+
     def _follow_changed(self, on: bool) -> None:
         if self.followButton.isChecked() != on:
             self.followButton.setChecked(on)

@@ -12,7 +12,7 @@ import math
 
 from PyQt5.QtCore import QObject, Qt, pyqtSignal
 from PyQt5.QtGui import QKeySequence
-from PyQt5.QtWidgets import QAction, QDockWidget, QMenu, QMessageBox, QScrollArea, QToolButton
+from PyQt5.QtWidgets import QAction, QDockWidget, QMenu, QMessageBox, QScrollArea, QToolButton, QWidget
 
 from driver.frames import offset_ned
 from driver.mission.plan import MissionItem, MissionRunState, Plan, PlanKind, TransferDirection
@@ -24,6 +24,7 @@ from .plan_editor import PlanEditor
 from .plan_files import PlanFiles
 from .plan_layer import PlanLayer
 from .plan_model import Performance, PlanDocument
+from .plan_room import make_room_for_plan
 from .plan_panel import PlanPanel
 from .survey_file import complex_items, mission_entries
 
@@ -32,7 +33,6 @@ __all__ = ["PlanController"]
 log = logging.getLogger(__name__)
 
 KINDS = {"mission": PlanKind.MISSION, "fence": PlanKind.FENCE, "rally": PlanKind.RALLY}
-PLAN_WIDTH = 520             # px: the list's columns and a map to plan on, beside the instruments
 _TITLES = {PlanKind.MISSION: "Mission", PlanKind.FENCE: "Fence", PlanKind.RALLY: "Rally"}
 _DIRECTION = {TransferDirection.UPLOAD: "Uploading", TransferDirection.DOWNLOAD: "Downloading",
               TransferDirection.CLEAR: "Clearing"}
@@ -103,7 +103,8 @@ class PlanController(QObject):
         scroll.setFrameShape(QScrollArea.NoFrame)
         scroll.setWidget(self.panel)
         dock.setWidget(scroll)
-        dock.hide()
+        dock.setTitleBarWidget(QWidget())       # no title bar: its height goes to the list (the map's Plan button
+        dock.hide()                             # and View › Plan show and hide it)
         # tabbed with Telemetry when first shown (show_plan): tabbed now, the window would lay out for a tab bar
         window.addDockWidget(Qt.RightDockWidgetArea, dock)
         window.menuView.addAction(dock.toggleViewAction())
@@ -245,12 +246,7 @@ class PlanController(QObject):
         leaving.hide()                          # first: never both shown, so never a tab bar's height more
         coming.show()
         coming.raise_()                         # the front tab where others share the place (Preflight on main)
-        if on:                                  # the map beside the list, as tall as the list
-            w = self._window
-            w.mapDock.raise_()
-            self.dock.raise_()
-            w.resizeDocks([self.dock, w.mapDock], [1, 1], Qt.Vertical)
-            w.resizeDocks([self.dock], [PLAN_WIDTH], Qt.Horizontal)
+        make_room_for_plan(self._window, self.dock, on)
         self.set_editing(on)
 
     def _dock_shown(self, shown: bool) -> None:

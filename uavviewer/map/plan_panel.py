@@ -19,6 +19,7 @@ from .survey import CAMERAS
 __all__ = ["PlanPanel", "LAYERS", "TOOLS"]
 
 LAYERS = ("mission", "fence", "rally")
+ROWS_IN_VIEW = 6                   # the list's rows always in view (its dock is made tall enough: plan_controller)
 #: What a click on the map adds, for each tab.
 TOOLS = {
     "mission": ("Waypoint", "ROI", "Land", "Loiter (time)", "Survey area"),
@@ -111,7 +112,6 @@ class PlanPanel(QWidget):
         self.totalsLabel = QLabel("Empty plan")
         self.totalsLabel.setObjectName("planTotals")
         self.totalsLabel.setWordWrap(True)
-        lay.addWidget(self.totalsLabel)
 
         transfers = QHBoxLayout()
         self.uploadButton = QPushButton("Upload")
@@ -132,7 +132,12 @@ class PlanPanel(QWidget):
         self.syncLabel = QLabel()
         self.syncLabel.setObjectName("planSync")
         self.syncLabel.setWordWrap(True)
-        lay.addWidget(self.syncLabel)
+        facts = QHBoxLayout()                    # the plan's totals and where it stands with the vehicle: one row,
+        facts.addWidget(self.totalsLabel, 1)     # so that the list keeps six rows in view at 1280×720
+        facts.addWidget(self.syncLabel, 1)
+        lay.addLayout(facts)
+        for label, lines in ((self.totalsLabel, 3), (self.syncLabel, 3)):
+            _fixed_lines(label, lines)           # a longer text never pushes the list (and the map) while editing
 
         fly = QHBoxLayout()
         self.startButton = QPushButton("Start mission")
@@ -141,19 +146,24 @@ class PlanPanel(QWidget):
         self.resumeButton = QPushButton("Resume")
         for w in (self.startButton, self.pauseButton, self.resumeButton):
             fly.addWidget(w)
-        lay.addLayout(fly)
+        for b in (self.uploadButton, self.downloadButton, self.clearButton, self.startButton, self.pauseButton,
+                  self.resumeButton):
+            b.setStyleSheet("padding: 2px 8px")  # as tall as the tool buttons: the list keeps its rows
         self.progressLabel = QLabel()
         self.progressLabel.setObjectName("missionProgress")
         self.progressLabel.setWordWrap(True)
-        lay.addWidget(self.progressLabel)
+        fly.addWidget(self.progressLabel, 1)     # beside the buttons it follows: one row less above the list
+        _fixed_lines(self.progressLabel, 2)     # as tall as the buttons beside it
+        lay.addLayout(fly)
 
         self.tabs = QTabWidget()
         self.tables: dict[str, QTableWidget] = {}
         for layer, title in zip(LAYERS, ("Mission", "Fence", "Rally")):
             table = PlanTable(0, len(COLUMNS[layer]))
             table.setObjectName(f"{layer}Table")
-            table.setMinimumHeight(110)
-            table.verticalHeader().setDefaultSectionSize(table.fontMetrics().height() + 6)
+            table.verticalHeader().setDefaultSectionSize(table.fontMetrics().height() + 2)   # compact rows
+            table.setMinimumHeight(table.horizontalHeader().sizeHint().height() + 2 * table.frameWidth()
+                                   + ROWS_IN_VIEW * table.verticalHeader().defaultSectionSize())
             table.setHorizontalHeaderLabels(COLUMNS[layer])
             table.verticalHeader().hide()
             table.setSelectionBehavior(QAbstractItemView.SelectRows)
@@ -171,6 +181,10 @@ class PlanPanel(QWidget):
             QShortcut(QKeySequence.Delete, table, self.deleteRequested.emit, context=Qt.WidgetShortcut)
             self.tables[layer] = table
             self.tabs.addTab(table, title)
+        # the list asks for no more than its minimum (six rows): the Plan dock is sized to it (plan_room.py)
+        self.tabs.ensurePolished()
+        self.tabs.setMinimumHeight(self.tabs.minimumSizeHint().height())
+        self.tabs.setSizePolicy(QSizePolicy.Preferred, QSizePolicy.Ignored)
         lay.addWidget(self.tabs, 1)
 
         self.surveyBox = QGroupBox("Survey")
@@ -374,3 +388,12 @@ class PlanPanel(QWidget):
         self.cancelButton.setEnabled(active)
         for w in (self.uploadButton, self.downloadButton, self.clearButton):
             w.setEnabled(not active)
+
+
+def _fixed_lines(label: QLabel, lines: int) -> None:
+    """As tall as ``lines`` wrapped lines, whatever it says (the rest is cut): the Plan dock is sized once, as it
+    opens (plan_room.py), and nothing in it moves afterwards."""
+    label.ensurePolished()
+    label.setFixedHeight(lines * label.fontMetrics().lineSpacing() + 2)
+    label.setAlignment(Qt.AlignLeft | Qt.AlignTop)
+

@@ -20,6 +20,7 @@ from ..dialogs import ask
 from .compare_dialog import CompareDialog
 from .mentions import named_parameter
 from .page import ParametersPage
+from .placement import place, remember
 from .review_dialog import ReviewDialog
 from .rows import compare_rows, review_rows
 from .table_model import ParameterModel, WriteState
@@ -123,14 +124,9 @@ class ParamsController(QObject):
             page.compareFileChosen.connect(self.compare_file)
             page.saveFileChosen.connect(self.save_file)
             page.metadataFileChosen.connect(self.load_metadata)
-            screen = self._parent.screen().availableGeometry() if self._parent.screen() else None
-            if screen is not None:                   # on the window's screen, a laptop's 1366×768 included
-                page.resize(min(page.width(), screen.width() - 40), min(page.height(), screen.height() - 60))
-                frame = page.frameGeometry()
-                frame.moveCenter(self._parent.frameGeometry().center())
-                frame.moveTop(max(min(frame.top(), screen.bottom() - frame.height()), screen.top()))
-                frame.moveLeft(max(min(frame.left(), screen.right() - frame.width()), screen.left()))
-                page.move(frame.topLeft())
+            settings = getattr(self._parent, "_qsettings", None)     # the window's: where it was left last time
+            page.hidden.connect(lambda: remember(page, settings))
+            place(page, self._parent, settings)                     # beside the flight controls, never over them
             self.page = page
         return self.page
 

@@ -50,6 +50,7 @@ class ParametersPage(QWidget):
     discardRequested = pyqtSignal()              # drop every pending change
     stageRequested = pyqtSignal(str, str)        # name, value as typed
     revertRequested = pyqtSignal(str)
+    hidden = pyqtSignal()                        # closed (Close, Esc, its title bar): its place is remembered
 
     def __init__(self, model: ParameterModel, parent: QWidget | None = None) -> None:
         super().__init__(parent, Qt.Window)
@@ -75,17 +76,22 @@ class ParametersPage(QWidget):
         self.save_button.setToolTip("Save the vehicle's parameters as a .param file (MAVProxy / Mission Planner)")
         self.metadata_button = QPushButton("Metadata…")
         self.metadata_button.setToolTip("Read bounds, units and descriptions from ArduPilot's apm.pdef.xml")
-        top = QHBoxLayout()
-        top.addWidget(self.search, 1)
-        top.addWidget(self.modified_only)
+        top = QVBoxLayout()                      # two rows: the page fits beside the flight controls at 1024 px
+        search_row, files_row = QHBoxLayout(), QHBoxLayout()
+        search_row.addWidget(self.search, 1)
+        search_row.addWidget(self.modified_only)
         for b in (self.refresh_button, self.compare_button, self.save_button, self.metadata_button):
-            top.addWidget(b)
+            files_row.addWidget(b)
+        files_row.addStretch(1)
+        top.addLayout(search_row)
+        top.addLayout(files_row)
 
         self.progress = QProgressBar()
         self.progress.setObjectName("paramProgress")
         self.progress.setMaximumHeight(18)
         self.status = QLabel()
         self.status.setObjectName("paramStatus")
+        self.status.setWordWrap(True)             # a long status wraps: it never widens the page
         status_row = QHBoxLayout()
         status_row.addWidget(self.status, 1)
         status_row.addWidget(self.progress, 1)
@@ -131,6 +137,10 @@ class ParametersPage(QWidget):
         bottom.addWidget(self.pending_label, 1)
         bottom.addWidget(self.discard_button)
         bottom.addWidget(self.review_button)
+        self.close_button = QPushButton("Close")
+        self.close_button.setObjectName("paramClose")
+        self.close_button.setToolTip("Close Parameters (Esc); pending changes stay pending")
+        bottom.addWidget(self.close_button)
 
         layout = QVBoxLayout(self)
         layout.setContentsMargins(8, 8, 8, 8)
@@ -152,6 +162,7 @@ class ParametersPage(QWidget):
                                                                 self._save_chosen, save=True))
         self.metadata_button.clicked.connect(lambda: self._ask_file("ArduPilot parameter metadata", METADATA_FILES,
                                                                     self.metadataFileChosen))
+        self.close_button.clicked.connect(self.close)
         self.review_button.clicked.connect(self.reviewRequested)
         self.discard_button.clicked.connect(self.discardRequested)
         self.editor.stageRequested.connect(self.stageRequested)
@@ -206,6 +217,18 @@ class ParametersPage(QWidget):
             text += " · no metadata: bounds and meanings unknown (Metadata…)"
         self.status.setText(text)
         self.refresh_button.setEnabled(connected and not table.downloading)
+
+    def keyPressEvent(self, event) -> None:  # noqa: N802 (Qt's name)
+        """Esc closes, as any dialog does (a field that uses Esc itself takes it first)."""
+        if event.key() == Qt.Key_Escape:
+            self.close()
+            return
+        super().keyPressEvent(event)
+
+    def hideEvent(self, event) -> None:  # noqa: N802 (Qt's name)
+        super().hideEvent(event)
+        if not event.spontaneous():
+            self.hidden.emit()
 
     def show_current(self) -> None:
         """The editor follows the current row (and its parameter's newest value)."""

@@ -4,7 +4,7 @@ from __future__ import annotations
 import time
 
 from PyQt5.QtCore import Qt, pyqtSignal
-from PyQt5.QtWidgets import QHBoxLayout, QLabel, QToolButton, QWidget
+from PyQt5.QtWidgets import QHBoxLayout, QLabel, QSizePolicy, QToolButton, QWidget
 
 from driver.state import Severity
 
@@ -32,6 +32,7 @@ class AlertBanner(QWidget):
         self.label = QLabel()
         self.label.setObjectName("alertText")
         self.label.setTextInteractionFlags(Qt.NoTextInteraction)
+        self.label.setSizePolicy(QSizePolicy.Ignored, QSizePolicy.Preferred)   # cut, never widens the window
         self.close_button = QToolButton()
         self.close_button.setObjectName("alertDismiss")
         self.close_button.setText("✕")

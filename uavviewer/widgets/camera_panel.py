@@ -1,7 +1,7 @@
 """The camera area of the window: the video view and a row of camera buttons."""
 from __future__ import annotations
 
-from PyQt5.QtCore import pyqtSignal
+from PyQt5.QtCore import Qt, pyqtSignal
 from PyQt5.QtWidgets import QHBoxLayout, QLabel, QSizePolicy, QToolButton, QVBoxLayout, QWidget
 
 from .camera_view import CameraView
@@ -41,6 +41,16 @@ class CameraPanel(QWidget):
         layout.setSpacing(2)
         layout.addWidget(self.view, 1)
         layout.addLayout(row)
+
+    def add_overlay(self, widget: QWidget) -> None:
+        """A control that comes and goes (Stop looking) stands over the video's top right corner, where showing it
+        moves nothing: the rows below keep their width, the attitude beside keeps its size."""
+        corner = self.view.layout()
+        if corner is None:
+            corner = QHBoxLayout(self.view)
+            corner.setContentsMargins(4, 4, 4, 4)
+            corner.addStretch(1)
+        corner.addWidget(widget, 0, Qt.AlignTop)
 
     def _button(self, text: str, tip: str, checkable: bool = False) -> QToolButton:
         b = QToolButton(self)

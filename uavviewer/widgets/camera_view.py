@@ -52,7 +52,7 @@ class CameraView(QWidget):
         self._state: VehicleState | None = None
         self._hud = True
         self.setAttribute(Qt.WA_OpaquePaintEvent)
-        self.setMinimumSize(240, 120)          # the window fits 1024×600
+        self.setMinimumSize(240, 96)           # the window fits 1024×600, title bar included
         self.setSizePolicy(QSizePolicy.Expanding, QSizePolicy.Expanding)
 
     # -- what to show ------------------------------------------------------------------------

@@ -37,8 +37,9 @@ class FlightControls(QWidget):
         self.progress = QProgressBar()
         self.progress.setObjectName("takeoffProgress")
         self.progress.setRange(0, 100)
-        self.progress.setTextVisible(True)
-        self.progress.setMaximumHeight(16)
+        self.progress.setTextVisible(False)       # the phase line above says it in words
+        self.progress.setFixedHeight(5)           # a thin bar along the main button's foot: nothing below moves
+        self.progress.setAttribute(Qt.WA_TransparentForMouseEvents)   # a click there is the button's
         self.progress.setVisible(False)
         self.stop_button = self._button("stopButton", "Stop", "stop")
         self.rtl_button = self._button("rtlButton", "RTL", "rtl")
@@ -51,10 +52,10 @@ class FlightControls(QWidget):
         grid.setContentsMargins(0, 0, 0, 0)
         grid.setSpacing(6)
         grid.addWidget(self.main_button, 0, 0, 1, 3)
-        grid.addWidget(self.progress, 1, 0, 1, 3)
-        grid.addWidget(self.stop_button, 2, 0)
-        grid.addWidget(self.rtl_button, 2, 1)
-        grid.addWidget(self.arm_button, 2, 2)
+        grid.addWidget(self.progress, 0, 0, 1, 3, Qt.AlignBottom)   # over the button: it never pushes the row
+        grid.addWidget(self.stop_button, 1, 0)
+        grid.addWidget(self.rtl_button, 1, 1)
+        grid.addWidget(self.arm_button, 1, 2)
         self.main_button.clicked.connect(self._main_clicked)
         self.stop_button.clicked.connect(self.stopRequested)
         self.rtl_button.clicked.connect(self.rtlRequested)
@@ -123,7 +124,7 @@ class FlightControls(QWidget):
         self.progress.setVisible(taking_off)
         if taking_off:
             self.progress.setValue(int(round(100 * max(0.0, min(1.0, progress)))))
-            self.progress.setFormat(detail or "taking off %p%")
+            self.progress.setToolTip(detail or f"taking off {self.progress.value()} %")
         self.stop_button.setEnabled(phase.airborne)
         self.rtl_button.setEnabled(phase.airborne or (connected and armed))
         a = self.arm_button

@@ -2,9 +2,10 @@
 from __future__ import annotations
 
 from PyQt5.QtCore import Qt
-from PyQt5.QtWidgets import QLabel, QWidget
+from PyQt5.QtWidgets import QLabel, QSizePolicy, QWidget
 
 from driver.state import LinkStatus
+from ..connect.choice import waiting_words
 from ..flight_phase import NO_VEHICLE, NOT_CONNECTED
 
 __all__ = ["LinkBanner"]
@@ -17,7 +18,7 @@ class LinkBanner(QLabel):
         super().__init__(parent)
         self.setObjectName("linkBanner")
         self.setAlignment(Qt.AlignCenter)
-        self.setMinimumHeight(34)
+        self.setSizePolicy(QSizePolicy.Ignored, QSizePolicy.Fixed)   # a long text is cut, never widens the window
         self._status: LinkStatus | None = None
         self.setVisible(False)
 
@@ -35,7 +36,7 @@ class LinkBanner(QLabel):
         elif status is LinkStatus.OK:
             text, kind = "", ""
         elif status is LinkStatus.WAITING:
-            text, kind = f"{NO_VEHICLE} — listening on {address}…", "waiting"
+            text, kind = f"{NO_VEHICLE} — {waiting_words(address)}…", "waiting"
         elif status is LinkStatus.LOST:
             since = "" if heartbeat_age is None else f" — {heartbeat_age:.0f} s since the last heartbeat"
             text, kind = f"Link lost{since}", "lost"
@@ -50,4 +51,5 @@ class LinkBanner(QLabel):
             self.style().polish(self)
         if self.text() != text:
             self.setText(text)
+            self.setToolTip(text)
         self.setVisible(bool(text))

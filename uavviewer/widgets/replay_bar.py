@@ -6,6 +6,7 @@ from PyQt5.QtWidgets import QComboBox, QHBoxLayout, QLabel, QPushButton, QSlider
 
 from ..flight_timer import clock_text
 from .seek_slider import SeekSlider
+from .text_width import width_for
 
 __all__ = ["ReplayBar", "SPEEDS"]
 
@@ -42,7 +43,7 @@ class ReplayBar(QWidget):
         self.clock = QLabel("--:-- / --:--")
         self.clock.setObjectName("replayClock")
         row = QHBoxLayout(self)
-        row.setContentsMargins(8, 4, 8, 4)
+        row.setContentsMargins(8, 0, 8, 0)          # as tall as the stick line it stands in for
         row.addWidget(QLabel("Replay"))
         row.addWidget(self.play_button)
         row.addWidget(self.restart_button)
@@ -51,6 +52,9 @@ class ReplayBar(QWidget):
         row.addWidget(self.clock)
         self._finished = False
         self.play_button.clicked.connect(self._play_clicked)
+        # as wide as their longest texts from the start: Pause/Play/Restart and the clock never move the seek bar
+        self.play_button.setMinimumWidth(max(width_for(self.play_button, t) for t in ("Pause", "Play", "Restart")))
+        self.clock.setMinimumWidth(width_for(self.clock, "8:88:88 / 8:88:88"))
         self.speed.activated.connect(lambda i: self.speedRequested.emit(float(self.speed.itemData(i))))
         self.restart_button.clicked.connect(self.restartRequested)
         self.progress.sliderReleased.connect(lambda: self._seek(self.progress.value()))
@@ -93,9 +97,10 @@ class ReplayBar(QWidget):
                 self.progress.blockSignals(True)
                 self.progress.setValue(value)
                 self.progress.blockSignals(False)
-        end = "  (replay ended)" if finished else ""
-        self.clock.setText(f"{clock_text(duration if finished else position)} / {clock_text(duration)}{end}")
+        # "Finished" is the play button's: a longer clock would squeeze the seek bar at the end
+        self.clock.setText(f"{clock_text(duration if finished else position)} / {clock_text(duration)}")
         if speed is not None and not self.speed.view().isVisible():
             i = self.speed.findData(float(speed))
             if i >= 0 and i != self.speed.currentIndex():
                 self.speed.setCurrentIndex(i)
+

@@ -1,0 +1,1 @@
+"""What the window asks and says around a flight's commands (arming, ...), apart from the window that wires them."""
