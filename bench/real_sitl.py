@@ -46,8 +46,10 @@ from dataclasses import dataclass
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
-from sitl_judge import HeldItem, Judge, mavlink  # noqa: E402  (first: it picks MAVLink 2 for pymavlink)
+from pymavlink.dialects.v20 import ardupilotmega as mavlink  # noqa: E402
+
 from lossy_relay import LossyRelay, free_udp_port  # noqa: E402
+from sitl_judge import HeldItem, Judge  # noqa: E402
 import tables  # noqa: E402
 
 from driver import CommandStatus, Vehicle, VehicleConfig  # noqa: E402

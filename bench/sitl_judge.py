@@ -9,17 +9,13 @@ station.
 """
 from __future__ import annotations
 
-import os
 import queue
 import threading
 import time
 from dataclasses import dataclass
 
-os.environ["MAVLINK20"] = "1"                  # mission_type needs MAVLink 2
-
-from pymavlink import mavutil  # noqa: E402
-
-mavlink = mavutil.mavlink
+from pymavlink import mavutil
+from pymavlink.dialects.v20 import ardupilotmega as mavlink    # mission_type needs MAVLink 2, whatever mavutil's
 
 PREARM_CHECK = 0x10000000                      # MAV_SYS_STATUS_PREARM_CHECK
 #: message id -> interval in microseconds
@@ -51,6 +47,8 @@ class Judge:
         # SERIAL1 listens only once SERIAL0 is connected: pymavlink retries a second apart
         self.conn = mavutil.mavlink_connection(f"tcp:127.0.0.1:{port}", source_system=254, source_component=191,
                                                retries=int(connect_timeout))
+        self.conn.mav = mavlink.MAVLink(self.conn, srcSystem=254, srcComponent=191)   # MAVLink 2 whatever the
+        self.conn.mav.robust_parsing = True                                            # process chose before
         self._latest: dict = {}
         self._lock = threading.Lock()
         self._waiters: list = []
