@@ -123,3 +123,14 @@ def test_the_vehicles_refusals_are_shown_with_their_meaning(homed, sim):
     assert refused.status is CommandStatus.REFUSED
     assert refused.reason.startswith("NO_SPACE: more items than the vehicle can store")
     assert homed.wait_for(lambda s: any(m.text == "Only 700 items are supported" for m in s.messages), 5)
+
+
+def test_a_land_item_is_held_as_arducopter_reads_it_back(homed, sim):
+    """ArduPilot keeps NAV_LAND's param4 only as a yaw direction and reads it back as 1 or -1 (AP_Mission.cpp;
+    ArduCopter 4.6.3 SITL read back 1 for the 0 sent): that is the plan sent, not another one."""
+    lat, lon = place(homed, 0, 0)
+    plan = Plan(PlanKind.MISSION, (MissionItem(mavlink.MAV_CMD_NAV_TAKEOFF, alt=10), waypoint(homed, 20, 0, 10),
+                                   MissionItem(mavlink.MAV_CMD_NAV_LAND, lat=lat, lon=lon)))
+    outcome = homed.upload_plan(plan).result(30)
+    assert sim.autopilot.plan_items(PlanKind.MISSION)[-1].params[3] == 1.0
+    assert outcome.result.status is CommandStatus.ACCEPTED, str(outcome.result)
