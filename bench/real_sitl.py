@@ -31,6 +31,7 @@ from __future__ import annotations
 
 import argparse
 import atexit
+import contextlib
 import logging
 import math
 import os
@@ -137,14 +138,16 @@ class Row:
     why: str = ""
 
 
-def verdict(result, held: bool, false_premise: str = "") -> tuple[str, str]:
-    """right/wrong and why, for a driver's CommandResult (None: no answer) and whether the vehicle holds it."""
+def verdict(result, held: bool, false_premise: str = "", doing: bool = False) -> tuple[str, str]:
+    """right/wrong and why, for a driver's CommandResult (None: no answer) and whether the vehicle holds it (or,
+    ``doing``, is doing it)."""
     if result is None:
         return "wrong", "no answer within the time limit"
     if result.status is CommandStatus.ACCEPTED:
-        return ("right", "") if held else ("wrong", "told accepted, but the vehicle does not hold it")
+        return ("right", "") if held else \
+            ("wrong", f"told accepted, but the vehicle {'is not doing' if doing else 'does not hold'} it")
     if held:
-        return "wrong", f"told {result.status.value}, but the vehicle holds it"
+        return "wrong", f"told {result.status.value}, but the vehicle {'is doing' if doing else 'holds'} it"
     if false_premise:
         return "wrong", f"told {result.status.value} ({result.reason}), but {false_premise}"
     if result.status is CommandStatus.REJECTED:
@@ -271,10 +274,13 @@ class Bench:
         if not self.upload("upload the flight (5 items)", flight()):
             self.add(Row("fly the mission", "not flown", "the vehicle does not hold the flight", verdict="-"))
             return
+        asked = time.monotonic()
         result, seconds = answer(self.vehicle.start_mission(), TIMEOUT["start"])
         started = self.judge.wait(lambda: self.judge.mode == "AUTO" and self.judge.armed, 3.0 if result else 0.1)
-        self.add(Row("mission start", said(result, TIMEOUT["start"]), self._flight_state(), seconds,
-                     *verdict(result, started)))
+        row = self.add(Row("mission start", said(result, TIMEOUT["start"]), self._flight_state(), seconds,
+                           *verdict(result, started, doing=True)))
+        if row.verdict == "wrong":
+            row.why += f" (the vehicle: {self.judge.story(asked)})"
         if not started:
             return
         if not self.judge.wait(lambda: (self.judge.mission_current or (0,))[0] >= 2, 60):
@@ -282,14 +288,14 @@ class Bench:
         result, seconds = answer(self.vehicle.pause_mission(), TIMEOUT["pause"])
         paused = self.judge.wait(lambda: self.judge.mode == "BRAKE", 2.0 if result else 0.1)
         self.add(Row("mission pause", said(result, TIMEOUT["pause"]), self._flight_state(), seconds,
-                     *verdict(result, paused)))
+                     *verdict(result, paused, doing=True)))
         time.sleep(3.0)                                     # held in BRAKE: the current item must stay
         self.progress("progress while paused")
         result, seconds = answer(self.vehicle.resume_mission(), TIMEOUT["resume"])
         running = self.judge.wait(lambda: self.judge.mode == "AUTO" and (self.judge.mission_current or (0, 0))[1]
                                   == MissionRunState.ACTIVE, 3.0 if result else 0.1)
         self.add(Row("mission resume", said(result, TIMEOUT["resume"]), self._flight_state(), seconds,
-                     *verdict(result, running)))
+                     *verdict(result, running, doing=True)))
         t0 = time.monotonic()
         landed = self.judge.wait(lambda: self.judge.armed is False, TIMEOUT["flown"])
         time.sleep(2.0)                                     # the driver's MISSION_CURRENT at its stream rate
@@ -459,7 +465,8 @@ def main() -> int:
         serial0, serial1 = 5760 + 10 * args.instance, 5762 + 10 * args.instance
         try:
             relay = LossyRelay(serial0, free_udp_port(), args.loss, args.seed, TIMEOUT["connect"])
-            judge = Judge(serial1, TIMEOUT["connect"])
+            with contextlib.redirect_stdout(sys.stderr):     # pymavlink says each refused connect on stdout
+                judge = Judge(serial1, TIMEOUT["connect"])
         except OSError as exc:
             print(f"real_sitl: no SITL on 127.0.0.1:{serial0}/{serial1}: {exc}", file=sys.stderr)
             if sitl:

@@ -54,6 +54,7 @@ class Judge:
         self._waiters: list = []
         self.texts: list[tuple[float, int, str]] = []      # (monotonic time, severity, text)
         self.reached: list[int] = []                        # MISSION_ITEM_REACHED seqs
+        self.changes: list[tuple[float, str, bool]] = []    # (monotonic time, mode, armed) as each changed
         self._closing = threading.Event()
         self._thread = threading.Thread(target=self._read, name="judge", daemon=True)
         self._thread.start()
@@ -77,6 +78,10 @@ class Judge:
             with self._lock:
                 if m.get_srcComponent() == 1 or mtype != "HEARTBEAT":
                     self._latest[mtype] = (time.monotonic(), m)
+                if mtype == "HEARTBEAT" and m.get_srcComponent() == 1:
+                    now = (mavutil.mode_string_v10(m), bool(m.base_mode & mavlink.MAV_MODE_FLAG_SAFETY_ARMED))
+                    if not self.changes or self.changes[-1][1:] != now:
+                        self.changes.append((time.monotonic(), *now))
                 if mtype == "STATUSTEXT":
                     self.texts.append((time.monotonic(), m.severity, m.text))
                 elif mtype == "MISSION_ITEM_REACHED":
@@ -165,9 +170,12 @@ class Judge:
         p = self.latest("GLOBAL_POSITION_INT", 2.0)
         return p.relative_alt / 1000.0 if p else None
 
-    def text_since(self, since: float, words: str) -> bool:
+    def story(self, since: float) -> str:
+        """What the vehicle did since ``since``: its mode and arming changes and its texts, with the seconds."""
         with self._lock:
-            return any(t >= since and words in text for t, _, text in self.texts)
+            events = [(t, f"{mode} {'armed' if armed else 'disarmed'}") for t, mode, armed in self.changes if t >= since]
+            events += [(t, repr(text)) for t, _, text in self.texts if t >= since]
+        return "; ".join(f"{t - since:.1f} s {what}" for t, what in sorted(events))
 
     # -- plans ----------------------------------------------------------------------------------------------
     def read_plan(self, kind: int, timeout: float = 20.0) -> list[HeldItem] | None:
