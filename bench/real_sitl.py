@@ -61,9 +61,10 @@ HOME = (-35.363261, 149.165230, 584.0, 353.0)           # ArduPilot's CMAC, as i
 SHIM = "/work/sitl/bind_loopback.so"
 MISSION_ITEMS = 40
 #: (name, value): a float, an int32, two int16, an int8; none of them their default, all harmless to the flight
-#: (a quicker waypoint speed and landing, a shorter disarm delay).
+#: (a quicker waypoint speed and landing; a longer disarm delay, so a mission start slowed by loss still finds
+#: the vehicle armed: at 5 s it often did not, and the start is then refused).
 SETS = (("WPNAV_SPEED", 750.0), ("RTL_ALT", 1200.0), ("LAND_SPEED", 100.0), ("PILOT_SPEED_UP", 300.0),
-        ("DISARM_DELAY", 5.0))
+        ("DISARM_DELAY", 15.0))
 #: Parameters that change by themselves (counters) or by the links' own stream requests: not compared.
 VOLATILE = ("STAT_", "SR0_", "SR1_")
 #: Seconds each operation may take before "no answer".
