@@ -379,7 +379,7 @@ class Sitl:
         for what, path in (("SITL binary", self.binary), ("loopback shim", self.shim), ("defaults", self.defaults)):
             if not os.path.exists(path):
                 raise SystemExit(f"real_sitl: the {what} {path} does not exist")
-        home = ",".join(f"{v:g}" for v in HOME)
+        home = ",".join(f"{v:.7f}".rstrip("0").rstrip(".") for v in HOME)
         with open(self.log_path, "wb") as log:
             self.proc = subprocess.Popen(
                 [self.binary, "--model", "+", "--speedup", "1", "-I", str(self.instance), "-w",
@@ -413,6 +413,8 @@ def report(rows: list[Row], relay: LossyRelay | None, args, markdown: bool) -> s
     head = ("operation", "driver said", "vehicle holds", "s", "verdict")
     lines = tables.render(head, [(r.op, r.said, r.holds, "-" if r.seconds is None else f"{r.seconds:.1f}", r.verdict)
                                  for r in rows], markdown)
+    if markdown:
+        lines.append("")                                   # a Markdown table ends at a blank line
     answers = [r for r in rows if r.verdict != "-"]
     wrong = [r for r in answers if r.verdict == "wrong"]
     lines.append(f"{len(answers)} answers, {len(wrong)} wrong")
