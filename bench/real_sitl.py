@@ -411,8 +411,10 @@ class Sitl:
 
 def report(rows: list[Row], relay: LossyRelay | None, args, markdown: bool) -> str:
     head = ("operation", "driver said", "vehicle holds", "s", "verdict")
-    lines = tables.render(head, [(r.op, r.said, r.holds, "-" if r.seconds is None else f"{r.seconds:.1f}", r.verdict)
-                                 for r in rows], markdown)
+    def cell(text: str) -> str:
+        return text.replace("|", "\\|") if markdown else text
+    lines = tables.render(head, [(cell(r.op), cell(r.said), cell(r.holds),
+                                  "-" if r.seconds is None else f"{r.seconds:.1f}", r.verdict) for r in rows], markdown)
     if markdown:
         lines.append("")                                   # a Markdown table ends at a blank line
     answers = [r for r in rows if r.verdict != "-"]
