@@ -121,3 +121,18 @@ def test_land_aborts_a_mission_start(sim, vehicle_factory):
     result = starting.result(10)
     assert (result.command, result.status) == ("mission start", CommandStatus.ABORTED), str(result)
     assert drone.wait_for(lambda s: not s.takeoff.active, 5)
+
+
+def test_a_mission_start_is_refused_when_the_vehicle_disarmed_before_auto(sim_factory, vehicle_factory):
+    """ArduCopter disarms on the ground DISARM_DELAY s after arming, yet starts a mission in AUTO disarmed too
+    (ModeAuto::run). bench/real_sitl.py at 30 % loss on the 4.6.3 SITL: armed at 4.9 s, disarmed at 8.9 s, AUTO at
+    9.9 s with "Mission: 1 Takeoff", and the start was told accepted while the vehicle sat disarmed."""
+    sim = sim_factory()
+    sim.autopilot.params.update(DISARM_DELAY=1)
+    drone = vehicle_factory(f"tcp:127.0.0.1:{sim.tcp_port}")
+    assert drone.wait_for(lambda s: s.connected and s.home is not None and s.readiness.ready_to_arm, 30)
+    assert drone.upload_plan(recorded_mission(drone)).result(30).result.ok
+    sim.faults.uplink.latency = 0.5          # AUTO reaches the vehicle 2 s (sim) after it armed: disarmed by then
+    result = drone.start_mission().result(60)
+    assert not sim.truth().armed
+    assert result.status is CommandStatus.REFUSED and "disarmed" in result.reason, str(result)

@@ -158,3 +158,14 @@ def test_clearing_a_running_mission_is_refused_with_the_vehicles_word_after_read
     assert result.status is CommandStatus.REFUSED, str(result)
     assert result.reason == "ERROR: the vehicle reported an error; the vehicle still holds 4 items"
     assert len(sim.autopilot.plans[PlanKind.MISSION]) == 5
+
+
+def test_a_land_item_is_held_as_arducopter_reads_it_back(homed, sim):
+    """ArduPilot keeps NAV_LAND's param4 only as a yaw direction and reads it back as 1 or -1 (AP_Mission.cpp;
+    ArduCopter 4.6.3 SITL read back 1 for the 0 sent): that is the plan sent, not another one."""
+    lat, lon = place(homed, 0, 0)
+    plan = Plan(PlanKind.MISSION, (MissionItem(mavlink.MAV_CMD_NAV_TAKEOFF, alt=10), waypoint(homed, 20, 0, 10),
+                                   MissionItem(mavlink.MAV_CMD_NAV_LAND, lat=lat, lon=lon)))
+    outcome = homed.upload_plan(plan).result(30)
+    assert sim.autopilot.plan_items(PlanKind.MISSION)[-1].params[3] == 1.0
+    assert outcome.result.status is CommandStatus.ACCEPTED, str(outcome.result)

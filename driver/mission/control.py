@@ -49,6 +49,9 @@ class MissionStart(TakeoffSequence):
             return self._start_takeoff(now)          # flying or armed already: straight to AUTO
         if self._stage not in ("auto", "start", "running"):
             return super().step(now)
+        if not s.armed:             # ArduCopter starts a mission in AUTO disarmed too, and it then never flies
+            return CommandStatus.REFUSED, f"the vehicle disarmed before the mission flew (in {s.mode}; on the " \
+                "ground it disarms DISARM_DELAY s after arming)", SequencePhase.FAILED
         elapsed = now - self._since
         if self._stage == "auto":
             if self._pending is None:

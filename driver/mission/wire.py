@@ -94,6 +94,8 @@ def item_difference(kind: PlanKind, sent: MissionItem, got: MissionItem, integer
     for i, (a, b) in enumerate(zip(sent.params, got.params), 1):
         if i == 3 and sent.command in _LOITERS and kind is PlanKind.MISSION:
             a = -1.0 if a < 0 else 1.0                # kept as a direction flag (recording: 0 sent, 1 read back)
+        if i == 4 and sent.command == mavlink.MAV_CMD_NAV_LAND and kind is PlanKind.MISSION:
+            a = -1.0 if a < 0 else 1.0                # the same for LAND's yaw direction (4.6.3 SITL: 0 sent, 1 back)
         if not _same(_f32(a), b, 1e-6 * max(1.0, abs(a))):
             return f"param{i} {b:g} instead of {a:g}"
     if not _located(kind, sent):

@@ -2,7 +2,7 @@
 
 Mixed into :class:`~driver.sim.autopilot.Autopilot`, next to :mod:`.missions` (which keeps the items).
 
-* Entering AUTO armed starts the mission, or resumes it: the current item is flown again from its start
+* Entering AUTO starts the mission, or resumes it (disarmed too, as ModeAuto::run does; it then stays on the ground): the current item is flown again from its start
   ("Mission: 2 WP" once more). Leaving AUTO (BRAKE: a pause) stops it; MISSION_CURRENT then says 2.
 * Each navigation item starts with "Mission: N NAME" and MISSION_CURRENT; it ends with MISSION_ITEM_REACHED
   (and "Reached command #N" for waypoints and loiters, after their hold time). DO_ items between two
@@ -97,8 +97,10 @@ class Auto:
         return None
 
     def _auto_entered(self) -> None:
-        """Start or resume (AP_Mission::start_or_resume with MIS_RESTART 0); nothing while disarmed."""
-        if not self.armed or self.mission_total() == 0:
+        """Start or resume (AP_Mission::start_or_resume with MIS_RESTART 0), disarmed too: ModeAuto::run starts
+        the mission once there is an origin, armed or not (4.6.3 SITL: disarmed in AUTO, "Mission: 1 Takeoff"
+        and MISSION_CURRENT active); a disarmed vehicle just stays on the ground."""
+        if self.mission_total() == 0:
             return
         if self.mission_run == "complete" or self.mission_current == 0:
             self.jumps_done = {}
@@ -141,7 +143,7 @@ class Auto:
         """GCS_MAVLINK_Copter: AUTO, and the mission started unless it already runs."""
         if not self.set_mode(AUTO):
             return mavlink.MAV_RESULT_FAILED, None
-        if self.armed and self.mission_run != "running":
+        if self.mission_run != "running":
             self._auto_entered()
         return mavlink.MAV_RESULT_ACCEPTED, None
 
@@ -197,7 +199,7 @@ class Auto:
         place = self.ned_of(item) or here
         if item.command == mavlink.MAV_CMD_NAV_TAKEOFF:
             self.auto_target = (here[0], here[1], -max(item.z, 1.0))
-            if self.landed and self.liftoff_at is None:
+            if self.armed and self.landed and self.liftoff_at is None:
                 self.liftoff_at = max(self.armed_at + self.profile.arming_delay, self.t) + self.profile.liftoff_after
                 self.touchdown_at = None
         elif item.command == mavlink.MAV_CMD_NAV_RETURN_TO_LAUNCH:
@@ -230,7 +232,7 @@ class Auto:
     # -- flying (the controller asks _auto, the step asks _auto_step) ----------------------------------------
     def _auto_climbing(self) -> bool:
         """Armed on the ground in AUTO with a takeoff item to fly: the controller may lift off."""
-        return (self.mode == AUTO and self.mission_run == "running" and self.auto_stage == "fly"
+        return (self.armed and self.mode == AUTO and self.mission_run == "running" and self.auto_stage == "fly"
                 and self.plans[MISSION][self.mission_current].command == mavlink.MAV_CMD_NAV_TAKEOFF)
 
     def _auto_acceleration(self) -> float:

@@ -89,6 +89,8 @@ def stored_as(kind: int, command: int, frame: int, params, x: int, y: int, z: fl
         return StoredItem(command, mavlink.MAV_FRAME_GLOBAL_RELATIVE_ALT, params, x, y, _f32(z), 0)
     if command in _LOITERS:                 # the direction is kept as a flag: read back as 1 or -1 (recording)
         params = (params[0], params[1], -1.0 if params[2] < 0 else 1.0, params[3])
+    elif command == mavlink.MAV_CMD_NAV_LAND:   # param4 (yaw direction) too: AP_Mission.cpp keeps loiter_ccw from
+        params = params[:3] + (-1.0 if params[3] < 0 else 1.0,)   # it, reads back -1 or 1 (NaN: 1); 4.6.3 SITL
     if (is_nav(command) and command not in _NO_PLACE) or command in _LOCATED_DO:
         out = (mavlink.MAV_FRAME_GLOBAL_RELATIVE_ALT if frame in _RELATIVE else
                mavlink.MAV_FRAME_GLOBAL_TERRAIN_ALT if frame in _TERRAIN else mavlink.MAV_FRAME_GLOBAL)

@@ -83,7 +83,9 @@ class ReviewDialog(QDialog):
         if row is None:
             return
         item = self.table.item(row, _RESULT)
-        item.setText(state.value + (f": {reason}" if reason and state is WriteState.FAILED else ""))
+        # the driver's reason may already begin with the state's words ("not confirmed: no answer to ..."): once
+        reason_text = reason.removeprefix(f"{state.value}: ")
+        item.setText(state.value + (f": {reason_text}" if reason and state is WriteState.FAILED else ""))
         item.setToolTip(reason)
         item.setForeground(QBrush({WriteState.WRITING: PENDING, WriteState.CONFIRMED: CONFIRMED,
                                    WriteState.FAILED: FAILED}[state]))
