@@ -58,9 +58,8 @@ from driver.frames import offset_latlon  # noqa: E402
 from driver.mission.plan import MissionItem, MissionRunState, Plan, PlanKind  # noqa: E402
 
 HOME = (-35.363261, 149.165230, 584.0, 353.0)           # ArduPilot's CMAC, as in sitl.md and the recordings
-#: The loopback shim (bench/bind_loopback.c, built next to it), else the one the SITL build left.
-SHIM = next((p for p in (os.path.join(os.path.dirname(os.path.abspath(__file__)), "bind_loopback.so"),
-                         "/work/sitl/bind_loopback.so") if os.path.exists(p)), "bench/bind_loopback.so")
+#: The loopback shim: bench/bind_loopback.c built next to it (the README's gcc line), or $UAV_BIND_SHIM.
+SHIM = os.environ.get("UAV_BIND_SHIM") or os.path.join(os.path.dirname(os.path.abspath(__file__)), "bind_loopback.so")
 MISSION_ITEMS = 40
 #: (name, value): a float, an int32, two int16, an int8; none of them their default, all harmless to the flight
 #: (a quicker waypoint speed and landing; a longer disarm delay, so a mission start slowed by loss still finds
