@@ -73,9 +73,12 @@ class PlanPanel(QWidget):
         self.toolCombo.setToolTip("What a click on the map adds")
         self.finishButton = QToolButton(text="Finish shape")
         self.finishButton.setToolTip("End the polygon being drawn (at least three corners)")
+        self.insertCheck = QCheckBox("Insert")
+        self.insertCheck.setToolTip("Add before the selected item instead of at the end")
         bar.addWidget(self.editCheck)
         bar.addWidget(self.toolCombo, 1)
-        bar.addWidget(self.finishButton)
+        bar.addWidget(self.insertCheck)          # here, not in the row below: that one, with ↑ ↓ and New, would
+        bar.addWidget(self.finishButton)         # be wider than the dock, and its scroll bar hide a row of the list
         lay.addLayout(bar)
 
         adds = QHBoxLayout()
@@ -87,8 +90,6 @@ class PlanPanel(QWidget):
         for what in ("Takeoff", "RTL", "Change speed"):
             self.addMenu.addAction(what, lambda w=what: self.addRequested.emit(w))
         self.addButton.setMenu(self.addMenu)
-        self.insertCheck = QCheckBox("Insert")
-        self.insertCheck.setToolTip("Add before the selected item instead of at the end")
         self.deleteButton = QToolButton(text="Delete")
         self.deleteButton.setToolTip("Delete the selected item(s) (Delete key)")
         self.upButton = QToolButton(text="↑")
@@ -101,7 +102,7 @@ class PlanPanel(QWidget):
         self.openButton.setToolTip("Open a plan file (QGroundControl .plan, or a WPL waypoint file)")
         self.saveButton = QToolButton(text="Save…")
         self.saveButton.setToolTip("Save the plan (QGroundControl .plan, or the mission as a WPL waypoint file)")
-        for w in (self.addButton, self.insertCheck, self.deleteButton, self.upButton, self.downButton):
+        for w in (self.addButton, self.deleteButton, self.upButton, self.downButton):
             adds.addWidget(w)
         adds.addStretch(1)
         adds.addWidget(self.newButton)

@@ -97,7 +97,7 @@ class ReplayBar(QWidget):
                 self.progress.blockSignals(True)
                 self.progress.setValue(value)
                 self.progress.blockSignals(False)
-        # "Finished" is the play button's: a longer clock would squeeze the seek bar at the end
+        # the end is said by the play button (Restart): a longer clock would squeeze the seek bar at the end
         self.clock.setText(f"{clock_text(duration if finished else position)} / {clock_text(duration)}")
         if speed is not None and not self.speed.view().isVisible():
             i = self.speed.findData(float(speed))
