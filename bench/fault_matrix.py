@@ -31,7 +31,7 @@ from dataclasses import dataclass, field
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 from driver.sim import SimConfig, SimVehicle  # noqa: E402
-from driver.state import CommandStatus, LandedState  # noqa: E402
+from driver.vehicle.state import CommandStatus, LandedState  # noqa: E402
 from driver.vehicle import Vehicle, VehicleConfig  # noqa: E402
 import param_cells  # noqa: E402
 import tables  # noqa: E402

@@ -22,10 +22,10 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink  # noqa: E402
 
-from driver import frames  # noqa: E402
+from driver.core import frames  # noqa: E402
 from driver.mission.plan import MissionItem, Plan, PlanKind  # noqa: E402
 from driver.sim import SimConfig, SimVehicle  # noqa: E402
-from driver.state import CommandStatus  # noqa: E402
+from driver.vehicle.state import CommandStatus  # noqa: E402
 from driver.vehicle import Vehicle, VehicleConfig  # noqa: E402
 import tables  # noqa: E402  (bench/tables.py: this script runs from bench/)
 

@@ -30,7 +30,7 @@ import threading
 
 import cv2
 
-from ..api import Drone
+from ..vehicle.api import Drone
 from ..camera import CameraSet, Frame, VideoRecorder, VideoSource
 from ..camera.record import MIN_CAP_BYTES, recordings_size
 from . import load_slice

@@ -10,9 +10,9 @@ from __future__ import annotations
 import math
 import time
 
-from ..frames import clamp, enu_quaternion, finite, wrap_pi
+from ..core.frames import clamp, enu_quaternion, finite, wrap_pi
 from .plans import mission_from_ice, mission_to_ice
-from ..state import (Attitude, Battery, CommandResult, CommandStatus, Environment, Fence, GlobalPosition, Gps,
+from ..vehicle.state import (Attitude, Battery, CommandResult, CommandStatus, Environment, Fence, GlobalPosition, Gps,
                      LandedState, LinkHealth, LinkStatus, LocalPosition, Message, Readiness, SequencePhase,
                      SequenceProgress, Setpoint, Severity, VehicleState, Velocity)
 
@@ -116,7 +116,7 @@ def _int(value: float) -> int:
 
 # -- a plain JdeRobot server: Pose3D + Navdata -> VehicleState -----------------------------------
 def attitude_from_enu_quaternion(q0: float, q1: float, q2: float, q3: float) -> tuple[float, float, float]:
-    """NED (roll, pitch, yaw) of a FLU-in-ENU quaternion; inverse of :func:`driver.frames.enu_quaternion`."""
+    """NED (roll, pitch, yaw) of a FLU-in-ENU quaternion; inverse of :func:`driver.core.frames.enu_quaternion`."""
     from pymavlink.quaternion import QuaternionBase
     if not finite(q0, q1, q2, q3) or q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3 < 1e-9:
         return (0.0, 0.0, 0.0)

@@ -110,7 +110,7 @@ class Lab:
         secure = bool(self.certs)
         configs = [REGISTRY_CONFIG]
         if secure:                               # the key's password goes in a 0600 file, never on a command line
-            from ..files import private_dir, write_private
+            from ..core.files import private_dir, write_private
             private_dir(self._data)
             text = "".join(f"{k}={v}\n" for k, v in self._ssl().items())
             configs.append(write_private(os.path.join(self._data, "icessl.cfg"), text.encode()))

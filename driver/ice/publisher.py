@@ -16,8 +16,8 @@ import time
 import Ice
 import IceStorm
 
-from ..api import Drone
-from ..state import CommandStatus, Severity, VehicleState
+from ..vehicle.api import Drone
+from ..vehicle.state import CommandStatus, Severity, VehicleState
 from . import convert, load_slice
 from .payload import payload_to_ice
 

@@ -37,8 +37,8 @@ from dataclasses import dataclass
 
 import Ice
 
-from ..api import Drone
-from ..rules import COPTER_MODES, MAX_ALTITUDE
+from ..vehicle.api import Drone
+from ..vehicle.rules import COPTER_MODES, MAX_ALTITUDE
 from . import certs, servants
 from .servants import ICE_MODES, ServerSettings
 
@@ -342,7 +342,7 @@ class Served:
 
 
 class IceServer:
-    """Serves one :class:`~driver.api.Drone` on JdeRobot's interfaces; start(), then close()."""
+    """Serves one :class:`~driver.vehicle.api.Drone` on JdeRobot's interfaces; start(), then close()."""
 
     def __init__(self, vehicle: Drone, properties: Ice.Properties | None = None, camera=None):
         self.vehicle = vehicle

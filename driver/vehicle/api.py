@@ -1,9 +1,9 @@
 """The one small interface through which anything flies the drone.
 
-Both the embedded driver (:class:`driver.vehicle.Vehicle`) and the remote Ice
+Both the embedded driver (:class:`driver.vehicle.vehicle.Vehicle`) and the remote Ice
 client provide it, so the viewer never knows which it has. Every method returns
 at once: commands hand back a :class:`concurrent.futures.Future` that resolves
-to a :class:`~driver.state.CommandResult`; state is read as an immutable
+to a :class:`~driver.vehicle.state.CommandResult`; state is read as an immutable
 snapshot. Nothing here blocks on the network.
 """
 from __future__ import annotations
@@ -13,7 +13,7 @@ from concurrent.futures import Future
 from dataclasses import dataclass
 
 from . import guided
-from .mission.plan import Plan, PlanKind, TransferOutcome
+from ..mission.plan import Plan, PlanKind, TransferOutcome
 from .state import BatteryThresholds, CommandResult, CommandStatus, VehicleState
 
 
@@ -124,7 +124,7 @@ class Drone(abc.ABC):
     def set_yaw(self, degrees: float, relative: bool = False, rate_deg_s: float = 30.0) -> Future[CommandResult]:
         """Turn to a heading (clockwise from north) or by an angle (relative, positive = right)."""
 
-    # -- guided actions (driver.guided: built on the calls above, so every Drone has them) --------------
+    # -- guided actions (driver.vehicle.guided: built on the calls above, so every Drone has them) --------------
     def change_altitude(self, altitude: float) -> Future[CommandResult]:
         """Climb or descend to ``altitude`` m above home where the vehicle is, in GUIDED."""
         return guided.change_altitude(self, altitude)
@@ -222,7 +222,7 @@ class Drone(abc.ABC):
         reboot-required), or None when there is none: editing still works, unchecked."""
         return None
 
-    # -- link security (MAVLink 2 signing; driver.signing) -------------------------------------
+    # -- link security (MAVLink 2 signing; driver.link.signing) -------------------------------------
     # Only a driver that holds the MAVLink link can sign it; a remote one (Ice) is set up on its server.
     @property
     def signing_unavailable(self) -> str:

@@ -1,4 +1,4 @@
-"""The console's payload verbs (mixed into :class:`driver.console.Console`): gimbal, roi, camera."""
+"""The console's payload verbs (mixed into :class:`driver.console.console.Console`): gimbal, roi, camera."""
 from __future__ import annotations
 
 
@@ -20,12 +20,12 @@ def gimbal_line(s) -> str:
 
 
 class PayloadCommands:
-    """``self.vehicle`` is a :class:`~driver.api.Drone`; ``self._report(future)`` prints its result."""
+    """``self.vehicle`` is a :class:`~driver.vehicle.api.Drone`; ``self._report(future)`` prints its result."""
 
     def do_gimbal(self, arg: str) -> None:
         """gimbal pitch DEG [YAW] | gimbal rate DEG_S [YAW_S] | gimbal level | gimbal down: point the camera
         (0 level, -90 straight down; a positive rate tilts up, 0 stops); "gimbal" alone shows it"""
-        from ..console import _number     # here, not at the top: driver.console imports this module
+        from .console import _number     # here, not at the top: driver.console.console imports this module
         words = arg.split()
         if not words:
             self.say(gimbal_line(self.vehicle.state()))
@@ -44,7 +44,7 @@ class PayloadCommands:
 
     def do_roi(self, arg: str) -> None:
         """roi LAT LON [ALT] | roi none: look at a point (ALT m above home, default 0), or stop looking"""
-        from ..console import _number     # here, not at the top: driver.console imports this module
+        from .console import _number     # here, not at the top: driver.console.console imports this module
         words = arg.split()
         if words == ["none"]:
             self._report(self.vehicle.stop_looking())

@@ -14,9 +14,9 @@ import enum
 import math
 from dataclasses import dataclass, field, replace
 
-from .mission.plan import MissionProgress
-from .params.model import ParameterTable
-from .payload.model import Gimbal, VehicleCamera
+from ..mission.plan import MissionProgress
+from ..params.model import ParameterTable
+from ..payload.model import Gimbal, VehicleCamera
 
 __all__ = [
     "LandedState", "LinkStatus", "Severity", "CommandStatus", "Attitude", "GlobalPosition",
@@ -139,7 +139,7 @@ class BatteryAlarm(enum.IntEnum):
 @dataclass(frozen=True)
 class BatteryThresholds:
     """The pilot's own battery limits, per cell (loaded voltage) and in percent: whichever is crossed first
-    counts. Judged by the driver (driver.battery) whatever the vehicle's own battery failsafe says."""
+    counts. Judged by the driver (driver.vehicle.battery) whatever the vehicle's own battery failsafe says."""
     warning_cell: float = 3.6            # V a cell
     critical_cell: float = 3.5           # V a cell
     warning_percent: float = 30.0        # % remaining
@@ -177,7 +177,7 @@ class Battery:
 
     @property
     def alarm(self) -> BatteryAlarm:
-        """Against the pilot's thresholds, whatever the vehicle's failsafe says (driver.battery)."""
+        """Against the pilot's thresholds, whatever the vehicle's failsafe says (driver.vehicle.battery)."""
         from .battery import battery_alarm
         return battery_alarm(self)
 

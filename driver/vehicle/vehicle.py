@@ -3,19 +3,19 @@
 :class:`Vehicle` is the embedded driver behind the viewer and the Ice server, and it puts together parts
 that each do one job:
 
-* :mod:`driver.telemetry` folds telemetry into the state (pure, no I/O);
-* :mod:`driver.supervision` keeps the link supervised and asks the vehicle for streams, home, parameters;
-* :mod:`driver.commands` sends commands with retries and matches each reply to what it answers;
-* :mod:`driver.setpoints` streams the velocity setpoint, with the deadman;
-* :mod:`driver.takeoff` runs the takeoff sequence against the public :class:`~driver.api.Drone` interface;
-* :mod:`driver.store` publishes immutable :class:`~driver.state.VehicleState` snapshots.
+* :mod:`driver.vehicle.telemetry` folds telemetry into the state (pure, no I/O);
+* :mod:`driver.vehicle.supervision` keeps the link supervised and asks the vehicle for streams, home, parameters;
+* :mod:`driver.vehicle.commands` sends commands with retries and matches each reply to what it answers;
+* :mod:`driver.vehicle.setpoints` streams the velocity setpoint, with the deadman;
+* :mod:`driver.vehicle.takeoff` runs the takeoff sequence against the public :class:`~driver.vehicle.api.Drone` interface;
+* :mod:`driver.vehicle.store` publishes immutable :class:`~driver.vehicle.state.VehicleState` snapshots.
 
 Two threads do all the link work, so no caller ever waits on the network: the *reader* opens the link
 (reopening TCP/serial links that fail), parses every byte with pymavlink's codec and folds it into the
 state; the *ticker* sends the heartbeat, steps the takeoff, streams setpoints, services commands and
 supervises the link. Both decide under the state lock and write to the link only after releasing it, so
 a slow serial write never stalls the reader or :meth:`Vehicle.set_velocity`. Command results settle on a
-small fixed pool (:class:`~driver.commands.Notifier`).
+small fixed pool (:class:`~driver.vehicle.commands.Notifier`).
 """
 from __future__ import annotations
 
@@ -29,21 +29,21 @@ from dataclasses import dataclass, field, replace
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-from . import frames
+from ..core import frames
 from .api import CEILING, Drone, Limits
 from .commands import CommandSender, Notifier, chain, command_name
-from .forwarding import Forwarder
-from .payload.control import PAYLOAD_MESSAGES, Payload
-from .link import LinkError, ReplayControl, TlogWriter, Transport, open_transport
-from .params.cache import ParameterCache
-from .params.manager import ParameterManager, param_name
-from .params.metadata import metadata_for, set_problem
-from .mission.control import MissionControl
-from .mission.plan import Plan, PlanKind
+from ..link.forwarding import Forwarder
+from ..payload.control import PAYLOAD_MESSAGES, Payload
+from ..link.transport import LinkError, ReplayControl, TlogWriter, Transport, open_transport
+from ..params.cache import ParameterCache
+from ..params.manager import ParameterManager, param_name
+from ..params.metadata import metadata_for, set_problem
+from .missions import MissionControl
+from ..mission.plan import Plan, PlanKind
 from .rules import COPTER_MODES, MAX_ALTITUDE, MIN_TAKEOFF_ALTITUDE, go_to_problem, takeoff_altitude_problem
 from .sequence import SequenceSlot
 from .setpoints import SetpointStreamer
-from .signing import LinkSigning, SigningConfig
+from ..link.signing import LinkSigning, SigningConfig
 from .state import (
     FENCE_PARAMS, Battery, BatteryThresholds, CommandResult, CommandStatus, LinkHealth, LinkStatus, Setpoint,
     Severity, VehicleState,
@@ -53,7 +53,7 @@ from .supervision import LinkSupervisor
 from .takeoff import TakeoffSequence
 from .telemetry import COPTER_MODE_NAMES, TELEMETRY, fold_heartbeat
 
-log = logging.getLogger(__name__)
+log = logging.getLogger("driver.vehicle")       # the façade and its parts log as one
 
 __all__ = ["Vehicle", "VehicleConfig", "ReplayControl", "COPTER_MODES", "COPTER_MODE_NAMES",
            "MIN_TAKEOFF_ALTITUDE", "MAX_ALTITUDE", "takeoff_altitude_problem"]
@@ -97,7 +97,7 @@ class VehicleConfig:
     battery_thresholds: BatteryThresholds = field(default_factory=BatteryThresholds)   # the pilot's own alarm
     replay_speed: float = 1.0
     heartbeat_interval: float = 1.0
-    signing: SigningConfig | None = None      # MAVLink 2 signing (driver.signing); None: off until a key is given
+    signing: SigningConfig | None = None      # MAVLink 2 signing (driver.link.signing); None: off until a key is given
     allowed_senders: tuple[str, ...] = ()     # UDP: other addresses read besides the vehicle's ("10.1.1.1")
     param_metadata: str | None = None         # apm.pdef.xml; None: the per-user cache's, else the shipped copy
     param_cache: str | None = ""              # folder of tables per vehicle; "": the per-user cache, None: none
@@ -917,7 +917,7 @@ class Vehicle(Drone):
         return self._payload.record_video(on)
 
     # ------------------------------------------------------------------------------------------
-    # signing (driver.signing)
+    # signing (driver.link.signing)
     # ------------------------------------------------------------------------------------------
     def use_signing_key(self, key: bytes | None, allow_unsigned: bool | None = None) -> CommandResult:
         """Sign with ``key`` from now on, or stop (None), without telling the vehicle; ``allow_unsigned`` lets
@@ -1076,7 +1076,7 @@ class Vehicle(Drone):
         return seq.future
 
     # ------------------------------------------------------------------------------------------
-    # missions, fences, rally points (driver.mission.control does the work)
+    # missions, fences, rally points (driver.vehicle.missions does the work)
     # ------------------------------------------------------------------------------------------
     def upload_plan(self, plan: Plan) -> Future:
         return self._missions.upload(plan)
@@ -1103,7 +1103,7 @@ class Vehicle(Drone):
         return self._busy(f"mission item {seq}") or self._missions.go_to_item(seq)
 
     def _abort_takeoff(self, why: str) -> None:
-        """End a takeoff or mission start in progress (driver.sequence), cancelling what it asked."""
+        """End a takeoff or mission start in progress (driver.vehicle.sequence), cancelling what it asked."""
         with self._lock:
             self._sequence.abort(why)
 

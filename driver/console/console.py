@@ -18,11 +18,11 @@ import threading
 import time
 from concurrent.futures import Future
 
-from .battery import time_left
-from .console_plans import PlanCommands
-from .state import BatteryAlarm, CommandResult, CommandStatus, SequencePhase, VehicleState
-from .rules import COPTER_MODES, mode_warning
-from .payload.console import PayloadCommands
+from ..vehicle.battery import time_left
+from .plans import PlanCommands
+from ..vehicle.state import BatteryAlarm, CommandResult, CommandStatus, SequencePhase, VehicleState
+from ..vehicle.rules import COPTER_MODES, mode_warning
+from .payload import PayloadCommands
 
 ARM_USAGE = ("arm [throttle] [force] | arm check [all|none|MASK] | arm safetyon | arm safetyoff | arm list")
 VELOCITY_HOLD = 3.0          # s a typed velocity lasts (ArduCopter's GUID_TIMEOUT)
@@ -312,7 +312,7 @@ class Console(PlanCommands, PayloadCommands, cmd.Cmd):
         (in clear: over USB or a cable) and signs with it; key and keyfile sign without telling the vehicle;
         remove tells the vehicle to stop; disable stops signing here only; unsigned on lets the vehicle's
         unsigned frames in"""
-        from .signing import key_from_passphrase, read_key_file
+        from ..link.signing import key_from_passphrase, read_key_file
         sub, _, rest = arg.strip().partition(" ")
         rest = rest.strip()
         usage = "usage: signing setup PASSPHRASE | key PASSPHRASE | keyfile FILE | remove | disable | " \
@@ -339,9 +339,9 @@ class Console(PlanCommands, PayloadCommands, cmd.Cmd):
     def do_param(self, arg: str) -> None:
         """param fetch | param show [PATTERN] | param help NAME | param set NAME VALUE [force] |
         param load FILE [PATTERN] [force] | param save FILE [PATTERN] [missionplanner] | param diff FILE [PATTERN]
-        The vehicle's parameters, as MAVProxy's verbs (driver.params.verbs). A value outside ArduPilot's
+        The vehicle's parameters, as MAVProxy's verbs (driver.console.params). A value outside ArduPilot's
         documented bounds is written only with force; every write is confirmed by the vehicle."""
-        from .params.verbs import ParamVerbs
+        from .params import ParamVerbs
         ParamVerbs(self.vehicle, self.say, self._report)(arg)
 
     def do_status(self, arg: str) -> None:

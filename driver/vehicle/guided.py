@@ -1,6 +1,6 @@
 """Guided actions built from the Drone interface's own calls: change altitude, circle a point.
 
-Both work on any :class:`driver.api.Drone` (the embedded driver, the Ice client), because they only use its
+Both work on any :class:`driver.vehicle.api.Drone` (the embedded driver, the Ice client), because they only use its
 go-to, yaw, parameter and mode calls, each answered by the vehicle.
 
 Circling a point is done the way ArduCopter allows it from a ground station. Its CIRCLE mode takes no centre
@@ -15,7 +15,8 @@ import math
 import threading
 from concurrent.futures import Future
 
-from . import api, frames        # api imports this module too: its names are looked up at call time
+from . import api  # api imports this module too: its names are looked up at call time
+from ..core import frames
 from .state import CommandResult, CommandStatus, VehicleState
 
 __all__ = ["change_altitude", "circle_point", "circle_start", "MIN_CIRCLE_RADIUS", "MAX_CIRCLE_RADIUS"]

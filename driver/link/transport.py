@@ -1,7 +1,7 @@
 """Byte transports to the autopilot: live links (any mavutil connection string) and .tlog replay.
 
 A transport only moves bytes. Parsing, health and state live in
-:mod:`driver.vehicle`. Live transports are opened with pymavlink's
+:mod:`driver.vehicle.vehicle`. Live transports are opened with pymavlink's
 ``mavutil.mavlink_connection`` so every connection string MAVProxy accepts works
 (``udpin:0.0.0.0:14550``, ``tcp:127.0.0.1:5760``, ``udpout:``, ``/dev/ttyUSB0``).
 We read and write raw bytes and never call mavutil's ``recv_msg``: its automatic

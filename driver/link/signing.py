@@ -29,7 +29,7 @@ from dataclasses import dataclass
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-from .state import CommandStatus, Signing, SigningStatus
+from ..vehicle.state import CommandStatus, Signing, SigningStatus
 
 log = logging.getLogger(__name__)
 
@@ -76,7 +76,7 @@ def read_key_file(path: str) -> bytes:
 
 def write_key_file(path: str, key: bytes) -> None:
     """Save ``key`` as 64 hex digits, readable only by us (0600), never through a planted symlink."""
-    from .files import write_private
+    from ..core.files import write_private
     write_private(path, key.hex().encode("ascii") + b"\n")
 
 
@@ -139,7 +139,7 @@ class TimestampFile:
     def save(self, stamp: int) -> None:
         if not self.path or stamp <= self.saved:
             return
-        from .files import private_dir, write_private
+        from ..core.files import private_dir, write_private
         try:
             private_dir(os.path.dirname(self.path))
             write_private(self.path, f"{stamp}\n".encode("ascii"))

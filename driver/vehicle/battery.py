@@ -1,6 +1,6 @@
 """The pack against the pilot's own thresholds, and how long it lasts at the present draw.
 
-Pure functions of a :class:`~driver.state.Battery` snapshot. ArduPilot's own battery failsafe is off by
+Pure functions of a :class:`~driver.vehicle.state.Battery` snapshot. ArduPilot's own battery failsafe is off by
 default (BATT_FS_LOW_ACT 0, BATT_LOW_VOLT 0), and then BATTERY_STATUS says "OK" down to an empty pack: the
 alarm here never trusts that. It takes the worst of the pilot's thresholds (per cell and in percent) and the
 vehicle's own failsafe state.
