@@ -173,7 +173,7 @@ def main() -> int:
     import argparse
     import logging
 
-    from fault_matrix import FAULTS, PROFILES     # the same faults and profiles as the flights
+    from faults import FAULTS, PROFILES           # the same faults and profiles as the flights
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--speedup", type=float, default=2.0)
     ap.add_argument("--profiles", default=",".join(PROFILES))

@@ -6,6 +6,7 @@ from concurrent.futures import Future
 
 from ..mission.files import PlanFileError, load_plan_file, save_plan_file
 from ..mission.plan import Plan, PlanKind
+from .words import result_line
 
 __all__ = ["PlanCommands", "plan_lines"]
 
@@ -94,7 +95,6 @@ class PlanCommands:
                 return
             result = outcome.result
             if self._claim(result):
-                from .console import result_line
                 self.say(result_line(result))
             if not result.ok or outcome.plan is None:
                 return

@@ -11,7 +11,7 @@ import math
 import time
 
 from ..core.frames import clamp, enu_quaternion, finite, wrap_pi
-from .plans import mission_from_ice, mission_to_ice
+from .plans import mission_from_ice, mission_to_ice, outcome_from_result, result_from_outcome
 from ..vehicle.state import (Attitude, Battery, CommandResult, CommandStatus, Environment, Fence, GlobalPosition, Gps,
                      LandedState, LinkHealth, LinkStatus, LocalPosition, Message, Readiness, SequencePhase,
                      SequenceProgress, Setpoint, Severity, VehicleState, Velocity)
@@ -156,20 +156,6 @@ def state_from_jderobot(pose, nav, messages: tuple[Message, ...] = (),
 # -- mavlinkserver extension: VehicleState <-> VehicleStatus ------------------------------------
 def _opt(value) -> tuple[bool, float]:
     return (value is not None, float(value) if value is not None else 0.0)
-
-
-def outcome_from_result(ms, result: CommandResult):
-    return ms.CommandOutcome(index=result.index, command=result.command, status=result.status.name,
-                             reason=result.reason, attempts=result.attempts)
-
-
-def result_from_outcome(outcome) -> CommandResult:
-    try:
-        status = CommandStatus[outcome.status]
-    except KeyError:
-        status = CommandStatus.REJECTED
-    return CommandResult(command=outcome.command, status=status, reason=outcome.reason,
-                         attempts=outcome.attempts, index=outcome.index)
 
 
 def fence_to_ice(ms, fence: Fence):

@@ -24,6 +24,7 @@ import time
 import Ice
 
 from . import data_dir, registry
+from .problems import ice_problem
 
 log = logging.getLogger(__name__)
 
@@ -165,7 +166,6 @@ class Lab:
             except Ice.LocalException as exc:
                 self._check_exited()
                 if time.monotonic() > deadline:
-                    from .server import ice_problem
                     raise LabError(f"{what} did not answer within {timeout:g} s: {ice_problem(exc)}") from None
             time.sleep(0.05)
 

@@ -13,7 +13,7 @@ import math
 from concurrent.futures import Future
 from typing import Callable
 
-from ..vehicle.state import CommandStatus, LinkStatus, Severity
+from ..core.results import CommandStatus, LinkStatus, Severity
 from .cache import changed_names
 from .download import Download
 from .ftp import FtpDownload

@@ -31,8 +31,7 @@ from dataclasses import dataclass, replace
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from ..core import frames
-from ..vehicle.commands import chain
-from ..vehicle.state import CommandResult, CommandStatus, Severity
+from ..core.results import CommandResult, CommandStatus, Severity, chain
 from .model import (
     GIMBAL_PITCH_RANGE, RETRACT_FLAG, YAW_IN_EARTH_FRAME, CameraKind, Gimbal, GimbalControl, VehicleCamera,
     gimbal_from_quaternion,

@@ -18,7 +18,7 @@ from typing import Callable
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-from .commands import chain
+from ..core.results import chain
 from .state import CommandResult, CommandStatus, SequencePhase, Severity, VehicleState
 from .takeoff import TakeoffSequence
 from ..mission.limits import UNCHECKED, held_mission_problems, plan_problems, unchecked

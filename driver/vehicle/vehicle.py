@@ -31,7 +31,8 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from ..core import frames
 from .api import CEILING, Drone, Limits
-from .commands import CommandSender, Notifier, chain, command_name
+from ..core.results import chain
+from .commands import CommandSender, Notifier, command_name
 from ..link.forwarding import Forwarder
 from ..payload.control import PAYLOAD_MESSAGES, Payload
 from ..link.transport import LinkError, ReplayControl, TlogWriter, Transport, open_transport
