@@ -99,7 +99,7 @@ class MissionControl:
     def __init__(self, vehicle) -> None:
         self._v = vehicle
         cfg = vehicle.config
-        self.transfers = PlanTransfers(vehicle._new_encoder(), (cfg.source_system, cfg.source_component),
+        self.transfers = PlanTransfers(vehicle._ticker.new_encoder(), (cfg.source_system, cfg.source_component),
                                        vehicle._target_ids, vehicle._store.record_locked, vehicle._notifier.settle,
                                        lambda: vehicle._store.state.home, lambda: vehicle._v2)
         self._watches: list[_Watch] = []
