@@ -172,7 +172,8 @@ def main(argv: list[str] | None = None) -> int:
 
     from .vehicle.api import Limits
     from .console.console import Console, run_commands, show_logs, wait_for_vehicle
-    from .vehicle.vehicle import Vehicle, VehicleConfig, takeoff_altitude_problem
+    from .vehicle import Vehicle, VehicleConfig
+    from .vehicle.rules import takeoff_altitude_problem
 
     if opts.host:
         props.setProperty("MAVLinkServer.Host", opts.host)

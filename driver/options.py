@@ -59,7 +59,7 @@ port = whole(1, 65535)
 
 def takeoff_altitude(text: str) -> float:
     """Metres above home in the range the driver's takeoff accepts."""
-    from .vehicle.vehicle import takeoff_altitude_problem
+    from .vehicle.rules import takeoff_altitude_problem
     value = as_float(text)
     problem = takeoff_altitude_problem(value)
     if problem:

@@ -6,7 +6,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from driver.core import frames
 from driver.vehicle.state import CommandStatus, Fence, Velocity
-from driver.vehicle.vehicle import MASK_POSITION
+from driver.vehicle.ticker import MASK_POSITION
 
 from ice_fixtures import drone_factory, eventually, ice_server, server_factory  # noqa: F401
 
