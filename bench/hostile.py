@@ -164,7 +164,7 @@ class Scene:
         ours = []
         with open(self.tlog, "rb") as f:
             data = f.read()
-        from driver.link.transport import _records
+        from driver.link.tlog import _records
         for _, frame in _records(data):
             if frame[0] == 0xFD and frame[2] & 1 and frame[5] == 255:     # our own signed frames
                 ours.append(frame)

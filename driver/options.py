@@ -68,8 +68,8 @@ def takeoff_altitude(text: str) -> float:
 
 
 def connection(text: str) -> str:
-    """A MAVLink connection string that can be opened (checked by :func:`driver.link.transport.connection_problem`)."""
-    from .link.transport import connection_problem
+    """A MAVLink connection string that can be opened (checked by :func:`driver.link.connection.connection_problem`)."""
+    from .link.connection import connection_problem
     problem = connection_problem(text)
     if problem:
         raise argparse.ArgumentTypeError(problem)

@@ -9,7 +9,7 @@ import socket
 
 import pytest
 
-from driver.link.transport import connection_problem
+from driver.link.connection import connection_problem
 from driver.vehicle import Vehicle, VehicleConfig
 
 

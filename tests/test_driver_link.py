@@ -330,7 +330,7 @@ def test_a_link_that_cannot_open_says_why(vehicle_factory):
 
 def test_the_flight_log_is_never_written_through_a_planted_symlink(tmp_path):
     """A shared log folder: another user's link at our log's name must not make us truncate its target."""
-    from driver.link.transport import TlogWriter
+    from driver.link.tlog import TlogWriter
     victim = tmp_path / "victim"
     victim.write_bytes(b"someone else's file")
     (tmp_path / "mav.tlog").symlink_to(victim)

@@ -34,7 +34,7 @@ TAKEOFF_ALTITUDE = options.number(*TAKEOFF_ALTITUDE_RANGE,
 def choose_connection(args: argparse.Namespace, remembered: str) -> str:
     """--connect, else the last connection remembered (if it still reads as one), else a Solo (for runs
     with no --sim/--replay/--ice)."""
-    from driver.link.transport import connection_problem
+    from driver.link.connection import connection_problem
     if args.connect:
         return args.connect
     if remembered and connection_problem(remembered) is None:

@@ -32,7 +32,8 @@ from ..core import frames
 from ..core.results import chain
 from ..link.forwarding import Forwarder
 from ..link.signing import LinkSigning, SigningConfig
-from ..link.transport import ReplayControl, TlogWriter, Transport, open_transport
+from ..link.connection import open_transport
+from ..link.tlog import ReplayControl, TlogWriter
 from ..mission.plan import Plan, PlanKind
 from ..params.manager import ParameterManager
 from ..payload.control import Payload
@@ -41,7 +42,9 @@ from .commands import CommandSender, Notifier, command_name
 from .missions import MissionControl
 from .parameters import Parameters
 from .reader import Reader
-from .rules import COPTER_MODES, MAX_ALTITUDE, MIN_TAKEOFF_ALTITUDE, go_to_problem, takeoff_altitude_problem
+from .rules import (
+    COPTER_MODES, MAX_ALTITUDE, MIN_TAKEOFF_ALTITUDE, go_to_problem, ground_only, not_in_flight, takeoff_altitude_problem,
+)
 from .sequence import SequenceSlot
 from .setpoints import SetpointStreamer
 from .signing_control import SigningControl
@@ -98,22 +101,13 @@ class VehicleConfig:
     param_ftp: bool = True                    # read all parameters over MAVLink FTP where the vehicle offers it
 
 
-def _ground_only(s: VehicleState) -> str | None:
-    """Guard for commands that only make sense disarmed on the ground, checked each time one goes out."""
-    return "only when disarmed on the ground" if s.armed or s.flying else None
-
-
-def _not_in_flight(s: VehicleState) -> str | None:
-    return "not while flying (the motors would stop in the air)" if s.flying else None
-
-
 class Vehicle(Drone):
     """An ArduCopter reached over MAVLink; the embedded driver behind the viewer and the Ice server."""
 
     def __init__(self, config: VehicleConfig | None = None):
         self.config = cfg = config or VehicleConfig()
-        self._transport: Transport = open_transport(cfg.connection, cfg.baud, cfg.source_system,
-                                                    cfg.source_component, cfg.replay_speed, cfg.allowed_senders)
+        self._transport = open_transport(cfg.connection, cfg.baud, cfg.source_system,
+                                         cfg.source_component, cfg.replay_speed, cfg.allowed_senders)
         self._replay = ReplayControl(self._transport) if self._transport.is_replay else None
         self._signing = LinkSigning(cfg.signing, self._transport.description)
         self._v2 = cfg.mavlink_version == 2
@@ -314,12 +308,12 @@ class Vehicle(Drone):
             return self._command_long(mavlink.MAV_CMD_COMPONENT_ARM_DISARM, (0, ARM_FORCE_MAGIC),
                                       "emergency motor stop")
         if force:                                     # forced disarm in the air stops the motors: a crash
-            problem = _not_in_flight(self.state())
+            problem = not_in_flight(self.state())
             if problem:
                 return self._finish("disarm (forced)", CommandStatus.REJECTED, problem)
         return self._busy("disarm") or self._command_long(
             mavlink.MAV_CMD_COMPONENT_ARM_DISARM, (0, ARM_FORCE_MAGIC if force else 0),
-            "disarm (forced)" if force else "disarm", guard=_not_in_flight if force else None)
+            "disarm (forced)" if force else "disarm", guard=not_in_flight if force else None)
 
     def land(self) -> Future:
         self._abort_takeoff("landing")
@@ -338,7 +332,7 @@ class Vehicle(Drone):
         undone = []
         if s.armed and not seq.armed_before:
             self._command_long(mavlink.MAV_CMD_COMPONENT_ARM_DISARM, (0, 0), "disarm (takeoff cancelled)",
-                               guard=_not_in_flight)
+                               guard=not_in_flight)
             undone.append("disarming")
         if seq.mode_before and s.mode != seq.mode_before:
             self._set_mode(seq.mode_before)
@@ -388,19 +382,19 @@ class Vehicle(Drone):
         return chain(self._set_mode("GUIDED"), guided_answered, "stop")
 
     def reboot(self) -> Future:
-        problem = _ground_only(self.state())
+        problem = ground_only(self.state())
         if problem:
             return self._finish("reboot", CommandStatus.REJECTED, problem)
         return self._busy("reboot") or self._command_long(mavlink.MAV_CMD_PREFLIGHT_REBOOT_SHUTDOWN, (1,), "reboot",
-                                                          guard=_ground_only)
+                                                          guard=ground_only)
 
     def calibrate_level(self) -> Future:
         """Level (accelerometer trim) calibration; only sensible disarmed on the ground."""
-        problem = _ground_only(self.state())
+        problem = ground_only(self.state())
         if problem:
             return self._finish("level calibration", CommandStatus.REJECTED, problem)
         return self._busy("level calibration") or self._command_long(
-            mavlink.MAV_CMD_PREFLIGHT_CALIBRATION, (0, 0, 0, 0, 2, 0, 0), "level calibration", guard=_ground_only)
+            mavlink.MAV_CMD_PREFLIGHT_CALIBRATION, (0, 0, 0, 0, 2, 0, 0), "level calibration", guard=ground_only)
 
     def parachute(self, action: str) -> Future:
         actions = {"disable": mavlink.PARACHUTE_DISABLE, "enable": mavlink.PARACHUTE_ENABLE,
