@@ -29,7 +29,7 @@ def make_clip(path: str, seconds: float, size=(1280, 720), fps: float = 30.0) ->
     import cv2
 
     from driver.camera.sim import SimulatedCamera
-    from driver.state import Attitude, LocalPosition, VehicleState
+    from driver.vehicle.state import Attitude, LocalPosition, VehicleState
     cam = SimulatedCamera(*size)
     writer = cv2.VideoWriter(path, cv2.CAP_FFMPEG, cv2.VideoWriter_fourcc(*"mp4v"), fps, size)
     for i in range(int(seconds * fps)):
@@ -87,7 +87,7 @@ def serve(width: int, height: int) -> None:
     import Ice
 
     from driver.ice.camera import CameraI
-    from driver.state import VehicleState
+    from driver.vehicle.state import VehicleState
 
     class Still:
         def state(self):

@@ -21,8 +21,8 @@ sys.path.insert(0, ROOT)
 
 def fleet(count: int):
     """``count`` vehicles (the first picked) 10 m apart eastwards and 5 m northwards, as the Fleet panel reads them."""
-    from driver import frames
-    from driver.state import GlobalPosition, VehicleState
+    from driver.core import frames
+    from driver.vehicle.state import GlobalPosition, VehicleState
     from uavviewer.fleet import row_for
     seen = []
     for i in range(count):

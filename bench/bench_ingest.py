@@ -19,7 +19,7 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink  # noqa: E402
 
-from driver.link import frame_length  # noqa: E402
+from driver.link.transport import frame_length  # noqa: E402
 from driver.vehicle import Vehicle, VehicleConfig  # noqa: E402
 
 

@@ -32,14 +32,14 @@ def main() -> int:
     import tempfile
 
     from driver.sim import SimConfig, SimVehicle
-    from driver.state import LinkHealth, LinkStatus, VehicleState
+    from driver.vehicle.state import LinkHealth, LinkStatus, VehicleState
     from driver.vehicle import Vehicle, VehicleConfig
     from uavviewer.alerts.model import Alert, AlertKind, AlertModel
     from uavviewer.alerts.speech import Speaker
     from uavviewer.connect.choice import Choice, Kind
     from uavviewer.main_window import MainWindow
     from uavviewer.preflight.model import overall, preflight
-    from driver.state import Severity
+    from driver.vehicle.state import Severity
 
     app = QApplication(sys.argv[:1])
     sims = [SimVehicle(SimConfig(tcp_port=0, speedup=1.0, ready_after=1.0)).start() for _ in range(2)]

@@ -24,13 +24,13 @@ HOME = (47.0, 8.0)
 
 
 def square(side: float, north: float = 20.0, east: float = 20.0) -> tuple:
-    from driver.frames import offset_latlon
+    from driver.core.frames import offset_latlon
     return tuple(offset_latlon(*HOME, n, e) for n, e in
                  ((north, east), (north, east + side), (north + side, east + side), (north + side, east)))
 
 
 def mission(doc, count: int) -> None:
-    from driver.frames import offset_latlon
+    from driver.core.frames import offset_latlon
     from uavviewer.map.plan_model import ITEM_KINDS, new_item
     doc.entries[:] = [new_item(ITEM_KINDS["Takeoff"], alt=10.0)]
     for i in range(count):                               # a spiral out to ~150 m

@@ -31,54 +31,17 @@ from dataclasses import dataclass, field
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 from driver.sim import SimConfig, SimVehicle  # noqa: E402
-from driver.state import CommandStatus, LandedState  # noqa: E402
+from driver.vehicle.state import CommandStatus, LandedState  # noqa: E402
 from driver.vehicle import Vehicle, VehicleConfig  # noqa: E402
 import param_cells  # noqa: E402
 import tables  # noqa: E402
+from faults import FAULTS, PROFILES  # noqa: E402
 from transfer_matrix import run_transfers, transfer_table  # noqa: E402
 
 ALTITUDE = 3.0
 FORWARD_SPEED = 2.0
 FORWARD_SECONDS = 3.0        # sim seconds
 HEADING = 60.0               # degrees: the nose points neither north nor east, so a frame mix-up shows
-
-
-def _loss(share):
-    def apply(f):
-        f.uplink.loss = f.downlink.loss = share
-    return apply
-
-
-def _replies(f):
-    f.lose_replies = 0.5
-
-
-def _duplicates(f):
-    f.uplink.duplicate = f.downlink.duplicate = 0.2
-
-
-def _latency(f):
-    f.uplink.latency = f.downlink.latency = 0.2
-    f.uplink.jitter = f.downlink.jitter = 0.02
-
-
-def _bursts(f):
-    f.uplink.burst_rate = f.downlink.burst_rate = 0.02
-    f.uplink.burst_seconds = f.downlink.burst_seconds = 0.15
-
-
-#: name -> (what it is, how to set it); "outage" is applied in the middle of the forward flight.
-FAULTS = {
-    "clean": ("no fault", lambda f: None),
-    "loss10": ("10 % loss each way", _loss(0.10)),
-    "loss30": ("30 % loss each way", _loss(0.30)),
-    "replies": ("half the COMMAND_ACKs lost after the vehicle acted", _replies),
-    "duplicates": ("20 % of frames duplicated each way", _duplicates),
-    "latency": ("200 ms latency each way (±20 ms jitter)", _latency),
-    "bursts": ("150 ms loss bursts, 2 % of frames start one", _bursts),
-    "outage": ("a 1 s outage both ways mid-flight", lambda f: None),
-}
-PROFILES = ("copter-4", "solo")
 
 
 @dataclass

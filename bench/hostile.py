@@ -35,7 +35,7 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink  # noqa: E402
 
-from driver.signing import SigningConfig, signing_time  # noqa: E402
+from driver.link.signing import SigningConfig, signing_time  # noqa: E402
 from driver.sim import MODES, SimConfig, SimVehicle  # noqa: E402
 from driver.vehicle import Vehicle, VehicleConfig  # noqa: E402
 
@@ -164,7 +164,7 @@ class Scene:
         ours = []
         with open(self.tlog, "rb") as f:
             data = f.read()
-        from driver.link import _records
+        from driver.link.tlog import _records
         for _, frame in _records(data):
             if frame[0] == 0xFD and frame[2] & 1 and frame[5] == 255:     # our own signed frames
                 ours.append(frame)

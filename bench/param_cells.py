@@ -17,7 +17,7 @@ import time
 from dataclasses import dataclass, field
 
 from driver.sim import SimConfig, SimVehicle
-from driver.state import CommandStatus
+from driver.vehicle.state import CommandStatus
 from driver.vehicle import Vehicle, VehicleConfig
 
 SETS = (("WPNAV_SPEED", 750.0), ("FS_GCS_ENABLE", 1.0), ("RTL_ALT", 2500.0), ("WPNAV_SPEED", 1000.0),

@@ -22,10 +22,10 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink  # noqa: E402
 
-from driver import frames  # noqa: E402
+from driver.core import frames  # noqa: E402
 from driver.mission.plan import MissionItem, Plan, PlanKind  # noqa: E402
 from driver.sim import SimConfig, SimVehicle  # noqa: E402
-from driver.state import CommandStatus  # noqa: E402
+from driver.vehicle.state import CommandStatus  # noqa: E402
 from driver.vehicle import Vehicle, VehicleConfig  # noqa: E402
 import tables  # noqa: E402  (bench/tables.py: this script runs from bench/)
 
@@ -173,7 +173,7 @@ def main() -> int:
     import argparse
     import logging
 
-    from fault_matrix import FAULTS, PROFILES     # the same faults and profiles as the flights
+    from faults import FAULTS, PROFILES           # the same faults and profiles as the flights
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--speedup", type=float, default=2.0)
     ap.add_argument("--profiles", default=",".join(PROFILES))

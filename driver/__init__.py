@@ -6,9 +6,9 @@
 
 This package never imports Qt.
 """
-from .api import Drone, Limits
-from .state import CommandStatus, LandedState, LinkStatus, SequencePhase, Severity, VehicleState
-from .vehicle import Vehicle, VehicleConfig
+from .vehicle.api import Drone, Limits
+from .vehicle.state import CommandStatus, LandedState, LinkStatus, SequencePhase, Severity, VehicleState
+from .vehicle.vehicle import Vehicle, VehicleConfig
 
 __all__ = ["Drone", "Limits", "Vehicle", "VehicleConfig", "VehicleState", "CommandStatus", "LandedState",
            "LinkStatus", "SequencePhase", "Severity"]

@@ -170,9 +170,10 @@ def main(argv: list[str] | None = None) -> int:
     level = logging.DEBUG if opts.verbose > 1 else logging.INFO if (opts.verbose or opts.daemon) else logging.WARNING
     logging.basicConfig(level=level, format="%(asctime)s %(levelname)s %(name)s: %(message)s")
 
-    from .api import Limits
-    from .console import Console, run_commands, show_logs, wait_for_vehicle
-    from .vehicle import Vehicle, VehicleConfig, takeoff_altitude_problem
+    from .vehicle.api import Limits
+    from .console.console import Console, run_commands, show_logs, wait_for_vehicle
+    from .vehicle import Vehicle, VehicleConfig
+    from .vehicle.rules import takeoff_altitude_problem
 
     if opts.host:
         props.setProperty("MAVLinkServer.Host", opts.host)

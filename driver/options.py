@@ -59,7 +59,7 @@ port = whole(1, 65535)
 
 def takeoff_altitude(text: str) -> float:
     """Metres above home in the range the driver's takeoff accepts."""
-    from .vehicle import takeoff_altitude_problem
+    from .vehicle.rules import takeoff_altitude_problem
     value = as_float(text)
     problem = takeoff_altitude_problem(value)
     if problem:
@@ -68,8 +68,8 @@ def takeoff_altitude(text: str) -> float:
 
 
 def connection(text: str) -> str:
-    """A MAVLink connection string that can be opened (checked by :func:`driver.link.connection_problem`)."""
-    from .link import connection_problem
+    """A MAVLink connection string that can be opened (checked by :func:`driver.link.connection.connection_problem`)."""
+    from .link.connection import connection_problem
     problem = connection_problem(text)
     if problem:
         raise argparse.ArgumentTypeError(problem)
@@ -112,8 +112,8 @@ def add_link_security(group) -> None:
 def link_security(opts, parser: argparse.ArgumentParser):
     """(SigningConfig or None, allowed senders) from :func:`add_link_security`'s options; a bad key file or
     address is a usage error naming it."""
-    from .link import parse_sender
-    from .signing import SigningConfig, key_from_passphrase, read_key_file
+    from .link.transport import parse_sender
+    from .link.signing import SigningConfig, key_from_passphrase, read_key_file
     for address in opts.allow:
         try:
             parse_sender(address)
@@ -133,7 +133,7 @@ def link_security(opts, parser: argparse.ArgumentParser):
 
 
 def battery_threshold(text: str) -> tuple[float, float]:
-    """"3.6,30": a battery threshold, volts a cell and percent remaining (driver.battery)."""
+    """"3.6,30": a battery threshold, volts a cell and percent remaining (driver.vehicle.battery)."""
     try:
         cell, percent = (float(part) for part in text.split(","))
     except ValueError:
@@ -146,7 +146,7 @@ def battery_threshold(text: str) -> tuple[float, float]:
 def battery_thresholds(warning: tuple[float, float] | None, critical: tuple[float, float] | None):
     """The --battery-warning/--battery-critical pair as thresholds (defaults where not given); ValueError if
     critical is above warning."""
-    from .state import BatteryThresholds
+    from .vehicle.state import BatteryThresholds
     d = BatteryThresholds()
     wc, wp = warning or (d.warning_cell, d.warning_percent)
     cc, cp = critical or (d.critical_cell, d.critical_percent)

@@ -8,7 +8,7 @@ import wave
 
 import pytest
 
-from driver.state import (
+from driver.vehicle.state import (
     Battery, BatteryAlarm, Fence, LinkHealth, LinkStatus, Message, SequencePhase, SequenceProgress, Severity, VehicleState,
     replace,
 )

@@ -12,9 +12,9 @@ import math
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-from driver.console import Console
+from driver.console.console import Console
 from driver.payload import CameraKind, GimbalControl
-from driver.state import CommandStatus
+from driver.vehicle.state import CommandStatus
 
 from ice_fixtures import eventually
 

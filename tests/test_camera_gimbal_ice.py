@@ -5,7 +5,7 @@ from __future__ import annotations
 import pytest
 
 from driver.payload import CameraKind, GimbalControl
-from driver.state import CommandStatus
+from driver.vehicle.state import CommandStatus
 
 from ice_fixtures import drone_factory, server_factory  # noqa: F401  (fixtures)
 

@@ -10,7 +10,7 @@ from PyQt5.QtWidgets import QApplication
 from driver.camera.sim import SKY
 from gamepad_fixtures import pad, pad_factory  # noqa: F401  (fixtures)
 from viewer_fixtures import viewer_settings, window_factory  # noqa: F401  (fixtures)
-from driver.state import CommandStatus
+from driver.vehicle.state import CommandStatus
 
 
 def horizon_row(image: np.ndarray) -> int:

@@ -18,7 +18,7 @@ from driver.camera.sim import SimulatedCamera  # noqa: E402
 from driver.ice import load_slice  # noqa: E402
 from driver.ice.camera import CameraI  # noqa: E402
 from driver.ice.servants import ArDroneExtraI, ServerSettings  # noqa: E402
-from driver.state import Attitude, LocalPosition, VehicleState  # noqa: E402
+from driver.vehicle.state import Attitude, LocalPosition, VehicleState  # noqa: E402
 
 jderobot, _ = load_slice()
 

@@ -5,7 +5,7 @@ import numpy as np
 
 from driver.camera.sim import SKY, SimulatedCamera
 from driver.payload import Gimbal
-from driver.state import LocalPosition, VehicleState
+from driver.vehicle.state import LocalPosition, VehicleState
 
 
 def horizon_row(image: np.ndarray) -> int:

@@ -19,7 +19,7 @@ from driver.camera.record import MEASURE_FRAMES, MEASURE_S, measured_fps
 from driver.camera.sim import SKY, SimulatedCamera
 from driver.camera.solo import SoloSource, write_sdp
 from driver.camera.source import Frame
-from driver.state import Attitude, LocalPosition, VehicleState
+from driver.vehicle.state import Attitude, LocalPosition, VehicleState
 
 
 def nearest_colour(rgb) -> tuple[int, int, int]:

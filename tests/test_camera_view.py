@@ -14,7 +14,7 @@ from PyQt5.QtGui import QColor, QImage, QPainter
 from camera_media import COLOURS, UdpSender, frames_and_rate, free_udp_port, write_clip, write_ts
 from test_camera_sources import rate_of
 from viewer_fixtures import viewer_settings, window_factory  # noqa: F401  (fixtures)
-from driver.state import Attitude, Battery, LocalPosition, VehicleState, Velocity
+from driver.vehicle.state import Attitude, Battery, LocalPosition, VehicleState, Velocity
 from driver.camera import VideoRecorder
 from uavviewer import camera_controller
 from uavviewer.camera_controller import CameraController

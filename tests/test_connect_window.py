@@ -8,8 +8,8 @@ import pytest
 from PyQt5.QtCore import Qt
 
 from driver.mission.plan import Plan, PlanKind
-from driver.rules import unattended
-from driver.state import LinkStatus
+from driver.vehicle.rules import unattended
+from driver.vehicle.state import LinkStatus
 from recordings import FLIGHT
 from uavviewer.alerts.model import AlertKind
 from uavviewer.connect.choice import Choice, Kind, parse_key, sim_name

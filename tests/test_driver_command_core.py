@@ -9,7 +9,7 @@ import pytest
 from pymavlink import mavutil
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-from driver.state import CommandStatus
+from driver.vehicle.state import CommandStatus
 
 SOLO = dict(profile="solo", mavlink2=False)
 
@@ -142,7 +142,7 @@ def test_the_solo_flies_end_to_end_with_a_mavlink2_gimbal_on_its_link(sim_factor
 
 
 def test_on_the_pad_without_extended_sys_state_a_drifting_barometer_is_not_flight():
-    from driver.state import MAV_STATE_ACTIVE, MAV_STATE_STANDBY, VehicleState
+    from driver.vehicle.state import MAV_STATE_ACTIVE, MAV_STATE_STANDBY, VehicleState
     pad = VehicleState(armed=True, altitude=0.6, system_status=MAV_STATE_STANDBY)
     assert pad.in_air is False and not pad.flying
     assert VehicleState(armed=True, altitude=0.0, system_status=MAV_STATE_ACTIVE).in_air is True
@@ -170,7 +170,7 @@ def test_a_takeoff_whose_reply_was_lost_is_judged_by_the_climb(sim_factory, vehi
 
 
 def test_the_climb_timeout_grows_with_the_altitude():
-    from driver.takeoff import climb_timeout
+    from driver.vehicle.takeoff import climb_timeout
     assert climb_timeout(20.0, 100.0) > climb_timeout(20.0, 3.0) + 150.0
 
 
@@ -243,7 +243,7 @@ def test_a_blocked_link_write_stalls_neither_the_reader_nor_the_sticks(flying, s
 
 
 def test_tcp_writes_never_leave_half_a_frame_on_the_wire():
-    from driver.link import MavutilTransport
+    from driver.link.transport import MavutilTransport
     server = socket.socket()
     server.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)     # a peer that barely reads
     server.bind(("127.0.0.1", 0))

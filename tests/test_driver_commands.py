@@ -10,7 +10,7 @@ import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from driver.sim.autopilot import Autopilot
-from driver.state import CommandStatus, LandedState
+from driver.vehicle.state import CommandStatus, LandedState
 
 
 def angle_between(a: float, b: float) -> float:

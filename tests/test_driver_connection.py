@@ -9,7 +9,7 @@ import socket
 
 import pytest
 
-from driver.link import connection_problem
+from driver.link.connection import connection_problem
 from driver.vehicle import Vehicle, VehicleConfig
 
 
@@ -75,7 +75,7 @@ def test_a_replay_dates_its_messages_when_they_were_recorded(sim, vehicle_factor
     live.close()
     day = 86400.0
     data, out, i = recorded.read_bytes(), bytearray(), 0      # the same flight, one day earlier
-    from driver.link import frame_length
+    from driver.link.transport import frame_length
     while i + 9 <= len(data):
         n = frame_length(data, i + 8)
         stamp = struct.unpack_from(">Q", data, i)[0] - int(day * 1e6)

@@ -4,9 +4,9 @@ from __future__ import annotations
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-from driver import frames
-from driver.state import CommandStatus, Fence, Velocity
-from driver.vehicle import MASK_POSITION
+from driver.core import frames
+from driver.vehicle.state import CommandStatus, Fence, Velocity
+from driver.vehicle.ticker import MASK_POSITION
 
 from ice_fixtures import drone_factory, eventually, ice_server, server_factory  # noqa: F401
 

@@ -6,7 +6,7 @@ import math
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-from driver.state import CommandStatus, LandedState, SequencePhase
+from driver.vehicle.state import CommandStatus, LandedState, SequencePhase
 
 #: The deadman of the drivers that fly here (real seconds). The deadman is a real-time safety net, tested on
 #: its own (test_driver_link.py); with its default 0.5 s a test thread that a busy machine stalls for half a

@@ -12,9 +12,9 @@ import pytest
 from pymavlink import mavutil
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-from driver import frames
+from driver.core import frames
 from driver.sim.autopilot import DEFAULT_PARAMS
-from driver.state import CommandStatus, LinkStatus
+from driver.vehicle.state import CommandStatus, LinkStatus
 
 
 def test_telemetry_fills_the_state(vehicle, sim):
@@ -50,7 +50,7 @@ def test_garbage_and_corrupt_frames_never_stop_the_reader(vehicle, sim):
 @pytest.mark.parametrize("cut", ["one frame per read", "two frames per read", "7 bytes per read", "with garbage"])
 def test_every_way_a_link_cuts_the_bytes_gives_the_frames_pymavlink_gives(cut):
     """ingest() takes a shortcut past parse_buffer() for one-frame reads: it must not lose or invent a frame."""
-    from driver.link import frame_length
+    from driver.link.transport import frame_length
     from driver.vehicle import Vehicle, VehicleConfig
     mav = mavlink.MAVLink(None, srcSystem=1, srcComponent=1)
     frames_ = [mavlink.MAVLink_heartbeat_message(2, 3, 217, 4, 4, 3).pack(mav)]
@@ -330,7 +330,7 @@ def test_a_link_that_cannot_open_says_why(vehicle_factory):
 
 def test_the_flight_log_is_never_written_through_a_planted_symlink(tmp_path):
     """A shared log folder: another user's link at our log's name must not make us truncate its target."""
-    from driver.link import TlogWriter
+    from driver.link.tlog import TlogWriter
     victim = tmp_path / "victim"
     victim.write_bytes(b"someone else's file")
     (tmp_path / "mav.tlog").symlink_to(victim)

@@ -9,7 +9,7 @@ import time
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-from driver.state import LinkStatus
+from driver.vehicle.state import LinkStatus
 
 
 def driver_ends(port: int) -> set[int]:

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import pytest
 
-from driver.state import LinkStatus
+from driver.vehicle.state import LinkStatus
 from recordings import FLIGHT
 
 pytestmark = pytest.mark.timeout(60)

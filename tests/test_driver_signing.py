@@ -9,10 +9,10 @@ import struct
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-from driver.signing import (
+from driver.link.signing import (
     LinkSigning, SigningConfig, key_from_passphrase, read_key_file, signing_time, write_key_file,
 )
-from driver.state import SigningStatus
+from driver.vehicle.state import SigningStatus
 from driver.vehicle import Vehicle, VehicleConfig
 from recordings import SIGNING
 

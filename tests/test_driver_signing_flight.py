@@ -9,9 +9,9 @@ import pytest
 from pymavlink import mavutil
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-from driver.signing import SigningConfig
+from driver.link.signing import SigningConfig
 from driver.sim import MODES
-from driver.state import CommandStatus, SigningStatus
+from driver.vehicle.state import CommandStatus, SigningStatus
 from ice_fixtures import eventually
 
 KEY = hashlib.sha256(b"uavviewer-test").digest()

@@ -8,7 +8,7 @@ import socket
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-from driver.state import CommandStatus, LandedState
+from driver.vehicle.state import CommandStatus, LandedState
 
 from test_driver_flight import STICK_DEADMAN, hold_velocity
 

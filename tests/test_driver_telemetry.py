@@ -9,8 +9,8 @@ from collections import ChainMap
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-from driver import telemetry
-from driver.state import Battery, VehicleState
+from driver.vehicle import telemetry
+from driver.vehicle.state import Battery, VehicleState
 
 ENC = mavlink.MAVLink(None, srcSystem=1, srcComponent=1)
 NAN, INF = float("nan"), float("inf")

@@ -1,4 +1,4 @@
-"""driver.files on real files: planted links are never followed, nothing is clobbered, modes are private."""
+"""driver.core.files on real files: planted links are never followed, nothing is clobbered, modes are private."""
 from __future__ import annotations
 
 import os
@@ -7,8 +7,8 @@ import tempfile
 
 import pytest
 
-from driver import files
-from driver.files import open_new, private_dir, runtime_dir, write_private
+from driver.core import files
+from driver.core.files import open_new, private_dir, runtime_dir, write_private
 
 posix_only = pytest.mark.skipif(os.name != "posix", reason="modes, owners and symbolic links are POSIX")
 as_root = pytest.mark.skipif(os.name != "posix" or os.geteuid() != 0, reason="needs root to make another user's file")

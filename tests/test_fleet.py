@@ -16,7 +16,7 @@ from driver.ice.client import IceDrone
 from driver.ice.publisher import topic
 from driver.ice.registry import TOPIC_MANAGER, list_vehicles
 from driver.ice.server import IceServer, ServeError, default_properties
-from driver.state import LinkStatus
+from driver.vehicle.state import LinkStatus
 
 from fleet_fixtures import fleet, lab  # noqa: F401  (fixtures)
 from ice_fixtures import eventually

@@ -8,9 +8,9 @@ from PyQt5.QtCore import QPointF, QRectF, QSizeF, Qt
 from PyQt5.QtWidgets import QMessageBox
 
 from uavviewer import app as main
-from driver import frames
+from driver.core import frames
 from driver.ice.fleet import IceFleet
-from driver.state import GlobalPosition, LinkStatus, LocalPosition, Severity, VehicleState
+from driver.vehicle.state import GlobalPosition, LinkStatus, LocalPosition, Severity, VehicleState
 from uavviewer.fleet import FleetController, row_for, switch_message
 from uavviewer.map.geometry import MapFrame
 from uavviewer.map.controller import fleet_marks, placed

@@ -126,7 +126,7 @@ def test_the_input_moved_last_flies():
 def test_without_sdl_the_viewer_says_so_and_flies_on(qtbot, monkeypatch):
     """SDL2 missing (its import failed): the reader reports why, the gamepad input stays empty."""
     import uavviewer.gamepad as gamepad
-    from driver.state import Severity
+    from driver.vehicle.state import Severity
     from uavviewer.gamepad_input import GamepadInput
     from uavviewer.settings import ViewerSettings
     monkeypatch.setattr(gamepad, "sdl2", None)

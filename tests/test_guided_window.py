@@ -101,7 +101,7 @@ def test_a_circle_the_vehicle_took_is_drawn_from_the_ui_thread(qtbot):
     from PyQt5.QtCore import QThread
     from PyQt5.QtWidgets import QWidget
 
-    from driver.state import CommandResult, CommandStatus, VehicleState
+    from driver.vehicle.state import CommandResult, CommandStatus, VehicleState
     from uavviewer.guided.controller import GuidedController
 
     future = Future()

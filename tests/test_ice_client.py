@@ -6,7 +6,7 @@ import math
 import pytest
 
 from driver.ice.client import IceDrone, viewer_properties
-from driver.state import CommandStatus, LinkStatus
+from driver.vehicle.state import CommandStatus, LinkStatus
 
 from ice_fixtures import (drone_factory, eventually, free_port, ice_server, jde, communicator,  # noqa: F401
                               server_factory)

@@ -15,8 +15,8 @@ import threading
 
 import Ice
 
-from driver.console import Console, vertical_speed
-from driver.state import SequencePhase
+from driver.console.console import Console, vertical_speed
+from driver.vehicle.state import SequencePhase
 
 from ice_fixtures import eventually, free_port, jderobot, mavlinkserver
 

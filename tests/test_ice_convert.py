@@ -8,7 +8,7 @@ import pytest
 from pymavlink.quaternion import QuaternionBase
 
 from driver.ice import convert, load_slice
-from driver.state import (Attitude, Battery, CommandResult, CommandStatus, Environment, GlobalPosition, Gps,
+from driver.vehicle.state import (Attitude, Battery, CommandResult, CommandStatus, Environment, GlobalPosition, Gps,
                           LandedState, LinkHealth, LinkStatus, LocalPosition, Message, Readiness, SequencePhase,
                           SequenceProgress, Setpoint, Severity, VehicleState, Velocity)
 

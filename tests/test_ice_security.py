@@ -26,7 +26,7 @@ from driver.ice import certs
 from driver.ice.client import CLIENT_MESSAGE_KB, IceDrone, viewer_properties
 from driver.ice.server import (DEFAULT_PORTS, IceServer, ServeError, check_exposure, default_endpoints,
                                default_properties)
-from driver.state import CommandStatus
+from driver.vehicle.state import CommandStatus
 
 from ice_fixtures import communicator, eventually, free_port, jderobot, mavlinkserver, server_factory  # noqa: F401
 

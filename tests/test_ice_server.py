@@ -15,7 +15,7 @@ import pytest
 
 from driver.ice import SLICE_DIR, convert, slice_files
 from driver.ice.server import DEFAULT_PORTS, default_properties, default_record_dir, planned_endpoints
-from driver.state import CommandStatus
+from driver.vehicle.state import CommandStatus
 
 from ice_fixtures import (communicator, eventually, free_port, ice_server, jde, jderobot,  # noqa: F401
                               mavlinkserver, server_factory)

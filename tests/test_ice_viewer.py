@@ -7,7 +7,7 @@ import pytest
 from PyQt5.QtCore import Qt
 
 from uavviewer import app as main
-from driver.state import CommandStatus, LinkStatus
+from driver.vehicle.state import CommandStatus, LinkStatus
 
 from camera_media import write_clip
 from ice_fixtures import drone_factory, free_port, server_factory  # noqa: F401  (fixtures)

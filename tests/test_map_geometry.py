@@ -5,7 +5,7 @@ import math
 
 import pytest
 
-from driver import frames
+from driver.core import frames
 from uavviewer.map.geometry import (MapFrame, TileKey, ground_resolution, inverse_mercator, mercator, nice_scale, tile_at,
                            tile_url, tile_zoom_for, tiles_covering)
 from uavviewer.map.trail import TRAIL_SECONDS, Trail

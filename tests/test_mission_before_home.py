@@ -8,11 +8,11 @@ import io
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-from driver import frames
-from driver.console import Console, run_commands
+from driver.core import frames
+from driver.console.console import Console, run_commands
 from driver.mission.files import save_plan_file
 from driver.mission.plan import MissionItem, Plan, PlanKind
-from driver.state import CommandStatus
+from driver.vehicle.state import CommandStatus
 
 from ice_fixtures import eventually
 

@@ -7,7 +7,7 @@ from dataclasses import replace
 
 from pymavlink import mavwp
 
-from driver.console import Console
+from driver.console.console import Console
 from driver.mission.files import save_plan_file
 from driver.mission.plan import Plan, PlanKind
 from test_mission_files import fence, rally

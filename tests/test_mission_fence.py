@@ -5,7 +5,7 @@ from __future__ import annotations
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from driver.mission.plan import MissionItem, Plan, PlanKind
-from driver.state import CommandStatus
+from driver.vehicle.state import CommandStatus
 from test_driver_flight import STICK_DEADMAN, hold_velocity
 from test_mission_transfer import place, waypoint
 

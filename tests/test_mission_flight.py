@@ -6,7 +6,7 @@ import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from driver.mission.plan import MissionItem, MissionRunState, Plan, PlanKind
-from driver.state import CommandStatus
+from driver.vehicle.state import CommandStatus
 from test_mission_transfer import place, waypoint
 
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from ice_fixtures import drone_factory, server_factory  # noqa: F401
 from driver.mission.plan import MissionRunState, Plan, PlanKind
-from driver.state import CommandStatus
+from driver.vehicle.state import CommandStatus
 from test_mission_flight import fly, quick_rtl, recorded_mission
 from test_mission_transfer import fence_plan
 

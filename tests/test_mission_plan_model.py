@@ -7,7 +7,7 @@ from dataclasses import replace
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-from driver.frames import offset_latlon, offset_ned
+from driver.core.frames import offset_latlon, offset_ned
 from driver.mission.plan import MissionItem, Plan, PlanKind
 from driver.params.model import Parameter, ParameterTable
 from uavviewer.map.plan_model import (

@@ -4,9 +4,9 @@ from __future__ import annotations
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-from driver import frames
+from driver.core import frames
 from driver.mission.plan import MissionItem, Plan, PlanKind
-from driver.state import CommandStatus
+from driver.vehicle.state import CommandStatus
 
 
 def place(vehicle, north, east):

@@ -161,7 +161,7 @@ def test_start_is_refused_while_the_vehicles_mission_goes_beyond_the_limits(qtbo
                                                                            window_factory):
     """Another ground station left a mission with a waypoint 900 m out on the vehicle: downloaded, the driver
     names that item, and the Start button stays off with that reason (the driver refuses it too)."""
-    from driver import frames
+    from driver.core import frames
     from driver.sim.missions import stored_as
     sim = sim_factory(speedup=8.0)
     vehicle = vehicle_factory(f"tcp:127.0.0.1:{sim.tcp_port}")

@@ -10,7 +10,7 @@ from PyQt5.QtGui import QContextMenuEvent, QMouseEvent
 from PyQt5.QtWidgets import QApplication, QMenu
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-from driver.frames import offset_ned
+from driver.core.frames import offset_ned
 from driver.mission.plan import PlanKind
 from uavviewer.map.survey import SurveySpec
 

@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import io
 
-from driver.console import Console, run_commands
+from driver.console.console import Console, run_commands
 
 from ice_fixtures import eventually
 

@@ -7,7 +7,7 @@ import pytest
 
 from driver.params.cache import ParameterCache
 from driver.params.model import ParamType
-from driver.state import CommandStatus
+from driver.vehicle.state import CommandStatus
 
 from ice_fixtures import eventually
 

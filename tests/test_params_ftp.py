@@ -301,7 +301,7 @@ def test_a_file_left_open_by_an_earlier_session_is_reset_and_read(sim, vehicle_f
 def test_the_consoles_param_fetch_reads_over_ftp(sim, vehicle_factory):
     import io
 
-    from driver.console import Console
+    from driver.console.console import Console
     vehicle = _ftp_vehicle(sim, vehicle_factory)
     out = io.StringIO()
     Console(vehicle, stdout=out).onecmd("param fetch")

@@ -3,7 +3,7 @@ providing the same Drone methods as the embedded driver."""
 from __future__ import annotations
 
 from driver.params.model import ParamType
-from driver.state import CommandStatus
+from driver.vehicle.state import CommandStatus
 
 from ice_fixtures import drone_factory, eventually, ice_server, server_factory, mavlinkserver  # noqa: F401
 

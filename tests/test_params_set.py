@@ -5,7 +5,7 @@ import pytest
 
 from driver.params.metadata import ParamMetadata
 from driver.params.model import ParamType
-from driver.state import CommandStatus
+from driver.vehicle.state import CommandStatus
 
 PDEF = b"""<?xml version="1.0" encoding="utf-8"?>
 <!-- Generated from git tag Copter-9.9.9 on 2026-01-01 -->

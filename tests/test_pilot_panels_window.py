@@ -7,7 +7,7 @@ import pytest
 from PyQt5.QtCore import Qt
 from PyQt5.QtWidgets import QMessageBox
 
-from driver.state import LinkStatus
+from driver.vehicle.state import LinkStatus
 from uavviewer.alerts.model import AlertKind
 from viewer_fixtures import viewer_settings, window, window_factory  # noqa: F401  (fixtures)
 

@@ -1,7 +1,7 @@
 """The preflight go/no-go lines: each judged with its reason, from one snapshot."""
 from __future__ import annotations
 
-from driver.state import (
+from driver.vehicle.state import (
     Battery, Fence, Gps, LinkHealth, LinkStatus, Message, Readiness, Severity, Signing, SigningStatus,
     VehicleState, replace,
 )

@@ -19,12 +19,12 @@ from driver.payload.control import MANAGER
 from driver.params.model import ParamType
 from driver.params.values import as_stored
 from driver.sim.replay import ReplayVehicle, read_tlog
-from driver.state import CommandStatus
-from driver.supervision import WANTED_PARAMS
+from driver.vehicle.state import CommandStatus
+from driver.vehicle.supervision import WANTED_PARAMS
 
 from recordings import FTP_PARAMS, FTP_PARAMS_SERIAL1, GIMBAL, MISSION, PARAMS, SETUP  # noqa: E402
 
-#: Requests the driver makes by itself on every link (driver.supervision, driver.payload) that the recorded
+#: Requests the driver makes by itself on every link (driver.vehicle.supervision, driver.payload) that the recorded
 #: ground stations did not: (MAV_CMD, param1) of COMMAND_LONG, or any REQUEST_DATA_STREAM / those parameters.
 UPKEEP_COMMANDS = {
     (mavlink.MAV_CMD_SET_MESSAGE_INTERVAL, float(mavlink.MAVLINK_MSG_ID_EXTENDED_SYS_STATE)),

@@ -12,9 +12,9 @@ from collections import ChainMap
 import pytest
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-from driver import telemetry
-from driver.battery import battery_alarm, time_left
-from driver.state import Battery, BatteryAlarm, BatteryThresholds, VehicleState
+from driver.vehicle import telemetry
+from driver.vehicle.battery import battery_alarm, time_left
+from driver.vehicle.state import Battery, BatteryAlarm, BatteryThresholds, VehicleState
 from uavviewer.widgets.status_strip import ALARM_COLOURS
 from uavviewer.widgets.telemetry_panel import BAD
 
@@ -98,7 +98,7 @@ def test_the_pilots_thresholds_reach_the_driver(qtbot, sim, vehicle, window_fact
 
 
 def test_the_console_says_the_alarm_and_our_thresholds():
-    from driver.console import battery_line
+    from driver.console.console import battery_line
     s = VehicleState(battery=Battery(voltage=11.4, cells=4, remaining=0.0, current=15.0, consumed_mah=150.0,
                                      reported_remaining=0.0))
     line = battery_line(s)

@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import pytest
 
-from driver.state import LinkStatus
+from driver.vehicle.state import LinkStatus
 from uavviewer.widgets.status_strip import DIM as STRIP_DIM
 from uavviewer.widgets.telemetry_panel import DIM
 from uavviewer.widgets.video_hud import STALE_COLOUR, hud_colour, stale_text

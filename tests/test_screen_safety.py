@@ -14,7 +14,7 @@ pytestmark = pytest.mark.timeout(90)
 
 
 def test_the_window_knows_the_modes_the_simulator_refuses_to_arm_in():
-    from driver.rules import NOT_ARMABLE_MODES
+    from driver.vehicle.rules import NOT_ARMABLE_MODES
     assert NOT_ARMABLE_MODES == {MODE_NAMES[n] for n in NOT_ARMABLE}
 
 

@@ -8,8 +8,8 @@ from PyQt5.QtCore import QPoint, Qt
 from PyQt5.QtGui import QColor, QIcon
 from PyQt5.QtWidgets import QApplication, QMessageBox
 
-from driver.console import Console
-from driver.rules import TAKEOFF_ALTITUDE_RANGE, takeoff_altitude_problem
+from driver.console.console import Console
+from driver.vehicle.rules import TAKEOFF_ALTITUDE_RANGE, takeoff_altitude_problem
 from driver.version import __version__
 from uavviewer.dialogs import KeysDialog, SettingsDialog
 from uavviewer.flight_phase import NO_VEHICLE

@@ -10,7 +10,7 @@ import pytest
 from PyQt5.QtCore import QPoint, QRect, Qt
 from PyQt5.QtWidgets import QApplication, QMessageBox
 
-from driver.state import LinkStatus
+from driver.vehicle.state import LinkStatus
 from recordings import FLIGHT
 
 from viewer_fixtures import app_style, viewer_settings, window_factory  # noqa: F401  (fixtures)

@@ -10,7 +10,7 @@ from PyQt5.QtCore import Qt
 from PyQt5.QtWidgets import QMessageBox
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-from driver.state import SequencePhase
+from driver.vehicle.state import SequencePhase
 
 from viewer_fixtures import viewer_settings, window_factory  # noqa: F401  (fixtures)
 

@@ -12,7 +12,7 @@ from PyQt5.QtCore import QEvent, QPointF, Qt
 from PyQt5.QtGui import QMouseEvent
 from PyQt5.QtWidgets import QApplication, QMessageBox
 
-from driver.state import LandedState, LinkStatus
+from driver.vehicle.state import LandedState, LinkStatus
 from uavviewer.flight_phase import FlightPhase
 
 from viewer_fixtures import pick_mode, viewer_settings, window, window_factory  # noqa: F401  (fixtures)

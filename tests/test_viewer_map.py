@@ -8,7 +8,7 @@ from PyQt5.QtCore import QEvent, QPoint, QPointF, Qt
 from PyQt5.QtGui import QColor, QContextMenuEvent, QMouseEvent
 from PyQt5.QtWidgets import QApplication, QDialogButtonBox, QMenu, QMessageBox
 
-from driver import frames
+from driver.core import frames
 from driver.ice.client import IceDrone, viewer_properties
 from driver.vehicle import Vehicle, VehicleConfig
 

@@ -4,7 +4,7 @@ from __future__ import annotations
 import pytest
 from PyQt5.QtWidgets import QMessageBox
 
-from driver.rules import mode_warning
+from driver.vehicle.rules import mode_warning
 from viewer_fixtures import pick_mode, viewer_settings, window, window_factory  # noqa: F401  (fixtures)
 
 pytestmark = pytest.mark.timeout(120)
@@ -49,7 +49,7 @@ def test_on_the_ground_no_mode_needs_a_question():
 
 def test_the_console_asks_for_confirm_in_flight(flying, sim):
     import io
-    from driver.console import Console
+    from driver.console.console import Console
     out = io.StringIO()
     console = Console(flying, stdout=out)
     console.onecmd("mode STABILIZE")

@@ -8,7 +8,7 @@ from PyQt5.QtCore import QEvent, QPoint, QPointF, Qt
 from PyQt5.QtGui import QMouseEvent
 from PyQt5.QtWidgets import QApplication
 
-from driver.state import LinkStatus
+from driver.vehicle.state import LinkStatus
 from recordings import FLIGHT
 from uavviewer.widgets.video_hud import stale_text
 

@@ -12,7 +12,7 @@ import pytest
 from PyQt5.QtCore import QPoint, Qt
 from PyQt5.QtWidgets import QApplication, QDialogButtonBox, QMessageBox, QWidget
 
-from driver.api import CEILING, Limits
+from driver.vehicle.api import CEILING, Limits
 from uavviewer.dialogs import SettingsDialog
 from uavviewer.settings import ViewerSettings, save_settings
 

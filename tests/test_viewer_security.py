@@ -9,8 +9,8 @@ import pytest
 from PyQt5.QtCore import Qt
 from PyQt5.QtWidgets import QDialogButtonBox, QLineEdit, QMessageBox
 
-from driver.signing import SigningConfig, key_from_passphrase, write_key_file
-from driver.state import LinkHealth, LinkStatus, Signing, SigningStatus, VehicleState
+from driver.link.signing import SigningConfig, key_from_passphrase, write_key_file
+from driver.vehicle.state import LinkHealth, LinkStatus, Signing, SigningStatus, VehicleState
 from uavviewer.dialogs import SettingsDialog
 from uavviewer.link_security import signing_warning
 from uavviewer.settings import load_settings

@@ -7,7 +7,7 @@ from PyQt5.QtCore import QPoint, QPointF, Qt
 from PyQt5.QtGui import QWheelEvent
 from PyQt5.QtWidgets import QApplication
 
-from driver.state import LinkStatus, Severity
+from driver.vehicle.state import LinkStatus, Severity
 
 from viewer_fixtures import viewer_settings, window_factory  # noqa: F401  (fixtures)
 
@@ -102,7 +102,7 @@ def test_stop_looking_goes_back_to_the_pitch_before(qtbot, vehicle, window_facto
     qtbot.waitUntil(lambda: abs(w.adapter.state.gimbal.pitch_deg + 40) < 0.6, timeout=10000)
     qtbot.waitUntil(lambda: w.gimbal._target is None, timeout=5000)
     home = w.adapter.state.home
-    from driver.frames import offset_latlon
+    from driver.core.frames import offset_latlon
     lat, lon = offset_latlon(home.lat, home.lon, 30.0, 0.0)
     w.adapter.command("look_at", lat, lon, 0.0)          # the map's "Look here"
     qtbot.waitUntil(lambda: w.adapter.state.gimbal.roi is not None and w.gimbal_bar.stop_looking_button.isVisible(),

@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from PyQt5.QtCore import Qt
 
-from driver.state import (Battery, BatteryAlarm, CommandResult, CommandStatus, Gps, LandedState, LinkHealth, LinkStatus,
+from driver.vehicle.state import (Battery, BatteryAlarm, CommandResult, CommandStatus, Gps, LandedState, LinkHealth, LinkStatus,
                           SequencePhase, SequenceProgress, Severity, VehicleState)
 from uavviewer.flight_phase import FlightPhase, flight_phase, stick_hint
 from uavviewer.widgets.flight_controls import FlightControls
@@ -32,7 +32,7 @@ def battery_from_autopilot(voltage, remaining) -> Battery:
     """A 4S pack as the driver reads it from SYS_STATUS: "low" is the driver's rule, the panel only shows it."""
     from collections import ChainMap
     from pymavlink.dialects.v20 import ardupilotmega as mavlink
-    from driver import telemetry
+    from driver.vehicle import telemetry
     msg = mavlink.MAVLink(None).sys_status_encode(
         0, 0, 0, 0, 65535 if voltage is None else int(voltage * 1000), -1, -1 if remaining is None else int(remaining),
         0, 0, 0, 0, 0, 0)

@@ -34,7 +34,7 @@ TAKEOFF_ALTITUDE = options.number(*TAKEOFF_ALTITUDE_RANGE,
 def choose_connection(args: argparse.Namespace, remembered: str) -> str:
     """--connect, else the last connection remembered (if it still reads as one), else a Solo (for runs
     with no --sim/--replay/--ice)."""
-    from driver.link import connection_problem
+    from driver.link.connection import connection_problem
     if args.connect:
         return args.connect
     if remembered and connection_problem(remembered) is None:
@@ -190,7 +190,7 @@ def main(argv: list[str] | None = None) -> int:
     saved = load_settings(default_qsettings())                    # read once: what Preferences keep
     saved_key = saved.signing_key_file
     if signing is None and saved_key:                             # Preferences › Link security's key file
-        from driver.signing import SigningConfig, read_key_file
+        from driver.link.signing import SigningConfig, read_key_file
         try:
             signing = SigningConfig(key=read_key_file(saved_key))
         except ValueError as exc:
@@ -296,7 +296,7 @@ def _schedule_screenshot(window, path: Path, after: float, fly: bool) -> None:
     and quit."""
     from PyQt5.QtCore import QTimer
 
-    from driver.state import SequencePhase
+    from driver.vehicle.state import SequencePhase
 
     screen = window.screen().availableGeometry()         # the documentation shows the whole screen (Xvfb: no
     window.setGeometry(screen)                           # window manager, so no title bar to allow for)

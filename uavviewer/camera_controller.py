@@ -19,9 +19,9 @@ from typing import Callable
 from PyQt5.QtCore import QObject, QStandardPaths, Qt, QTimer, pyqtSignal
 
 import driver.ice.camera_source  # noqa: F401  (registers ice: cameras)
-from driver.api import Drone
+from driver.vehicle.api import Drone
 from driver.camera import CameraSet, VideoRecorder, describe_uri, save_snapshot
-from driver.state import CommandResult, CommandStatus, VehicleState
+from driver.vehicle.state import CommandResult, CommandStatus, VehicleState
 
 from .widgets.camera_panel import CameraPanel
 

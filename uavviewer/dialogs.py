@@ -11,9 +11,9 @@ from PyQt5 import uic
 from PyQt5.QtCore import Qt, pyqtSignal
 from PyQt5.QtWidgets import QDialog, QFileDialog, QMessageBox, QTableWidgetItem, QWidget
 
-from driver.api import CEILING
-from driver.signing import key_from_passphrase, read_key_file, write_key_file
-from driver.state import CommandResult, Signing, SigningStatus
+from driver.vehicle.api import CEILING
+from driver.link.signing import key_from_passphrase, read_key_file, write_key_file
+from driver.vehicle.state import CommandResult, Signing, SigningStatus
 
 from . import RESOURCES
 from .camera_controller import default_media_folder

@@ -14,9 +14,9 @@ from concurrent.futures import Future
 
 from PyQt5.QtCore import QObject, QTimer, pyqtSignal
 
-from driver.api import Drone
+from driver.vehicle.api import Drone
 from driver.mission.plan import TransferOutcome
-from driver.state import CommandResult, CommandStatus, VehicleState
+from driver.vehicle.state import CommandResult, CommandStatus, VehicleState
 
 from .sticks import VelocityCommand
 

@@ -13,8 +13,8 @@ from dataclasses import dataclass, replace
 
 from PyQt5.QtCore import QObject, QTimer, pyqtSignal
 
-from driver.api import Drone, Fleet
-from driver.state import CommandResult, CommandStatus, LinkStatus, Severity, VehicleState
+from driver.vehicle.api import Drone, Fleet
+from driver.vehicle.state import CommandResult, CommandStatus, LinkStatus, Severity, VehicleState
 
 from .flight_phase import flight_phase
 

@@ -3,8 +3,8 @@ from __future__ import annotations
 
 import enum
 
-from driver.rules import arming_refusal
-from driver.state import LandedState, LinkStatus, VehicleState
+from driver.vehicle.rules import arming_refusal
+from driver.vehicle.state import LandedState, LinkStatus, VehicleState
 
 #: The one wording, everywhere in the window, for "nothing heard from a vehicle yet".
 NO_VEHICLE = "No vehicle yet"
@@ -44,13 +44,13 @@ def flight_phase(s: VehicleState) -> FlightPhase:
 
 def takeoff_cancellable(s: VehicleState) -> bool:
     """A takeoff under way that has not asked the vehicle to leave the ground yet: Cancel gives it back."""
-    from driver.state import SequencePhase
+    from driver.vehicle.state import SequencePhase
     return s.takeoff.phase in (SequencePhase.WAITING_READY, SequencePhase.SETTING_GUIDED, SequencePhase.ARMING)
 
 
 def takeoff_progress(s: VehicleState) -> float:
     """0..1 of the takeoff sequence: arming counts a little, the climb the rest."""
-    from driver.state import SequencePhase
+    from driver.vehicle.state import SequencePhase
     phase = s.takeoff.phase
     early = {SequencePhase.WAITING_READY: 0.02, SequencePhase.SETTING_GUIDED: 0.05,
              SequencePhase.ARMING: 0.1}

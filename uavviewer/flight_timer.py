@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import time
 
-from driver.state import VehicleState
+from driver.vehicle.state import VehicleState
 
 __all__ = ["FlightTimer", "clock_text"]
 

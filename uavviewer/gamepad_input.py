@@ -13,7 +13,7 @@ import time
 
 from PyQt5.QtCore import QObject, QTimer, pyqtSignal
 
-from driver.state import Severity
+from driver.vehicle.state import Severity
 
 from .gamepad import GamepadFrame, GamepadReader, Pad, PadReading, shared_reader
 from .gamepad_mapping import ALWAYS_MAPPED, GamepadMapping, default_mapping, mappings_from_json

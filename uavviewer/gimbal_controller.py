@@ -7,7 +7,7 @@ import time
 from PyQt5.QtCore import QEvent, QObject, Qt
 
 from driver.payload.model import GIMBAL_PITCH_RANGE
-from driver.state import VehicleState
+from driver.vehicle.state import VehicleState
 
 __all__ = ["GimbalController", "WHEEL_STEP", "KEY_STEP", "DRAG_DEG_PER_PX"]
 

@@ -5,8 +5,8 @@ window, the telemetry panel and Preferences all word it the same way from here.
 """
 from __future__ import annotations
 
-from driver.api import Drone
-from driver.state import LinkHealth, Signing, SigningStatus
+from driver.vehicle.api import Drone
+from driver.vehicle.state import LinkHealth, Signing, SigningStatus
 
 __all__ = ["SIGNING_WARNINGS", "signing_warning", "signed_frames", "foreign_text", "foreign_tooltip",
            "signing_unavailable"]

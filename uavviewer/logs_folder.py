@@ -12,7 +12,7 @@ from PyQt5.QtCore import QObject, QUrl
 from PyQt5.QtGui import QDesktopServices
 from PyQt5.QtWidgets import QAction
 
-from driver.state import Severity
+from driver.vehicle.state import Severity
 
 __all__ = ["LogsFolder"]
 

@@ -15,9 +15,9 @@ from PyQt5 import uic
 from PyQt5.QtCore import QEvent, QObject, QSettings, Qt
 from PyQt5.QtWidgets import QApplication, QDialog, QLabel, QMainWindow, QMessageBox, QWidget
 
-from driver.api import Drone, Limits
-from driver.rules import mode_warning, unattended
-from driver.state import LinkStatus, SequencePhase, Severity, VehicleState
+from driver.vehicle.api import Drone, Limits
+from driver.vehicle.rules import mode_warning, unattended
+from driver.vehicle.state import LinkStatus, SequencePhase, Severity, VehicleState
 
 from . import RESOURCES
 from .dialogs import (

@@ -14,7 +14,7 @@ import os
 from PyQt5.QtCore import QObject, Qt
 from PyQt5.QtWidgets import QAction, QDockWidget, QFileDialog, QMenu, QMessageBox
 
-from driver.state import Severity
+from driver.vehicle.state import Severity
 
 from .alerts.controller import AlertController
 from .connect.choice import Choice, Kind

@@ -9,9 +9,9 @@ from dataclasses import asdict, dataclass, fields
 
 from PyQt5.QtCore import QByteArray, QSettings
 
-from driver.api import CEILING
-from driver.state import BatteryThresholds
-from driver.rules import TAKEOFF_ALTITUDE_RANGE
+from driver.vehicle.api import CEILING
+from driver.vehicle.state import BatteryThresholds
+from driver.vehicle.rules import TAKEOFF_ALTITUDE_RANGE
 
 from .sticks import MaxSpeeds, StickMode, StickShaping
 

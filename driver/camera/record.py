@@ -7,7 +7,7 @@ own, measured from the first second of frames (held back until then), so a recor
 plays at the speed it was filmed.
 
 Files are made so that another user who can write to the folder cannot turn them against
-us (see :mod:`driver.files`): a snapshot or a recording's name is created new (O_EXCL,
+us (see :mod:`driver.core.files`): a snapshot or a recording's name is created new (O_EXCL,
 never through a planted link, never over an existing file; the next free name is taken
 instead). OpenCV's encoder opens its file by name, and would follow a link or truncate a
 file, so it writes into a directory only we can enter (``.recording-XXXXXXXX`` in the same
@@ -30,7 +30,7 @@ from typing import Callable, Iterator
 import cv2
 import numpy as np
 
-from ..files import open_new
+from ..core.files import open_new
 from .source import Frame
 
 log = logging.getLogger(__name__)

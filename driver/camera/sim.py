@@ -3,7 +3,7 @@
 It renders what a forward camera would see from the attitude and local position the
 driver reports (sky, horizon, a ground grid every few metres, the home pad), so the
 picture tilts when the vehicle rolls and the grid slides past when it flies. It reads
-only :class:`~driver.state.VehicleState`, so it works the same in the viewer's
+only :class:`~driver.vehicle.state.VehicleState`, so it works the same in the viewer's
 embedded driver and in the server.
 """
 from __future__ import annotations
@@ -15,7 +15,7 @@ from typing import Callable
 import cv2
 import numpy as np
 
-from ..state import VehicleState
+from ..vehicle.state import VehicleState
 from .source import SourceFailed, VideoSource
 
 __all__ = ["SimulatedCamera", "SimSource", "SKY", "GROUND"]

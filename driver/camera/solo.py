@@ -4,7 +4,7 @@ The controller forwards the Solo's H.264 as RTP to UDP 5600 of the one app that
 holds a TCP connection open to 10.1.1.1:5502 (see arducopter.md, "Video on the
 Solo"). :class:`SoloLink` holds that connection and reconnects when it drops;
 :func:`write_sdp` describes the RTP stream so OpenCV's FFmpeg backend can open it.
-The SDP file lives in our private :func:`~driver.files.runtime_dir` under a random name
+The SDP file lives in our private :func:`~driver.core.files.runtime_dir` under a random name
 (never a fixed name in /tmp that another user could plant a link at), and goes when the
 source closes.
 """
@@ -16,7 +16,7 @@ import secrets
 import socket
 import threading
 
-from ..files import runtime_dir, write_private
+from ..core.files import runtime_dir, write_private
 from .source import OpenCVSource, SourceFailed
 
 log = logging.getLogger(__name__)
@@ -34,7 +34,7 @@ def write_sdp(path: str, port: int = SOLO_VIDEO_UDP_PORT, encoding: str = "H264/
               address: str = "127.0.0.1") -> str:
     """Write an SDP file describing one RTP video stream arriving on UDP ``port`` (mode 0600).
 
-    Written with :func:`~driver.files.write_private`: a link planted at ``path`` is replaced, not
+    Written with :func:`~driver.core.files.write_private`: a link planted at ``path`` is replaced, not
     followed, and a reader never sees half a file."""
     text = "\n".join([
         "v=0",
@@ -97,7 +97,7 @@ class SoloSource(OpenCVSource):
     """``solo``: the Solo's RTP H.264 video, with the controller link kept open.
 
     Without ``sdp_path``, the SDP file is named on the first open, ``solo-PORT-RANDOM.sdp`` in
-    :func:`~driver.files.runtime_dir` (``sdp_path`` then tells where), and removed when the capture
+    :func:`~driver.core.files.runtime_dir` (``sdp_path`` then tells where), and removed when the capture
     thread ends; a file at a given ``sdp_path`` is the caller's and stays.
     """
 

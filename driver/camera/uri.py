@@ -20,7 +20,7 @@ import os
 import threading
 from typing import Callable
 
-from ..state import VehicleState
+from ..vehicle.state import VehicleState
 from .source import FFMPEG_TIMEOUT_MS, STALL_S, OpenCVSource, SourceFailed, VideoSource
 
 log = logging.getLogger(__name__)

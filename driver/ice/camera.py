@@ -6,7 +6,7 @@ number of clients. ``getImageData`` is AMD in the Slice; it answers at once here
 
 Configuration (``MAVLinkServer.Camera.*``, prefix removed): ``Uri`` (and ``Uri.2``,
 ``Uri.3``… for ArDroneExtra.toggleCam), ``Loop`` (1 = loop files), ``Name``,
-``RecordDir`` (where recordOnUsb(true) writes, default :func:`~driver.ice.server.default_record_dir`),
+``RecordDir`` (where recordOnUsb(true) writes, default :func:`~driver.core.files.default_record_dir`),
 ``RecordMaxMB`` (the most one recording may hold, default 4000), ``RecordDirMaxMB`` (the most our
 recordings in ``RecordDir`` may hold together, default 20000), ``TimeoutMs`` (how long
 opening or reading a stream may hang, default 5000), ``StallMs`` (how long without a new frame
@@ -30,9 +30,10 @@ import threading
 
 import cv2
 
-from ..api import Drone
+from ..vehicle.api import Drone
 from ..camera import CameraSet, Frame, VideoRecorder, VideoSource
 from ..camera.record import MIN_CAP_BYTES, recordings_size
+from ..core.files import default_record_dir
 from . import load_slice
 
 jderobot, _ = load_slice()
@@ -184,7 +185,6 @@ class CameraI(jderobot.Camera):
     def _start_recording(self) -> VideoRecorder | None:
         """A recorder with the room left under both caps, or None (with a warning) if too little is left."""
         if not self._record_dir:                            # make_camera_servant always sets it; a bare servant
-            from .server import default_record_dir
             self._record_dir = os.path.abspath(default_record_dir())
         os.makedirs(self._record_dir, exist_ok=True)
         used = recordings_size(self._record_dir)

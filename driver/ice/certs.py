@@ -33,7 +33,7 @@ import secrets
 import sys
 from dataclasses import dataclass
 
-from ..files import write_private
+from ..core.files import write_private
 
 log = logging.getLogger(__name__)
 

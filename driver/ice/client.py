@@ -1,4 +1,4 @@
-"""IceDrone: a :class:`~driver.api.Drone` on another machine, reached through the MAVLinkServer's Ice interfaces.
+"""IceDrone: a :class:`~driver.vehicle.api.Drone` on another machine, reached through the MAVLinkServer's Ice interfaces.
 
 The viewer holds it exactly as it holds the embedded driver. No Ice call ever
 runs on the caller's thread: a poller thread reads the server's status into an
@@ -22,9 +22,9 @@ from concurrent.futures import Future, ThreadPoolExecutor
 
 import Ice
 
-from ..api import CEILING, Drone, Limits
-from ..frames import clamp, finite
-from ..state import (CommandResult, CommandStatus, Fence, LinkHealth, LinkStatus, Message, Severity, VehicleState,
+from ..vehicle.api import CEILING, Drone, Limits
+from ..core.frames import clamp, finite
+from ..vehicle.state import (CommandResult, CommandStatus, Fence, LinkHealth, LinkStatus, Message, Severity, VehicleState,
                      replace)
 from ..mission.plan import Plan, PlanKind, TransferOutcome
 from ..params.metadata import metadata_for

@@ -10,9 +10,9 @@ from __future__ import annotations
 import math
 import time
 
-from ..frames import clamp, enu_quaternion, finite, wrap_pi
-from .plans import mission_from_ice, mission_to_ice
-from ..state import (Attitude, Battery, CommandResult, CommandStatus, Environment, Fence, GlobalPosition, Gps,
+from ..core.frames import clamp, enu_quaternion, finite, wrap_pi
+from .plans import mission_from_ice, mission_to_ice, outcome_from_result, result_from_outcome
+from ..vehicle.state import (Attitude, Battery, CommandResult, CommandStatus, Environment, Fence, GlobalPosition, Gps,
                      LandedState, LinkHealth, LinkStatus, LocalPosition, Message, Readiness, SequencePhase,
                      SequenceProgress, Setpoint, Severity, VehicleState, Velocity)
 
@@ -116,7 +116,7 @@ def _int(value: float) -> int:
 
 # -- a plain JdeRobot server: Pose3D + Navdata -> VehicleState -----------------------------------
 def attitude_from_enu_quaternion(q0: float, q1: float, q2: float, q3: float) -> tuple[float, float, float]:
-    """NED (roll, pitch, yaw) of a FLU-in-ENU quaternion; inverse of :func:`driver.frames.enu_quaternion`."""
+    """NED (roll, pitch, yaw) of a FLU-in-ENU quaternion; inverse of :func:`driver.core.frames.enu_quaternion`."""
     from pymavlink.quaternion import QuaternionBase
     if not finite(q0, q1, q2, q3) or q0 * q0 + q1 * q1 + q2 * q2 + q3 * q3 < 1e-9:
         return (0.0, 0.0, 0.0)
@@ -156,20 +156,6 @@ def state_from_jderobot(pose, nav, messages: tuple[Message, ...] = (),
 # -- mavlinkserver extension: VehicleState <-> VehicleStatus ------------------------------------
 def _opt(value) -> tuple[bool, float]:
     return (value is not None, float(value) if value is not None else 0.0)
-
-
-def outcome_from_result(ms, result: CommandResult):
-    return ms.CommandOutcome(index=result.index, command=result.command, status=result.status.name,
-                             reason=result.reason, attempts=result.attempts)
-
-
-def result_from_outcome(outcome) -> CommandResult:
-    try:
-        status = CommandStatus[outcome.status]
-    except KeyError:
-        status = CommandStatus.REJECTED
-    return CommandResult(command=outcome.command, status=status, reason=outcome.reason,
-                         attempts=outcome.attempts, index=outcome.index)
 
 
 def fence_to_ice(ms, fence: Fence):

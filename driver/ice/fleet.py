@@ -11,7 +11,7 @@ import threading
 
 import Ice
 
-from ..api import Drone, Fleet
+from ..vehicle.api import Drone, Fleet
 from .client import IceDrone, fleet_properties
 from .registry import RegistryError, list_vehicles, registry_address
 

@@ -24,6 +24,7 @@ import time
 import Ice
 
 from . import data_dir, registry
+from .problems import ice_problem
 
 log = logging.getLogger(__name__)
 
@@ -110,7 +111,7 @@ class Lab:
         secure = bool(self.certs)
         configs = [REGISTRY_CONFIG]
         if secure:                               # the key's password goes in a 0600 file, never on a command line
-            from ..files import private_dir, write_private
+            from ..core.files import private_dir, write_private
             private_dir(self._data)
             text = "".join(f"{k}={v}\n" for k, v in self._ssl().items())
             configs.append(write_private(os.path.join(self._data, "icessl.cfg"), text.encode()))
@@ -165,7 +166,6 @@ class Lab:
             except Ice.LocalException as exc:
                 self._check_exited()
                 if time.monotonic() > deadline:
-                    from .server import ice_problem
                     raise LabError(f"{what} did not answer within {timeout:g} s: {ice_problem(exc)}") from None
             time.sleep(0.05)
 

@@ -8,9 +8,9 @@ from concurrent.futures import Future
 
 import Ice
 
-from ..frames import finite
+from ..core.frames import finite
 from ..payload.model import CameraKind, Gimbal, GimbalControl, VehicleCamera
-from ..state import CommandStatus, VehicleState
+from ..vehicle.state import CommandStatus, VehicleState
 
 __all__ = ["payload_to_ice", "payload_from_ice", "PayloadServant", "PayloadClient"]
 
@@ -76,7 +76,7 @@ class PayloadServant:
 
 
 class PayloadClient:
-    """:class:`~driver.api.Drone`'s payload calls on a MAVLinkServer (``self._vehicle``: its Vehicle proxy)."""
+    """:class:`~driver.vehicle.api.Drone`'s payload calls on a MAVLinkServer (``self._vehicle``: its Vehicle proxy)."""
 
     _payload_missing = False
 

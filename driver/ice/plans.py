@@ -1,11 +1,12 @@
 """Plans and mission progress between driver.mission's model and the mavlinkserver.ice structs."""
 from __future__ import annotations
 
+from ..core.results import CommandResult, CommandStatus
 from ..mission.plan import (MissionItem, MissionProgress, MissionRunState, Plan, PlanKind, TransferDirection,
                             TransferOutcome, TransferProgress)
 
 __all__ = ["plan_to_ice", "plan_from_ice", "outcome_to_ice", "outcome_from_ice", "mission_to_ice",
-           "mission_from_ice", "kind_of"]
+           "mission_from_ice", "kind_of", "outcome_from_result", "result_from_outcome"]
 
 
 def kind_of(value: int) -> PlanKind | None:
@@ -30,15 +31,27 @@ def plan_from_ice(p) -> Plan:
                                         i.alt, bool(i.autocontinue)) for i in p.items))
 
 
+def outcome_from_result(ms, result: CommandResult):
+    return ms.CommandOutcome(index=result.index, command=result.command, status=result.status.name,
+                             reason=result.reason, attempts=result.attempts)
+
+
+def result_from_outcome(outcome) -> CommandResult:
+    try:
+        status = CommandStatus[outcome.status]
+    except KeyError:
+        status = CommandStatus.REJECTED
+    return CommandResult(command=outcome.command, status=status, reason=outcome.reason,
+                         attempts=outcome.attempts, index=outcome.index)
+
+
 def outcome_to_ice(ms, outcome: TransferOutcome):
-    from .convert import outcome_from_result          # convert imports this module for the status
     plan = outcome.plan
     return ms.TransferOutcome(outcome=outcome_from_result(ms, outcome.result), hasPlan=plan is not None,
                               plan=plan_to_ice(ms, plan) if plan is not None else ms.Plan(kind=0, items=[]))
 
 
 def outcome_from_ice(o) -> TransferOutcome:
-    from .convert import result_from_outcome
     return TransferOutcome(result_from_outcome(o.outcome), plan_from_ice(o.plan) if o.hasPlan else None)
 
 

@@ -16,10 +16,11 @@ import time
 import Ice
 import IceStorm
 
-from ..api import Drone
-from ..state import CommandStatus, Severity, VehicleState
+from ..vehicle.api import Drone
+from ..vehicle.state import CommandStatus, Severity, VehicleState
 from . import convert, load_slice
 from .payload import payload_to_ice
+from .problems import ice_problem
 
 jderobot, mavlinkserver = load_slice()
 log = logging.getLogger(__name__)
@@ -143,5 +144,4 @@ class TelemetryPublisher:
 
 
 def _problem(exc: Exception) -> str:
-    from .server import ice_problem
     return ice_problem(exc) if isinstance(exc, Ice.Exception) else str(exc)

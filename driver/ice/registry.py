@@ -15,6 +15,8 @@ import re
 import Ice
 import IceGrid
 
+from .problems import ice_problem
+
 log = logging.getLogger(__name__)
 
 DEFAULT_PORT = 4061                          # IceGrid's registered port
@@ -75,7 +77,6 @@ def serving_elsewhere(com: Ice.Communicator, name: str) -> str | None:
     except Ice.AdapterNotFoundException:
         return None
     except Ice.LocalException as exc:
-        from .server import ice_problem
         raise RegistryError(f"cannot reach the registry: {ice_problem(exc)}") from None
     if found is None:
         return None
@@ -101,7 +102,6 @@ def _admin(com: Ice.Communicator):
     except IceGrid.PermissionDeniedException as exc:
         raise RegistryError(f"the registry refused an admin session: {exc.reason}") from None
     except Ice.LocalException as exc:
-        from .server import ice_problem
         raise RegistryError(f"cannot reach the registry: {ice_problem(exc)}") from None
 
 
@@ -158,6 +158,5 @@ def list_vehicles(com: Ice.Communicator, timeout_ms: int = 2000) -> list[str]:
             com.stringToProxy(f"{_instance(com)}/Query").ice_invocationTimeout(timeout_ms))
         found = query.findAllObjectsByType(VEHICLE_TYPE)
     except Ice.LocalException as exc:
-        from .server import ice_problem
         raise RegistryError(f"cannot reach the registry: {ice_problem(exc)}") from None
     return sorted({p.ice_getIdentity().name for p in found if p is not None})

@@ -23,11 +23,11 @@ from dataclasses import dataclass
 
 import Ice
 
-from ..api import Drone
-from ..frames import finite
+from ..vehicle.api import Drone
+from ..core.frames import finite
 from ..mission.plan import TransferOutcome
-from ..rules import COPTER_MODES, MAX_ALTITUDE, go_to_problem, takeoff_altitude_problem
-from ..state import CommandResult, CommandStatus, LandedState
+from ..vehicle.rules import COPTER_MODES, MAX_ALTITUDE, go_to_problem, takeoff_altitude_problem
+from ..vehicle.state import CommandResult, CommandStatus, LandedState
 from . import convert, load_slice, plans
 from .params import Revisions, table_to_ice
 from .payload import PayloadServant
@@ -86,7 +86,7 @@ def _log_failure(what: str):
 class Snapshots:
     """What the JdeRobot getters answer, converted once per driver snapshot and shared by every servant.
 
-    The driver publishes a new immutable :class:`~driver.state.VehicleState` when telemetry changes; between
+    The driver publishes a new immutable :class:`~driver.vehicle.state.VehicleState` when telemetry changes; between
     two snapshots every ``getPose3DData``/``getNavdata`` of every client gets the same prepared Ice value, so
     a call costs a lookup, not a conversion. Ice only reads a value it marshals, so sharing one is safe; a
     race between two dispatch threads at most converts the same snapshot twice.

@@ -11,7 +11,7 @@ Defaults are the 2017 server's: ``Camera`` 9999, ``Pose3D`` 9998, ``CMDVel``
 - ``MAVLinkServer.TakeoffAltitude``, ``MAVLinkServer.CMDVel.Xmax/Ymax/Zmax/Yawmax/RefuseAbove``,
   ``MAVLinkServer.Navdata.Vehicle``
 - ``MAVLinkServer.Camera.*``: handed to the camera servant (see :func:`make_camera_servant`);
-  ``Camera.RecordDir`` defaults to :func:`default_record_dir`
+  ``Camera.RecordDir`` defaults to :func:`driver.core.files.default_record_dir`
 - ``MAVLinkServer.Certs``: a folder made by ``python -m driver certs``; every default endpoint is then
   ``ssl -h <Host>`` (clients must show a certificate from that CA) plus plain ``tcp -h 127.0.0.1`` on the
   same port for JdeRobot clients on this machine
@@ -37,9 +37,11 @@ from dataclasses import dataclass
 
 import Ice
 
-from ..api import Drone
-from ..rules import COPTER_MODES, MAX_ALTITUDE
+from ..vehicle.api import Drone
+from ..vehicle.rules import COPTER_MODES, MAX_ALTITUDE
+from ..core.files import default_record_dir
 from . import certs, servants
+from .problems import ice_problem
 from .servants import ICE_MODES, ServerSettings
 
 log = logging.getLogger(__name__)
@@ -57,18 +59,6 @@ SERVER_MESSAGE_KB = 64
 
 class ServeError(RuntimeError):
     """An interface cannot be served (port taken, bad endpoint, unknown host), said in one line."""
-
-
-def ice_problem(exc: Exception) -> str:
-    """An Ice exception in a few words on one line ("address already in use"), not Ice's multi-line dump."""
-    if isinstance(exc, Ice.DNSException):
-        return f"cannot resolve host {exc.host}"
-    if isinstance(exc, Ice.FileException) and exc.path:
-        return f"{exc.path}: {os.strerror(exc.error).lower() if exc.error > 0 else 'cannot read'}"
-    if isinstance(exc, Ice.SyscallException) and exc.error > 0:
-        return os.strerror(exc.error).lower()
-    text = getattr(exc, "str", "") or getattr(exc, "reason", "") or str(exc)
-    return " ".join(str(text).split())
 
 
 def _where(endpoints: str) -> str:
@@ -150,18 +140,6 @@ def allowed_modes(text: str) -> frozenset[str]:
     if unknown:
         log.warning("%sModes: unknown mode %s ignored", PREFIX, ", ".join(unknown))
     return frozenset((names & set(COPTER_MODES)) | {"LAND"})
-
-
-def default_record_dir() -> str:
-    """Where Extra.recordOnUsb writes when ``Camera.RecordDir`` is not set: the per-user data folder
-    the viewer also uses (Qt's AppDataLocation, found here without Qt), never the current directory."""
-    if sys.platform == "win32":
-        base = os.environ.get("APPDATA") or os.path.join(os.path.expanduser("~"), "AppData", "Roaming")
-    elif sys.platform == "darwin":
-        base = os.path.join(os.path.expanduser("~"), "Library", "Application Support")
-    else:
-        base = os.environ.get("XDG_DATA_HOME") or os.path.join(os.path.expanduser("~"), ".local", "share")
-    return os.path.join(base, "UavViewerPy", "recordings")
 
 
 def make_camera_servant(props: Ice.Properties, vehicle: Drone):
@@ -342,7 +320,7 @@ class Served:
 
 
 class IceServer:
-    """Serves one :class:`~driver.api.Drone` on JdeRobot's interfaces; start(), then close()."""
+    """Serves one :class:`~driver.vehicle.api.Drone` on JdeRobot's interfaces; start(), then close()."""
 
     def __init__(self, vehicle: Drone, properties: Ice.Properties | None = None, camera=None):
         self.vehicle = vehicle

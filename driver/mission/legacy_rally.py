@@ -11,7 +11,7 @@ from __future__ import annotations
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-from ..state import CommandStatus
+from ..core.results import CommandStatus
 from .plan import MissionItem, Plan, PlanKind, TransferDirection
 
 __all__ = ["LegacyRally"]

@@ -5,7 +5,7 @@ refusal names the item (the vehicle's numbering) and the reason.
 Before the vehicle has a home (no GPS fix yet) a distance cannot be checked, but a mission may still go up, as
 ArduPilot, QGroundControl and MAVProxy allow (ArduPilot puts its home in item 0 anyway): the items wait, and
 :func:`held_mission_problems` checks the mission the vehicle holds as soon as home is known; until then, and
-while an item is beyond the limits, the mission is not started (:class:`driver.mission.control.MissionControl`).
+while an item is beyond the limits, the mission is not started (:class:`driver.vehicle.missions.MissionControl`).
 
 The fence's shapes (:func:`fence_shapes`, :meth:`FenceShapes.outside`) are also what the simulated vehicle
 enforces, as AC_Fence does: outside every inclusion polygon or circle, or inside an exclusion, is a breach.
@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-from .. import frames
+from ..core import frames
 from .plan import MissionItem, Plan, PlanKind
 
 __all__ = ["plan_problems", "held_mission_problems", "unchecked", "UNCHECKED", "fence_shapes", "FenceShapes",

@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 if TYPE_CHECKING:
-    from ..state import CommandResult
+    from ..core.results import CommandResult
 
 __all__ = ["PlanKind", "MissionItem", "Plan", "TransferDirection", "TransferProgress", "TransferOutcome",
            "MissionRunState", "MissionProgress"]

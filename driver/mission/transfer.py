@@ -30,7 +30,7 @@ from typing import Callable
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-from ..state import CommandResult, CommandStatus
+from ..core.results import CommandResult, CommandStatus
 from .legacy_rally import LegacyRally
 from .plan import Plan, PlanKind, TransferDirection, TransferOutcome, TransferProgress
 from .wire import difference, from_wire, home_slot, result_meaning, to_wire

@@ -13,7 +13,7 @@ import logging
 import os
 import re
 
-from ..files import private_dir, write_private
+from ..core.files import private_dir, write_private
 from .model import Parameter, ParameterTable, ParameterValues, ParamType
 from .values import same_value
 

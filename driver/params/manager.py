@@ -1,6 +1,6 @@
 """The vehicle's parameters inside the driver: the table, its download and every write, for one vehicle.
 
-:class:`ParameterManager` is the part :class:`~driver.vehicle.Vehicle` wires in (as QGroundControl's
+:class:`ParameterManager` is the part :class:`~driver.vehicle.vehicle.Vehicle` wires in (as QGroundControl's
 ParameterManager is to its Vehicle): every PARAM_VALUE goes to :meth:`on_param_value` (reader thread), the
 ticker calls :meth:`service`; both with the state lock held, and :meth:`service` only *returns* the messages
 to send. The table is published in ``VehicleState.parameters`` as an immutable
@@ -13,7 +13,7 @@ import math
 from concurrent.futures import Future
 from typing import Callable
 
-from ..state import CommandStatus, LinkStatus, Severity
+from ..core.results import CommandStatus, LinkStatus, Severity
 from .cache import changed_names
 from .download import Download
 from .ftp import FtpDownload

@@ -27,7 +27,7 @@ import xml.etree.ElementTree as ET
 from dataclasses import dataclass, field
 from typing import Mapping
 
-from ..files import private_dir, write_private
+from ..core.files import private_dir, write_private
 
 log = logging.getLogger(__name__)
 

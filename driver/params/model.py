@@ -1,7 +1,7 @@
 """The parameter model every layer shares.
 
 A :class:`ParameterTable` is immutable and is replaced as a whole when a value arrives; the snapshot
-(:class:`~driver.state.VehicleState`) holds a reference to it, so a state change that is not about
+(:class:`~driver.vehicle.state.VehicleState`) holds a reference to it, so a state change that is not about
 parameters copies nothing.
 """
 from __future__ import annotations

@@ -30,9 +30,8 @@ from dataclasses import dataclass, replace
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-from .. import frames
-from ..commands import chain
-from ..state import CommandResult, CommandStatus, Severity
+from ..core import frames
+from ..core.results import CommandResult, CommandStatus, Severity, chain
 from .model import (
     GIMBAL_PITCH_RANGE, RETRACT_FLAG, YAW_IN_EARTH_FRAME, CameraKind, Gimbal, GimbalControl, VehicleCamera,
     gimbal_from_quaternion,
@@ -73,7 +72,7 @@ class _Wait:
 
 
 class Payload:
-    """Gimbal, ROI and camera of one vehicle; owned by :class:`driver.vehicle.Vehicle`."""
+    """Gimbal, ROI and camera of one vehicle; owned by :class:`driver.vehicle.vehicle.Vehicle`."""
 
     def __init__(self, vehicle) -> None:
         self._v = vehicle

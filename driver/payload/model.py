@@ -1,4 +1,4 @@
-"""What the vehicle says about its gimbal and its camera, as immutable values in :class:`~driver.state.VehicleState`.
+"""What the vehicle says about its gimbal and its camera, as immutable values in :class:`~driver.vehicle.state.VehicleState`.
 
 Everything here is the vehicle's word: the gimbal's attitude is "unknown" (None) until GIMBAL_DEVICE_ATTITUDE_STATUS
 or MOUNT_STATUS arrives, and a picture counts only once CAMERA_FEEDBACK, CAMERA_IMAGE_CAPTURED or the GoPro

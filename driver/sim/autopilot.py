@@ -25,7 +25,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink
 from .auto import Auto
 from .commands import Commands
 from .circle import CircleNav
-from ..frames import offset_ned
+from ..core.frames import offset_ned
 from .common import (DEFAULT_PARAMS, MODE_NAMES, MODES, NOT_ARMABLE, POSITION_MODES, STREAMS, command_name,
                      wrap_pi)
 from .faults import Faults

@@ -35,7 +35,7 @@ from dataclasses import dataclass
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-from ..signing import EPOCH_2015, key_from_passphrase as passphrase_key    # the driver's: one key derivation
+from ..link.signing import EPOCH_2015, key_from_passphrase as passphrase_key    # the driver's: one key derivation
 from .profiles import speaks_mavlink2
 
 __all__ = ["Signing", "SigningCounters", "Channel", "passphrase_key", "signing_timestamp", "EPOCH_2015", "MINUTE",

@@ -4,7 +4,7 @@ from __future__ import annotations
 from PyQt5.QtCore import QObject, pyqtSignal
 from PyQt5.QtWidgets import QAction
 
-from driver.state import VehicleState
+from driver.vehicle.state import VehicleState
 
 from ..widgets.alert_banner import AlertBanner
 from .model import Alert, AlertModel

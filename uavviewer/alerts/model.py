@@ -13,8 +13,8 @@ from __future__ import annotations
 import enum
 from dataclasses import dataclass, replace
 
-from driver.rules import gcs_failsafe_setting
-from driver.state import BatteryAlarm, LinkStatus, SequencePhase, Severity, VehicleState
+from driver.vehicle.rules import gcs_failsafe_setting
+from driver.vehicle.state import BatteryAlarm, LinkStatus, SequencePhase, Severity, VehicleState
 
 __all__ = ["Alert", "AlertKind", "AlertModel", "MAV_STATE_CRITICAL", "MAV_STATE_EMERGENCY"]
 

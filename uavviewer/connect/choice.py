@@ -11,7 +11,7 @@ import enum
 import os
 from dataclasses import dataclass, field
 
-from driver.link import connection_problem
+from driver.link.connection import connection_problem
 
 __all__ = ["Kind", "Choice", "parse_key", "from_command_line", "serial_ports", "sim_name", "SITL_TCP", "SOLO_UDP",
            "waiting_words"]

@@ -1,8 +1,8 @@
 """What the pilot is told before the window lets go of a vehicle in the air (connect elsewhere, disconnect). No Qt."""
 from __future__ import annotations
 
-from driver.rules import gcs_failsafe_setting, unattended
-from driver.state import VehicleState
+from driver.vehicle.rules import gcs_failsafe_setting, unattended
+from driver.vehicle.state import VehicleState
 
 __all__ = ["leaving_words"]
 

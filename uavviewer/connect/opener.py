@@ -9,8 +9,8 @@ import time
 from dataclasses import dataclass, replace
 from pathlib import Path
 
-from driver.api import CEILING, Drone, Limits
-from driver.state import CommandResult, CommandStatus, LinkHealth, LinkStatus, VehicleState
+from driver.vehicle.api import CEILING, Drone, Limits
+from driver.vehicle.state import CommandResult, CommandStatus, LinkHealth, LinkStatus, VehicleState
 
 from ..flight_phase import NOT_CONNECTED
 from .choice import Choice, Kind

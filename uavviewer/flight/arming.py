@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from PyQt5.QtWidgets import QMessageBox
 
-from driver.rules import ARM_IN, arming_consequence, arming_refusal
+from driver.vehicle.rules import ARM_IN, arming_consequence, arming_refusal
 
 from ..dialogs import arm_question, ask
 from ..flight_phase import flight_phase

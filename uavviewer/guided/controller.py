@@ -12,9 +12,9 @@ from PyQt5.QtCore import QObject, QPointF, Qt, pyqtSignal
 from PyQt5.QtGui import QColor, QPen
 from PyQt5.QtWidgets import QAction, QInputDialog, QMenu, QWidget
 
-from driver.guided import MAX_CIRCLE_RADIUS, MIN_CIRCLE_RADIUS
-from driver.rules import MAX_ALTITUDE, MIN_GOTO_ALTITUDE
-from driver.state import VehicleState
+from driver.vehicle.guided import MAX_CIRCLE_RADIUS, MIN_CIRCLE_RADIUS
+from driver.vehicle.rules import MAX_ALTITUDE, MIN_GOTO_ALTITUDE
+from driver.vehicle.state import VehicleState
 
 __all__ = ["GuidedController"]
 

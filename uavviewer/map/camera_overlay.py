@@ -6,7 +6,7 @@ from PyQt5.QtCore import QObject, QPointF, Qt
 from PyQt5.QtGui import QColor, QFont, QPen, QPolygonF
 
 from driver.payload import GimbalControl
-from driver.state import VehicleState
+from driver.vehicle.state import VehicleState
 
 from .camera_footprint import footprint, look_point
 

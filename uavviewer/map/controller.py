@@ -20,8 +20,8 @@ from dataclasses import dataclass
 from PyQt5.QtCore import QObject, pyqtSignal
 from PyQt5.QtWidgets import QMessageBox, QWidget
 
-from driver.rules import MAX_ALTITUDE, MIN_GOTO_ALTITUDE
-from driver.state import CommandResult, VehicleState
+from driver.vehicle.rules import MAX_ALTITUDE, MIN_GOTO_ALTITUDE
+from driver.vehicle.state import CommandResult, VehicleState
 
 from .camera_overlay import CameraOverlay
 from ..dialogs import ask, fly_here_question

@@ -11,7 +11,7 @@ import math
 from dataclasses import dataclass
 from functools import cached_property
 
-from driver.frames import EARTH_RADIUS
+from driver.core.frames import EARTH_RADIUS
 
 __all__ = ["TILE_SIZE", "MAX_LAT", "MAX_ZOOM", "MapFrame", "TileKey", "mercator", "inverse_mercator",
            "tile_at", "tiles_covering", "tile_zoom_for", "nice_scale", "tile_url", "ground_resolution"]

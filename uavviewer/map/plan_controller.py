@@ -14,10 +14,10 @@ from PyQt5.QtCore import QObject, Qt, pyqtSignal
 from PyQt5.QtGui import QKeySequence
 from PyQt5.QtWidgets import QAction, QDockWidget, QMenu, QMessageBox, QScrollArea, QToolButton, QWidget
 
-from driver.frames import offset_ned
+from driver.core.frames import offset_ned
 from driver.mission.plan import MissionItem, MissionRunState, Plan, PlanKind, TransferDirection
 from driver.mission.wire import difference
-from driver.state import CommandResult, LinkStatus, Severity, VehicleState
+from driver.vehicle.state import CommandResult, LinkStatus, Severity, VehicleState
 
 from ..dialogs import ask, mission_start_question
 from .plan_editor import PlanEditor

@@ -17,7 +17,7 @@ from PyQt5.QtWidgets import QComboBox, QFileDialog, QWidget
 
 from driver.mission.files import PlanFile, PlanFileError, load_plan_file, save_plan_file
 from driver.mission.plan import Plan, PlanKind
-from driver.state import Severity
+from driver.vehicle.state import Severity
 
 __all__ = ["PlanFiles", "FILTERS"]
 

@@ -16,7 +16,7 @@ from typing import Union
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-from driver.frames import offset_ned
+from driver.core.frames import offset_ned
 from driver.mission.plan import MissionItem, Plan, PlanKind
 
 from .survey import Survey, SurveySpec, survey

@@ -16,7 +16,7 @@ from dataclasses import dataclass
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-from driver.frames import offset_latlon, offset_ned
+from driver.core.frames import offset_latlon, offset_ned
 from driver.mission.plan import MissionItem
 
 __all__ = ["Camera", "CAMERAS", "GOPRO_HERO4_BLACK", "SurveySpec", "Survey", "survey", "camera_named",

@@ -14,7 +14,7 @@ from PyQt5.QtCore import QObject, Qt, pyqtSignal
 from PyQt5.QtGui import QKeySequence
 from PyQt5.QtWidgets import QAction, QMainWindow, QMenu, QMessageBox, QTreeWidgetItem, QWidget
 
-from driver.state import CommandResult, LinkStatus, Severity, VehicleState
+from driver.vehicle.state import CommandResult, LinkStatus, Severity, VehicleState
 
 from ..dialogs import ask
 from .compare_dialog import CompareDialog

@@ -10,7 +10,7 @@ from __future__ import annotations
 import enum
 from dataclasses import dataclass
 
-from driver.state import BatteryAlarm, LinkStatus, SigningStatus, VehicleState
+from driver.vehicle.state import BatteryAlarm, LinkStatus, SigningStatus, VehicleState
 
 __all__ = ["Verdict", "Check", "preflight", "overall", "LOSS_CAUTION", "LOSS_NO_GO"]
 

@@ -6,7 +6,7 @@ import time
 from PyQt5.QtCore import Qt, pyqtSignal
 from PyQt5.QtWidgets import QHBoxLayout, QLabel, QSizePolicy, QToolButton, QWidget
 
-from driver.state import Severity
+from driver.vehicle.state import Severity
 
 __all__ = ["AlertBanner"]
 

@@ -15,7 +15,7 @@ from PyQt5.QtGui import QColor, QFont, QImage, QPainter
 from PyQt5.QtWidgets import QSizePolicy, QWidget
 
 from driver.camera import Frame
-from driver.state import VehicleState
+from driver.vehicle.state import VehicleState
 
 from .video_hud import paint_hud
 

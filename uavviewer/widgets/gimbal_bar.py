@@ -8,7 +8,7 @@ from __future__ import annotations
 from PyQt5.QtCore import pyqtSignal
 from PyQt5.QtWidgets import QHBoxLayout, QLabel, QToolButton, QWidget
 
-from driver.state import VehicleState
+from driver.vehicle.state import VehicleState
 
 from .text_width import width_for
 

@@ -11,7 +11,7 @@ from PyQt5.QtCore import QEvent, QObject, QPointF, QRectF, Qt
 from PyQt5.QtGui import QColor, QFont, QPainter, QPen, QPolygonF
 from PyQt5.QtWidgets import QWidget
 
-from driver.state import LinkStatus, VehicleState
+from driver.vehicle.state import LinkStatus, VehicleState
 
 __all__ = ["HomeArrow", "home_direction"]
 

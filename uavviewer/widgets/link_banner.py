@@ -4,7 +4,7 @@ from __future__ import annotations
 from PyQt5.QtCore import Qt
 from PyQt5.QtWidgets import QLabel, QSizePolicy, QWidget
 
-from driver.state import LinkStatus
+from driver.vehicle.state import LinkStatus
 from ..connect.choice import waiting_words
 from ..flight_phase import NO_VEHICLE, NOT_CONNECTED
 

@@ -13,7 +13,7 @@ from PyQt5.QtCore import Qt, pyqtSignal
 from PyQt5.QtGui import QBrush, QColor
 from PyQt5.QtWidgets import QAbstractItemView, QHeaderView, QToolButton, QTreeWidget, QTreeWidgetItem, QWidget
 
-from driver.state import CommandResult, CommandStatus, Severity
+from driver.vehicle.state import CommandResult, CommandStatus, Severity
 
 __all__ = ["MessagesView", "severity_color", "GESTURE_GAP"]
 

@@ -9,8 +9,8 @@ from PyQt5.QtCore import QSize, Qt
 from PyQt5.QtGui import QPainter
 from PyQt5.QtWidgets import QFrame, QHBoxLayout, QLabel, QSizePolicy, QVBoxLayout, QWidget
 
-from driver.battery import time_left
-from driver.state import BatteryAlarm, LinkStatus, Message, Severity, VehicleState
+from driver.vehicle.battery import time_left
+from driver.vehicle.state import BatteryAlarm, LinkStatus, Message, Severity, VehicleState
 from ..flight_phase import NO_VEHICLE, flight_phase, no_vehicle_words
 from ..flight_timer import clock_text
 from .messages_view import severity_color

@@ -14,7 +14,7 @@ import math
 from PyQt5.QtCore import QPointF, QRectF, Qt
 from PyQt5.QtGui import QColor, QFont, QPainter, QPen, QRegion
 
-from driver.state import BatteryAlarm, LinkStatus, VehicleState
+from driver.vehicle.state import BatteryAlarm, LinkStatus, VehicleState
 from ..flight_phase import no_vehicle_words
 from ..units import fmt as _num
 

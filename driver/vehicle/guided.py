@@ -1,6 +1,6 @@
 """Guided actions built from the Drone interface's own calls: change altitude, circle a point.
 
-Both work on any :class:`driver.api.Drone` (the embedded driver, the Ice client), because they only use its
+Both work on any :class:`driver.vehicle.api.Drone` (the embedded driver, the Ice client), because they only use its
 go-to, yaw, parameter and mode calls, each answered by the vehicle.
 
 Circling a point is done the way ArduCopter allows it from a ground station. Its CIRCLE mode takes no centre
@@ -15,7 +15,8 @@ import math
 import threading
 from concurrent.futures import Future
 
-from . import api, frames        # api imports this module too: its names are looked up at call time
+from ..core import frames
+from ..core.results import answered
 from .state import CommandResult, CommandStatus, VehicleState
 
 __all__ = ["change_altitude", "circle_point", "circle_start", "MIN_CIRCLE_RADIUS", "MAX_CIRCLE_RADIUS"]
@@ -32,7 +33,7 @@ def change_altitude(drone, altitude: float) -> Future:
     position, so the driver's altitude limits, fence and refusals apply as to any go-to."""
     s = drone.state()
     if s.local is None:
-        return api._answered(CommandResult(f"altitude {altitude:g} m", CommandStatus.REJECTED,
+        return answered(CommandResult(f"altitude {altitude:g} m", CommandStatus.REJECTED,
                                            "the vehicle has not sent its position yet"))
     return drone.go_to(s.local.north, s.local.east, altitude)
 
@@ -57,16 +58,16 @@ def circle_point(drone, north: float, east: float, radius: float, altitude: floa
     approach where it is."""
     name = f"circle N{north:.0f} E{east:.0f} r {radius:g} m"
     if not all(map(math.isfinite, (north, east, radius))) or altitude is not None and not math.isfinite(altitude):
-        return api._answered(CommandResult(name, CommandStatus.REJECTED, "coordinates are not finite numbers"))
+        return answered(CommandResult(name, CommandStatus.REJECTED, "coordinates are not finite numbers"))
     if not MIN_CIRCLE_RADIUS <= radius <= MAX_CIRCLE_RADIUS:
-        return api._answered(CommandResult(name, CommandStatus.REJECTED,
+        return answered(CommandResult(name, CommandStatus.REJECTED,
                                            f"a circle's radius is {MIN_CIRCLE_RADIUS:g} to {MAX_CIRCLE_RADIUS:g} m"))
     s = drone.state()
     if s.mode != "GUIDED" or not s.flying:
-        return api._answered(CommandResult(name, CommandStatus.REJECTED,
+        return answered(CommandResult(name, CommandStatus.REJECTED,
                                            f"needs GUIDED and flying (mode {s.mode or '?'})"))
     if s.local is None:
-        return api._answered(CommandResult(name, CommandStatus.REJECTED, "the vehicle has not sent its position yet"))
+        return answered(CommandResult(name, CommandStatus.REJECTED, "the vehicle has not sent its position yet"))
     future: Future = Future()
     threading.Thread(target=_fly_circle, args=(drone, name, north, east, radius,
                                                s.altitude if altitude is None else altitude, future),

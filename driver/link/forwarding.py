@@ -12,7 +12,7 @@ from typing import Callable
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-from .link import LinkError, MavutilTransport
+from .transport import LinkError, MavutilTransport
 
 log = logging.getLogger(__name__)
 

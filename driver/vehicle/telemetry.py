@@ -17,7 +17,7 @@ from collections.abc import Mapping
 from pymavlink import mavutil
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-from . import frames
+from ..core import frames
 from .state import (
     Attitude, Battery, Environment, GlobalPosition, Gps, LandedState, LocalPosition, Readiness, Velocity,
 )

@@ -30,31 +30,12 @@ from .state import CommandResult, CommandStatus, Severity, VehicleState
 
 log = logging.getLogger(__name__)
 
-__all__ = ["Capabilities", "CommandSender", "Notifier", "chain", "command_name"]
+__all__ = ["Capabilities", "CommandSender", "Notifier", "command_name"]
 
 MODE_RESEND = 1.0            # s between SET_MODE messages on firmware that answers none (one heartbeat)
 ACKED_MODE_WAIT = 1.5        # s an accepted mode change waits for a heartbeat showing it before re-sending
 STATUSTEXT_GRACE = 0.3       # s: the STATUSTEXT explaining a refusal may trail the ACK
 PROGRESS_TIMEOUT = 30.0      # s an IN_PROGRESS command may stay silent before it counts as lost
-
-
-def chain(inner: Future, then: Callable, name: str = "command") -> Future:
-    """A future resolved by ``then(result)`` (a CommandResult, or a Future to follow) once ``inner`` is. If
-    ``then`` raises, it resolves REJECTED ("internal error") under ``name``: never left unresolved."""
-    outer: Future = Future()
-
-    def follow(f: Future) -> None:
-        try:
-            nxt = then(f.result())
-        except Exception as exc:               # never leave the caller's future unresolved
-            log.exception("%s: a chained step failed", name)
-            nxt = CommandResult(name, CommandStatus.REJECTED, f"internal error: {exc}")
-        if isinstance(nxt, Future):
-            nxt.add_done_callback(lambda g: outer.done() or outer.set_result(g.result()))
-        elif not outer.done():
-            outer.set_result(nxt)
-    inner.add_done_callback(follow)
-    return outer
 
 
 def command_name(command: int) -> str:

@@ -18,6 +18,7 @@ drone or speak for it. Signing is authentication, not encryption: anyone on the 
 """
 from __future__ import annotations
 
+import enum
 import hashlib
 import logging
 import os
@@ -29,9 +30,49 @@ from dataclasses import dataclass
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-from .state import CommandStatus, Signing, SigningStatus
+from ..core.results import CommandStatus
 
 log = logging.getLogger(__name__)
+
+
+class SigningStatus(enum.Enum):
+    OFF = "off"                                    # no key, the vehicle does not sign either
+    SIGNING = "signing"                            # we sign everything we send (see Signing.detail)
+    REQUIRED = "vehicle requires signing"          # the vehicle signs and we have no key: it ignores us
+    MISMATCH = "key mismatch"                      # the vehicle's signatures fail with our key
+    UNAVAILABLE = "MAVLink 1: cannot sign"         # a MAVLink 1 link (stock Solo) has no signing at all
+    SETTING_UP = "setting up"                      # SETUP_SIGNING sent, waiting for the vehicle to sign
+
+
+@dataclass(frozen=True)
+class Signing:
+    """MAVLink 2 message signing on the vehicle link: state and what was accepted or dropped."""
+    status: SigningStatus = SigningStatus.OFF
+    detail: str = ""
+    link_id: int | None = None           # the link id our signatures carry; None without a key
+    allow_unsigned: bool = False         # the pilot lets unsigned frames from the vehicle in
+    vehicle_signs: bool | None = None    # the autopilot's last heartbeat was signed; None before one
+    signed_accepted: int = 0             # frames whose signature verified with our key
+    bad_signature: int = 0               # signed frames dropped: wrong key, replayed or too old
+    unsigned_rejected: int = 0           # unsigned frames dropped (MAVLink 1 frames among them)
+    unsigned_accepted: int = 0           # unsigned frames let in (RADIO_STATUS, or allowed by the pilot)
+
+    @property
+    def counts(self) -> str:
+        """What was verified and dropped, in a few words ("" while signing has counted nothing)."""
+        parts = [f"{n} {what}" for n, what in ((self.signed_accepted, "verified"),
+                                                (self.bad_signature, "bad signatures dropped"),
+                                                (self.unsigned_rejected, "unsigned dropped"),
+                                                (self.unsigned_accepted, "unsigned let in")) if n]
+        return ", ".join(parts)
+
+    @property
+    def summary(self) -> str:
+        """One line for the pilot: "signing (both ends sign; link id 7): 1200 verified, 3 unsigned dropped"."""
+        notes = [n for n in (self.detail, f"link id {self.link_id}" if self.link_id is not None else "",
+                             "unsigned frames from the vehicle allowed" if self.allow_unsigned else "") if n]
+        text = self.status.value + (f" ({'; '.join(notes)})" if notes else "")
+        return text + (f": {self.counts}" if self.counts else "")
 
 __all__ = ["SigningConfig", "LinkSigning", "key_from_passphrase", "read_key_file", "write_key_file",
            "signing_time", "link_id_for", "verify_signature_first", "default_timestamp_path"]
@@ -76,7 +117,7 @@ def read_key_file(path: str) -> bytes:
 
 def write_key_file(path: str, key: bytes) -> None:
     """Save ``key`` as 64 hex digits, readable only by us (0600), never through a planted symlink."""
-    from .files import write_private
+    from ..core.files import write_private
     write_private(path, key.hex().encode("ascii") + b"\n")
 
 
@@ -139,7 +180,7 @@ class TimestampFile:
     def save(self, stamp: int) -> None:
         if not self.path or stamp <= self.saved:
             return
-        from .files import private_dir, write_private
+        from ..core.files import private_dir, write_private
         try:
             private_dir(os.path.dirname(self.path))
             write_private(self.path, f"{stamp}\n".encode("ascii"))

@@ -20,12 +20,13 @@ import logging
 import os
 import shutil
 import stat
+import sys
 import tempfile
 import threading
 
 log = logging.getLogger(__name__)
 
-__all__ = ["APP_DIR", "runtime_dir", "private_dir", "write_private", "open_new"]
+__all__ = ["APP_DIR", "runtime_dir", "private_dir", "write_private", "open_new", "default_record_dir"]
 
 APP_DIR = "uavviewer"
 _NOFOLLOW = getattr(os, "O_NOFOLLOW", 0)        # POSIX; Windows has no symlinks we would follow here
@@ -167,3 +168,15 @@ def open_new(path: str, mode: str = "wb", perm: int = 0o600, **kwargs):
     except BaseException:
         os.close(fd)
         raise
+
+
+def default_record_dir() -> str:
+    """Where Extra.recordOnUsb writes when ``Camera.RecordDir`` is not set: the per-user data folder
+    the viewer also uses (Qt's AppDataLocation, found here without Qt), never the current directory."""
+    if sys.platform == "win32":
+        base = os.environ.get("APPDATA") or os.path.join(os.path.expanduser("~"), "AppData", "Roaming")
+    elif sys.platform == "darwin":
+        base = os.path.join(os.path.expanduser("~"), "Library", "Application Support")
+    else:
+        base = os.environ.get("XDG_DATA_HOME") or os.path.join(os.path.expanduser("~"), ".local", "share")
+    return os.path.join(base, "UavViewerPy", "recordings")

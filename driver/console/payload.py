@@ -1,5 +1,7 @@
-"""The console's payload verbs (mixed into :class:`driver.console.Console`): gimbal, roi, camera."""
+"""The console's payload verbs (mixed into :class:`driver.console.console.Console`): gimbal, roi, camera."""
 from __future__ import annotations
+
+from .words import number
 
 
 __all__ = ["PayloadCommands", "gimbal_line"]
@@ -20,21 +22,20 @@ def gimbal_line(s) -> str:
 
 
 class PayloadCommands:
-    """``self.vehicle`` is a :class:`~driver.api.Drone`; ``self._report(future)`` prints its result."""
+    """``self.vehicle`` is a :class:`~driver.vehicle.api.Drone`; ``self._report(future)`` prints its result."""
 
     def do_gimbal(self, arg: str) -> None:
         """gimbal pitch DEG [YAW] | gimbal rate DEG_S [YAW_S] | gimbal level | gimbal down: point the camera
         (0 level, -90 straight down; a positive rate tilts up, 0 stops); "gimbal" alone shows it"""
-        from ..console import _number     # here, not at the top: driver.console imports this module
         words = arg.split()
         if not words:
             self.say(gimbal_line(self.vehicle.state()))
         elif words[0] == "pitch" and len(words) in (2, 3):
-            yaw = _number(words[2], "YAW") if len(words) == 3 else None
-            self._report(self.vehicle.point_gimbal(_number(words[1], "DEG"), yaw))
+            yaw = number(words[2], "YAW") if len(words) == 3 else None
+            self._report(self.vehicle.point_gimbal(number(words[1], "DEG"), yaw))
         elif words[0] == "rate" and len(words) in (2, 3):
-            yaw = _number(words[2], "YAW_S") if len(words) == 3 else 0.0
-            self._report(self.vehicle.gimbal_rate(_number(words[1], "DEG_S"), yaw))
+            yaw = number(words[2], "YAW_S") if len(words) == 3 else 0.0
+            self._report(self.vehicle.gimbal_rate(number(words[1], "DEG_S"), yaw))
         elif words == ["level"]:
             self._report(self.vehicle.point_gimbal(0.0))
         elif words == ["down"]:
@@ -44,13 +45,12 @@ class PayloadCommands:
 
     def do_roi(self, arg: str) -> None:
         """roi LAT LON [ALT] | roi none: look at a point (ALT m above home, default 0), or stop looking"""
-        from ..console import _number     # here, not at the top: driver.console imports this module
         words = arg.split()
         if words == ["none"]:
             self._report(self.vehicle.stop_looking())
         elif len(words) in (2, 3):
-            alt = _number(words[2], "ALT") if len(words) == 3 else 0.0
-            self._report(self.vehicle.look_at(_number(words[0], "LAT"), _number(words[1], "LON"), alt))
+            alt = number(words[2], "ALT") if len(words) == 3 else 0.0
+            self._report(self.vehicle.look_at(number(words[0], "LAT"), number(words[1], "LON"), alt))
         else:
             raise ValueError(f"usage: {ROI_USAGE}")
 

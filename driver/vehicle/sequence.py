@@ -1,4 +1,4 @@
-"""The one slot in which a takeoff or a mission start runs (driver.takeoff, driver.mission.control).
+"""The one slot in which a takeoff or a mission start runs (driver.vehicle.takeoff, driver.vehicle.missions).
 
 A sequence is stepped by the ticker; while it runs only Land and Stop are taken, and both end it. Aborting cancels
 what it asked the vehicle (its tagged commands), so no retry launches it afterwards. The slot owns no lock: every

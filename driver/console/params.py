@@ -1,6 +1,6 @@
 """The console's ``param`` verbs, as MAVProxy's: fetch, show, help, set, load, save, diff.
 
-They work on any :class:`~driver.api.Drone` (the embedded driver or an Ice client): the table read is
+They work on any :class:`~driver.vehicle.api.Drone` (the embedded driver or an Ice client): the table read is
 ``state().parameters``, every write goes through ``set_parameter`` and is confirmed by the vehicle.
 
 ``show``, ``save``, ``diff`` and ``load`` act on the vehicle's whole list: when it is not all known (right after
@@ -14,11 +14,11 @@ import threading
 from concurrent.futures import Future, wait
 from typing import Callable
 
-from .model import ParameterTable
+from ..params.model import ParameterTable
 
-from .files import ParamFormat, compare, read_param_file, write_param_file
-from .metadata import ParamMeta
-from .values import format_value
+from ..params.files import ParamFormat, compare, read_param_file, write_param_file
+from ..params.metadata import ParamMeta
+from ..params.values import format_value
 
 __all__ = ["ParamVerbs", "USAGE"]
 

@@ -14,9 +14,12 @@ import enum
 import math
 from dataclasses import dataclass, field, replace
 
-from .mission.plan import MissionProgress
-from .params.model import ParameterTable
-from .payload.model import Gimbal, VehicleCamera
+from ..core.results import CommandResult, CommandStatus, LinkStatus, Severity
+from ..link.signing import Signing, SigningStatus
+from ..mission.plan import MissionProgress
+from ..params.model import ParameterTable
+from ..payload.model import Gimbal, VehicleCamera
+from .battery import Battery, BatteryAlarm, BatteryThresholds
 
 __all__ = [
     "LandedState", "LinkStatus", "Severity", "CommandStatus", "Attitude", "GlobalPosition",
@@ -37,34 +40,6 @@ class LandedState(enum.IntEnum):
     IN_AIR = 2
     TAKEOFF = 3
     LANDING = 4
-
-
-class LinkStatus(enum.Enum):
-    WAITING = "waiting"      # link open, no vehicle heartbeat yet
-    OK = "ok"
-    LOST = "lost"            # no heartbeat for the loss timeout
-    CLOSED = "closed"
-
-
-class Severity(enum.IntEnum):
-    """MAV_SEVERITY: lower is worse."""
-    EMERGENCY = 0
-    ALERT = 1
-    CRITICAL = 2
-    ERROR = 3
-    WARNING = 4
-    NOTICE = 5
-    INFO = 6
-    DEBUG = 7
-
-
-class CommandStatus(enum.Enum):
-    ACCEPTED = "accepted"
-    REFUSED = "refused"          # the vehicle said no (COMMAND_ACK failure / mode not reached)
-    TIMED_OUT = "timed out"      # no answer after every retry
-    REJECTED = "rejected"        # refused by the driver itself (bad value, busy, no link)
-    ABORTED = "aborted"          # cancelled by the pilot (e.g. land during takeoff)
-    IN_PROGRESS = "in progress"  # accepted and still running (e.g. a takeoff climbing)
 
 
 @dataclass(frozen=True)
@@ -128,60 +103,6 @@ class Velocity:
         return (c * self.north + s * self.east, -s * self.north + c * self.east, self.down)
 
 
-class BatteryAlarm(enum.IntEnum):
-    """How the pack stands against the pilot's own thresholds (and the vehicle's failsafe): worse is higher."""
-    UNKNOWN = 0          # nothing to judge by yet
-    OK = 1
-    WARNING = 2
-    CRITICAL = 3
-
-
-@dataclass(frozen=True)
-class BatteryThresholds:
-    """The pilot's own battery limits, per cell (loaded voltage) and in percent: whichever is crossed first
-    counts. Judged by the driver (driver.battery) whatever the vehicle's own battery failsafe says."""
-    warning_cell: float = 3.6            # V a cell
-    critical_cell: float = 3.5           # V a cell
-    warning_percent: float = 30.0        # % remaining
-    critical_percent: float = 15.0       # % remaining
-
-    def problem(self) -> str | None:
-        """Why these thresholds cannot be used, or None."""
-        values = (self.warning_cell, self.critical_cell, self.warning_percent, self.critical_percent)
-        if not all(isinstance(v, (int, float)) and math.isfinite(v) for v in values):
-            return "battery thresholds must be finite numbers"
-        if not 2.5 <= self.critical_cell <= self.warning_cell <= 4.4:
-            return "battery cell thresholds: 2.5 V <= critical <= warning <= 4.4 V"
-        if not 0.0 <= self.critical_percent <= self.warning_percent <= 100.0:
-            return "battery percent thresholds: 0 <= critical <= warning <= 100 %"
-        return None
-
-
-@dataclass(frozen=True)
-class Battery:
-    voltage: float | None = None         # V
-    current: float | None = None         # A
-    remaining: float | None = None       # percent 0..100
-    remaining_estimated: bool = False    # True when derived from cell voltage
-    cells: int = 0                       # 0: not known yet
-    low: bool = False                    # the autopilot's battery failsafe state, else under 20 % or 3.7 V a cell
-    cells_source: str = ""               # "configured", "vehicle" (per-cell voltages) or "inferred" (from voltage)
-    charge_state: int = 0                # MAV_BATTERY_CHARGE_STATE from the autopilot, 0 when it sends none
-    reported_remaining: float | None = None   # the autopilot's own percentage, None when it gives none
-    consumed_mah: float | None = None    # BATTERY_STATUS.current_consumed, None when the vehicle does not count it
-    thresholds: BatteryThresholds = field(default_factory=BatteryThresholds)   # what ``alarm`` is judged by
-
-    @property
-    def cell_voltage(self) -> float | None:
-        return None if self.voltage is None or self.cells <= 0 else self.voltage / self.cells
-
-    @property
-    def alarm(self) -> BatteryAlarm:
-        """Against the pilot's thresholds, whatever the vehicle's failsafe says (driver.battery)."""
-        from .battery import battery_alarm
-        return battery_alarm(self)
-
-
 @dataclass(frozen=True)
 class Gps:
     fix_type: int = 0                    # GPS_FIX_TYPE: 0/1 none, 2 2D, 3 3D, 4+ DGPS/RTK
@@ -235,46 +156,6 @@ class LinkHealth:
         return "Replay ended" if self.replay_ended else ""
 
 
-class SigningStatus(enum.Enum):
-    OFF = "off"                                    # no key, the vehicle does not sign either
-    SIGNING = "signing"                            # we sign everything we send (see Signing.detail)
-    REQUIRED = "vehicle requires signing"          # the vehicle signs and we have no key: it ignores us
-    MISMATCH = "key mismatch"                      # the vehicle's signatures fail with our key
-    UNAVAILABLE = "MAVLink 1: cannot sign"         # a MAVLink 1 link (stock Solo) has no signing at all
-    SETTING_UP = "setting up"                      # SETUP_SIGNING sent, waiting for the vehicle to sign
-
-
-@dataclass(frozen=True)
-class Signing:
-    """MAVLink 2 message signing on the vehicle link: state and what was accepted or dropped."""
-    status: SigningStatus = SigningStatus.OFF
-    detail: str = ""
-    link_id: int | None = None           # the link id our signatures carry; None without a key
-    allow_unsigned: bool = False         # the pilot lets unsigned frames from the vehicle in
-    vehicle_signs: bool | None = None    # the autopilot's last heartbeat was signed; None before one
-    signed_accepted: int = 0             # frames whose signature verified with our key
-    bad_signature: int = 0               # signed frames dropped: wrong key, replayed or too old
-    unsigned_rejected: int = 0           # unsigned frames dropped (MAVLink 1 frames among them)
-    unsigned_accepted: int = 0           # unsigned frames let in (RADIO_STATUS, or allowed by the pilot)
-
-    @property
-    def counts(self) -> str:
-        """What was verified and dropped, in a few words ("" while signing has counted nothing)."""
-        parts = [f"{n} {what}" for n, what in ((self.signed_accepted, "verified"),
-                                                (self.bad_signature, "bad signatures dropped"),
-                                                (self.unsigned_rejected, "unsigned dropped"),
-                                                (self.unsigned_accepted, "unsigned let in")) if n]
-        return ", ".join(parts)
-
-    @property
-    def summary(self) -> str:
-        """One line for the pilot: "signing (both ends sign; link id 7): 1200 verified, 3 unsigned dropped"."""
-        notes = [n for n in (self.detail, f"link id {self.link_id}" if self.link_id is not None else "",
-                             "unsigned frames from the vehicle allowed" if self.allow_unsigned else "") if n]
-        text = self.status.value + (f" ({'; '.join(notes)})" if notes else "")
-        return text + (f": {self.counts}" if self.counts else "")
-
-
 @dataclass(frozen=True)
 class Message:
     """A line for the pilot: the autopilot's STATUSTEXT or the driver's own report."""
@@ -283,22 +164,6 @@ class Message:
     severity: Severity
     text: str
     source: str = "vehicle"              # "vehicle" (STATUSTEXT) or "driver"
-
-
-@dataclass(frozen=True)
-class CommandResult:
-    command: str                         # "takeoff", "arm", "mode GUIDED", ...
-    status: CommandStatus
-    reason: str = ""                     # the vehicle's words (ACK result + STATUSTEXT) or ours
-    attempts: int = 0
-    index: int = 0                       # increases by one for every result of a session
-
-    @property
-    def ok(self) -> bool:
-        return self.status in (CommandStatus.ACCEPTED, CommandStatus.IN_PROGRESS)
-
-    def __str__(self) -> str:
-        return f"{self.command}: {self.status.value}" + (f" ({self.reason})" if self.reason else "")
 
 
 @dataclass(frozen=True)

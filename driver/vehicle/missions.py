@@ -1,5 +1,5 @@
 """The embedded driver's mission part: transfers, the mission state, and flying the mission (start, pause,
-resume, go to an item), wired into :class:`driver.vehicle.Vehicle`, which only forwards to it.
+resume, go to an item), wired into :class:`driver.vehicle.vehicle.Vehicle`, which only forwards to it.
 
 Every command is confirmed by what the vehicle reports, as for every command of the driver: a start by the
 heartbeat showing AUTO *and* MISSION_CURRENT saying the mission runs; a pause by the heartbeat (BRAKE); a
@@ -18,13 +18,13 @@ from typing import Callable
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-from ..commands import chain
-from ..state import CommandResult, CommandStatus, SequencePhase, Severity, VehicleState
-from ..takeoff import TakeoffSequence
-from .limits import UNCHECKED, held_mission_problems, plan_problems, unchecked
-from .plan import MissionRunState, Plan, PlanKind, TransferOutcome
-from .progress import fold_item_reached, fold_mission_current, fold_text, fold_transfer_end
-from .transfer import PlanTransfers
+from ..core.results import chain
+from .state import CommandResult, CommandStatus, SequencePhase, Severity, VehicleState
+from .takeoff import TakeoffSequence
+from ..mission.limits import UNCHECKED, held_mission_problems, plan_problems, unchecked
+from ..mission.plan import MissionRunState, Plan, PlanKind, TransferOutcome
+from ..mission.progress import fold_item_reached, fold_mission_current, fold_text, fold_transfer_end
+from ..mission.transfer import PlanTransfers
 
 __all__ = ["MissionControl", "MissionStart"]
 
@@ -102,7 +102,7 @@ class MissionControl:
     def __init__(self, vehicle) -> None:
         self._v = vehicle
         cfg = vehicle.config
-        self.transfers = PlanTransfers(vehicle._new_encoder(), (cfg.source_system, cfg.source_component),
+        self.transfers = PlanTransfers(vehicle._ticker.new_encoder(), (cfg.source_system, cfg.source_component),
                                        vehicle._target_ids, vehicle._store.record_locked, vehicle._notifier.settle,
                                        lambda: vehicle._store.state.home, lambda: vehicle._v2)
         self._watches: list[_Watch] = []

@@ -1,4 +1,4 @@
-"""The writer side of :class:`~driver.state.VehicleState`: changes gathered under one lock, published as
+"""The writer side of :class:`~driver.vehicle.state.VehicleState`: changes gathered under one lock, published as
 one immutable snapshot that any thread may read without locking."""
 from __future__ import annotations
 

@@ -1,9 +1,9 @@
 """The one small interface through which anything flies the drone.
 
-Both the embedded driver (:class:`driver.vehicle.Vehicle`) and the remote Ice
+Both the embedded driver (:class:`driver.vehicle.vehicle.Vehicle`) and the remote Ice
 client provide it, so the viewer never knows which it has. Every method returns
 at once: commands hand back a :class:`concurrent.futures.Future` that resolves
-to a :class:`~driver.state.CommandResult`; state is read as an immutable
+to a :class:`~driver.vehicle.state.CommandResult`; state is read as an immutable
 snapshot. Nothing here blocks on the network.
 """
 from __future__ import annotations
@@ -13,7 +13,8 @@ from concurrent.futures import Future
 from dataclasses import dataclass
 
 from . import guided
-from .mission.plan import Plan, PlanKind, TransferOutcome
+from ..mission.plan import Plan, PlanKind, TransferOutcome
+from ..core.results import answered
 from .state import BatteryThresholds, CommandResult, CommandStatus, VehicleState
 
 
@@ -124,7 +125,7 @@ class Drone(abc.ABC):
     def set_yaw(self, degrees: float, relative: bool = False, rate_deg_s: float = 30.0) -> Future[CommandResult]:
         """Turn to a heading (clockwise from north) or by an angle (relative, positive = right)."""
 
-    # -- guided actions (driver.guided: built on the calls above, so every Drone has them) --------------
+    # -- guided actions (driver.vehicle.guided: built on the calls above, so every Drone has them) --------------
     def change_altitude(self, altitude: float) -> Future[CommandResult]:
         """Climb or descend to ``altitude`` m above home where the vehicle is, in GUIDED."""
         return guided.change_altitude(self, altitude)
@@ -136,34 +137,34 @@ class Drone(abc.ABC):
     # -- payload --------------------------------------------------------------------------
     def toggle_camera(self) -> Future[CommandResult]:
         """Ask the vehicle to show its next camera; a vehicle with one camera (the default) refuses at once."""
-        return _answered(CommandResult("switch camera", CommandStatus.REJECTED, "this vehicle has no camera switch"))
+        return answered(CommandResult("switch camera", CommandStatus.REJECTED, "this vehicle has no camera switch"))
 
     # -- gimbal, region of interest, camera on the vehicle (driver.payload; docs/camera.md) ------------
     # Each resolves on the vehicle's word: a pointing command on its ACK (or, on the Solo, MOUNT_STATUS
     # showing the angle); a picture or a recording only on the camera's own confirmation, never an ACK alone.
     def point_gimbal(self, pitch_deg: float, yaw_deg: float | None = None) -> Future[CommandResult]:
         """Point the gimbal: pitch 0 level, -90 straight down; yaw from the nose where the mount has it."""
-        return _answered(CommandResult("gimbal", CommandStatus.REJECTED, _NO_PAYLOAD))
+        return answered(CommandResult("gimbal", CommandStatus.REJECTED, _NO_PAYLOAD))
 
     def gimbal_rate(self, pitch_deg_s: float, yaw_deg_s: float = 0.0) -> Future[CommandResult]:
         """Turn the gimbal at a rate (positive pitch rate tilts up) until another command; 0 stops it."""
-        return _answered(CommandResult("gimbal rate", CommandStatus.REJECTED, _NO_PAYLOAD))
+        return answered(CommandResult("gimbal rate", CommandStatus.REJECTED, _NO_PAYLOAD))
 
     def look_at(self, lat: float, lon: float, alt: float = 0.0) -> Future[CommandResult]:
         """Region of interest: the vehicle keeps its camera (and nose) on this point, alt above home."""
-        return _answered(CommandResult("look at", CommandStatus.REJECTED, _NO_PAYLOAD))
+        return answered(CommandResult("look at", CommandStatus.REJECTED, _NO_PAYLOAD))
 
     def stop_looking(self) -> Future[CommandResult]:
         """End the region of interest: the mount goes back to its default mode."""
-        return _answered(CommandResult("stop looking", CommandStatus.REJECTED, _NO_PAYLOAD))
+        return answered(CommandResult("stop looking", CommandStatus.REJECTED, _NO_PAYLOAD))
 
     def take_photo(self) -> Future[CommandResult]:
         """A picture on the vehicle's camera; ACCEPTED only once the camera confirms it."""
-        return _answered(CommandResult("photo", CommandStatus.REJECTED, _NO_PAYLOAD))
+        return answered(CommandResult("photo", CommandStatus.REJECTED, _NO_PAYLOAD))
 
     def record_video(self, on: bool) -> Future[CommandResult]:
         """Start or stop video on the vehicle's camera; ACCEPTED once the camera says it records (or stopped)."""
-        return _answered(CommandResult(f"record {'on' if on else 'off'}", CommandStatus.REJECTED, _NO_PAYLOAD))
+        return answered(CommandResult(f"record {'on' if on else 'off'}", CommandStatus.REJECTED, _NO_PAYLOAD))
 
     # -- missions, fences, rally points (driver.mission) ----------------------------------------
     # A transfer resolves only on the vehicle's word: an upload is ACCEPTED once MISSION_ACK accepted it *and*
@@ -171,17 +172,17 @@ class Drone(abc.ABC):
     # time; progress is in ``state().mission.transfers``.
     def upload_plan(self, plan: Plan) -> Future[TransferOutcome]:
         """Check ``plan`` against the flight limits, write it to the vehicle, read it back and compare."""
-        return _answered(TransferOutcome(CommandResult(f"upload {plan.kind.label}", CommandStatus.REJECTED,
+        return answered(TransferOutcome(CommandResult(f"upload {plan.kind.label}", CommandStatus.REJECTED,
                                                        _NO_MISSIONS)))
 
     def download_plan(self, kind: PlanKind) -> Future[TransferOutcome]:
         """Read the vehicle's plan of ``kind``."""
-        return _answered(TransferOutcome(CommandResult(f"download {kind.label}", CommandStatus.REJECTED,
+        return answered(TransferOutcome(CommandResult(f"download {kind.label}", CommandStatus.REJECTED,
                                                        _NO_MISSIONS)))
 
     def clear_plan(self, kind: PlanKind) -> Future[CommandResult]:
         """MISSION_CLEAR_ALL for ``kind``, confirmed by its MISSION_ACK."""
-        return _answered(CommandResult(f"clear {kind.label}", CommandStatus.REJECTED, _NO_MISSIONS))
+        return answered(CommandResult(f"clear {kind.label}", CommandStatus.REJECTED, _NO_MISSIONS))
 
     def cancel_transfer(self, kind: PlanKind) -> None:
         """End the transfer of ``kind`` running now (its future resolves ABORTED); nothing when none runs."""
@@ -189,32 +190,32 @@ class Drone(abc.ABC):
     def start_mission(self) -> Future[CommandResult]:
         """Fly the uploaded mission: AUTO + MISSION_START; from the ground through the takeoff's readiness and
         arming path. Resolves when the heartbeat and MISSION_CURRENT say it runs."""
-        return _answered(CommandResult("mission start", CommandStatus.REJECTED, _NO_MISSIONS))
+        return answered(CommandResult("mission start", CommandStatus.REJECTED, _NO_MISSIONS))
 
     def pause_mission(self) -> Future[CommandResult]:
         """Hold where it is (BRAKE); the current item is kept."""
-        return _answered(CommandResult("mission pause", CommandStatus.REJECTED, _NO_MISSIONS))
+        return answered(CommandResult("mission pause", CommandStatus.REJECTED, _NO_MISSIONS))
 
     def resume_mission(self) -> Future[CommandResult]:
         """Back to AUTO: the vehicle flies the current item again."""
-        return _answered(CommandResult("mission resume", CommandStatus.REJECTED, _NO_MISSIONS))
+        return answered(CommandResult("mission resume", CommandStatus.REJECTED, _NO_MISSIONS))
 
     def set_mission_item(self, seq: int) -> Future[CommandResult]:
         """Make item ``seq`` (1 = the first flyable item) current: DO_SET_MISSION_CURRENT, else MISSION_SET_CURRENT."""
-        return _answered(CommandResult(f"mission item {seq}", CommandStatus.REJECTED, _NO_MISSIONS))
+        return answered(CommandResult(f"mission item {seq}", CommandStatus.REJECTED, _NO_MISSIONS))
 
     # -- parameters (driver.params) ---------------------------------------------------------------
     # The table is in ``state().parameters``; a set resolves ACCEPTED only on a PARAM_VALUE carrying the new
     # value at the parameter's own precision.
     def fetch_parameters(self, refresh: bool = False) -> Future[CommandResult]:
         """Download every parameter (re-asking missing ones by index); ``refresh`` ignores what is cached."""
-        return _answered(CommandResult("parameters", CommandStatus.REJECTED, _NO_PARAMETERS))
+        return answered(CommandResult("parameters", CommandStatus.REJECTED, _NO_PARAMETERS))
 
     def set_parameter(self, name: str, value: float, allow_out_of_bounds: bool = False) -> Future[CommandResult]:
         """PARAM_SET ``name`` to ``value`` in the parameter's own type, confirmed by the vehicle's echo. A value
         outside ArduPilot's documented bounds (:attr:`parameter_metadata`) is REJECTED unless
         ``allow_out_of_bounds`` says the pilot confirmed exactly that: the vehicle itself checks nothing."""
-        return _answered(CommandResult(f"param {name}", CommandStatus.REJECTED, _NO_PARAMETERS))
+        return answered(CommandResult(f"param {name}", CommandStatus.REJECTED, _NO_PARAMETERS))
 
     @property
     def parameter_metadata(self):
@@ -222,7 +223,7 @@ class Drone(abc.ABC):
         reboot-required), or None when there is none: editing still works, unchecked."""
         return None
 
-    # -- link security (MAVLink 2 signing; driver.signing) -------------------------------------
+    # -- link security (MAVLink 2 signing; driver.link.signing) -------------------------------------
     # Only a driver that holds the MAVLink link can sign it; a remote one (Ice) is set up on its server.
     @property
     def signing_unavailable(self) -> str:
@@ -239,11 +240,11 @@ class Drone(abc.ABC):
 
     def setup_signing(self, key: bytes) -> Future[CommandResult]:
         """Give the vehicle ``key`` (SETUP_SIGNING, in clear) and sign with it."""
-        return _answered(CommandResult("signing setup", CommandStatus.REJECTED, _NO_SIGNING))
+        return answered(CommandResult("signing setup", CommandStatus.REJECTED, _NO_SIGNING))
 
     def remove_signing(self) -> Future[CommandResult]:
         """Tell the vehicle to stop signing, then stop here."""
-        return _answered(CommandResult("signing remove", CommandStatus.REJECTED, _NO_SIGNING))
+        return answered(CommandResult("signing remove", CommandStatus.REJECTED, _NO_SIGNING))
 
     @abc.abstractmethod
     def close(self) -> None:
@@ -288,9 +289,3 @@ _NO_MISSIONS = "this vehicle connection cannot transfer or fly plans"
 _NO_PARAMETERS = "this vehicle connection cannot read or write parameters"
 _NO_PAYLOAD = "this vehicle connection cannot point a gimbal or trigger a camera"
 _NO_SIGNING = "the MAVLink link is signed where it is held: set signing up on the MAVLinkServer"
-
-
-def _answered(result: CommandResult) -> Future[CommandResult]:
-    future: Future[CommandResult] = Future()
-    future.set_result(result)
-    return future

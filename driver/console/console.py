@@ -12,17 +12,17 @@ from __future__ import annotations
 import cmd
 import inspect
 import logging
-import math
 import sys
 import threading
 import time
 from concurrent.futures import Future
 
-from .battery import time_left
-from .console_plans import PlanCommands
-from .state import BatteryAlarm, CommandResult, CommandStatus, SequencePhase, VehicleState
-from .rules import COPTER_MODES, mode_warning
-from .payload.console import PayloadCommands
+from ..vehicle.battery import time_left
+from .plans import PlanCommands
+from .words import number, result_line
+from ..vehicle.state import BatteryAlarm, CommandResult, CommandStatus, SequencePhase, VehicleState
+from ..vehicle.rules import COPTER_MODES, mode_warning
+from .payload import PayloadCommands
 
 ARM_USAGE = ("arm [throttle] [force] | arm check [all|none|MASK] | arm safetyon | arm safetyoff | arm list")
 VELOCITY_HOLD = 3.0          # s a typed velocity lasts (ArduCopter's GUID_TIMEOUT)
@@ -188,7 +188,7 @@ class Console(PlanCommands, PayloadCommands, cmd.Cmd):
                 return
             value = {"all": 1, "none": 0}.get(words[1])
             if value is None:
-                value = _number(words[1], "MASK", integer=True)
+                value = number(words[1], "MASK", integer=True)
             self._report(self.vehicle.set_parameter("ARMING_CHECK", float(value)))
         elif sub in ("safetyon", "safetyoff") or (sub == "safety" and len(words) == 2 and words[1] in ("on", "off")):
             on = sub == "safetyon" or (sub == "safety" and words[1] == "on")
@@ -212,7 +212,7 @@ class Console(PlanCommands, PayloadCommands, cmd.Cmd):
         words = arg.split()
         if len(words) > 1:
             raise ValueError("usage: takeoff [ALT]")
-        altitude = _number(words[0], "ALT") if words else None
+        altitude = number(words[0], "ALT") if words else None
         future = self.vehicle.takeoff(altitude)
         if not future.done():                 # the driver refuses at once (out of range, already flying): no "started"
             self.say("takeoff started" + (f" to {altitude:g} m" if altitude is not None else ""))
@@ -255,8 +255,8 @@ class Console(PlanCommands, PayloadCommands, cmd.Cmd):
         words = arg.split()
         if len(words) not in (3, 4):
             raise ValueError("usage: velocity X Y Z [SECONDS]  (forward right up, m/s, relative to the heading)")
-        x, y, z = (_number(w, name) for w, name in zip(words, "XYZ"))
-        hold = _number(words[3], "SECONDS") if len(words) == 4 else VELOCITY_HOLD
+        x, y, z = (number(w, name) for w, name in zip(words, "XYZ"))
+        hold = number(words[3], "SECONDS") if len(words) == 4 else VELOCITY_HOLD
         if not 0 < hold <= VELOCITY_HOLD_MAX:
             raise ValueError(f"SECONDS must be between 0 and {VELOCITY_HOLD_MAX:g}")
         why = velocity_hint(self.vehicle.state())
@@ -312,7 +312,7 @@ class Console(PlanCommands, PayloadCommands, cmd.Cmd):
         (in clear: over USB or a cable) and signs with it; key and keyfile sign without telling the vehicle;
         remove tells the vehicle to stop; disable stops signing here only; unsigned on lets the vehicle's
         unsigned frames in"""
-        from .signing import key_from_passphrase, read_key_file
+        from ..link.signing import key_from_passphrase, read_key_file
         sub, _, rest = arg.strip().partition(" ")
         rest = rest.strip()
         usage = "usage: signing setup PASSPHRASE | key PASSPHRASE | keyfile FILE | remove | disable | " \
@@ -339,25 +339,15 @@ class Console(PlanCommands, PayloadCommands, cmd.Cmd):
     def do_param(self, arg: str) -> None:
         """param fetch | param show [PATTERN] | param help NAME | param set NAME VALUE [force] |
         param load FILE [PATTERN] [force] | param save FILE [PATTERN] [missionplanner] | param diff FILE [PATTERN]
-        The vehicle's parameters, as MAVProxy's verbs (driver.params.verbs). A value outside ArduPilot's
+        The vehicle's parameters, as MAVProxy's verbs (driver.console.params). A value outside ArduPilot's
         documented bounds is written only with force; every write is confirmed by the vehicle."""
-        from .params.verbs import ParamVerbs
+        from .params import ParamVerbs
         ParamVerbs(self.vehicle, self.say, self._report)(arg)
 
     def do_status(self, arg: str) -> None:
         """status: link, mode, armed, position, battery, GPS, takeoff"""
         for line in status_lines(self.vehicle.state()):
             self.say(line)
-
-
-def _number(text: str, name: str, integer: bool = False) -> float:
-    try:
-        value = int(text, 0) if integer else float(text)
-    except ValueError:
-        raise ValueError(f"{name} must be a number, not {text!r}") from None
-    if not math.isfinite(value):
-        raise ValueError(f"{name} must be a finite number")
-    return value
 
 
 def battery_line(s: VehicleState) -> str:
@@ -424,13 +414,6 @@ def vertical_speed(climb: float) -> str:
     """"climbing 0.4 m/s", "descending 0.4 m/s"; a speed that rounds to zero is "climbing 0.0", never "-0.0"."""
     shown = round(climb, 1) + 0.0                       # + 0.0 turns -0.0 into 0.0
     return f"descending {-shown:.1f} m/s" if shown < 0 else f"climbing {shown:.1f} m/s"
-
-
-def result_line(result: CommandResult) -> str:
-    """A command's answer; one the vehicle never acknowledges (the safety switch) says just that it was sent."""
-    if result.status is CommandStatus.ACCEPTED and result.reason.startswith("sent"):
-        return f"{result.command}: {result.reason}"
-    return str(result)
 
 
 class _ConsoleLogHandler(logging.Handler):

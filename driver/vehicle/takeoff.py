@@ -1,4 +1,4 @@
-"""The takeoff sequence, written against the public :class:`~driver.api.Drone` interface.
+"""The takeoff sequence, written against the public :class:`~driver.vehicle.api.Drone` interface.
 
 Wait for the link and for readiness, GUIDED, arm, NAV_TAKEOFF, climb to 95 % of the target. It is a
 state machine the driver's ticker steps (no thread of its own, never blocking): each step reads the

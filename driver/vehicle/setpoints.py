@@ -10,7 +10,7 @@ from __future__ import annotations
 
 import logging
 
-from . import frames
+from ..core import frames
 from .api import Limits
 from .state import Setpoint
 

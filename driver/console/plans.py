@@ -1,11 +1,12 @@
 """The console's mission verbs, after MAVProxy's wp, fence and rally modules (mixed into
-:class:`driver.console.Console`): each transfer answers when the vehicle has, its lines printed then."""
+:class:`driver.console.console.Console`): each transfer answers when the vehicle has, its lines printed then."""
 from __future__ import annotations
 
 from concurrent.futures import Future
 
-from .mission.files import PlanFileError, load_plan_file, save_plan_file
-from .mission.plan import Plan, PlanKind
+from ..mission.files import PlanFileError, load_plan_file, save_plan_file
+from ..mission.plan import Plan, PlanKind
+from .words import result_line
 
 __all__ = ["PlanCommands", "plan_lines"]
 
@@ -94,7 +95,6 @@ class PlanCommands:
                 return
             result = outcome.result
             if self._claim(result):
-                from .console import result_line
                 self.say(result_line(result))
             if not result.ok or outcome.plan is None:
                 return

@@ -1,0 +1,107 @@
+"""The pack against the pilot's own thresholds, and how long it lasts at the present draw.
+
+Pure functions of a :class:`~driver.vehicle.state.Battery` snapshot. ArduPilot's own battery failsafe is off by
+default (BATT_FS_LOW_ACT 0, BATT_LOW_VOLT 0), and then BATTERY_STATUS says "OK" down to an empty pack: the
+alarm here never trusts that. It takes the worst of the pilot's thresholds (per cell and in percent) and the
+vehicle's own failsafe state.
+"""
+from __future__ import annotations
+
+import enum
+import math
+from dataclasses import dataclass, field
+
+from pymavlink.dialects.v20 import ardupilotmega as mavlink
+
+__all__ = ["Battery", "BatteryAlarm", "BatteryThresholds", "battery_alarm", "time_left"]
+
+class BatteryAlarm(enum.IntEnum):
+    """How the pack stands against the pilot's own thresholds (and the vehicle's failsafe): worse is higher."""
+    UNKNOWN = 0          # nothing to judge by yet
+    OK = 1
+    WARNING = 2
+    CRITICAL = 3
+
+
+@dataclass(frozen=True)
+class BatteryThresholds:
+    """The pilot's own battery limits, per cell (loaded voltage) and in percent: whichever is crossed first
+    counts. Judged by the driver (driver.vehicle.battery) whatever the vehicle's own battery failsafe says."""
+    warning_cell: float = 3.6            # V a cell
+    critical_cell: float = 3.5           # V a cell
+    warning_percent: float = 30.0        # % remaining
+    critical_percent: float = 15.0       # % remaining
+
+    def problem(self) -> str | None:
+        """Why these thresholds cannot be used, or None."""
+        values = (self.warning_cell, self.critical_cell, self.warning_percent, self.critical_percent)
+        if not all(isinstance(v, (int, float)) and math.isfinite(v) for v in values):
+            return "battery thresholds must be finite numbers"
+        if not 2.5 <= self.critical_cell <= self.warning_cell <= 4.4:
+            return "battery cell thresholds: 2.5 V <= critical <= warning <= 4.4 V"
+        if not 0.0 <= self.critical_percent <= self.warning_percent <= 100.0:
+            return "battery percent thresholds: 0 <= critical <= warning <= 100 %"
+        return None
+
+
+@dataclass(frozen=True)
+class Battery:
+    voltage: float | None = None         # V
+    current: float | None = None         # A
+    remaining: float | None = None       # percent 0..100
+    remaining_estimated: bool = False    # True when derived from cell voltage
+    cells: int = 0                       # 0: not known yet
+    low: bool = False                    # the autopilot's battery failsafe state, else under 20 % or 3.7 V a cell
+    cells_source: str = ""               # "configured", "vehicle" (per-cell voltages) or "inferred" (from voltage)
+    charge_state: int = 0                # MAV_BATTERY_CHARGE_STATE from the autopilot, 0 when it sends none
+    reported_remaining: float | None = None   # the autopilot's own percentage, None when it gives none
+    consumed_mah: float | None = None    # BATTERY_STATUS.current_consumed, None when the vehicle does not count it
+    thresholds: BatteryThresholds = field(default_factory=BatteryThresholds)   # what ``alarm`` is judged by
+
+    @property
+    def cell_voltage(self) -> float | None:
+        return None if self.voltage is None or self.cells <= 0 else self.voltage / self.cells
+
+    @property
+    def alarm(self) -> BatteryAlarm:
+        """Against the pilot's thresholds, whatever the vehicle's failsafe says (driver.vehicle.battery)."""
+        return battery_alarm(self)
+
+
+_MIN_DRAW = 0.5            # A: below it (disarmed, on the bench) a time left means nothing
+
+
+def battery_alarm(b: Battery) -> BatteryAlarm:
+    """How ``b`` stands against ``b.thresholds`` and the vehicle's own failsafe state: worse is higher."""
+    t = b.thresholds
+    cell = b.cell_voltage
+    if cell is None and b.remaining is None and b.charge_state < mavlink.MAV_BATTERY_CHARGE_STATE_LOW:
+        return BatteryAlarm.UNKNOWN
+    alarm = BatteryAlarm.OK
+    if (cell is not None and cell <= t.warning_cell) or (b.remaining is not None and b.remaining <= t.warning_percent):
+        alarm = BatteryAlarm.WARNING
+    if (cell is not None and cell <= t.critical_cell) or (b.remaining is not None
+                                                          and b.remaining <= t.critical_percent):
+        alarm = BatteryAlarm.CRITICAL
+    if b.charge_state >= mavlink.MAV_BATTERY_CHARGE_STATE_CRITICAL:      # CRITICAL, EMERGENCY, FAILED, UNHEALTHY
+        alarm = BatteryAlarm.CRITICAL
+    elif b.charge_state == mavlink.MAV_BATTERY_CHARGE_STATE_LOW:
+        alarm = max(alarm, BatteryAlarm.WARNING)
+    return alarm
+
+
+def time_left(b: Battery, reserve_percent: float | None = None) -> float | None:
+    """Seconds until the pack is down to ``reserve_percent`` (default: the critical threshold) at the present
+    current, or None when the vehicle gives no consumed charge, no current or no percentage of its own.
+
+    ArduPilot's percentage is (capacity - consumed) / capacity, so the charge left is
+    consumed * remaining / (100 - remaining) mAh, whatever BATT_CAPACITY is."""
+    remaining, consumed, current = b.reported_remaining, b.consumed_mah, b.current
+    if remaining is None or consumed is None or current is None or current < _MIN_DRAW:
+        return None
+    if remaining >= 100.0 or consumed <= 0.0:
+        return None
+    reserve = b.thresholds.critical_percent if reserve_percent is None else reserve_percent
+    usable = max(0.0, remaining - reserve)
+    left_mah = consumed * usable / (100.0 - remaining)
+    return 3.6 * left_mah / current

@@ -1,0 +1,186 @@
+"""The ticker thread of a :class:`~driver.vehicle.vehicle.Vehicle`, and the one way out to the link.
+
+Every tick it sends the heartbeat, steps the takeoff or mission start, streams the velocity setpoint, and lets
+the command sender, the parameters, the payload, the missions and signing say what they want sent. All of it is
+decided under the state lock and written after releasing it, so a slow serial write stalls nobody. Callers on
+other threads (the UI) only :meth:`Ticker.post`: the ticker writes for them.
+"""
+from __future__ import annotations
+
+import collections
+import logging
+import math
+import threading
+import time
+
+from pymavlink.dialects.v20 import ardupilotmega as mavlink
+
+from .state import Setpoint, Severity
+
+log = logging.getLogger("driver.vehicle")
+
+__all__ = ["Ticker", "MASK_VELOCITY_YAW_RATE", "MASK_POSITION", "MASK_VELOCITY"]
+
+MASK_VELOCITY_YAW_RATE = 1479      # use vx, vy, vz and yaw rate (arducopter.md)
+MASK_POSITION = 3576               # use x, y, z only
+MASK_VELOCITY = 3527               # use vx, vy, vz only
+YAW_LEAD = 0.5                     # s: old firmware's heading target is this far ahead of a turning nose
+YAW_RESEND = 0.2                   # s between those targets
+LOG_FLUSH_INTERVAL = 1.0           # s: a crash loses at most this much of the flight log
+
+
+class Ticker:
+    """Sends for the vehicle: the outbox, the encoder (signing as configured now) and the periodic work."""
+
+    def __init__(self, vehicle):
+        self._v = vehicle
+        self.config = vehicle.config
+        self._transport, self._signing, self._store = vehicle._transport, vehicle._signing, vehicle._store
+        self._lock, self._link, self._commands = vehicle._lock, vehicle._link, vehicle._commands
+        self._params, self._setpoints, self._sequence = vehicle._params, vehicle._setpoints, vehicle._sequence
+        self._closing, self._wake = vehicle._closing, vehicle._wake
+        self._codec_out = self.new_encoder()
+        self._sender_generation = -1          # the encoder is (re)configured for signing on the next send
+        self._tx_lock = threading.Lock()
+        self._outbox: collections.deque = collections.deque()   # messages posted by callers, sent by the ticker
+        self._yaw_next = 0.0                  # old firmware: next CONDITION_YAW of a held yaw stick
+        self._yaw_held = False                # old firmware: the heading is held by CONDITION_YAW
+
+    def send(self, msg) -> None:
+        """Pack and write one message; ``bytes`` are a frame packed already (SETUP_SIGNING)."""
+        if self._transport.is_replay:
+            return
+        with self._tx_lock:
+            if isinstance(msg, bytes):
+                self._write(msg)
+                return
+            signing, codec = self._signing, self._codec_out
+            if self._sender_generation != signing.generation:
+                self._sender_generation = signing.generation
+                signing.configure_sender(codec, signing.key)
+            signing.stamp(codec)
+            buf = msg.pack(codec, force_mavlink1=not self._v._v2)
+            codec.seq = (codec.seq + 1) % 256
+            signing.note_sent(codec)
+            self._write(buf)
+
+    def new_encoder(self):
+        return mavlink.MAVLink(None, srcSystem=self.config.source_system, srcComponent=self.config.source_component)
+
+    def forward_to_vehicle(self, frame: bytes) -> None:
+        with self._tx_lock:
+            self._write(frame)
+
+    def post(self, msg) -> None:
+        """Send from the ticker thread: callers (the UI among them) never touch the link themselves."""
+        self._outbox.append(msg)
+        self._wake.set()
+
+    def _write(self, buf: bytes) -> None:
+        """Whole frames only, one writer at a time (caller holds _tx_lock)."""
+        if self._transport.write(buf) and self._v._tlog:       # the log holds what really went out
+            self._v._tlog.write(buf)
+
+    def heartbeat_message(self):
+        return mavlink.MAVLink_heartbeat_message(mavlink.MAV_TYPE_GCS, mavlink.MAV_AUTOPILOT_INVALID, 0, 0,
+                                                 mavlink.MAV_STATE_ACTIVE, 3)
+
+    def setpoint_message(self, sp: Setpoint):
+        system, component = self._v._target_ids()
+        return mavlink.MAVLink_set_position_target_local_ned_message(
+            0, system, component, mavlink.MAV_FRAME_BODY_OFFSET_NED,
+            MASK_VELOCITY_YAW_RATE, 0, 0, 0, sp.forward, sp.right, -sp.up, 0, 0, 0, 0, sp.yaw_rate)
+
+    def _legacy_setpoint_messages(self, sp: Setpoint, now: float) -> list:
+        """Firmware before ArduCopter 3.5 (the stock Solo) reads neither the frame nor the yaw rate of
+        SET_POSITION_TARGET_LOCAL_NED ("for future use" in its GCS_Mavlink): body velocities are turned to
+        north/east here, with the heading the vehicle reports, and the nose is steered with CONDITION_YAW
+        heading targets a little ahead of it (else the vehicle turns its nose to the direction of travel)."""
+        system, component = self._v._target_ids()
+        yaw = self._store.state.attitude.yaw
+        c, s = math.cos(yaw), math.sin(yaw)
+        out = [mavlink.MAVLink_set_position_target_local_ned_message(
+            0, system, component, mavlink.MAV_FRAME_LOCAL_NED, MASK_VELOCITY,
+            0, 0, 0, c * sp.forward - s * sp.right, s * sp.forward + c * sp.right, -sp.up, 0, 0, 0, 0, 0)]
+        if sp.yaw_rate and now >= self._yaw_next:
+            target = math.degrees(yaw + sp.yaw_rate * YAW_LEAD) % 360.0
+            out.append(mavlink.MAVLink_command_long_message(
+                system, component, mavlink.MAV_CMD_CONDITION_YAW, 0, target, math.degrees(abs(sp.yaw_rate)),
+                1 if sp.yaw_rate > 0 else -1, 0, 0, 0, 0))
+            self._yaw_next, self._yaw_held = now + YAW_RESEND, False
+        elif not sp.yaw_rate and not self._yaw_held:          # hold the heading the pilot left it at
+            out.append(mavlink.MAVLink_command_long_message(
+                system, component, mavlink.MAV_CMD_CONDITION_YAW, 0, math.degrees(yaw) % 360.0, 30, 0, 0, 0, 0, 0))
+            self._yaw_held = True
+        return out
+
+    def run(self) -> None:
+        next_heartbeat = next_health = next_flush = 0.0
+        while not self._closing.is_set():
+            now = time.monotonic()
+            out: list = []
+            try:
+                if now >= next_heartbeat:
+                    next_heartbeat = now + self.config.heartbeat_interval
+                    out.append(self.heartbeat_message())
+                while self._outbox:
+                    out.append(self._outbox.popleft())
+                with self._lock:
+                    self._sequence.step(now)
+                    out += self._stream_setpoint(now)
+                    out += self._commands.service(now, self._store.state)
+                    out += self._params.service(now, self._link.status)
+                    out += self._v._payload.service(now, self._store.state)
+                    out += self._v._missions.service(now, self._store.state)
+                    if now >= next_health:
+                        next_health = now + 0.1
+                        out += self._supervise(now)
+                        frames_out, settled = self._signing.service(now, self._v._target_ids(), self.new_encoder)
+                        out += frames_out
+                        self._v._signing_control.settle(settled)
+            except Exception:                         # heartbeat, setpoints and deadman must outlive any bug
+                log.exception("ticker step failed")
+            for msg in out:                           # outside the lock: a slow link stalls nobody else
+                self.send(msg)
+            if self._v._tlog is not None and now >= next_flush:
+                next_flush = now + LOG_FLUSH_INTERVAL
+                self._v._tlog.flush()
+            self._wake.wait(min(0.05, 1.0 / self.config.setpoint_rate))
+            self._wake.clear()
+
+    def _supervise(self, now: float) -> list:
+        """Link health, loss, log failures and requests to the vehicle; republishes every 100 ms."""
+        store = self._store
+        if self._v._tlog is not None and self._v._tlog.error:
+            error, self._v._tlog = self._v._tlog.error, None
+            store.add_message_locked(Severity.WARNING, f"Flight log stopped: {error}")
+        out, event, reopen = self._link.tick(now)
+        if reopen:
+            self._v._reader.reopen = True
+        store.set(link=self._link.health(self._v._version), signing=self._signing.snapshot(self._v._version))
+        for ip, port in self._transport.strangers():
+            store.add_message_locked(Severity.WARNING, f"Ignored MAVLink from {ip}:{port}: the link is pinned to the "
+                                     f"vehicle at {self._link.health(self._v._version).pinned_to} (--allow {ip} "
+                                     "accepts that sender)")
+        store.publish()
+        if event == "lost":
+            age = self._link.health(self._v._version).heartbeat_age or 0.0
+            store.add_message_locked(Severity.CRITICAL, f"Link lost: no heartbeat for {age:.1f} s")
+            self._commands.link_lost()
+            self._params.link_lost()
+        elif event == "finished":
+            store.add_message_locked(Severity.NOTICE, "Replay ended: the whole recording has been played")
+        return out
+
+    def _stream_setpoint(self, now: float) -> list:
+        sp, fired = self._setpoints.tick(now)
+        if fired:
+            self._store.set(setpoint=self._setpoints.setpoint)
+            self._store.publish()
+        if not self._setpoints.streaming:
+            self._yaw_held = False                    # the next stick movement holds the heading it finds
+        if sp is None or self._store.state.mode != "GUIDED":
+            return []
+        if self._commands.capabilities.setpoint_yaw is False:
+            return self._legacy_setpoint_messages(sp, now)
+        return [self.setpoint_message(sp)]
