@@ -54,7 +54,7 @@ from sitl_judge import HeldItem, Judge  # noqa: E402
 import tables  # noqa: E402
 
 from driver import CommandStatus, Vehicle, VehicleConfig  # noqa: E402
-from driver.frames import offset_latlon  # noqa: E402
+from driver.core.frames import offset_latlon  # noqa: E402
 from driver.mission.plan import MissionItem, MissionRunState, Plan, PlanKind  # noqa: E402
 
 HOME = (-35.363261, 149.165230, 584.0, 353.0)           # ArduPilot's CMAC, as in sitl.md and the recordings
