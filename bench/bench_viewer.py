@@ -251,7 +251,7 @@ def main() -> None:
     pad = None
     sweeping, stopping = threading.Event(), threading.Event()
     if args.gamepad:
-        from uavviewer.gamepad import VirtualPad
+        from uavviewer.input.gamepad import VirtualPad
         pad = VirtualPad("Bench gamepad")
 
         def thumbs() -> None:                       # both sticks sweep, 100 updates a second

@@ -11,7 +11,7 @@ from uavviewer import app as main
 from driver import frames
 from driver.ice.fleet import IceFleet
 from driver.state import GlobalPosition, LinkStatus, LocalPosition, Severity, VehicleState
-from uavviewer.fleet import FleetController, row_for, switch_message
+from uavviewer.fleet.controller import FleetController, row_for, switch_message
 from uavviewer.map.geometry import MapFrame
 from uavviewer.map.controller import fleet_marks, placed
 from uavviewer.map.map_view import OTHER, STALE, VEHICLE, MapView, VehicleMark

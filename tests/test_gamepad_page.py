@@ -9,7 +9,7 @@ from PyQt5.QtCore import Qt
 from PyQt5.QtWidgets import QCheckBox, QComboBox, QDialogButtonBox, QLabel, QProgressBar, QPushButton
 
 from uavviewer.settings import load_settings
-from uavviewer.widgets.gamepad_page import GamepadPage
+from uavviewer.input.gamepad_page import GamepadPage
 
 from gamepad_fixtures import pad, pad_factory  # noqa: F401  (fixtures)
 from test_viewer_gamepad import press, wait_pad

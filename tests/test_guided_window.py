@@ -102,7 +102,7 @@ def test_a_circle_the_vehicle_took_is_drawn_from_the_ui_thread(qtbot):
     from PyQt5.QtWidgets import QWidget
 
     from driver.state import CommandResult, CommandStatus, VehicleState
-    from uavviewer.guided.controller import GuidedController
+    from uavviewer.flight.guided import GuidedController
 
     future = Future()
 

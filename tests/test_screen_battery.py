@@ -15,8 +15,8 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink
 from driver import telemetry
 from driver.battery import battery_alarm, time_left
 from driver.state import Battery, BatteryAlarm, BatteryThresholds, VehicleState
-from uavviewer.widgets.status_strip import ALARM_COLOURS
-from uavviewer.widgets.telemetry_panel import BAD
+from uavviewer.telemetry.status_strip import ALARM_COLOURS
+from uavviewer.telemetry.panel import BAD
 
 from viewer_fixtures import viewer_settings, window_factory  # noqa: F401  (fixtures)
 

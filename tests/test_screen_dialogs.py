@@ -8,8 +8,8 @@ import pytest
 from PyQt5.QtCore import QPoint, QRect
 from PyQt5.QtWidgets import QAbstractButton, QApplication, QDialog, QDialogButtonBox, QMessageBox
 
-from uavviewer import dialogs
-from uavviewer.layout import FRAME_ALLOWANCE, MIN_SIZE
+from uavviewer.preferences import dialog as dialogs
+from uavviewer.window.layout import FRAME_ALLOWANCE, MIN_SIZE
 from uavviewer.params.compare_dialog import CompareDialog
 from uavviewer.params.review_dialog import ReviewDialog
 from uavviewer.params.rows import FileRow, ReviewRow

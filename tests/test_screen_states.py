@@ -11,7 +11,7 @@ import pytest
 from PyQt5.QtWidgets import QProgressBar
 
 from driver.camera.source import SourceFailed, VideoSource
-from uavviewer.widgets.gamepad_page import GamepadPage
+from uavviewer.input.gamepad_page import GamepadPage
 
 from test_viewer_window import silent_vehicle  # noqa: F401  (fixture)
 from viewer_fixtures import viewer_settings, window_factory  # noqa: F401  (fixtures)

@@ -13,7 +13,7 @@ from PyQt5.QtGui import QMouseEvent
 from PyQt5.QtWidgets import QApplication, QMessageBox
 
 from driver.state import LandedState, LinkStatus
-from uavviewer.flight_phase import FlightPhase
+from uavviewer.flight.phase import FlightPhase
 
 from viewer_fixtures import pick_mode, viewer_settings, window, window_factory  # noqa: F401  (fixtures)
 

@@ -13,7 +13,7 @@ import pytest
 from PyQt5.QtCore import Qt
 from PyQt5.QtWidgets import QWidget
 
-from uavviewer.gamepad import sdl2
+from uavviewer.input.gamepad import sdl2
 
 from gamepad_fixtures import pad, pad_factory, reached  # noqa: F401  (fixtures)
 from test_viewer_safety import sent_commands, wait_flying

@@ -50,7 +50,7 @@ def test_preferences_left_alone_do_not_save_the_command_line_altitude(qtbot, sil
                                                                        window_factory):
     from PyQt5.QtWidgets import QDialogButtonBox
 
-    from uavviewer.dialogs import SettingsDialog
+    from uavviewer.preferences.dialog import SettingsDialog
     from uavviewer.settings import load_settings
     w = window_factory(silent_vehicle, takeoff_altitude=25.0)
     w.edit_settings()

@@ -13,7 +13,7 @@ from PyQt5.QtCore import QPoint, Qt
 from PyQt5.QtWidgets import QApplication, QDialogButtonBox, QMessageBox, QWidget
 
 from driver.api import CEILING, Limits
-from uavviewer.dialogs import SettingsDialog
+from uavviewer.preferences.dialog import SettingsDialog
 from uavviewer.settings import ViewerSettings, save_settings
 
 from test_viewer_window import silent_vehicle  # noqa: F401  (fixture)

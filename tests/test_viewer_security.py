@@ -11,11 +11,11 @@ from PyQt5.QtWidgets import QDialogButtonBox, QLineEdit, QMessageBox
 
 from driver.signing import SigningConfig, key_from_passphrase, write_key_file
 from driver.state import LinkHealth, LinkStatus, Signing, SigningStatus, VehicleState
-from uavviewer.dialogs import SettingsDialog
-from uavviewer.link_security import signing_warning
+from uavviewer.preferences.dialog import SettingsDialog
+from uavviewer.connect.security import signing_warning
 from uavviewer.settings import load_settings
-from uavviewer.widgets.link_banner import LinkBanner
-from uavviewer.widgets.telemetry_panel import DIM, GOOD, NORMAL, WARN, TelemetryPanel
+from uavviewer.connect.link_banner import LinkBanner
+from uavviewer.telemetry.panel import DIM, GOOD, NORMAL, WARN, TelemetryPanel
 
 from ice_fixtures import drone_factory, server_factory  # noqa: F401  (fixtures)
 from test_driver_pinned_link import Spoofer

@@ -11,9 +11,9 @@ import pytest
 from PyQt5.QtWidgets import QApplication, QDialogButtonBox
 
 from driver.vehicle import Vehicle, VehicleConfig
-from uavviewer.dialogs import KeysDialog, SettingsDialog
+from uavviewer.preferences.dialog import KeysDialog, SettingsDialog
 from uavviewer.settings import ViewerSettings, split_uris
-from uavviewer.sticks import StickMode, pad_labels
+from uavviewer.input.sticks import StickMode, pad_labels
 
 from camera_media import write_clip
 from test_camera_view import nearest, painted_rgb
@@ -144,7 +144,7 @@ from PyQt5.QtCore import QSettings
 from PyQt5.QtWidgets import QApplication
 app = QApplication([])
 from driver.vehicle import Vehicle, VehicleConfig
-from uavviewer.dialogs import SettingsDialog
+from uavviewer.preferences.dialog import SettingsDialog
 from uavviewer.main_window import MainWindow
 with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
     s.bind(("127.0.0.1", 0))

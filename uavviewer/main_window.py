@@ -20,35 +20,35 @@ from driver.rules import mode_warning, unattended
 from driver.state import LinkStatus, SequencePhase, Severity, VehicleState
 
 from . import RESOURCES
-from .dialogs import (
+from .preferences.dialog import (
     KeysDialog, SettingsDialog, ask, emergency_stop_question, mode_question, takeoff_question,
 )
-from .camera_controller import CameraController, default_media_folder
+from .camera.controller import CameraController, default_media_folder
 from .connect.choice import Choice, Kind, sim_name
-from .dialog_fit import fit_dialog
+from .widgets.dialog_fit import fit_dialog
 from .drone_adapter import DroneAdapter
 from .flight.arming import Arming
-from .flight_timer import FlightTimer
-from .flight_phase import (
+from .flight.timer import FlightTimer
+from .flight.phase import (
     NO_VEHICLE, FlightPhase, flight_phase, link_gone_text, no_link_flag, no_vehicle_words, readiness_text, stick_hint,
     takeoff_cancellable, takeoff_progress,
 )
-from .gamepad_input import GamepadInput
-from .keyboard import ACTION_KEYS, AXIS_KEYS, KeyboardSticks
-from .link_security import signing_unavailable, signing_warning
-from .pilot_input import Input, InputSelector
-from .pilot_tools import PilotTools
+from .input.gamepad_input import GamepadInput
+from .input.keyboard import ACTION_KEYS, AXIS_KEYS, KeyboardSticks
+from .connect.security import signing_unavailable, signing_warning
+from .input.selector import Input, InputSelector
+from .window.pilot_tools import PilotTools
 from .map.controller import MapController, TileSettings
-from .map.plan_controller import PlanController
+from .plan.controller import PlanController
 from .params import ParamsController
 from .refresh import INSTRUMENTS_HZ, PLOTS_HZ, TEXT_HZ, Refresh
 from .settings import ViewerSettings, default_qsettings, load_settings, load_window, save_settings, save_window
-from .sticks import Axes, MaxSpeeds, axes_from_pads, combine, pad_labels, pads_from_axes, velocity_from_axes
-from .gimbal_controller import KEY_STEP, GimbalController
-from .layout import fit_restored, fit_screen, show_replay_bar, steady_slots
-from .widgets.camera_panel import CameraPanel
-from .widgets.gimbal_bar import GimbalBar
-from .widgets.gamepad_page import GamepadPage
+from .input.sticks import Axes, MaxSpeeds, axes_from_pads, combine, pad_labels, pads_from_axes, velocity_from_axes
+from .camera.gimbal import KEY_STEP, GimbalController
+from .window.layout import fit_restored, fit_screen, show_replay_bar, steady_slots
+from .camera.panel import CameraPanel
+from .camera.gimbal_bar import GimbalBar
+from .input.gamepad_page import GamepadPage
 
 __all__ = ["MainWindow", "load_style"]
 
@@ -198,7 +198,7 @@ class MainWindow(QMainWindow):
         self.show_state(VehicleState(link=self.adapter.state.link))
         self.adapter.start()
 
-    # -- connecting (File › Connect, Disconnect, Open flight log: uavviewer/pilot_tools.py wires them) ----------
+    # -- connecting (File › Connect, Disconnect, Open flight log: uavviewer/window/pilot_tools.py wires them) ----------
     def _connected(self, opened) -> None:
         """A connection opened by File › Connect (:class:`uavviewer.connect.opener.Opened`): a vehicle, or a lab's
         fleet with its Fleet panel."""
@@ -212,7 +212,7 @@ class MainWindow(QMainWindow):
             from driver.ice import camera_source as ice_source
             from driver.ice.client import fleet_properties
 
-            from .fleet import FleetController
+            from .fleet.controller import FleetController
             ice_source.use_client_properties(fleet_properties(opened.choice.target, self.connections.certs))
             own = [FleetController.camera_uri(opened.first)]
             self.attach_fleet(FleetController(opened.fleet, opened.first, parent=self))
@@ -642,7 +642,7 @@ class MainWindow(QMainWindow):
             fc.main_button.click()
         elif action == "land" and fc.phase in (FlightPhase.TAKING_OFF, FlightPhase.FLYING):
             fc.main_button.click()
-        elif action in ("tilt_up", "tilt_down"):      # the vehicle's camera (uavviewer.gimbal_controller)
+        elif action in ("tilt_up", "tilt_down"):      # the vehicle's camera (uavviewer.camera.gimbal)
             self.gimbal.tilt_by(KEY_STEP if action == "tilt_up" else -KEY_STEP)
 
     def changeEvent(self, event: QEvent) -> None:  # noqa: N802
@@ -846,10 +846,10 @@ class MainWindow(QMainWindow):
 
     # -- fleet (docs/fleet.md): several vehicles; the sticks, keys, buttons and instruments follow the picked one --
     def attach_fleet(self, fleet) -> None:
-        """A Fleet dock for ``fleet`` (:class:`uavviewer.fleet.FleetController`), already flying its picked vehicle."""
+        """A Fleet dock for ``fleet`` (:class:`uavviewer.fleet.controller.FleetController`), already flying its picked vehicle."""
         from PyQt5.QtWidgets import QDockWidget
 
-        from .widgets.fleet_panel import FleetPanel
+        from .fleet.panel import FleetPanel
         self.fleet, self.fleet_box = fleet, None
         self.fleet_panel = FleetPanel()
         dock = QDockWidget("Fleet", self)
@@ -888,7 +888,7 @@ class MainWindow(QMainWindow):
 
     def request_all(self, command: str) -> None:
         """Take off, land or stop every vehicle, after one confirmation."""
-        from .dialogs import all_vehicles_question
+        from .preferences.dialog import all_vehicles_question
         names = [r.name for r in self.fleet.rows]
         if not names or (self.fleet_box is not None and self.fleet_box.isVisible()):
             return

@@ -10,8 +10,8 @@ from PyQt5.QtWidgets import QMessageBox
 
 from driver.rules import ARM_IN, arming_consequence, arming_refusal
 
-from ..dialogs import arm_question, ask
-from ..flight_phase import flight_phase
+from ..preferences.dialog import arm_question, ask
+from .phase import flight_phase
 
 __all__ = ["Arming"]
 

@@ -24,7 +24,7 @@ from driver.rules import MAX_ALTITUDE, MIN_GOTO_ALTITUDE
 from driver.state import CommandResult, VehicleState
 
 from .camera_overlay import CameraOverlay
-from ..dialogs import ask, fly_here_question
+from ..preferences.dialog import ask, fly_here_question
 from .geometry import MapFrame, tiles_covering, tile_zoom_for
 from .tiles import MAX_AREA_TILES, TileSource
 from .trail import Trail
@@ -65,7 +65,7 @@ def placed(frame: MapFrame | None, s: VehicleState, own: bool = True) -> tuple[f
 def fleet_marks(frame: MapFrame | None, seen) -> tuple[VehicleMark, ...]:
     """The fleet's vehicles but the picked one, where their own snapshots put them in ``frame``.
 
-    ``seen``: (FleetRow, VehicleState or None) for each vehicle, as :class:`uavviewer.fleet.FleetController` reads
+    ``seen``: (FleetRow, VehicleState or None) for each vehicle, as :class:`uavviewer.fleet.controller.FleetController` reads
     them; a vehicle without a state or a position is left off."""
     marks = []
     for row, s in seen:

@@ -11,8 +11,8 @@ from __future__ import annotations
 from PyQt5.QtCore import QPoint, QRect, QSettings
 from PyQt5.QtWidgets import QWidget
 
-from ..dialog_fit import fit_dialog
-from ..layout import FRAME_ALLOWANCE
+from ..widgets.dialog_fit import fit_dialog
+from ..window.layout import FRAME_ALLOWANCE
 
 __all__ = ["GEOMETRY_KEY", "GAP", "keep_clear", "place", "remember"]
 

@@ -2,7 +2,7 @@
 
 While Plan is shown, the tabs behind it and behind the map (Preflight, Plots: not in view anyway) step out, so no
 tab bar takes height, and the Plan dock gets the height its panel needs with its list showing
-:data:`~uavviewer.map.plan_panel.ROWS_IN_VIEW` rows; the map has the rest of the column. Never wider: the flight
+:data:`~uavviewer.plan.panel.ROWS_IN_VIEW` rows; the map has the rest of the column. Never wider: the flight
 controls beside it stay where they are. Plan closed: the tabs come back as they were.
 """
 from __future__ import annotations

@@ -1,7 +1,7 @@
 """Editing the plan in Plan mode: what a click, a drag, the Add menu, Delete and the list's cells do to the
-:class:`~uavviewer.map.plan_model.PlanDocument`, and the list, survey box and totals shown from it.
+:class:`~uavviewer.plan.model.PlanDocument`, and the list, survey box and totals shown from it.
 
-The vehicle's part (transfers, flying, progress) is :class:`uavviewer.map.plan_controller.PlanController`'s.
+The vehicle's part (transfers, flying, progress) is :class:`uavviewer.plan.controller.PlanController`'s.
 """
 from __future__ import annotations
 
@@ -13,9 +13,9 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from driver.mission.plan import MissionItem, Plan, PlanKind
 
-from .plan_checks import unreachable
-from .plan_history import PlanHistory
-from .plan_model import ITEM_KINDS, FenceShape, Performance, PlanDocument, is_nav, new_item
+from .checks import unreachable
+from .history import PlanHistory
+from .model import ITEM_KINDS, FenceShape, Performance, PlanDocument, is_nav, new_item
 from .survey import SurveySpec, camera_named
 
 __all__ = ["PlanEditor", "LAYER_OF"]
@@ -264,7 +264,7 @@ class PlanEditor(QObject):
         self._changed(f"Load the {plan.kind.label}")
 
     def load_entries(self, entries: list) -> None:
-        """A mission opened from a file, its surveys kept surveys (uavviewer.map.survey_file)."""
+        """A mission opened from a file, its surveys kept surveys (uavviewer.plan.survey_file)."""
         self.doc.entries = list(entries)
         self._select("mission", None)
         self._changed("Open the mission")

@@ -17,7 +17,7 @@ from PyQt5.QtWidgets import QSizePolicy, QWidget
 from driver.camera import Frame
 from driver.state import VehicleState
 
-from .video_hud import paint_hud
+from .hud import paint_hud
 
 __all__ = ["CameraView", "fit_rect"]
 

@@ -5,8 +5,8 @@ from PyQt5.QtCore import QSize, Qt, pyqtSignal
 from PyQt5.QtGui import QFontMetrics, QIcon
 from PyQt5.QtWidgets import QGridLayout, QProgressBar, QPushButton, QSizePolicy, QWidget
 
-from .icons import icon
-from ..flight_phase import FlightPhase
+from ..widgets.icons import icon
+from .phase import FlightPhase
 
 __all__ = ["FlightControls"]
 

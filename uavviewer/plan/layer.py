@@ -10,7 +10,7 @@ import math
 from PyQt5.QtCore import QLineF, QObject, QPointF, QRectF, Qt, pyqtSignal
 from PyQt5.QtGui import QColor, QFont, QPainter, QPen, QPixmap, QPolygonF
 
-from .plan_model import PlanDocument, is_nav
+from .model import PlanDocument, is_nav
 from .survey import SurveySpec
 
 __all__ = ["PlanLayer", "HIT_PX"]

@@ -4,9 +4,9 @@ from __future__ import annotations
 from PyQt5.QtCore import Qt, pyqtSignal
 from PyQt5.QtWidgets import QComboBox, QHBoxLayout, QLabel, QPushButton, QSlider, QWidget
 
-from ..flight_timer import clock_text
-from .seek_slider import SeekSlider
-from .text_width import width_for
+from ..flight.timer import clock_text
+from ..widgets.seek_slider import SeekSlider
+from ..widgets.text_width import width_for
 
 __all__ = ["ReplayBar", "SPEEDS"]
 

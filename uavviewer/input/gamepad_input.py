@@ -1,6 +1,6 @@
 """The chosen gamepad as a pilot input, on the UI thread: its sticks as pilot axes, its buttons as actions.
 
-Frames come from the process's :class:`~uavviewer.gamepad.GamepadReader` thread through a queued signal. The pad
+Frames come from the process's :class:`~uavviewer.input.gamepad.GamepadReader` thread through a queued signal. The pad
 flies nothing until its sticks have been seen centred: after it connects, after Stop or Land, after the window
 lost focus (unless the pilot chose to fly in the background), after it stopped reporting, and while Preferences
 maps it. Disconnecting, or a reader silent for :data:`STALL` seconds, is zero at once and a message. Stop and Land
@@ -17,7 +17,7 @@ from driver.state import Severity
 
 from .gamepad import GamepadFrame, GamepadReader, Pad, PadReading, shared_reader
 from .gamepad_mapping import ALWAYS_MAPPED, GamepadMapping, default_mapping, mappings_from_json
-from .settings import ViewerSettings
+from ..settings import ViewerSettings
 from .sticks import Axes
 
 __all__ = ["GamepadInput", "STALL"]

@@ -11,7 +11,7 @@ from __future__ import annotations
 from PyQt5.QtCore import Qt
 from PyQt5.QtWidgets import QApplication, QFrame, QScrollArea, QWidget
 
-from .layout import FRAME_ALLOWANCE
+from ..window.layout import FRAME_ALLOWANCE
 
 __all__ = ["fit_dialog", "scrollable"]
 

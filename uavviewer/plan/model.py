@@ -1,7 +1,7 @@
 """The plan being edited in Plan mode (no Qt): the mission, the fence and the rally points.
 
 The mission is a list of entries, each a :class:`driver.mission.plan.MissionItem` or a survey
-(:class:`uavviewer.map.survey.SurveySpec`, flown as the items its lawnmower gives); :meth:`PlanDocument.plan`
+(:class:`uavviewer.plan.survey.SurveySpec`, flown as the items its lawnmower gives); :meth:`PlanDocument.plan`
 expands it into the :class:`~driver.mission.plan.Plan` the driver uploads. A waypoint's speed is not a field of
 its own in ArduPilot: it is a DO_CHANGE_SPEED item before it, and the list shows the speed in force on each leg.
 

@@ -6,13 +6,13 @@ from PyQt5.QtCore import Qt
 from PyQt5.QtWidgets import QCheckBox, QComboBox, QDoubleSpinBox, QLabel, QProgressBar, QPushButton, QWidget
 
 from .. import RESOURCES
-from ..gamepad import GamepadFrame, Pad, PadReading
-from ..gamepad_input import GamepadInput
-from ..gamepad_mapping import (ACTIONS, PILOT_AXES, AxisCapture, ButtonCapture, GamepadMapping, mappings_from_json,
-                               mappings_to_json)
+from .gamepad import GamepadFrame, Pad, PadReading
+from .gamepad_input import GamepadInput
+from .gamepad_mapping import (ACTIONS, PILOT_AXES, AxisCapture, ButtonCapture, GamepadMapping, mappings_from_json,
+                              mappings_to_json)
 from ..settings import ViewerSettings
-from ..sticks import StickMode
-from .telemetry_panel import GOOD, NORMAL, WARN
+from .sticks import StickMode
+from ..telemetry.panel import GOOD, NORMAL, WARN
 
 __all__ = ["GamepadPage"]
 

@@ -1,4 +1,4 @@
-"""Undo and redo for Plan mode: every edit of the :class:`~uavviewer.map.plan_model.PlanDocument` is one step on a
+"""Undo and redo for Plan mode: every edit of the :class:`~uavviewer.plan.model.PlanDocument` is one step on a
 QUndoStack (Ctrl+Z, Ctrl+Shift+Z), and the stack's clean state says whether there is work not saved to a file.
 
 A step holds the whole document before and after (its lists hold immutable items and surveys, so a snapshot is a

@@ -11,10 +11,10 @@ from PyQt5.QtWidgets import QFrame, QHBoxLayout, QLabel, QSizePolicy, QVBoxLayou
 
 from driver.battery import time_left
 from driver.state import BatteryAlarm, LinkStatus, Message, Severity, VehicleState
-from ..flight_phase import NO_VEHICLE, flight_phase, no_vehicle_words
-from ..flight_timer import clock_text
-from .messages_view import severity_color
-from .telemetry_panel import BAD, DIM, GOOD, NORMAL, WARN
+from ..flight.phase import NO_VEHICLE, flight_phase, no_vehicle_words
+from ..flight.timer import clock_text
+from ..widgets.messages_view import severity_color
+from .panel import BAD, DIM, GOOD, NORMAL, WARN
 
 __all__ = ["StatusStrip", "ALARM_COLOURS", "battery_text", "NO_VEHICLE"]
 

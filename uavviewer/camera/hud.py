@@ -15,7 +15,7 @@ from PyQt5.QtCore import QPointF, QRectF, Qt
 from PyQt5.QtGui import QColor, QFont, QPainter, QPen, QRegion
 
 from driver.state import BatteryAlarm, LinkStatus, VehicleState
-from ..flight_phase import no_vehicle_words
+from ..flight.phase import no_vehicle_words
 from ..units import fmt as _num
 
 __all__ = ["paint_hud", "text_rows", "HUD_COLOUR", "STALE_COLOUR", "hud_colour", "stale_text"]

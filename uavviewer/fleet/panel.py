@@ -1,6 +1,6 @@
 """The fleet: every vehicle of the lab in a row (name, mode, armed, battery, link age); a click picks the one
 the sticks fly; Take off / Land / Stop for all. It only shows rows and says what was clicked
-(uavviewer.fleet.FleetController decides)."""
+(uavviewer.fleet.controller.FleetController decides)."""
 from __future__ import annotations
 
 from PyQt5 import uic
@@ -37,7 +37,7 @@ class FleetPanel(QWidget):
             self.vehiclePicked.emit(self._names[row])
 
     def set_rows(self, rows) -> None:
-        """``rows``: uavviewer.fleet.FleetRow, one per vehicle."""
+        """``rows``: uavviewer.fleet.controller.FleetRow, one per vehicle."""
         self._names = [r.name for r in rows]
         self.table.setRowCount(len(rows))
         picked = ""

@@ -4,7 +4,7 @@ from __future__ import annotations
 from PyQt5.QtCore import Qt
 from PyQt5.QtWidgets import QFrame, QGridLayout, QLabel, QScrollArea, QVBoxLayout, QWidget
 
-from ..preflight.model import Check, Verdict
+from .model import Check, Verdict
 
 __all__ = ["PreflightPanel"]
 

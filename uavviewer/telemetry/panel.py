@@ -5,8 +5,8 @@ from PyQt5.QtCore import Qt
 from PyQt5.QtWidgets import QFrame, QGridLayout, QLabel, QSizePolicy, QWidget
 
 from driver.state import BatteryAlarm, LandedState, LinkStatus, SigningStatus, VehicleState
-from ..flight_phase import no_vehicle_words
-from ..link_security import SIGNING_WARNINGS, foreign_text, foreign_tooltip, signed_frames
+from ..flight.phase import no_vehicle_words
+from ..connect.security import SIGNING_WARNINGS, foreign_text, foreign_tooltip, signed_frames
 from ..units import fmt
 
 __all__ = ["TelemetryPanel"]

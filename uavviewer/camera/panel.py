@@ -4,7 +4,7 @@ from __future__ import annotations
 from PyQt5.QtCore import Qt, pyqtSignal
 from PyQt5.QtWidgets import QHBoxLayout, QLabel, QSizePolicy, QToolButton, QVBoxLayout, QWidget
 
-from .camera_view import CameraView
+from .view import CameraView
 
 __all__ = ["CameraPanel"]
 

@@ -5,8 +5,8 @@ from PyQt5.QtCore import Qt
 from PyQt5.QtWidgets import QLabel, QSizePolicy, QWidget
 
 from driver.state import LinkStatus
-from ..connect.choice import waiting_words
-from ..flight_phase import NO_VEHICLE, NOT_CONNECTED
+from .choice import waiting_words
+from ..flight.phase import NO_VEHICLE, NOT_CONNECTED
 
 __all__ = ["LinkBanner"]
 

@@ -13,7 +13,7 @@ from PyQt5.QtWidgets import (
     QToolButton, QVBoxLayout, QWidget,
 )
 
-from .plan_table import PlanTable
+from .table import PlanTable
 from .survey import CAMERAS
 
 __all__ = ["PlanPanel", "LAYERS", "TOOLS"]

@@ -16,20 +16,20 @@ from PyQt5.QtWidgets import QAction, QDockWidget, QFileDialog, QMenu, QMessageBo
 
 from driver.state import Severity
 
-from .alerts.controller import AlertController
-from .connect.choice import Choice, Kind
-from .connect.controller import ConnectionController
-from .connect.dialog import ConnectDialog
-from .connect.leaving import leaving_words
-from .dialogs import ask
-from .flight_phase import flight_phase
-from .guided.controller import GuidedController
-from .logs_folder import LogsFolder
-from .preflight.model import overall, preflight
-from .refresh import TEXT_HZ
-from .widgets.alert_banner import AlertBanner
-from .widgets.home_arrow import HomeArrow
-from .widgets.preflight_panel import PreflightPanel
+from ..alerts.controller import AlertController
+from ..connect.choice import Choice, Kind
+from ..connect.controller import ConnectionController
+from ..connect.dialog import ConnectDialog
+from ..connect.leaving import leaving_words
+from ..preferences.dialog import ask
+from ..flight.phase import flight_phase
+from ..flight.guided import GuidedController
+from ..replay.logs_folder import LogsFolder
+from ..preflight.model import overall, preflight
+from ..refresh import TEXT_HZ
+from ..alerts.banner import AlertBanner
+from ..widgets.home_arrow import HomeArrow
+from ..preflight.panel import PreflightPanel
 
 __all__ = ["PilotTools"]
 

@@ -15,16 +15,16 @@ from driver.api import CEILING
 from driver.signing import key_from_passphrase, read_key_file, write_key_file
 from driver.state import CommandResult, Signing, SigningStatus
 
-from . import RESOURCES
-from .camera_controller import default_media_folder
-from .dialog_fit import scrollable
-from .layout import FRAME_ALLOWANCE
-from .gamepad_mapping import ACTIONS, CONTROLLER_BUTTONS
-from .keyboard import key_help
-from .link_security import SIGNING_WARNINGS
-from .settings import TAKEOFF_ALTITUDE_RANGE, ViewerSettings, split_uris
-from .sticks import StickMode
-from .widgets.telemetry_panel import GOOD, NORMAL, WARN
+from .. import RESOURCES
+from ..camera.controller import default_media_folder
+from ..widgets.dialog_fit import scrollable
+from ..window.layout import FRAME_ALLOWANCE
+from ..input.gamepad_mapping import ACTIONS, CONTROLLER_BUTTONS
+from ..input.keyboard import key_help
+from ..connect.security import SIGNING_WARNINGS
+from ..settings import TAKEOFF_ALTITUDE_RANGE, ViewerSettings, split_uris
+from ..input.sticks import StickMode
+from ..telemetry.panel import GOOD, NORMAL, WARN
 
 __all__ = ["SettingsDialog", "KeysDialog", "takeoff_question", "arm_question", "fly_here_question", "mode_question",
            "signing_setup_question", "emergency_stop_question"]

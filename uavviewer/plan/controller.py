@@ -1,4 +1,4 @@
-"""Plan mode: the Plan dock and the plan on the map, edited by :class:`~uavviewer.map.plan_editor.PlanEditor`;
+"""Plan mode: the Plan dock and the plan on the map, edited by :class:`~uavviewer.plan.editor.PlanEditor`;
 here the plans move to and from the vehicle and the mission is flown (docs/missions-viewer.md).
 
 Everything about the vehicle comes from its snapshots: what it holds (the plan read back after an upload, or
@@ -19,13 +19,13 @@ from driver.mission.plan import MissionItem, MissionRunState, Plan, PlanKind, Tr
 from driver.mission.wire import difference
 from driver.state import CommandResult, LinkStatus, Severity, VehicleState
 
-from ..dialogs import ask, mission_start_question
-from .plan_editor import PlanEditor
-from .plan_files import PlanFiles
-from .plan_layer import PlanLayer
-from .plan_model import Performance, PlanDocument
-from .plan_room import make_room_for_plan
-from .plan_panel import PlanPanel
+from ..preferences.dialog import ask, mission_start_question
+from .editor import PlanEditor
+from .files import PlanFiles
+from .layer import PlanLayer
+from .model import Performance, PlanDocument
+from .room import make_room_for_plan
+from .panel import PlanPanel
 from .survey_file import complex_items, mission_entries
 
 __all__ = ["PlanController"]

@@ -23,7 +23,7 @@ from driver.api import Drone
 from driver.camera import CameraSet, VideoRecorder, describe_uri, save_snapshot
 from driver.state import CommandResult, CommandStatus, VehicleState
 
-from .widgets.camera_panel import CameraPanel
+from .panel import CameraPanel
 
 __all__ = ["CameraController", "default_media_folder"]
 

@@ -15,7 +15,7 @@ from pathlib import Path
 
 from driver.version import __version__
 
-from . import RESOURCES
+from .. import RESOURCES
 
 #: the desktop file's name without ``.desktop``, also told to the window manager by the running window
 APP_ID = "uavviewerpy"
@@ -40,7 +40,7 @@ def command() -> list[str]:
     script = Path(sys.executable).parent / "uavviewer"
     if script.is_file() and os.access(script, os.X_OK):
         return [str(script)]
-    return [sys.executable, str(Path(__file__).resolve().parent.parent / "main.py")]
+    return [sys.executable, str(Path(__file__).resolve().parents[2] / "main.py")]
 
 
 def _exec_line(argv: list[str]) -> str:

@@ -10,7 +10,7 @@ from PyQt5.QtWidgets import QHBoxLayout, QLabel, QToolButton, QWidget
 
 from driver.state import VehicleState
 
-from .text_width import width_for
+from ..widgets.text_width import width_for
 
 __all__ = ["GimbalBar"]
 

@@ -16,7 +16,7 @@ from PyQt5.QtCore import QObject, QTimer, pyqtSignal
 from driver.api import Drone, Fleet
 from driver.state import CommandResult, CommandStatus, LinkStatus, Severity, VehicleState
 
-from .flight_phase import flight_phase
+from ..flight.phase import flight_phase
 
 __all__ = ["FleetRow", "FleetController", "row_for", "switch_message"]
 
