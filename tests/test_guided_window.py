@@ -78,7 +78,7 @@ def test_circle_a_point_from_the_map_flies_ardupilots_circle(qtbot, sim, flying,
     assert math.hypot(north - centre[0], east - centre[1]) < 0.5 and radius == 5.0   # (a pixel off: the click)
     paints = view.paints
     qtbot.waitUntil(lambda: view.paints > paints, timeout=3000)
-    w.request_mode("LOITER")                                           # any other mode leaves the circle
+    w.flight.request_mode("LOITER")                                           # any other mode leaves the circle
     qtbot.waitUntil(lambda: w.guided.circling is None, timeout=10000)
 
 

@@ -11,7 +11,8 @@ import pytest
 from PyQt5.QtWidgets import QApplication, QDialogButtonBox
 
 from driver.vehicle import Vehicle, VehicleConfig
-from uavviewer.preferences.dialog import KeysDialog, SettingsDialog
+from uavviewer.input.keys_dialog import KeysDialog
+from uavviewer.preferences.dialog import SettingsDialog
 from uavviewer.settings import ViewerSettings, split_uris
 from uavviewer.input.sticks import StickMode, pad_labels
 
@@ -45,7 +46,7 @@ def test_waiting_banner_and_inert_controls(qtbot, silent_vehicle, window_factory
 
 def test_settings_are_remembered(qtbot, silent_vehicle, window_factory):
     w = window_factory(silent_vehicle)
-    w.set_settings(ViewerSettings(stick_mode=StickMode.MODE1.value, max_horizontal=3.5, max_vertical=0.5,
+    w.preferences.set_settings(ViewerSettings(stick_mode=StickMode.MODE1.value, max_horizontal=3.5, max_vertical=0.5,
                                   max_yaw_deg_s=30.0, deadband=0.1, expo=0.3, takeoff_altitude=5.0))
     assert w.leftStick._caption == pad_labels(StickMode.MODE1)[0]
     w.close()

@@ -261,7 +261,7 @@ def main(argv: list[str] | None = None) -> int:
         window.name_vehicle(sim_name(sim.config.speedup))
     if fleet is not None:
         controller = FleetController(fleet, first, parent=window)
-        window.attach_fleet(controller)
+        window.fleet_dock.attach(controller)
     connections = window.connections                              # File › Connect switches from this one
     connections.base, connections.speedup = config, args.speedup
     connections.log_dir = str(args.log_dir) if args.log_dir is not None else None

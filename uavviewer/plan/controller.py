@@ -19,7 +19,7 @@ from driver.mission.plan import MissionItem, MissionRunState, Plan, PlanKind, Tr
 from driver.mission.wire import difference
 from driver.state import CommandResult, LinkStatus, Severity, VehicleState
 
-from ..preferences.dialog import ask, mission_start_question
+from ..widgets.ask import ask, cautious_question
 from .editor import PlanEditor
 from .files import PlanFiles
 from .layer import PlanLayer
@@ -36,6 +36,12 @@ KINDS = {"mission": PlanKind.MISSION, "fence": PlanKind.FENCE, "rally": PlanKind
 _TITLES = {PlanKind.MISSION: "Mission", PlanKind.FENCE: "Fence", PlanKind.RALLY: "Rally"}
 _DIRECTION = {TransferDirection.UPLOAD: "Uploading", TransferDirection.DOWNLOAD: "Downloading",
               TransferDirection.CLEAR: "Clearing"}
+
+
+def mission_start_question(parent: QWidget, text: str) -> QMessageBox:
+    """Confirm a mission start (from the ground it arms and takes off); like the takeoff question, Cancel is the
+    default."""
+    return cautious_question(parent, "Start mission", text, "Start mission", "missionStartQuestion")
 
 
 class PlanController(QObject):

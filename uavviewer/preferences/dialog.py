@@ -1,15 +1,13 @@
-"""Preferences, the key list, and the confirmations: takeoff, mode, signing set-up, emergency motor stop
-(all non-blocking)."""
+"""Preferences: sticks, speeds, takeoff altitude, cameras, link security (and the signing set-up question)."""
 from __future__ import annotations
 
 import math
 import os
-from collections.abc import Callable
 from dataclasses import replace
 
 from PyQt5 import uic
-from PyQt5.QtCore import Qt, pyqtSignal
-from PyQt5.QtWidgets import QDialog, QFileDialog, QMessageBox, QTableWidgetItem, QWidget
+from PyQt5.QtCore import pyqtSignal
+from PyQt5.QtWidgets import QDialog, QFileDialog, QMessageBox, QWidget
 
 from driver.api import CEILING
 from driver.signing import key_from_passphrase, read_key_file, write_key_file
@@ -17,17 +15,14 @@ from driver.state import CommandResult, Signing, SigningStatus
 
 from .. import RESOURCES
 from ..camera.controller import default_media_folder
+from ..widgets.ask import ask, cautious_question
 from ..widgets.dialog_fit import scrollable
-from ..window.layout import FRAME_ALLOWANCE
-from ..input.gamepad_mapping import ACTIONS, CONTROLLER_BUTTONS
-from ..input.keyboard import key_help
 from ..connect.security import SIGNING_WARNINGS
 from ..settings import TAKEOFF_ALTITUDE_RANGE, ViewerSettings, split_uris
 from ..input.sticks import StickMode
 from ..telemetry.panel import GOOD, NORMAL, WARN
 
-__all__ = ["SettingsDialog", "KeysDialog", "takeoff_question", "arm_question", "fly_here_question", "mode_question",
-           "signing_setup_question", "emergency_stop_question"]
+__all__ = ["SettingsDialog", "signing_setup_question"]
 
 
 class SettingsDialog(QDialog):
@@ -265,172 +260,12 @@ class SettingsDialog(QDialog):
                                 "passphrase is not kept.", GOOD)
 
 
-class KeysDialog(QDialog):
-    """Help > Keys, filled from the same tables the keyboard and the gamepad use."""
-
-    def __init__(self, parent: QWidget | None = None) -> None:
-        super().__init__(parent)
-        uic.loadUi(str(RESOURCES / "ui" / "keys_dialog.ui"), self)
-        rows = key_help() + [(f"Gamepad {button.upper()}", ACTIONS[action])
-                             for action, button in CONTROLLER_BUTTONS.items()]
-        rows.append(("Gamepad sticks", "As the on-screen sticks (mode and mapping: Preferences › Gamepad)"))
-        self.table.setColumnCount(2)
-        self.table.setHorizontalHeaderLabels(["Key", "Action"])
-        self.table.setRowCount(len(rows))
-        for i, (key, text) in enumerate(rows):
-            self.table.setItem(i, 0, QTableWidgetItem(key))
-            self.table.setItem(i, 1, QTableWidgetItem(text))
-        self.table.resizeColumnToContents(0)
-        self._fit_rows()
-
-    def _fit_rows(self) -> None:
-        """Tall enough for every row, the last one too (as far as the screen allows; then it scrolls)."""
-        t = self.table
-        t.setWordWrap(False)                    # one line a row; the dialog is as wide as the longest
-        t.resizeColumnsToContents()
-        t.setMinimumWidth(sum(t.columnWidth(c) for c in range(t.columnCount())) + 2 * t.frameWidth() + 4)
-        t.verticalHeader().setDefaultSectionSize(t.fontMetrics().height() + 6)   # compact rows: all in view
-        needed = t.horizontalHeader().sizeHint().height() + 2 * t.frameWidth() + \
-            sum(t.rowHeight(i) for i in range(t.rowCount())) + 6      # + the header's border
-        screen = self.screen() if hasattr(self, "screen") else None
-        limit = (screen.availableGeometry().height() - 110 - FRAME_ALLOWANCE if screen is not None  # intro, buttons,
-                 else needed)                                                                      # a title bar
-        t.setMinimumHeight(max(120, min(needed, limit)))
-        self.adjustSize()                       # (Qt caps this at 2/3 of the screen: grow to what the rows need)
-        if screen is not None:
-            self.resize(self.sizeHint().boundedTo(screen.availableGeometry().size()))
-
-
-def ask(box: QMessageBox, answered: Callable[[QMessageBox], None]) -> QMessageBox:
-    """Open a question window-modal without blocking (the window keeps flying meanwhile); ``answered(box)`` runs
-    once it closes, however it closes."""
-    box.setWindowModality(Qt.WindowModal)
-    box.finished.connect(lambda _result: answered(box))
-    box.open()
-    return box
-
-
-def takeoff_question(parent: QWidget, altitude: float, waiting_for: tuple[str, ...] = (),
-                     wait_limit: float = 60.0) -> QMessageBox:
-    """A window-modal question, opened with ``open()`` so nothing waits on it. ``waiting_for``: what the vehicle
-    still lacks (GPS fix, EKF, pre-arm checks): the question says the takeoff waits for it, and how to cancel.
-
-    Cancel is the focused default: Space (Stop) or Enter must never start the motors; only a click does.
-    """
-    if not waiting_for:
-        return _cautious_question(parent, "Take off", f"Take off and climb to {altitude:.1f} m above home?\n\n"
-                                  "The motors will start. Keep clear of the propellers.", "Take off",
-                                  "takeoffQuestion")
-    return _cautious_question(
-        parent, "Take off when ready",
-        f"The vehicle is not ready yet: waiting for {', '.join(waiting_for)}.\n\n"
-        f"Take off as soon as it is (up to {wait_limit:.0f} s), and climb to {altitude:.1f} m above home?\n\n"
-        "Until then nothing starts; \"Cancel takeoff\" on the main button ends the wait and leaves the vehicle as "
-        "it is. Then the motors will start: keep clear of the propellers.", "Take off when ready", "takeoffQuestion")
-
-
-def arm_question(parent: QWidget, mode: str, consequence: str) -> QMessageBox:
-    """Before Arm: the motors start; say what happens next in this mode (the driver's words). Cancel is the
-    focused default, as for a takeoff."""
-    box = _cautious_question(parent, "Arm the motors", f"Arm the motors in {mode or 'the current mode'}?\n\n"
-                             f"{consequence}\n\nKeep clear of the propellers.", "Arm", "armQuestion")
-    box.setIcon(QMessageBox.Warning)
-    return box
-
-
-def fly_here_question(parent: QWidget, text: str) -> QMessageBox:
-    """Confirm a go-to, saying how far and how high; like the takeoff question, Cancel is the default."""
-    return _cautious_question(parent, "Fly here", text, "Fly there", "flyHereQuestion")
-
-
-def mission_start_question(parent: QWidget, text: str) -> QMessageBox:
-    """Confirm a mission start (from the ground it arms and takes off); like the takeoff question, Cancel is the
-    default."""
-    return _cautious_question(parent, "Start mission", text, "Start mission", "missionStartQuestion")
-
-
-def _cautious_question(parent: QWidget, title: str, text: str, yes: str, name: str) -> QMessageBox:
-    box = QMessageBox(QMessageBox.Question, title, text, QMessageBox.Yes | QMessageBox.Cancel, parent)
-    box.setObjectName(name)
-    go = box.button(QMessageBox.Yes)
-    go.setText(yes)
-    go.setFocusPolicy(Qt.NoFocus)
-    go.setAutoDefault(False)
-    box.setDefaultButton(QMessageBox.Cancel)
-    box.setEscapeButton(QMessageBox.Cancel)
-    return box
-
-
-def mode_question(parent: QWidget, mode: str, warning: str) -> QMessageBox:
-    """Confirm a mode that needs an RC transmitter in flight, saying why (the driver's words).
-
-    Like the takeoff question: window-modal, opened without waiting, Cancel the focused default.
-    """
-    box = QMessageBox(QMessageBox.Warning, f"Switch to {mode}", warning, QMessageBox.Yes | QMessageBox.Cancel,
-                      parent)
-    box.setObjectName("modeQuestion")
-    go = box.button(QMessageBox.Yes)
-    go.setText(f"Switch to {mode}")
-    go.setFocusPolicy(Qt.NoFocus)
-    go.setAutoDefault(False)
-    box.setDefaultButton(QMessageBox.Cancel)
-    box.setEscapeButton(QMessageBox.Cancel)
-    return box
-
-
 def signing_setup_question(parent: QWidget) -> QMessageBox:
     """Before SETUP_SIGNING: the key travels in clear. Cancel is the focused default."""
-    box = QMessageBox(QMessageBox.Warning, "Set up signing on the vehicle",
-                      "Send the signing key to the vehicle?\n\n"
-                      "SETUP_SIGNING carries the key in clear: anyone listening on this link learns it. Send it only "
-                      "over USB or a cable, never over a radio or Wi-Fi link.\n\n"
-                      "The vehicle keeps the key, and from then on its telemetry links obey only frames signed "
-                      "with it. It must be disarmed.", QMessageBox.Yes | QMessageBox.Cancel, parent)
-    box.setObjectName("signingSetupQuestion")
-    go = box.button(QMessageBox.Yes)
-    go.setText("Send the key")
-    go.setFocusPolicy(Qt.NoFocus)
-    go.setAutoDefault(False)
-    box.setDefaultButton(QMessageBox.Cancel)
-    box.setEscapeButton(QMessageBox.Cancel)
-    return box
-
-
-def emergency_stop_question(parent: QWidget) -> QMessageBox:
-    """Disarm in the air stops the motors: the drone falls. Asked every time, Cancel the focused default;
-    only a click on "Stop the motors" does it (never Space or Enter)."""
-    box = QMessageBox(QMessageBox.Critical, "Emergency motor stop",
-                      "Stop the motors now? The drone will fall.\n\n"
-                      "Only for an emergency. To come down safely, use Land.",
-                      QMessageBox.Yes | QMessageBox.Cancel, parent)
-    box.setObjectName("emergencyStopQuestion")
-    go = box.button(QMessageBox.Yes)
-    go.setText("Stop the motors")
-    go.setFocusPolicy(Qt.NoFocus)
-    go.setAutoDefault(False)
-    box.setDefaultButton(QMessageBox.Cancel)
-    box.setEscapeButton(QMessageBox.Cancel)
-    return box
-
-
-def all_vehicles_question(parent: QWidget, command: str, names: list[str], altitude: float) -> QMessageBox:
-    """One confirmation for Take off / Land / Stop on every vehicle of the fleet (window-modal, not waited on).
-
-    For a takeoff Cancel is the focused default, as for one vehicle; for Land and Stop the action is."""
-    what = {"takeoff": (f"Take off all {len(names)} vehicles", f"Every vehicle takes off and climbs to "
-                        f"{altitude:.1f} m above its home. The motors will start: keep clear of all of them."),
-            "land": (f"Land all {len(names)} vehicles", "Every vehicle switches to LAND where it is."),
-            "stop": (f"Stop all {len(names)} vehicles", "Every vehicle stops and holds its position.")}[command]
-    box = QMessageBox(QMessageBox.Question, what[0], f"{what[0]}?\n\n{', '.join(names)}\n\n{what[1]}",
-                      QMessageBox.Yes | QMessageBox.Cancel, parent)
-    box.setObjectName("allVehiclesQuestion")
-    go = box.button(QMessageBox.Yes)
-    go.setText(what[0])
-    if command == "takeoff":
-        go.setFocusPolicy(Qt.NoFocus)
-        go.setAutoDefault(False)
-        box.setDefaultButton(QMessageBox.Cancel)
-    else:
-        box.setDefaultButton(QMessageBox.Yes)
-    box.setEscapeButton(QMessageBox.Cancel)
-    return box
+    return cautious_question(parent, "Set up signing on the vehicle",
+                             "Send the signing key to the vehicle?\n\n"
+                             "SETUP_SIGNING carries the key in clear: anyone listening on this link learns it. Send "
+                             "it only over USB or a cable, never over a radio or Wi-Fi link.\n\n"
+                             "The vehicle keeps the key, and from then on its telemetry links obey only frames signed "
+                             "with it. It must be disarmed.", "Send the key", "signingSetupQuestion",
+                             QMessageBox.Warning)

@@ -11,9 +11,9 @@ from __future__ import annotations
 from PyQt5.QtCore import Qt
 from PyQt5.QtWidgets import QApplication, QFrame, QScrollArea, QWidget
 
-from ..window.layout import FRAME_ALLOWANCE
+FRAME_ALLOWANCE = 40               # px a window manager's title bar and borders take
 
-__all__ = ["fit_dialog", "scrollable"]
+__all__ = ["FRAME_ALLOWANCE", "fit_dialog", "scrollable"]
 
 
 def scrollable(content: QWidget) -> QScrollArea:

@@ -10,12 +10,13 @@ from __future__ import annotations
 from PyQt5.QtCore import QSize, Qt
 from PyQt5.QtWidgets import QApplication, QSizePolicy, QWidget
 
-__all__ = ["FIRST_SIZE", "MIN_SIZE", "fit_screen", "fit_restored", "essential_widgets", "steady_slots", "show_replay_bar",
+from ..widgets.dialog_fit import FRAME_ALLOWANCE
+
+__all__ = ["FIRST_SIZE", "MIN_SIZE", "fit_screen", "fit_restored", "essential_widgets", "steady_slots",
            "BANNER_HEIGHT"]
 
 FIRST_SIZE = QSize(1366, 768)      # at most: a laptop's screen
 MIN_SIZE = QSize(1024, 600)        # a netbook's: still flyable
-FRAME_ALLOWANCE = 40               # px a window manager's title bar and borders take
 CONTROLS_WIDTH = 270               # px: the buttons' column between the sticks, fixed (it fits 1024×600)
 BANNER_HEIGHT = 26                 # px: the row the link and alert banners share, there when both are hidden
 
@@ -40,11 +41,6 @@ def steady_slots(window) -> None:
     window.phaseLabel.setObjectName("phaseLabel")
     window.phaseLabel.ensurePolished()        # the style sheet's font, not the default one
     window.phaseLabel.setFixedHeight(2 * window.phaseLabel.fontMetrics().lineSpacing() + 2)   # a third is cut
-
-
-def show_replay_bar(window, replay: bool) -> None:
-    """A replay shows its bar in the stick line's place (a recording is not flown): nothing else moves."""
-    window.bottomSlot.setCurrentWidget(window.replayBar if replay else window.stickLine)
 
 
 def fit_screen(window: QWidget) -> None:

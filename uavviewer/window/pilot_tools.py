@@ -1,8 +1,8 @@
 """What a pilot reaches for besides the sticks, wired into the window: connecting (File › Connect, Recent,
 Disconnect, Open flight log), spoken alerts and the critical banner, the preflight dock, the Fly menu's guided
-actions, the home arrow and the replay's seek and restart.
+actions, and the home arrow.
 
-Each feature is its own part (``connect/``, ``alerts/``, ``preflight/``, ``guided/``, their widgets); this only
+Each feature is its own part (``connect/``, ``alerts/``, ``preflight/``, ``flight/guided.py``, their widgets); this only
 builds them into the window's layout and menus and connects them to its adapter. The window keeps what is its own:
 switching the drone it flies (:meth:`MainWindow.use_connection`). Widgets and actions are also set on the window
 under the names tests and the other parts use (``window.connections``, ``window.alerts``, ...).
@@ -21,7 +21,7 @@ from ..connect.choice import Choice, Kind
 from ..connect.controller import ConnectionController
 from ..connect.dialog import ConnectDialog
 from ..connect.leaving import leaving_words
-from ..preferences.dialog import ask
+from ..widgets.ask import ask
 from ..flight.phase import flight_phase
 from ..flight.guided import GuidedController
 from ..replay.logs_folder import LogsFolder
@@ -46,8 +46,6 @@ class PilotTools(QObject):
         self._guided(w)
         self._connecting(w)
         w.plan.panel.editToggled.connect(w.mapPanel.hold_still)     # editing a plan: the map stays still
-        w.replayBar.seekRequested.connect(lambda t: w.adapter.replay and w.adapter.replay.seek(t))
-        w.replayBar.restartRequested.connect(lambda: w.adapter.replay and w.adapter.replay.restart())
         channel = w.refresh.add(TEXT_HZ, self.show)
         w.adapter.stateChanged.connect(lambda _s: channel.mark())
 
@@ -122,7 +120,7 @@ class PilotTools(QObject):
     def show(self) -> None:
         """The preflight lines, the home arrow and what guided actions allow (TEXT_HZ)."""
         w = self.window
-        s = w._shown_state
+        s = w.readouts.shown
         if s is None:
             return
         checks = preflight(s)
