@@ -8,6 +8,8 @@ act from any window state; Take off and RTL only when the pad may fly.
 """
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 import logging
 import time
 
@@ -17,8 +19,10 @@ from driver.state import Severity
 
 from .gamepad import GamepadFrame, GamepadReader, Pad, PadReading, shared_reader
 from .gamepad_mapping import ALWAYS_MAPPED, GamepadMapping, default_mapping, mappings_from_json
-from ..settings import ViewerSettings
 from .sticks import Axes
+
+if TYPE_CHECKING:                     # a type only: settings.py builds on input/sticks.py, not the other way
+    from ..settings import ViewerSettings
 
 __all__ = ["GamepadInput", "STALL"]
 

@@ -1,6 +1,8 @@
 """Preferences > Gamepad: pick the controller, watch its sticks and buttons live, map them by moving them."""
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
 from PyQt5 import sip, uic
 from PyQt5.QtCore import Qt
 from PyQt5.QtWidgets import QCheckBox, QComboBox, QDoubleSpinBox, QLabel, QProgressBar, QPushButton, QWidget
@@ -10,9 +12,11 @@ from .gamepad import GamepadFrame, Pad, PadReading
 from .gamepad_input import GamepadInput
 from .gamepad_mapping import (ACTIONS, PILOT_AXES, AxisCapture, ButtonCapture, GamepadMapping, mappings_from_json,
                               mappings_to_json)
-from ..settings import ViewerSettings
 from .sticks import StickMode
 from ..telemetry.panel import GOOD, NORMAL, WARN
+
+if TYPE_CHECKING:                     # a type only: settings.py builds on input/sticks.py, not the other way
+    from ..settings import ViewerSettings
 
 __all__ = ["GamepadPage"]
 
