@@ -45,8 +45,8 @@ def bench_viewer(seconds: float) -> None:
     from PyQt5.QtCore import QEventLoop, QTimer
     from PyQt5.QtWidgets import QApplication
 
-    from uavviewer.camera_controller import CameraController
-    from uavviewer.widgets.camera_panel import CameraPanel
+    from uavviewer.camera.controller import CameraController
+    from uavviewer.camera.panel import CameraPanel
 
     app = QApplication.instance() or QApplication([])
     with tempfile.TemporaryDirectory() as tmp:

@@ -23,7 +23,7 @@ def fleet(count: int):
     """``count`` vehicles (the first picked) 10 m apart eastwards and 5 m northwards, as the Fleet panel reads them."""
     from driver.core import frames
     from driver.vehicle.state import GlobalPosition, VehicleState
-    from uavviewer.fleet import row_for
+    from uavviewer.fleet.controller import row_for
     seen = []
     for i in range(count):
         lat, lon = frames.offset_latlon(47.0, 8.0, 5.0 * i, 10.0 * i)

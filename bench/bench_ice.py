@@ -196,7 +196,7 @@ def through_the_window(probe: WireProbe, count: int) -> tuple[list[float], list[
     from PyQt5.QtWidgets import QApplication
 
     from driver.vehicle import Vehicle, VehicleConfig
-    from uavviewer.gamepad import VirtualPad
+    from uavviewer.input.gamepad import VirtualPad
     from uavviewer.main_window import MainWindow
 
     app = QApplication.instance() or QApplication(sys.argv[:1])

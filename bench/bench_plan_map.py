@@ -31,7 +31,7 @@ def square(side: float, north: float = 20.0, east: float = 20.0) -> tuple:
 
 def mission(doc, count: int) -> None:
     from driver.core.frames import offset_latlon
-    from uavviewer.map.plan_model import ITEM_KINDS, new_item
+    from uavviewer.plan.model import ITEM_KINDS, new_item
     doc.entries[:] = [new_item(ITEM_KINDS["Takeoff"], alt=10.0)]
     for i in range(count):                               # a spiral out to ~150 m
         a, r = i * 0.6, 10.0 + 140.0 * i / max(1, count)
@@ -60,9 +60,9 @@ def main() -> int:
     app = QApplication(sys.argv[:1])  # noqa: F841 - the widgets need it
     from uavviewer.map.geometry import MapFrame
     from uavviewer.map.map_view import MapView
-    from uavviewer.map.plan_layer import PlanLayer
-    from uavviewer.map.plan_model import FenceShape, PlanDocument
-    from uavviewer.map.survey import SurveySpec, survey
+    from uavviewer.plan.layer import PlanLayer
+    from uavviewer.plan.model import FenceShape, PlanDocument
+    from uavviewer.plan.survey import SurveySpec, survey
 
     view = MapView()
     view.resize(500, 330)

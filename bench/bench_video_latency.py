@@ -218,8 +218,8 @@ def run_viewer(uri: str, warmup: float, seconds: float, low_latency: bool) -> in
     from PyQt5.QtGui import QImage
     from PyQt5.QtWidgets import QApplication
 
-    from uavviewer.camera_controller import CameraController
-    from uavviewer.widgets.camera_panel import CameraPanel
+    from uavviewer.camera.controller import CameraController
+    from uavviewer.camera.panel import CameraPanel
 
     app = QApplication(sys.argv[:1])
     panel = CameraPanel()

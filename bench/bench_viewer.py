@@ -174,7 +174,7 @@ def cpu_case(case: str, port: int, seconds: float, uri: str, dock: str) -> None:
     driver.start(200)
     QTimer.singleShot(int((seconds + 120) * 1000), app.quit)     # never hang
     app.exec_()
-    w.centre_sticks()
+    w.sticks.centre()
     w.close()
     drone.close()
     print(json.dumps({k: v for k, v in result.items() if k in ("cpu", "ui", "painted", "shown", "minimised")}))
@@ -215,7 +215,7 @@ def main() -> None:
         from tile_server import TileServer
         tile_server = TileServer().start()
         w.tile_cache_dir = tempfile.mkdtemp()
-        w.set_settings(replace(w.settings, tile_url=tile_server.url, tile_attribution="local tiles"))
+        w.preferences.set_settings(replace(w.settings, tile_url=tile_server.url, tile_attribution="local tiles"))
         w.mapPanel.layerCombo.setCurrentIndex(1)
 
     follow: list[float] = []
@@ -229,9 +229,9 @@ def main() -> None:
     w.adapter.stateChanged.disconnect()
     w.adapter.stateChanged.connect(timed(follow, w.show_state))
     # the views' refresh channels (uavviewer/refresh.py)
-    w._instruments._callback = timed(instruments, w._show_instruments)
-    w._readouts._callback = timed(readouts, w._show_readouts)
-    w._plots_refresh._callback = timed(redraws, w.plots.redraw)
+    w.readouts.instruments_channel._callback = timed(instruments, w.readouts.show_instruments)
+    w.readouts.text_channel._callback = timed(readouts, w.readouts.show_text)
+    w.readouts.plots_channel._callback = timed(redraws, w.plots.redraw)
 
     lateness: list[float] = []
     last = [time.perf_counter()]
@@ -251,7 +251,7 @@ def main() -> None:
     pad = None
     sweeping, stopping = threading.Event(), threading.Event()
     if args.gamepad:
-        from uavviewer.gamepad import VirtualPad
+        from uavviewer.input.gamepad import VirtualPad
         pad = VirtualPad("Bench gamepad")
 
         def thumbs() -> None:                       # both sticks sweep, 100 updates a second

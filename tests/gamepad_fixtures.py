@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import pytest
 
-from uavviewer.gamepad import VirtualPad
+from uavviewer.input.gamepad import VirtualPad
 
 
 @pytest.fixture

@@ -16,11 +16,11 @@ from test_camera_sources import rate_of
 from viewer_fixtures import viewer_settings, window_factory  # noqa: F401  (fixtures)
 from driver.vehicle.state import Attitude, Battery, LocalPosition, VehicleState, Velocity
 from driver.camera import VideoRecorder
-from uavviewer import camera_controller
-from uavviewer.camera_controller import CameraController
-from uavviewer.widgets.camera_panel import CameraPanel
-from uavviewer.widgets.camera_view import BACKGROUND
-from uavviewer.widgets.video_hud import HUD_COLOUR, paint_hud, text_rows
+from uavviewer.camera import controller as camera_controller
+from uavviewer.camera.controller import CameraController
+from uavviewer.camera.panel import CameraPanel
+from uavviewer.camera.view import BACKGROUND
+from uavviewer.camera.hud import HUD_COLOUR, paint_hud, text_rows
 
 HOVER = VehicleState(attitude=Attitude(roll=math.radians(10)), local=LocalPosition(0, 0, -4), altitude=4.0,
                      mode="GUIDED")

@@ -254,7 +254,7 @@ def test_a_dead_address_keeps_the_flying_vehicle_flown_and_ends_in_a_clear_error
     qtbot.mouseClick(leave, Qt.LeftButton)
     assert w.connections.busy and w.adapter.drone is flying          # tried beside it: the old link stays
     assert "Connecting to" in w.statusbar.currentMessage()
-    w.request_mode("LOITER")                                         # and keeps flying meanwhile
+    w.flight.request_mode("LOITER")                                         # and keeps flying meanwhile
     qtbot.waitUntil(lambda: sim.truth().mode == "LOITER", timeout=10000)
     assert w.connections.busy and w.adapter.drone is flying
 

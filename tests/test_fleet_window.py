@@ -11,7 +11,7 @@ from uavviewer import app as main
 from driver.core import frames
 from driver.ice.fleet import IceFleet
 from driver.vehicle.state import GlobalPosition, LinkStatus, LocalPosition, Severity, VehicleState
-from uavviewer.fleet import FleetController, row_for, switch_message
+from uavviewer.fleet.controller import FleetController, row_for, switch_message
 from uavviewer.map.geometry import MapFrame
 from uavviewer.map.controller import fleet_marks, placed
 from uavviewer.map.map_view import OTHER, STALE, VEHICLE, MapView, VehicleMark
@@ -120,7 +120,7 @@ def test_two_vehicles_flown_at_once_from_one_window(qtbot, fleet, lab, ice_fleet
     w = window_factory(f.drone("solo-1"), takeoff_altitude=3.0, default_cameras=[FleetController.camera_uri("solo-1")])
     controller = FleetController(f, "solo-1", parent=w)
     first_trail = w.map.trail
-    w.attach_fleet(controller)
+    w.fleet_dock.attach(controller)
     assert w.map.trail is first_trail                                      # the vehicle flown so far keeps its trail
     panel = w.fleet_panel
     qtbot.waitUntil(lambda: len(panel.row_texts()) == 2 and all("–" not in r for r in panel.row_texts()),
@@ -168,9 +168,9 @@ def test_two_vehicles_flown_at_once_from_one_window(qtbot, fleet, lab, ice_fleet
     release(w.rightStick)
 
     qtbot.mouseClick(panel.landAllButton, Qt.LeftButton)                   # one confirmation for all
-    qtbot.waitUntil(lambda: w.fleet_box is not None and w.fleet_box.isVisible(), timeout=3000)
-    assert "solo-1, solo-2" in w.fleet_box.text()
-    qtbot.mouseClick(w.fleet_box.button(QMessageBox.Yes), Qt.LeftButton)
+    qtbot.waitUntil(lambda: w.fleet_dock.box is not None and w.fleet_dock.box.isVisible(), timeout=3000)
+    assert "solo-1, solo-2" in w.fleet_dock.box.text()
+    qtbot.mouseClick(w.fleet_dock.box.button(QMessageBox.Yes), Qt.LeftButton)
     qtbot.waitUntil(lambda: all(v.state().mode == "LAND" for v in vehicles), timeout=10000)
     qtbot.waitUntil(lambda: not any(s.truth().armed for s in sims), timeout=60000)
     qtbot.waitUntil(lambda: [r[2] for r in panel.row_texts()] == ["disarmed", "disarmed"], timeout=5000)
@@ -178,9 +178,9 @@ def test_two_vehicles_flown_at_once_from_one_window(qtbot, fleet, lab, ice_fleet
 
     def answer_all(button, words: str) -> None:
         qtbot.mouseClick(button, Qt.LeftButton)
-        qtbot.waitUntil(lambda: w.fleet_box is not None and w.fleet_box.isVisible(), timeout=3000)
-        assert words in w.fleet_box.text()
-        qtbot.mouseClick(w.fleet_box.button(QMessageBox.Yes), Qt.LeftButton)
+        qtbot.waitUntil(lambda: w.fleet_dock.box is not None and w.fleet_dock.box.isVisible(), timeout=3000)
+        assert words in w.fleet_dock.box.text()
+        qtbot.mouseClick(w.fleet_dock.box.button(QMessageBox.Yes), Qt.LeftButton)
 
     answer_all(panel.takeoffAllButton, "Take off all 2 vehicles")
     qtbot.waitUntil(lambda: all(s.truth().altitude > 2.5 for s in sims), timeout=60000)

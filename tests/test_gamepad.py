@@ -7,10 +7,10 @@ import queue
 
 import pytest
 
-from uavviewer.gamepad import GamepadReader, Pad, PadReading
-from uavviewer.gamepad_mapping import AxisCapture, GamepadMapping, default_mapping, mappings_from_json
-from uavviewer.pilot_input import Input, InputSelector
-from uavviewer.sticks import Axes, StickMode
+from uavviewer.input.gamepad import GamepadReader, Pad, PadReading
+from uavviewer.input.gamepad_mapping import AxisCapture, GamepadMapping, default_mapping, mappings_from_json
+from uavviewer.input.selector import Input, InputSelector
+from uavviewer.input.sticks import Axes, StickMode
 
 from gamepad_fixtures import pad_factory  # noqa: F401  (fixture)
 
@@ -125,9 +125,9 @@ def test_the_input_moved_last_flies():
 
 def test_without_sdl_the_viewer_says_so_and_flies_on(qtbot, monkeypatch):
     """SDL2 missing (its import failed): the reader reports why, the gamepad input stays empty."""
-    import uavviewer.gamepad as gamepad
+    import uavviewer.input.gamepad as gamepad
     from driver.vehicle.state import Severity
-    from uavviewer.gamepad_input import GamepadInput
+    from uavviewer.input.gamepad_input import GamepadInput
     from uavviewer.settings import ViewerSettings
     monkeypatch.setattr(gamepad, "sdl2", None)
     monkeypatch.setattr(gamepad, "_IMPORT_ERROR", "SDL2 is not available (no libSDL2)")

@@ -9,7 +9,7 @@ from PyQt5.QtCore import Qt
 from PyQt5.QtWidgets import QCheckBox, QComboBox, QDialogButtonBox, QLabel, QProgressBar, QPushButton
 
 from uavviewer.settings import load_settings
-from uavviewer.widgets.gamepad_page import GamepadPage
+from uavviewer.input.gamepad_page import GamepadPage
 
 from gamepad_fixtures import pad, pad_factory  # noqa: F401  (fixtures)
 from test_viewer_gamepad import press, wait_pad
@@ -20,8 +20,8 @@ pytestmark = pytest.mark.timeout(60)
 
 
 def open_page(qtbot, w) -> GamepadPage:
-    w.edit_settings()
-    dialog = w.settings_dialog
+    w.preferences.edit()
+    dialog = w.preferences.dialog
     page = dialog.findChild(GamepadPage)
     dialog.pages.setCurrentWidget(page)
     qtbot.waitUntil(lambda: page.pad is not None and page.isVisible(), timeout=3000)
@@ -33,9 +33,9 @@ def click(qtbot, page, name: str) -> None:
 
 
 def ok(qtbot, w) -> None:
-    dialog = w.settings_dialog
+    dialog = w.preferences.dialog
     qtbot.mouseClick(dialog.buttons.button(QDialogButtonBox.Ok), Qt.LeftButton)
-    qtbot.waitUntil(lambda: w.settings_dialog is None, timeout=3000)
+    qtbot.waitUntil(lambda: w.preferences.dialog is None, timeout=3000)
 
 
 def test_map_by_moving_and_pressing_saved_for_that_controller(qtbot, silent_vehicle, viewer_settings,

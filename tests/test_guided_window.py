@@ -78,7 +78,7 @@ def test_circle_a_point_from_the_map_flies_ardupilots_circle(qtbot, sim, flying,
     assert math.hypot(north - centre[0], east - centre[1]) < 0.5 and radius == 5.0   # (a pixel off: the click)
     paints = view.paints
     qtbot.waitUntil(lambda: view.paints > paints, timeout=3000)
-    w.request_mode("LOITER")                                           # any other mode leaves the circle
+    w.flight.request_mode("LOITER")                                           # any other mode leaves the circle
     qtbot.waitUntil(lambda: w.guided.circling is None, timeout=10000)
 
 
@@ -102,7 +102,7 @@ def test_a_circle_the_vehicle_took_is_drawn_from_the_ui_thread(qtbot):
     from PyQt5.QtWidgets import QWidget
 
     from driver.vehicle.state import CommandResult, CommandStatus, VehicleState
-    from uavviewer.guided.controller import GuidedController
+    from uavviewer.flight.guided import GuidedController
 
     future = Future()
 

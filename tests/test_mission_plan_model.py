@@ -10,10 +10,10 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink
 from driver.core.frames import offset_latlon, offset_ned
 from driver.mission.plan import MissionItem, Plan, PlanKind
 from driver.params.model import Parameter, ParameterTable
-from uavviewer.map.plan_model import (
+from uavviewer.plan.model import (
     ITEM_KINDS, FenceShape, Performance, PlanDocument, new_item,
 )
-from uavviewer.map.survey import CAMERAS, GOPRO_HERO4_BLACK, SurveySpec, survey
+from uavviewer.plan.survey import CAMERAS, GOPRO_HERO4_BLACK, SurveySpec, survey
 
 HOME = (40.2839, -3.7940)
 

@@ -12,7 +12,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from driver.core.frames import offset_ned
 from driver.mission.plan import PlanKind
-from uavviewer.map.survey import SurveySpec
+from uavviewer.plan.survey import SurveySpec
 
 from viewer_fixtures import viewer_settings, window_factory  # noqa: F401  (fixtures)
 

@@ -122,6 +122,9 @@ def test_the_wheel_carries_the_files_the_program_loads(wheel):
         files = [p.relative_to(folder).as_posix() for p in folder.rglob("*") if p.is_file()]
         assert files and all(f"{inside}/{f}" in names for f in files), sorted(names)
     assert not any("__pycache__" in n or n.startswith("tests/") for n in names)
+    code = [p.relative_to(ROOT).as_posix() for package in ("driver", "uavviewer") for p in (ROOT / package).rglob("*.py")
+            if "__pycache__" not in p.parts]                 # every feature folder, with or without an __init__.py
+    assert "uavviewer/flight/commands.py" in code and not set(code) - names, sorted(set(code) - names)
     entry_points = zipfile.ZipFile(wheel).read(next(n for n in names if n.endswith("entry_points.txt"))).decode()
     assert "uavviewer = uavviewer.app:main" in entry_points and "mavlinkserver = driver.__main__:main" in entry_points
 

@@ -37,8 +37,8 @@ def test_a_critical_autopilot_message_goes_to_the_banner_and_can_be_dismissed(qt
     sim.faults.refuse_arm = "Compass not calibrated"
     qtbot.waitUntil(lambda: w.flightControls.arm_button.isEnabled(), timeout=15000)
     qtbot.mouseClick(w.flightControls.arm_button, Qt.LeftButton)
-    qtbot.waitUntil(lambda: w.arm_box is not None and w.arm_box.isVisible(), timeout=3000)   # Arm asks first
-    qtbot.mouseClick(w.arm_box.button(QMessageBox.Yes), Qt.LeftButton)
+    qtbot.waitUntil(lambda: w.flight.arm_box is not None and w.flight.arm_box.isVisible(), timeout=3000)  # Arm asks first
+    qtbot.mouseClick(w.flight.arm_box.button(QMessageBox.Yes), Qt.LeftButton)
     qtbot.waitUntil(lambda: w.alert_banner.isVisible() and "Compass not calibrated" in w.alert_banner.text,
                     timeout=15000)
     banner_bottom = w.alert_banner.mapTo(w, w.alert_banner.rect().bottomLeft()).y()

@@ -12,7 +12,7 @@ from PyQt5.QtWidgets import QApplication, QMessageBox
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from driver.mission.plan import PlanKind
-from uavviewer.map.survey import SurveySpec
+from uavviewer.plan.survey import SurveySpec
 
 from test_mission_viewer_plan import click, logged, planning_window, settle
 from viewer_fixtures import viewer_settings, window_factory  # noqa: F401  (fixtures)

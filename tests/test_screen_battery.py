@@ -15,8 +15,8 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink
 from driver.vehicle import telemetry
 from driver.vehicle.battery import battery_alarm, time_left
 from driver.vehicle.state import Battery, BatteryAlarm, BatteryThresholds, VehicleState
-from uavviewer.widgets.status_strip import ALARM_COLOURS
-from uavviewer.widgets.telemetry_panel import BAD
+from uavviewer.telemetry.status_strip import ALARM_COLOURS
+from uavviewer.telemetry.panel import BAD
 
 from viewer_fixtures import viewer_settings, window_factory  # noqa: F401  (fixtures)
 
@@ -91,8 +91,8 @@ def test_the_pilots_thresholds_reach_the_driver(qtbot, sim, vehicle, window_fact
     from dataclasses import replace
     w = window_factory(vehicle)
     qtbot.waitUntil(lambda: vehicle.state().battery.alarm is BatteryAlarm.OK, timeout=15000)
-    w.settings = replace(w.settings, battery_warning_percent=100.0, battery_critical_percent=99.5)
-    w._apply_settings()
+    w.preferences.settings = replace(w.settings, battery_warning_percent=100.0, battery_critical_percent=99.5)
+    w.preferences.apply()
     assert vehicle.state().battery.thresholds.warning_percent == 100.0
     qtbot.waitUntil(lambda: vehicle.state().battery.alarm is not BatteryAlarm.OK, timeout=5000)
 

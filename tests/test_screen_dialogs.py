@@ -8,8 +8,13 @@ import pytest
 from PyQt5.QtCore import QPoint, QRect
 from PyQt5.QtWidgets import QAbstractButton, QApplication, QDialog, QDialogButtonBox, QMessageBox
 
-from uavviewer import dialogs
-from uavviewer.layout import FRAME_ALLOWANCE, MIN_SIZE
+from uavviewer.fleet.dock import all_vehicles_question
+from uavviewer.flight.questions import arm_question, emergency_stop_question, mode_question, takeoff_question
+from uavviewer.input.keys_dialog import KeysDialog
+from uavviewer.map.controller import fly_here_question
+from uavviewer.plan.controller import mission_start_question
+from uavviewer.preferences.dialog import signing_setup_question
+from uavviewer.window.layout import FRAME_ALLOWANCE, MIN_SIZE
 from uavviewer.params.compare_dialog import CompareDialog
 from uavviewer.params.review_dialog import ReviewDialog
 from uavviewer.params.rows import FileRow, ReviewRow
@@ -52,20 +57,20 @@ def opened(qtbot, d: QDialog) -> QDialog:
 
 
 def _questions(w) -> dict:
-    return {"takeoff": lambda: dialogs.takeoff_question(w, 3.0, ("GPS fix", "EKF", "pre-arm checks"), 60.0),
-            "arm": lambda: dialogs.arm_question(w, "STABILIZE", "The motors start. " * 8),
-            "mode": lambda: dialogs.mode_question(w, "ALT_HOLD", "It takes its throttle from an RC transmitter."),
-            "emergency stop": lambda: dialogs.emergency_stop_question(w),
-            "signing setup": lambda: dialogs.signing_setup_question(w),
-            "all vehicles": lambda: dialogs.all_vehicles_question(w, "takeoff", [f"solo-{i}" for i in range(8)], 3.0),
-            "fly here": lambda: dialogs.fly_here_question(w, "Fly 120 m north-east at 10 m?"),
-            "mission start": lambda: dialogs.mission_start_question(w, "Start the mission from item 1?")}
+    return {"takeoff": lambda: takeoff_question(w, 3.0, ("GPS fix", "EKF", "pre-arm checks"), 60.0),
+            "arm": lambda: arm_question(w, "STABILIZE", "The motors start. " * 8),
+            "mode": lambda: mode_question(w, "ALT_HOLD", "It takes its throttle from an RC transmitter."),
+            "emergency stop": lambda: emergency_stop_question(w),
+            "signing setup": lambda: signing_setup_question(w),
+            "all vehicles": lambda: all_vehicles_question(w, "takeoff", [f"solo-{i}" for i in range(8)], 3.0),
+            "fly here": lambda: fly_here_question(w, "Fly 120 m north-east at 10 m?"),
+            "mission start": lambda: mission_start_question(w, "Start the mission from item 1?")}
 
 
 def test_preferences_fits_with_ok_in_reach(qtbot, silent_vehicle, window_factory):
     w = window_factory(silent_vehicle)
     w.actionPreferences.trigger()
-    d = opened(qtbot, w.settings_dialog)
+    d = opened(qtbot, w.preferences.dialog)
     problems = dialog_problems(d)
     assert not problems, "\n".join(problems)
     d.reject()
@@ -74,7 +79,7 @@ def test_preferences_fits_with_ok_in_reach(qtbot, silent_vehicle, window_factory
 def test_help_keys_fits(qtbot, silent_vehicle, window_factory):
     w = window_factory(silent_vehicle)
     w.show_keys()
-    d = next(x for x in w.findChildren(dialogs.KeysDialog) if x.isVisible())
+    d = next(x for x in w.findChildren(KeysDialog) if x.isVisible())
     qtbot.waitExposed(d)
     problems = dialog_problems(d)
     assert not problems, "\n".join(problems)
@@ -118,8 +123,8 @@ def test_the_guided_altitude_question_and_the_folder_chooser_fit(qtbot, silent_v
     problems = [f"altitude: {p}" for p in dialog_problems(opened(qtbot, w.guided.question))]
     w.guided.question.reject()
     w.actionPreferences.trigger()
-    chooser = opened(qtbot, w.settings_dialog.browse_media_folder())
+    chooser = opened(qtbot, w.preferences.dialog.browse_media_folder())
     problems += [f"folder: {p}" for p in dialog_problems(chooser)]
     chooser.reject()
-    w.settings_dialog.reject()
+    w.preferences.dialog.reject()
     assert not problems, "\n".join(problems)

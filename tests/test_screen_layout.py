@@ -1,5 +1,5 @@
 """Issue 21, problem 2: the window fits a laptop. At 1366×768, 1280×720 and 1024×600 every essential widget
-(uavviewer.layout.essential_widgets) lies inside the window, is shown whole (not clipped by its parents, not
+(uavviewer.window.layout.essential_widgets) lies inside the window, is shown whole (not clipped by its parents, not
 narrower than its own content needs) and is not covered by anything else: the widget under its centre and under
 each corner is itself or one of its children.
 
@@ -11,7 +11,7 @@ import pytest
 from PyQt5.QtCore import QPoint, QRect
 from PyQt5.QtWidgets import QApplication, QWidget
 
-from uavviewer.layout import MIN_SIZE, essential_widgets
+from uavviewer.window.layout import MIN_SIZE, essential_widgets
 
 from viewer_fixtures import app_style, viewer_settings, window, window_factory  # noqa: F401  (fixtures)
 
@@ -100,7 +100,7 @@ def test_a_fresh_profile_on_a_600_pixel_screen_fits_title_bar_included(qtbot, si
     """Issue 29, item 7: the test screen (Qt's offscreen platform) is 600 px tall, as a 1024×600 netbook's; a fresh
     profile opened 629 px tall there, its bottom cut. Now it fits with a title bar, and everything a pilot needs is
     in view at that size."""
-    from uavviewer.layout import FRAME_ALLOWANCE
+    from uavviewer.window.layout import FRAME_ALLOWANCE
     w = _own_window(qtbot, flying, viewer_settings)
     free = QApplication.primaryScreen().availableGeometry()
     assert free.height() <= 600
@@ -112,7 +112,7 @@ def test_a_fresh_profile_on_a_600_pixel_screen_fits_title_bar_included(qtbot, si
 
 def test_a_window_saved_on_a_larger_screen_is_restored_inside_this_one(qtbot, vehicle, viewer_settings):
     """Issue 29, item 6: saved at 1366×728 (a larger screen), restored on a smaller one, it came back 1366×728."""
-    from uavviewer.layout import FRAME_ALLOWANCE
+    from uavviewer.window.layout import FRAME_ALLOWANCE
     w = _own_window(qtbot, vehicle, viewer_settings)
     w.setMinimumSize(0, 0)
     w.resize(1366, 728)

@@ -8,9 +8,9 @@ from __future__ import annotations
 import pytest
 
 from driver.vehicle.state import LinkStatus
-from uavviewer.widgets.status_strip import DIM as STRIP_DIM
-from uavviewer.widgets.telemetry_panel import DIM
-from uavviewer.widgets.video_hud import STALE_COLOUR, hud_colour, stale_text
+from uavviewer.telemetry.status_strip import DIM as STRIP_DIM
+from uavviewer.telemetry.panel import DIM
+from uavviewer.camera.hud import STALE_COLOUR, hud_colour, stale_text
 
 from viewer_fixtures import viewer_settings, window_factory  # noqa: F401  (fixtures)
 

@@ -28,8 +28,8 @@ def test_arm_in_rtl_says_which_mode_arms_before_asking_and_offers_the_switch(qtb
     assert "ready to arm" not in w.phaseLabel.text()
 
     qtbot.mouseClick(w.flightControls.arm_button, Qt.LeftButton)
-    qtbot.waitUntil(lambda: w.arm_box is not None and w.arm_box.isVisible(), timeout=3000)
-    box = w.arm_box
+    qtbot.waitUntil(lambda: w.flight.arm_box is not None and w.flight.arm_box.isVisible(), timeout=3000)
+    box = w.flight.arm_box
     assert "switch to GUIDED or LOITER to arm" in box.text() and "RTL" in box.text()
     assert box.defaultButton() is box.button(box.Cancel)
     switch = next(b for b in box.buttons() if b.text() == "Switch to GUIDED")

@@ -11,8 +11,9 @@ from PyQt5.QtWidgets import QApplication, QMessageBox
 from driver.console.console import Console
 from driver.vehicle.rules import TAKEOFF_ALTITUDE_RANGE, takeoff_altitude_problem
 from driver.version import __version__
-from uavviewer.dialogs import KeysDialog, SettingsDialog
-from uavviewer.flight_phase import NO_VEHICLE
+from uavviewer.input.keys_dialog import KeysDialog
+from uavviewer.preferences.dialog import SettingsDialog
+from uavviewer.flight.phase import NO_VEHICLE
 from uavviewer.settings import ViewerSettings
 from uavviewer.widgets.icons import DISABLED_COLOUR
 

@@ -11,7 +11,7 @@ import pytest
 from PyQt5.QtWidgets import QProgressBar
 
 from driver.camera.source import SourceFailed, VideoSource
-from uavviewer.widgets.gamepad_page import GamepadPage
+from uavviewer.input.gamepad_page import GamepadPage
 
 from test_viewer_window import silent_vehicle  # noqa: F401  (fixture)
 from viewer_fixtures import viewer_settings, window_factory  # noqa: F401  (fixtures)
@@ -36,18 +36,18 @@ def test_the_quit_question_says_what_the_vehicle_does_in_its_mode(qtbot, sim, fl
     qtbot.waitUntil(lambda: w.adapter.state.mode == "LOITER" and w.adapter.state.gcs_failsafe is not None,
                     timeout=10000)
     w.close()
-    qtbot.waitUntil(lambda: w.quit_box is not None and w.quit_box.isVisible(), timeout=3000)
-    text = w.quit_box.text()
+    qtbot.waitUntil(lambda: w.closing.quit_box is not None and w.closing.quit_box.isVisible(), timeout=3000)
+    text = w.closing.quit_box.text()
     assert "holds position in LOITER" in text and "GUIDED" not in text
     assert "GCS failsafe is off" in text                    # the simulated vehicle's FS_GCS_ENABLE is 0
-    w.quit_box.reject()
-    qtbot.waitUntil(lambda: w.quit_box is None, timeout=3000)
+    w.closing.quit_box.reject()
+    qtbot.waitUntil(lambda: w.closing.quit_box is None, timeout=3000)
 
 
 def test_the_gamepad_page_without_a_controller_shows_no_readings(qtbot, silent_vehicle, window_factory):
     w = window_factory(silent_vehicle)
-    w.edit_settings()
-    dialog = w.settings_dialog
+    w.preferences.edit()
+    dialog = w.preferences.dialog
     page = dialog.findChild(GamepadPage)
     dialog.pages.setCurrentWidget(page)
     qtbot.waitUntil(page.isVisible, timeout=3000)

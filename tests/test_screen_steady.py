@@ -84,7 +84,7 @@ def test_no_control_moves_as_the_state_changes(qtbot, sim_factory, vehicle_facto
     watch.step("camera start")
 
     qtbot.mouseClick(w.flightControls.main_button, Qt.LeftButton)            # Take off, and its confirmation
-    answer(qtbot, lambda: w.takeoff_box, QMessageBox.Yes)
+    answer(qtbot, lambda: w.flight.takeoff_box, QMessageBox.Yes)
     qtbot.waitUntil(lambda: w.adapter.state.armed, timeout=30000)
     watch.step("arm")
     qtbot.waitUntil(lambda: w.flightControls.progress.isVisible() or w.adapter.state.can_fly_velocity, timeout=20000)

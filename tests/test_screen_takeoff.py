@@ -19,8 +19,8 @@ pytestmark = pytest.mark.timeout(90)
 
 def open_takeoff_question(qtbot, w) -> QMessageBox:
     qtbot.mouseClick(w.flightControls.main_button, Qt.LeftButton)
-    qtbot.waitUntil(lambda: w.takeoff_box is not None and w.takeoff_box.isVisible(), timeout=3000)
-    return w.takeoff_box
+    qtbot.waitUntil(lambda: w.flight.takeoff_box is not None and w.flight.takeoff_box.isVisible(), timeout=3000)
+    return w.flight.takeoff_box
 
 
 def test_takeoff_before_ready_says_it_waits_and_cancel_leaves_the_vehicle_as_it_was(
@@ -65,12 +65,12 @@ def test_arm_asks_first_and_says_what_happens_without_rc(qtbot, sim, vehicle_fac
     arm = w.flightControls.arm_button
     qtbot.waitUntil(lambda: arm.isEnabled() and vehicle.state().mode == "STABILIZE", timeout=15000)
     qtbot.mouseClick(arm, Qt.LeftButton)
-    qtbot.waitUntil(lambda: w.arm_box is not None and w.arm_box.isVisible(), timeout=3000)
-    text = w.arm_box.text()
+    qtbot.waitUntil(lambda: w.flight.arm_box is not None and w.flight.arm_box.isVisible(), timeout=3000)
+    text = w.flight.arm_box.text()
     assert "STABILIZE" in text and "RC transmitter" in text and "disarms again" in text
-    assert w.arm_box.defaultButton() is w.arm_box.button(QMessageBox.Cancel)
-    qtbot.mouseClick(w.arm_box.button(QMessageBox.Cancel), Qt.LeftButton)
-    qtbot.waitUntil(lambda: w.arm_box is None, timeout=3000)
+    assert w.flight.arm_box.defaultButton() is w.flight.arm_box.button(QMessageBox.Cancel)
+    qtbot.mouseClick(w.flight.arm_box.button(QMessageBox.Cancel), Qt.LeftButton)
+    qtbot.waitUntil(lambda: w.flight.arm_box is None, timeout=3000)
     assert not sim.truth().armed and not vehicle.state().armed
 
 
@@ -85,7 +85,7 @@ def test_launch_to_airborne_is_one_click_and_its_confirmation(qtbot, sim_factory
     qtbot.waitUntil(lambda: b.isEnabled() and b.text() == "Take off when ready", timeout=10000)
     qtbot.mouseClick(b, Qt.LeftButton)
     clicks += 1
-    qtbot.waitUntil(lambda: w.takeoff_box is not None and w.takeoff_box.isVisible(), timeout=3000)
-    qtbot.mouseClick(w.takeoff_box.button(QMessageBox.Yes), Qt.LeftButton)      # its confirmation
+    qtbot.waitUntil(lambda: w.flight.takeoff_box is not None and w.flight.takeoff_box.isVisible(), timeout=3000)
+    qtbot.mouseClick(w.flight.takeoff_box.button(QMessageBox.Yes), Qt.LeftButton)      # its confirmation
     qtbot.waitUntil(lambda: w.leftStick.isEnabled() and vehicle.state().can_fly_velocity, timeout=60000)
     assert clicks == 1 and sim.truth().altitude > 2.5

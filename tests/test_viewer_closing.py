@@ -26,9 +26,9 @@ def sent_commands(w) -> list[str]:
 def ask_to_close(qtbot, w) -> QMessageBox:
     """Close the window in flight: the question comes and the window stays."""
     w.close()
-    qtbot.waitUntil(lambda: w.quit_box is not None and w.quit_box.isVisible(), timeout=3000)
+    qtbot.waitUntil(lambda: w.closing.quit_box is not None and w.closing.quit_box.isVisible(), timeout=3000)
     assert w.isVisible()
-    return w.quit_box
+    return w.closing.quit_box
 
 
 def button(box: QMessageBox, text: str):
@@ -53,7 +53,7 @@ def test_cancel_keeps_the_window_and_the_vehicle_flying(qtbot, sim, flying, wind
     sent = sent_commands(w)
     box = ask_to_close(qtbot, w)
     qtbot.mouseClick(box.button(QMessageBox.Cancel), Qt.LeftButton)
-    qtbot.waitUntil(lambda: w.quit_box is None, timeout=3000)
+    qtbot.waitUntil(lambda: w.closing.quit_box is None, timeout=3000)
     assert w.isVisible() and sent == []
     hovers_in_place(qtbot, sim)
     # still the pilot's window: its state is live, its sticks fly, its buttons command the vehicle
@@ -65,7 +65,7 @@ def test_cancel_keeps_the_window_and_the_vehicle_flying(qtbot, sim, flying, wind
     # and closing again asks again
     box = ask_to_close(qtbot, w)
     qtbot.mouseClick(box.button(QMessageBox.Cancel), Qt.LeftButton)
-    qtbot.waitUntil(lambda: w.quit_box is None, timeout=3000)
+    qtbot.waitUntil(lambda: w.closing.quit_box is None, timeout=3000)
     assert w.isVisible() and sent == []
 
 
@@ -76,7 +76,7 @@ def test_quit_anyway_closes_and_leaves_the_vehicle_hovering(qtbot, sim, flying, 
     box = ask_to_close(qtbot, w)
     qtbot.mouseClick(button(box, "Quit anyway"), Qt.LeftButton)
     qtbot.waitUntil(lambda: not w.isVisible(), timeout=3000)
-    assert w.quit_box is None and sent == []              # no Land, no RTL: it is left where it is
+    assert w.closing.quit_box is None and sent == []              # no Land, no RTL: it is left where it is
     assert flying.state().setpoint.is_zero
     hovers_in_place(qtbot, sim)
 
@@ -91,7 +91,7 @@ def test_minimising_stops_the_vehicle(qtbot, sim, flying, window):
     qtbot.waitUntil(lambda: body_velocity(sim)[0] > 1.0 and sim.truth().yaw_rate > 0.3, timeout=15000)
     w.showMinimized()
     qtbot.waitUntil(lambda: w.adapter.setpoint.is_zero, timeout=3000)
-    assert w.leftStick.position == (0.0, 0.0) and not w.keyboard.active
+    assert w.leftStick.position == (0.0, 0.0) and not w.sticks.keyboard.active
     qtbot.waitUntil(lambda: flying.state().setpoint.is_zero, timeout=2000)
     qtbot.waitUntil(lambda: speed(sim) < 0.2 and abs(sim.truth().yaw_rate) < 0.05, timeout=20000)
     hovers_in_place(qtbot, sim)

@@ -13,7 +13,7 @@ from PyQt5.QtGui import QMouseEvent
 from PyQt5.QtWidgets import QApplication, QMessageBox
 
 from driver.vehicle.state import LandedState, LinkStatus
-from uavviewer.flight_phase import FlightPhase
+from uavviewer.flight.phase import FlightPhase
 
 from viewer_fixtures import pick_mode, viewer_settings, window, window_factory  # noqa: F401  (fixtures)
 
@@ -48,9 +48,9 @@ def click_takeoff(qtbot, w) -> None:
     qtbot.waitUntil(lambda: w.flightControls.main_button.isEnabled()
                     and w.flightControls.main_button.text() == "Take off", timeout=15000)
     qtbot.mouseClick(w.flightControls.main_button, Qt.LeftButton)
-    qtbot.waitUntil(lambda: w.takeoff_box is not None and w.takeoff_box.isVisible(), timeout=3000)
-    assert "3.0 m" in w.takeoff_box.text()
-    qtbot.mouseClick(w.takeoff_box.button(QMessageBox.Yes), Qt.LeftButton)
+    qtbot.waitUntil(lambda: w.flight.takeoff_box is not None and w.flight.takeoff_box.isVisible(), timeout=3000)
+    assert "3.0 m" in w.flight.takeoff_box.text()
+    qtbot.mouseClick(w.flight.takeoff_box.button(QMessageBox.Yes), Qt.LeftButton)
 
 
 def wait_flying(qtbot, w, timeout=40000) -> None:
@@ -74,9 +74,9 @@ def test_cancelled_takeoff_sends_nothing(qtbot, sim, window):
     w = window
     qtbot.waitUntil(lambda: w.flightControls.main_button.isEnabled(), timeout=15000)
     qtbot.mouseClick(w.flightControls.main_button, Qt.LeftButton)
-    qtbot.waitUntil(lambda: w.takeoff_box is not None and w.takeoff_box.isVisible(), timeout=3000)
-    qtbot.mouseClick(w.takeoff_box.button(QMessageBox.Cancel), Qt.LeftButton)
-    qtbot.waitUntil(lambda: w.takeoff_box is None, timeout=3000)
+    qtbot.waitUntil(lambda: w.flight.takeoff_box is not None and w.flight.takeoff_box.isVisible(), timeout=3000)
+    qtbot.mouseClick(w.flight.takeoff_box.button(QMessageBox.Cancel), Qt.LeftButton)
+    qtbot.waitUntil(lambda: w.flight.takeoff_box is None, timeout=3000)
     assert not w.adapter.state.takeoff.active and not sim.truth().armed
 
 
@@ -169,8 +169,8 @@ def test_refused_arming_shows_the_reason(qtbot, sim, window):
     sim.faults.refuse_arm = "Compass not calibrated"
     qtbot.waitUntil(lambda: w.flightControls.arm_button.isEnabled(), timeout=15000)
     qtbot.mouseClick(w.flightControls.arm_button, Qt.LeftButton)
-    qtbot.waitUntil(lambda: w.arm_box is not None and w.arm_box.isVisible(), timeout=3000)   # it asks first
-    qtbot.mouseClick(w.arm_box.button(QMessageBox.Yes), Qt.LeftButton)
+    qtbot.waitUntil(lambda: w.flight.arm_box is not None and w.flight.arm_box.isVisible(), timeout=3000)  # it asks first
+    qtbot.mouseClick(w.flight.arm_box.button(QMessageBox.Yes), Qt.LeftButton)
 
     def refused():
         return any("refused" in t and "Compass not calibrated" in t for t in w.messages.texts())
@@ -258,19 +258,19 @@ def test_a_takeoff_confirmed_after_the_link_was_lost_is_not_sent(qtbot, sim, veh
     qtbot.waitUntil(lambda: w.flightControls.main_button.isEnabled()
                     and w.flightControls.main_button.text() == "Take off", timeout=15000)
     qtbot.mouseClick(w.flightControls.main_button, Qt.LeftButton)
-    qtbot.waitUntil(lambda: w.takeoff_box is not None and w.takeoff_box.isVisible(), timeout=3000)
-    box = w.takeoff_box
+    qtbot.waitUntil(lambda: w.flight.takeoff_box is not None and w.flight.takeoff_box.isVisible(), timeout=3000)
+    box = w.flight.takeoff_box
     w.adapter.stateChanged.disconnect(w.show_state)         # the window has not yet shown the newest state...
     try:
         sim.faults.link_down = True                         # ...in which the link is lost
         qtbot.waitUntil(lambda: w.adapter.state.link.status is LinkStatus.LOST, timeout=10000)
-        assert w.takeoff_box is box and box.isVisible()
+        assert w.flight.takeoff_box is box and box.isVisible()
         qtbot.mouseClick(box.button(QMessageBox.Yes), Qt.LeftButton)
     finally:
         w.adapter.stateChanged.connect(w.show_state)
     assert "takeoff" not in sent
     assert any(t.startswith("Takeoff not sent") for t in w.messages.texts())
-    qtbot.waitUntil(lambda: w.takeoff_box is None, timeout=3000)
+    qtbot.waitUntil(lambda: w.flight.takeoff_box is None, timeout=3000)
     sim.faults.link_down = False
     qtbot.waitUntil(lambda: w.adapter.state.link.status is LinkStatus.OK
                     and w.flightControls.main_button.isEnabled(), timeout=15000)

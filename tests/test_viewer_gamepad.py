@@ -13,7 +13,7 @@ import pytest
 from PyQt5.QtCore import Qt
 from PyQt5.QtWidgets import QWidget
 
-from uavviewer.gamepad import sdl2
+from uavviewer.input.gamepad import sdl2
 
 from gamepad_fixtures import pad, pad_factory, reached  # noqa: F401  (fixtures)
 from test_viewer_safety import sent_commands, wait_flying
@@ -56,7 +56,7 @@ def shaped(value: float, deadband: float = 0.1, expo: float = 0.0) -> float:
 
 
 def use_mapping(w, guid: str, mapping: dict, **settings) -> None:
-    w.set_settings(replace(w.settings, gamepad_mappings=json.dumps({guid: mapping}), **settings))
+    w.preferences.set_settings(replace(w.settings, gamepad_mappings=json.dumps({guid: mapping}), **settings))
 
 
 def test_mode2_sticks_reach_the_vehicle_then_mode1(qtbot, sim, flying, window, pad):
@@ -130,7 +130,7 @@ def test_buttons_stop_and_land_at_one_press(qtbot, sim, flying, window, pad):
     press(qtbot, w, pad, "b")            # Land: one press, no question
     qtbot.waitUntil(lambda: "land" in commands, timeout=3000)
     qtbot.waitUntil(lambda: flying.state().mode == "LAND", timeout=5000)
-    assert w.takeoff_box is None
+    assert w.flight.takeoff_box is None
 
 
 def test_take_off_button_asks_first(qtbot, sim, vehicle, window, pad):
@@ -140,13 +140,13 @@ def test_take_off_button_asks_first(qtbot, sim, vehicle, window, pad):
     wait_pad(qtbot, w, "Virtual gamepad")
     commands = sent_commands(w)
     press(qtbot, w, pad, "start")
-    qtbot.waitUntil(lambda: w.takeoff_box is not None and w.takeoff_box.isVisible(), timeout=3000)
+    qtbot.waitUntil(lambda: w.flight.takeoff_box is not None and w.flight.takeoff_box.isVisible(), timeout=3000)
     assert "takeoff" not in commands and not vehicle.state().armed
     press(qtbot, w, pad, "a")            # no other button answers the question
     press(qtbot, w, pad, "start")
     qtbot.waitUntil(lambda: w.gamepad.reading is not None and "start" not in w.gamepad.reading.held, timeout=3000)
-    assert "takeoff" not in commands and w.takeoff_box.isVisible()
-    w.takeoff_box.reject()
+    assert "takeoff" not in commands and w.flight.takeoff_box.isVisible()
+    w.flight.takeoff_box.reject()
 
 
 def test_disconnect_hovers_with_a_message_and_a_new_pad_plugs_in(qtbot, sim, flying, window, pad_factory):
@@ -232,7 +232,7 @@ def test_focus_loss_hovers_unless_flying_in_background(qtbot, sim, flying, windo
     qtbot.waitUntil(w.isActiveWindow, timeout=3000)
     assert w.gamepad.status == "centre its sticks"         # still held: not before it is centred
     pad.centre()
-    w.set_settings(replace(w.settings, gamepad_background=True))
+    w.preferences.set_settings(replace(w.settings, gamepad_background=True))
     qtbot.waitUntil(lambda: w.gamepad.status == "", timeout=3000)
     hold_forward(qtbot, w, pad)
     other.activateWindow()
@@ -257,8 +257,8 @@ def test_no_device_no_trouble(qtbot, silent_vehicle, window_factory):
 def test_off_means_no_gamepad_flies(qtbot, silent_vehicle, viewer_settings, window_factory, pad):
     w = window_factory(silent_vehicle)
     wait_pad(qtbot, w, "Virtual gamepad")
-    w.set_settings(replace(w.settings, gamepad="off"))
+    w.preferences.set_settings(replace(w.settings, gamepad="off"))
     assert w.gamepad.pad is None and "gamepad" not in w.inputLabel.text()
-    w.set_settings(replace(w.settings, gamepad=pad.guid))
+    w.preferences.set_settings(replace(w.settings, gamepad=pad.guid))
     assert w.gamepad.pad is not None and w.gamepad.pad.guid == pad.guid
 

@@ -115,8 +115,8 @@ def test_preferences_set_the_tile_server_and_the_area_downloads(qtbot, vehicle, 
         combo = panel.layerCombo
         assert combo.currentText() == "Grid" and not combo.model().item(1).isEnabled()   # the offline grid first
         assert w.map.tiles is None and not panel.downloadButton.isEnabled()            # nothing on the network
-        w.edit_settings()
-        dialog = w.settings_dialog
+        w.preferences.edit()
+        dialog = w.preferences.dialog
         dialog.tileUrl.setText(server.url)
         dialog.tileAttribution.setText("© test")
         dialog.tileCacheMb.setValue(50)

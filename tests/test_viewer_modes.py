@@ -18,17 +18,17 @@ def test_in_flight_stabilize_is_asked_first_and_cancel_keeps_guided(qtbot, sim, 
     w.adapter.commandSent.connect(sent.append)
 
     pick_mode(qtbot, sel, "STABILIZE")
-    qtbot.waitUntil(lambda: w.mode_box is not None and w.mode_box.isVisible(), timeout=3000)
-    box = w.mode_box
+    qtbot.waitUntil(lambda: w.flight.mode_box is not None and w.flight.mode_box.isVisible(), timeout=3000)
+    box = w.flight.mode_box
     assert box.text() == mode_warning("STABILIZE", True) and "RC transmitter" in box.text()
     assert box.defaultButton() is box.button(QMessageBox.Cancel)
     box.button(QMessageBox.Cancel).click()
-    qtbot.waitUntil(lambda: w.mode_box is None, timeout=3000)
+    qtbot.waitUntil(lambda: w.flight.mode_box is None, timeout=3000)
     assert sent == [] and sim.truth().mode == "GUIDED"
 
     pick_mode(qtbot, sel, "ALT_HOLD")
-    qtbot.waitUntil(lambda: w.mode_box is not None and w.mode_box.isVisible(), timeout=3000)
-    w.mode_box.button(QMessageBox.Yes).click()
+    qtbot.waitUntil(lambda: w.flight.mode_box is not None and w.flight.mode_box.isVisible(), timeout=3000)
+    w.flight.mode_box.button(QMessageBox.Yes).click()
     assert sent == ["set_mode"]
     qtbot.waitUntil(lambda: sim.truth().mode == "ALT_HOLD", timeout=10000)
 
@@ -37,7 +37,7 @@ def test_in_flight_loiter_needs_no_question(qtbot, sim, flying, window_factory):
     w = window_factory(flying, takeoff_altitude=3.0)
     qtbot.waitUntil(lambda: w.modeSelector.mode == "GUIDED", timeout=10000)
     pick_mode(qtbot, w.modeSelector, "LOITER")
-    assert w.mode_box is None
+    assert w.flight.mode_box is None
     qtbot.waitUntil(lambda: sim.truth().mode == "LOITER", timeout=10000)
 
 

@@ -50,10 +50,10 @@ def test_preferences_left_alone_do_not_save_the_command_line_altitude(qtbot, sil
                                                                        window_factory):
     from PyQt5.QtWidgets import QDialogButtonBox
 
-    from uavviewer.dialogs import SettingsDialog
+    from uavviewer.preferences.dialog import SettingsDialog
     from uavviewer.settings import load_settings
     w = window_factory(silent_vehicle, takeoff_altitude=25.0)
-    w.edit_settings()
+    w.preferences.edit()
     dialog = w.findChild(SettingsDialog)
     assert dialog.takeoffAltitude.value() == 25.0                 # what is in force is what is shown
     dialog.maxHorizontal.setValue(3.0)
@@ -61,7 +61,7 @@ def test_preferences_left_alone_do_not_save_the_command_line_altitude(qtbot, sil
     assert w.takeoff_altitude == 25.0
     saved = load_settings(viewer_settings)
     assert saved.takeoff_altitude == 3.0 and saved.max_horizontal == 3.0
-    w.edit_settings()                                             # now the pilot does choose an altitude
+    w.preferences.edit()                                             # now the pilot does choose an altitude
     dialog = w.findChild(SettingsDialog)
     dialog.takeoffAltitude.setValue(7.0)
     dialog.buttons.button(QDialogButtonBox.Ok).click()
@@ -119,13 +119,13 @@ def test_closing_in_flight_asks_and_land_lands(qtbot, sim, flying, window):
     sent: list[str] = []
     w.adapter.commandSent.connect(sent.append)
     w.close()
-    qtbot.waitUntil(lambda: w.quit_box is not None and w.quit_box.isVisible(), timeout=3000)
+    qtbot.waitUntil(lambda: w.closing.quit_box is not None and w.closing.quit_box.isVisible(), timeout=3000)
     assert w.isVisible()                                     # still there: nobody would command the vehicle
-    qtbot.mouseClick(next(b for b in w.quit_box.buttons() if b.text() == "Land"), Qt.LeftButton)
+    qtbot.mouseClick(next(b for b in w.closing.quit_box.buttons() if b.text() == "Land"), Qt.LeftButton)
     assert sent == ["land"] and w.isVisible()
     qtbot.waitUntil(lambda: not sim.truth().armed, timeout=40000)
     w.close()                                                # on the ground: closes without a question
-    assert not w.isVisible() and w.quit_box is None
+    assert not w.isVisible() and w.closing.quit_box is None
 
 
 def test_sigterm_closes_the_app_cleanly(tmp_path):

@@ -48,7 +48,9 @@ def test_minimised_window_paints_nothing_and_stops_the_video(qtbot, vehicle, win
     snapshots = []
     w.adapter.stateChanged.connect(snapshots.append)
     attitude = Paints(w.attitude)
-    qtbot.waitUntil(lambda: len(frames) >= 3 and w._instruments.runs > 0 and w._readouts.runs > 0, timeout=10000)
+    readouts = w.readouts
+    qtbot.waitUntil(lambda: len(frames) >= 3 and readouts.instruments_channel.runs > 0 and readouts.text_channel.runs > 0,
+                    timeout=10000)
 
     w.showMinimized()
     qtbot.waitUntil(lambda: not w.refresh.shown, timeout=3000)
@@ -56,19 +58,20 @@ def test_minimised_window_paints_nothing_and_stops_the_video(qtbot, vehicle, win
     assert w.camera._cameras.suspended
     qtbot.waitUntil(lambda: source.closed, timeout=3000)          # nothing captured or decoded
     painted, paints = len(frames), attitude.count
-    runs = (w._instruments.runs, w._readouts.runs, w._plots_refresh.runs)
+    runs = (w.readouts.instruments_channel.runs, w.readouts.text_channel.runs, w.readouts.plots_channel.runs)
     seen = len(snapshots)
     qtbot.waitUntil(lambda: len(snapshots) >= seen + 10, timeout=10000)   # the vehicle goes on reporting
     assert len(frames) == painted and attitude.count == paints
-    assert (w._instruments.runs, w._readouts.runs, w._plots_refresh.runs) == runs
-    assert w._instruments.pending and w._readouts.pending          # kept for when the pilot looks again
+    assert (w.readouts.instruments_channel.runs, w.readouts.text_channel.runs, w.readouts.plots_channel.runs) == runs
+    assert w.readouts.instruments_channel.pending and w.readouts.text_channel.pending   # kept for when the pilot looks again
     assert not w.flight_timer.started
     w.show_state(replace(w.adapter.state, armed=True))             # an arm while minimised is not missed
     assert w.flight_timer.started
 
     w.showNormal()
     qtbot.waitUntil(lambda: w.refresh.shown, timeout=3000)
-    qtbot.waitUntil(lambda: w._instruments.runs > runs[0] and w._readouts.runs > runs[1], timeout=3000)
+    qtbot.waitUntil(lambda: w.readouts.instruments_channel.runs > runs[0] and w.readouts.text_channel.runs > runs[1],
+                    timeout=3000)
     assert not w.camera._cameras.suspended and w.camera.source is not source
     qtbot.waitUntil(lambda: len(frames) > painted, timeout=10000)  # the video opened again and is painted
 

@@ -10,7 +10,7 @@ from PyQt5.QtWidgets import QApplication
 
 from driver.vehicle.state import LinkStatus
 from recordings import FLIGHT
-from uavviewer.widgets.video_hud import stale_text
+from uavviewer.camera.hud import stale_text
 
 from viewer_fixtures import viewer_settings, window_factory  # noqa: F401  (fixtures)
 

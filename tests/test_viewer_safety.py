@@ -13,7 +13,7 @@ from PyQt5.QtCore import QPoint, Qt
 from PyQt5.QtWidgets import QApplication, QDialogButtonBox, QMessageBox, QWidget
 
 from driver.vehicle.api import CEILING, Limits
-from uavviewer.dialogs import SettingsDialog
+from uavviewer.preferences.dialog import SettingsDialog
 from uavviewer.settings import ViewerSettings, save_settings
 
 from test_viewer_window import silent_vehicle  # noqa: F401  (fixture)
@@ -76,15 +76,15 @@ def test_space_and_enter_do_not_confirm_the_takeoff(qtbot, sim, window):
     qtbot.waitUntil(lambda: w.flightControls.main_button.isEnabled(), timeout=15000)
     for key in (Qt.Key_Space, Qt.Key_Return):
         qtbot.keyClick(w, Qt.Key_T)
-        qtbot.waitUntil(lambda: w.takeoff_box is not None and w.takeoff_box.isVisible(), timeout=3000)
-        box = w.takeoff_box
+        qtbot.waitUntil(lambda: w.flight.takeoff_box is not None and w.flight.takeoff_box.isVisible(), timeout=3000)
+        box = w.flight.takeoff_box
         qtbot.waitUntil(lambda: box.isActiveWindow() and box.isAncestorOf(QApplication.focusWidget()),
                         timeout=3000)
         assert box.button(QMessageBox.Yes).focusPolicy() == Qt.NoFocus
         assert box.defaultButton() is box.button(QMessageBox.Cancel)
         qtbot.keyClick(QApplication.focusWidget(), key)
         assert box.clickedButton() is not box.button(QMessageBox.Yes)
-        qtbot.waitUntil(lambda: w.takeoff_box is None, timeout=3000)
+        qtbot.waitUntil(lambda: w.flight.takeoff_box is None, timeout=3000)
     assert "takeoff" not in sent
     assert not w.adapter.state.takeoff.active
 
@@ -106,7 +106,7 @@ def test_saved_speeds_become_the_driver_limits_at_start(qtbot, silent_vehicle, v
     limits = silent_vehicle.limits
     assert (limits.horizontal, limits.vertical) == (3.5, 0.5)
     assert limits.yaw_rate == pytest.approx(math.radians(30.0))
-    assert w.speeds.horizontal == 3.5 and w.speeds.yaw_deg_s == pytest.approx(30.0)
+    assert w.sticks.speeds.horizontal == 3.5 and w.sticks.speeds.yaw_deg_s == pytest.approx(30.0)
     dialog = SettingsDialog(w.settings, w)
     assert dialog.maxHorizontal.maximum() == CEILING.horizontal
     assert dialog.maxVertical.maximum() == CEILING.vertical
@@ -136,9 +136,9 @@ def test_preferences_speeds_reach_the_driver(qtbot, sim, flying, window):
 def test_speeds_follow_what_the_driver_allows(qtbot, silent_vehicle, window_factory):
     """Asking for more than the ceiling: the sticks scale by the limits in force, not the wish."""
     w = window_factory(silent_vehicle)
-    w.set_settings(replace(w.settings, max_horizontal=25.0))
+    w.preferences.set_settings(replace(w.settings, max_horizontal=25.0))
     assert silent_vehicle.limits.horizontal == CEILING.horizontal
-    assert w.speeds.horizontal == CEILING.horizontal
+    assert w.sticks.speeds.horizontal == CEILING.horizontal
 
 
 def test_lost_link_in_flight_makes_the_sticks_inert_and_keys_need_a_fresh_press(
@@ -175,11 +175,11 @@ def test_a_takeoff_question_is_withdrawn_when_the_link_is_lost(qtbot, sim, vehic
     sent = sent_commands(w)
     qtbot.waitUntil(lambda: w.flightControls.main_button.isEnabled(), timeout=15000)
     qtbot.mouseClick(w.flightControls.main_button, Qt.LeftButton)
-    qtbot.waitUntil(lambda: w.takeoff_box is not None and w.takeoff_box.isVisible(), timeout=3000)
+    qtbot.waitUntil(lambda: w.flight.takeoff_box is not None and w.flight.takeoff_box.isVisible(), timeout=3000)
     clicked: list[str] = []
-    w.takeoff_box.buttonClicked.connect(lambda b: clicked.append(b.text()))
+    w.flight.takeoff_box.buttonClicked.connect(lambda b: clicked.append(b.text()))
     sim.faults.link_down = True
-    qtbot.waitUntil(lambda: w.takeoff_box is None, timeout=10000)        # withdrawn, never answered
+    qtbot.waitUntil(lambda: w.flight.takeoff_box is None, timeout=10000)        # withdrawn, never answered
     assert clicked == []
     sim.faults.link_down = False
     qtbot.waitUntil(lambda: w.adapter.state.link.status.value == "ok"

@@ -11,11 +11,11 @@ from PyQt5.QtWidgets import QDialogButtonBox, QLineEdit, QMessageBox
 
 from driver.link.signing import SigningConfig, key_from_passphrase, write_key_file
 from driver.vehicle.state import LinkHealth, LinkStatus, Signing, SigningStatus, VehicleState
-from uavviewer.dialogs import SettingsDialog
-from uavviewer.link_security import signing_warning
+from uavviewer.preferences.dialog import SettingsDialog
+from uavviewer.connect.security import signing_warning
 from uavviewer.settings import load_settings
-from uavviewer.widgets.link_banner import LinkBanner
-from uavviewer.widgets.telemetry_panel import DIM, GOOD, NORMAL, WARN, TelemetryPanel
+from uavviewer.connect.link_banner import LinkBanner
+from uavviewer.telemetry.panel import DIM, GOOD, NORMAL, WARN, TelemetryPanel
 
 from ice_fixtures import drone_factory, server_factory  # noqa: F401  (fixtures)
 from test_driver_pinned_link import Spoofer
@@ -36,8 +36,8 @@ def signing_driver(vehicle_factory, connection: str, **kw):
 
 def open_link_security(qtbot, w) -> SettingsDialog:
     w.actionPreferences.trigger()
-    qtbot.waitUntil(lambda: w.settings_dialog is not None and w.settings_dialog.isVisible(), timeout=3000)
-    dialog = w.settings_dialog
+    qtbot.waitUntil(lambda: w.preferences.dialog is not None and w.preferences.dialog.isVisible(), timeout=3000)
+    dialog = w.preferences.dialog
     dialog.pages.setCurrentWidget(dialog.signingPage)
     return dialog
 
@@ -208,8 +208,8 @@ def test_a_refused_setup_shows_why_and_disarm_on_the_ground_asks_nothing(qtbot, 
     qtbot.waitUntil(lambda: fc.arm_button.isEnabled() and w.adapter.state.readiness.ready_to_arm, timeout=15000)
     sent = sent_commands(w)
     qtbot.mouseClick(fc.arm_button, Qt.LeftButton)
-    qtbot.waitUntil(lambda: w.arm_box is not None and w.arm_box.isVisible(), timeout=3000)   # Arm asks first
-    qtbot.mouseClick(w.arm_box.button(QMessageBox.Yes), Qt.LeftButton)
+    qtbot.waitUntil(lambda: w.flight.arm_box is not None and w.flight.arm_box.isVisible(), timeout=3000)  # Arm asks first
+    qtbot.mouseClick(w.flight.arm_box.button(QMessageBox.Yes), Qt.LeftButton)
     qtbot.waitUntil(lambda: w.adapter.state.armed and fc.arm_button.text() == "Disarm", timeout=10000)
 
     dialog = open_link_security(qtbot, w)
@@ -222,7 +222,7 @@ def test_a_refused_setup_shows_why_and_disarm_on_the_ground_asks_nothing(qtbot, 
 
     w.activateWindow()
     qtbot.mouseClick(fc.arm_button, Qt.LeftButton)          # on the ground: a plain disarm, no question
-    assert w.emergency_box is None
+    assert w.flight.emergency_box is None
     assert sent == ["arm", "setup_signing", "disarm"]
     qtbot.waitUntil(lambda: not sim.truth().armed and not w.adapter.state.armed, timeout=10000)
 
@@ -264,21 +264,21 @@ def test_disarm_in_the_air_asks_for_an_emergency_motor_stop(qtbot, sim, flying, 
     sent = sent_commands(w)
 
     qtbot.mouseClick(fc.arm_button, Qt.LeftButton)
-    qtbot.waitUntil(lambda: w.emergency_box is not None and w.emergency_box.isVisible(), timeout=3000)
-    box = w.emergency_box
+    qtbot.waitUntil(lambda: w.flight.emergency_box is not None and w.flight.emergency_box.isVisible(), timeout=3000)
+    box = w.flight.emergency_box
     assert box.text().startswith("Stop the motors now? The drone will fall.")
     assert box.defaultButton() is box.button(QMessageBox.Cancel)
     assert box.button(QMessageBox.Yes).focusPolicy() == Qt.NoFocus
     qtbot.mouseClick(box.button(QMessageBox.Cancel), Qt.LeftButton)
-    qtbot.waitUntil(lambda: w.emergency_box is None, timeout=3000)
+    qtbot.waitUntil(lambda: w.flight.emergency_box is None, timeout=3000)
     assert sent == []
     answered = w.adapter.state.time                     # a later snapshot: still armed, in the air, flyable
     qtbot.waitUntil(lambda: w.adapter.state.time > answered and w.adapter.state.can_fly_velocity, timeout=5000)
     assert sim.truth().armed and sim.truth().altitude > 2.0
 
     qtbot.mouseClick(fc.arm_button, Qt.LeftButton)
-    qtbot.waitUntil(lambda: w.emergency_box is not None and w.emergency_box.isVisible(), timeout=3000)
-    qtbot.mouseClick(w.emergency_box.button(QMessageBox.Yes), Qt.LeftButton)
+    qtbot.waitUntil(lambda: w.flight.emergency_box is not None and w.flight.emergency_box.isVisible(), timeout=3000)
+    qtbot.mouseClick(w.flight.emergency_box.button(QMessageBox.Yes), Qt.LeftButton)
     assert sent == ["disarm"]
     qtbot.waitUntil(lambda: not sim.truth().armed, timeout=10000)
     qtbot.waitUntil(lambda: not w.adapter.state.armed and fc.arm_button.text() == "Arm", timeout=10000)
@@ -291,7 +291,7 @@ def test_land_and_stop_stay_one_click_in_the_air(qtbot, sim, flying, window_fact
     sent = sent_commands(w)
     qtbot.mouseClick(w.flightControls.stop_button, Qt.LeftButton)
     qtbot.mouseClick(w.flightControls.main_button, Qt.LeftButton)
-    assert sent == ["stop", "land"] and w.emergency_box is None
+    assert sent == ["stop", "land"] and w.flight.emergency_box is None
     qtbot.waitUntil(lambda: sim.truth().mode == "LAND", timeout=10000)
 
 

@@ -6,9 +6,9 @@ import math
 import pytest
 from PyQt5.QtCore import Qt
 
-from uavviewer.keyboard import KeyboardSticks, key_help
-from uavviewer.sticks import (Axes, MaxSpeeds, StickMode, StickShaping, axes_from_pads, combine, shape,
-                              velocity_from_axes)
+from uavviewer.input.keyboard import KeyboardSticks, key_help
+from uavviewer.input.sticks import (Axes, MaxSpeeds, StickMode, StickShaping, axes_from_pads, combine, shape,
+                                    velocity_from_axes)
 
 
 def test_deadband_zeroes_small_deflections_and_still_reaches_full():

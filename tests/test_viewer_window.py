@@ -11,9 +11,10 @@ import pytest
 from PyQt5.QtWidgets import QApplication, QDialogButtonBox
 
 from driver.vehicle import Vehicle, VehicleConfig
-from uavviewer.dialogs import KeysDialog, SettingsDialog
+from uavviewer.input.keys_dialog import KeysDialog
+from uavviewer.preferences.dialog import SettingsDialog
 from uavviewer.settings import ViewerSettings, split_uris
-from uavviewer.sticks import StickMode, pad_labels
+from uavviewer.input.sticks import StickMode, pad_labels
 
 from camera_media import write_clip
 from test_camera_view import nearest, painted_rgb
@@ -45,7 +46,7 @@ def test_waiting_banner_and_inert_controls(qtbot, silent_vehicle, window_factory
 
 def test_settings_are_remembered(qtbot, silent_vehicle, window_factory):
     w = window_factory(silent_vehicle)
-    w.set_settings(ViewerSettings(stick_mode=StickMode.MODE1.value, max_horizontal=3.5, max_vertical=0.5,
+    w.preferences.set_settings(ViewerSettings(stick_mode=StickMode.MODE1.value, max_horizontal=3.5, max_vertical=0.5,
                                   max_yaw_deg_s=30.0, deadband=0.1, expo=0.3, takeoff_altitude=5.0))
     assert w.leftStick._caption == pad_labels(StickMode.MODE1)[0]
     w.close()
@@ -144,7 +145,7 @@ from PyQt5.QtCore import QSettings
 from PyQt5.QtWidgets import QApplication
 app = QApplication([])
 from driver.vehicle import Vehicle, VehicleConfig
-from uavviewer.dialogs import SettingsDialog
+from uavviewer.preferences.dialog import SettingsDialog
 from uavviewer.main_window import MainWindow
 with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
     s.bind(("127.0.0.1", 0))

@@ -10,14 +10,14 @@ from PyQt5.QtCore import Qt
 
 from driver.vehicle.state import (Battery, BatteryAlarm, CommandResult, CommandStatus, Gps, LandedState, LinkHealth, LinkStatus,
                           SequencePhase, SequenceProgress, Severity, VehicleState)
-from uavviewer.flight_phase import FlightPhase, flight_phase, stick_hint
-from uavviewer.widgets.flight_controls import FlightControls
-from uavviewer.widgets.link_banner import LinkBanner
+from uavviewer.flight.phase import FlightPhase, flight_phase, stick_hint
+from uavviewer.flight.controls import FlightControls
+from uavviewer.connect.link_banner import LinkBanner
 from uavviewer.widgets.messages_view import MessagesView, severity_color
-from uavviewer.widgets.mode_selector import ModeSelector
+from uavviewer.flight.mode_selector import ModeSelector
 from uavviewer.widgets.plots_panel import MIN_SPAN, PlotsPanel
-from uavviewer.widgets.replay_bar import ReplayBar
-from uavviewer.widgets.telemetry_panel import BAD, DIM, GOOD, WARN, TelemetryPanel
+from uavviewer.replay.bar import ReplayBar
+from uavviewer.telemetry.panel import BAD, DIM, GOOD, WARN, TelemetryPanel
 
 OK_LINK = LinkHealth(status=LinkStatus.OK, address="tcp:x", heartbeat_age=0.3, packets_per_s=42.0)
 

@@ -161,7 +161,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.vehicle and args.registry is None:
         build_parser().error("--vehicle needs --registry")
     if args.install_desktop or args.remove_desktop:
-        from uavviewer import desktop
+        from uavviewer.window import desktop
         done = desktop.install() if args.install_desktop else desktop.remove()
         for line in done:
             print(line)
@@ -182,7 +182,7 @@ def main(argv: list[str] | None = None) -> int:
 
     from driver.vehicle import Vehicle, VehicleConfig
     from uavviewer import RESOURCES
-    from uavviewer.desktop import APP_ID
+    from uavviewer.window.desktop import APP_ID
     from uavviewer.main_window import MainWindow, load_style
     from uavviewer.settings import default_qsettings, load_settings
 
@@ -244,7 +244,7 @@ def main(argv: list[str] | None = None) -> int:
     camera_props = None
     if fleet is not None:                                         # the picked vehicle's camera, through the registry
         from driver.ice.client import fleet_properties
-        from uavviewer.fleet import FleetController
+        from uavviewer.fleet.controller import FleetController
         camera_props = fleet_properties(args.registry, str(args.ice_certs) if args.ice_certs else None)
         own_camera = [FleetController.camera_uri(first)]
     if remote:                                                    # the server's camera, from the viewer's config
@@ -261,7 +261,7 @@ def main(argv: list[str] | None = None) -> int:
         window.name_vehicle(sim_name(sim.config.speedup))
     if fleet is not None:
         controller = FleetController(fleet, first, parent=window)
-        window.attach_fleet(controller)
+        window.fleet_dock.attach(controller)
     connections = window.connections                              # File › Connect switches from this one
     connections.base, connections.speedup = config, args.speedup
     connections.log_dir = str(args.log_dir) if args.log_dir is not None else None

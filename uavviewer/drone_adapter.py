@@ -18,7 +18,7 @@ from driver.vehicle.api import Drone
 from driver.mission.plan import TransferOutcome
 from driver.vehicle.state import CommandResult, CommandStatus, VehicleState
 
-from .sticks import VelocityCommand
+from .input.sticks import VelocityCommand
 
 __all__ = ["DroneAdapter"]
 

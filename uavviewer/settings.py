@@ -13,7 +13,7 @@ from driver.vehicle.api import CEILING
 from driver.vehicle.state import BatteryThresholds
 from driver.vehicle.rules import TAKEOFF_ALTITUDE_RANGE
 
-from .sticks import MaxSpeeds, StickMode, StickShaping
+from .input.sticks import MaxSpeeds, StickMode, StickShaping
 
 __all__ = ["ViewerSettings", "load_settings", "save_settings", "default_qsettings", "split_uris",
            "TAKEOFF_ALTITUDE_RANGE"]
@@ -40,7 +40,7 @@ class ViewerSettings:
     signing_key_file: str = ""       # Link security: the key file's path, never the key or a passphrase
     gamepad: str = "auto"            # the gamepad that flies: "auto" (the first connected), "off", or its GUID
     gamepad_background: bool = False  # the gamepad keeps flying while the window is not active
-    gamepad_mappings: str = ""       # JSON: controller GUID -> its mapping (uavviewer.gamepad_mapping)
+    gamepad_mappings: str = ""       # JSON: controller GUID -> its mapping (uavviewer.input.gamepad_mapping)
     tile_url: str = ""               # Map: a {z}/{x}/{y} tile server; "" = the offline grid only
     tile_attribution: str = ""       # shown on the map with its tiles
     tile_cache_mb: float = 200.0     # the disk cache's limit

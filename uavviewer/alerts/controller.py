@@ -6,7 +6,7 @@ from PyQt5.QtWidgets import QAction
 
 from driver.vehicle.state import VehicleState
 
-from ..widgets.alert_banner import AlertBanner
+from .banner import AlertBanner
 from .model import Alert, AlertModel
 from .speech import Speaker
 

@@ -12,7 +12,7 @@ from pathlib import Path
 from driver.vehicle.api import CEILING, Drone, Limits
 from driver.vehicle.state import CommandResult, CommandStatus, LinkHealth, LinkStatus, VehicleState
 
-from ..flight_phase import NOT_CONNECTED
+from ..flight.phase import NOT_CONNECTED
 from .choice import Choice, Kind
 
 __all__ = ["Opened", "Disconnected", "open_choice", "close_quietly"]

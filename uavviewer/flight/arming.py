@@ -10,14 +10,15 @@ from PyQt5.QtWidgets import QMessageBox
 
 from driver.vehicle.rules import ARM_IN, arming_consequence, arming_refusal
 
-from ..dialogs import arm_question, ask
-from ..flight_phase import flight_phase
+from ..widgets.ask import ask
+from .questions import arm_question
+from .phase import flight_phase
 
 __all__ = ["Arming"]
 
 
 class Arming:
-    """``window``: the main window (its adapter, ``_command``)."""
+    """``window``: the main window (its adapter, and ``window.flight``: the flight commands)."""
 
     def __init__(self, window) -> None:
         self.window = window
@@ -49,14 +50,14 @@ class Arming:
         clicked = box.clickedButton()
         mode = clicked.property("mode") if clicked is not None else None
         if mode:
-            self.window.request_mode(mode)
+            self.window.flight.request_mode(mode)
         self._done(box)
 
     def _arm_answered(self, box: QMessageBox) -> None:
         if box.clickedButton() is box.button(QMessageBox.Yes):
             s = self.window.adapter.state
             if s.connected and not s.armed and not flight_phase(s).airborne:
-                self.window._command("arm")
+                self.window.flight.command("arm")
         self._done(box)
 
     def _done(self, box: QMessageBox) -> None:

@@ -24,7 +24,7 @@ from driver.vehicle.rules import MAX_ALTITUDE, MIN_GOTO_ALTITUDE
 from driver.vehicle.state import CommandResult, VehicleState
 
 from .camera_overlay import CameraOverlay
-from ..dialogs import ask, fly_here_question
+from ..widgets.ask import ask, cautious_question
 from .geometry import MapFrame, tiles_covering, tile_zoom_for
 from .tiles import MAX_AREA_TILES, TileSource
 from .trail import Trail
@@ -36,6 +36,11 @@ __all__ = ["MapController", "TileSettings", "fleet_marks", "placed"]
 log = logging.getLogger(__name__)
 
 ARRIVED = 1.0                # m from the go-to target: reached, the target leaves the map
+
+
+def fly_here_question(parent: QWidget, text: str) -> QMessageBox:
+    """Confirm a go-to, saying how far and how high; like the takeoff question, Cancel is the default."""
+    return cautious_question(parent, "Fly here", text, "Fly there", "flyHereQuestion")
 
 
 @dataclass(frozen=True)
@@ -65,7 +70,8 @@ def placed(frame: MapFrame | None, s: VehicleState, own: bool = True) -> tuple[f
 def fleet_marks(frame: MapFrame | None, seen) -> tuple[VehicleMark, ...]:
     """The fleet's vehicles but the picked one, where their own snapshots put them in ``frame``.
 
-    ``seen``: (FleetRow, VehicleState or None) for each vehicle, as :class:`uavviewer.fleet.FleetController` reads
+    ``seen``: (FleetRow, VehicleState or None) for each vehicle, as
+    :class:`uavviewer.fleet.controller.FleetController` reads
     them; a vehicle without a state or a position is left off."""
     marks = []
     for row, s in seen:

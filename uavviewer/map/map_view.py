@@ -83,7 +83,7 @@ class MapView(QWidget):
         self._bands: list[list[QPointF]] = [[] for _ in range(TRAIL_BANDS)]   # view metres, oldest band first
         self._drag: QPointF | None = None
         self._dragged = False                        # the press became a pan: its release is no click
-        # parts that may take the mouse first (the plan in Plan mode: uavviewer/map/plan_layer.py): mouse_press,
+        # parts that may take the mouse first (the plan in Plan mode: uavviewer/plan/layer.py): mouse_press,
         # mouse_move(view, event) and mouse_release(view, event, clicked) return True when they took it
         self.mouse_parts: list = []
         self._drag_centre = self.centre

@@ -16,7 +16,7 @@ from PyQt5.QtWidgets import QAction, QMainWindow, QMenu, QMessageBox, QTreeWidge
 
 from driver.vehicle.state import CommandResult, LinkStatus, Severity, VehicleState
 
-from ..dialogs import ask
+from ..widgets.ask import ask
 from .compare_dialog import CompareDialog
 from .mentions import named_parameter
 from .page import ParametersPage

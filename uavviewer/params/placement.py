@@ -11,8 +11,7 @@ from __future__ import annotations
 from PyQt5.QtCore import QPoint, QRect, QSettings
 from PyQt5.QtWidgets import QWidget
 
-from ..dialog_fit import fit_dialog
-from ..layout import FRAME_ALLOWANCE
+from ..widgets.dialog_fit import FRAME_ALLOWANCE, fit_dialog
 
 __all__ = ["GEOMETRY_KEY", "GAP", "keep_clear", "place", "remember"]
 

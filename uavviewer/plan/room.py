@@ -1,0 +1,40 @@
+"""Room for the Plan list beside the map (issue 29: the list showed 1 row at 1366×768 and 0 at 1280×720).
+
+While Plan is shown, the tabs behind it and behind the map (Preflight, Plots: not in view anyway) step out, so no
+tab bar takes height, and the Plan dock gets the height its panel needs with its list showing
+:data:`~uavviewer.plan.panel.ROWS_IN_VIEW` rows; the map has the rest of the column. Never wider: the flight
+controls beside it stay where they are. Plan closed: the tabs come back as they were.
+"""
+from __future__ import annotations
+
+from PyQt5.QtCore import Qt
+
+__all__ = ["make_room_for_plan"]
+
+_STEPPED_OUT = "_plan_stepped_out"       # the window's docks that stepped out for Plan
+
+
+def make_room_for_plan(window, dock, on: bool) -> None:
+    if on:
+        behind = [d for d in (getattr(window, "preflightDock", None), window.plotsDock)
+                  if d is not None and d.isVisible() and not d.isFloating()]
+        for d in behind:
+            d.hide()
+        setattr(window, _STEPPED_OUT, behind)
+        window.mapDock.raise_()
+        dock.raise_()
+        window.layout().activate()               # the docks' heights as they are now, without the tab bars
+        scroll = dock.widget()                   # the panel in its scroll area
+        panel = scroll.widget()                  # a PlanPanel: its lines above the list, wrapped at this width,
+        width = scroll.width() - scroll.verticalScrollBar().sizeHint().width()   # and the list's own minimum
+        above = panel.heightForWidth(width) if panel.hasHeightForWidth() else 0  # (the list asks for no more)
+        need = max(panel.minimumSizeHint().height(), above + panel.tabs.minimumHeight()) \
+            + dock.height() - scroll.height()
+        total = dock.height() + window.mapDock.height()
+        window.resizeDocks([dock, window.mapDock], [need, max(1, total - need)], Qt.Vertical)
+    else:
+        for d in getattr(window, _STEPPED_OUT, []):
+            d.show()
+        setattr(window, _STEPPED_OUT, [])
+        window.mapDock.raise_()
+        window.telemetryDock.raise_()
