@@ -334,11 +334,12 @@ class VehicleSetup:
             for c in traffic.alerts:
                 if c.icao not in self._alerted:
                     self._alerted.add(c.icao)
-                    a = c.approach
-                    above = "above" if (a.vertical or 0) >= 0 else "below"
+                    a, limits = c.approach, self._traffic.limits
+                    above = "above" if a.vertical >= 0 else "below"
                     self._store.add_message_locked(
-                        Severity.WARNING, f"Traffic {c.label}: closest approach {a.horizontal:.0f} m, "
-                        f"{abs(a.vertical):.0f} m {above}, in {a.time:.0f} s")
+                        Severity.WARNING, f"Traffic {c.label}: within {limits.horizontal:.0f} m and "
+                        f"{limits.vertical:.0f} m of us in {a.conflict_in:.0f} s (closest {a.horizontal:.0f} m in "
+                        f"{a.time:.0f} s, {abs(a.vertical):.0f} m {above})")
             self._alerted &= {c.icao for c in traffic.alerts}
         return []
 
