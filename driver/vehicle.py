@@ -43,6 +43,7 @@ from .mission.plan import Plan, PlanKind
 from .rules import COPTER_MODES, MAX_ALTITUDE, MIN_TAKEOFF_ALTITUDE, go_to_problem, takeoff_altitude_problem
 from .sequence import SequenceSlot
 from .setpoints import SetpointStreamer
+from .setup.control import SETUP_MESSAGES, VehicleSetup
 from .signing import LinkSigning, SigningConfig
 from .state import (
     FENCE_PARAMS, Battery, BatteryThresholds, CommandResult, CommandStatus, LinkHealth, LinkStatus, Setpoint,
@@ -164,6 +165,7 @@ class Vehicle(Drone):
         self._forwarder = Forwarder(cfg.outputs, cfg.baud, self._forward_to_vehicle,
                                     lambda text: self._store.add_message(Severity.WARNING, text), self._closing)
         self._missions = MissionControl(self)          # driver.mission: transfers, mission state, AUTO
+        self.setup = VehicleSetup(self)                # driver.setup: calibrations, motor test, radio, traffic
 
     # ------------------------------------------------------------------------------------------
     # lifecycle
@@ -607,6 +609,7 @@ class Vehicle(Drone):
                     out += self._params.service(now, self._link.status)
                     out += self._payload.service(now, self._store.state)
                     out += self._missions.service(now, self._store.state)
+                    out += self.setup.service(now, self._store.state)
                     if now >= next_health:
                         next_health = now + 0.1
                         out += self._supervise(now)
@@ -1120,4 +1123,5 @@ _EVENTS = {
     **{name: Vehicle._on_mission for name in ("MISSION_CURRENT", "MISSION_ITEM_REACHED", "MISSION_REQUEST",
                                               "MISSION_REQUEST_INT", "MISSION_COUNT", "MISSION_ITEM",
                                               "MISSION_ITEM_INT", "MISSION_ACK", "RALLY_POINT")},
+    **{name: lambda v, m: v.setup.on_message(m) for name in SETUP_MESSAGES},
 }
