@@ -12,7 +12,7 @@ Mixed into :class:`~driver.sim.autopilot.Autopilot` (through :class:`~driver.sim
   is repeated about once a second. An airframe that is not turned fails at position 2. The airframe is
   turned only by ``SimConfig.calibration_model`` (SITL's ``calibration`` model: it takes each asked pose);
 * compass (DO_START_MAG_CAL): MAG_CAL_PROGRESS per compass 0..2 at about 4 Hz each; unmoved it stays 0 %
-  (status 2); tumbled by the calibration model it reaches 25/33/50/75 % and after 38.7 s each compass says
+  (status 2); tumbled by the calibration model it reaches 25/33/50/75 % and after 38.5 s each compass says
   "Mag(n) good orientation" and sends MAG_CAL_REPORT (status 4, fitness 0.037, offsets 5, 13, -18) until
   accepted (COMPASS_OFS* written) or cancelled; a cancel leaves "Compass calibrated requires reboot";
 * armed: gyro/accel/baro/level FAILED "Disarm to allow calibration", DO_START_MAG_CAL FAILED "Disarm to allow
@@ -41,7 +41,7 @@ POSITION_NAMES = {1: "level", 2: "on its left side", 3: "on its right side", 4: 
 COMPASSES = (0, 1, 2)
 MAG_OFFSETS = (4.998, 12.998, -17.999)            # the calibration model's (recording: 5, 13, -18)
 MAG_FITNESS = 0.037
-MAG_CAL_DURATION = 38.7                          # s from start to the reports, tumbled (recording)
+MAG_CAL_DURATION = 38.4                          # s from start to the first report, tumbled (recording: 38.5)
 MAG_STEPS = ((9.2, 25, 2), (12.2, 33, 3), (17.0, 50, 3), (25.5, 75, 3))   # s, percent, status (recording)
 MAG_INTERVAL = 0.25                              # s between rounds of MAG_CAL_PROGRESS (about 4 Hz each)
 VERDICT_REPEAT = 1.0                             # s between repeats of the accel verdict
@@ -61,7 +61,9 @@ class Calibration:
         self.mag_done = False                    # reports sent, waiting for accept / cancel
         self.mag_reboot = False                  # "Compass calibrated requires reboot"
         self.mag_next = 0.0
-        self.mag_next_text = 0.0
+        self.prearm_failing_since: float | None = None   # the calibration's pre-arm failures, reported as 4.x does
+        self.prearm_reported: float | None = None
+        self.prearm_check = 0.0
 
     @property
     def turned(self) -> bool:
@@ -80,6 +82,27 @@ class Calibration:
         if self.mag_started is not None and self.t >= self.mag_next:
             self.mag_next = self.t + MAG_INTERVAL
             self._mag_round()
+        if self.t >= self.prearm_check:
+            self.prearm_check = self.t + 1.0
+            self._report_prearm()
+
+    def _report_prearm(self) -> None:
+        """AP_Arming's pre-arm check at 1 Hz: a failure is told a second or more after it began, then every 30 s
+        (recording: 1.0 s after DO_START_MAG_CAL, 1.8 s after the accel success, again 30-31 s later)."""
+        reasons = self.calibration_arm_reasons()
+        if not reasons:
+            self.prearm_failing_since = self.prearm_reported = None
+            return
+        if self.armed or not self.profile.calibration_text:
+            return
+        if self.prearm_failing_since is None:
+            self.prearm_failing_since = self.t
+        due = (self.prearm_reported is None and self.t - self.prearm_failing_since >= 1.0) or (
+            self.prearm_reported is not None and self.t - self.prearm_reported > 30.0)
+        if due:
+            self.prearm_reported = self.t
+            for reason in reasons:
+                self._text(mavlink.MAV_SEVERITY_CRITICAL, "PreArm: " + reason.removeprefix("Arm: "))
 
     def calibration_arm_reasons(self) -> list[str]:
         """Why arming is refused after a calibration (recording: "Arm: 3D Accel calibration needed")."""
@@ -196,6 +219,9 @@ class Calibration:
     def _repeat_verdict(self, verdict: int) -> None:
         if self.accel_verdict != verdict or self.accel_step is not None:
             return                               # a new calibration started
+        if self.armed:                           # AP_AccelCal is not updated while armed (recording: no repeat
+            self.after(0.02, lambda: self._repeat_verdict(verdict))   # during a motor test, one right after it)
+            return
         self._accel_command(verdict)
         self.after(VERDICT_REPEAT, lambda: self._repeat_verdict(verdict))
 
@@ -208,7 +234,6 @@ class Calibration:
         self.mag_started = self.t
         self.mag_done = False
         self.mag_next = self.t + 0.2
-        self.mag_next_text = self.t + 1.0
         return mavlink.MAV_RESULT_ACCEPTED, None
 
     def _cmd_do_accept_mag_cal(self, *_):
@@ -229,9 +254,6 @@ class Calibration:
             self.mag_started = None
             self.mag_done = False
             self.mag_reboot = True
-            if self.profile.calibration_text:
-                self.after(2.0, lambda: self._text(mavlink.MAV_SEVERITY_CRITICAL,
-                                                   "PreArm: Compass calibrated requires reboot"))
         return mavlink.MAV_RESULT_ACCEPTED, None
 
     def _cmd_fixed_mag_cal_yaw(self, p1, *_):
@@ -259,17 +281,20 @@ class Calibration:
             return
         if self.turned and self.t - self.mag_started >= MAG_CAL_DURATION:
             self.mag_done = True
-            for compass in COMPASSES:
-                self._text(mavlink.MAV_SEVERITY_INFO, f"Mag({compass}) good orientation: 0 4.0")
-                self._mag_report(compass)
+            self._mag_good(0)                    # the recording's order: each compass ends on its own
+            self._mag_report(0)
+            self._mag_good(2)
+            self._mag_good(1)
+            self._mag_report(1)
+            self._mag_report(2)
             return
         pct, status = self._mag_progress()
         mask = [0, 0, 0, 0, 2, 0, 0, 0, 0, 0] if pct == 0 else [219, 136, 253, 123, 219, 218, 244, 250, 178, 218]
         for compass in (1, 2, 0):               # the recording's order
             self.emit(self.factory.mag_cal_progress_encode(compass, 7, status, 1, pct, mask, 0.0, 0.0, 0.0))
-        if self.t >= self.mag_next_text and self.profile.calibration_text:
-            self.mag_next_text = self.t + 30.0
-            self._text(mavlink.MAV_SEVERITY_CRITICAL, "PreArm: Compass calibration running")
+
+    def _mag_good(self, compass: int) -> None:
+        self._text(mavlink.MAV_SEVERITY_INFO, f"Mag({compass}) good orientation: 0 4.0")
 
     def _mag_report(self, compass: int) -> None:
         self.emit(self.factory.mag_cal_report_encode(compass, 7, mavlink.MAG_CAL_SUCCESS, 0, MAG_FITNESS,
