@@ -205,18 +205,32 @@ class VehicleSetup:
         problem = _motor_test_problem(motor, throttle_pct, pwm, seconds, count, propellers_removed)
         if problem:
             return self._v._finish(name, CommandStatus.REJECTED, problem)
-        state = self._v.state()
-        if state.armed and not self.motor_test_running:
-            return self._v._finish(name, CommandStatus.REJECTED, "the vehicle is armed: disarm first")
-        if state.in_air:
-            return self._v._finish(name, CommandStatus.REJECTED, "the vehicle is flying")
+        ours = self.motor_test_running          # our own test armed the motors: a new one may replace it
+
+        def problem(s) -> str | None:           # checked now and again as the command goes out
+            if s.in_air:
+                return "the vehicle is flying"
+            if s.armed and not ours:
+                return "the vehicle is armed: disarm first"
+            return None
+        refusal = problem(self._v.state())
+        if refusal:
+            return self._v._finish(name, CommandStatus.REJECTED, refusal)
         kind, value = (0, float(throttle_pct)) if pwm is None else (1, float(pwm))
         self.watch_radio()
         self._test_until = time.monotonic() + seconds * count + (count - 1) * 1.0 + 1.0
         with self._store.lock:
             self._set(motor_test_running=True)
-        return self._v._command_long(mavlink.MAV_CMD_DO_MOTOR_TEST, (motor, kind, value, seconds, count), name,
-                                     guard=lambda s: "the vehicle is flying" if s.in_air else None)
+        future = self._v._command_long(mavlink.MAV_CMD_DO_MOTOR_TEST, (motor, kind, value, seconds, count), name,
+                                       guard=problem)
+        future.add_done_callback(lambda f: f.result().ok or self._test_ended())
+        return future
+
+    def _test_ended(self) -> None:
+        self._test_until = 0.0
+        with self._store.lock:
+            self._set(motor_test_running=False)
+            self._store.publish()
 
     @property
     def motor_test_running(self) -> bool:
@@ -224,9 +238,7 @@ class VehicleSetup:
 
     def stop_motor_test(self) -> Future:
         """End the running test at once (DO_MOTOR_TEST with timeout 0, as ArduCopter's motor_test_output reads it)."""
-        self._test_until = 0.0
-        with self._store.lock:
-            self._set(motor_test_running=False)
+        self._test_ended()
         return self._v._command_long(mavlink.MAV_CMD_DO_MOTOR_TEST, (1, 0, 0, 0, 0), "stop motor test")
 
     def watch_radio(self, rate_hz: int = RADIO_RATE_HZ) -> None:
