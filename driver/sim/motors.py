@@ -9,7 +9,8 @@ its seconds, then about 1 s at rest, then the next one. Test order 1..4 is outpu
 vehicle not landed" in the air (ArduCopter motor_test.cpp). A test with timeout 0 ends the running one.
 
 The radio: RC_CHANNELS from a simulated transmitter, 8 channels at the recording's SITL values (sticks centred,
-throttle down, CH5 1800 and CH8 1800); a test moves them with :meth:`MotorTest.move_stick`.
+throttle down, CH5 1800 and CH8 1800), as RC_CHANNELS_RAW on the Solo's 3.3; a test moves them with
+:meth:`MotorTest.move_stick`.
 The Solo's 3.3 (GCS_Mavlink.pde: ``mavlink_motor_test_start``) runs the same test; whether it says
 "starting motor test" is not in its sources we read: it says nothing here.
 """
@@ -106,5 +107,7 @@ class MotorTest:
         return self.factory.servo_output_raw_encode(int(self.t * 1e6) & 0xFFFFFFFF, 0, *pwm, 0, 0, 0, 0)
 
     def _msg_rc_channels(self):
+        if not self.profile.mavlink2:         # 3.3's RC stream: "SERVO_OUTPUT_RAW and RC_CHANNELS_RAW" (GCS_Mavlink.pde)
+            return self.factory.rc_channels_raw_encode(self.time_boot_ms(), 0, *self.rc[:8], 255)
         channels = list(self.rc) + [0] * (18 - len(self.rc))
         return self.factory.rc_channels_encode(self.time_boot_ms(), len(self.rc), *channels[:18], 255)
