@@ -66,3 +66,16 @@ def test_a_position_that_was_not_asked_is_failed_and_a_second_start_is_turned_aw
     assert b.command(mavlink.MAV_CMD_ACCELCAL_VEHICLE_POS, 3)[0] == [mavlink.MAV_RESULT_FAILED]   # 1 is asked
     assert b.command(mavlink.MAV_CMD_PREFLIGHT_CALIBRATION, 0, 0, 0, 0, 1)[0] == [
         mavlink.MAV_RESULT_TEMPORARILY_REJECTED]
+
+
+def test_each_page_can_say_what_the_solos_firmware_lacks(sim_factory, vehicle_factory):
+    from driver.setup.availability import SETUP_ACTIONS, unavailable
+    sim = sim_factory(profile="solo")
+    v = vehicle_factory(f"tcp:127.0.0.1:{sim.tcp_port}")
+    state = v.wait_for(lambda s: s.firmware, 30)
+    assert state.firmware == "3.3.1"
+    missing = {a for a in SETUP_ACTIONS if unavailable(a, state.firmware)}
+    assert missing == {"level", "accel_simple", "fixed_yaw", "adsb"}
+    assert "MAV_CMD_FIXED_MAG_CAL_YAW" in unavailable("fixed_yaw", state.firmware)
+    assert not any(unavailable(a, "4.6.3") for a in SETUP_ACTIONS)
+    assert not any(unavailable(a, "") for a in SETUP_ACTIONS)      # not known yet: the vehicle decides

@@ -155,6 +155,8 @@ class Calibration:
             self._text(mavlink.MAV_SEVERITY_INFO, "Initialising ArduPilot")
             return None, lambda: self._ack_later(cmd, mavlink.MAV_RESULT_ACCEPTED, 1.05, self._trim_ok)
         if int(p5) == 4:                                        # simple accel (level only): as level
+            if not modern:
+                return mavlink.MAV_RESULT_FAILED, None          # not handled by 3.3
             return None, lambda: self._ack_later(cmd, mavlink.MAV_RESULT_ACCEPTED, 1.0)
         if int(p5) == 1:                                        # 3D accel, six positions
             if self.accel_step is not None:
