@@ -35,13 +35,14 @@ def test_driver_never_imports_qt():
 #: one on its own floor or above. The loose modules at the top (options, __main__) stand above everything they start.
 FLOORS = {
     "driver.core": 0, "driver.version": 0,
-    "driver.link": 1, "driver.mission": 1, "driver.params": 1, "driver.payload": 1,
-    "driver.vehicle": 2,
-    "driver.camera": 3,
-    "driver.console": 4, "driver.ice": 4,
-    "driver.options": 5,
-    "driver.sim": 6,
-    "driver.__main__": 7, "driver": 7,
+    "driver.link": 1, "driver.mission": 1, "driver.params": 1, "driver.payload": 1, "driver.traffic": 1,
+    "driver.setup": 2,
+    "driver.vehicle": 3,
+    "driver.camera": 4,
+    "driver.console": 5, "driver.ice": 5,
+    "driver.options": 6,
+    "driver.sim": 7,
+    "driver.__main__": 8, "driver": 8,
 }
 MAX_LOOSE_MODULES = 8
 MAX_FACADE_LINES = 600

@@ -27,7 +27,7 @@ KEY = hashlib.sha256(b"uavviewer-test").digest()          # the recording's key
 WRONG = hashlib.sha256(b"not-the-key").digest()
 FAST = dict(tcp_port=0, usb_port=0, speedup=10.0, ready_after=0.5, seed=7)
 SET_MODE = mavlink.MAV_CMD_DO_SET_MODE
-CALIBRATE = (mavlink.MAV_CMD_PREFLIGHT_CALIBRATION, 0, 0, 0, 0, 2)     # harmless, ACCEPTED while disarmed
+HARMLESS = (mavlink.MAV_CMD_REQUEST_AUTOPILOT_CAPABILITIES, 1)   # ACCEPTED at once on every profile
 CAPABILITIES = (mavlink.MAV_CMD_REQUEST_AUTOPILOT_CAPABILITIES, 1)      # ACCEPTED armed or not
 ARM, FORCE = mavlink.MAV_CMD_COMPONENT_ARM_DISARM, 21196
 ACCEPTED = mavlink.MAV_RESULT_ACCEPTED
@@ -119,10 +119,10 @@ class Station:
         return self.ask(SET_MODE, mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, MODES[name], signed=signed)
 
     def acks_until_sentinel(self, signed: bool | None = None) -> list[int]:
-        """A harmless command, then the commands of every COMMAND_ACK heard up to its own: [CALIBRATE] alone
+        """A harmless command, then the commands of every COMMAND_ACK heard up to its own: [HARMLESS] alone
         proves that what was sent before it got no answer."""
-        self.command(*CALIBRATE, signed=signed)
-        read = self.until(ack_of(CALIBRATE[0]))
+        self.command(*HARMLESS, signed=signed)
+        read = self.until(ack_of(HARMLESS[0]))
         assert read is not None, "the sentinel command got no COMMAND_ACK"
         return [m.command for m in read if m.get_type() == "COMMAND_ACK"]
 
@@ -168,7 +168,7 @@ def test_unsigned_commands_are_ignored_on_the_telemetry_port_once_the_key_is_set
     assert [m.command for m in tel.heard if m.get_type() == "COMMAND_ACK"] == [SET_MODE]   # one ACK: the signed
     assert tel.set_mode("LOITER").result == ACCEPTED and sim.truth().mode == "LOITER"
     tel.command(SET_MODE, 1, MODES["GUIDED"], signed=False)    # "stopped signing": ignored again
-    assert tel.acks_until_sentinel() == [CALIBRATE[0]]
+    assert tel.acks_until_sentinel() == [HARMLESS[0]]
     assert sim.truth().mode == "LOITER"
     c = sim.signing.counters
     assert (c.dropped_unsigned, c.accepted_signed, c.dropped_bad_signature, c.dropped_replay) == (2, 3, 0, 0)
@@ -184,7 +184,7 @@ def test_the_usb_port_obeys_unsigned_and_every_link_signs_with_its_own_id(make_s
     initial = now_stamp()
     setup_signing(usb, KEY, initial)
     assert usb.set_mode("GUIDED", signed=False).result == ACCEPTED           # SERIAL0: unsigned always accepted
-    assert usb.ask(*CALIBRATE, signed=False).result == ACCEPTED
+    assert usb.ask(*HARMLESS, signed=False).result == ACCEPTED
     assert usb.ask(*CAPABILITIES, mav1=True).result == ACCEPTED              # MAVLink 1 too, on USB
     assert sim.signing.counters.accepted_unsigned == 3 and sim.signing.counters.dropped_unsigned == 0
     one, two = station(sim.tcp_port), station(sim.tcp_port)                 # two telemetry links
@@ -211,13 +211,13 @@ def test_a_replayed_frame_and_a_stale_new_stream_are_ignored(make_sim, station):
     tel.sign(KEY, initial - 1, link_id=3)       # a new stream over a minute behind the link's initial + 1 min
     tel.command(SET_MODE, 1, MODES["LOITER"])
     tel.sign(KEY, initial + 10_000, link_id=3)  # 59.9 s behind, as the recording's station was: accepted
-    assert tel.acks_until_sentinel() == [CALIBRATE[0]]
+    assert tel.acks_until_sentinel() == [HARMLESS[0]]
     assert sim.signing.counters.dropped_replay == 1 and sim.truth().mode == "STABILIZE"
     loiter = tel.command(SET_MODE, 1, MODES["LOITER"])
     assert tel.until(ack_of(SET_MODE))[-1].result == ACCEPTED and sim.truth().mode == "LOITER"
     assert tel.set_mode("GUIDED").result == ACCEPTED
     tel.conn.write(loiter)                      # the same signed frame again: its timestamp is used up
-    assert tel.acks_until_sentinel() == [CALIBRATE[0]]
+    assert tel.acks_until_sentinel() == [HARMLESS[0]]
     assert sim.truth().mode == "GUIDED" and sim.signing.counters.dropped_replay == 2
 
 
@@ -236,7 +236,7 @@ def test_a_wrong_key_and_a_forged_future_timestamp_are_ignored(make_sim, station
     tel.command(SET_MODE, 1, MODES["LOITER"])
     state.secret_key, state.timestamp = KEY, stamp
     # C checks the signature before it records a stream's timestamp: the real stream is not locked out
-    assert tel.acks_until_sentinel() == [CALIBRATE[0]]
+    assert tel.acks_until_sentinel() == [HARMLESS[0]]
     assert sim.truth().mode == "GUIDED"
     assert tel.set_mode("LOITER").result == ACCEPTED and sim.truth().mode == "LOITER"
     c = sim.signing.counters
@@ -265,7 +265,7 @@ def test_a_zero_key_turns_signing_off_and_an_unsigned_key_cannot_take_over(make_
     tel.sign(KEY)
     # a key injected without the key, from the telemetry link: dropped like any unsigned frame
     tel.send(tel.conn.mav.setup_signing_encode(1, 1, list(WRONG), now_stamp()), signed=False)
-    assert tel.acks_until_sentinel() == [CALIBRATE[0]]
+    assert tel.acks_until_sentinel() == [HARMLESS[0]]
     assert sim.signing.key == KEY and sim.signing.counters.setups == 0
     tel.send(tel.conn.mav.setup_signing_encode(1, 1, [0] * 32, 0))          # signed with the key: obeyed
     tel.conn.disable_signing()
@@ -282,7 +282,7 @@ def test_radio_status_and_radio_pass_unsigned(make_sim, station):
     tel.send(mav.radio_status_encode(200, 180, 90, 40, 35, 0, 0), signed=False)
     tel.send(mav.radio_encode(200, 180, 90, 40, 35, 0, 0), signed=False)
     tel.send(mav.heartbeat_encode(mavlink.MAV_TYPE_GCS, mavlink.MAV_AUTOPILOT_INVALID, 0, 0, 0), signed=False)
-    assert tel.acks_until_sentinel() == [CALIBRATE[0]]
+    assert tel.acks_until_sentinel() == [HARMLESS[0]]
     kinds = [kind for _, kind, _ in sim.received_messages]
     assert "RADIO_STATUS" in kinds and "RADIO" in kinds and "HEARTBEAT" not in kinds
     c = sim.signing.counters
@@ -299,7 +299,7 @@ def test_no_more_than_sixteen_streams(make_sim, station):
     tel.sign(KEY, stamp, link_id=200)           # the 17th stream: MAVLINK_MAX_SIGNING_STREAMS reached
     tel.command(SET_MODE, 1, MODES["LOITER"])
     tel.sign(KEY, stamp + 10, link_id=100)      # a known stream still works
-    assert tel.acks_until_sentinel() == [CALIBRATE[0]]
+    assert tel.acks_until_sentinel() == [HARMLESS[0]]
     assert sim.signing.counters.dropped_streams == 1 and sim.truth().mode == "STABILIZE"
 
 
@@ -322,7 +322,7 @@ def test_gps_time_raises_the_signing_timestamp(make_sim, station):
         tel.sign(KEY, 2000, link_id=1)
         tel.command(SET_MODE, 1, MODES["LOITER"])
         tel.sign(KEY, now_stamp(), link_id=2)
-        assert tel.acks_until_sentinel() == ([CALIBRATE[0]] if gps else [SET_MODE, CALIBRATE[0]])
+        assert tel.acks_until_sentinel() == ([HARMLESS[0]] if gps else [SET_MODE, HARMLESS[0]])
         assert sim.signing.counters.dropped_replay == (1 if gps else 0)
 
 
@@ -330,7 +330,7 @@ def test_setup_signing_targets_this_vehicle_only(make_sim, station):
     sim = make_sim()
     usb = station(sim.usb_port)
     usb.send(usb.conn.mav.setup_signing_encode(2, 1, list(KEY), now_stamp()))    # another system's key
-    assert usb.acks_until_sentinel() == [CALIBRATE[0]]
+    assert usb.acks_until_sentinel() == [HARMLESS[0]]
     assert sim.signing.key is None
     setup_signing(usb, KEY, now_stamp(), target=0)                              # broadcast: taken
     assert sim.signing.key == KEY
@@ -347,7 +347,7 @@ def test_a_mavlink1_vehicle_cannot_sign(make_sim):
     gs = GroundStation(sim.usb_port, mav1=True)
     try:
         gs.send(gs.encoder.setup_signing_encode(1, 1, list(KEY), now_stamp()), mav1=False)
-        assert gs.command(*CALIBRATE).result == ACCEPTED
+        assert gs.command(*HARMLESS).result == ACCEPTED
         assert sim.server.ignored_v2 == 1 and sim.signing.key is None
         assert {version for _, version in gs.frames} == {1}
     finally:
@@ -407,7 +407,7 @@ def test_signing_as_recorded(make_sim, station):
     tel.command(SET_MODE, 1, MODES["GUIDED"], signed=False)
     tel.acks_until_sentinel()
     assert sim_acks == recorded_acks == [ACCEPTED, ACCEPTED]             # the unsigned ones: no ACK in either
-    assert [m.command for m in tel.heard if m.get_type() == "COMMAND_ACK"] == [SET_MODE, SET_MODE, CALIBRATE[0]]
+    assert [m.command for m in tel.heard if m.get_type() == "COMMAND_ACK"] == [SET_MODE, SET_MODE, HARMLESS[0]]
     assert sim.truth().mode == "LOITER"
     flags = [signature(m) is not None for m in usb.heard]
     assert flags == sorted(flags) and flags.count(False) > 0

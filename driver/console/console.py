@@ -23,6 +23,7 @@ from .words import number, result_line
 from ..vehicle.state import BatteryAlarm, CommandResult, CommandStatus, SequencePhase, VehicleState
 from ..vehicle.rules import COPTER_MODES, mode_warning
 from .payload import PayloadCommands
+from .setup import SetupCommands
 
 ARM_USAGE = ("arm [throttle] [force] | arm check [all|none|MASK] | arm safetyon | arm safetyoff | arm list")
 VELOCITY_HOLD = 3.0          # s a typed velocity lasts (ArduCopter's GUID_TIMEOUT)
@@ -34,7 +35,7 @@ TELEMETRY_WAIT = 5.0         # s more for the requested telemetry (battery, posi
 NOTEWORTHY = ("driver.ice.servants", "driver.ice.camera", "driver.camera.uri")
 
 
-class Console(PlanCommands, PayloadCommands, cmd.Cmd):
+class Console(PlanCommands, PayloadCommands, SetupCommands, cmd.Cmd):
     """``reboot, arm, disarm, takeoff, land, mode, velocity, parachute, bat, alt, param, status, help``; ``wp``,
     ``fence``, ``rally`` (console_plans.py); ``gimbal``, ``roi``, ``camera`` (payload/console.py)."""
 
@@ -133,7 +134,7 @@ class Console(PlanCommands, PayloadCommands, cmd.Cmd):
 
     # -- cmd.Cmd plumbing -----------------------------------------------------------------------
     def emptyline(self) -> bool:
-        return False                                    # never repeat the last command by accident
+        return self.setup_enter()                       # never repeat the last command (Enter: accelcal's)
 
     def default(self, line: str) -> bool:
         self.say(f"unknown command {line.split()[0]!r}; type help for the list")

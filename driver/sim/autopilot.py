@@ -37,6 +37,7 @@ from .ftp import FtpServer
 from .params import ParamProtocol, SimParams
 from .missions import Missions
 from .profiles import POSITION_REASONS, profile_of
+from .setup import Setup
 from .telemetry import EARTH_RADIUS, GRAVITY, METRES_PER_DEG, Telemetry
 
 log = logging.getLogger(__name__)
@@ -84,7 +85,7 @@ class SimTruth:
         return math.hypot(self.vn, self.ve)
 
 
-class Autopilot(Telemetry, Commands, ParamProtocol, FtpServer, GcsFailsafe, Missions, Auto, Messages, Flight,
+class Autopilot(Setup, Telemetry, Commands, ParamProtocol, FtpServer, GcsFailsafe, Missions, Auto, Messages, Flight,
                 Payload):
     """One ArduCopter: state, flight modes, command handling and telemetry streams."""
 
@@ -139,6 +140,7 @@ class Autopilot(Telemetry, Commands, ParamProtocol, FtpServer, GcsFailsafe, Miss
         self._payload_init()             # the mount and camera (gimbal.py)
         self._missions_init()             # missions.py: the plans outlive a reboot
         self._auto_init()                 # auto.py
+        self._setup_init()                # setup.py: calibrations, motor test, radio, traffic
         self._boot()
 
     # -- lifecycle -------------------------------------------------------------------------------
@@ -204,6 +206,7 @@ class Autopilot(Telemetry, Commands, ParamProtocol, FtpServer, GcsFailsafe, Miss
         self._fence_check()
         self._battery(dt)
         self._payload_step(dt)
+        self._setup_step(dt)
         self._send_due()
         self.params_step(dt)
         self.failsafe_step()
@@ -265,6 +268,8 @@ class Autopilot(Telemetry, Commands, ParamProtocol, FtpServer, GcsFailsafe, Miss
             return [f"PreArm: {self.faults.refuse_arm}"]
         if self.safety_on:
             return ["PreArm: Hardware safety switch"]
+        if self.calibration_arm_reasons():
+            return self.calibration_arm_reasons()
         if self.ready or not self.params["ARMING_CHECK"]:
             return []
         reasons = list(self.stage.arm_reasons)

@@ -49,6 +49,7 @@ class Commands:
 
     def _command(self, msg, command: int, params) -> None:
         self.last_command = command_name(command)
+        self._sender_ids = (msg.get_srcSystem(), msg.get_srcComponent())   # for an ACK sent later (setup.py)
         if self.faults.ignores(command):
             self.faults.ignored.append(command)
             log.info("ignoring %s (fault)", self.last_command)
@@ -67,7 +68,9 @@ class Commands:
                     result, follow = mavlink.MAV_RESULT_DENIED, None
         finally:
             texts, self.deferred_texts = self.deferred_texts, None
-        if self.faults.loses_reply(command):
+        if result is None:
+            pass                           # the handler answers later itself (calibration.py)
+        elif self.faults.loses_reply(command):
             log.info("the COMMAND_ACK of %s is lost (fault)", self.last_command)
         else:
             self.emit(self.factory.command_ack_encode(command, result, 0, 0, msg.get_srcSystem(),

@@ -17,6 +17,7 @@ from ..core import frames
 from ..link.transport import LinkError
 from ..params.manager import param_name
 from ..payload.control import PAYLOAD_MESSAGES
+from ..setup.control import SETUP_MESSAGES
 from .state import FENCE_PARAMS, Severity
 from .telemetry import TELEMETRY, fold_heartbeat
 
@@ -312,4 +313,5 @@ _EVENTS = {
     **{name: Reader._on_mission for name in ("MISSION_CURRENT", "MISSION_ITEM_REACHED", "MISSION_REQUEST",
                                               "MISSION_REQUEST_INT", "MISSION_COUNT", "MISSION_ITEM",
                                               "MISSION_ITEM_INT", "MISSION_ACK", "RALLY_POINT")},
+    **{name: (lambda r, m: r._v.setup.on_message(m)) for name in SETUP_MESSAGES},
 }

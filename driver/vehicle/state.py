@@ -20,6 +20,8 @@ from ..mission.plan import MissionProgress
 from ..params.model import ParameterTable
 from ..payload.model import Gimbal, VehicleCamera
 from .battery import Battery, BatteryAlarm, BatteryThresholds
+from ..setup.model import SetupState
+from ..traffic.model import Traffic
 
 __all__ = [
     "LandedState", "LinkStatus", "Severity", "CommandStatus", "Attitude", "GlobalPosition",
@@ -300,6 +302,8 @@ class VehicleState:
     parameters: ParameterTable = field(default_factory=ParameterTable)  # driver.params: every value reported
     gimbal: Gimbal = field(default_factory=Gimbal)   # driver.payload: as the vehicle reports it, unknown until then
     camera: VehicleCamera = field(default_factory=VehicleCamera)   # the vehicle's camera (not the window's video)
+    setup: SetupState = field(default_factory=SetupState)          # driver.setup: radio, outputs, calibrations
+    traffic: Traffic = field(default_factory=Traffic)              # driver.traffic: ADS-B contacts, alerts
 
     # -- derived views -----------------------------------------------------------------------
     @property

@@ -37,6 +37,7 @@ from ..link.tlog import ReplayControl, TlogWriter
 from ..mission.plan import Plan, PlanKind
 from ..params.manager import ParameterManager
 from ..payload.control import Payload
+from ..setup.control import VehicleSetup
 from .api import CEILING, Drone, Limits
 from .commands import CommandSender, Notifier, command_name
 from .missions import MissionControl
@@ -140,6 +141,7 @@ class Vehicle(Drone):
         self._forwarder = Forwarder(cfg.outputs, cfg.baud, self._ticker.forward_to_vehicle,
                                     lambda text: self._store.add_message(Severity.WARNING, text), self._closing)
         self._missions = MissionControl(self)          # transfers, mission state, AUTO (driver.vehicle.missions)
+        self.setup = VehicleSetup(self)                # calibrations, motor test, radio, traffic (driver.setup)
         self._reader = Reader(self)                    # the reader thread: parse, fold, dispatch (built last)
 
     # ------------------------------------------------------------------------------------------

@@ -1,0 +1,73 @@
+"""The motor test and the radio end to end: SERVO_OUTPUT_RAW and RC_CHANNELS as the driver shows them from the
+simulated vehicle (both profiles), and the driver's own refusals."""
+from __future__ import annotations
+
+import math
+
+from driver.vehicle.state import CommandStatus
+
+from setup_fixtures import bench, texts  # noqa: F401
+
+T = 30
+
+
+def outputs_in_turn(vehicle, until, value: int) -> list[int]:
+    """The outputs seen at ``value`` one after the other until ``until()`` (state changes only, no sleeps)."""
+    seen: list[int] = []
+    while not until():
+        state = vehicle.wait_for(lambda s: until() or (
+            [i + 1 for i, v in enumerate(s.setup.outputs.values[:4]) if v == value][:1] not in ([], seen[-1:])), T)
+        assert state is not None
+        spinning = [i + 1 for i, v in enumerate(state.setup.outputs.values[:4]) if v == value]
+        if spinning and spinning[:1] != seen[-1:]:
+            seen.append(spinning[0])
+    return seen
+
+
+def test_a_plus_quad_runs_motors_1_to_4_on_outputs_3_1_4_2_then_disarms(bench):
+    sim, v = bench()
+    sim.autopilot.params["FRAME_TYPE"] = 0                    # + quad, as the recording's SITL
+    v.setup.watch_radio()
+    assert v.wait_for(lambda s: s.setup.outputs.values[:4] == (1000, 1000, 1000, 1000), T)
+    result = v.setup.motor_test(1, throttle_pct=20, seconds=1.0, count=4, propellers_removed=True).result(T)
+    assert result.status is CommandStatus.ACCEPTED
+    finished = outputs_in_turn(v, lambda: not sim.autopilot.motor_testing, 1200)
+    assert finished == [3, 1, 4, 2]
+    assert v.wait_for(lambda s: not s.armed and s.setup.outputs.values[:4] == (1000,) * 4, T)
+    if bench.profile == "copter-4":
+        assert "starting motor test" in texts(v) and "finished motor test" in texts(v)
+
+
+def test_pwm_and_stop_cut_the_output_at_once(bench):
+    sim, v = bench()
+    sim.autopilot.params["FRAME_TYPE"] = 0
+    assert v.setup.motor_test(2, pwm=1300, seconds=60, propellers_removed=True).result(T).ok
+    assert v.wait_for(lambda s: s.setup.outputs.output(1) == 1300, T)
+    assert v.setup.motor_test_running
+    assert v.setup.stop_motor_test().result(T).ok
+    assert v.wait_for(lambda s: s.setup.outputs.output(1) == 1000 and not s.armed, T)
+    assert not sim.autopilot.motor_testing
+
+
+def test_the_driver_refuses_a_motor_test_without_the_propellers_off_armed_or_with_bad_values(bench):
+    sim, v = bench()
+    refused = v.setup.motor_test(1, throttle_pct=20, seconds=2)
+    assert refused.result(T).status is CommandStatus.REJECTED and "propellers" in refused.result().reason
+    for kwargs in (dict(throttle_pct=math.nan), dict(throttle_pct=120), dict(pwm=5000), dict(throttle_pct=10, pwm=1200),
+                   dict(throttle_pct=10, seconds=0), dict(throttle_pct=10, seconds=math.inf)):
+        kwargs.setdefault("seconds", 2)
+        assert v.setup.motor_test(1, propellers_removed=True, **kwargs).result(T).status is CommandStatus.REJECTED
+    assert v.set_mode("GUIDED").result(T).ok and v.arm().result(T).ok
+    assert v.wait_for(lambda s: s.armed, T)
+    armed = v.setup.motor_test(1, throttle_pct=20, seconds=2, propellers_removed=True).result(T)
+    assert armed.status is CommandStatus.REJECTED and "armed" in armed.reason
+    assert sim.autopilot.motor_testing is False
+
+
+def test_the_transmitters_sticks_show_in_the_rc_channels(bench):
+    sim, v = bench()
+    v.setup.watch_radio()
+    state = v.wait_for(lambda s: s.setup.rc.channel(3) == 1000, T)
+    assert state.setup.rc.values[:8] == (1500, 1500, 1000, 1500, 1800, 1000, 1000, 1800)
+    sim.autopilot.move_stick(3, 1620)
+    assert v.wait_for(lambda s: s.setup.rc.channel(3) == 1620, T)
