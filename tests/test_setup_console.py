@@ -3,7 +3,7 @@ from __future__ import annotations
 
 import io
 
-from driver.console import Console
+from driver.console.console import Console
 
 from ice_fixtures import eventually
 
