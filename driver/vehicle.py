@@ -38,6 +38,7 @@ from .link import LinkError, ReplayControl, TlogWriter, Transport, open_transpor
 from .params.cache import ParameterCache
 from .params.manager import ParameterManager, param_name
 from .params.metadata import metadata_for, set_problem
+from .params.setter import SET_RETRY
 from .mission.control import MissionControl
 from .mission.plan import Plan, PlanKind
 from .rules import COPTER_MODES, MAX_ALTITUDE, MIN_TAKEOFF_ALTITUDE, go_to_problem, takeoff_altitude_problem
@@ -90,6 +91,7 @@ class VehicleConfig:
     setpoint_rate: float = 20.0               # Hz while streaming
     command_timeout: float = 3.0              # s per attempt (QGC re-sends 3 s apart)
     command_attempts: int = 3
+    param_retry: float = SET_RETRY            # s without a PARAM_VALUE echo before PARAM_SET goes again
     ready_timeout: float = 60.0               # s the takeoff waits for readiness before trying anyway
     climb_timeout: float = 20.0               # s for the climb to 95 % of the target, plus 2 s a metre
     mavlink_version: int | None = None        # None: start on 1, follow the autopilot to 2
@@ -139,7 +141,8 @@ class Vehicle(Drone):
         self._notifier = Notifier()
         self._commands = CommandSender(self._store, cfg, self._notifier, self._target_ids)
         self._link = LinkSupervisor(cfg, self._transport, self._commands.capabilities, self._target_ids)
-        self._params = ParameterManager(self._store, self._notifier, self._target_ids, 2 * cfg.loss_timeout)
+        self._params = ParameterManager(self._store, self._notifier, self._target_ids, 2 * cfg.loss_timeout,
+                                        cfg.param_retry)
         self._param_cache = ParameterCache(cfg.param_cache or None) if cfg.param_cache is not None else None
         self._params.on_complete = self._cache_parameters
         self._params.use_ftp = cfg.param_ftp
