@@ -17,6 +17,9 @@ from driver.vehicle import Vehicle, VehicleConfig  # noqa: E402
 SPEEDUP = 4.0
 #: A recording replayed (driver/sim/replay.py) at ten times its pace: a 1,392-parameter list in 0.07 s.
 REPLAY_SPEEDUP = 10.0
+#: s before an unechoed PARAM_SET goes again (MAVProxy's 1 s in flight): the sim on localhost answers in milliseconds,
+#: and the sets that are never echoed (10 tries, then 5 reads by name) took 15 s each.
+DRIVER_PARAM_RETRY = 0.25
 
 
 @pytest.fixture(autouse=True, scope="session")
@@ -74,7 +77,7 @@ def vehicle_factory(tmp_path):
 
     def make(connection: str, **overrides) -> Vehicle:
         opts = dict(connection=connection, tlog_path=str(tmp_path / f"flight{len(vehicles)}.tlog"),
-                    command_timeout=1.0)
+                    command_timeout=1.0, param_retry=DRIVER_PARAM_RETRY)
         opts.update(overrides)
         v = Vehicle(VehicleConfig(**opts)).start()
         vehicles.append(v)

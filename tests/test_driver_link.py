@@ -15,6 +15,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink
 from driver.core import frames
 from driver.sim.autopilot import DEFAULT_PARAMS
 from driver.vehicle.state import CommandStatus, LinkStatus
+from driver.vehicle import VehicleConfig
 
 
 def test_telemetry_fills_the_state(vehicle, sim):
@@ -104,9 +105,14 @@ def test_nan_inf_and_huge_velocities_never_reach_the_wire(flying, sim):
 
 
 def test_deadman_zeroes_a_stalled_stream(sim_factory, vehicle_factory):
-    """The driver falls to zero before the autopilot's own 3 s guided timeout would stop the vehicle."""
-    sim = sim_factory(speedup=1.0)                      # vehicle time = real time: the two timeouts compare
-    flying = vehicle_factory(f"tcp:127.0.0.1:{sim.tcp_port}")
+    """The driver falls to zero before the autopilot's own 3 s guided timeout would stop the vehicle. The sim runs
+    at the suite's speed-up and the driver's deadman is shortened by the same factor, so the two timeouts compare
+    in vehicle time as they would at 1× (where the flight took 9 s)."""
+    guided_timeout = DEFAULT_PARAMS["GUID_TIMEOUT"][0]                # ArduCopter's own failsafe, 3 s
+    assert VehicleConfig().deadman < guided_timeout
+    sim = sim_factory()
+    speedup = sim.config.speedup
+    flying = vehicle_factory(f"tcp:127.0.0.1:{sim.tcp_port}", deadman=VehicleConfig().deadman / speedup)
     assert flying.takeoff(3.0).result(timeout=60).ok
     assert flying.set_velocity(1.5, 0, 0, 0)
     assert flying.wait_for(lambda s: not s.setpoint.is_zero, 2)
@@ -118,7 +124,6 @@ def test_deadman_zeroes_a_stalled_stream(sim_factory, vehicle_factory):
     received = list(sim.received_setpoints)
     last_moving = max(r[0] for r in received if abs(r[3] - 1.5) < 1e-6)
     first_zero = min(r[0] for r in received if r[0] > last_moving and r[3] == 0.0)
-    guided_timeout = DEFAULT_PARAMS["GUID_TIMEOUT"][0]                # ArduCopter's own failsafe, 3 s
     assert first_zero - last_moving < guided_timeout, (first_zero, last_moving)
     assert flying.wait_for(lambda s: math.hypot(sim.truth().vn, sim.truth().ve) < 0.2, 20)
 

@@ -111,10 +111,12 @@ def painted(view, east: float, north: float):
     return view.grab().toImage().pixelColor(view.to_screen(east, north).toPoint()).name()
 
 
-def test_two_vehicles_flown_at_once_from_one_window(qtbot, fleet, lab, ice_fleet, window_factory, monkeypatch):
+def fleet_in_a_window(qtbot, fleet, lab, ice_fleet, window_factory, monkeypatch, **server_properties):
+    """Two simulated vehicles registered as solo-1 and solo-2, flown from one window through the registry,
+    solo-1 picked; (sims, vehicles, servers, the IceFleet, the window) once both rows are filled."""
     from driver.ice import camera_source as ice_source
     monkeypatch.setitem(ice_source.client_properties, "Ice.Default.Locator", lab.locator)
-    sims, vehicles, servers = fleet(2, **{"MAVLinkServer.Camera.Uri": "sim"})
+    sims, vehicles, servers = fleet(2, **server_properties)
     f = ice_fleet()
     assert f.wait_listed(10) and eventually(lambda: f.names() == ("solo-1", "solo-2"), 10)
     w = window_factory(f.drone("solo-1"), takeoff_altitude=3.0, default_cameras=[FleetController.camera_uri("solo-1")])
@@ -125,6 +127,21 @@ def test_two_vehicles_flown_at_once_from_one_window(qtbot, fleet, lab, ice_fleet
     panel = w.fleet_panel
     qtbot.waitUntil(lambda: len(panel.row_texts()) == 2 and all("–" not in r for r in panel.row_texts()),
                     timeout=15000)
+    return sims, vehicles, servers, f, w
+
+
+def answer_all(qtbot, w, button, words: str) -> None:
+    """A fleet button, and its one confirmation for all."""
+    qtbot.mouseClick(button, Qt.LeftButton)
+    qtbot.waitUntil(lambda: w.fleet_dock.box is not None and w.fleet_dock.box.isVisible(), timeout=3000)
+    assert words in w.fleet_dock.box.text()
+    qtbot.mouseClick(w.fleet_dock.box.button(QMessageBox.Yes), Qt.LeftButton)
+
+
+def test_two_vehicles_flown_at_once_from_one_window(qtbot, fleet, lab, ice_fleet, window_factory, monkeypatch):
+    sims, vehicles, servers, f, w = fleet_in_a_window(qtbot, fleet, lab, ice_fleet, window_factory, monkeypatch,
+                                                      **{"MAVLinkServer.Camera.Uri": "sim"})
+    panel = w.fleet_panel
     first, second = panel.row_texts()
     assert first[0] == "▶ solo-1" and second[0] == "solo-2"              # name, mode, armed, battery, link age
     assert first[2] == "disarmed" and first[3].endswith("%") and first[4].endswith(" s")
@@ -176,15 +193,23 @@ def test_two_vehicles_flown_at_once_from_one_window(qtbot, fleet, lab, ice_fleet
     qtbot.waitUntil(lambda: [r[2] for r in panel.row_texts()] == ["disarmed", "disarmed"], timeout=5000)
     assert any(t.startswith("solo-1: mode LAND") for t in w.messages.texts()), w.messages.texts()   # each answer
 
-    def answer_all(button, words: str) -> None:
-        qtbot.mouseClick(button, Qt.LeftButton)
-        qtbot.waitUntil(lambda: w.fleet_dock.box is not None and w.fleet_dock.box.isVisible(), timeout=3000)
-        assert words in w.fleet_dock.box.text()
-        qtbot.mouseClick(w.fleet_dock.box.button(QMessageBox.Yes), Qt.LeftButton)
 
-    answer_all(panel.takeoffAllButton, "Take off all 2 vehicles")
+def test_all_taken_off_stopped_and_picked_on_the_map_then_their_servers_stop(qtbot, fleet, lab, ice_fleet,
+                                                                              window_factory, monkeypatch):
+    """The rest of the fleet's flight, in a window of its own (one test took 11 s): take off and stop all, solo-2
+    sent to a Fly here, solo-1 picked by its icon, then each vehicle's server stops and the map greys it."""
+    sims, vehicles, servers, f, w = fleet_in_a_window(qtbot, fleet, lab, ice_fleet, window_factory, monkeypatch)
+    panel, view = w.fleet_panel, w.mapPanel.mapView
+    answer_all(qtbot, w, panel.takeoffAllButton, "Take off all 2 vehicles")
     qtbot.waitUntil(lambda: all(s.truth().altitude > 2.5 for s in sims), timeout=60000)
-    answer_all(panel.stopAllButton, "Stop all 2 vehicles")
+    wait_flying(qtbot, w, timeout=60000)                                   # the sticks fly solo-1
+    solo1_trail = w.map.trail
+    press(w.rightStick, 0.0, 1.0)                                          # solo-1 forward: its trail
+    qtbot.waitUntil(lambda: body_velocity(sims[0])[0] > 0.8 and len(solo1_trail) > 1, timeout=15000)
+    release(w.rightStick)
+    qtbot.mouseClick(panel.table.viewport(), Qt.LeftButton, pos=panel.click_vehicle("solo-2"))   # solo-2 flown
+    qtbot.waitUntil(lambda: w.adapter.drone is f.drone("solo-2") and view.vehicle_name == "solo-2", timeout=3000)
+    answer_all(qtbot, w, panel.stopAllButton, "Stop all 2 vehicles")
     qtbot.waitUntil(lambda: any(t.startswith("solo-1: stop") for t in w.messages.texts()), timeout=10000)
     assert all(v.state().setpoint.is_zero and v.state().mode == "GUIDED" for v in vehicles)   # both hold
 

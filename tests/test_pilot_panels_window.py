@@ -57,8 +57,11 @@ def test_mute_is_a_menu_toggle_kept_for_the_next_run(qtbot, window, viewer_setti
     assert w.alerts.speaker.muted and viewer_settings.value("alerts/muted", type=bool)
     said = []
     w.alerts.speaker.spoken.connect(said.append)
+    snapshots = []
+    w.adapter.stateChanged.connect(snapshots.append)     # after the alerts' own slot: each has been judged
     qtbot.waitUntil(lambda: w.adapter.state.connected, timeout=10000)
-    qtbot.wait(300)                                      # snapshots go by: nothing may be said while muted
+    seen = len(snapshots)
+    qtbot.waitUntil(lambda: len(snapshots) >= seen + 5, timeout=10000)   # snapshots go by: nothing may be said
     assert said == []
 
 

@@ -12,6 +12,7 @@ from PyQt5.QtWidgets import QApplication, QMessageBox
 
 from driver.vehicle.state import LinkStatus
 from recordings import FLIGHT
+from uavviewer.replay.bar import clock_text
 
 from viewer_fixtures import app_style, viewer_settings, window_factory  # noqa: F401  (fixtures)
 
@@ -139,6 +140,9 @@ def test_no_control_moves_as_the_state_changes(qtbot, sim_factory, vehicle_facto
     w.tools.open_flight_log(f"{FLIGHT}.tlog")
     qtbot.waitUntil(lambda: w.adapter.replay is not None and w.adapter.state.connected, timeout=20000)
     qtbot.waitUntil(lambda: w.replayBar.isVisible() and w.adapter.replay.duration > 0, timeout=5000)
+    # the bar seeks only once it has shown the duration (else the whole log plays: 10 s at 8×)
+    qtbot.waitUntil(lambda: w.replayBar.clock.text().endswith(f"/ {clock_text(w.adapter.replay.duration)}"),
+                    timeout=5000)
     watch.step("replay start")
     replay = w.adapter.replay
     replay.speed = 8.0

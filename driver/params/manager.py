@@ -38,8 +38,10 @@ def param_name(m) -> str:
 class ParameterManager:
     """Parameters of one vehicle; every method runs with the driver's state lock held."""
 
-    def __init__(self, store, notifier, target: Callable[[], tuple[int, int]], give_up_after: float = 7.0) -> None:
+    def __init__(self, store, notifier, target: Callable[[], tuple[int, int]], give_up_after: float = 7.0,
+                 set_retry: float = SET_RETRY) -> None:
         self._store = store
+        self._set_retry = set_retry              # s without an echo before a PARAM_SET (or read back) goes again
         self._give_up_after = give_up_after      # s of a lost link before a download ends (it waits until then)
         self._lost_since: float | None = None
         self._notifier = notifier
@@ -240,7 +242,7 @@ class ParameterManager:
             if pending.attempts >= pending.tries and not pending.answered_otherwise and pending.can_read_back:
                 out.append(pending.read_message(target))      # never echoed: what does the vehicle hold?
                 pending.reads += 1
-                pending.next_send = now + SET_RETRY
+                pending.next_send = now + self._set_retry
                 continue
             if pending.attempts >= pending.tries or pending.answered_otherwise:
                 del self._sets[pending.name]
@@ -249,7 +251,7 @@ class ParameterManager:
                 continue
             out.append(pending.message(target))
             pending.attempts += 1
-            pending.next_send = now + SET_RETRY
+            pending.next_send = now + self._set_retry
         if self._dirty:
             self._publish(now)
         return out

@@ -36,6 +36,7 @@ from ..link.connection import open_transport
 from ..link.tlog import ReplayControl, TlogWriter
 from ..mission.plan import Plan, PlanKind
 from ..params.manager import ParameterManager
+from ..params.setter import SET_RETRY
 from ..payload.control import Payload
 from ..setup.control import VehicleSetup
 from .api import CEILING, Drone, Limits
@@ -88,6 +89,7 @@ class VehicleConfig:
     setpoint_rate: float = 20.0               # Hz while streaming
     command_timeout: float = 3.0              # s per attempt (QGC re-sends 3 s apart)
     command_attempts: int = 3
+    param_retry: float = SET_RETRY            # s without a PARAM_VALUE echo before PARAM_SET goes again
     ready_timeout: float = 60.0               # s the takeoff waits for readiness before trying anyway
     climb_timeout: float = 20.0               # s for the climb to 95 % of the target, plus 2 s a metre
     mavlink_version: int | None = None        # None: start on 1, follow the autopilot to 2
@@ -123,7 +125,8 @@ class Vehicle(Drone):
         self._notifier = Notifier()
         self._commands = CommandSender(self._store, cfg, self._notifier, self._target_ids)
         self._link = LinkSupervisor(cfg, self._transport, self._commands.capabilities, self._target_ids)
-        self._params = ParameterManager(self._store, self._notifier, self._target_ids, 2 * cfg.loss_timeout)
+        self._params = ParameterManager(self._store, self._notifier, self._target_ids, 2 * cfg.loss_timeout,
+                                        cfg.param_retry)
         self._params.use_ftp = cfg.param_ftp
         self._setpoints = SetpointStreamer(cfg.deadman, cfg.setpoint_rate)
         self._payload = Payload(self)         # gimbal, region of interest, camera (driver.payload)
