@@ -168,7 +168,9 @@ class ParameterManager:
         old = self._values.get(name)
         index = m.param_index
         if index == NO_INDEX or index >= m.param_count:
-            index = old.index if old is not None else -1
+            # a read by name (or a set's echo) names no index: keep the one known, from the list or the cache
+            known = old if old is not None else (self._cached.values.get(name) if self._cached is not None else None)
+            index = known.index if known is not None else -1
         param = Parameter(name, as_stored(ptype, m.param_value), ptype, index)
         self._values[name] = param
         if index >= 0:
