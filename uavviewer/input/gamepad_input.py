@@ -8,7 +8,7 @@ act from any window state; Take off and RTL only when the pad may fly.
 """
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
+from typing import Protocol
 
 import logging
 import time
@@ -21,10 +21,16 @@ from .gamepad import GamepadFrame, GamepadReader, Pad, PadReading, shared_reader
 from .gamepad_mapping import ALWAYS_MAPPED, GamepadMapping, default_mapping, mappings_from_json
 from .sticks import Axes
 
-if TYPE_CHECKING:                     # a type only: settings.py builds on input/sticks.py, not the other way
-    from ..settings import ViewerSettings
 
-__all__ = ["GamepadInput", "STALL"]
+class GamepadSettings(Protocol):
+    """What the gamepad reads of the pilot's preferences (``uavviewer.settings.ViewerSettings`` has these): named
+    here, so that input/ depends on no module above it (settings.py builds on input/sticks.py)."""
+    gamepad: str                  # "auto", "off", or the GUID of the pad that flies
+    gamepad_background: bool      # the pad keeps flying while the window is not active
+    gamepad_mappings: str         # JSON: controller GUID -> its mapping
+
+
+__all__ = ["GamepadInput", "GamepadSettings", "STALL"]
 
 log = logging.getLogger(__name__)
 
@@ -43,7 +49,7 @@ class GamepadInput(QObject):
     message = pyqtSignal(str, object)        # text for the pilot, Severity
     frameArrived = pyqtSignal(object)        # every GamepadFrame (Preferences' live bars)
 
-    def __init__(self, settings: ViewerSettings, reader: GamepadReader | None = None,
+    def __init__(self, settings: GamepadSettings, reader: GamepadReader | None = None,
                  parent: QObject | None = None) -> None:
         super().__init__(parent)
         self._reader = reader or shared_reader()
@@ -75,7 +81,7 @@ class GamepadInput(QObject):
         self._reader.unsubscribe(self._listener)
 
     # -- settings -------------------------------------------------------------------------------
-    def apply_settings(self, settings: ViewerSettings) -> None:
+    def apply_settings(self, settings: GamepadSettings) -> None:
         self._choice = settings.gamepad or "auto"
         self.background = settings.gamepad_background
         self._saved = mappings_from_json(settings.gamepad_mappings)

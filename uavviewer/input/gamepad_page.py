@@ -1,7 +1,6 @@
 """Preferences > Gamepad: pick the controller, watch its sticks and buttons live, map them by moving them."""
 from __future__ import annotations
 
-from typing import TYPE_CHECKING
 
 from PyQt5 import sip, uic
 from PyQt5.QtCore import Qt
@@ -9,14 +8,12 @@ from PyQt5.QtWidgets import QCheckBox, QComboBox, QDoubleSpinBox, QLabel, QProgr
 
 from .. import RESOURCES
 from .gamepad import GamepadFrame, Pad, PadReading
-from .gamepad_input import GamepadInput
+from .gamepad_input import GamepadInput, GamepadSettings
 from .gamepad_mapping import (ACTIONS, PILOT_AXES, AxisCapture, ButtonCapture, GamepadMapping, mappings_from_json,
                               mappings_to_json)
 from .sticks import StickMode
 from ..telemetry.panel import GOOD, NORMAL, WARN
 
-if TYPE_CHECKING:                     # a type only: settings.py builds on input/sticks.py, not the other way
-    from ..settings import ViewerSettings
 
 __all__ = ["GamepadPage"]
 
@@ -33,7 +30,7 @@ class GamepadPage(QWidget):
     While a stick or button is being mapped the gamepad neither flies nor acts (:meth:`GamepadInput.set_capturing`).
     """
 
-    def __init__(self, gamepad: GamepadInput, settings: ViewerSettings, parent: QWidget | None = None) -> None:
+    def __init__(self, gamepad: GamepadInput, settings: GamepadSettings, parent: QWidget | None = None) -> None:
         super().__init__(parent)
         uic.loadUi(str(RESOURCES / "ui" / "gamepad_page.ui"), self)
         self._gamepad = gamepad
