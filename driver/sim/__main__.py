@@ -88,6 +88,8 @@ def parser() -> argparse.ArgumentParser:
     parser.add_argument("--companion", action="store_true", help="a companion computer (component 191)")
     parser.add_argument("--camera", action="store_true",
                         help="a camera on the vehicle: pictures are confirmed with CAMERA_FEEDBACK (copter-4)")
+    parser.add_argument("--log-dir", metavar="DIR",
+                        help="keep the DataFlash logs (written while armed, 0000000N.BIN) here (default: a temp folder)")
     parser.add_argument("--usb-port", type=whole(0, 65535), metavar="PORT",
                         help="also serve TCP on this port (on --tcp's host, 0 = any) as the USB port, SERIAL0: "
                              "unsigned frames are accepted there even with signing on (--tcp is a telemetry port)")
@@ -130,7 +132,8 @@ def configure(args: argparse.Namespace) -> SimVehicle:
                        speedup=args.speedup, ready_after=args.ready_after, home=args.home,
                        mavlink2=not args.mav1, seed=args.seed, profile=args.profile,
                        origin_offset=args.origin_offset, gimbal=args.gimbal, companion=args.companion,
-                       usb_port=args.usb_port, signing_key=key, camera=args.camera)
+                       usb_port=args.usb_port, signing_key=key, camera=args.camera,
+                       log_dir=args.log_dir)
     return _with_faults(SimVehicle(config), args)
 
 

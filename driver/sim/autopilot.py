@@ -34,6 +34,7 @@ from .gimbal import Payload
 from .messages import Messages
 from .failsafe import GcsFailsafe
 from .ftp import FtpServer
+from .logs import LogServer
 from .params import ParamProtocol, SimParams
 from .missions import Missions
 from .profiles import POSITION_REASONS, profile_of
@@ -84,7 +85,7 @@ class SimTruth:
         return math.hypot(self.vn, self.ve)
 
 
-class Autopilot(Telemetry, Commands, ParamProtocol, FtpServer, GcsFailsafe, Missions, Auto, Messages, Flight,
+class Autopilot(Telemetry, Commands, ParamProtocol, FtpServer, LogServer, GcsFailsafe, Missions, Auto, Messages, Flight,
                 Payload):
     """One ArduCopter: state, flight modes, command handling and telemetry streams."""
 
@@ -206,6 +207,7 @@ class Autopilot(Telemetry, Commands, ParamProtocol, FtpServer, GcsFailsafe, Miss
         self._payload_step(dt)
         self._send_due()
         self.params_step(dt)
+        self.logs_step(dt)
         self.failsafe_step()
 
     @property
@@ -376,6 +378,7 @@ class Autopilot(Telemetry, Commands, ParamProtocol, FtpServer, GcsFailsafe, Miss
             self.deferred_texts.append((severity, text))
             return
         log.info("STATUSTEXT %s", text)
+        self.log_text(text)
         self.emit(self.factory.statustext_encode(severity, text.encode()[:50]))
 
     def _send_now(self, name: str) -> None:

@@ -59,6 +59,7 @@ class SimConfig:
     rate_hz: int = 50
     seed: int | None = None
     signing_key: bytes | None = None        # 32 bytes: a MAVLink 2 signing key already in storage at power-on
+    log_dir: str | None = None              # where the DataFlash logs are kept (None: a temporary folder)
     radio_baud: int | None = None           # a telemetry radio's rate: a parameter list streams only as fast as it
                                             # allows (params.py); None: as fast as the recording's TCP (2,300/s)
 
