@@ -34,6 +34,7 @@ from .api import CEILING, Drone, Limits
 from .commands import CommandSender, Notifier, chain, command_name
 from .forwarding import Forwarder
 from .payload.control import PAYLOAD_MESSAGES, Payload
+from .logs.control import LogControl
 from .link import LinkError, ReplayControl, TlogWriter, Transport, open_transport
 from .params.cache import ParameterCache
 from .params.manager import ParameterManager, param_name
@@ -164,6 +165,7 @@ class Vehicle(Drone):
         self._forwarder = Forwarder(cfg.outputs, cfg.baud, self._forward_to_vehicle,
                                     lambda text: self._store.add_message(Severity.WARNING, text), self._closing)
         self._missions = MissionControl(self)          # driver.mission: transfers, mission state, AUTO
+        self.logs = LogControl(self)                   # driver.logs: the vehicle's DataFlash logs
 
     # ------------------------------------------------------------------------------------------
     # lifecycle
