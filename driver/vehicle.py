@@ -1119,6 +1119,7 @@ _EVENTS = {
     "AUTOPILOT_VERSION": Vehicle._on_autopilot_version,
     "FENCE_STATUS": Vehicle._on_fence_status,
     "FILE_TRANSFER_PROTOCOL": Vehicle._on_file_transfer_protocol,
+    **{name: lambda v, m: v.logs.on_message(m) for name in ("LOG_ENTRY", "LOG_DATA")},
     **{name: Vehicle._on_mission for name in ("MISSION_CURRENT", "MISSION_ITEM_REACHED", "MISSION_REQUEST",
                                               "MISSION_REQUEST_INT", "MISSION_COUNT", "MISSION_ITEM",
                                               "MISSION_ITEM_INT", "MISSION_ACK", "RALLY_POINT")},
