@@ -530,6 +530,7 @@ class Vehicle(Drone):
             self._store.add_message_locked(sev, text, "vehicle")
             self._settle_signing(self._signing.statustext(text))
             self._missions.on_text(text)
+            self.logs.on_text(text)
 
     def _on_command_ack(self, m) -> None:
         self._commands.on_ack(m, time.monotonic())
