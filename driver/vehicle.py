@@ -610,6 +610,7 @@ class Vehicle(Drone):
                     out += self._params.service(now, self._link.status)
                     out += self._payload.service(now, self._store.state)
                     out += self._missions.service(now, self._store.state)
+                    out += self.logs.service(now, self._store.state)
                     if now >= next_health:
                         next_health = now + 0.1
                         out += self._supervise(now)
