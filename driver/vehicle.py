@@ -227,6 +227,7 @@ class Vehicle(Drone):
         for t in self._threads:
             t.join(timeout=2.0)
         self._missions.close()
+        self.logs.close()
         with self._lock:
             self._commands.abort_all("driver closed")
             self._params.abort_all("driver closed")
