@@ -101,6 +101,7 @@ class _Job:
         self.kind, self.name, self.future = kind, name, future
         self.log_id, self.path = log_id, path
         self.started = 0.0
+        self.checking = False                   # DFReader reads the finished file (a thread of its own)
         self.listed = False                     # a download reads the list first: sizes and times as they are now
 
 
@@ -125,7 +126,8 @@ class _Download:
         self.window: tuple[int, int] | None = None
         self.sent_at = 0.0
         self.last_rx = 0.0
-        self.first_rx: float | None = None
+        self.first_rx: float | None = None      # the window's first packet: when, and its offset
+        self.first_ofs = self.last_ofs = 0
         self.rtt = 0.3
         self.rate = 0.0                         # packets/s seen while a window streams
         self.received = self.requested = 0
@@ -336,6 +338,8 @@ class LogControl:
         return d
 
     def _service_download(self, job: _Job, now: float, link_up: bool) -> list:
+        if job.checking:
+            return []
         d = self._download
         if d is None:
             d = self._download = self._begin_download(job, now)
@@ -362,8 +366,9 @@ class LogControl:
             return [self._end_message()]
         if d.window is not None:
             quiet = now - max(d.sent_at, d.last_rx)
-            if quiet < max(0.25, 3 * d.rtt):
+            if quiet < max(0.1, 3 * d.rtt):
                 return []
+            self._measure(d, now)
             d.window = None                     # silence: the rest of that window was lost
         return [self._next_window(d, now)]
 
@@ -386,6 +391,8 @@ class LogControl:
             if d.end is not None:
                 count = min(count, d.end - start)
         d.window = (start, start + count)
+        log.debug("log %d: window %d+%d (rtt %.3f s, %.0f packets/s, %d gaps)", d.entry.id, start, count, d.rtt,
+                  d.rate, len(gaps))
         d.sent_at = now
         d.first_rx = None
         d.requested += min(count, (d.end if d.end is not None else d.size) - start) if count != OPEN_END - start \
@@ -408,17 +415,23 @@ class LogControl:
             d.end = ofs + count                 # a short packet: the log ends here (the vehicle's word)
             d.part.size = d.end
         window = d.window
-        if window is None:
-            return
-        if ofs == window[0] and d.first_rx is None:
-            d.first_rx = now
-            d.rtt = 0.7 * d.rtt + 0.3 * (now - d.sent_at)
+        if window is None or not window[0] <= ofs < window[1]:
+            return                              # queued from an earlier request: kept, but it times nothing
+        if d.first_rx is None:
+            d.first_rx, d.first_ofs = now, ofs
+            d.rtt = 0.5 * d.rtt + 0.5 * (now - d.sent_at)
+        d.last_ofs = ofs
         if ofs + count >= window[1] or count < CHUNK:
-            if d.first_rx is not None and now > d.first_rx:
-                packets = (ofs - window[0]) // CHUNK + 1
-                d.rate = max(d.rate * 0.5, packets / (now - d.first_rx))
+            self._measure(d, now)
             d.window = None
             self._v._wake.set()
+
+    @staticmethod
+    def _measure(d: _Download, now: float) -> None:
+        """The stream's rate (packets/s, lost ones counted) from this window's first and last packets."""
+        if d.first_rx is not None and d.last_rx > d.first_rx and d.last_ofs > d.first_ofs:
+            rate = (d.last_ofs - d.first_ofs) / CHUNK / (d.last_rx - d.first_rx)
+            d.rate = rate if d.rate == 0 else 0.5 * d.rate + 0.5 * rate
 
     def _flush(self, d: _Download) -> bool:
         d.flushed_at = time.monotonic()
@@ -466,6 +479,7 @@ class LogControl:
         seconds = time.monotonic() - job.started
         fields = dict(log_id=d.entry.id, path=job.path, size=d.end, seconds=seconds, bytes_received=d.received,
                       bytes_requested=d.requested, resumed_from=d.resumed)
+        job.checking = True
         thread = threading.Thread(target=self._check, args=(job, fields), name="log-check", daemon=True)
         self._check_thread = thread
         thread.start()

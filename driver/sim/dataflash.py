@@ -14,7 +14,7 @@ import struct
 import tempfile
 import time
 
-__all__ = ["DataFlashWriter", "LogFolder", "FORMATS", "log_file_name"]
+__all__ = ["DataFlashWriter", "LogFolder", "FORMATS", "log_file_name", "write_flight_log"]
 
 log = logging.getLogger(__name__)
 
@@ -166,3 +166,27 @@ class LogFolder:
             except OSError:
                 pass
         self._times.clear()
+
+
+def write_flight_log(folder: LogFolder, size: int, params=(("SYSID_THISMAV", 1.0),), seed: int = 0) -> int:
+    """A log of about ``size`` bytes as if flown (for tests and benches that need a large log fast): the
+    parameters, a mode, then ATT, CTUN, BAT at 10 Hz, GPS at 5 Hz, a photo now and then. Returns its number."""
+    import math as _m
+    number = folder.begin(params)
+    folder.write("MODE", 0, 4, 4, 1)
+    folder.write("MSG", 0, "ArduCopter V4.6.3 (simulated)")
+    i = 0
+    while folder._file.tell() < size:
+        us = 1_000_000 + i * 100_000
+        phase = (i + seed) * 0.05
+        folder.write("ATT", us, 5 * _m.sin(phase), 5 * _m.sin(phase) + 0.1, 3 * _m.cos(phase), 3 * _m.cos(phase),
+                     (i * 0.5) % 360, (i * 0.5) % 360)
+        folder.write("CTUN", us, 0.5, 0.45, 10.0, 10.0 + 0.1 * _m.sin(phase), 10.0, 0.0)
+        folder.write("BAT", us, 0, 16.0 - i * 1e-5, 12.0, i * 0.33)
+        if i % 2 == 0:
+            folder.write("GPS", us, 3, us // 1000, 2300, 14, 402839000 + i, -37940000 - i, 67400, 2.0, 90.0)
+        if i % 100 == 50:
+            folder.write("CAM", us, i // 100, 402839000 + i, -37940000 - i, 67400, 1000, 0, 0, 9000)
+        i += 1
+    folder.end()
+    return number
