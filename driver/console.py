@@ -20,6 +20,7 @@ from concurrent.futures import Future
 
 from .battery import time_left
 from .console_plans import PlanCommands
+from .logs.console import LogCommands
 from .state import BatteryAlarm, CommandResult, CommandStatus, SequencePhase, VehicleState
 from .rules import COPTER_MODES, mode_warning
 from .payload.console import PayloadCommands
@@ -34,7 +35,7 @@ TELEMETRY_WAIT = 5.0         # s more for the requested telemetry (battery, posi
 NOTEWORTHY = ("driver.ice.servants", "driver.ice.camera", "driver.camera.uri")
 
 
-class Console(PlanCommands, PayloadCommands, cmd.Cmd):
+class Console(PlanCommands, PayloadCommands, LogCommands, cmd.Cmd):
     """``reboot, arm, disarm, takeoff, land, mode, velocity, parachute, bat, alt, param, status, help``; ``wp``,
     ``fence``, ``rally`` (console_plans.py); ``gimbal``, ``roi``, ``camera`` (payload/console.py)."""
 
