@@ -71,7 +71,8 @@ class LogOutcome:
     size: int = 0
     seconds: float = 0.0
     bytes_received: int = 0     # LOG_DATA bytes that arrived (duplicates too)
-    bytes_requested: int = 0    # bytes asked for, first asks and gap re-asks together
+    bytes_requested: int = 0    # bytes asked for, first asks and gap re-asks together (of the size known then)
+    bytes_rerequested: int = 0  # of those, bytes already held when asked (merged into a gap's window)
     resumed_from: int = 0       # bytes already held in the .part when this download began
     messages: int = 0           # DataFlash messages DFReader read
 
@@ -130,7 +131,7 @@ class _Download:
         self.first_ofs = self.last_ofs = 0
         self.rtt = 0.3
         self.rate = 0.0                         # packets/s seen while a window streams
-        self.received = self.requested = 0
+        self.received = self.requested = self.rerequested = 0
         self.progress_at = 0.0
         self.flushed_at = 0.0
         self.history: deque = deque()           # (time, held) for the rate shown
@@ -395,8 +396,9 @@ class LogControl:
                   d.rate, len(gaps))
         d.sent_at = now
         d.first_rx = None
-        d.requested += min(count, (d.end if d.end is not None else d.size) - start) if count != OPEN_END - start \
-            else max(0, (d.end or d.size) - start)
+        upto = min(start + count, d.end if d.end is not None else max(d.size, start))
+        d.requested += max(0, upto - start)
+        d.rerequested += sum(max(0, min(b, upto) - max(a, start)) for a, b in d.ranges.spans)
         return self._message("log_request_data", d.entry.id, start, count)
 
     def _on_data(self, m) -> None:
@@ -478,7 +480,7 @@ class LogControl:
         self.progress = LogProgress(d.entry.id, job.path, d.end, d.end, 0.0, "checking")
         seconds = time.monotonic() - job.started
         fields = dict(log_id=d.entry.id, path=job.path, size=d.end, seconds=seconds, bytes_received=d.received,
-                      bytes_requested=d.requested, resumed_from=d.resumed)
+                      bytes_requested=d.requested, bytes_rerequested=d.rerequested, resumed_from=d.resumed)
         job.checking = True
         thread = threading.Thread(target=self._check, args=(job, fields), name="log-check", daemon=True)
         self._check_thread = thread
