@@ -574,6 +574,7 @@ class Vehicle(Drone):
         """MAVLink FTP: the parameters' file (driver.params.ftp)."""
         if m.target_system in (0, self.config.source_system) and m.target_component in (0, self.config.source_component):
             self._params.on_ftp(m, time.monotonic())
+            self.logs.on_ftp(m)
             self._wake.set()
     def _on_mission(self, m) -> None:
         self._missions.on_message(m)
