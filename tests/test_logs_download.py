@@ -72,13 +72,13 @@ def test_the_list_is_complete_under_loss(sim_factory, vehicle_factory, tmp_path)
     assert [(e.id, e.size) for e in listed.entries] == [(n, s) for n, s, _ in folder.entries()]
 
 
-@pytest.mark.parametrize("loss", [0.0, 0.3])
-def test_download_is_byte_identical(sim_factory, vehicle_factory, tmp_path, loss):
-    sim, folder = logs_sim(sim_factory, tmp_path, [20_000, 120_000])
+@pytest.mark.parametrize("via, loss", [("log_data", 0.0), ("log_data", 0.3), ("ftp", 0.0), ("ftp", 0.3)])
+def test_download_is_byte_identical(sim_factory, vehicle_factory, tmp_path, via, loss):
+    sim, folder = logs_sim(sim_factory, tmp_path, [20_000, 120_000], speedup=8.0)
     v = connect(vehicle_factory, sim)
     lossy(sim, loss)
     out = tmp_path / "got" / "two.BIN"
-    outcome = v.logs.download(2, str(out)).result(120)
+    outcome = v.logs.download(2, str(out), via=via).result(120)
     assert outcome.ok, outcome.reason
     assert outcome.size == os.path.getsize(folder.path(2)) and same_bytes(out, folder, 2)
     assert outcome.messages > 1000
@@ -155,6 +155,9 @@ def test_the_solo_downloads_by_log_data(sim_factory, vehicle_factory, tmp_path):
     assert outcome.ok, outcome.reason and same_bytes(out, folder, 1)
     kinds = {kind for _, kind, _ in sim.received_messages}
     assert "LOG_REQUEST_DATA" in kinds and "FILE_TRANSFER_PROTOCOL" not in kinds
+    assert v.wait_for(lambda s: s.firmware, 10)         # AUTOPILOT_VERSION: no FTP capability
+    refused = v.logs.download(1, out, via="ftp").result(10)
+    assert not refused.ok and "offers no MAVLink FTP" in refused.reason
 
 
 def test_console_log_list_and_download_latest(sim_factory, vehicle_factory, tmp_path):
