@@ -6,6 +6,7 @@ of fetching the log again. The map is written only after the bytes it names are 
 """
 from __future__ import annotations
 
+import bisect
 import json
 import os
 
@@ -13,8 +14,13 @@ __all__ = ["Ranges", "PartMap", "load_part_map", "save_part_map"]
 
 
 class Ranges:
+    """Held bytes as sorted, disjoint spans; adding one is a binary search (a lossy download holds thousands of
+    spans and adds one per packet)."""
+
     def __init__(self, spans=()) -> None:
         self.spans: list[list[int]] = []
+        self._starts: list[int] = []
+        self._total = 0
         for a, b in spans:
             self.add(int(a), int(b))
 
@@ -22,20 +28,25 @@ class Ranges:
         """Hold [start, end); returns how many of those bytes are new."""
         if end <= start:
             return 0
-        spans = self.spans
-        before = self.total()
-        i = 0
-        while i < len(spans) and spans[i][1] < start:
-            i += 1
+        spans, starts = self.spans, self._starts
+        i = bisect.bisect_left(starts, start)
+        if i and spans[i - 1][1] >= start:
+            i -= 1                              # the span before reaches this one: merge from it
         j = i
+        removed = 0
+        new_start, new_end = start, end
         while j < len(spans) and spans[j][0] <= end:
-            start, end = min(start, spans[j][0]), max(end, spans[j][1])
+            new_start, new_end = min(new_start, spans[j][0]), max(new_end, spans[j][1])
+            removed += spans[j][1] - spans[j][0]
             j += 1
-        spans[i:j] = [[start, end]]
-        return self.total() - before
+        spans[i:j] = [[new_start, new_end]]
+        starts[i:j] = [new_start]
+        added = (new_end - new_start) - removed
+        self._total += added
+        return added
 
     def total(self) -> int:
-        return sum(b - a for a, b in self.spans)
+        return self._total
 
     def held_from(self, offset: int) -> int:
         """The end of the held run that covers ``offset`` (``offset`` itself when it is not held)."""
