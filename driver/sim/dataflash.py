@@ -91,6 +91,7 @@ class LogFolder:
         self._writer: DataFlashWriter | None = None
         self._file = None
         self._times: dict[int, int] = {}
+        self._reader = None                      # (number, file) kept open while a log is read packet by packet
 
     def path(self, number: int) -> str:
         return os.path.join(self.folder, log_file_name(number))
@@ -121,11 +122,16 @@ class LogFolder:
         """``count`` bytes at ``offset`` of log ``number`` (fewer at the end), None if there is no such log."""
         if self._file is not None and number == self.current:
             self._file.flush()
+        reader = self._reader
         try:
-            with open(self.path(number), "rb") as f:
-                f.seek(offset)
-                return f.read(count)
-        except OSError:
+            if reader is None or reader[0] != number:
+                if reader is not None:
+                    reader[1].close()
+                reader = self._reader = (number, open(self.path(number), "rb"))
+            reader[1].seek(offset)
+            return reader[1].read(count)
+        except (OSError, ValueError):
+            self._reader = None
             return None
 
     def begin(self, params, stamp: float | None = None) -> int:
@@ -160,6 +166,9 @@ class LogFolder:
 
     def erase(self) -> None:
         self.end()
+        if self._reader is not None:
+            self._reader[1].close()
+            self._reader = None
         for number in self.numbers():
             try:
                 os.remove(self.path(number))

@@ -42,7 +42,7 @@ class LogServer:
 
     log_folder_: LogFolder | None = None
     log_listing: list | None = None       # [peer, next id, last id, num_logs]
-    log_sending: list | None = None       # [peer, id, ofs, remaining, left after END or None]
+    log_sending: list | None = None       # [peer, id, ofs, bytes left, packets left after END or None]
     log_told_armed = False
     log_credit = 0.0
     log_list_credit = 0.0
@@ -87,7 +87,11 @@ class LogServer:
             return                                      # an unknown id: nothing at all
         if msg.id == folder.current:
             folder.end()                                # a download closes the log being written
-        self.log_sending = [self.sender, msg.id, msg.ofs, msg.count, None]
+        size = next((e[1] for e in folder.entries() if e[0] == msg.id), 0)
+        remaining = msg.count                           # the size as it is now (get_log_info at the request)
+        if msg.ofs + remaining > size:
+            remaining = size - msg.ofs if msg.ofs <= size else 0xFFFFFFFF
+        self.log_sending = [self.sender, msg.id, msg.ofs, remaining, None]
 
     def _on_log_request_end(self, msg) -> None:
         if self._log_refused():
@@ -141,9 +145,6 @@ class LogServer:
     def _log_data(self) -> None:
         sending = self.log_sending
         peer, number, ofs, remaining, after_end = sending
-        size = next((e[1] for e in self.log_folder.entries() if e[0] == number), 0)
-        if ofs + remaining > size:
-            remaining = size - ofs if ofs <= size else 0xFFFFFFFF
         n = min(LOG_DATA_SIZE, remaining)
         data = self.log_folder.read(number, ofs, n) or b""
         self.emit_to(self.factory.log_data_encode(number, ofs, len(data), data.ljust(LOG_DATA_SIZE, b"\0")), peer)
