@@ -128,12 +128,15 @@ def test_armed_the_vehicle_says_disarm_for_log_download(sim_factory, vehicle_fac
     assert eventually(lambda: any(m.text == "Disarm for log download" for m in v.state().messages), 10)
 
 
-def test_an_unknown_log_id(sim_factory, vehicle_factory, tmp_path):
-    sim, _ = logs_sim(sim_factory, tmp_path, [5_000])
+def test_an_unknown_log_id_and_an_empty_log(sim_factory, vehicle_factory, tmp_path):
+    sim, folder = logs_sim(sim_factory, tmp_path, [5_000])
+    open(folder.path(2), "wb").close()                  # a log the vehicle began and never wrote to
     v = connect(vehicle_factory, sim)
     outcome = v.logs.download(7, str(tmp_path / "x.BIN")).result(20)
-    assert not outcome.ok and outcome.reason == "no log 7 on the vehicle (logs 1 to 1)"
+    assert not outcome.ok and outcome.reason == "no log 7 on the vehicle (logs 1 to 2)"
     assert not os.path.exists(tmp_path / "x.BIN.part")
+    outcome = v.logs.download(2, str(tmp_path / "x.BIN")).result(20)
+    assert not outcome.ok and outcome.reason == "log 2 is empty (0 bytes) on the vehicle"
 
 
 def test_a_corrupt_or_truncated_bin_is_told(tmp_path):
