@@ -253,6 +253,8 @@ class LogControl:
         if not self._jobs:
             return out
         job = self._jobs[0]
+        if not job.started:
+            self._refused = None                 # a refusal told before this job's first request is not its own
         if self._refused is not None:
             self._refused, reason = None, self._refused
             self._abort(job, f"{reason}: the vehicle ignores log requests while armed")
