@@ -88,11 +88,7 @@ class LogCommands:
 
     def _log_report(self, future: Future, show: bool = False) -> None:
         def done(f: Future) -> None:
-            try:
-                outcome = f.result()
-            except Exception as exc:
-                self.say(f"error: {exc}")
-                return
+            outcome = f.result()                  # a LogOutcome: vehicle.logs settles its futures, never raises
             if not outcome.ok:
                 self.say(f"error: {outcome.name}: {outcome.reason}")
                 return
