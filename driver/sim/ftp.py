@@ -158,7 +158,8 @@ class FtpServer:
         return sim_entries(self.params)
 
     def _on_file_transfer_protocol(self, msg) -> None:
-        if msg.target_system not in (0, self.config.system_id) or self.profile.version[0] < 4:
+        profile = getattr(self, "profile", None)         # the Autopilot's firmware profile (absent in a bare worker)
+        if msg.target_system not in (0, self.config.system_id) or (profile is not None and profile.version[0] < 4):
             return                                       # the Solo's 3.3 has no MAVLink FTP
         payload = bytes(msg.payload)
         seq, session, opcode, size, _, _, _, offset = HEADER.unpack(payload[:12])
