@@ -5,7 +5,6 @@ from __future__ import annotations
 
 import io
 import os
-import time
 
 import pytest
 from pymavlink.DFReader import DFReader_binary
@@ -181,4 +180,26 @@ def test_console_log_list_and_download_latest(sim_factory, vehicle_factory, tmp_
     console.onecmd("log erase yes")
     wait_text(out, "0 logs")
     assert folder.numbers() == []
-    _ = time
+
+
+def test_cmd_log_download_latest_runs_unattended(sim_factory, tmp_path):
+    """``python -m driver --cmd "log download latest FILE" --daemon``: no list asked first, nobody at the console."""
+    import subprocess
+    import sys
+    from ice_fixtures import free_port
+    sim, folder = logs_sim(sim_factory, tmp_path, [4_000, 9_000])
+    root = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+    proc = subprocess.Popen([sys.executable, "-m", "driver", "--master", f"tcp:127.0.0.1:{sim.tcp_port}", "--no-log",
+                             "--one-port", str(free_port()), "--cmd", "log download latest got.bin", "--daemon"],
+                            cwd=tmp_path, env={**os.environ, "PYTHONPATH": root}, stdin=subprocess.DEVNULL,
+                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    lines: list[str] = []
+    import threading
+    threading.Thread(target=lambda: lines.extend(proc.stdout), daemon=True).start()
+    try:
+        assert eventually(lambda: any(f"Finished downloading {tmp_path / 'got.bin'}" in x for x in lines), 30), \
+            "".join(lines)
+    finally:
+        proc.terminate()
+        proc.wait(timeout=15)
+    assert same_bytes(tmp_path / "got.bin", folder, 2)
