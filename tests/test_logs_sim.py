@@ -92,3 +92,24 @@ def test_the_solo_answers_no_ftp(sim_factory, tmp_path):
         gcs.send(gcs.mav.file_transfer_protocol_encode(0, 1, 1, list(reset)))
         assert gcs.wait("FILE_TRANSFER_PROTOCOL", 1.5, since=mark) is None
         assert gcs.wait("HEARTBEAT", 5, since=mark) is not None
+
+
+def test_a_request_during_a_transfer_is_dropped(sim_factory, tmp_path):
+    """AP_Logger_MAVLinkLogTransfer: while LOG_DATA streams, a new LOG_REQUEST_DATA on that link is dropped
+    silently and a LOG_REQUEST_LIST with "Log download in progress"; LOG_REQUEST_END frees it."""
+    folder = LogFolder(str(tmp_path / "logs"))
+    write_flight_log(folder, 20_000)
+    sim = sim_factory(log_dir=folder.folder, radio_baud=200_000)          # ~180 LOG_DATA a second
+    with OtherGroundStation(f"tcp:127.0.0.1:{sim.tcp_port}").start() as gcs:
+        mark = gcs.mark()
+        gcs.send(gcs.mav.log_request_data_encode(1, 1, 1, 0, 0xFFFFFFFF))
+        assert gcs.wait("LOG_DATA", 5, since=mark)
+        gcs.send(gcs.mav.log_request_data_encode(1, 1, 1, 18_001, 90))
+        gcs.send(gcs.mav.log_request_list_encode(1, 1, 0, 0xFFFF))
+        assert gcs.wait(lambda m: m.get_type() == "STATUSTEXT" and m.text == "Log download in progress", 5,
+                        since=mark)
+        gcs.send(gcs.mav.log_request_end_encode(1, 1))
+        data = quiet_after(gcs, "LOG_DATA", mark)
+        offsets = [m.ofs for m in data]
+        assert offsets == sorted(offsets) and 18_001 not in offsets      # one stream in order, the window dropped
+        assert not [m for m in gcs.messages[mark:] if m.get_type() == "LOG_ENTRY"]

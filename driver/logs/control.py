@@ -6,8 +6,9 @@ about it here:
 * LOG_REQUEST_LIST 0..0xffff gives one LOG_ENTRY per log; a list of ids past the last one floods LOG_ENTRY (size
   0) for ~40 s. So only 0..0xffff is asked, ids that went missing are asked again as a range inside last_log_num,
   entries outside 1..last_log_num are ignored, and LOG_REQUEST_END follows every listing.
-* LOG_REQUEST_DATA (ofs, count) streams 90-byte LOG_DATA in order; a new request replaces the stream. A download
-  asks for the first gap to the end of the log (open-ended: the log's true end is where a short packet, or a
+* LOG_REQUEST_DATA (ofs, count) streams 90-byte LOG_DATA in order; while it runs (or a listing does) a new
+  request is dropped (AP_Logger_MAVLinkLogTransfer.cpp), so the next one goes out only when the stream has ended
+  (its last packet, or silence), and every listing is preceded by LOG_REQUEST_END. A download asks for the first gap to the end of the log (open-ended: the log's true end is where a short packet, or a
   packet of count 0, says it is, so a log that grew since the list is fetched whole); then, where packets were
   lost, the next gap, merged with the gaps after it while the bytes held between them cost less to send again than
   a round trip. Nothing held is ever thrown away: no log is restarted because chunks were lost.
@@ -301,7 +302,8 @@ class LogControl:
         listing.tries += 1
         listing.quiet_until = now + 0.5 + 0.25 * listing.tries
         start, end = (wanted[0], wanted[-1]) if listing.last is not None else ALL_IDS
-        return [self._message("log_request_list", start, end)]
+        # a transfer still running (a cancelled download's, its END lost) would drop the list: END goes first
+        return [self._end_message(), self._message("log_request_list", start, end)]
 
     @staticmethod
     def _missing_ids(listing: _Listing) -> list[int]:

@@ -6,10 +6,13 @@ Mixed into the Autopilot. What the recording shows, quirks included:
 * LOG_REQUEST_LIST (start, end): ``end`` is clamped to the last log, then LOG_ENTRY counts from ``start`` up (the
   id wrapping past 65535) until it has sent ``end``: ids that do not exist come with size 0 and time 0, about
   :data:`LIST_RATE` a second, so a list of ids past the last log floods for ~40 s unless LOG_REQUEST_END stops it.
-  With no log at all: one LOG_ENTRY id 0, num_logs 0. While a listing runs, a LOG_REQUEST_DATA on the same link is
-  dropped.
+  With no log at all: one LOG_ENTRY id 0, num_logs 0. While a listing or a transfer runs, a new LOG_REQUEST_LIST
+  or LOG_REQUEST_DATA is dropped (AP_Logger_MAVLinkLogTransfer.cpp: "Log download in progress", except for a
+  LOG_REQUEST_DATA on the link being served: silence, as the recording shows during a listing): a request never
+  replaces the stream under way.
 * LOG_REQUEST_DATA (id, ofs, count): LOG_DATA of 90 bytes in order until ``count`` is sent or a packet comes out
-  short (the end of the log); an offset past the end: one LOG_DATA of count 0; an unknown id: nothing.
+  short (the end of the log, whose size is taken at the request); an offset past the end: one LOG_DATA of count
+  0; an unknown id: nothing.
 * LOG_REQUEST_END stops either, but :data:`QUEUED_AFTER_END` LOG_DATA already queued still go out.
 * Armed: every LOG_* request is ignored, the first with STATUSTEXT severity 3 "Disarm for log download".
 * LOG_ERASE: no reply.
@@ -35,6 +38,7 @@ LIST_RATE = 1_600.0              # LOG_ENTRY a second (the recording's flood)
 QUEUED_AFTER_END = 243           # LOG_DATA that still arrive after LOG_REQUEST_END (the recording)
 LOG_RATE = 10.0                  # Hz of ATT, CTUN, BAT (GPS at half of it)
 DISARM_TEXT = "Disarm for log download"
+BUSY_TEXT = "Log download in progress"
 
 
 class LogServer:
@@ -66,8 +70,19 @@ class LogServer:
             self._text(mavlink.MAV_SEVERITY_ERROR, DISARM_TEXT)
         return True
 
+    def _log_busy(self) -> bool:
+        """A listing or a transfer runs (ArduPilot's _log_sending_link): a new LIST or DATA is dropped, with
+        "Log download in progress" unless it is a LOG_REQUEST_DATA on the link being served."""
+        busy = self.log_listing or self.log_sending
+        if busy is None or (busy is self.log_sending and busy[4] is not None):
+            return False                                # what follows LOG_REQUEST_END is only the queue
+        return True
+
     def _on_log_request_list(self, msg) -> None:
         if self._log_refused():
+            return
+        if self._log_busy():
+            self._text(mavlink.MAV_SEVERITY_INFO, BUSY_TEXT)
             return
         entries = self.log_folder.entries()
         last = entries[-1][0] if entries else 0
@@ -75,22 +90,23 @@ class LogServer:
             self.log_listing = [self.sender, 0, 0, 0]
         else:
             self.log_listing = [self.sender, max(1, msg.start), min(msg.end, last), len(entries)]
-        self.log_sending = None if self.log_sending and self.log_sending[0] is self.sender else self.log_sending
 
     def _on_log_request_data(self, msg) -> None:
         if self._log_refused():
             return
-        if self.log_listing is not None and self.log_listing[0] is self.sender:
-            return                                      # dropped while a listing runs (the recording)
+        if self._log_busy():
+            busy = self.log_listing or self.log_sending
+            if busy[0] is not self.sender:
+                self._text(mavlink.MAV_SEVERITY_INFO, BUSY_TEXT)
+            return                                      # dropped (the recording: during a listing, silently)
         folder = self.log_folder
         if msg.id not in folder.numbers():
+            self.log_sending = None
             return                                      # an unknown id: nothing at all
         if msg.id == folder.current:
             folder.end()                                # a download closes the log being written
         size = next((e[1] for e in folder.entries() if e[0] == msg.id), 0)
-        remaining = msg.count                           # the size as it is now (get_log_info at the request)
-        if msg.ofs + remaining > size:
-            remaining = size - msg.ofs if msg.ofs <= size else 0xFFFFFFFF
+        remaining = min(msg.count, max(0, size - msg.ofs))   # the size as it is now (get_log_info)
         self.log_sending = [self.sender, msg.id, msg.ofs, remaining, None]
 
     def _on_log_request_end(self, msg) -> None:
@@ -102,7 +118,7 @@ class LogServer:
 
     def _on_log_erase(self, msg) -> None:
         if self._log_refused():
-            return
+            return                                      # (ArduPilot erases even during a transfer)
         self.log_listing = self.log_sending = None
         self.log_folder.erase()
 
@@ -146,7 +162,7 @@ class LogServer:
         sending = self.log_sending
         peer, number, ofs, remaining, after_end = sending
         n = min(LOG_DATA_SIZE, remaining)
-        data = self.log_folder.read(number, ofs, n) or b""
+        data = self.log_folder.read(number, ofs, n) or b"" if n else b""
         self.emit_to(self.factory.log_data_encode(number, ofs, len(data), data.ljust(LOG_DATA_SIZE, b"\0")), peer)
         sending[2], sending[3] = ofs + n, remaining - n
         if after_end is not None:
