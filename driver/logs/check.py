@@ -35,7 +35,6 @@ def check_dataflash(path: str) -> int:
             reader = DFReader_binary(path)
             count, end = 0, 0
             while True:
-                start = reader.offset
                 msg = reader.recv_msg()
                 if msg is None:
                     break
@@ -45,7 +44,6 @@ def check_dataflash(path: str) -> int:
                                        f"{reader.offset - length - end} bytes skipped)")
                 end = reader.offset
                 count += 1
-                del start
         except LogFileError:
             raise
         except Exception as exc:              # DFReader's own failures on garbage

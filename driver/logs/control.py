@@ -8,10 +8,10 @@ about it here:
   entries outside 1..last_log_num are ignored, and LOG_REQUEST_END follows every listing.
 * LOG_REQUEST_DATA (ofs, count) streams 90-byte LOG_DATA in order; while it runs (or a listing does) a new
   request is dropped (AP_Logger_MAVLinkLogTransfer.cpp), so the next one goes out only when the stream has ended
-  (its last packet, or silence), and every listing is preceded by LOG_REQUEST_END. A download asks for the first gap to the end of the log (open-ended: the log's true end is where a short packet, or a
-  packet of count 0, says it is, so a log that grew since the list is fetched whole); then, where packets were
-  lost, the next gap, merged with the gaps after it while the bytes held between them cost less to send again than
-  a round trip. Nothing held is ever thrown away: no log is restarted because chunks were lost.
+  (its last packet, or silence), and every listing is preceded by LOG_REQUEST_END. A download asks for the first
+  gap to the end of the log (open-ended: the log's true end is where a short packet, or a packet of count 0, says
+  it is, so a log that grew since the list is fetched whole); then, where packets were lost, the next gap, merged
+  with the gaps after it while the bytes held between them cost less to send again than a round trip. Nothing held is ever thrown away: no log is restarted because chunks were lost.
 * LOG_REQUEST_END stops the stream but hundreds of queued LOG_DATA still come: any LOG_DATA of the log being
   fetched is kept, whichever request it answers.
 * Armed, the vehicle ignores every LOG_* request (the first with "Disarm for log download"): the request fails
@@ -34,6 +34,8 @@ import time
 from collections import deque
 from concurrent.futures import Future
 from dataclasses import dataclass
+
+from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from ..ftp.reader import CHUNK as FTP_CHUNK, HEADER as FTP_HEADER, FtpRead
 from .check import LogFileError, check_dataflash
@@ -142,9 +144,6 @@ class _Download:
         self.ftp: FtpRead | None = None         # the FTP read, when the log comes that way
         self.ftp_failure = ""
 
-    def window_done(self) -> bool:
-        return self.window is None
-
 
 class LogControl:
     """``vehicle.logs``: the vehicle's DataFlash logs (one operation at a time, the others queued)."""
@@ -233,7 +232,7 @@ class LogControl:
         now = time.monotonic()
         failure = d.ftp.on_message(m, now)
         payload = bytes(m.payload)
-        _, _, opcode, size, _, _, _, offset = FTP_HEADER.unpack(payload[:12])
+        offset = FTP_HEADER.unpack(payload[:12])[7]
         chunk = d.ftp.chunks.get(offset)
         if chunk is not None and d.ranges.add(offset, offset + len(chunk)):
             d.pending.append((offset, chunk))
@@ -601,7 +600,6 @@ class LogControl:
 
     # -- helpers -----------------------------------------------------------------------------------------------
     def _message(self, name: str, *fields):
-        from pymavlink.dialects.v20 import ardupilotmega as mavlink
         target = self._v._target_ids()
         return getattr(mavlink, f"MAVLink_{name}_message")(*target, *fields)
 
