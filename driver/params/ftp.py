@@ -5,7 +5,7 @@ the PARAM_VALUE stream's bytes (names share prefixes, values take 1 to 4 bytes):
 4.6.3's 1,397 parameters in 239-byte packets. pymavlink's ``MAVFTP.ftp_param_decode`` unpacks it; the file lists
 the parameters in the vehicle's index order.
 
-What ArduCopter 4.6.3 does (tests/data/recordings/README.md, "MAVFTP parameter download"), and so how this reads:
+The reading itself is the shared FTP engine's (driver.ftp.reader); what ArduCopter 4.6.3 does (tests/data/recordings/README.md, "MAVFTP parameter download"), and so how this reads:
 
 * the size in the OpenFileRO ACK is only an estimate (12 bytes a parameter: 16,764 for a 15,311-byte file), so it
   is never used to end or check the read: the end of the file is learnt from a short packet, or from a NAK EOF
@@ -27,253 +27,23 @@ to send.
 from __future__ import annotations
 
 import struct
-from dataclasses import dataclass, field
 
-from pymavlink.dialects.v20 import ardupilotmega as mavlink
 from pymavlink.mavftp import MAVFTP
 
+from ..ftp.reader import STALL_SECONDS, FtpRead
 from .model import Parameter, ParamType
 
 __all__ = ["FtpDownload", "PARAM_FILE", "STALL_SECONDS"]
 
 PARAM_FILE = b"@PARAM/param.pck"
-CHUNK = 239                # bytes a packet: the most one FILE_TRANSFER_PROTOCOL carries
-HEADER = struct.Struct("<HBBBBBBI")
-OP_TERMINATE, OP_RESET, OP_OPEN_RO, OP_READ, OP_BURST, OP_ACK, OP_NAK = 1, 2, 4, 5, 15, 128, 129
-ERR_FAIL, ERR_EOF = 1, 6
-NAK_TEXT = {1: "failed", 2: "failed (errno)", 3: "invalid size", 4: "invalid session", 5: "no session available",
-            6: "end of file", 7: "unknown command", 10: "file not found"}
-STALL_SECONDS = 3.0        # no FTP progress (an answer to the open, a new byte of the file) this long: the list instead
-OPEN_RETRY = 0.25          # s between OpenFileRO tries (a retry after a lost ACK is refused: the file is open)
-BURST_QUIET = 0.3          # s without a packet before a burst counts as over (its end lost): gaps are then read
-BURST_GAPS = 8             # ... or this many of its packet intervals (a radio's burst sends one every 140 ms)
-READ_WINDOW = 4            # ReadFiles out at once (ArduPilot queues 5 FTP requests and drops one more)
-READ_TIMEOUT_MIN = 0.2     # s before a ReadFile is asked again (or 3 round trips, whichever is longer)
-READ_TRIES = 20            # ReadFiles for one chunk before FTP is given up
-BURSTS = 20                # BurstReadFiles at most (a 16-byte-packet file of 15 kB needs 2; param.pck in 239: 1)
 _TYPES = {1: ParamType.INT8, 2: ParamType.INT16, 3: ParamType.INT32, 4: ParamType.REAL32}
 
 
-@dataclass
-class FtpDownload:
-    started: float
-    estimate: int | None = None          # the open's size: ArduPilot's guess, shown, never relied on
-    chunks: dict[int, bytes] = field(default_factory=dict)    # offset -> data
-    end: int | None = None               # the file's real size, once a short packet or an EOF says it
-    bound: int | None = None             # the file ends at or before this (a ReadFile's EOF)
-    phase: str = "open"                  # open, read, done
-    seq: int = 0
-    sent: dict[int, tuple[int, int, float]] = field(default_factory=dict)   # seq -> (opcode, offset, when)
-    open_sent: float = -1.0
-    opens: int = 0
-    burst: int | None = None             # the running burst's seq
-    next_burst: int | None = 0           # where the next BurstReadFile starts (None: none to send)
-    reset: bool = False                  # the file was open already: ResetSessions before the next open
-    bursts: int = 0
-    heard: float = 0.0                   # last FTP frame from the vehicle
-    gap: float = 0.0                     # smoothed time between a burst's packets (by their seqs)
-    last_packet: tuple[int, float] | None = None              # (seq, when) of the last burst packet heard
-    progress: float = 0.0                # last answer to the open or new byte of the file
-    asked: dict[int, float] = field(default_factory=dict)     # gap offset -> when asked
-    tries: dict[int, int] = field(default_factory=dict)       # gap offset -> ReadFiles sent
-    rtt: float = 0.1
-    frames: int = 0                      # FTP frames received (the cost on the radio)
+class FtpDownload(FtpRead):
+    """param.pck read by the shared engine, then decoded."""
 
-    def __post_init__(self) -> None:
-        self.heard = self.progress = self.started
-
-    @property
-    def received(self) -> int:
-        return sum(len(c) for c in self.chunks.values())
-
-    @property
-    def total(self) -> int | None:
-        """The size to show: the real one once known, else the vehicle's estimate."""
-        return self.end if self.end is not None else self.estimate
-
-    def _request(self, target: tuple[int, int], opcode: int, offset: int = 0, data: bytes = b"", size=None, now=0.0):
-        self.seq = (self.seq + 1) & 0xFFFF
-        self.sent[self.seq] = (opcode, offset, now)
-        payload = HEADER.pack(self.seq, 0, opcode, len(data) if size is None else size, 0, 0, 0, offset) + data
-        return mavlink.MAVLink_file_transfer_protocol_message(0, target[0], target[1], list(payload.ljust(251, b"\0")))
-
-    def missing(self) -> list[int]:
-        """Offsets of the chunks not received below what is known of the file (its end, else the highest chunk)."""
-        top = self.end if self.end is not None else self.bound if self.bound is not None else \
-            max(self.chunks, default=-CHUNK) + CHUNK
-        return [o for o in range(0, top, CHUNK) if o not in self.chunks]
-
-    def _learn_end(self) -> None:
-        """A bound below which every chunk has arrived, the last one full: the file ends exactly there."""
-        if self.end is None and self.bound is not None and not self.missing():
-            last = max((o for o in self.chunks if o < self.bound), default=None)
-            if last is None or len(self.chunks[last]) == CHUNK:
-                self.end = self.bound
-
-    # -- the vehicle's answers ----------------------------------------------------------------------
-    def on_message(self, m, now: float) -> str | None:
-        """A FILE_TRANSFER_PROTOCOL reply; returns why the transfer failed, else None."""
-        payload = bytes(m.payload)
-        seq, session, opcode, size, req_opcode, burst_complete, _, offset = HEADER.unpack(payload[:12])
-        data = payload[12:12 + size]
-        self.frames += 1
-        self.heard = now
-        if 0 < (seq - self.seq) & 0xFFFF < 0x8000:
-            # the next request follows the vehicle's last seq, as pymavlink's MAVFTP does: ArduPilot answers a
-            # request whose seq is one below its last reply's with that reply again (a re-request)
-            self.seq = seq
-        if opcode == OP_NAK:
-            return self._on_nak(seq, req_opcode, offset, data[0] if data else 0, now)
-        if opcode != OP_ACK:
-            return None
-        if req_opcode == OP_OPEN_RO and self.phase == "open" and size >= 4:
-            self.estimate = struct.unpack("<I", data[:4])[0]
-            self._opened(now)
-        elif req_opcode in (OP_READ, OP_BURST) and self.phase == "read" and offset % CHUNK == 0 and data:
-            if req_opcode == OP_BURST:
-                self._burst_packet(seq, now)
-            if offset not in self.chunks:
-                self.chunks[offset] = data
-                self.progress = now
-            if len(data) < CHUNK:
-                self.end = offset + len(data)
-                if req_opcode == OP_BURST and self.burst is not None:
-                    self.sent.pop(self.burst, None)     # only its NAK EOF can follow: the gaps are read now
-                    self.burst = None
-            sent = self.asked.pop(offset, None)
-            if sent is not None and self.tries.get(offset) == 1:
-                self.rtt = 0.8 * self.rtt + 0.2 * max(0.0, now - sent)
-            if req_opcode == OP_READ:
-                self._answered_read((seq - 1) & 0xFFFF)
-            elif burst_complete and self.burst is not None:
-                self.sent.pop(self.burst, None)
-                self.burst = None
-                self.next_burst = offset + CHUNK        # the vehicle stopped at 500 packets: ask for more
-            self._learn_end()
-        return None
-
-    def _burst_packet(self, seq: int, now: float) -> None:
-        """Learn the burst's pace; a packet after the burst was judged over says the vehicle is still bursting:
-        the ReadFiles sent meanwhile wait behind it in its queue, so their time starts again."""
-        if self.last_packet is not None and 0 < (seq - self.last_packet[0]) & 0xFFFF < 50:
-            each = (now - self.last_packet[1]) / ((seq - self.last_packet[0]) & 0xFFFF)
-            self.gap = each if not self.gap else 0.7 * self.gap + 0.3 * each
-        self.last_packet = (seq, now)
-        if self.burst is None:
-            for offset in self.asked:
-                self.asked[offset] = now
-
-    def _answered_read(self, request: int) -> None:
-        """The vehicle answers its queue in order: a ReadFile sent before this one and still unanswered was lost,
-        or its answer was: it is asked again at once."""
-        self.sent.pop(request, None)
-        for seq, (opcode, offset, _) in list(self.sent.items()):
-            if opcode == OP_READ and 0 < (request - seq) & 0xFFFF < 1000:
-                del self.sent[seq]
-                self.asked.pop(offset, None)
-
-    def _opened(self, now: float) -> None:
-        self.phase, self.progress = "read", now
-
-    def _on_nak(self, seq: int, req_opcode: int, offset: int, error: int, now: float) -> str | None:
-        if req_opcode == OP_OPEN_RO and self.phase == "open":
-            if error == ERR_FAIL and self.opens > 1:
-                self._opened(now)                       # our earlier open was ACKed, its ACK lost: it is open
-                return None
-            if error == ERR_FAIL and not self.reset:    # open from before (a fetch given up): close, open again
-                self.reset, self.open_sent = True, -1.0
-                return None
-            return f"was refused: the vehicle said {NAK_TEXT.get(error, error)} to the open of {PARAM_FILE.decode()}"
-        if req_opcode == OP_READ:
-            request = self.sent.get((seq - 1) & 0xFFFF)
-            self._answered_read((seq - 1) & 0xFFFF)
-        elif req_opcode == OP_BURST:                    # the burst's seqs count up from its request's
-            mine = [s for s, (op, _, _) in self.sent.items() if op == OP_BURST and 0 < (seq - s) & 0xFFFF < 1000]
-            request = self.sent.pop(min(mine, key=lambda s: (seq - s) & 0xFFFF)) if mine else None
-        else:
-            return None
-        if request is None or self.phase != "read":
-            return None                                 # an answer to something no longer asked
-        _, asked_at, _ = request
-        if error != ERR_EOF:
-            return f"was refused: the vehicle said {NAK_TEXT.get(error, error)} to a read at byte {asked_at:,}"
-        if req_opcode == OP_READ:
-            self.asked.pop(asked_at, None)
-            self.bound = asked_at if self.bound is None else min(self.bound, asked_at)
-        else:
-            if self.burst is not None and self.sent.get(self.burst) is None:
-                self.burst = None                       # this burst is over
-            if offset % CHUNK:                          # after a short packet: the end itself
-                self.end = offset
-            else:   # after a full packet, its offset; 0 when the burst began at the end (or after one packet)
-                limit = offset + CHUNK if offset > 0 else asked_at or CHUNK
-                self.bound = limit if self.bound is None else min(self.bound, limit)
-        self._learn_end()
-        return None
-
-    # -- the ticker ----------------------------------------------------------------------------------
-
-    def service(self, now: float, target: tuple[int, int]) -> tuple[list, str | None]:
-        """Messages to send, and why it failed (None while it goes on)."""
-        if self.phase == "done":
-            return [], None
-        if now - self.progress >= STALL_SECONDS:
-            if self.phase == "open":
-                return [], f"got no answer to the open of {PARAM_FILE.decode()} in {STALL_SECONDS:g} s"
-            return [], f"stalled at byte {self.received:,}" + (
-                f" (the file has {self.end:,})" if self.end is not None else
-                f" (about {self.estimate:,} by the vehicle's estimate)" if self.estimate else "") + \
-                f": nothing new for {STALL_SECONDS:g} s"
-        if self.phase == "open":
-            if self.open_sent < 0 or now - self.open_sent >= OPEN_RETRY:
-                self.opens += 1
-                self.open_sent = now
-                first = [self._request(target, OP_RESET, now=now)] if self.reset and self.opens == 2 else []
-                return first + [self._request(target, OP_OPEN_RO, 0, PARAM_FILE, now=now)], None
-            return [], None
-        out = []
-        if self.next_burst is not None and (self.end is None or self.next_burst < self.end):
-            if self.bursts >= BURSTS:
-                return [], f"gave up: {self.bursts} bursts did not bring the whole file"
-            self.bursts += 1
-            out.append(self._request(target, OP_BURST, self.next_burst, size=CHUNK, now=now))
-            self.burst, self.next_burst, self.heard = self.seq, None, now
-            return out, None
-        if self.burst is not None:
-            if now - self.heard < max(BURST_QUIET, 4 * self.rtt, BURST_GAPS * self.gap):
-                return [], None
-            self.sent.pop(self.burst, None)             # its end was lost, or it stalled: read what is missing
-            self.burst = None
-        missing = self.missing()
-        if not missing and self.end is None and self.bound is None:
-            # the tail's packets and the EOF were all lost: burst again from the first byte not read
-            self.next_burst = max(self.chunks, default=-CHUNK) + CHUNK
-            return self.service(now, target)
-        if not missing and self.end is not None:
-            self.phase = "done"
-            return [self._request(target, OP_TERMINATE, now=now)], None
-        timeout = max(READ_TIMEOUT_MIN, 3 * self.rtt)
-        for offset, sent in list(self.asked.items()):
-            if now - sent >= timeout:
-                del self.asked[offset]
-        for offset in missing:
-            if len(self.asked) >= READ_WINDOW:
-                break
-            if offset not in self.asked:
-                if self.tries.get(offset, 0) >= READ_TRIES:
-                    return out, f"gave up: byte {offset:,} of the file asked {READ_TRIES} times without an answer"
-                self.tries[offset] = self.tries.get(offset, 0) + 1
-                self.asked[offset] = now
-                out.append(self._request(target, OP_READ, offset, size=CHUNK, now=now))
-        return out, None
-
-    def terminate(self, target: tuple[int, int]):
-        """TerminateSession: the vehicle closes the file (sent when FTP is given up)."""
-        return self._request(target, OP_TERMINATE)
-
-    @property
-    def done(self) -> bool:
-        return self.phase == "done"
+    def __init__(self, started: float) -> None:
+        super().__init__(started, PARAM_FILE)
 
     def parameters(self) -> tuple[dict[str, Parameter], int] | str:
         """The decoded table (name -> Parameter, index = order in the file) and its count, or why not."""

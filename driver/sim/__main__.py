@@ -92,6 +92,8 @@ def parser() -> argparse.ArgumentParser:
                         help="N aircraft of ADS-B traffic around home (SITL's SIM_ADSB_COUNT, copter-4)")
     parser.add_argument("--calibration-model", action="store_true",
                         help="the airframe turns as the accel calibration asks and tumbles for the compass one")
+    parser.add_argument("--log-dir", metavar="DIR",
+                        help="keep the DataFlash logs (written while armed, 0000000N.BIN) here (default: a temp folder)")
     parser.add_argument("--usb-port", type=whole(0, 65535), metavar="PORT",
                         help="also serve TCP on this port (on --tcp's host, 0 = any) as the USB port, SERIAL0: "
                              "unsigned frames are accepted there even with signing on (--tcp is a telemetry port)")
@@ -135,7 +137,8 @@ def configure(args: argparse.Namespace) -> SimVehicle:
                        mavlink2=not args.mav1, seed=args.seed, profile=args.profile,
                        origin_offset=args.origin_offset, gimbal=args.gimbal, companion=args.companion,
                        usb_port=args.usb_port, signing_key=key, camera=args.camera,
-                       adsb=args.adsb, calibration_model=args.calibration_model)
+                       adsb=args.adsb, calibration_model=args.calibration_model,
+                       log_dir=args.log_dir)
     return _with_faults(SimVehicle(config), args)
 
 

@@ -34,6 +34,7 @@ from .gimbal import Payload
 from .messages import Messages
 from .failsafe import GcsFailsafe
 from .ftp import FtpServer
+from .logs import LogServer
 from .params import ParamProtocol, SimParams
 from .missions import Missions
 from .profiles import POSITION_REASONS, profile_of
@@ -85,7 +86,8 @@ class SimTruth:
         return math.hypot(self.vn, self.ve)
 
 
-class Autopilot(Setup, Telemetry, Commands, ParamProtocol, FtpServer, GcsFailsafe, Missions, Auto, Messages, Flight,
+class Autopilot(Setup, Telemetry, Commands, ParamProtocol, FtpServer, LogServer, GcsFailsafe, Missions, Auto, Messages,
+                Flight,
                 Payload):
     """One ArduCopter: state, flight modes, command handling and telemetry streams."""
 
@@ -209,6 +211,7 @@ class Autopilot(Setup, Telemetry, Commands, ParamProtocol, FtpServer, GcsFailsaf
         self._setup_step(dt)
         self._send_due()
         self.params_step(dt)
+        self.logs_step(dt)
         self.failsafe_step()
 
     @property
@@ -381,6 +384,7 @@ class Autopilot(Setup, Telemetry, Commands, ParamProtocol, FtpServer, GcsFailsaf
             self.deferred_texts.append((severity, text))
             return
         log.info("STATUSTEXT %s", text)
+        self.log_text(text)
         self.emit(self.factory.statustext_encode(severity, text.encode()[:50]))
 
     def _send_now(self, name: str) -> None:

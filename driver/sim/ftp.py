@@ -23,10 +23,15 @@ bandwidth, as GCS_FTP's burst delay makes it):
 * ReadFile: one ACK of the packet size; at or past the end NAK 6 with offset 0; another packet size than the
   open's first read: NAK 2 (FailErrno) errno 22; no file open: NAK 10;
 * TerminateSession, ResetSessions: ACK (size 0); a request repeating the last one's seq gets the last reply again;
-  anything else (ListDirectory too: not simulated): NAK 1.
+  anything else: NAK 1.
+
+The log folder too, as the logs recording shows (arducopter-4.6-sitl-logs.*): ListDirectory of ``logs`` and ``/``
+(``/APM/LOGS``: NAK 10, an empty path: NAK 3), OpenFileRO of ``logs/0000000N.BIN`` (its true size, no banner), read
+by the same worker. The Solo profile (3.3) has no MAVLink FTP: its requests go unanswered.
 """
 from __future__ import annotations
 
+import os
 import struct
 from collections import deque
 
@@ -38,7 +43,7 @@ __all__ = ["FtpServer", "pack", "sim_entries", "PARAM_FILE", "CHUNK", "BURST_PAC
 PARAM_FILE = "@PARAM/param.pck"
 CHUNK = 239                       # data bytes in one FILE_TRANSFER_PROTOCOL payload (251 - 12 header)
 HEADER = struct.Struct("<HBBBBBBI")
-OP_TERMINATE, OP_RESET, OP_OPEN_RO, OP_READ, OP_BURST = 1, 2, 4, 5, 15
+OP_TERMINATE, OP_RESET, OP_LIST, OP_OPEN_RO, OP_READ, OP_BURST = 1, 2, 3, 4, 5, 15
 OP_ACK, OP_NAK = 128, 129
 ERR_FAIL, ERR_ERRNO, ERR_SIZE, ERR_INVALID_SESSION, ERR_EOF, ERR_NOT_FOUND = 1, 2, 3, 4, 6, 10
 EINVAL = 22
@@ -108,6 +113,19 @@ class _OpenFile:
         return self.data[offset:offset + count]
 
 
+class _BytesFile:
+    """A log (``logs/0000000N.BIN``) as it was when opened: any packet size reads it."""
+
+    def __init__(self, data: bytes) -> None:
+        self.data = data
+
+    def read(self, offset: int, count: int) -> bytes:
+        return self.data[offset:offset + count]
+
+
+ROOT_ENTRIES = ("D.", "Dlogs", "D..", "Dterrain", "D@ROMFS", "D@SYS")      # "/" on the 4.6.3 SITL
+
+
 class _Reply:
     """One reply as GCS_FTP builds it: kept whole, since a burst reuses it packet after packet."""
 
@@ -140,8 +158,9 @@ class FtpServer:
         return sim_entries(self.params)
 
     def _on_file_transfer_protocol(self, msg) -> None:
-        if msg.target_system not in (0, self.config.system_id):
-            return
+        profile = getattr(self, "profile", None)         # the Autopilot's firmware profile (absent in a bare worker)
+        if msg.target_system not in (0, self.config.system_id) or (profile is not None and profile.version[0] < 4):
+            return                                       # the Solo's 3.3 has no MAVLink FTP
         payload = bytes(msg.payload)
         seq, session, opcode, size, _, _, _, offset = HEADER.unpack(payload[:12])
         if self.ftp_queue is None:
@@ -187,7 +206,7 @@ class FtpServer:
             return 0
         self.ftp_credit -= 1.0
         self._ftp_send(reply)
-        if reply.req_opcode == OP_OPEN_RO and reply.opcode == OP_ACK and self.ftp_file is not None:
+        if reply.req_opcode == OP_OPEN_RO and reply.opcode == OP_ACK and isinstance(self.ftp_file, _OpenFile):
             self._banner()                          # send_banner() after the open of param.pck, as 4.6.3 does
         return FRAME_OVERHEAD + len(reply.data)
 
@@ -217,6 +236,8 @@ class FtpServer:
                 self.ftp_file, self.ftp_session = None, -1    # the old session idled out: closed
             if opcode in (OP_TERMINATE, OP_RESET):
                 self.ftp_file, self.ftp_session = None, -1
+            elif opcode == OP_LIST:
+                self._ftp_list(reply, data[:size].split(b"\0", 1)[0].decode(errors="replace"), offset)
             elif opcode == OP_OPEN_RO:
                 self._ftp_open(reply, data[:size].split(b"\0", 1)[0].decode(errors="replace"), idle)
             elif opcode in (OP_READ, OP_BURST) and self.ftp_file is None:
@@ -236,11 +257,44 @@ class FtpServer:
                 reply.nak(ERR_FAIL)
         return reply
 
+    def _ftp_list(self, reply: _Reply, path: str, offset: int) -> None:
+        """ListDirectory as the 4.6.3 SITL answers it: ``logs`` (relative) and ``/``; entries ``F<name>\\t<size>``
+        or ``D<name>``, each followed by two NULs, from entry ``offset`` on; past the last: NAK EOF."""
+        folder = path.strip("/")
+        if not path:
+            reply.nak(ERR_SIZE)
+            return
+        if path == "/":
+            entries = list(ROOT_ENTRIES)
+        elif folder == "logs":
+            logs = self.log_folder
+            entries = ["D.", "D.."] + [f"F{name}\t{os.path.getsize(os.path.join(logs.folder, name))}"
+                                       for name in sorted(os.listdir(logs.folder), reverse=True)
+                                       if os.path.isfile(os.path.join(logs.folder, name))]
+        else:
+            reply.nak(ERR_NOT_FOUND)
+            return
+        out = b""
+        for entry in entries[offset:]:
+            raw = entry.encode() + b"\0\0"
+            if len(out) + len(raw) > CHUNK:
+                break
+            out += raw
+        if not out:
+            reply.nak(ERR_EOF)
+        else:
+            reply.data = out
+
     def _ftp_open(self, reply: _Reply, path: str, idle: bool) -> None:
         if self.ftp_file is not None and idle:
             self.ftp_file, self.ftp_session = None, -1
         if self.ftp_file is not None:
             reply.nak(ERR_FAIL)
+        elif path.startswith("logs/") and "/" not in path[5:] and path[5:] in os.listdir(self.log_folder.folder):
+            with open(os.path.join(self.log_folder.folder, path[5:]), "rb") as f:
+                self.ftp_file = _BytesFile(f.read())
+            self.ftp_session = reply.session
+            reply.data = struct.pack("<I", len(self.ftp_file.data))
         elif path != PARAM_FILE and not path.startswith(PARAM_FILE + "?"):
             reply.nak(ERR_NOT_FOUND)
         else:

@@ -275,6 +275,7 @@ class Payload:
     def _picture(self, captured: bool = False) -> None:
         """AP_Camera: CAMERA_FEEDBACK for every picture; the camera protocol's CAMERA_IMAGE_CAPTURED too."""
         self.images += 1
+        self.log_camera()
         lat, lon = self._lat_lon()
         lat_i, lon_i = int(round(lat * 1e7)), int(round(lon * 1e7))
         alt_msl = self.home_alt - self.d

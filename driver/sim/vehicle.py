@@ -61,6 +61,7 @@ class SimConfig:
     adsb: int = 0                           # aircraft of simulated ADS-B traffic (SIM_ADSB_COUNT; adsb.py)
     calibration_model: bool = False         # the airframe takes each pose a calibration asks (calibration.py)
     signing_key: bytes | None = None        # 32 bytes: a MAVLink 2 signing key already in storage at power-on
+    log_dir: str | None = None              # where the DataFlash logs are kept (None: a temporary folder)
     radio_baud: int | None = None           # a telemetry radio's rate: a parameter list streams only as fast as it
                                             # allows (params.py); None: as fast as the recording's TCP (2,300/s)
 

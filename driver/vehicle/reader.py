@@ -241,6 +241,7 @@ class Reader:
             self._store.add_message_locked(sev, text, "vehicle")
             self._v._signing_control.settle(self._signing.statustext(text))
             self._missions.on_text(text)
+            self._v.logs.on_text(text)                  # 'Disarm for log download'
 
     def _on_command_ack(self, m) -> None:
         self._commands.on_ack(m, time.monotonic())
@@ -283,6 +284,7 @@ class Reader:
         """MAVLink FTP: the parameters' file (driver.params.ftp)."""
         if m.target_system in (0, self.config.source_system) and m.target_component in (0, self.config.source_component):
             self._params.on_ftp(m, time.monotonic())
+            self._v.logs.on_ftp(m)                       # a log read by FTP (driver.logs)
             self._wake.set()
 
     def _on_mission(self, m) -> None:
@@ -314,4 +316,5 @@ _EVENTS = {
                                               "MISSION_REQUEST_INT", "MISSION_COUNT", "MISSION_ITEM",
                                               "MISSION_ITEM_INT", "MISSION_ACK", "RALLY_POINT")},
     **{name: (lambda r, m: r._v.setup.on_message(m)) for name in SETUP_MESSAGES},
+    **{name: (lambda r, m: r._v.logs.on_message(m)) for name in ("LOG_ENTRY", "LOG_DATA")},
 }

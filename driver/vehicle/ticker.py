@@ -133,6 +133,7 @@ class Ticker:
                     out += self._v._payload.service(now, self._store.state)
                     out += self._v._missions.service(now, self._store.state)
                     out += self._v.setup.service(now, self._store.state)
+                    out += self._v.logs.service(now, self._store.state)
                     if now >= next_health:
                         next_health = now + 0.1
                         out += self._supervise(now)

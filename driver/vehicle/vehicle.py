@@ -10,8 +10,9 @@ pilot's calls (the :class:`~driver.vehicle.api.Drone` interface) and hands each 
 * :mod:`driver.vehicle.commands` sends commands with retries and matches each reply to what it answers;
 * :mod:`driver.vehicle.setpoints` streams the velocity setpoint, with the deadman;
 * :mod:`driver.vehicle.takeoff` runs the takeoff sequence against the public :class:`~driver.vehicle.api.Drone` interface;
-* :mod:`driver.vehicle.missions`, :mod:`driver.vehicle.parameters`, :mod:`driver.vehicle.signing_control` and
-  :mod:`driver.payload.control`: plans, parameters, signing and the payload, wired to this vehicle;
+* :mod:`driver.vehicle.missions`, :mod:`driver.vehicle.parameters`, :mod:`driver.vehicle.signing_control`,
+  :mod:`driver.payload.control`, :mod:`driver.setup.control` and :mod:`driver.logs.control`: plans, parameters,
+  signing, the payload, setup and the DataFlash logs, wired to this vehicle;
 * :mod:`driver.vehicle.store` publishes immutable :class:`~driver.vehicle.state.VehicleState` snapshots.
 
 Two threads do all the link work, so no caller ever waits on the network. Both decide under the state lock and
@@ -38,6 +39,7 @@ from ..mission.plan import Plan, PlanKind
 from ..params.manager import ParameterManager
 from ..params.setter import SET_RETRY
 from ..payload.control import Payload
+from ..logs.control import LogControl
 from ..setup.control import VehicleSetup
 from .api import CEILING, Drone, Limits
 from .commands import CommandSender, Notifier, command_name
@@ -144,12 +146,10 @@ class Vehicle(Drone):
         self._forwarder = Forwarder(cfg.outputs, cfg.baud, self._ticker.forward_to_vehicle,
                                     lambda text: self._store.add_message(Severity.WARNING, text), self._closing)
         self._missions = MissionControl(self)          # transfers, mission state, AUTO (driver.vehicle.missions)
-        self.setup = VehicleSetup(self)                # calibrations, motor test, radio, traffic (driver.setup)
+        self.setup, self.logs = VehicleSetup(self), LogControl(self)     # calibrations, motor test, traffic; logs
         self._reader = Reader(self)                    # the reader thread: parse, fold, dispatch (built last)
 
-    # ------------------------------------------------------------------------------------------
-    # lifecycle
-    # ------------------------------------------------------------------------------------------
+    # -- lifecycle ---------------------------------------------------------------------------------
     @property
     def description(self) -> str:
         return self._transport.description
@@ -206,6 +206,7 @@ class Vehicle(Drone):
         for t in self._threads:
             t.join(timeout=2.0)
         self._missions.close()
+        self.logs.close()
         with self._lock:
             self._commands.abort_all("driver closed")
             self._params.abort_all("driver closed")
@@ -222,9 +223,7 @@ class Vehicle(Drone):
     def __exit__(self, *exc):
         self.close()
 
-    # ------------------------------------------------------------------------------------------
-    # state
-    # ------------------------------------------------------------------------------------------
+    # -- state -------------------------------------------------------------------------------------
     def state(self) -> VehicleState:
         return self._store.state
 
@@ -239,9 +238,7 @@ class Vehicle(Drone):
     def _target_ids(self) -> tuple[int, int]:
         return self._target or 1, self.config.target_component
 
-    # ------------------------------------------------------------------------------------------
-    # the link, both ways (driver.vehicle.reader, driver.vehicle.ticker)
-    # ------------------------------------------------------------------------------------------
+    # -- the link, both ways (driver.vehicle.reader, driver.vehicle.ticker) ------------------------
     def ingest(self, data: bytes) -> int:
         """Parse raw bytes as if read from the link and fold them into the state; returns messages parsed."""
         return self._reader.ingest(data)
@@ -250,9 +247,7 @@ class Vehicle(Drone):
         """Send from the ticker thread: callers (the UI among them) never touch the link themselves."""
         self._ticker.post(msg)
 
-    # ------------------------------------------------------------------------------------------
-    # commands
-    # ------------------------------------------------------------------------------------------
+    # -- commands ----------------------------------------------------------------------------------
     def command_long(self, command: int, params=(), name: str | None = None, *, guard=None) -> Future:
         """Send any MAV_CMD as COMMAND_LONG with ACK handling and retries."""
         name = name or command_name(command)
@@ -415,9 +410,7 @@ class Vehicle(Drone):
             self._target_ids()[0], mavlink.MAV_MODE_FLAG_DECODE_POSITION_SAFETY, 1 if on else 0))
         return self._finish(f"safety {'on' if on else 'off'}", CommandStatus.ACCEPTED, "sent (not acknowledged)")
 
-    # ------------------------------------------------------------------------------------------
-    # parameters (driver.vehicle.parameters)
-    # ------------------------------------------------------------------------------------------
+    # -- parameters (driver.vehicle.parameters) ----------------------------------------------------
     def fetch_parameters(self, refresh: bool = False) -> Future:
         """Download every parameter into ``state().parameters`` (driver.params.download)."""
         return self._parameters.fetch(refresh)
@@ -431,9 +424,7 @@ class Vehicle(Drone):
     def parameter_metadata(self):
         return self._parameters.metadata()
 
-    # ------------------------------------------------------------------------------------------
-    # payload: gimbal, region of interest, camera (driver.payload)
-    # ------------------------------------------------------------------------------------------
+    # -- payload: gimbal, region of interest, camera (driver.payload) ------------------------------
     def point_gimbal(self, pitch_deg: float, yaw_deg: float | None = None) -> Future:
         return self._payload.point(pitch_deg, yaw_deg)
 
@@ -452,9 +443,7 @@ class Vehicle(Drone):
     def record_video(self, on: bool) -> Future:
         return self._payload.record_video(on)
 
-    # ------------------------------------------------------------------------------------------
-    # signing (driver.vehicle.signing_control)
-    # ------------------------------------------------------------------------------------------
+    # -- signing (driver.vehicle.signing_control) --------------------------------------------------
     def use_signing_key(self, key: bytes | None, allow_unsigned: bool | None = None) -> CommandResult:
         """Sign with ``key`` from now on, or stop (None), without telling the vehicle; ``allow_unsigned`` lets
         the vehicle's unsigned frames in (a vehicle without the key yet)."""
@@ -474,9 +463,7 @@ class Vehicle(Drone):
     def remove_signing(self) -> Future:
         return self._signing_control.remove()
 
-    # ------------------------------------------------------------------------------------------
-    # velocity, position and yaw
-    # ------------------------------------------------------------------------------------------
+    # -- velocity, position and yaw ----------------------------------------------------------------
     def set_velocity(self, forward: float, right: float, up: float, yaw_rate: float) -> bool:
         sp = SetpointStreamer.clamp(forward, right, up, yaw_rate, self._limits)
         if sp is None:
@@ -536,9 +523,7 @@ class Vehicle(Drone):
                                   (angle, abs(rate_deg_s), direction, 1 if relative else 0),
                                   f"yaw {'by' if relative else 'to'} {degrees:g}°")
 
-    # ------------------------------------------------------------------------------------------
-    # takeoff sequence (stepped by the ticker)
-    # ------------------------------------------------------------------------------------------
+    # -- takeoff sequence (stepped by the ticker) --------------------------------------------------
     def takeoff(self, altitude: float | None = None) -> Future:
         alt = self.config.takeoff_altitude if altitude is None else altitude
         problem = takeoff_altitude_problem(alt, self.config.max_altitude)
@@ -565,9 +550,7 @@ class Vehicle(Drone):
         self._wake.set()
         return seq.future
 
-    # ------------------------------------------------------------------------------------------
-    # missions, fences, rally points (driver.vehicle.missions does the work)
-    # ------------------------------------------------------------------------------------------
+    # -- missions, fences, rally points (driver.vehicle.missions does the work) --------------------
     def upload_plan(self, plan: Plan) -> Future:
         return self._missions.upload(plan)
 

@@ -1,0 +1,1 @@
+"""MAVLink FTP, one engine for every file read from the vehicle (parameters, logs)."""

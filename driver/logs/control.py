@@ -1,0 +1,633 @@
+"""List, download and erase the vehicle's DataFlash logs over LOG_* messages, as ArduCopter answers them.
+
+What ArduCopter 4.6.3 does (tests/data/recordings/arducopter-4.6-sitl-logs.*, README there) and what is done
+about it here:
+
+* LOG_REQUEST_LIST 0..0xffff gives one LOG_ENTRY per log; a list of ids past the last one floods LOG_ENTRY (size
+  0) for ~40 s. So only 0..0xffff is asked, ids that went missing are asked again as a range inside last_log_num,
+  entries outside 1..last_log_num are ignored, and LOG_REQUEST_END follows every listing.
+* LOG_REQUEST_DATA (ofs, count) streams 90-byte LOG_DATA in order; while it runs (or a listing does) a new
+  request is dropped (AP_Logger_MAVLinkLogTransfer.cpp), so the next one goes out only when the stream has ended
+  (its last packet, or silence), and every listing is preceded by LOG_REQUEST_END. A download asks for the first
+  gap to the end of the log (open-ended: the log's true end is where a short packet, or a packet of count 0, says
+  it is, so a log that grew since the list is fetched whole); then, where packets were lost, the next gap, merged
+  with the gaps after it while the bytes held between them cost less to send again than a round trip. Nothing held is ever thrown away: no log is restarted because chunks were lost.
+* LOG_REQUEST_END stops the stream but hundreds of queued LOG_DATA still come: any LOG_DATA of the log being
+  fetched is kept, whichever request it answers.
+* Armed, the vehicle ignores every LOG_* request (the first with "Disarm for log download"): the request fails
+  with that text.
+
+The bytes go to ``FILE.part`` with a map of the ranges held in ``FILE.part.json`` (ranges.py): a dropped link or
+an app restart resumes from it. The finished file has the size the vehicle's stream ended at and DFReader reads
+it to its last byte (check.py); only then is it renamed to FILE.
+
+Threads: requests come from any thread; ``on_message``, ``on_text`` and ``service`` run on the driver's reader and
+ticker threads with the vehicle's lock held; futures are settled by the vehicle's Notifier; the file check runs
+on a thread of its own.
+"""
+from __future__ import annotations
+
+import logging
+import os
+import threading
+import time
+from collections import deque
+from concurrent.futures import Future
+from dataclasses import dataclass
+
+from pymavlink.dialects.v20 import ardupilotmega as mavlink
+
+from ..ftp.reader import CHUNK as FTP_CHUNK, HEADER as FTP_HEADER, FtpRead
+from .check import LogFileError, check_dataflash
+from .ranges import PartMap, Ranges, load_part_map, save_part_map
+
+__all__ = ["LogControl", "LogEntry", "LogOutcome", "LogProgress", "DISARM_TEXT"]
+
+log = logging.getLogger(__name__)
+
+CHUNK = 90                      # bytes in one LOG_DATA
+ALL_IDS = (0, 0xFFFF)
+OPEN_END = 0xFFFFFFFF
+DISARM_TEXT = "Disarm for log download"
+LIST_TRIES = 8                  # listings of the missing ids before the list is given up
+STALL_LIMIT = 20.0              # s without one new byte (link up) before a download is given up, resumable
+FLUSH_INTERVAL = 0.25           # s between writes of the .part file and its map
+ERASE_WAIT = 1.0                # s after LOG_ERASE before the list that confirms it
+ERASE_TRIES = 3
+
+
+@dataclass(frozen=True)
+class LogEntry:
+    id: int
+    size: int
+    time_utc: int               # s since 1970 (0: the vehicle had no clock)
+
+
+@dataclass(frozen=True)
+class LogOutcome:
+    """What a list, download or erase came to; ``ok`` False with ``reason`` in the vehicle's or our words."""
+    name: str
+    ok: bool
+    reason: str = ""
+    entries: tuple = ()         # LogEntry, by id (list and erase)
+    log_id: int = 0
+    path: str = ""
+    size: int = 0
+    seconds: float = 0.0
+    bytes_received: int = 0     # LOG_DATA bytes that arrived (duplicates too)
+    bytes_requested: int = 0    # bytes asked for, first asks and gap re-asks together (of the size known then)
+    bytes_rerequested: int = 0  # of those, bytes already held when asked (merged into a gap's window)
+    resumed_from: int = 0       # bytes already held in the .part when this download began
+    messages: int = 0           # DataFlash messages DFReader read
+
+    @property
+    def rate(self) -> float:
+        """Bytes a second fetched by this download."""
+        return (self.size - self.resumed_from) / self.seconds if self.seconds > 0 else 0.0
+
+
+@dataclass(frozen=True)
+class LogProgress:
+    """The download under way, for a progress bar: bytes held of size (the size may still grow), rate, time left."""
+    log_id: int
+    path: str
+    size: int
+    held: int
+    rate: float                 # bytes/s over the last second
+    phase: str                  # "listing", "downloading", "checking", "erasing"
+
+    @property
+    def seconds_left(self) -> float | None:
+        return (self.size - self.held) / self.rate if self.rate > 0 else None
+
+
+class _Job:
+    def __init__(self, kind: str, name: str, future: Future, log_id: int = 0, path: str = "") -> None:
+        self.kind, self.name, self.future = kind, name, future
+        self.log_id, self.path = log_id, path
+        self.started = 0.0
+        self.checking = False                   # DFReader reads the finished file (a thread of its own)
+        self.ftp = False                        # read by MAVLink FTP instead of LOG_DATA
+        self.listed = False                     # a download reads the list first: sizes and times as they are now
+
+
+class _Listing:
+    """One list in progress: entries by id, the tries left, when the next re-ask is due."""
+
+    def __init__(self) -> None:
+        self.entries: dict[int, LogEntry] = {}
+        self.last: int | None = None
+        self.tries = 0
+        self.quiet_until = 0.0
+
+
+class _Download:
+    def __init__(self, job: _Job, entry: LogEntry, part: PartMap, resumed: int) -> None:
+        self.job, self.entry, self.part = job, entry, part
+        self.ranges = part.ranges
+        self.size = entry.size                  # known lower bound until the stream's end is seen
+        self.end: int | None = None             # the log's end, as a short (or empty) LOG_DATA said
+        self.resumed = resumed
+        self.pending: list[tuple[int, bytes]] = []
+        self.window: tuple[int, int] | None = None
+        self.sent_at = 0.0
+        self.last_rx = 0.0
+        self.first_rx: float | None = None      # the window's first packet: when, and its offset
+        self.first_ofs = self.last_ofs = 0
+        self.rtt = 0.3
+        self.rate = 0.0                         # packets/s seen while a window streams
+        self.received = self.requested = self.rerequested = 0
+        self.progress_at = 0.0
+        self.flushed_at = 0.0
+        self.history: deque = deque()           # (time, held) for the rate shown
+        self.file = None
+        self.ftp: FtpRead | None = None         # the FTP read, when the log comes that way
+        self.ftp_failure = ""
+
+
+class LogControl:
+    """``vehicle.logs``: the vehicle's DataFlash logs (one operation at a time, the others queued)."""
+
+    def __init__(self, vehicle) -> None:
+        self._v = vehicle
+        self._jobs: deque[_Job] = deque()
+        self._listing: _Listing | None = None
+        self._download: _Download | None = None
+        self._refused: str | None = None
+        self._erase_at = 0.0
+        self._erase_before: tuple = ()
+        self._erase_tries = 0
+        self._check_thread: threading.Thread | None = None
+        self.entries: tuple = ()                # the last complete list
+        self.progress: LogProgress | None = None
+
+    # -- requests (any thread) -----------------------------------------------------------------------------
+    def list(self) -> Future:
+        """Every log on the vehicle: a LogOutcome whose ``entries`` are LogEntry by id."""
+        return self._queue(_Job("list", "log list", Future()))
+
+    def download(self, log_id: int, path: str, via: str = "auto") -> Future:
+        """Log ``log_id`` into ``path`` (resuming from ``path``.part where one is there); a LogOutcome.
+
+        ``via``: "log_data" (LOG_REQUEST_DATA), "ftp" (MAVLink FTP of ``logs/0000000N.BIN``) or "auto", which is
+        LOG_DATA: measured on ArduCopter 4.6.3 over TCP it moved 5.5 MB/s against FTP's 43 kB/s (the logs
+        recording), and on a radio ArduPilot keeps FTP bursts to a third of the link while LOG_DATA takes what is
+        free. The Solo (3.3) has no FTP at all."""
+        job = _Job("download", f"log download {log_id}", Future(), log_id, os.path.abspath(path))
+        if not isinstance(log_id, int) or not 1 <= log_id <= 0xFFFF:
+            return self._done(job, False, f"no log {log_id}: log numbers go from 1 to 65535")
+        if via not in ("auto", "log_data", "ftp"):
+            return self._done(job, False, f"no way {via!r} to download: auto, log_data or ftp")
+        if via == "ftp" and self._v._params.ftp_capable is False:
+            return self._done(job, False, "the vehicle offers no MAVLink FTP (MAV_PROTOCOL_CAPABILITY_FTP): "
+                                          "download by LOG_DATA")
+        job.ftp = via == "ftp"
+        return self._queue(job)
+
+    def download_latest(self, path: str) -> Future:
+        """The newest log (the list is read first)."""
+        return self._queue(_Job("download", "log download latest", Future(), -1, os.path.abspath(path)))
+
+    def erase(self) -> Future:
+        """LOG_ERASE (no reply: a list afterwards confirms it, and it is sent again if the logs are still there)."""
+        return self._queue(_Job("erase", "log erase", Future()))
+
+    def cancel(self) -> None:
+        """Stop what runs and drop what waits; a download keeps its .part to resume from."""
+        v = self._v
+        with v._lock:
+            jobs = list(self._jobs)
+            self._jobs.clear()
+            for job in jobs:
+                self._finish(job, False, "cancelled")
+            self._post_end()
+        v._wake.set()
+
+    def _queue(self, job: _Job) -> Future:
+        v = self._v
+        if v._replay is not None:
+            return self._done(job, False, "replaying a recording: no vehicle to ask")
+        with v._lock:
+            self._jobs.append(job)
+        v._wake.set()
+        return job.future
+
+    def _done(self, job: _Job, ok: bool, reason: str, **more) -> Future:
+        job.future.set_result(LogOutcome(job.name, ok, reason, **more))
+        return job.future
+
+    # -- the driver's threads (lock held) ------------------------------------------------------------------
+    def on_message(self, m) -> None:
+        kind = m.get_type()
+        if kind == "LOG_ENTRY" and self._listing is not None:
+            self._on_entry(m)
+        elif kind == "LOG_DATA" and self._download is not None and m.id == self._download.entry.id:
+            self._on_data(m)
+
+    def on_ftp(self, m) -> None:
+        """A FILE_TRANSFER_PROTOCOL reply while a log is read by FTP (reader thread, lock held)."""
+        d = self._download
+        if d is None or d.ftp is None or d.job.checking:
+            return
+        now = time.monotonic()
+        failure = d.ftp.on_message(m, now)
+        payload = bytes(m.payload)
+        offset = FTP_HEADER.unpack(payload[:12])[7]
+        chunk = d.ftp.chunks.get(offset)
+        if chunk is not None and d.ranges.add(offset, offset + len(chunk)):
+            d.pending.append((offset, chunk))
+            d.received += len(chunk)
+            d.progress_at = now
+        if d.ftp.end is not None:
+            d.end = d.part.size = d.ftp.end
+        if failure:
+            d.ftp_failure = failure
+        self._v._wake.set()
+
+    def on_text(self, text: str) -> None:
+        if text.startswith(DISARM_TEXT) and self._jobs:
+            self._refused = text
+
+    def service(self, now: float, state) -> list:
+        out: list = []
+        if not self._jobs:
+            return out
+        job = self._jobs[0]
+        if not job.started:
+            self._refused = None                 # a refusal told before this job's first request is not its own
+        if self._refused is not None:
+            self._refused, reason = None, self._refused
+            self._abort(job, f"{reason}: the vehicle ignores log requests while armed")
+            return [self._end_message()]
+        if not job.started:
+            job.started = now
+            if state.armed:                      # the vehicle says why only once: ask, and tell its words
+                out.append(self._message("log_request_list", *ALL_IDS))
+                self._abort(job, f"{DISARM_TEXT}: the vehicle ignores log requests while armed")
+                return out
+        link_up = state.connected                 # a lost link pauses: the download goes on when it is back
+        if job.kind == "list" or (job.kind == "download" and not job.listed and self._download is None):
+            out += self._service_list(job, now, link_up)
+        elif job.kind == "download":
+            out += self._service_download(job, now, link_up)
+        elif job.kind == "erase":
+            out += self._service_erase(job, now, link_up)
+        return out
+
+    def close(self) -> None:
+        with self._v._lock:
+            for job in list(self._jobs):
+                self._abort(job, "driver closed")
+
+    # -- listing ---------------------------------------------------------------------------------------------
+    def _known(self, log_id: int) -> bool:
+        return any(e.id == log_id for e in self.entries or ())
+
+    def _service_list(self, job: _Job, now: float, link_up: bool) -> list:
+        listing = self._listing
+        if listing is None:
+            listing = self._listing = _Listing()
+            self.progress = LogProgress(0, "", 0, 0, 0.0, "listing")
+        if now < listing.quiet_until or not link_up:
+            return []
+        wanted = self._missing_ids(listing)
+        if listing.last is not None and not wanted:
+            return self._listed(job)
+        if listing.tries >= LIST_TRIES:
+            self._listing = None
+            missing = ", ".join(str(i) for i in wanted[:10]) if wanted else "all"
+            self._abort(job, f"the log list is incomplete after {LIST_TRIES} tries (missing: {missing})")
+            return [self._end_message()]
+        listing.tries += 1
+        listing.quiet_until = now + 0.5 + 0.25 * listing.tries
+        start, end = (wanted[0], wanted[-1]) if listing.last is not None else ALL_IDS
+        # a transfer still running (a cancelled download's, its END lost) would drop the list: END goes first
+        return [self._end_message(), self._message("log_request_list", start, end)]
+
+    @staticmethod
+    def _missing_ids(listing: _Listing) -> list[int]:
+        if listing.last is None:
+            return []
+        return [i for i in range(1, listing.last + 1) if i not in listing.entries]
+
+    def _on_entry(self, m) -> None:
+        listing = self._listing
+        if m.num_logs == 0 or m.last_log_num == 0:
+            listing.last = 0
+        else:
+            listing.last = m.last_log_num if listing.last is None else max(listing.last, m.last_log_num)
+        if 1 <= m.id <= m.last_log_num:
+            listing.entries[m.id] = LogEntry(m.id, m.size, m.time_utc)
+            listing.quiet_until = min(listing.quiet_until, time.monotonic() + 0.3) \
+                if not self._missing_ids(listing) else time.monotonic() + 0.3
+        if not self._missing_ids(listing):
+            listing.quiet_until = 0.0
+            self._v._wake.set()
+
+    def _listed(self, job: _Job) -> list:
+        entries = tuple(sorted(self._listing.entries.values(), key=lambda e: e.id))
+        self._listing = None
+        self.entries = entries
+        self.progress = None
+        job.listed = True
+        if job.kind == "erase":
+            pass
+        elif job.kind == "list":
+            self._jobs.popleft()
+            self._finish(job, True, f"{len(entries)} logs", entries=entries)
+        elif job.log_id < 0:
+            if not entries:
+                self._abort(job, "no logs on the vehicle")
+            else:
+                job.log_id = entries[-1].id
+        elif not self._known(job.log_id):
+            have = f"logs {entries[0].id} to {entries[-1].id}" if entries else "no logs"
+            self._abort(job, f"no log {job.log_id} on the vehicle ({have})")
+        self._v._wake.set()
+        return [self._end_message()]
+
+    # -- downloading -----------------------------------------------------------------------------------------
+    def _begin_download(self, job: _Job, now: float) -> _Download | None:
+        entry = next(e for e in self.entries if e.id == job.log_id)
+        if entry.size == 0:
+            self._abort(job, f"log {entry.id} is empty (0 bytes) on the vehicle")
+            return None
+        part = load_part_map(job.path)
+        fresh = part is None or part.log_id != entry.id or part.time_utc != entry.time_utc \
+            or not os.path.exists(job.path + ".part")
+        if fresh:
+            part = PartMap(entry.id, entry.time_utc, Ranges(), None)
+        try:
+            folder = os.path.dirname(job.path)
+            if folder:
+                os.makedirs(folder, exist_ok=True)
+            handle = open(job.path + ".part", "wb" if fresh else "r+b")
+            if fresh:
+                save_part_map(job.path, part)
+        except OSError as exc:
+            self._abort(job, f"{job.path}: {exc.strerror or exc}")
+            return None
+        d = _Download(job, entry, part, part.ranges.total())
+        if part.size:
+            d.end = part.size
+        d.file = handle
+        d.progress_at = d.flushed_at = now
+        if job.ftp:
+            self._flush(d)
+            self._start_ftp(d, now)
+        if d.resumed:
+            log.info("log %d: resuming with %d bytes held", entry.id, d.resumed)
+        return d
+
+    def _service_download(self, job: _Job, now: float, link_up: bool) -> list:
+        if job.checking:
+            return []
+        d = self._download
+        if d is None:
+            d = self._download = self._begin_download(job, now)
+            if d is None:
+                return []
+        if d.job is not job:
+            return []
+        if now - d.flushed_at >= FLUSH_INTERVAL:
+            if not self._flush(d):
+                return [self._end_message()]
+        self._show(d, now)
+        end = d.end
+        if end is not None and not d.ranges.missing(end):
+            return self._complete(d)
+        if not link_up:
+            d.window = None
+            d.progress_at = now
+            return []
+        if d.ftp is not None:
+            return self._service_ftp(d, now)
+        if now - d.progress_at > STALL_LIMIT:
+            self._flush(d)
+            self._close_download(d)
+            self._abort(job, f"no data from the vehicle for {STALL_LIMIT:.0f} s: {d.ranges.total()} bytes of "
+                             f"{self._size_text(d)} kept in {job.path}.part, download again to resume")
+            return [self._end_message()]
+        if d.window is not None:
+            quiet = now - max(d.sent_at, d.last_rx)
+            if quiet < max(0.1, 3 * d.rtt):
+                return []
+            self._measure(d, now)
+            d.window = None                     # silence: the rest of that window was lost
+        return [self._next_window(d, now)]
+
+    def _service_ftp(self, d: _Download, now: float) -> list:
+        msgs, failure = d.ftp.service(now, self._v._target_ids())
+        failure = failure or d.ftp_failure
+        if failure:
+            self._flush(d)
+            self._close_download(d)
+            self._abort(d.job, f"MAVLink FTP {failure}: {d.ranges.total()} bytes kept in {d.job.path}.part, "
+                               "download again to resume")
+            return msgs + [d.ftp.terminate(self._v._target_ids())]
+        return msgs
+
+    def _start_ftp(self, d: _Download, now: float) -> None:
+        """The FTP read of ``logs/0000000N.BIN``, given every whole chunk the .part holds already."""
+        ftp = d.ftp = FtpRead(now, f"logs/{d.entry.id:08d}.BIN".encode(), max_bursts=1 << 30, stall=STALL_LIMIT)
+        first_missing = None
+        held_to = d.ranges.spans[-1][1] if d.ranges.spans else 0
+        for offset in range(0, held_to, FTP_CHUNK):
+            if d.ranges.held_from(offset) >= offset + FTP_CHUNK:
+                d.file.seek(offset)
+                ftp.chunks[offset] = d.file.read(FTP_CHUNK)
+            elif first_missing is None:
+                first_missing = offset
+        ftp.next_burst = first_missing if first_missing is not None else len(ftp.chunks) * FTP_CHUNK
+
+    def _next_window(self, d: _Download, now: float):
+        known = d.end if d.end is not None else max(d.size, d.ranges.spans[-1][1] if d.ranges.spans else 0)
+        gaps = d.ranges.missing(known)
+        if gaps:
+            start, stop = gaps[0]
+        else:
+            start, stop = known, known
+        merge = max(4 * CHUNK, int(d.rate * d.rtt) * CHUNK)   # held bytes worth sending again to save a round trip
+        for a, b in gaps[1:]:
+            if a - stop > merge:
+                break
+            stop = b
+        if d.end is None and stop >= known:
+            count = OPEN_END - start            # to the log's true end: a short packet will say where it is
+        else:
+            count = -(-(stop - start) // CHUNK) * CHUNK
+            if d.end is not None:
+                count = min(count, d.end - start)
+        d.window = (start, start + count)
+        log.debug("log %d: window %d+%d (rtt %.3f s, %.0f packets/s, %d gaps)", d.entry.id, start, count, d.rtt,
+                  d.rate, len(gaps))
+        d.sent_at = now
+        d.first_rx = None
+        upto = min(start + count, d.end if d.end is not None else max(d.size, start))
+        d.requested += max(0, upto - start)
+        d.rerequested += sum(max(0, min(b, upto) - max(a, start)) for a, b in d.ranges.spans)
+        return self._message("log_request_data", d.entry.id, start, count)
+
+    def _on_data(self, m) -> None:
+        d = self._download
+        now = time.monotonic()
+        count = min(int(m.count), CHUNK)
+        ofs = int(m.ofs)
+        d.last_rx = now
+        d.received += count
+        if count:
+            data = bytes(m.data[:count])
+            if d.ranges.add(ofs, ofs + count):
+                d.pending.append((ofs, data))
+                d.progress_at = now
+        if count < CHUNK and (d.end is None or ofs + count < d.end):
+            d.end = ofs + count                 # a short packet: the log ends here (the vehicle's word)
+            d.part.size = d.end
+        window = d.window
+        if window is None or not window[0] <= ofs < window[1]:
+            return                              # queued from an earlier request: kept, but it times nothing
+        if d.first_rx is None:
+            d.first_rx, d.first_ofs = now, ofs
+            d.rtt = 0.5 * d.rtt + 0.5 * (now - d.sent_at)
+        d.last_ofs = ofs
+        if ofs + count >= window[1] or count < CHUNK:
+            self._measure(d, now)
+            d.window = None
+            self._v._wake.set()
+
+    @staticmethod
+    def _measure(d: _Download, now: float) -> None:
+        """The stream's rate (packets/s, lost ones counted) from this window's first and last packets."""
+        if d.first_rx is not None and d.last_rx > d.first_rx and d.last_ofs > d.first_ofs:
+            rate = (d.last_ofs - d.first_ofs) / CHUNK / (d.last_rx - d.first_rx)
+            d.rate = rate if d.rate == 0 else 0.5 * d.rate + 0.5 * rate
+
+    def _flush(self, d: _Download) -> bool:
+        d.flushed_at = time.monotonic()
+        try:
+            for ofs, data in d.pending:
+                d.file.seek(ofs)
+                d.file.write(data)
+            d.file.flush()
+            d.pending.clear()
+            save_part_map(d.job.path, d.part)
+            return True
+        except OSError as exc:                  # a full disk: what is on disk stays resumable
+            self._close_download(d)
+            self._abort(d.job, f"{d.job.path}.part: {exc.strerror or exc}; the partial file is kept, download "
+                               "again to resume")
+            return False
+
+    def _show(self, d: _Download, now: float) -> None:
+        held = d.ranges.total()
+        d.history.append((now, held))
+        while len(d.history) > 2 and now - d.history[0][0] > 1.0:
+            d.history.popleft()
+        t0, h0 = d.history[0]
+        rate = (held - h0) / (now - t0) if now > t0 else 0.0
+        self.progress = LogProgress(d.entry.id, d.job.path, d.end or max(d.size, held), held, rate, "downloading")
+
+    @staticmethod
+    def _size_text(d: _Download) -> str:
+        return f"{d.end} bytes" if d.end is not None else f"at least {d.size} bytes"
+
+    def _close_download(self, d: _Download) -> None:
+        if d.file is not None:
+            d.file.close()
+            d.file = None
+        self._download = None
+        self.progress = None
+
+    def _complete(self, d: _Download) -> list:
+        if not self._flush(d):
+            return [self._end_message()]
+        job = d.job
+        done = [d.ftp.terminate(self._v._target_ids())] if d.ftp is not None else []
+        d.file.truncate(d.end)
+        self._close_download(d)
+        self.progress = LogProgress(d.entry.id, job.path, d.end, d.end, 0.0, "checking")
+        seconds = time.monotonic() - job.started
+        fields = dict(log_id=d.entry.id, path=job.path, size=d.end, seconds=seconds, bytes_received=d.received,
+                      bytes_requested=d.requested, bytes_rerequested=d.rerequested, resumed_from=d.resumed)
+        job.checking = True
+        thread = threading.Thread(target=self._check, args=(job, fields), name="log-check", daemon=True)
+        self._check_thread = thread
+        thread.start()
+        return done + [self._end_message()]
+
+    def _check(self, job: _Job, fields: dict) -> None:
+        """DFReader reads the whole .part (off the driver's threads), then it becomes the file."""
+        path = job.path
+        try:
+            messages = check_dataflash(path + ".part")
+            os.replace(path + ".part", path)
+            os.remove(path + ".part.json")
+            ok, reason = True, f"log {fields['log_id']} saved to {path}"
+        except (LogFileError, OSError) as exc:
+            messages, ok = 0, False
+            reason = f"log {fields['log_id']} downloaded ({fields['size']} bytes) but {exc}"
+        with self._v._lock:
+            if self._jobs and self._jobs[0] is job:
+                self._jobs.popleft()
+            self.progress = None
+            self._finish(job, ok, reason, messages=messages, **fields)
+        self._v._wake.set()
+
+    # -- erasing -----------------------------------------------------------------------------------------------
+    def _service_erase(self, job: _Job, now: float, link_up: bool) -> list:
+        if not link_up:
+            return []
+        if self._erase_tries:
+            if now < self._erase_at:
+                return []
+            if self.entries is None:             # the list that tells whether the erase was done
+                return self._service_list(job, now, link_up)
+            if not set(self.entries) & set(self._erase_before):
+                self._erase_tries = 0
+                self._jobs.popleft()
+                self._finish(job, True, f"logs erased; {len(self.entries)} on the vehicle now", entries=self.entries)
+                return []
+            if self._erase_tries >= ERASE_TRIES:
+                self._erase_tries = 0
+                self._abort(job, f"the logs are still there after {ERASE_TRIES} LOG_ERASE")
+                return []
+        self._erase_before = self.entries or ()
+        self._erase_tries += 1
+        self._erase_at = now + ERASE_WAIT
+        self.progress = LogProgress(0, "", 0, 0, 0.0, "erasing")
+        self.entries = None
+        return [self._message("log_erase")]
+
+    # -- helpers -----------------------------------------------------------------------------------------------
+    def _message(self, name: str, *fields):
+        target = self._v._target_ids()
+        return getattr(mavlink, f"MAVLink_{name}_message")(*target, *fields)
+
+    def _end_message(self):
+        return self._message("log_request_end")
+
+    def _post_end(self) -> None:
+        if self._download is not None:
+            self._flush(self._download) if self._download.file is not None else None
+            if self._download is not None:
+                self._close_download(self._download)
+        self._listing = None
+        self._v._post(self._end_message())
+
+    def _abort(self, job: _Job, reason: str) -> None:
+        if self._jobs and self._jobs[0] is job:
+            self._jobs.popleft()
+            if self._download is not None and self._download.job is job:
+                self._flush(self._download) if self._download.file is not None else None
+                if self._download is not None:
+                    self._close_download(self._download)
+            self._listing = None
+        elif job in self._jobs:
+            self._jobs.remove(job)
+        self.progress = None
+        self._finish(job, False, reason)
+
+    def _finish(self, job: _Job, ok: bool, reason: str, **more) -> None:
+        if not ok:
+            log.warning("%s: %s", job.name, reason)
+        self._v._notifier.settle(job.future, LogOutcome(job.name, ok, reason, **more))
