@@ -34,6 +34,7 @@ from .plan.controller import PlanController
 from .preferences.controller import Preferences
 from .refresh import Refresh
 from .replay.controls import ReplayControls
+from .review.controller import ReviewController
 from .settings import ViewerSettings, default_qsettings
 from .telemetry.readouts import Readouts
 from .window.about import show_about
@@ -113,6 +114,7 @@ class MainWindow(QMainWindow):
         self.params.add_to_menu(self)                       # Vehicle › Parameters…
         self.params.offer_fixes(self.messages)              # a warning naming a parameter: Fix… opens it
         self.fleet_dock = FleetDock(self)
+        self.review = ReviewController(self)                # File › Open log…: docs/review.md
 
         self.preferences.apply()
         self._restore_window()
@@ -260,6 +262,7 @@ class MainWindow(QMainWindow):
         self.preferences.save(self.saveGeometry(), self.saveState())
         self.sticks.close()
         self.alerts.close()
+        self.review.close()
         self.camera.close(wait=0.5)
         self.adapter.stop()
         super().closeEvent(event)
