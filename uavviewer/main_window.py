@@ -27,6 +27,7 @@ from .fleet.dock import FleetDock
 from .flight.commands import FlightCommands
 from .flight.timer import FlightTimer
 from .input.controller import PilotSticks
+from .inspector.controller import InspectorController
 from .input.keys_dialog import KeysDialog
 from .map.controller import MapController
 from .params import ParamsController
@@ -115,6 +116,7 @@ class MainWindow(QMainWindow):
         self.params.offer_fixes(self.messages)              # a warning naming a parameter: Fix… opens it
         self.fleet_dock = FleetDock(self)
         self.review = ReviewController(self)                # File › Open log…: docs/review.md
+        self.inspector = InspectorController(self)          # Tools › MAVLink inspector
 
         self.preferences.apply()
         self._restore_window()
@@ -263,6 +265,7 @@ class MainWindow(QMainWindow):
         self.sticks.close()
         self.alerts.close()
         self.review.close()
+        self.inspector.close()
         self.camera.close(wait=0.5)
         self.adapter.stop()
         super().closeEvent(event)

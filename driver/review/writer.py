@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import struct
 
-from .dataflash import _NUMERIC, _STRINGS, FMT_ID, FMT_LENGTH, HEAD, _fmt_record
+from .dataflash import _STRINGS, FMT_ID, FMT_LENGTH, HEAD, _fmt_record
 
 _STRUCT = {
     "b": "b", "B": "B", "h": "h", "H": "H", "i": "i", "I": "I", "f": "f", "d": "d", "q": "q", "Q": "Q",
