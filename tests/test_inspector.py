@@ -15,8 +15,11 @@ def _stat(inspection, system, component, name):
 
 
 def test_the_vehicle_counts_every_message_with_its_rate_and_fields(vehicle):
-    assert vehicle.wait_for(lambda s: _stat(vehicle.inspection(), 1, 1, "ATTITUDE") is not None
-                            and _stat(vehicle.inspection(), 1, 1, "ATTITUDE").count > 20, 10)
+    def rates_known(_s) -> bool:              # the first rate comes once a second has passed between snapshots
+        seen = vehicle.inspection()
+        return all(_stat(seen, 1, 1, n) is not None and _stat(seen, 1, 1, n).rate_hz > 0
+                   for n in ("ATTITUDE", "HEARTBEAT"))
+    assert vehicle.wait_for(rates_known, 10)
     seen = vehicle.inspection()
     assert seen.available
     heartbeat = _stat(seen, 1, 1, "HEARTBEAT")
@@ -60,4 +63,24 @@ def test_tools_mavlink_inspector_updates_in_place_and_plots_a_field(qtbot, windo
     qtbot.waitUntil(lambda: len(view.field_plot.points) >= 3, timeout=5000)
     count = view._messages[(1, 1, "ATTITUDE")].text(2)
     qtbot.waitUntil(lambda: view._messages[(1, 1, "ATTITUDE")].text(2) != count, timeout=5000)
-    assert float(view._messages[(1, 1, "ATTITUDE")].text(1)) > 0
+    qtbot.waitUntil(lambda: float(view._messages[(1, 1, "ATTITUDE")].text(1)) > 0, timeout=5000)
+
+
+def test_rates_come_from_the_counts_between_snapshots():
+    from pymavlink.dialects.v20 import ardupilotmega as mavlink
+    from driver.vehicle.inspector import MessageInspector
+    now = [100.0]
+    inspector = MessageInspector(clock=lambda: now[0])
+    for k in range(50):
+        inspector.seen(mavlink.MAVLink_attitude_message(k, 0.1, 0.0, 0.0, 0, 0, 0), 1, 1, "ATTITUDE")
+    inspector.seen(mavlink.MAVLink_statustext_message(4, b"Hello\0\0", 0, 0), 1, 1, "STATUSTEXT")
+    first = inspector.snapshot()
+    assert [m.rate_hz for m in first.messages] == [0.0, 0.0]          # no second has passed yet
+    now[0] = 102.0
+    for k in range(40):
+        inspector.seen(mavlink.MAVLink_attitude_message(k, 0.2, 0.0, 0.0, 0, 0, 0), 1, 1, "ATTITUDE")
+    attitude, text = inspector.snapshot().messages
+    assert attitude.rate_hz == 45.0 and attitude.count == 90 and dict(attitude.fields)["roll"] == 0.2
+    assert dict(text.fields)["text"] == "Hello" and text.age_s == 2.0
+    now[0] = 104.0
+    assert inspector.snapshot().messages[0].rate_hz == 0.0          # it stopped: the rate falls to 0

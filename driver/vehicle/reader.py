@@ -171,7 +171,7 @@ class Reader:
                 self._signing.rejected(msg)
             return 0
         header = msg.get_header()
-        self.inspector.seen(msg, header.srcSystem, header.srcComponent)    # every system's, for the inspector
+        self.inspector.seen(msg, header.srcSystem, header.srcComponent, mtype)    # every system's, for the inspector
         if self._v._tlog:
             self._v._tlog.write(bytes(msg.get_msgbuf()))
         system = header.srcSystem
