@@ -18,7 +18,9 @@ RECORDINGS = os.path.join(os.path.dirname(__file__), "data", "recordings")
 
 @pytest.fixture()
 def view(qtbot, bin_path):
-    v = ReviewWindow(open_log(bin_path), lambda: {"RTL_ALT": 2000.0, "WPNAV_SPEED": 500.0})
+    current = {"RTL_ALT": 2000.0, "WPNAV_SPEED": 500.0}
+    v = ReviewWindow(open_log(bin_path), lambda: dict(current))
+    v.current = current
     qtbot.addWidget(v)
     v.resize(1366, 768)
     v.show()
@@ -75,6 +77,10 @@ def test_events_and_parameters_as_flown(qtbot, view):
     assert p.table.rowCount() == 2 and p.table.item(1, 1).text() == "1500" and p.table.item(1, 2).text() == "2000"
     p.only_diff.setChecked(False)
     assert p.table.rowCount() == 3
+    view.current["BATT_LOW_VOLT"] = 10.5                  # the vehicle's table changed: read again on showing
+    view.side.setCurrentWidget(view.events)
+    view.side.setCurrentWidget(view.params)
+    assert p.differences == [("RTL_ALT", 1500.0, 2000.0)] and p.table.rowCount() == 1
 
 
 def test_export_csv_of_the_plotted_fields(view, tmp_path):

@@ -71,9 +71,22 @@ class ReviewWindow(QMainWindow):
         self.tree.fieldChosen.connect(self.add_field)
         self.plots.cursorMoved.connect(self.path_overlay.set_time)
         self.events.timeChosen.connect(self.plots.set_cursor)
-        self._fill(current_params)
+        self._current_params = current_params
+        self.flown_params = self.log.params()
+        side.currentChanged.connect(lambda index: index == side.indexOf(self.params) and self.compare_params())
+        self._fill()
 
-    def _fill(self, current_params) -> None:
+    def compare_params(self) -> None:
+        """The parameters as flown beside the vehicle's now (read again each time the tab is shown: the vehicle
+        may have been connected, or its table read, since the log was opened)."""
+        try:
+            current = self._current_params() or {}
+        except Exception:                                   # noqa: BLE001 - a comparison is optional
+            log.exception("current parameters")
+            current = {}
+        self.params.show_params(self.flown_params, current)
+
+    def _fill(self) -> None:
         tree = self.log.tree()
         self.tree.set_tree(tree, {t: self.log.count(t) for t in tree})
         events = self.log.events()
@@ -87,12 +100,7 @@ class ReviewWindow(QMainWindow):
                 f'<span style="color:{mode_colour(m).name()}">■ {m or "?"}</span>' for m in seen))
         else:
             self.legend.setText("No position in this log: no path to draw.")
-        try:
-            current = current_params() or {}
-        except Exception:                                   # noqa: BLE001 - a comparison is optional
-            log.exception("current parameters")
-            current = {}
-        self.params.show_params(self.log.params(), current)
+        self.compare_params()
         skipped = self.log.skipped_bytes
         self.status.setText(f"{sum(self.log.count(t) for t in tree):,} records, {len(tree)} types"
                             + (f"; {skipped:,} unreadable bytes skipped" if skipped else ""))
