@@ -62,6 +62,12 @@ def test_the_cursor_moves_the_marker_along_the_path_and_back(qtbot, view):
     paints = view.map.paints
     view.plots.set_cursor(10.0)
     qtbot.waitUntil(lambda: view.map.paints > paints)
+    view.side.setCurrentWidget(view.map)
+    qtbot.waitUntil(lambda: view.map.isVisible())
+    index = len(overlay._points) * 3 // 4                  # a click on the path puts the cursor at its time
+    qtbot.mouseClick(view.map, Qt.LeftButton, pos=view.map.to_screen(*overlay._points[index]).toPoint())
+    assert overlay.marker == index
+    assert view.plots.cursor.value() == pytest.approx(overlay._t[index])
 
 
 def test_events_and_parameters_as_flown(qtbot, view):

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import bisect
 
-from PyQt5.QtCore import QObject, Qt
+from PyQt5.QtCore import QObject, QPointF, Qt, pyqtSignal
 from PyQt5.QtGui import QColor, QPen
 
 from .geometry import MapFrame
@@ -21,8 +21,14 @@ def mode_colour(mode: str) -> QColor:
     return QColor(_FIXED.get(mode) or _PALETTE[sum(map(ord, mode)) % len(_PALETTE)])
 
 
+PICK_PX = 12                  # a click this near the path picks its nearest point
+
+
 class LogPathOverlay(QObject):
-    """``set_path(t, lat, lon, modes)`` once; ``set_time(t)`` moves the marker (the nearest earlier fix)."""
+    """``set_path(t, lat, lon, modes)`` once; ``set_time(t)`` moves the marker (the nearest earlier fix); a click
+    on the path gives that point's time (``timePicked``), so the map moves the review's cursor too."""
+
+    timePicked = pyqtSignal(float)
 
     def __init__(self, view, parent: QObject | None = None) -> None:
         super().__init__(parent)
@@ -34,6 +40,7 @@ class LogPathOverlay(QObject):
         self._fitted_to = None                      # the view size the path was fitted to, or "panned"
         self._centre_fitted = None
         view.overlays.append(self.paint)
+        view.mouse_parts.append(self)
 
     def set_path(self, t, lat, lon, modes: list[str]) -> None:
         if len(t) == 0:
@@ -68,6 +75,30 @@ class LogPathOverlay(QObject):
         if i != self.marker:
             self.marker = i
             self.view.update()
+
+    # -- the map's mouse (MapView.mouse_parts) -------------------------------------------------------------------
+    def mouse_press(self, view, event) -> bool:
+        return False
+
+    def mouse_move(self, view, event) -> bool:
+        return False
+
+    def mouse_release(self, view, event, clicked: bool) -> bool:
+        if not clicked or not self._points:
+            return False
+        at = QPointF(event.pos())
+        best, index = PICK_PX, None
+        for i, point in enumerate(self._points):
+            q = view.to_screen(*point)
+            d = abs(q.x() - at.x()) + abs(q.y() - at.y())
+            if d <= best:
+                best, index = d, i
+        if index is None:
+            return False
+        self.marker = index
+        view.update()
+        self.timePicked.emit(self._t[index])
+        return True
 
     def marker_place(self) -> tuple[float, float] | None:
         """The marker in view metres (east, north)."""

@@ -70,6 +70,7 @@ class ReviewWindow(QMainWindow):
 
         self.tree.fieldChosen.connect(self.add_field)
         self.plots.cursorMoved.connect(self.path_overlay.set_time)
+        self.path_overlay.timePicked.connect(self.plots.set_cursor)      # and back: a click on the path
         self.events.timeChosen.connect(self.plots.set_cursor)
         self._current_params = current_params
         self.flown_params = self.log.params()
