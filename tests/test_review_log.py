@@ -107,3 +107,20 @@ def test_tlog_with_garbage_inside_keeps_its_messages(tmp_path):
     path = str(tmp_path / "g.tlog")
     open(path, "wb").write(data[:len(data) // 2] + os.urandom(2000) + data[len(data) // 2:])
     assert open_log(path).count("ATTITUDE") > 0
+
+
+@pytest.mark.parametrize("name", ["pymavlink-test.BIN", "ap-logger-alltypes.BIN"])
+def test_real_ardupilot_logs_read_as_dfreader_reads_them(name):
+    path = os.path.join(os.path.dirname(__file__), "data", "logs", name)
+    log = open_log(path)
+    reader = DFReader.DFReader_binary(path)
+    messages: dict[str, list] = {}
+    while (m := reader.recv_msg()) is not None:
+        messages.setdefault(m.get_type(), []).append(m)
+    tree = log.tree()
+    assert set(tree) == set(messages) - {"FMT"}
+    for mtype, fields in tree.items():
+        assert log.count(mtype) == len(messages[mtype]), mtype
+        for f in fields:
+            theirs = [float(getattr(m, f)) for m in messages[mtype]]
+            assert np.allclose(log.series(mtype, f)[1], theirs, equal_nan=True, rtol=1e-6), (mtype, f)

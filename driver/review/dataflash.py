@@ -67,8 +67,9 @@ def _parse_fmt(record: bytes) -> MessageFormat | None:
     name = record[5:9].rstrip(b"\0").decode("ascii", "replace")
     fmt = record[9:25].rstrip(b"\0").decode("ascii", "replace")
     columns = record[25:89].rstrip(b"\0").decode("ascii", "replace").split(",")
-    if len(columns) != len(fmt) or not name:
+    if len(columns) > len(fmt) or not name:
         return None
+    columns += [f"_{i}" for i in range(len(columns), len(fmt))]   # fewer names than formats: DFReader reads it too
     fields, offset = [], 3
     for col, kind in zip(columns, fmt):
         if kind in _NUMERIC:
