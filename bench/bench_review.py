@@ -74,7 +74,7 @@ def main() -> None:
     print(f"read and draw ATT.DesRoll: {drawn:.3f} s")
     t = time.perf_counter()
     events = log.events()
-    print(f"events ({len(events)}), modes, path: {time.perf_counter() - t + 0:.3f} s", end="; ")
+    print(f"events ({len(events)}): {(time.perf_counter() - t) * 1000:.1f} ms", end="; ")
     t = time.perf_counter()
     log.flight_path()
     print(f"path {time.perf_counter() - t:.3f} s")
