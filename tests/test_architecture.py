@@ -35,7 +35,8 @@ def test_driver_never_imports_qt():
 #: one on its own floor or above. The loose modules at the top (options, __main__) stand above everything they start.
 FLOORS = {
     "driver.core": 0, "driver.version": 0, "driver.ftp": 0,
-    "driver.link": 1, "driver.mission": 1, "driver.params": 1, "driver.payload": 1, "driver.traffic": 1, "driver.logs": 1,
+    "driver.link": 1, "driver.mission": 1, "driver.params": 1, "driver.payload": 1, "driver.traffic": 1,
+    "driver.logs": 1, "driver.review": 1,
     "driver.setup": 2,
     "driver.vehicle": 3,
     "driver.camera": 4,

@@ -15,6 +15,7 @@ from concurrent.futures import Future
 from PyQt5.QtCore import QObject, QTimer, pyqtSignal
 
 from driver.vehicle.api import Drone
+from driver.vehicle.inspector import Inspection
 from driver.mission.plan import TransferOutcome
 from driver.vehicle.state import CommandResult, CommandStatus, VehicleState
 
@@ -74,6 +75,13 @@ class DroneAdapter(QObject):
     def replay(self):
         """Play/pause/speed of a recorded flight, or None when flying a vehicle."""
         return self.drone.replay
+
+    def inspection(self) -> Inspection:
+        """What the link carries, message by message (Tools › MAVLink inspector); never blocks."""
+        try:
+            return self.drone.inspection()
+        except Exception as e:               # noqa: BLE001 - a remote drone may fail; the UI goes on
+            return Inspection.unavailable(f"the drone did not answer ({e})")
 
     def start(self) -> None:
         self._poll.start()

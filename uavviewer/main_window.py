@@ -27,6 +27,7 @@ from .fleet.dock import FleetDock
 from .flight.commands import FlightCommands
 from .flight.timer import FlightTimer
 from .input.controller import PilotSticks
+from .inspector.controller import InspectorController
 from .input.keys_dialog import KeysDialog
 from .map.controller import MapController
 from .params import ParamsController
@@ -34,6 +35,7 @@ from .plan.controller import PlanController
 from .preferences.controller import Preferences
 from .refresh import Refresh
 from .replay.controls import ReplayControls
+from .review.controller import ReviewController
 from .settings import ViewerSettings, default_qsettings
 from .telemetry.readouts import Readouts
 from .window.about import show_about
@@ -113,6 +115,8 @@ class MainWindow(QMainWindow):
         self.params.add_to_menu(self)                       # Vehicle › Parameters…
         self.params.offer_fixes(self.messages)              # a warning naming a parameter: Fix… opens it
         self.fleet_dock = FleetDock(self)
+        self.review = ReviewController(self)                # File › Open log…: docs/review.md
+        self.inspector = InspectorController(self)          # Tools › MAVLink inspector
 
         self.preferences.apply()
         self._restore_window()
@@ -260,6 +264,8 @@ class MainWindow(QMainWindow):
         self.preferences.save(self.saveGeometry(), self.saveState())
         self.sticks.close()
         self.alerts.close()
+        self.review.close()
+        self.inspector.close()
         self.camera.close(wait=0.5)
         self.adapter.stop()
         super().closeEvent(event)

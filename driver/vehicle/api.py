@@ -15,6 +15,7 @@ from dataclasses import dataclass
 from . import guided
 from ..mission.plan import Plan, PlanKind, TransferOutcome
 from ..core.results import answered
+from .inspector import Inspection
 from .state import BatteryThresholds, CommandResult, CommandStatus, VehicleState
 
 
@@ -69,6 +70,18 @@ class Drone(abc.ABC):
     def replay(self):
         """Play/pause/speed control when the 'vehicle' is a recorded flight, else None."""
         return None
+
+    #: the link's counts by system, component and message (driver.vehicle.inspector.MessageInspector), set by a
+    #: drone that reads the link itself (the Vehicle's reader); None: this drone does not see the link
+    inspector = None
+
+    def inspection(self) -> Inspection:
+        """Every message type from every component with its rate and newest fields; ``available`` False (and
+        why) for a drone that does not see the raw link (the Ice client: its server reads it)."""
+        if self.inspector is None:
+            return Inspection.unavailable("this connection does not carry the raw MAVLink to the viewer "
+                                          "(a remote drone: its server reads the link)")
+        return self.inspector.snapshot()
 
     # -- flight ---------------------------------------------------------------------------
     @abc.abstractmethod

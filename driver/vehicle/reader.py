@@ -18,6 +18,7 @@ from ..link.transport import LinkError
 from ..params.manager import param_name
 from ..payload.control import PAYLOAD_MESSAGES
 from ..setup.control import SETUP_MESSAGES
+from .inspector import MessageInspector
 from .state import FENCE_PARAMS, Severity
 from .telemetry import TELEMETRY, fold_heartbeat
 
@@ -45,6 +46,7 @@ class Reader:
         self.reopen = False                # the supervisor found a half-open link: reopen it
         self._open_error = ""
         self._gcs_failsafe_warned = False
+        self.inspector = vehicle.inspector = MessageInspector()   # what the link carries: Drone.inspection()
 
     def _new_parser(self, carry=None):
         """A fresh incoming codec, signing as configured now; ``carry``: the old one, whose unparsed bytes
@@ -169,6 +171,7 @@ class Reader:
                 self._signing.rejected(msg)
             return 0
         header = msg.get_header()
+        self.inspector.seen(msg, header.srcSystem, header.srcComponent, mtype)    # every system's, for the inspector
         if self._v._tlog:
             self._v._tlog.write(bytes(msg.get_msgbuf()))
         system = header.srcSystem

@@ -12,11 +12,12 @@ from typing import Callable, Mapping
 
 from PyQt5.QtCore import QObject, Qt, pyqtSignal
 from PyQt5.QtGui import QKeySequence
-from PyQt5.QtWidgets import QAction, QMainWindow, QMenu, QMessageBox, QTreeWidgetItem, QWidget
+from PyQt5.QtWidgets import QAction, QMainWindow, QMessageBox, QTreeWidgetItem, QWidget
 
 from driver.vehicle.state import CommandResult, LinkStatus, Severity, VehicleState
 
 from ..widgets.ask import ask
+from ..widgets.menus import menu_named
 from .compare_dialog import CompareDialog
 from .mentions import named_parameter
 from .page import ParametersPage
@@ -68,12 +69,7 @@ class ParamsController(QObject):
     # -- wiring ------------------------------------------------------------------------------------
     def add_to_menu(self, window: QMainWindow) -> QAction:
         """Vehicle › Parameters… (the Vehicle menu is made if the window has none yet)."""
-        menu = window.findChild(QMenu, "menuVehicle")
-        if menu is None:
-            menu = QMenu("&Vehicle", window.menuBar())
-            menu.setObjectName("menuVehicle")
-            settings = window.findChild(QMenu, "menuSettings")
-            window.menuBar().insertMenu(settings.menuAction() if settings is not None else None, menu)
+        menu = menu_named(window, "menuVehicle", "&Vehicle")
         action = QAction("&Parameters…", window)
         action.setObjectName("actionParameters")
         action.setShortcut(QKeySequence("Ctrl+Shift+P"))

@@ -1,0 +1,229 @@
+"""What a reviewer asks of a flight log, the same for a .BIN and a .tlog: the tree of types and fields, one field
+over time, the flight modes, the events, the path, the parameters as they were, a CSV of chosen fields.
+
+:func:`open_log` raises :class:`LogError` with words a pilot can read for an empty, truncated or foreign file.
+"""
+from __future__ import annotations
+
+import csv
+import logging
+import os
+from dataclasses import dataclass
+
+import numpy as np
+from pymavlink import mavutil
+
+from .dataflash import DataFlashError, DataFlashLog
+from .tlog import TlogColumns, TlogError
+
+log = logging.getLogger(__name__)
+
+MODE_NAMES = dict(mavutil.mode_mapping_acm)
+#: ArduCopter's EV ids (AP_Logger LogEvent) that a reviewer looks for
+EVENT_NAMES = {10: "armed", 11: "disarmed", 15: "auto armed", 17: "land complete maybe", 18: "land complete",
+               25: "set home", 28: "not landed", 41: "mission complete", 64: "EKF yaw reset"}
+#: ERR subsystems (AP_Logger LogErrorSubsystem) that are failsafes
+FAILSAFES = {5: "radio failsafe", 6: "battery failsafe", 7: "GPS failsafe", 8: "GCS failsafe", 9: "fence",
+             10: "flight mode", 12: "crash check", 13: "flip", 16: "EKF check", 17: "EKF failsafe",
+             19: "terrain", 22: "navigation", 24: "ADS-B failsafe", 27: "vibration failsafe"}
+
+
+class LogError(ValueError):
+    """The log cannot be read; str() says why, for the pilot."""
+
+
+@dataclass(frozen=True)
+class Event:
+    t: float          # seconds from the log's start
+    kind: str         # "mode", "arming", "error", "failsafe", "event", "message"
+    text: str
+
+
+@dataclass(frozen=True)
+class FlightPath:
+    t: np.ndarray
+    lat: np.ndarray
+    lon: np.ndarray
+    alt: np.ndarray
+    mode: list[str]    # the mode flown at each point
+
+
+PRESETS: dict[str, list[tuple[str, str, int]]] = {
+    # name -> (type, field, axis 0 left / 1 right)
+    "Attitude": [("ATT", "DesRoll", 0), ("ATT", "Roll", 0), ("ATT", "DesPitch", 0), ("ATT", "Pitch", 0),
+                 ("ATTITUDE", "roll", 0), ("ATTITUDE", "pitch", 0)],
+    "Altitude": [("CTUN", "DAlt", 0), ("CTUN", "Alt", 0), ("CTUN", "BAlt", 0), ("GPS", "Alt", 1),
+                 ("GLOBAL_POSITION_INT", "relative_alt", 0), ("VFR_HUD", "alt", 1)],
+    "Battery": [("BAT", "Volt", 0), ("BAT", "Curr", 1), ("SYS_STATUS", "voltage_battery", 0),
+                ("SYS_STATUS", "current_battery", 1)],
+    "Vibration": [("VIBE", "VibeX", 0), ("VIBE", "VibeY", 0), ("VIBE", "VibeZ", 0), ("VIBE", "Clip0", 1),
+                  ("VIBRATION", "vibration_x", 0), ("VIBRATION", "vibration_y", 0), ("VIBRATION", "vibration_z", 0)],
+    "GPS": [("GPS", "NSats", 0), ("GPS", "HDop", 1), ("GPS_RAW_INT", "satellites_visible", 0),
+            ("GPS_RAW_INT", "eph", 1)],
+}
+
+
+class FlightLog:
+    """A log opened for review; ``kind`` is "bin" or "tlog". Fields load when asked (:meth:`series`)."""
+
+    def __init__(self, path: str) -> None:
+        self.path = path
+        self.kind = "tlog" if path.lower().endswith(".tlog") else "bin"
+        self._bin: DataFlashLog | None = None
+        self._tlog: TlogColumns | None = None
+        try:
+            if self.kind == "bin":
+                self._bin = DataFlashLog(path)
+            else:
+                self._tlog = TlogColumns(path)
+        except (DataFlashError, TlogError) as e:
+            raise LogError(f"{os.path.basename(path)}: {e}") from e
+        except (OSError, ValueError, IndexError, MemoryError) as e:
+            raise LogError(f"{os.path.basename(path)}: cannot be read ({e})") from e
+
+    def close(self) -> None:
+        if self._bin is not None:
+            self._bin.close()
+
+    @property
+    def skipped_bytes(self) -> int:
+        return self._bin.skipped if self._bin is not None else 0
+
+    # -- the tree and fields -----------------------------------------------------------------------------------
+    def tree(self) -> dict[str, list[str]]:
+        """Message type -> its numeric fields (TimeUS left out: it is the axis)."""
+        if self._bin is not None:
+            return {n: [f.name for f in self._bin.formats[n].fields if f.numeric and f.name != "TimeUS"]
+                    for n in self._bin.names() if n != "FMT"}
+        return {n: sorted(cols) for n, cols in sorted(self._tlog.columns.items())}
+
+    def count(self, mtype: str) -> int:
+        if self._bin is not None:
+            return self._bin.count(mtype)
+        return len(self._tlog.times.get(mtype, ()))
+
+    def has(self, mtype: str, field: str) -> bool:
+        return field in self.tree().get(mtype, []) if self._bin is None else (
+            mtype in self._bin.formats and any(f.name == field and f.numeric for f in self._bin.formats[mtype].fields))
+
+    def series(self, mtype: str, field: str) -> tuple[np.ndarray, np.ndarray]:
+        """(seconds, values) of one field, read now from the index."""
+        if self._bin is not None:
+            return self._bin.times(mtype), self._bin.column(mtype, field)
+        return self._tlog.times[mtype], self._tlog.columns[mtype][field]
+
+    def duration(self) -> float:
+        ends = [self.series(t, f)[0][-1] for t, f in (("ATT", "Roll"), ("GPS", "Lat"), ("ATTITUDE", "roll"),
+                                                     ("HEARTBEAT", "custom_mode")) if self.has(t, f)]
+        return float(max(ends)) if ends else 0.0
+
+    # -- modes, events, path, parameters ------------------------------------------------------------------------
+    def modes(self) -> list[tuple[float, str]]:
+        """(time, mode name) at each change of flight mode."""
+        out: list[tuple[float, str]] = []
+        if self._bin is not None:
+            if "MODE" in self._bin.formats:
+                field = "ModeNum" if self.has("MODE", "ModeNum") else "Mode"
+                t, nums = self.series("MODE", field)
+                out = [(float(a), MODE_NAMES.get(int(n), f"mode {int(n)}")) for a, n in zip(t, nums)]
+        else:
+            for t, custom, _armed in self._tlog.heartbeats:
+                name = MODE_NAMES.get(custom, f"mode {custom}")
+                if not out or out[-1][1] != name:
+                    out.append((t, name))
+        return out
+
+    def events(self) -> list[Event]:
+        out = [Event(t, "mode", name) for t, name in self.modes()]
+        if self._bin is not None:
+            b = self._bin
+            if "EV" in b.formats:
+                for t, i in zip(*self.series("EV", "Id")):
+                    name = EVENT_NAMES.get(int(i), f"event {int(i)}")
+                    out.append(Event(float(t), "arming" if int(i) in (10, 11, 15) else "event", name))
+            if "ARM" in b.formats and self.has("ARM", "ArmState"):
+                for t, s in zip(*self.series("ARM", "ArmState")):
+                    out.append(Event(float(t), "arming", "armed" if s else "disarmed"))
+            if "ERR" in b.formats:
+                t, sub = self.series("ERR", "Subsys")
+                _t, code = self.series("ERR", "ECode")
+                for a, s, c in zip(t, sub, code):
+                    s, c = int(s), int(c)
+                    if s in FAILSAFES:
+                        what = f"{FAILSAFES[s]} {'cleared' if c == 0 else 'triggered'}"
+                        out.append(Event(float(a), "failsafe" if s not in (10,) else "error", what))
+                    else:
+                        out.append(Event(float(a), "error", f"error subsystem {s} code {c}"))
+            if "MSG" in b.formats:
+                for t, text in zip(b.times("MSG"), b.strings("MSG", "Message")):
+                    out.append(Event(float(t), "message", text))
+        else:
+            armed = None
+            for t, _custom, arm in self._tlog.heartbeats:
+                if arm != armed and armed is not None:
+                    out.append(Event(t, "arming", "armed" if arm else "disarmed"))
+                armed = arm
+            for t, sev, text in self._tlog.texts:
+                out.append(Event(t, "failsafe" if "failsafe" in text.lower() else
+                                 ("error" if sev <= 3 else "message"), text))
+        return sorted(out, key=lambda e: e.t)
+
+    def flight_path(self) -> FlightPath | None:
+        if self._bin is not None and self.has("GPS", "Lat"):
+            t, lat = self.series("GPS", "Lat")
+            lon, alt = self.series("GPS", "Lng")[1], self.series("GPS", "Alt")[1]
+        elif self._tlog is not None and "GLOBAL_POSITION_INT" in self._tlog.columns:
+            cols = self._tlog.columns["GLOBAL_POSITION_INT"]
+            t, lat, lon, alt = (self._tlog.times["GLOBAL_POSITION_INT"], cols["lat"] / 1e7, cols["lon"] / 1e7,
+                                cols["relative_alt"] / 1000.0)
+        else:
+            return None
+        fix = (np.abs(lat) > 1e-6) | (np.abs(lon) > 1e-6)
+        t, lat, lon, alt = t[fix], lat[fix], lon[fix], alt[fix]
+        if len(t) == 0:
+            return None
+        changes = self.modes()
+        starts = np.array([c[0] for c in changes]) if changes else np.zeros(0)
+        idx = np.searchsorted(starts, t, side="right") - 1
+        mode = [changes[i][1] if i >= 0 else "" for i in idx.tolist()]
+        return FlightPath(t, lat, lon, alt, mode)
+
+    def params(self) -> dict[str, float]:
+        """The parameters as they were in that flight (the last value logged of each)."""
+        if self._bin is None:
+            return dict(self._tlog.params)
+        if "PARM" not in self._bin.formats:
+            return {}
+        names = self._bin.strings("PARM", "Name")
+        values = self._bin.column("PARM", "Value")
+        return {n: float(v) for n, v in zip(names, values)}
+
+    def export_csv(self, path: str, fields: list[tuple[str, str]]) -> int:
+        """Write time and the chosen fields, one row per time any of them was logged; each column holds its last
+        logged value (empty before its first). Returns the rows written."""
+        series = [self.series(t, f) for t, f in fields]
+        times = np.unique(np.concatenate([s[0] for s in series])) if series else np.zeros(0)
+        columns = []
+        for t, v in series:
+            i = np.searchsorted(t, times, side="right") - 1
+            columns.append([("" if k < 0 else repr(float(v[k]))) for k in i.tolist()])
+        with open(path, "w", newline="", encoding="utf-8") as f:
+            w = csv.writer(f)
+            w.writerow(["time_s"] + [f"{t}.{n}" for t, n in fields])
+            for r, t in enumerate(times.tolist()):
+                w.writerow([f"{t:.6f}"] + [c[r] for c in columns])
+        return len(times)
+
+
+def param_diff(flight: dict[str, float], current: dict[str, float]) -> list[tuple[str, float | None, float | None]]:
+    """(name, in the flight, now) for each parameter that differs or exists on one side only."""
+    out = []
+    for name in sorted(set(flight) | set(current)):
+        a, b = flight.get(name), current.get(name)
+        if a is None or b is None or not np.isclose(a, b, rtol=1e-6, atol=1e-7):
+            out.append((name, a, b))
+    return out
+
+
+def open_log(path: str) -> FlightLog:
+    return FlightLog(path)

@@ -1,0 +1,126 @@
+"""The review's log reader (driver/review): a .BIN made here with FMT + records reads as pymavlink's DFReader
+reads it; a .tlog from the recordings gives its types, modes, messages and parameters; bad input is a LogError."""
+from __future__ import annotations
+
+import os
+
+import numpy as np
+import pytest
+from pymavlink import DFReader
+
+from driver.review import LogError, open_log
+from driver.review.log import param_diff
+from driver.review.writer import sample_flight
+
+RECORDINGS = os.path.join(os.path.dirname(__file__), "data", "recordings")
+
+
+@pytest.fixture()
+def bin_path(tmp_path):
+    path = str(tmp_path / "flight.BIN")
+    sample_flight(seconds=20, rate_hz=10).save(path)
+    return path
+
+
+def test_fields_read_as_dfreader_reads_them(bin_path):
+    log = open_log(bin_path)
+    reader = DFReader.DFReader_binary(bin_path)
+    rolls, lats = [], []
+    while (m := reader.recv_msg()) is not None:
+        if m.get_type() == "ATT":
+            rolls.append(m.Roll)
+        elif m.get_type() == "GPS":
+            lats.append(m.Lat)
+    assert np.allclose(log.series("ATT", "Roll")[1], rolls)
+    assert np.allclose(log.series("GPS", "Lat")[1], lats)
+    assert "DesRoll" in log.tree()["ATT"] and "TimeUS" not in log.tree()["ATT"]
+    t = log.series("ATT", "Roll")[0]
+    assert np.all(np.diff(t) > 0) and t[0] >= 0
+
+
+def test_modes_events_path_and_parameters(bin_path):
+    log = open_log(bin_path)
+    assert [m for _t, m in log.modes()] == ["GUIDED", "LOITER", "RTL"]
+    kinds = {(e.kind, e.text) for e in log.events()}
+    assert ("arming", "armed") in kinds and ("arming", "disarmed") in kinds
+    assert ("failsafe", "battery failsafe triggered") in kinds
+    assert ("message", "Battery 1 is low 10.40V used 2200 mAh") in kinds
+    path = log.flight_path()
+    assert path.mode[0] == "GUIDED" and path.mode[-1] == "RTL" and abs(path.lat[0] + 35.36) < 0.01
+    assert log.params()["RTL_ALT"] == 1500.0
+    assert param_diff(log.params(), {"RTL_ALT": 2000.0, "WPNAV_SPEED": 500.0, "NEW": 1.0}) == [
+        ("BATT_LOW_VOLT", 10.5, None), ("NEW", None, 1.0), ("RTL_ALT", 1500.0, 2000.0)]
+
+
+def test_csv_holds_the_chosen_fields(bin_path, tmp_path):
+    log = open_log(bin_path)
+    out = str(tmp_path / "f.csv")
+    rows = log.export_csv(out, [("ATT", "Roll"), ("BAT", "Volt")])
+    lines = open(out).read().splitlines()
+    assert lines[0] == "time_s,ATT.Roll,BAT.Volt" and len(lines) == rows + 1
+    assert float(lines[-1].split(",")[2]) == pytest.approx(log.series("BAT", "Volt")[1][-1], rel=1e-6)
+
+
+def test_truncated_and_corrupt_bin_still_open(bin_path, tmp_path):
+    data = open(bin_path, "rb").read()
+    cut = str(tmp_path / "cut.BIN")
+    open(cut, "wb").write(data[:len(data) // 2 + 7])          # a record cut in half at the end
+    log = open_log(cut)
+    assert 0 < log.count("ATT") < open_log(bin_path).count("ATT") and log.skipped_bytes > 0
+    bad = bytearray(data)
+    middle = len(bad) // 2
+    bad[middle:middle + 300] = os.urandom(300)                # garbage inside
+    path = str(tmp_path / "bad.BIN")
+    open(path, "wb").write(bad)
+    log = open_log(path)
+    assert log.count("ATT") > 0.9 * open_log(bin_path).count("ATT") and log.skipped_bytes >= 200
+
+
+@pytest.mark.parametrize("content,words", [(b"", "empty"), (os.urandom(5000), "not a .BIN"),
+                                           (b"\xa3\x95\x80" + bytes(40), "FMT")])
+def test_bad_bin_is_a_clear_error(tmp_path, content, words):
+    path = str(tmp_path / "x.BIN")
+    open(path, "wb").write(content.replace(b"\xa3\x95", b"\xa3\x96") if words == "not a .BIN" else content)
+    with pytest.raises(LogError, match=words):
+        open_log(path)
+
+
+def test_tlog_from_the_recordings():
+    log = open_log(os.path.join(RECORDINGS, "arducopter-4.6-sitl-adsb.tlog"))
+    assert "roll" in log.tree()["ATTITUDE"]
+    assert any(e.text == "ArduPilot Ready" for e in log.events())
+    assert log.modes()[0][1] == "STABILIZE"
+    assert len(log.params()) > 0
+    assert log.flight_path() is not None
+
+
+@pytest.mark.parametrize("content,words", [(b"", "empty"), (b"\x00garbage" * 500, "no MAVLink")])
+def test_bad_tlog_is_a_clear_error(tmp_path, content, words):
+    path = str(tmp_path / "x.tlog")
+    open(path, "wb").write(content)
+    with pytest.raises(LogError, match=words):
+        open_log(path)
+
+
+def test_tlog_with_garbage_inside_keeps_its_messages(tmp_path):
+    data = open(os.path.join(RECORDINGS, "arducopter-4.6-sitl-adsb.tlog"), "rb").read()
+    path = str(tmp_path / "g.tlog")
+    open(path, "wb").write(data[:len(data) // 2] + os.urandom(2000) + data[len(data) // 2:])
+    assert open_log(path).count("ATTITUDE") > 0
+
+
+@pytest.mark.parametrize("name", ["pymavlink-test.BIN", "ap-logger-alltypes.BIN"])
+def test_real_ardupilot_logs_read_as_dfreader_reads_them(name):
+    path = os.path.join(os.path.dirname(__file__), "data", "logs", name)
+    log = open_log(path)
+    reader = DFReader.DFReader_binary(path)
+    messages: dict[str, list] = {}
+    while (m := reader.recv_msg()) is not None:
+        messages.setdefault(m.get_type(), []).append(m)
+    tree = log.tree()
+    assert set(tree) == set(messages) - {"FMT"}
+    for mtype, fields in tree.items():
+        assert log.count(mtype) == len(messages[mtype]), mtype
+        for f in fields:
+            theirs = [float(getattr(m, f)) for m in messages[mtype]]
+            assert np.allclose(log.series(mtype, f)[1], theirs, equal_nan=True, rtol=1e-6), (mtype, f)

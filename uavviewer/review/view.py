@@ -1,0 +1,153 @@
+"""One reviewed log in one view (issue 31): the searchable field tree, the plots with their events and cursor,
+the flight path on the map coloured by mode with the cursor's marker, the events, the parameters as flown and
+their difference from the vehicle's, presets and CSV export."""
+from __future__ import annotations
+
+import logging
+import os
+
+from PyQt5.QtCore import Qt
+from PyQt5.QtWidgets import (QComboBox, QFileDialog, QHBoxLayout, QLabel, QMainWindow, QPushButton, QSplitter,
+                             QTabWidget, QVBoxLayout, QWidget)
+
+from driver.review.log import PRESETS, FlightLog
+
+from ..map.log_path import LogPathOverlay, mode_colour
+from ..map.map_view import MapView
+from .events_list import EventsList
+from .field_tree import FieldTree
+from .params_table import FlightParams
+from .plots import ReviewPlots
+
+log = logging.getLogger(__name__)
+
+__all__ = ["ReviewWindow"]
+
+
+class ReviewWindow(QMainWindow):
+    """``current_params``: a callable giving the vehicle's parameters now (name -> value; empty when none)."""
+
+    def __init__(self, flight: FlightLog, current_params=dict, parent: QWidget | None = None) -> None:
+        super().__init__(parent)
+        self.log = flight
+        self.setWindowTitle(f"Review — {os.path.basename(flight.path)}")
+        self.tree = FieldTree()
+        self.plots = ReviewPlots()
+        self.map = MapView()
+        self.path_overlay = LogPathOverlay(self.map, self)
+        self.events = EventsList()
+        self.params = FlightParams()
+        self.preset = QComboBox()
+        self.preset.addItem("Preset…")
+        self.preset.addItems(list(PRESETS))
+        self.preset.activated[str].connect(self.apply_preset)
+        clear = QPushButton("Clear plots")
+        clear.clicked.connect(self.plots.clear_fields)
+        self.export_button = QPushButton("Export CSV…")
+        self.export_button.clicked.connect(self.ask_export)
+        self.status = QLabel()
+        bar = QHBoxLayout()
+        for w in (self.preset, clear, self.export_button):
+            bar.addWidget(w)
+        bar.addWidget(self.status, 1)
+        self.legend = QLabel()
+        self.legend.setTextFormat(Qt.RichText)
+
+        side = QTabWidget()
+        side.addTab(self.map, "Path")
+        side.addTab(self.events, "Events")
+        side.addTab(self.params, "Parameters")
+        self.side = side
+        right = QSplitter(Qt.Vertical)
+        right.addWidget(_column(bar, self.plots))
+        right.addWidget(_column(side, self.legend))
+        right.setSizes([430, 300])
+        main = QSplitter(Qt.Horizontal)
+        main.addWidget(self.tree)
+        main.addWidget(right)
+        main.setSizes([260, 1100])
+        self.setCentralWidget(main)
+
+        self.tree.fieldChosen.connect(self.add_field)
+        self.plots.cursorMoved.connect(self.path_overlay.set_time)
+        self.path_overlay.timePicked.connect(self.plots.set_cursor)      # and back: a click on the path
+        self.events.timeChosen.connect(self.plots.set_cursor)
+        self._current_params = current_params
+        self.flown_params = self.log.params()
+        side.currentChanged.connect(lambda index: index == side.indexOf(self.params) and self.compare_params())
+        self._fill()
+
+    def compare_params(self) -> None:
+        """The parameters as flown beside the vehicle's now (read again each time the tab is shown: the vehicle
+        may have been connected, or its table read, since the log was opened)."""
+        try:
+            current = self._current_params() or {}
+        except Exception:                                   # noqa: BLE001 - a comparison is optional
+            log.exception("current parameters")
+            current = {}
+        self.params.show_params(self.flown_params, current)
+
+    def _fill(self) -> None:
+        tree = self.log.tree()
+        self.tree.set_tree(tree, {t: self.log.count(t) for t in tree})
+        events = self.log.events()
+        self.plots.show_events(events)
+        self.events.show_events(events)
+        path = self.log.flight_path()
+        if path is not None:
+            self.path_overlay.set_path(path.t, path.lat, path.lon, path.mode)
+            seen = list(dict.fromkeys(path.mode))
+            self.legend.setText("Path by mode: " + "  ".join(
+                f'<span style="color:{mode_colour(m).name()}">■ {m or "?"}</span>' for m in seen))
+        else:
+            self.legend.setText("No position in this log: no path to draw.")
+        self.compare_params()
+        skipped = self.log.skipped_bytes
+        self.status.setText(f"{sum(self.log.count(t) for t in tree):,} records, {len(tree)} types"
+                            + (f"; {skipped:,} unreadable bytes skipped" if skipped else ""))
+
+    # -- fields --------------------------------------------------------------------------------------------------
+    def add_field(self, mtype: str, field: str, axis: int = 0) -> None:
+        t, values = self.log.series(mtype, field)
+        self.plots.add((mtype, field), t, values, axis)
+
+    def apply_preset(self, name: str) -> int:
+        """The preset's fields this log has (ATT for a .BIN, ATTITUDE for a .tlog); returns how many."""
+        if name not in PRESETS:
+            return 0
+        self.plots.clear_fields()
+        chosen = [(t, f, axis) for t, f, axis in PRESETS[name] if self.log.has(t, f)]
+        for t, f, axis in chosen:
+            self.add_field(t, f, axis)
+        self.status.setText(f"{name}: {len(chosen)} fields" if chosen else f"{name}: none of its fields in this log")
+        self.preset.setCurrentIndex(0)
+        return len(chosen)
+
+    def export(self, path: str) -> int:
+        fields = list(self.plots.curves)
+        rows = self.log.export_csv(path, fields)
+        self.status.setText(f"exported {len(fields)} fields, {rows:,} rows to {os.path.basename(path)}")
+        return rows
+
+    def ask_export(self) -> None:
+        if not self.plots.curves:
+            self.status.setText("plot the fields to export first")
+            return
+        base = os.path.splitext(self.log.path)[0] + ".csv"
+        path, _ = QFileDialog.getSaveFileName(self, "Export CSV", base, "CSV (*.csv)")
+        if path:
+            self.export(path)
+
+    def closeEvent(self, event) -> None:  # noqa: N802
+        self.log.close()
+        super().closeEvent(event)
+
+
+def _column(*parts) -> QWidget:
+    """Widgets and layouts stacked without margins."""
+    box = QWidget()
+    layout = QVBoxLayout(box)
+    layout.setContentsMargins(0, 0, 0, 0)
+    for part in parts:
+        (layout.addLayout if isinstance(part, QHBoxLayout) else layout.addWidget)(part)
+    return box
