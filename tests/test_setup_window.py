@@ -1,0 +1,95 @@
+"""Issue 32, the viewer: Vehicle › Setup on the real simulated ArduCopter 4.6.3 — a calibration from its page to
+the vehicle's verdict, the accelerometer's six positions with the simulator's calibration model, the motor test
+refused without the propellers' tick and while armed, the outputs and channels moving live."""
+from __future__ import annotations
+
+import pytest
+from PyQt5.QtCore import Qt
+from PyQt5.QtWidgets import QMenu
+
+from viewer_fixtures import app_style, viewer_settings, window_factory  # noqa: F401  (fixtures)
+
+pytestmark = pytest.mark.timeout(120)
+
+
+@pytest.fixture
+def bench_window(sim_factory, vehicle_factory, window_factory):
+    def make(**sim_options):
+        sim = sim_factory(**sim_options)
+        vehicle = vehicle_factory(f"tcp:127.0.0.1:{sim.tcp_port}")
+        assert vehicle.wait_for(lambda s: s.connected and s.readiness.prearm_ok, 30), "vehicle not ready"
+        return sim, vehicle, window_factory(vehicle)
+    return make
+
+
+def open_setup(w, page: str):
+    menu = w.findChild(QMenu, "menuVehicle")
+    action = next(a for a in menu.actions() if a.objectName() == "actionSetup")
+    action.trigger()
+    return w.setup.dialog.turn_to(page)
+
+
+def test_gyro_calibration_from_the_page_to_the_vehicles_verdict(qtbot, bench_window):
+    _sim, _vehicle, w = bench_window()
+    page = open_setup(w, "Sensors")
+    qtbot.mouseClick(page.gyro, Qt.LeftButton)
+    qtbot.waitUntil(lambda: "accepted" in page.result.text(), timeout=10000)
+    assert page.result.text().startswith("gyro calibration: accepted")
+
+
+def test_accel_six_positions_with_the_calibration_model(qtbot, bench_window):
+    _sim, vehicle, w = bench_window(calibration_model=True, speedup=20.0)
+    page = open_setup(w, "Sensors")
+    qtbot.mouseClick(page.accel_start, Qt.LeftButton)
+    drawn = []
+    for position in range(1, 7):
+        qtbot.waitUntil(lambda p=position: page.next.isEnabled() and page.pose.position == p, timeout=20000)
+        assert f"Position {position} of 6" in page.asked.text()
+        drawn.append(page.pose.position)
+        qtbot.mouseClick(page.next, Qt.LeftButton)
+    qtbot.waitUntil(lambda: "accel calibration" in page.result.text() and "…" not in page.result.text(),
+                    timeout=20000)
+    assert drawn == [1, 2, 3, 4, 5, 6]
+    assert "accepted" in page.result.text() and "successful" in page.result.text()
+    qtbot.waitUntil(lambda: "Calibration successful" in page.said.toPlainText(), timeout=5000)   # its own words
+
+
+def test_motor_test_needs_the_tick_and_a_disarmed_vehicle_and_the_outputs_move(qtbot, bench_window):
+    _sim, vehicle, w = bench_window()
+    page = open_setup(w, "Motors")
+    qtbot.waitUntil(lambda: "propellers" in page.reason.text().lower(), timeout=5000)
+    assert not page.test.isEnabled()
+    assert vehicle.arm().result(timeout=20).ok
+    page.props_off.setChecked(True)
+    qtbot.waitUntil(lambda: "armed" in page.reason.text(), timeout=5000)
+    assert not page.test.isEnabled()
+    assert vehicle.disarm().result(timeout=20).ok
+    qtbot.waitUntil(page.test.isEnabled, timeout=10000)
+    qtbot.waitUntil(lambda: page.outputs.value(1) is not None, timeout=10000)
+    idle = page.outputs.value(1)
+    page.throttle.setValue(30.0)
+    page.seconds.setValue(5.0)
+    qtbot.mouseClick(page.test, Qt.LeftButton)
+    qtbot.waitUntil(lambda: (page.outputs.value(1) or 0) > idle, timeout=10000)
+    qtbot.mouseClick(page.stop, Qt.LeftButton)
+    qtbot.waitUntil(lambda: page.outputs.value(1) == idle, timeout=10000)
+
+
+def test_radio_bars_follow_the_transmitter(qtbot, bench_window):
+    sim, _vehicle, w = bench_window()
+    page = open_setup(w, "Radio")
+    qtbot.waitUntil(lambda: page.channels.value(1) is not None, timeout=10000)
+    sim.autopilot.move_stick(1, 1900)
+    qtbot.waitUntil(lambda: page.channels.value(1) == 1900, timeout=10000)
+    assert "channels received" in page.status.text()
+
+
+def test_summary_says_each_area(qtbot, bench_window):
+    _sim, vehicle, w = bench_window()
+    page = open_setup(w, "Summary")
+    assert vehicle.wait_for(lambda s: s.firmware, 10)
+    qtbot.waitUntil(lambda: f"ArduCopter {vehicle.state().firmware}" in page.firmware.text(), timeout=10000)
+    qtbot.waitUntil(lambda: page.verdict("Radio") == "done", timeout=10000)
+    assert page.verdict("Motors") == "done"
+    assert vehicle.arm().result(timeout=20).ok
+    qtbot.waitUntil(lambda: page.verdict("Motors") == "not applicable", timeout=10000)
