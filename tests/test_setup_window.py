@@ -93,3 +93,27 @@ def test_summary_says_each_area(qtbot, bench_window):
     assert page.verdict("Motors") == "done"
     assert vehicle.arm().result(timeout=20).ok
     qtbot.waitUntil(lambda: page.verdict("Motors") == "not applicable", timeout=10000)
+
+
+def test_radio_calibration_writes_only_moved_channels_after_the_review(qtbot, bench_window):
+    sim, vehicle, w = bench_window()
+    page = open_setup(w, "Radio")
+    assert vehicle.wait_for(lambda s: s.parameters.complete and s.parameters.get("RC1_MIN") is not None, 30)
+    qtbot.waitUntil(lambda: page.channels.value(1) is not None, timeout=10000)
+    qtbot.mouseClick(page.start, Qt.LeftButton)
+    for pwm in (1100, 1900, 1520):
+        sim.autopilot.move_stick(1, pwm)
+        qtbot.waitUntil(lambda p=pwm: page.channels.value(1) == p, timeout=10000)
+    qtbot.mouseClick(page.finish, Qt.LeftButton)
+    plan = page.plan.toPlainText()
+    assert "RC1_MIN 1100, RC1_MAX 1900, RC1_TRIM 1520" in plan
+    assert "RC2: never moved" in plan and "not written" in plan
+    qtbot.mouseClick(page.write, Qt.LeftButton)
+    qtbot.waitUntil(lambda: w.params.review is not None and w.params.review.isVisible(), timeout=5000)
+    assert set(w.params.model.pending) == {"RC1_MIN", "RC1_MAX", "RC1_TRIM"}     # nothing of RC2..
+    assert vehicle.state().parameters.get("RC1_MIN").value == 1000                  # not before Write
+    qtbot.mouseClick(w.params.review.write_button, Qt.LeftButton)
+    assert vehicle.wait_for(lambda s: s.parameters.get("RC1_MIN").value == 1100
+                            and s.parameters.get("RC1_MAX").value == 1900
+                            and s.parameters.get("RC1_TRIM").value == 1520, 15)   # the vehicle's echo
+    assert sim.autopilot.params["RC1_MIN"] == 1100

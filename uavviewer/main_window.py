@@ -113,7 +113,7 @@ class MainWindow(QMainWindow):
         self.params = ParamsController(self.adapter, self, say=self.log_message)    # docs/parameters.md
         self.params.add_to_menu(self)                       # Vehicle › Parameters…
         self.params.offer_fixes(self.messages)              # a warning naming a parameter: Fix… opens it
-        self.setup = SetupController(self.adapter, self)    # Vehicle › Setup…: calibrations, radio, motors
+        self.setup = SetupController(self.adapter, self, self.params)    # Vehicle › Setup…: calibrations, radio, motors
         self.setup.add_to_menu(self)
         self.fleet_dock = FleetDock(self)
 

@@ -33,9 +33,10 @@ class _Relay(QObject):
 
 
 class SetupController(QObject):
-    def __init__(self, adapter, parent: QMainWindow) -> None:
+    def __init__(self, adapter, parent: QMainWindow, params) -> None:
         super().__init__(parent)
         self.adapter = adapter
+        self.params = params                         # the Parameters page's controller: the one checked write path
         self._parent = parent
         self.dialog: SetupDialog | None = None
         self._relay = _Relay()
@@ -54,7 +55,7 @@ class SetupController(QObject):
 
     def open(self, page: str = "") -> SetupDialog:
         if self.dialog is None:
-            pages = [SummaryPage(), SensorsPage(self), RadioPage(), MotorsPage(self)]
+            pages = [SummaryPage(), SensorsPage(self), RadioPage(self), MotorsPage(self)]
             self.dialog = SetupDialog(pages, self._parent)
             self.dialog.pageShown.connect(lambda _title: self._watch())
         if page:
@@ -63,6 +64,7 @@ class SetupController(QObject):
         self.dialog.raise_()
         self.dialog.activateWindow()
         self._watch()
+        self.params.fetch_if_needed()                # the pages read and write parameters
         self.show_state(self.adapter.state)
         return self.dialog
 
@@ -81,6 +83,11 @@ class SetupController(QObject):
     @staticmethod
     def now() -> float:
         return time.time()
+
+    def propose(self, values: dict[str, float]) -> list[str]:
+        """Parameters a page wants written: checked, staged and reviewed as on the Parameters page, written only
+        when the pilot presses Write there, each confirmed by the vehicle's echo (ParamsController.propose)."""
+        return self.params.propose(values)
 
     def run(self, name: str, call: Callable, done: Callable[[CommandResult], None]) -> None:
         """``call(drone.setup)`` returns a Future of a CommandResult; ``done(result)`` runs on the UI thread."""
