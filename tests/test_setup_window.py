@@ -117,3 +117,22 @@ def test_radio_calibration_writes_only_moved_channels_after_the_review(qtbot, be
                             and s.parameters.get("RC1_MAX").value == 1900
                             and s.parameters.get("RC1_TRIM").value == 1520, 15)   # the vehicle's echo
     assert sim.autopilot.params["RC1_MIN"] == 1100
+
+
+def test_flight_modes_light_the_switch_slot_and_write_through_the_review(qtbot, bench_window):
+    sim, vehicle, w = bench_window()
+    page = open_setup(w, "Flight modes")
+    assert vehicle.wait_for(lambda s: s.parameters.complete, 30)
+    qtbot.waitUntil(lambda: page.modes[0].currentText() == "CIRCLE", timeout=5000)     # FLTMODE1 7 in the sim
+    sim.autopilot.move_stick(5, 1300)                                                   # FLTMODE_CH 5
+    qtbot.waitUntil(lambda: page.lit == 2, timeout=10000)
+    sim.autopilot.move_stick(5, 1800)
+    qtbot.waitUntil(lambda: page.lit == 6, timeout=10000)
+    page.modes[5].setCurrentIndex(page.modes[5].findText("LOITER"))
+    page.simple[1].setChecked(True)
+    qtbot.mouseClick(page.write, Qt.LeftButton)
+    qtbot.waitUntil(lambda: w.params.review is not None and w.params.review.isVisible(), timeout=5000)
+    assert w.params.model.pending == {"FLTMODE6": 5.0, "SIMPLE": 2.0}
+    qtbot.mouseClick(w.params.review.write_button, Qt.LeftButton)
+    assert vehicle.wait_for(lambda s: s.parameters.get("FLTMODE6").value == 5
+                            and s.parameters.get("SIMPLE").value == 2, 15)

@@ -15,6 +15,7 @@ from PyQt5.QtWidgets import QAction, QMainWindow, QMenu
 from driver.vehicle.state import CommandResult, CommandStatus
 
 from .dialog import SetupDialog
+from .modes_page import ModesPage
 from .motors_page import MotorsPage
 from .radio_page import RadioPage
 from .sensors_page import SensorsPage
@@ -55,7 +56,7 @@ class SetupController(QObject):
 
     def open(self, page: str = "") -> SetupDialog:
         if self.dialog is None:
-            pages = [SummaryPage(), SensorsPage(self), RadioPage(self), MotorsPage(self)]
+            pages = [SummaryPage(), SensorsPage(self), RadioPage(self), ModesPage(self), MotorsPage(self)]
             self.dialog = SetupDialog(pages, self._parent)
             self.dialog.pageShown.connect(lambda _title: self._watch())
         if page:
