@@ -15,6 +15,7 @@ from PyQt5.QtWidgets import QAction, QMainWindow, QMenu
 from driver.vehicle.state import CommandResult, CommandStatus
 
 from .dialog import SetupDialog
+from .frame_page import FramePage
 from .modes_page import ModesPage
 from .motors_page import MotorsPage
 from .radio_page import RadioPage
@@ -56,7 +57,7 @@ class SetupController(QObject):
 
     def open(self, page: str = "") -> SetupDialog:
         if self.dialog is None:
-            pages = [SummaryPage(), SensorsPage(self), RadioPage(self), ModesPage(self), MotorsPage(self)]
+            pages = [SummaryPage(), FramePage(self), SensorsPage(self), RadioPage(self), ModesPage(self), MotorsPage(self)]
             self.dialog = SetupDialog(pages, self._parent)
             self.dialog.pageShown.connect(lambda _title: self._watch())
         if page:
@@ -89,6 +90,19 @@ class SetupController(QObject):
         """Parameters a page wants written: checked, staged and reviewed as on the Parameters page, written only
         when the pilot presses Write there, each confirmed by the vehicle's echo (ParamsController.propose)."""
         return self.params.propose(values)
+
+    def propose_changes(self, wanted: dict[str, float], reported: dict[str, float]) -> str:
+        """The values of ``wanted`` that differ from what the vehicle ``reported``, proposed; the page's words."""
+        changed = {n: v for n, v in wanted.items() if reported.get(n) != v}
+        if not changed:
+            return "Nothing changed."
+        unknown = self.propose(changed)
+        return (f"Not staged: {', '.join(unknown)} not read from the vehicle yet." if unknown else
+                "In the Parameters review: written when you press Write there.")
+
+    def reboot(self) -> None:
+        """The vehicle restarts (a new frame); the answer goes to Messages as every command's."""
+        self.adapter.command("reboot")
 
     def run(self, name: str, call: Callable, done: Callable[[CommandResult], None]) -> None:
         """``call(drone.setup)`` returns a Future of a CommandResult; ``done(result)`` runs on the UI thread."""

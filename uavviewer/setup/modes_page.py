@@ -77,13 +77,7 @@ class ModesPage(QWidget):
         return values
 
     def write_changes(self) -> None:
-        changed = {n: v for n, v in self.wanted().items() if self._shown.get(n) != v}
-        if not changed:
-            self.status.setText("Nothing changed.")
-            return
-        unknown = self._runner.propose(changed)
-        self.status.setText(f"Not staged: {', '.join(unknown)} not read from the vehicle yet." if unknown else
-                            "In the Parameters review: written when you press Write there.")
+        self.status.setText(self._runner.propose_changes(self.wanted(), self._shown))
 
     def show_state(self, s) -> None:
         reported = {n: _param(s, n) for n in [f"FLTMODE{i}" for i in range(1, 7)] + ["SIMPLE", "SUPER_SIMPLE"]}
