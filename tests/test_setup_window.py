@@ -153,3 +153,34 @@ def test_frame_is_drawn_and_a_change_asks_for_a_reboot(qtbot, bench_window):
     qtbot.waitUntil(lambda: page.drawing.frame == (1, 0) and page.reboot.isVisible(), timeout=15000)
     assert [m[2] for m in page.drawing.motors] == [2, 4, 1, 3]
     assert "reboot" in page.status.text()
+
+
+def test_power_voltage_calibration_scales_the_multiplier_through_the_review(qtbot, bench_window):
+    _sim, vehicle, w = bench_window()
+    page = open_setup(w, "Power")
+    assert vehicle.wait_for(lambda s: s.parameters.complete and s.battery.voltage, 30)
+    qtbot.waitUntil(lambda: "BATT_MONITOR 4" in page.info.text(), timeout=5000)
+    page.measured_volts.setValue(12.0)
+    qtbot.mouseClick(page.volts, Qt.LeftButton)
+    qtbot.waitUntil(lambda: w.params.review is not None and w.params.review.isVisible(), timeout=5000)
+    reported = float(page.status.text().split("the vehicle reads ")[1].split(",")[0])
+    proposed = w.params.model.pending["BATT_VOLT_MULT"]
+    assert proposed == pytest.approx(10.1 * 12.0 / reported, rel=1e-3)
+    assert vehicle.state().parameters.get("BATT_VOLT_MULT").value == pytest.approx(10.1)      # not before Write
+    qtbot.mouseClick(w.params.review.write_button, Qt.LeftButton)
+    assert vehicle.wait_for(lambda s: s.parameters.get("BATT_VOLT_MULT").value == pytest.approx(proposed), 15)
+
+
+def test_failsafes_in_words_and_a_warning_when_none_is_left(qtbot, bench_window):
+    _sim, vehicle, w = bench_window()
+    page = open_setup(w, "Failsafes")
+    assert vehicle.wait_for(lambda s: s.parameters.complete, 30)
+    qtbot.waitUntil(lambda: page.lines.topLevelItemCount() == 6
+                    and "not read" not in page.lines.topLevelItem(2).text(1), timeout=5000)
+    words = {page.lines.topLevelItem(i).text(0): page.lines.topLevelItem(i).text(1) for i in range(6)}
+    assert words["Radio lost"].startswith("returns home (RTL) (FS_THR_ENABLE 1")
+    assert words["Fence"].startswith("off")
+    assert "No battery failsafe action" in page.warnings.text()
+    assert "Neither the radio" not in page.warnings.text()
+    assert vehicle.set_parameter("FS_THR_ENABLE", 0).result(timeout=15).ok
+    qtbot.waitUntil(lambda: "Neither the radio nor the ground-station failsafe" in page.warnings.text(), timeout=5000)

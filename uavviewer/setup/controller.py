@@ -15,9 +15,11 @@ from PyQt5.QtWidgets import QAction, QMainWindow, QMenu
 from driver.vehicle.state import CommandResult, CommandStatus
 
 from .dialog import SetupDialog
+from .failsafes_page import FailsafesPage
 from .frame_page import FramePage
 from .modes_page import ModesPage
 from .motors_page import MotorsPage
+from .power_page import PowerPage
 from .radio_page import RadioPage
 from .sensors_page import SensorsPage
 from .summary_page import SummaryPage
@@ -57,7 +59,8 @@ class SetupController(QObject):
 
     def open(self, page: str = "") -> SetupDialog:
         if self.dialog is None:
-            pages = [SummaryPage(), FramePage(self), SensorsPage(self), RadioPage(self), ModesPage(self), MotorsPage(self)]
+            pages = [SummaryPage(), FramePage(self), SensorsPage(self), RadioPage(self), ModesPage(self),
+                     PowerPage(self), FailsafesPage(self), MotorsPage(self)]
             self.dialog = SetupDialog(pages, self._parent)
             self.dialog.pageShown.connect(lambda _title: self._watch())
         if page:
@@ -99,6 +102,9 @@ class SetupController(QObject):
         unknown = self.propose(changed)
         return (f"Not staged: {', '.join(unknown)} not read from the vehicle yet." if unknown else
                 "In the Parameters review: written when you press Write there.")
+
+    def open_parameter(self, name: str) -> None:
+        self.params.open(name)
 
     def reboot(self) -> None:
         """The vehicle restarts (a new frame); the answer goes to Messages as every command's."""
