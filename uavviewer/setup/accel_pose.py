@@ -7,8 +7,9 @@ from PyQt5.QtWidgets import QSizePolicy, QWidget
 
 __all__ = ["AccelPose"]
 
-# position → (view, rotation in degrees of the side or front view, upside down)
-_VIEWS = {1: ("side", 0), 2: ("front", -90), 3: ("front", 90), 4: ("side", 90), 5: ("side", -90), 6: ("side", 180)}
+# position → (view, clockwise rotation on screen): the side view has the nose to the right, the front view the
+# nose towards the pilot (the vehicle's left on the pilot's right)
+_VIEWS = {1: ("side", 0), 2: ("front", 90), 3: ("front", -90), 4: ("side", 90), 5: ("side", -90), 6: ("side", 180)}
 
 
 class AccelPose(QWidget):
@@ -36,6 +37,7 @@ class AccelPose(QWidget):
             p.drawText(self.rect(), Qt.AlignCenter, "no position asked")
             return
         view, angle = _VIEWS[self.position]
+        p.drawText(8, 16, "seen from the side, nose →" if view == "side" else "seen from the front, nose towards you")
         p.translate(w / 2, ground - 34)
         p.rotate(angle)
         p.setPen(QPen(QColor("#ddd"), 3))
@@ -49,7 +51,5 @@ class AccelPose(QWidget):
             p.drawLine(QPointF(20, 0), QPointF(56, 0))
             p.drawLine(QPointF(56, 0), QPointF(48, -6))
             p.drawLine(QPointF(56, 0), QPointF(48, 6))
-            p.drawText(QPointF(40, 20), "nose")
         else:
             p.drawEllipse(QPointF(0, 0), 5, 5)                        # the nose towards the viewer
-            p.drawText(QPointF(-14, 24), "nose ⊙")

@@ -149,6 +149,8 @@ class SensorsPage(QWidget):
         self.pose.set_position(accel.position if accel.step is AccelStep.WAITING else None)
         waiting = accel.step is AccelStep.WAITING
         if waiting:
+            if self.result.text().startswith("accel calibration: starting"):
+                self.result.setText("accel calibration: running…")
             self.asked.setText(f"Position {accel.position} of 6: put the vehicle {accel.position_name}, "
                                "hold it still, then press Next.")
         elif accel.step is AccelStep.SUCCESS:
