@@ -184,3 +184,41 @@ def test_failsafes_in_words_and_a_warning_when_none_is_left(qtbot, bench_window)
     assert "Neither the radio" not in page.warnings.text()
     assert vehicle.set_parameter("FS_THR_ENABLE", 0).result(timeout=15).ok
     qtbot.waitUntil(lambda: "Neither the radio nor the ground-station failsafe" in page.warnings.text(), timeout=5000)
+
+
+def test_compass_progress_per_compass_fitness_and_accept(qtbot, bench_window):
+    _sim, _vehicle, w = bench_window(calibration_model=True, speedup=20.0)
+    page = open_setup(w, "Sensors")
+    assert not page.compass_accept.isEnabled()
+    qtbot.mouseClick(page.compass_start, Qt.LeftButton)
+    qtbot.waitUntil(lambda: bool(page.compass_bars) and any(0 < bar.value() < 100 for bar, _ in page.compass_bars.values()),
+                    timeout=30000)
+    qtbot.waitUntil(lambda: "compass calibration: accepted" in page.result.text(), timeout=60000)
+    qtbot.waitUntil(lambda: all(bar.value() == 100 and words.text().startswith("fitness ")
+                                for bar, words in page.compass_bars.values()) and page.compass_accept.isEnabled(),
+                    timeout=5000)
+    qtbot.mouseClick(page.compass_accept, Qt.LeftButton)
+    qtbot.waitUntil(lambda: page.result.text().startswith("accept compass calibration: accepted"), timeout=10000)
+    qtbot.waitUntil(lambda: not page.compass_accept.isEnabled(), timeout=5000)
+
+
+def test_a_calibration_refused_while_armed_shows_the_vehicles_reason(qtbot, bench_window):
+    _sim, vehicle, w = bench_window()
+    page = open_setup(w, "Sensors")
+    assert vehicle.arm().result(timeout=20).ok
+    qtbot.waitUntil(lambda: page.notes.text().startswith("Armed: the vehicle refuses calibrations"), timeout=5000)
+    qtbot.mouseClick(page.gyro, Qt.LeftButton)
+    qtbot.waitUntil(lambda: "refused" in page.result.text() or "rejected" in page.result.text(), timeout=10000)
+    assert "Disarm" in page.result.text(), page.result.text()
+
+
+def test_the_solos_33_says_what_it_lacks(qtbot, sim_factory, vehicle_factory, window_factory):
+    sim = sim_factory(profile="solo")
+    vehicle = vehicle_factory(f"tcp:127.0.0.1:{sim.tcp_port}")
+    assert vehicle.wait_for(lambda s: s.connected and s.firmware.startswith("3.3"), 30)
+    w = window_factory(vehicle)
+    page = open_setup(w, "Sensors")
+    qtbot.waitUntil(lambda: "does not handle a level calibration" in page.notes.text(), timeout=5000)
+    assert "no compass calibration from a known yaw" in page.notes.text()
+    assert not page.level.isEnabled() and not page.simple.isEnabled() and not page.fixed_yaw.isEnabled()
+    assert page.gyro.isEnabled() and page.accel_start.isEnabled()
