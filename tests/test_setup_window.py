@@ -222,3 +222,5 @@ def test_the_solos_33_says_what_it_lacks(qtbot, sim_factory, vehicle_factory, wi
     assert "no compass calibration from a known yaw" in page.notes.text()
     assert not page.level.isEnabled() and not page.simple.isEnabled() and not page.fixed_yaw.isEnabled()
     assert page.gyro.isEnabled() and page.accel_start.isEnabled()
+    summary = w.setup.dialog.turn_to("Summary")
+    qtbot.waitUntil(lambda: summary.verdict("Traffic (ADS-B)") == "not applicable", timeout=5000)

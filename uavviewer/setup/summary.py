@@ -4,6 +4,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+from driver.setup.availability import unavailable
+
 __all__ = ["Line", "summary", "DONE", "ATTENTION", "NOT_APPLICABLE", "UNKNOWN"]
 
 DONE, ATTENTION, NOT_APPLICABLE, UNKNOWN = "done", "needs attention", "not applicable", "not known yet"
@@ -54,6 +56,9 @@ def summary(s) -> list[Line]:
     lines.append(Line("Power", UNKNOWN, "parameters not read yet") if batt is None else
                  Line("Power", ATTENTION, "no battery monitor (BATT_MONITOR 0)") if batt == 0 else
                  Line("Power", DONE, f"battery monitor {batt:g}, capacity {_param(s, 'BATT_CAPACITY') or 0:g} mAh"))
+    why = unavailable("adsb", s.firmware)
+    lines.append(Line("Traffic (ADS-B)", NOT_APPLICABLE, why) if why else
+                 Line("Traffic (ADS-B)", DONE, f"{len(s.traffic.contacts)} aircraft heard"))
     lines.append(Line("Motors", NOT_APPLICABLE, "armed: the motor test is for a disarmed vehicle on the ground")
                  if s.armed else Line("Motors", DONE, "motor test available (disarmed, propellers off)"))
     return lines
