@@ -224,3 +224,20 @@ def test_the_solos_33_says_what_it_lacks(qtbot, sim_factory, vehicle_factory, wi
     assert page.gyro.isEnabled() and page.accel_start.isEnabled()
     summary = w.setup.dialog.turn_to("Summary")
     qtbot.waitUntil(lambda: summary.verdict("Traffic (ADS-B)") == "not applicable", timeout=5000)
+
+
+def test_all_motors_in_sequence_each_output_spins(qtbot, bench_window):
+    _sim, vehicle, w = bench_window()
+    page = open_setup(w, "Motors")
+    assert vehicle.wait_for(lambda s: s.parameters.complete and len(s.setup.outputs.values) >= 4, 30)
+    idle = vehicle.state().setup.outputs.values[:4]
+    raised: set[int] = set()
+    w.adapter.stateChanged.connect(lambda s: raised.update(
+        i + 1 for i, us in enumerate(s.setup.outputs.values[:4]) if us > idle[i]))
+    page.props_off.setChecked(True)
+    page.all.setChecked(True)
+    page.seconds.setValue(0.5)
+    qtbot.waitUntil(page.test.isEnabled, timeout=5000)
+    qtbot.mouseClick(page.test, Qt.LeftButton)
+    qtbot.waitUntil(lambda: raised == {1, 2, 3, 4}, timeout=20000)
+    assert page.result.text().startswith("motor test 1: accepted")
