@@ -22,6 +22,13 @@ def bench_window(sim_factory, vehicle_factory, window_factory):
     return make
 
 
+def read(s) -> bool:
+    """Every parameter read and no download running: a table shown from the cache while the vehicle's own list
+    is still being read is complete too, and the download ending later would bring back values from before a
+    write the test makes."""
+    return s.parameters.complete and not s.parameters.downloading
+
+
 def open_setup(w, page: str):
     menu = w.findChild(QMenu, "menuVehicle")
     action = next(a for a in menu.actions() if a.objectName() == "actionSetup")
@@ -98,7 +105,7 @@ def test_summary_says_each_area(qtbot, bench_window):
 def test_radio_calibration_writes_only_moved_channels_after_the_review(qtbot, bench_window):
     sim, vehicle, w = bench_window()
     page = open_setup(w, "Radio")
-    assert vehicle.wait_for(lambda s: s.parameters.complete and s.parameters.get("RC1_MIN") is not None, 30)
+    assert vehicle.wait_for(lambda s: read(s) and s.parameters.get("RC1_MIN") is not None, 30)
     qtbot.waitUntil(lambda: page.channels.value(1) is not None, timeout=10000)
     qtbot.mouseClick(page.start, Qt.LeftButton)
     for pwm in (1100, 1900, 1520):
@@ -122,7 +129,7 @@ def test_radio_calibration_writes_only_moved_channels_after_the_review(qtbot, be
 def test_flight_modes_light_the_switch_slot_and_write_through_the_review(qtbot, bench_window):
     sim, vehicle, w = bench_window()
     page = open_setup(w, "Flight modes")
-    assert vehicle.wait_for(lambda s: s.parameters.complete, 30)
+    assert vehicle.wait_for(lambda s: read(s), 30)
     qtbot.waitUntil(lambda: page.modes[0].currentText() == "CIRCLE", timeout=5000)     # FLTMODE1 7 in the sim
     sim.autopilot.move_stick(5, 1300)                                                   # FLTMODE_CH 5
     qtbot.waitUntil(lambda: page.lit == 2, timeout=10000)
@@ -141,7 +148,7 @@ def test_flight_modes_light_the_switch_slot_and_write_through_the_review(qtbot, 
 def test_frame_is_drawn_and_a_change_asks_for_a_reboot(qtbot, bench_window):
     _sim, vehicle, w = bench_window()
     page = open_setup(w, "Frame")
-    assert vehicle.wait_for(lambda s: s.parameters.complete, 30)
+    assert vehicle.wait_for(lambda s: read(s), 30)
     qtbot.waitUntil(lambda: page.drawing.frame == (1, 1), timeout=5000)       # the sim: "Frame: QUAD/X"
     assert [m[2] for m in page.drawing.motors] == [1, 3, 4, 2]                 # AP_MotorsMatrix's test order
     assert not page.reboot.isVisible()
@@ -158,7 +165,7 @@ def test_frame_is_drawn_and_a_change_asks_for_a_reboot(qtbot, bench_window):
 def test_power_voltage_calibration_scales_the_multiplier_through_the_review(qtbot, bench_window):
     _sim, vehicle, w = bench_window()
     page = open_setup(w, "Power")
-    assert vehicle.wait_for(lambda s: s.parameters.complete and s.battery.voltage, 30)
+    assert vehicle.wait_for(lambda s: read(s) and s.battery.voltage, 30)
     qtbot.waitUntil(lambda: "BATT_MONITOR 4" in page.info.text(), timeout=5000)
     page.measured_volts.setValue(12.0)
     qtbot.mouseClick(page.volts, Qt.LeftButton)
@@ -174,7 +181,7 @@ def test_power_voltage_calibration_scales_the_multiplier_through_the_review(qtbo
 def test_failsafes_in_words_and_a_warning_when_none_is_left(qtbot, bench_window):
     _sim, vehicle, w = bench_window()
     page = open_setup(w, "Failsafes")
-    assert vehicle.wait_for(lambda s: s.parameters.complete, 30)
+    assert vehicle.wait_for(lambda s: read(s), 30)
     qtbot.waitUntil(lambda: page.lines.topLevelItemCount() == 6
                     and "not read" not in page.lines.topLevelItem(2).text(1), timeout=5000)
     words = {page.lines.topLevelItem(i).text(0): page.lines.topLevelItem(i).text(1) for i in range(6)}
@@ -229,14 +236,14 @@ def test_the_solos_33_says_what_it_lacks(qtbot, sim_factory, vehicle_factory, wi
 def test_all_motors_in_sequence_each_output_spins(qtbot, bench_window):
     _sim, vehicle, w = bench_window()
     page = open_setup(w, "Motors")
-    assert vehicle.wait_for(lambda s: s.parameters.complete and len(s.setup.outputs.values) >= 4, 30)
+    assert vehicle.wait_for(lambda s: read(s) and len(s.setup.outputs.values) >= 4, 30)
     idle = vehicle.state().setup.outputs.values[:4]
     raised: set[int] = set()
     w.adapter.stateChanged.connect(lambda s: raised.update(
         i + 1 for i, us in enumerate(s.setup.outputs.values[:4]) if us > idle[i]))
     page.props_off.setChecked(True)
     page.all.setChecked(True)
-    page.seconds.setValue(0.5)
+    page.seconds.setValue(2.0)             # several SERVO_OUTPUT_RAW (10 Hz) per motor even at the sim speed-up
     qtbot.waitUntil(page.test.isEnabled, timeout=5000)
     qtbot.mouseClick(page.test, Qt.LeftButton)
     qtbot.waitUntil(lambda: raised == {1, 2, 3, 4}, timeout=20000)

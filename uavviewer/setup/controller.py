@@ -46,6 +46,7 @@ class SetupController(QObject):
         self._relay = _Relay()
         self._relay.done.connect(lambda callback, result: callback(result))
         adapter.stateChanged.connect(self.show_state)
+        adapter.droneChanged.connect(lambda _drone: self._vehicle_changed())
 
     def add_to_menu(self, window: QMainWindow) -> QAction:
         """Vehicle › Setup… under Parameters… (the Vehicle menu is made by the params feature)."""
@@ -72,6 +73,17 @@ class SetupController(QObject):
         self.params.fetch_if_needed()                # the pages read and write parameters
         self.show_state(self.adapter.state)
         return self.dialog
+
+    def _vehicle_changed(self) -> None:
+        """Another vehicle (a fleet's pick, File › Connect): the pages start again from its own reports."""
+        if self.dialog is None:
+            return
+        dialog, self.dialog = self.dialog, None
+        title = dialog.list.currentItem().text() if dialog.isVisible() and dialog.list.currentItem() else ""
+        dialog.close()
+        dialog.deleteLater()
+        if title:
+            self.open(title)
 
     def _watch(self) -> None:
         setup = getattr(self.adapter.drone, "setup", None)
