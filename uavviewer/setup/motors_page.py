@@ -111,6 +111,7 @@ class MotorsPage(QWidget):
 
     def show_state(self, s) -> None:
         self._state = s
+        self.motor.setMaximum(motors(s))                 # the frame's motors, in test order
         self._show_reason()
         self.outputs.show_values(s.setup.outputs.values[:8])
         self.stop.setEnabled(s.connected)
