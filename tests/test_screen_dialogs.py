@@ -128,3 +128,12 @@ def test_the_guided_altitude_question_and_the_folder_chooser_fit(qtbot, silent_v
     chooser.reject()
     w.preferences.dialog.reject()
     assert not problems, "\n".join(problems)
+
+
+def test_vehicle_setup_fits_on_every_page(qtbot, silent_vehicle, window_factory):
+    w = window_factory(silent_vehicle)
+    d = opened(qtbot, w.setup.open())
+    for title in d.pages:
+        d.turn_to(title)
+        QApplication.processEvents()
+        assert dialog_problems(d) == [], title

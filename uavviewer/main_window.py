@@ -31,6 +31,7 @@ from .inspector.controller import InspectorController
 from .input.keys_dialog import KeysDialog
 from .map.controller import MapController
 from .params import ParamsController
+from .setup.controller import SetupController
 from .plan.controller import PlanController
 from .preferences.controller import Preferences
 from .refresh import Refresh
@@ -114,6 +115,8 @@ class MainWindow(QMainWindow):
         self.params = ParamsController(self.adapter, self, say=self.log_message)    # docs/parameters.md
         self.params.add_to_menu(self)                       # Vehicle › Parameters…
         self.params.offer_fixes(self.messages)              # a warning naming a parameter: Fix… opens it
+        self.setup = SetupController(self.adapter, self, self.params)    # Vehicle › Setup…: calibrations, radio, motors
+        self.setup.add_to_menu(self)
         self.fleet_dock = FleetDock(self)
         self.review = ReviewController(self)                # File › Open log…: docs/review.md
         self.inspector = InspectorController(self)          # Tools › MAVLink inspector

@@ -36,11 +36,12 @@ class AlertKind(enum.Enum):
     TAKEOFF_COMPLETE = "takeoff complete"
     CONNECTED = "connected"
     NO_GCS_FAILSAFE = "no GCS failsafe in flight"
+    TRAFFIC = "traffic"
 
 
 #: Kinds that also go to the banner in the pilot's eye line (the rest are spoken only)
 CRITICAL_KINDS = {AlertKind.LINK_LOST, AlertKind.BATTERY_WARNING, AlertKind.BATTERY_CRITICAL, AlertKind.FAILSAFE,
-                  AlertKind.FENCE, AlertKind.MESSAGE, AlertKind.NO_GCS_FAILSAFE}
+                  AlertKind.FENCE, AlertKind.MESSAGE, AlertKind.NO_GCS_FAILSAFE, AlertKind.TRAFFIC}
 
 
 @dataclass(frozen=True)
@@ -106,6 +107,7 @@ class AlertModel:
             if s.mode and prev.mode and s.mode != prev.mode:
                 out.append(Alert(AlertKind.MODE, _mode_words(s.mode), Severity.INFO))
         out += _no_gcs_failsafe(prev, s)
+        out += _traffic(prev, s)
         if s.takeoff.phase is SequencePhase.DONE and prev.takeoff.phase is not SequencePhase.DONE:
             out.append(Alert(AlertKind.TAKEOFF_COMPLETE, f"Takeoff complete, {s.altitude:.0f} metres", Severity.INFO))
         return sorted((a if a.time else replace(a, time=s.time) for a in out), key=lambda a: a.severity)
@@ -133,6 +135,23 @@ def _no_gcs_failsafe(prev: VehicleState | None, s: VehicleState) -> list[Alert]:
         return []
     return [Alert(AlertKind.NO_GCS_FAILSAFE, f"No GCS failsafe ({gcs_failsafe_setting(0)}): on link loss it flies on "
                   "until its battery failsafe", Severity.WARNING)]
+
+
+def _traffic(prev: VehicleState, s: VehicleState) -> list[Alert]:
+    """An aircraft whose closest approach (driver.traffic) newly comes within the alert limits: said once, short
+    ("Traffic SIM42, 900 metres, 50 metres above, closest in 20 seconds"); the driver's Messages line has it all."""
+    before = {c.icao for c in prev.traffic.alerts}
+    out = []
+    for c in s.traffic.alerts:
+        if c.icao in before:
+            continue
+        a = c.approach
+        where = "" if c.distance is None else f", {c.distance:.0f} metres"
+        height = "" if c.relative_alt is None else \
+            f", {abs(c.relative_alt):.0f} metres {'above' if c.relative_alt >= 0 else 'below'}"
+        out.append(Alert(AlertKind.TRAFFIC, f"Traffic {c.label}{where}{height}, closest in {a.time:.0f} seconds",
+                         Severity.WARNING))
+    return out
 
 
 def _has_vehicle(s: VehicleState) -> bool:

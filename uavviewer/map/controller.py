@@ -24,6 +24,7 @@ from driver.vehicle.rules import MAX_ALTITUDE, MIN_GOTO_ALTITUDE
 from driver.vehicle.state import CommandResult, VehicleState
 
 from .camera_overlay import CameraOverlay
+from .traffic_overlay import TrafficOverlay
 from ..widgets.ask import ask, cautious_question
 from .geometry import MapFrame, tiles_covering, tile_zoom_for
 from .tiles import MAX_AREA_TILES, TileSource
@@ -113,6 +114,7 @@ class MapController(QObject):
         panel.downloadRequested.connect(self.download_area)
         self.view.flyHereRequested.connect(self.ask_fly_here)
         self.camera = CameraOverlay(self.view, adapter, self)     # footprint, look direction, Look here (ROI)
+        self.traffic = TrafficOverlay(self.view, self)            # ADS-B contacts (issue 32)
         adapter.commandFinished.connect(self._command_finished)
         self._show_status()
         replay = adapter.replay
@@ -215,6 +217,7 @@ class MapController(QObject):
         self._follow_target(s, where)
         self._fly_here_item(s)
         self.camera.show_state(s, where)
+        self.traffic.show_state(s)
 
     def _set_frame(self, s: VehicleState) -> None:
         home = s.home

@@ -101,7 +101,7 @@ class ParamsController(QObject):
         page.show()
         page.raise_()
         page.activateWindow()
-        self._fetch_if_needed()
+        self.fetch_if_needed()
         if name and not page.select(name):
             self._wanted = name                  # shown once the vehicle reports it
         elif name:
@@ -137,7 +137,7 @@ class ParamsController(QObject):
             self._wanted = ""
             self.page.editor.focus_value()
         if self.page.isVisible():
-            self._fetch_if_needed()
+            self.fetch_if_needed()
             self._show_download()
 
     def _vehicle_changed(self) -> None:
@@ -166,7 +166,7 @@ class ParamsController(QObject):
         self._fetch_problem = ""
         self.adapter.command("fetch_parameters", refresh)
 
-    def _fetch_if_needed(self) -> None:
+    def fetch_if_needed(self) -> None:
         table = self.model.table
         if self._asked or table.complete or table.downloading or not self._state.connected:
             return
@@ -206,6 +206,19 @@ class ParamsController(QObject):
         box.button(QMessageBox.Yes).setText("Stage anyway")
         box.setDefaultButton(QMessageBox.Cancel)
         self.question = ask(box, lambda b: self._outside_answered(b, fine, outside))
+
+    def propose(self, values: Mapping[str, float]) -> list[str]:
+        """Another page's changes (Setup's radio calibration, voltage): checked and staged as typed ones are,
+        then shown in the review, written only once the pilot presses Write there and confirmed by the
+        vehicle's echo. Returns the names the vehicle has not reported (not staged: its parameters are not read)."""
+        self.fetch_if_needed()
+        unknown = [name for name in values if self.model.parameter(name) is None]
+        self.stage_values({n: v for n, v in values.items() if n not in unknown})
+        if self.question is not None:                        # some are outside the bounds: the review after
+            self.question.finished.connect(lambda _r: self.open_review())
+        else:
+            self.open_review()
+        return unknown
 
     def _outside_answered(self, box: QMessageBox, fine: dict[str, float], outside: dict[str, str]) -> None:
         if box.clickedButton() is box.button(QMessageBox.Yes):

@@ -1,0 +1,32 @@
+"""Issue 32, the viewer's traffic: ADS-B contacts from the simulated ArduCopter drawn on the map with callsign,
+relative height and age, faded once stale; a head-on aircraft's closest approach said aloud and in the banner."""
+from __future__ import annotations
+
+import pytest
+
+from uavviewer.alerts.model import AlertKind
+from uavviewer.map.traffic_overlay import contact_label
+
+from viewer_fixtures import app_style, viewer_settings, window, window_factory  # noqa: F401  (fixtures)
+
+pytestmark = pytest.mark.timeout(90)
+
+
+def test_contacts_on_the_map_and_a_head_on_one_alerted_in_the_banner_and_aloud(qtbot, sim, vehicle, window):
+    assert vehicle.wait_for(lambda s: s.position is not None and s.home is not None and s.readiness.prearm_ok, 30)
+    alerts = []
+    window.alerts.alerted.connect(alerts.append)
+    ground = sim.autopilot.home_alt
+    sim.autopilot.add_aircraft(4242, north=2500.0, east=0.0, alt=ground + 50.0, heading=180.0, speed=60.0)
+    passing = sim.autopilot.add_aircraft(4343, north=-800.0, east=0.0, alt=ground + 50.0, heading=180.0, speed=60.0)
+    overlay = window.map.traffic
+    qtbot.waitUntil(lambda: {c.icao for _e, _n, c in overlay.marks()} >= {4242, 4343}, timeout=20000)
+    head_on = next(c for _e, _n, c in overlay.marks() if c.icao == 4242)
+    assert contact_label(head_on).startswith("SIM4242 +") and contact_label(head_on).endswith(" s")
+    qtbot.waitUntil(lambda: any(a.kind is AlertKind.TRAFFIC for a in alerts), timeout=20000)
+    said = [a.text for a in alerts if a.kind is AlertKind.TRAFFIC]
+    assert said[0].startswith("Traffic SIM4242, ") and "metres above" in said[0], said
+    assert all("4343" not in text for text in said)
+    assert "Traffic SIM4242" in window.alert_banner.text
+    sim.autopilot.aircraft.remove(passing)                      # no longer heard: faded on the map, then gone
+    qtbot.waitUntil(lambda: any(c.icao == 4343 and c.stale for _e, _n, c in overlay.marks()), timeout=20000)

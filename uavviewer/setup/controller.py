@@ -1,0 +1,146 @@
+"""Vehicle › Setup's logic: builds the pages, gives them each snapshot while the window is open, and runs what a
+page asks of ``drone.setup`` (driver/setup/control.py) without waiting: its answer comes back on the UI thread.
+
+A connection without a setup part (a replayed recording, an Ice drone) answers every action with why not."""
+from __future__ import annotations
+
+import logging
+import time
+from concurrent.futures import Future
+from typing import Callable
+
+from PyQt5.QtCore import QObject, pyqtSignal
+from PyQt5.QtWidgets import QAction, QMainWindow, QMenu
+
+from driver.vehicle.state import CommandResult, CommandStatus
+
+from .dialog import SetupDialog
+from .failsafes_page import FailsafesPage
+from .frame_page import FramePage
+from .modes_page import ModesPage
+from .motors_page import MotorsPage
+from .power_page import PowerPage
+from .radio_page import RadioPage
+from .sensors_page import SensorsPage
+from .summary_page import SummaryPage
+
+__all__ = ["SetupController"]
+
+log = logging.getLogger(__name__)
+NO_SETUP = "this connection has no vehicle setup (a replayed recording or a remote drone)"
+
+
+class _Relay(QObject):
+    """Carries a finished setup action to the UI thread; parentless, so a late answer never lands on a deleted
+    page (as the adapter's relay)."""
+    done = pyqtSignal(object, object)            # the page's callback, CommandResult
+
+
+class SetupController(QObject):
+    def __init__(self, adapter, parent: QMainWindow, params) -> None:
+        super().__init__(parent)
+        self.adapter = adapter
+        self.params = params                         # the Parameters page's controller: the one checked write path
+        self._parent = parent
+        self.dialog: SetupDialog | None = None
+        self._relay = _Relay()
+        self._relay.done.connect(lambda callback, result: callback(result))
+        adapter.stateChanged.connect(self.show_state)
+        adapter.droneChanged.connect(lambda _drone: self._vehicle_changed())
+
+    def add_to_menu(self, window: QMainWindow) -> QAction:
+        """Vehicle › Setup… under Parameters… (the Vehicle menu is made by the params feature)."""
+        menu = window.findChild(QMenu, "menuVehicle")
+        action = QAction("&Setup…", window)
+        action.setObjectName("actionSetup")
+        action.setToolTip("Calibrations, radio, motor test: the vehicle on the bench")
+        action.triggered.connect(lambda: self.open())
+        menu.addAction(action)
+        return action
+
+    def open(self, page: str = "") -> SetupDialog:
+        if self.dialog is None:
+            pages = [SummaryPage(), FramePage(self), SensorsPage(self), RadioPage(self), ModesPage(self),
+                     PowerPage(self), FailsafesPage(self), MotorsPage(self)]
+            self.dialog = SetupDialog(pages, self._parent)
+            self.dialog.pageShown.connect(lambda _title: self._watch())
+        if page:
+            self.dialog.turn_to(page)
+        self.dialog.show()
+        self.dialog.raise_()
+        self.dialog.activateWindow()
+        self._watch()
+        self.params.fetch_if_needed()                # the pages read and write parameters
+        self.show_state(self.adapter.state)
+        return self.dialog
+
+    def _vehicle_changed(self) -> None:
+        """Another vehicle (a fleet's pick, File › Connect): the pages start again from its own reports."""
+        if self.dialog is None:
+            return
+        dialog, self.dialog = self.dialog, None
+        title = dialog.list.currentItem().text() if dialog.isVisible() and dialog.list.currentItem() else ""
+        dialog.close()
+        dialog.deleteLater()
+        if title:
+            self.open(title)
+
+    def _watch(self) -> None:
+        setup = getattr(self.adapter.drone, "setup", None)
+        if setup is not None:
+            setup.watch_radio()                      # RC_CHANNELS and SERVO_OUTPUT_RAW while the pages show them
+
+    def show_state(self, s) -> None:
+        if self.dialog is None or not self.dialog.isVisible():
+            return
+        for page in self.dialog.pages.values():
+            page.show_state(s)
+
+    # -- what the pages ask ---------------------------------------------------------------------------
+    @staticmethod
+    def now() -> float:
+        return time.time()
+
+    def propose(self, values: dict[str, float]) -> list[str]:
+        """Parameters a page wants written: checked, staged and reviewed as on the Parameters page, written only
+        when the pilot presses Write there, each confirmed by the vehicle's echo (ParamsController.propose)."""
+        return self.params.propose(values)
+
+    def propose_changes(self, wanted: dict[str, float], reported: dict[str, float]) -> str:
+        """The values of ``wanted`` that differ from what the vehicle ``reported``, proposed; the page's words."""
+        changed = {n: v for n, v in wanted.items() if reported.get(n) != v}
+        if not changed:
+            return "Nothing changed."
+        unknown = self.propose(changed)
+        return (f"Not staged: {', '.join(unknown)} not read from the vehicle yet." if unknown else
+                "In the Parameters review: written when you press Write there.")
+
+    def open_parameter(self, name: str) -> None:
+        self.params.open(name)
+
+    def reboot(self) -> None:
+        """The vehicle restarts (a new frame); the answer goes to Messages as every command's."""
+        self.adapter.command("reboot")
+
+    def run(self, name: str, call: Callable, done: Callable[[CommandResult], None]) -> None:
+        """``call(drone.setup)`` returns a Future of a CommandResult; ``done(result)`` runs on the UI thread."""
+        setup = getattr(self.adapter.drone, "setup", None)
+        if setup is None:
+            done(CommandResult(name, CommandStatus.REJECTED, NO_SETUP))
+            return
+        try:
+            future = call(setup)
+        except Exception as exc:                     # noqa: BLE001 - said on the page, the window goes on
+            log.exception("setup action %s failed to start", name)
+            done(CommandResult(name, CommandStatus.REJECTED, str(exc)))
+            return
+        relay = self._relay
+        future.add_done_callback(lambda f: relay.done.emit(done, _result(name, f)))
+
+
+def _result(name: str, future: Future) -> CommandResult:
+    try:
+        result = future.result(timeout=0)
+    except Exception as exc:                         # noqa: BLE001
+        return CommandResult(name, CommandStatus.REJECTED, f"{type(exc).__name__}: {exc}")
+    return result if isinstance(result, CommandResult) else CommandResult(name, CommandStatus.ACCEPTED, str(result))

@@ -1,0 +1,55 @@
+"""What the vehicle will do on each failsafe, in plain words, from its parameters (ArduCopter 4.x's values), and
+the combinations that leave it with none. No Qt."""
+from __future__ import annotations
+
+__all__ = ["failsafe_lines", "BATTERY_ACTIONS"]
+
+BATTERY_ACTIONS = {0: "nothing (a warning only)", 1: "lands", 2: "returns home (RTL)",
+                   3: "SmartRTL, else RTL", 4: "SmartRTL, else lands", 5: "stops the motors (terminate)",
+                   6: "auto lands (DO_LAND_START), else RTL", 7: "Brake, else lands"}
+_RADIO = {0: "nothing: it keeps flying without the transmitter", 1: "returns home (RTL)",
+          2: "goes on with its mission in AUTO, else RTL", 3: "lands", 4: "SmartRTL, else RTL",
+          5: "SmartRTL, else lands", 6: "auto lands (DO_LAND_START), else RTL", 7: "Brake, else lands"}
+_GCS = {0: "nothing: it keeps flying without the ground station", 1: "returns home (RTL)",
+        2: "goes on with its mission in AUTO, else RTL", 3: "SmartRTL, else RTL", 4: "SmartRTL, else lands",
+        5: "lands", 6: "auto lands (DO_LAND_START), else RTL", 7: "Brake, else lands"}
+_EKF = {0: "nothing (reported only)", 1: "lands", 2: "switches to AltHold", 3: "lands even in Stabilize"}
+_FENCE = {0: "reports the breach only", 1: "returns home (RTL), else lands", 2: "lands",
+          3: "SmartRTL, else RTL, else lands", 4: "Brake, else lands", 5: "SmartRTL, else lands"}
+
+
+def _v(s, name: str) -> float | None:
+    p = s.parameters.get(name)
+    return None if p is None else p.value
+
+
+def failsafe_lines(s) -> tuple[list[tuple[str, str]], list[str]]:
+    """(area, what the vehicle does) per failsafe, and warnings; unread parameters say so."""
+    lines: list[tuple[str, str]] = []
+
+    def say(area: str, name: str, words: dict, extra: str = "") -> float | None:
+        value = _v(s, name)
+        lines.append((area, "not read yet" if value is None else
+                      f"{words.get(int(value), f'action {value:g}')} ({name} {value:g}){extra}"))
+        return value
+    low = _v(s, "BATT_LOW_VOLT")
+    say("Battery low", "BATT_FS_LOW_ACT", BATTERY_ACTIONS, "" if low is None else f" below {low:g} V")
+    crit = _v(s, "BATT_CRT_VOLT")
+    say("Battery critical", "BATT_FS_CRT_ACT", BATTERY_ACTIONS, "" if crit is None else
+        (" (no voltage set: BATT_CRT_VOLT 0)" if crit == 0 else f" below {crit:g} V"))
+    radio = say("Radio lost", "FS_THR_ENABLE", _RADIO)
+    gcs = say("Ground station lost", "FS_GCS_ENABLE", _GCS)
+    say("EKF unhealthy", "FS_EKF_ACTION", _EKF)
+    fence = _v(s, "FENCE_ENABLE")
+    if fence is not None and fence == 0:
+        lines.append(("Fence", "off (FENCE_ENABLE 0): nothing keeps it inside"))
+    else:
+        say("Fence breached", "FENCE_ACTION", _FENCE)
+    warnings = []
+    battery = [_v(s, n) for n in ("BATT_FS_LOW_ACT", "BATT_FS_CRT_ACT")]
+    if radio == 0 and gcs == 0:
+        warnings.append("Neither the radio nor the ground-station failsafe is on: if both links are lost it keeps "
+                        "flying as it was until its battery runs out.")
+    if all(b == 0 for b in battery):
+        warnings.append("No battery failsafe action: a low battery is only reported, the vehicle does not come back.")
+    return lines, warnings
