@@ -307,3 +307,25 @@ def test_the_consoles_param_fetch_reads_over_ftp(sim, vehicle_factory):
     Console(vehicle, stdout=out).onecmd("param fetch")
     assert eventually(lambda: "parameters: accepted" in out.getvalue(), 30), out.getvalue()
     assert "over MAVLink FTP" in out.getvalue(), out.getvalue()
+
+
+def test_a_value_written_while_the_file_is_read_is_not_put_back_by_the_file(sim, vehicle_factory):
+    """param.pck holds the values of when it was opened. A set confirmed by its echo while the file is still read
+    is newer: the finished file must not put the old value back in the table the pilot sees."""
+    holding = [True]
+    # the burst's data is held back (lost on the way) until the set is done: the read then fills those gaps
+    _lose_replies(sim, lambda r: holding[0] and r.opcode == simftp.OP_ACK and r.req_opcode == simftp.OP_BURST)
+    requests = _requests(sim)
+    vehicle = _ftp_vehicle(sim, vehicle_factory)
+    before = sim.autopilot.params["WPNAV_ACCEL"]
+    fetch = vehicle.fetch_parameters(refresh=True)
+    assert eventually(lambda: any(op == simftp.OP_BURST for op, _, _ in requests), 5)    # the file is open
+    written = vehicle.set_parameter("WPNAV_ACCEL", before + 150).result(timeout=10)
+    assert written.ok, written
+    holding[0] = False
+    result = fetch.result(timeout=30)
+    assert result.ok and "over MAVLink FTP" in result.reason, result
+    assert sim.autopilot.params["WPNAV_ACCEL"] == before + 150
+    assert vehicle.wait_for(lambda s: not s.parameters.downloading, 5)
+    p = vehicle.state().parameters.get("WPNAV_ACCEL")
+    assert p.value == before + 150 and p.index >= 0, p

@@ -56,6 +56,7 @@ class ParameterManager:
         self._detail = ""
         self._cached: ParameterTable | None = None   # shown while the vehicle's own list is read
         self._ftp: FtpDownload | None = None         # @PARAM/param.pck on its way (driver.params.ftp)
+        self._since_ftp: dict[str, Parameter] = {}   # values the vehicle sent one by one while the file was read
         self._ftp_note = ""                          # why this download reads the list though FTP was offered
         self._ftp_given_up: FtpDownload | None = None   # its TerminateSession goes out on the next tick
         self.use_ftp = True                          # read the whole table over MAVLink FTP where it is offered
@@ -91,6 +92,7 @@ class ParameterManager:
         self._ftp_note = ""
         if download.listing and self.use_ftp and self.ftp_capable:
             self._ftp = FtpDownload(now)
+            self._since_ftp = {}
             self._detail = "reading @PARAM/param.pck over MAVLink FTP"
         if download.listing and cached is not None and cached.complete and self._expected is None:
             self._cached = cached
@@ -173,6 +175,8 @@ class ParameterManager:
             index = known.index if known is not None else -1
         param = Parameter(name, as_stored(ptype, m.param_value), ptype, index)
         self._values[name] = param
+        if self._ftp is not None:
+            self._since_ftp[name] = param
         if index >= 0:
             if self._expected != m.param_count:
                 self._expected = m.param_count
@@ -272,7 +276,13 @@ class ParameterManager:
                 return msgs
             values, count = got
             self._ftp = None
-            self._values = {**{n: p for n, p in self._values.items() if p.index < 0 and n not in values}, **values}
+            # the file was packed when it was opened: a value the vehicle sent since (a set's echo, a read by name)
+            # is newer than the file's, and stays (a confirmed write must not go back to its old value)
+            newer = {n: Parameter(n, p.value, p.type, values[n].index if n in values else p.index)
+                     for n, p in self._since_ftp.items()}
+            self._since_ftp = {}
+            self._values = {**{n: p for n, p in self._values.items() if p.index < 0 and n not in values}, **values,
+                            **newer}
             self._expected = count
             self._end_download(CommandStatus.ACCEPTED, f"{len(values)} parameters over MAVLink FTP ({ftp.end:,} bytes "
                                f"in {ftp.frames} frames)", now)
