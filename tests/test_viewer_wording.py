@@ -43,7 +43,9 @@ def test_a_wheel_gesture_is_one_line_and_repeats_are_counted(qtbot, vehicle, win
     w = window_factory(vehicle)
     qtbot.waitUntil(lambda: w.adapter.state.gimbal.pitch_deg is not None, timeout=10000)
     w.gimbal_bar.level_button.click()
-    qtbot.waitUntil(lambda: abs(w.adapter.state.gimbal.pitch_deg) < 0.6, timeout=10000)
+    # level to the float's last digits: the wheel tilts from the reported pitch, and "gimbal pitch -20°" is
+    # written with :g, so a gesture started at -0.3° would say -20.3°
+    qtbot.waitUntil(lambda: abs(w.adapter.state.gimbal.pitch_deg) < 1e-4, timeout=10000)
     qtbot.waitUntil(lambda: w.gimbal._target is None, timeout=5000)
     before = len([r for r in vehicle.state().results if r.command.startswith("gimbal pitch")])
     for _ in range(4):                                   # a wheel turned four notches: four events, four commands
