@@ -62,6 +62,7 @@ class TakeoffSequence:
         self._answer: CommandResult | None = None
         self._retries = 0                   # commands asked again after no answer at all
         self.takeoff_sent = False           # NAV_TAKEOFF was issued (it may reach the vehicle after an abort)
+        self.guided_sent = False            # GUIDED was asked: the vehicle may be in it before it says so
         self.phase = SequencePhase.WAITING_READY
         self.detail = ""
         before = drone.state()                      # what a cancel before liftoff gives back
@@ -95,6 +96,7 @@ class TakeoffSequence:
         elif stage == "guided":
             if self._pending is None:
                 self._pending = self.drone.set_mode("GUIDED")
+                self.guided_sent = True
             r = self._result()
             if r is not None:
                 if not r.ok and not self._ask_again(r):

@@ -334,7 +334,8 @@ class Vehicle(Drone):
             self._command_long(mavlink.MAV_CMD_COMPONENT_ARM_DISARM, (0, 0), "disarm (takeoff cancelled)",
                                guard=not_in_flight)
             undone.append("disarming")
-        if seq.mode_before and s.mode != seq.mode_before:
+        # GUIDED asked: the vehicle may be in it before its heartbeat says so; asking for the mode it is in is harmless
+        if seq.mode_before and (s.mode != seq.mode_before or (seq.guided_sent and seq.mode_before != "GUIDED")):
             self._set_mode(seq.mode_before)
             undone.append(f"back to {seq.mode_before}")
         return self._finish("cancel takeoff", CommandStatus.ACCEPTED,
