@@ -1,5 +1,5 @@
 """A small DataFlash writer: FMT then records, as ArduPilot lays them out. Tests and the bench make .BIN files with
-it; the simulator's own logs come from its branch (issue 31, download)."""
+it; the simulator writes its logs with the same record layout (driver.sim.dataflash)."""
 from __future__ import annotations
 
 import struct
@@ -11,6 +11,16 @@ _STRUCT = {
     "M": "B", "c": "h", "C": "H", "e": "i", "E": "I", "L": "i", "g": "e"}
 
 
+def record_struct(fmt: str) -> struct.Struct:
+    """The little-endian layout of a record with DataFlash format letters ``fmt`` (text fields fixed-size bytes)."""
+    return struct.Struct("<" + "".join(f"{_STRINGS[c]}s" if c in _STRINGS else _STRUCT[c] for c in fmt))
+
+
+def text_size(letter: str) -> int:
+    """Bytes of a text field's format letter (n 4, N 16, Z 64)."""
+    return _STRINGS[letter]
+
+
 class DataFlashWriter:
     """``define(type, name, format, columns)`` writes the FMT; ``record(name, *values)`` a record, values raw (as
     stored: a 'c' field is centi-units, an 'L' 1e-7 degrees, text is str)."""
@@ -20,8 +30,7 @@ class DataFlashWriter:
         self._defs: dict[str, tuple[int, struct.Struct]] = {}
 
     def define(self, mtype: int, name: str, fmt: str, columns: str) -> None:
-        layout = "<" + "".join(f"{_STRINGS[c]}s" if c in _STRINGS else _STRUCT[c] for c in fmt)
-        packer = struct.Struct(layout)
+        packer = record_struct(fmt)
         self._defs[name] = (mtype, packer)
         self._out += _fmt_record(mtype, 3 + packer.size, name, fmt, columns)
 
@@ -38,7 +47,7 @@ class DataFlashWriter:
             f.write(self._out)
 
 
-__all__ = ["DataFlashWriter", "FMT_ID", "FMT_LENGTH"]
+__all__ = ["DataFlashWriter", "FMT_ID", "FMT_LENGTH", "record_struct", "text_size"]
 
 
 def sample_flight(seconds: float = 60.0, rate_hz: float = 25.0, params: dict[str, float] | None = None,

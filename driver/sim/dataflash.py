@@ -14,15 +14,14 @@ import struct
 import tempfile
 import time
 
+from ..review.dataflash import FMT_ID, HEAD
+from ..review.writer import record_struct, text_size
+
 __all__ = ["DataFlashWriter", "LogFolder", "FORMATS", "log_file_name", "write_flight_log"]
 
 log = logging.getLogger(__name__)
 
-HEAD = b"\xa3\x95"
-FMT_TYPE = 128
-_LETTERS = {"b": "b", "B": "B", "h": "h", "H": "H", "i": "i", "I": "I", "f": "f", "d": "d", "n": "4s",
-            "N": "16s", "Z": "64s", "c": "h", "C": "H", "e": "i", "E": "I", "L": "i", "M": "B", "q": "q",
-            "Q": "Q"}
+FMT_TYPE = FMT_ID
 #: name → (type, format letters, columns): the subset of ArduCopter's messages the sim logs.
 FORMATS = {
     "FMT": (FMT_TYPE, "BBnNZ", "Type,Length,Name,Format,Columns"),
@@ -41,15 +40,11 @@ def log_file_name(number: int) -> str:
     return f"{number:08d}.BIN"
 
 
-def _struct(letters: str) -> struct.Struct:
-    return struct.Struct("<" + "".join(_LETTERS[c] for c in letters))
-
-
 class DataFlashWriter:
     """Packs messages; each type's FMT goes out just before its first message (as AP_Logger does)."""
 
     def __init__(self) -> None:
-        self._structs = {name: _struct(letters) for name, (_t, letters, _c) in FORMATS.items()}
+        self._structs = {name: record_struct(letters) for name, (_t, letters, _c) in FORMATS.items()}
         self._announced: set[str] = set()
 
     def _fmt(self, name: str) -> bytes:
@@ -74,7 +69,7 @@ class DataFlashWriter:
 
     @staticmethod
     def _text_size(name: str, index: int) -> int:
-        return {"n": 4, "N": 16, "Z": 64}.get(FORMATS[name][1][index], 64)
+        return text_size(FORMATS[name][1][index])
 
 
 class LogFolder:
