@@ -210,7 +210,9 @@ class Bench:
         holds = ("pre-arm OK" if truth else "pre-arm failing") + (", home set" if self.judge.home else ", no home")
         row = Row("ready to arm", told, holds, seconds)
         if s and not truth:
-            row.verdict, row.why = "wrong", "told ready, but the vehicle's pre-arm check fails"
+            row.verdict, row.why = "wrong", "told ready, but the vehicle's pre-arm check fails" \
+                f" (the vehicle: {self.judge.story(t0 - 60.0)}; the judge's newest: {self.judge.ages()}; " \
+                f"the driver's readiness: {now.readiness})"
         elif not s and truth:
             row.verdict, row.why = "wrong", "never told ready, though the vehicle is"
         self.add(row)
@@ -317,7 +319,8 @@ class Bench:
         reached = self.judge.reached[-1] if self.judge.reached else None
         row = Row(op, told, f"{self._flight_state()}, last reached {reached}", seconds)
         if not agreed:
-            row.verdict, row.why = "wrong", "the driver's item, mission state or arming is not the vehicle's"
+            row.verdict, row.why = "wrong", "the driver's item, mission state or arming is not the vehicle's" \
+                f" (the judge's newest: {self.judge.ages()})"
         self.add(row)
 
     def parameters_by_list(self) -> None:

@@ -27,6 +27,7 @@ STREAMS = {
     mavlink.MAVLINK_MSG_ID_EXTENDED_SYS_STATE: 500_000,
     mavlink.MAVLINK_MSG_ID_HOME_POSITION: 1_000_000,
 }
+STREAM_CHECK = 2.0                             # s between checks that every stream flows (asked again if not)
 
 
 @dataclass(frozen=True)
@@ -51,10 +52,12 @@ class Judge:
         self.conn.mav.robust_parsing = True                                            # process chose before
         self._latest: dict = {}
         self._lock = threading.Lock()
+        self._send_lock = threading.Lock()
         self._waiters: list = []
         self.texts: list[tuple[float, int, str]] = []      # (monotonic time, severity, text)
         self.reached: list[int] = []                        # MISSION_ITEM_REACHED seqs
         self.changes: list[tuple[float, str, bool]] = []    # (monotonic time, mode, armed) as each changed
+        self.prearm_changes: list[tuple[float, bool]] = []  # (monotonic time, pre-arm bit) as it changed
         self._closing = threading.Event()
         self._thread = threading.Thread(target=self._read, name="judge", daemon=True)
         self._thread.start()
@@ -62,7 +65,11 @@ class Judge:
 
     # -- the link ------------------------------------------------------------------------------------
     def _read(self) -> None:
+        next_check = time.monotonic() + STREAM_CHECK
         while not self._closing.is_set():
+            if time.monotonic() >= next_check:
+                next_check = time.monotonic() + STREAM_CHECK
+                self._keep_streams()
             try:
                 m = self.conn.recv_match(blocking=True, timeout=0.2)
             except (OSError, ValueError):
@@ -82,6 +89,10 @@ class Judge:
                     now = (mavutil.mode_string_v10(m), bool(m.base_mode & mavlink.MAV_MODE_FLAG_SAFETY_ARMED))
                     if not self.changes or self.changes[-1][1:] != now:
                         self.changes.append((time.monotonic(), *now))
+                if mtype == "SYS_STATUS" and m.get_srcComponent() == 1:
+                    bit = bool(m.onboard_control_sensors_health & PREARM_CHECK)
+                    if not self.prearm_changes or self.prearm_changes[-1][1] != bit:
+                        self.prearm_changes.append((time.monotonic(), bit))
                 if mtype == "STATUSTEXT":
                     self.texts.append((time.monotonic(), m.severity, m.text))
                 elif mtype == "MISSION_ITEM_REACHED":
@@ -91,10 +102,24 @@ class Judge:
                         q.put(m)
 
     def send(self, msg) -> None:
-        self.conn.mav.send(msg)
+        with self._send_lock:                  # the reader thread asks for streams too
+            self.conn.mav.send(msg)
 
-    def ask_streams(self) -> None:
-        for msg_id, interval in STREAMS.items():
+    def _keep_streams(self) -> None:
+        """Ask again for every stream that is not flowing. A request that reaches SERIAL1 before the vehicle has
+        set up that port's intervals is overwritten by them (GCS_MAVLINK::update_send runs
+        initialise_message_intervals_from_streamrates once, and SR1_* are 0): the judge then saw no SYS_STATUS at
+        all and called a ready vehicle's pre-arm check failing."""
+        now = time.monotonic()
+        with self._lock:
+            newest = {t: e[0] for t, e in self._latest.items()}
+        stale = {i: interval for i, interval in STREAMS.items()
+                 if now - newest.get(mavlink.mavlink_map[i].msgname, -1e9) > 3 * interval / 1e6 + 1.0}
+        if stale:
+            self.ask_streams(stale)
+
+    def ask_streams(self, streams: dict | None = None) -> None:
+        for msg_id, interval in (streams or STREAMS).items():
             self.send(mavlink.MAVLink_command_long_message(1, 1, mavlink.MAV_CMD_SET_MESSAGE_INTERVAL, 0,
                                                            msg_id, interval, 0, 0, 0, 0, 0))
 
@@ -170,11 +195,21 @@ class Judge:
         p = self.latest("GLOBAL_POSITION_INT", 2.0)
         return p.relative_alt / 1000.0 if p else None
 
+    def ages(self) -> str:
+        """How old the newest of each streamed message is, in words (a judge whose streams stopped sees nothing)."""
+        now = time.monotonic()
+        with self._lock:
+            got = {t: now - e[0] for t, e in self._latest.items()}
+        return ", ".join(f"{mavlink.mavlink_map[i].msgname} {got[mavlink.mavlink_map[i].msgname]:.1f} s"
+                         if mavlink.mavlink_map[i].msgname in got else f"{mavlink.mavlink_map[i].msgname} never"
+                         for i in STREAMS)
+
     def story(self, since: float) -> str:
         """What the vehicle did since ``since``: its mode and arming changes and its texts, with the seconds."""
         with self._lock:
             events = [(t, f"{mode} {'armed' if armed else 'disarmed'}") for t, mode, armed in self.changes if t >= since]
             events += [(t, repr(text)) for t, _, text in self.texts if t >= since]
+            events += [(t, f"pre-arm bit {'set' if bit else 'clear'}") for t, bit in self.prearm_changes if t >= since]
         return "; ".join(f"{t - since:.1f} s {what}" for t, what in sorted(events))
 
     # -- plans ----------------------------------------------------------------------------------------------
