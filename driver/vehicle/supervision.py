@@ -26,6 +26,7 @@ HOME_RETRY = 2.0             # s between home requests while the vehicle has not
 PARAM_RETRY = 3.0            # s between reads of the parameters below while some are unanswered
 PARAM_TRIES = 3
 STREAM_SILENCE = 3.0         # s without ATTITUDE before the streams are asked for again
+ADSB_RATE_HZ = 5.0           # ADSB_VEHICLE asked for: one aircraft of the list each time (see stream_requests)
 REOPEN_AFTER = 5.0           # s past the loss timeout before a reconnectable link is reopened
 PLAN_PARAMS = ("WPNAV_SPEED", "WPNAV_SPEED_UP", "WPNAV_SPEED_DN", "LAND_SPEED", "RTL_ALT", "BATT_CAPACITY")
 WANTED_PARAMS = ("FS_GCS_ENABLE",) + FENCE_PARAMS + PLAN_PARAMS
@@ -153,7 +154,11 @@ class LinkSupervisor:
                                   (mavlink.MAV_DATA_STREAM_RAW_SENSORS, max(1, rate // 2)))]
         if self._caps.message_interval is not False:   # 4.7 sends EXTENDED_SYS_STATE only when asked so
             for msg_id, hz in ((mavlink.MAVLINK_MSG_ID_EXTENDED_SYS_STATE, rate),
-                               (mavlink.MAVLINK_MSG_ID_HOME_POSITION, 0.5)):
+                               (mavlink.MAVLINK_MSG_ID_HOME_POSITION, 0.5),
+                               # ADS-B traffic is in no data stream (SRn_ADSB, 0 by default): unasked, 4.6.3
+                               # SITL sent none in 40 s; at 5 Hz, one aircraft of its list each time, every
+                               # aircraft about once a second (AP_ADSB::send_adsb_vehicle), as the recording
+                               (mavlink.MAVLINK_MSG_ID_ADSB_VEHICLE, ADSB_RATE_HZ)):
                 out.append(mavlink.MAVLink_command_long_message(
                     system, component, mavlink.MAV_CMD_SET_MESSAGE_INTERVAL, 0, msg_id, 1e6 / hz, 0, 0, 0, 0, 0))
         return out
