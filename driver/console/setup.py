@@ -17,6 +17,7 @@ __all__ = ["SetupCommands", "traffic_lines", "rc_line"]
 
 MAGCAL_USAGE = "magcal start|accept|cancel|status | magcal yaw DEG"
 MOTORTEST_USAGE = "motortest MOTOR TYPE VALUE SECONDS [COUNT] (TYPE 0 percent, 1 PWM) | motortest stop"
+RC_WAIT = 3.0                  # s 'rc' waits for the first RC_CHANNELS it asked for
 WATCH_TIMEOUT = 120.0          # s an accel calibration waits for the vehicle's next word
 
 
@@ -136,7 +137,10 @@ class SetupCommands:
         """rc: the transmitter's channels (RC_CHANNELS) and the outputs (SERVO_OUTPUT_RAW) as the vehicle sees them"""
         state = self.vehicle.state()
         if not state.setup.rc.values:
+            # RC_CHANNELS is in no stream a ground station asks for at connect: ask, then wait for the first one
+            # (4.6.3 SITL sent it about a second later), rather than say "nothing" to the first 'rc'
             self.vehicle.setup.watch_radio()
+            state = self.vehicle.wait_for(lambda s: bool(s.setup.rc.values), RC_WAIT) or self.vehicle.state()
         self.say(rc_line(state))
 
     def do_adsb(self, arg: str) -> None:
