@@ -337,3 +337,27 @@ def test_photos_of_a_survey_flown_on_the_simulator(sim_factory, vehicle_factory,
     for name, row in zip(names, rows):
         assert_tagged(photos / "geotagged" / name, row)
     assert len({exif_position(photos / "geotagged" / n)[:2] for n in names}) == len(names)   # along the pass
+
+
+def test_the_console_geotags_without_a_vehicle(tmp_path):
+    import io
+    from driver.console.console import Console
+    rows = cam_rows(3)
+    photos = tmp_path / "photos"
+    names = shoot(photos, rows + cam_rows(4)[3:])
+    bin_path = write_log(tmp_path, rows)
+    out = io.StringIO()
+    console = Console(None, stdout=out)
+    assert not console.onecmd(f"geotag {bin_path} {photos} {tmp_path / 'out'} offset={CAMERA_AHEAD:g} by=order")
+    report = console.geotag_run.result(30)
+    assert len(report.tagged) == 3
+    text = out.getvalue()
+    assert f"3 photos tagged from CAM events into {tmp_path / 'out'}" in text
+    assert f"untagged {names[3]}: more photos than events (4 photos, 3 CAM events)" in text
+    for name, row in zip(names, rows):
+        assert_tagged(tmp_path / "out" / name, row)
+    console.onecmd(f"geotag {bin_path}")
+    assert "error: usage: geotag LOG FOLDER" in out.getvalue()
+    console.onecmd(f"geotag {os.path.join(LOGS, 'pymavlink-test.BIN')} {photos}")
+    assert console.geotag_run.result(30) is None
+    assert "error: geotag: pymavlink-test.BIN: no CAM or TRIG records" in out.getvalue()
