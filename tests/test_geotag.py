@@ -307,6 +307,12 @@ def test_camera_feedback_in_a_tlog(tmp_path):
     assert report.source == "CAMERA_FEEDBACK" and len(report.tagged) == 3, report.lines()
     for name, row in zip(names, rows):
         assert_tagged(photos / "geotagged" / name, row)
+    # with a feedback pin ArduPilot stamps CAMERA_FEEDBACK with its boot time: the receive time stands in
+    for _stamp, m in messages[1::2]:
+        m.time_usec = 1_000_000 + m.img_idx
+    path.write_bytes(tlog_bytes(messages))
+    report = geotag(str(path), str(photos), str(tmp_path / "boot"), clock_offset=CAMERA_AHEAD)
+    assert len(report.tagged) == 3 and all(-0.35 < t.time_error < -0.25 for t in report.tagged), report.lines()
     (tmp_path / "none.tlog").write_bytes(tlog_bytes(messages[:1]))
     with pytest.raises(GeotagError, match="no CAMERA_FEEDBACK"):
         geotag(str(tmp_path / "none.tlog"), str(photos))
@@ -337,6 +343,32 @@ def test_photos_of_a_survey_flown_on_the_simulator(sim_factory, vehicle_factory,
     for name, row in zip(names, rows):
         assert_tagged(photos / "geotagged" / name, row)
     assert len({exif_position(photos / "geotagged" / n)[:2] for n in names}) == len(names)   # along the pass
+
+
+def test_an_event_without_a_position_writes_nothing(tmp_path):
+    """A CAM logged before the first fix (0, 0): its photo keeps its EXIF as it was, and says why."""
+    rows = cam_rows(3)
+    rows[1] = rows[1][:2] + (0.0, 0.0) + rows[1][4:]
+    photos = tmp_path / "photos"
+    names = shoot(photos, rows)
+    report = geotag(write_log(tmp_path, rows), str(photos), clock_offset=CAMERA_AHEAD)
+    assert [t.photo.name for t in report.tagged] == [names[0], names[2]]
+    assert [u.name for u in report.unmatched] == [names[1]] and "CAM 2 has no position" in report.unmatched[0].reason
+    assert [e.number for e, _why in report.events_without_photo] == [2]
+    assert not (photos / "geotagged" / names[1]).exists()
+
+
+def test_photos_without_a_date_are_matched_by_order_and_said_so(tmp_path):
+    rows = cam_rows(2)
+    photos = tmp_path / "photos"
+    photos.mkdir()
+    for k in range(2):
+        make_photo(photos / f"P{k}.jpg", None)
+    report = geotag(write_log(tmp_path, rows), str(photos))
+    assert [(t.photo.name, t.time_error) for t in report.tagged] == [("P0.jpg", None), ("P1.jpg", None)]
+    assert "2 photos matched by order only, not checked by time" in "\n".join(report.lines())
+    for k, row in enumerate(rows):
+        assert_tagged(photos / "geotagged" / f"P{k}.jpg", row)
 
 
 def test_the_console_geotags_without_a_vehicle(tmp_path):

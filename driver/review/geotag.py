@@ -109,6 +109,10 @@ class GeotagReport:
         out += [f"{e.source} {e.number} (image {e.image}, {e.t:.1f} s into the log) has no photo: {why}"
                 for e, why in self.events_without_photo]
         out += [f"ignored {u.name}: {u.reason}" for u in self.ignored]
+        unchecked = sum(t.time_error is None for t in self.tagged)
+        if unchecked:
+            out.append(f"{unchecked} photos matched by order only, not checked by time (no DateTimeOriginal in the "
+                       "photo, or no GPS time in the log)")
         if self.camera_clock_ahead is not None and any("time mismatch" in u.reason for u in self.unmatched):
             out.append(f"the camera's clock reads {self.camera_clock_ahead:+.1f} s from the log's GPS time "
                        "(median over the photos matched by order): set that as the camera clock offset")
@@ -310,6 +314,12 @@ def _dms(value: float) -> tuple[tuple[int, int], tuple[int, int], tuple[int, int
     return (degrees, 1), (minutes, 1), (seconds, 1_000_000)
 
 
+def _has_position(event: CameraEvent) -> bool:
+    """A real place: finite, on the globe, not the 0,0 an autopilot logs before its first fix."""
+    return (np.isfinite([event.lat, event.lon, event.alt]).all() and abs(event.lat) <= 90 and abs(event.lon) <= 180
+            and (event.lat, event.lon) != (0.0, 0.0))
+
+
 def gps_ifd(event: CameraEvent, altitude: str = "msl") -> dict:
     """The EXIF GPS tags for one event; ``altitude`` "msl" (EXIF's meaning: above sea level) or "relative"
     (above home, for tools that want height above the take-off)."""
@@ -391,14 +401,19 @@ def geotag(log_or_path: FlightLog | str, folder: str, output: str | None = None,
     tagged, unmatched = [], list(match.unmatched)
     for done, (photo, event, apart) in enumerate(match.pairs, 1):
         destination = os.path.join(target, photo.name)
-        try:
-            write_tags(photo, event, destination, altitude)
-        except (OSError, ValueError, piexif.InvalidImageDataError) as e:
-            log.warning("geotag %s: %s", photo.name, e)
-            unmatched.append(Untagged(photo.name, f"its EXIF could not be written ({e})"))
-            match.idle.append((event, f"its photo, {photo.name}, could not be written"))
+        if not _has_position(event):
+            unmatched.append(Untagged(photo.name, f"{event.source} {event.number} has no position (no GPS fix "
+                                                  "when it was logged): nothing written"))
+            match.idle.append((event, f"no position to give its photo, {photo.name}"))
         else:
-            tagged.append(Tagged(photo, event, destination, apart))
+            try:
+                write_tags(photo, event, destination, altitude)
+            except (OSError, ValueError, piexif.InvalidImageDataError) as e:
+                log.warning("geotag %s: %s", photo.name, e)
+                unmatched.append(Untagged(photo.name, f"its EXIF could not be written ({e})"))
+                match.idle.append((event, f"its photo, {photo.name}, could not be written"))
+            else:
+                tagged.append(Tagged(photo, event, destination, apart))
         if progress is not None:
             progress(done, len(match.pairs))
     report = GeotagReport(kind, target, tuple(tagged), tuple(unmatched),
