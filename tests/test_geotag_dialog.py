@@ -36,7 +36,7 @@ def test_geotag_from_the_review_view(qtbot, tmp_path):
     report = done.args[0]
     assert isinstance(report, GeotagReport) and len(report.tagged) == 4
     assert dialog.run_button.isEnabled()
-    assert dialog.status.text().startswith("4 photos tagged from CAM events")
+    assert dialog.status.text() == "4 photos tagged from CAM events; 2 photos untagged, 1 event without a photo"
     text = dialog.report.toPlainText()
     assert f"untagged {names[4]}: more photos than events" not in text      # photo 5 meets event 5, off in time
     assert f"untagged {names[4]}: time mismatch" in text

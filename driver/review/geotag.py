@@ -100,7 +100,9 @@ class GeotagReport:
     unmatched: tuple[Untagged, ...]              # JPEGs left untagged, and why
     events_without_photo: tuple[tuple[CameraEvent, str], ...]
     ignored: tuple[Untagged, ...] = ()           # files in the folder that are not photos
-    camera_clock_ahead: float | None = None      # s, median of camera time less event time over the order pairs
+    #: s, the camera clock offset the photos suggest (the median of camera time less event time over the pairs by
+    #: order) when it differs from the one used by more than the tolerance; else None
+    suggested_offset: float | None = None
 
     def lines(self) -> list[str]:
         """The report in words, one line a fact, for the dialog and the console."""
@@ -113,8 +115,8 @@ class GeotagReport:
         if unchecked:
             out.append(f"{unchecked} photos matched by order only, not checked by time (no DateTimeOriginal in the "
                        "photo, or no GPS time in the log)")
-        if self.camera_clock_ahead is not None and any("time mismatch" in u.reason for u in self.unmatched):
-            out.append(f"the camera's clock reads {self.camera_clock_ahead:+.1f} s from the log's GPS time "
+        if self.suggested_offset is not None:
+            out.append(f"the camera's clock reads {self.suggested_offset:+.1f} s from the log's GPS time "
                        "(median over the photos matched by order): set that as the camera clock offset")
         return out
 
@@ -300,9 +302,12 @@ def _by_time(photos: list[Photo], events: list[CameraEvent], clock_offset: float
     return m
 
 
-def _clock_ahead(photos: list[Photo], events: list[CameraEvent]) -> float | None:
+def _suggested_offset(photos: list[Photo], events: list[CameraEvent], clock_offset: float,
+                      tolerance: float) -> float | None:
+    """The camera clock offset the photos paired by order show (their median), if it is not the one used."""
     gaps = [a for p, e in zip(photos, events) if (a := _apart(p, e, 0.0)) is not None]
-    return float(statistics.median(gaps)) if gaps else None
+    seen = float(statistics.median(gaps)) if gaps else None
+    return seen if seen is not None and abs(seen - clock_offset) > tolerance else None
 
 
 # -- writing -----------------------------------------------------------------------------------------------------
@@ -418,7 +423,7 @@ def geotag(log_or_path: FlightLog | str, folder: str, output: str | None = None,
             progress(done, len(match.pairs))
     report = GeotagReport(kind, target, tuple(tagged), tuple(unmatched),
                           tuple(sorted(match.idle, key=lambda x: x[0].number)), tuple(ignored),
-                          _clock_ahead(photos, events))
+                          _suggested_offset(photos, events, clock_offset, tolerance))
     log.info("geotag %s: %d tagged, %d untagged, %d events without a photo", folder, len(tagged),
              len(unmatched), len(report.events_without_photo))
     return report

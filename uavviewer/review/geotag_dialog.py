@@ -121,8 +121,11 @@ class GeotagDialog(QDialog):
             self._finish(f"geotagging failed: {e}", f"geotagging failed: {e}")
             return
         lines = report.lines()
-        left = len(report.unmatched) + len(report.events_without_photo)
-        self._finish(lines[0] + (f"; {left} left over, see below" if left else ""), "\n".join(lines), report)
+        left = [f"{n} {one if n == 1 else many}" for n, one, many in (
+            (len(report.unmatched), "photo untagged", "photos untagged"),
+            (len(report.events_without_photo), "event without a photo", "events without a photo")) if n]
+        self._finish(lines[0].split(" into ")[0] + (f"; {', '.join(left)}" if left else ""), "\n".join(lines),
+                     report)
 
     def _finish(self, status: str, text: str, result: object = None) -> None:
         self.status.setText(status)
