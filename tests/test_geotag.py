@@ -31,17 +31,20 @@ def cam_rows(count: int, first_ms: int = 100_000, every_ms: int = 3_000):
              HOME[1] - k * 2.345678e-4, HOME[2] + 30.0 + k * 0.37, 30.0 + k * 0.37) for k in range(count)]
 
 
-def write_log(folder, rows, with_cam: bool = True) -> str:
-    """A .BIN as the simulator writes one: PARM, GPS at 5 Hz over the flight, a CAM for each row."""
+def write_log(folder, rows, with_cam: bool = True, second=()) -> str:
+    """A .BIN as the simulator writes one: PARM, GPS at 5 Hz over the flight, a CAM for each row (and for each row
+    of ``second``, a second camera's, instance 1)."""
     logs = LogFolder(str(folder))
     number = logs.begin([("SYSID_THISMAV", 1.0)])
     end_us = (rows[-1][0] if rows else 10_000_000) + 2_000_000
-    pending = list(rows) if with_cam else []
+    pending = sorted([(r, 0) for r in rows] + [(r, 1) for r in second]) if with_cam else []
+    counts = [0, 0]
     gps_ms0 = (rows[0][1] if rows else 100_000) - (rows[0][0] if rows else 1_000_000) // 1000
     for us in range(0, end_us, 200_000):
-        while pending and pending[0][0] <= us:
-            t_us, ms, lat, lon, alt, rel = pending.pop(0)
-            logs.write("CAM", t_us, 0, len(rows) - len(pending), ms, WEEK, round(lat * 1e7), round(lon * 1e7),
+        while pending and pending[0][0][0] <= us:
+            (t_us, ms, lat, lon, alt, rel), camera = pending.pop(0)
+            counts[camera] += 1
+            logs.write("CAM", t_us, camera, counts[camera], ms, WEEK, round(lat * 1e7), round(lon * 1e7),
                        round(alt * 100), round(rel * 100), round(alt * 100), 0, 0, 9000)
         logs.write("GPS", us, 3, gps_ms0 + us // 1000, WEEK, 14, round(HOME[0] * 1e7), round(HOME[1] * 1e7),
                    round(HOME[2] * 100), 0.0, 0.0)
@@ -372,6 +375,26 @@ def test_photos_without_a_date_are_matched_by_order_and_said_so(tmp_path):
         assert_tagged(photos / "geotagged" / f"P{k}.jpg", row)
 
 
+def test_two_cameras_each_count_their_own_photos(tmp_path):
+    rows = cam_rows(3)
+    other = [(r[0] + 2_600_000, r[1] + 2600, r[2] + 1e-4, r[3] + 1e-4, r[4] + 1.0, r[5] + 1.0) for r in cam_rows(2)]
+    bin_path = write_log(tmp_path, rows, second=other)
+    photos = tmp_path / "photos"
+    names = shoot(photos, other)
+    report = geotag(bin_path, str(photos), clock_offset=CAMERA_AHEAD, camera=1)
+    assert report.cameras == (0, 1) and report.camera == 1
+    assert [(t.photo.name, t.event.number, t.event.image) for t in report.tagged] == [(names[0], 1, 1),
+                                                                                      (names[1], 2, 2)]
+    assert not report.events_without_photo
+    for name, row in zip(names, other):
+        assert_tagged(photos / "geotagged" / name, row)
+    first = geotag(bin_path, str(photos), str(tmp_path / "first"), clock_offset=CAMERA_AHEAD)
+    assert first.camera == 0 and "the log has cameras 0, 1: camera 0's events were used" in first.lines()
+    assert [u.name for u in first.unmatched] == names                 # 2.6 s off camera 0's: time mismatches
+    with pytest.raises(GeotagError, match="no camera 2"):
+        geotag(bin_path, str(photos), camera=2)
+
+
 def test_the_console_geotags_without_a_vehicle(tmp_path):
     import io
     from driver.console.console import Console
@@ -381,7 +404,8 @@ def test_the_console_geotags_without_a_vehicle(tmp_path):
     bin_path = write_log(tmp_path, rows)
     out = io.StringIO()
     console = Console(None, stdout=out)
-    assert not console.onecmd(f"geotag {bin_path} {photos} {tmp_path / 'out'} offset={CAMERA_AHEAD:g} by=order")
+    assert not console.onecmd(f"geotag {bin_path} {photos} {tmp_path / 'out'} offset={CAMERA_AHEAD:g} by=order "
+                              "camera=0")
     report = console.geotag_run.result(30)
     assert len(report.tagged) == 3
     text = out.getvalue()

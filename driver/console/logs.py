@@ -13,7 +13,7 @@ __all__ = ["LogCommands", "entry_line", "GEOTAG_USAGE"]
 LOG_USAGE = "usage: log list | log download N|latest [FILE] | log download all [FOLDER] | log erase [yes] | " \
             "log cancel"
 GEOTAG_USAGE = "usage: geotag LOG FOLDER [OUT] [offset=SECONDS] [tolerance=SECONDS] [by=order|time] " \
-               "[altitude=msl|relative] [inplace]"
+               "[altitude=msl|relative] [camera=N] [inplace]"
 
 
 def entry_line(entry) -> str:
@@ -72,7 +72,7 @@ class LogCommands:
 
     def do_geotag(self, arg: str) -> None:
         """geotag LOG FOLDER [OUT] [offset=SECONDS] [tolerance=SECONDS] [by=order|time] [altitude=msl|relative]
-        [inplace]
+        [camera=N] [inplace]
         Write the position of each camera event of LOG (.BIN CAM/TRIG, .tlog CAMERA_FEEDBACK) into the EXIF of
         the photos in FOLDER, the n-th photo to the n-th event, checked by time; copies go to OUT (FOLDER/geotagged
         unless given), the originals are rewritten only with 'inplace'. offset: how far the camera's clock runs
@@ -82,15 +82,16 @@ class LogCommands:
         words = arg.split()
         options = dict(w.split("=", 1) for w in words if "=" in w)
         places = [w for w in words if "=" not in w and w != "inplace"]
-        unknown = set(options) - {"offset", "tolerance", "by", "altitude"}
+        unknown = set(options) - {"offset", "tolerance", "by", "altitude", "camera"}
         if len(places) not in (2, 3) or unknown:
             raise ValueError(GEOTAG_USAGE)
         try:
             numbers = {k: float(options[k]) for k in ("offset", "tolerance") if k in options}
+            camera = int(options["camera"]) if "camera" in options else None
         except ValueError:
-            raise ValueError(f"geotag: offset and tolerance are seconds; {GEOTAG_USAGE}") from None
+            raise ValueError(f"geotag: offset and tolerance are seconds, camera a number; {GEOTAG_USAGE}") from None
         kwargs = dict(clock_offset=numbers.get("offset", 0.0), in_place="inplace" in words,
-                      by=options.get("by", "order"), altitude=options.get("altitude", "msl"))
+                      by=options.get("by", "order"), altitude=options.get("altitude", "msl"), camera=camera)
         if "tolerance" in numbers:
             kwargs["tolerance"] = numbers["tolerance"]
         future: Future = Future()

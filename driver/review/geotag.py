@@ -28,7 +28,7 @@ import os
 import shutil
 import statistics
 import tempfile
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from datetime import datetime, timedelta, timezone
 from typing import Callable
 
@@ -69,6 +69,7 @@ class CameraEvent:
     alt: float                # m above mean sea level
     rel_alt: float            # m above home
     source: str               # "CAM", "TRIG" or "CAMERA_FEEDBACK"
+    camera: int = 0           # the camera's instance (CAM I, CAMERA_FEEDBACK cam_idx)
 
 
 @dataclass(frozen=True)
@@ -103,6 +104,9 @@ class GeotagReport:
     #: s, the camera clock offset the photos suggest (the median of camera time less event time over the pairs by
     #: order) when it differs from the one used by more than the tolerance; else None
     suggested_offset: float | None = None
+    cameras: tuple[int, ...] = (0,)              # the camera instances in the log; the report is of the first
+                                                 # unless another was asked for (``camera``)
+    camera: int = 0
 
     def lines(self) -> list[str]:
         """The report in words, one line a fact, for the dialog and the console."""
@@ -111,6 +115,9 @@ class GeotagReport:
         out += [f"{e.source} {e.number} (image {e.image}, {e.t:.1f} s into the log) has no photo: {why}"
                 for e, why in self.events_without_photo]
         out += [f"ignored {u.name}: {u.reason}" for u in self.ignored]
+        if len(self.cameras) > 1:
+            out.append(f"the log has cameras {', '.join(map(str, self.cameras))}: camera {self.camera}'s events "
+                       "were used")
         unchecked = sum(t.time_error is None for t in self.tagged)
         if unchecked:
             out.append(f"{unchecked} photos matched by order only, not checked by time (no DateTimeOriginal in the "
@@ -128,8 +135,8 @@ def gps_utc(week: int, ms: float) -> datetime:
 
 
 def camera_events(flight: FlightLog, source: str = "auto") -> tuple[str, list[CameraEvent]]:
-    """(the record type used, its events in the log's order). ``source``: "auto" (CAM, else TRIG; a .tlog's
-    CAMERA_FEEDBACK), "CAM" or "TRIG". Raises :class:`GeotagError` when the log has none."""
+    """(the record type used, its events in the log's order, every camera's). ``source``: "auto" (CAM, else TRIG;
+    a .tlog's CAMERA_FEEDBACK), "CAM" or "TRIG". Raises :class:`GeotagError` when the log has none."""
     if flight.kind == "tlog":
         events = _tlog_events(flight)
         if not events:
@@ -151,6 +158,7 @@ def _dataflash_events(flight: FlightLog, name: str) -> list[CameraEvent]:
     alt = flight.series(name, "Alt")[1]
     rel = flight.series(name, "RelAlt")[1] if flight.has(name, "RelAlt") else np.full(len(t), np.nan)
     image = flight.series(name, "Img")[1] if flight.has(name, "Img") else np.arange(1, len(t) + 1)
+    camera = flight.series(name, "I")[1] if flight.has(name, "I") else np.zeros(len(t))
     if flight.has(name, "GPSTime") and flight.has(name, "GPSWeek"):
         ms, week = flight.series(name, "GPSTime")[1], flight.series(name, "GPSWeek")[1]
         utc = [gps_utc(int(w), float(m)) if w > 0 else None for w, m in zip(week, ms)]
@@ -161,7 +169,7 @@ def _dataflash_events(flight: FlightLog, name: str) -> list[CameraEvent]:
         utc = _utc_from_gps_records(flight, t)
     order = np.argsort(t, kind="stable")
     return [CameraEvent(n + 1, float(t[i]), int(image[i]), utc[i], float(lat[i]), float(lon[i]), float(alt[i]),
-                        float(rel[i]), name) for n, i in enumerate(order.tolist())]
+                        float(rel[i]), name, int(camera[i])) for n, i in enumerate(order.tolist())]
 
 
 def _utc_from_gps_records(flight: FlightLog, t: np.ndarray) -> list[datetime | None]:
@@ -187,7 +195,7 @@ def _tlog_events(flight: FlightLog) -> list[CameraEvent]:
         return []
     t, lat = flight.series("CAMERA_FEEDBACK", "lat")
     cols = {f: flight.series("CAMERA_FEEDBACK", f)[1] for f in ("lng", "alt_msl", "alt_rel", "img_idx",
-                                                                   "time_usec")}
+                                                                   "time_usec", "cam_idx")}
     start = flight.start_unix
     out = []
     for n, i in enumerate(np.argsort(t, kind="stable").tolist()):
@@ -198,7 +206,7 @@ def _tlog_events(flight: FlightLog) -> list[CameraEvent]:
             utc = datetime.fromtimestamp(start + float(t[i]), timezone.utc) if start else None
         out.append(CameraEvent(n + 1, float(t[i]), int(cols["img_idx"][i]), utc, float(lat[i]) / 1e7,
                                float(cols["lng"][i]) / 1e7, float(cols["alt_msl"][i]), float(cols["alt_rel"][i]),
-                               "CAMERA_FEEDBACK"))
+                               "CAMERA_FEEDBACK", int(cols["cam_idx"][i])))
     return out
 
 
@@ -373,11 +381,13 @@ def write_tags(photo: Photo, event: CameraEvent, destination: str, altitude: str
 
 def geotag(log_or_path: FlightLog | str, folder: str, output: str | None = None, *, clock_offset: float = 0.0,
            tolerance: float = DEFAULT_TOLERANCE, in_place: bool = False, by: str = "order", source: str = "auto",
-           altitude: str = "msl", progress: Callable[[int, int], None] | None = None) -> GeotagReport:
+           altitude: str = "msl", camera: int | None = None,
+           progress: Callable[[int, int], None] | None = None) -> GeotagReport:
     """Tag the JPEGs in ``folder`` from the log's camera events and say what was done (see the module's words).
 
     ``clock_offset``: seconds the camera's clock is ahead of UTC (a camera set to UTC+2 local time: 7200).
     ``output``: where the tagged copies go (default ``<folder>/geotagged``); ``in_place``: rewrite the originals.
+    ``camera``: whose events, where the log has several cameras (CAM I); the lowest instance unless told.
     ``progress(done, total)`` is called after each photo written. Raises :class:`GeotagError` (or
     ``LogError`` for a log that cannot be read) before anything is written."""
     if by not in ("order", "time"):
@@ -397,6 +407,13 @@ def geotag(log_or_path: FlightLog | str, folder: str, output: str | None = None,
     finally:
         if isinstance(log_or_path, str):
             flight.close()
+    cameras = tuple(sorted({e.camera for e in events}))
+    chosen = cameras[0] if camera is None else camera
+    if chosen not in cameras:
+        raise GeotagError(f"the log has no camera {chosen} (its {kind} events are of camera "
+                          f"{', '.join(map(str, cameras))})")
+    if len(cameras) > 1:                      # each camera counts its own photos
+        events = [replace(e, number=n) for n, e in enumerate((e for e in events if e.camera == chosen), 1)]
     if not photos:
         raise GeotagError(f"{folder}: no JPEG photos in this folder")
     if all(p.taken is not None for p in photos):
@@ -423,7 +440,7 @@ def geotag(log_or_path: FlightLog | str, folder: str, output: str | None = None,
             progress(done, len(match.pairs))
     report = GeotagReport(kind, target, tuple(tagged), tuple(unmatched),
                           tuple(sorted(match.idle, key=lambda x: x[0].number)), tuple(ignored),
-                          _suggested_offset(photos, events, clock_offset, tolerance))
+                          _suggested_offset(photos, events, clock_offset, tolerance), cameras, chosen)
     log.info("geotag %s: %d tagged, %d untagged, %d events without a photo", folder, len(tagged),
              len(unmatched), len(report.events_without_photo))
     return report
