@@ -1,15 +1,19 @@
 """The console's ``log`` verbs, in MAVProxy's words (mixed into :class:`driver.console.Console`): each answers
-when the vehicle has, so ``--cmd "log download latest FILE"`` works unattended."""
+when the vehicle has, so ``--cmd "log download latest FILE"`` works unattended; and ``geotag``, a downloaded
+log's camera events written into a folder of photos (driver.review.geotag), which needs no vehicle."""
 from __future__ import annotations
 
 import os
+import threading
 import time
 from concurrent.futures import Future
 
-__all__ = ["LogCommands", "entry_line"]
+__all__ = ["LogCommands", "entry_line", "GEOTAG_USAGE"]
 
 LOG_USAGE = "usage: log list | log download N|latest [FILE] | log download all [FOLDER] | log erase [yes] | " \
             "log cancel"
+GEOTAG_USAGE = "usage: geotag LOG FOLDER [OUT] [offset=SECONDS] [tolerance=SECONDS] [by=order|time] " \
+               "[altitude=msl|relative] [camera=N] [inplace]"
 
 
 def entry_line(entry) -> str:
@@ -63,6 +67,51 @@ class LogCommands:
             logs.cancel()
         else:
             raise ValueError(LOG_USAGE)
+
+    geotag_run: Future | None = None
+
+    def do_geotag(self, arg: str) -> None:
+        """geotag LOG FOLDER [OUT] [offset=SECONDS] [tolerance=SECONDS] [by=order|time] [altitude=msl|relative]
+        [camera=N] [inplace]
+        Write the position of each camera event of LOG (.BIN CAM/TRIG, .tlog CAMERA_FEEDBACK) into the EXIF of
+        the photos in FOLDER, the n-th photo to the n-th event, checked by time; copies go to OUT (FOLDER/geotagged
+        unless given), the originals are rewritten only with 'inplace'. offset: how far the camera's clock runs
+        ahead of UTC. Photos left untagged and events without a photo are listed (on a thread: the console stays
+        free; ``geotag_run`` is its future)"""
+        from ..review.geotag import geotag
+        words = arg.split()
+        options = dict(w.split("=", 1) for w in words if "=" in w)
+        places = [w for w in words if "=" not in w and w != "inplace"]
+        unknown = set(options) - {"offset", "tolerance", "by", "altitude", "camera"}
+        if len(places) not in (2, 3) or unknown:
+            raise ValueError(GEOTAG_USAGE)
+        try:
+            numbers = {k: float(options[k]) for k in ("offset", "tolerance") if k in options}
+            camera = int(options["camera"]) if "camera" in options else None
+        except ValueError:
+            raise ValueError(f"geotag: offset and tolerance are seconds, camera a number; {GEOTAG_USAGE}") from None
+        kwargs = dict(clock_offset=numbers.get("offset", 0.0), in_place="inplace" in words,
+                      by=options.get("by", "order"), altitude=options.get("altitude", "msl"), camera=camera)
+        if "tolerance" in numbers:
+            kwargs["tolerance"] = numbers["tolerance"]
+        future: Future = Future()
+
+        def run() -> None:
+            try:
+                report = geotag(places[0], places[1], places[2] if len(places) == 3 else None, **kwargs)
+            except ValueError as e:                   # GeotagError, LogError: the words are for the pilot
+                self.say(f"error: geotag: {e}")
+                future.set_result(None)
+                return
+            except Exception as e:                    # noqa: BLE001 - the console stays up
+                self.say(f"error: geotag: {e}")
+                future.set_exception(e)
+                return
+            for line in report.lines():
+                self.say(line)
+            future.set_result(report)
+        self.geotag_run = future
+        threading.Thread(target=run, name="console-geotag", daemon=True).start()
 
     def _log_latest(self, listed: Future, future: Future) -> None:
         outcome = listed.result()

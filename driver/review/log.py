@@ -86,6 +86,12 @@ class FlightLog:
             self._bin.close()
 
     @property
+    def start_unix(self) -> float | None:
+        """Unix time of a .tlog's first message (the ground station's clock); None for a .BIN (its clock is the
+        autopilot's boot time: UTC comes from its GPS records)."""
+        return self._tlog.t0 if self._tlog is not None else None
+
+    @property
     def skipped_bytes(self) -> int:
         return self._bin.skipped if self._bin is not None else 0
 

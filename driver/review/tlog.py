@@ -22,7 +22,8 @@ class TlogError(ValueError):
 
 class TlogColumns:
     """``columns[type][field]`` numpy arrays, ``times[type]`` seconds from the first message, ``texts`` (t, severity,
-    text), ``params`` name -> value, ``heartbeats`` (t, custom_mode, armed)."""
+    text), ``params`` name -> value, ``heartbeats`` (t, custom_mode, armed), ``t0`` the first message's time (Unix
+    seconds, the ground station's clock)."""
 
     def __init__(self, path: str) -> None:
         from pymavlink import mavutil
@@ -64,6 +65,7 @@ class TlogColumns:
                 stamps[mtype].append(t)
         finally:
             conn.close()
+        self.t0 = t0 or 0.0
         if not rows:
             raise TlogError("no MAVLink messages from a vehicle in the file")
         self.columns: dict[str, dict[str, np.ndarray]] = {}

@@ -32,7 +32,8 @@ FORMATS = {
     "GPS": (68, "QBIHBLLeff", "TimeUS,Status,GMS,GWk,NSats,Lat,Lng,Alt,Spd,GCrs"),
     "BAT": (69, "QBfff", "TimeUS,Inst,Volt,Curr,CurrTot"),
     "CTUN": (70, "Qffffff", "TimeUS,ThI,ThO,DAlt,Alt,BAlt,CRt"),
-    "CAM": (71, "QHLLeeccC", "TimeUS,Img,Lat,Lng,Alt,RelAlt,Roll,Pitch,Yaw"),
+    # AP_Camera_Logging.h (4.6): instance, image, the GPS's time, position, altitudes (AMSL, above home, GPS's)
+    "CAM": (71, "QBHIHLLeeeccC", "TimeUS,I,Img,GPSTime,GPSWeek,Lat,Lng,Alt,RelAlt,GPSAlt,R,P,Y"),
 }
 
 
@@ -190,7 +191,8 @@ def write_flight_log(folder: LogFolder, size: int, params=(("SYSID_THISMAV", 1.0
         if i % 2 == 0:
             folder.write("GPS", us, 3, us // 1000, 2300, 14, 402839000 + i, -37940000 - i, 67400, 2.0, 90.0)
         if i % 100 == 50:
-            folder.write("CAM", us, i // 100, 402839000 + i, -37940000 - i, 67400, 1000, 0, 0, 9000)
+            folder.write("CAM", us, 0, i // 100, us // 1000, 2300, 402839000 + i, -37940000 - i, 67400, 1000, 67400,
+                         0, 0, 9000)
         i += 1
     folder.end()
     return number

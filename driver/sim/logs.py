@@ -197,7 +197,7 @@ class LogServer:
         self.log_gps_tick += 1
         if self.log_gps_tick % 2 == 0:
             lat, lon = self._lat_lon()
-            folder.write("GPS", us, 3, int(self.t * 1000) % 604_800_000, 2300, 14, int(round(lat * 1e7)),
+            folder.write("GPS", us, 3, *self._gps_time(), 14, int(round(lat * 1e7)),
                          int(round(lon * 1e7)), int(round((self.home_alt - self.d) * 100)),
                          math.hypot(self.vn, self.ve), deg(math.atan2(self.ve, self.vn)) % 360.0)
 
@@ -206,14 +206,20 @@ class LogServer:
         if self.log_folder_ is not None and self.log_folder_.current is not None:
             self.log_folder_.write("MSG", int(self.boot_seconds * 1e6), text)
 
+    def _gps_time(self) -> tuple[int, int]:
+        """The simulated GPS's time, (ms into the week, week): the sim's seconds into week 2300 (GPS GMS/GWk, CAM
+        GPSTime/GPSWeek, in that order in both)."""
+        return int(self.t * 1000) % 604_800_000, 2300
+
     def log_camera(self) -> None:
         """A photo: CAM (AP_Camera::Write_Camera)."""
         if self.log_folder_ is None or self.log_folder_.current is None:
             return
         lat, lon = self._lat_lon()
-        self.log_folder_.write("CAM", int(self.boot_seconds * 1e6), self.images & 0xFFFF, int(round(lat * 1e7)),
-                               int(round(lon * 1e7)), int(round((self.home_alt - self.d) * 100)),
-                               int(round(-self.d * 100)), int(round(math.degrees(self.roll) * 100)),
+        alt_cm = int(round((self.home_alt - self.d) * 100))
+        self.log_folder_.write("CAM", int(self.boot_seconds * 1e6), 0, self.images & 0xFFFF, *self._gps_time(),
+                               int(round(lat * 1e7)), int(round(lon * 1e7)), alt_cm, int(round(-self.d * 100)),
+                               alt_cm, int(round(math.degrees(self.roll) * 100)),
                                int(round(math.degrees(self.pitch) * 100)),
                                int(round(math.degrees(self.yaw) % 360.0 * 100)))
 

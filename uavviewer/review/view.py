@@ -1,6 +1,6 @@
 """One reviewed log in one view (issue 31): the searchable field tree, the plots with their events and cursor,
 the flight path on the map coloured by mode with the cursor's marker, the events, the parameters as flown and
-their difference from the vehicle's, presets and CSV export."""
+their difference from the vehicle's, presets and CSV export, and geotagging the flight's photos."""
 from __future__ import annotations
 
 import logging
@@ -16,6 +16,7 @@ from ..map.log_path import LogPathOverlay, mode_colour
 from ..map.map_view import MapView
 from .events_list import EventsList
 from .field_tree import FieldTree
+from .geotag_dialog import GeotagDialog
 from .params_table import FlightParams
 from .plots import ReviewPlots
 
@@ -45,9 +46,14 @@ class ReviewWindow(QMainWindow):
         clear.clicked.connect(self.plots.clear_fields)
         self.export_button = QPushButton("Export CSV…")
         self.export_button.clicked.connect(self.ask_export)
+        self.geotag_button = QPushButton("Geotag photos…")
+        self.geotag_button.setToolTip("Write the position of each of this flight's camera events (CAM, TRIG, "
+                                      "CAMERA_FEEDBACK) into its photo's EXIF")
+        self.geotag_button.clicked.connect(self.open_geotag)
+        self.geotag_dialog: GeotagDialog | None = None
         self.status = QLabel()
         bar = QHBoxLayout()
-        for w in (self.preset, clear, self.export_button):
+        for w in (self.preset, clear, self.export_button, self.geotag_button):
             bar.addWidget(w)
         bar.addWidget(self.status, 1)
         self.legend = QLabel()
@@ -138,7 +144,16 @@ class ReviewWindow(QMainWindow):
         if path:
             self.export(path)
 
+    def open_geotag(self) -> GeotagDialog:
+        if self.geotag_dialog is None:
+            self.geotag_dialog = GeotagDialog(self.log.path, self)
+        self.geotag_dialog.show()
+        self.geotag_dialog.raise_()
+        return self.geotag_dialog
+
     def closeEvent(self, event) -> None:  # noqa: N802
+        if self.geotag_dialog is not None:
+            self.geotag_dialog.shutdown()
         self.log.close()
         super().closeEvent(event)
 
