@@ -20,7 +20,7 @@ from concurrent.futures import Future
 from dataclasses import dataclass
 from typing import Callable
 
-from PyQt5.QtCore import QObject, QTimer, pyqtSignal
+from PyQt5.QtCore import QObject, Qt, QTimer, pyqtSignal
 from PyQt5.QtWidgets import QAction
 
 from driver.logs.control import DISARM_TEXT
@@ -74,7 +74,8 @@ class FlightLogsController(QObject):
         self._timer.setInterval(PROGRESS_MS)
         self._timer.timeout.connect(self._show_progress)
         self._relay = _Relay()
-        self._relay.done.connect(self._settled)
+        self._relay.done.connect(self._settled, Qt.QueuedConnection)     # never inside _next, even when a
+        # future is settled before its callback is added (armed, the refusal is at once)
         adapter.droneChanged.connect(self._vehicle_changed)
 
     # -- the window ---------------------------------------------------------------------------------------------
@@ -130,10 +131,12 @@ class FlightLogsController(QObject):
             row = self._rows.get(log_id)
             if row is None or row.running:
                 continue
-            if not self._queue(_Op("download", log_id)):
-                return
-            if self._rows[log_id].state is not RowState.DOWNLOADING:
-                self._rows[log_id] = self._rows[log_id].but(state=RowState.QUEUED, reason="")
+            why = self.unavailable()
+            if why:
+                self._say(why)
+                break
+            self._rows[log_id] = row.but(state=RowState.QUEUED, reason="")
+            self._queue(_Op("download", log_id))
         self._emit_rows()
 
     def download_all(self) -> None:
@@ -261,7 +264,7 @@ class FlightLogsController(QObject):
         if rest.state is RowState.ON_VEHICLE and outcome.reason != "cancelled":
             rest = rest.but(state=RowState.FAILED)
         elif rest.state is RowState.PARTIAL and outcome.reason == "cancelled":
-            rest = rest.but(reason=f"cancelled: {size_text(rest.held)} kept, Download resumes")
+            rest = rest.but(reason=f"cancelled: {size_text(rest.held)} kept to resume from")
         self._rows[op.log_id] = rest
         self._say(f"log {op.log_id}: {rest.reason}")
         if outcome.reason.startswith(DISARM_TEXT):   # the rest would be refused alike: they wait no more
