@@ -10,10 +10,11 @@ import pytest
 from PyQt5.QtCore import Qt
 from PyQt5.QtWidgets import QAction, QMenu, QMessageBox
 
-from uavviewer.logs.controller import NO_LOGS, REPLAYED
+from uavviewer.connect.opener import Disconnected
+from uavviewer.logs.controller import NO_LOGS, NOT_CONNECTED, REPLAYED
 from uavviewer.logs.rows import RowState, date_text, size_text
 
-from ice_fixtures import drone_factory, server_factory  # noqa: F401  (fixtures)
+from ice_fixtures import drone_factory, eventually, server_factory  # noqa: F401  (fixtures)
 from test_logs_download import logs_sim, same_bytes
 from viewer_fixtures import viewer_settings, window_factory  # noqa: F401  (fixtures)
 
@@ -163,3 +164,17 @@ def test_a_connection_without_logs_says_why(qtbot, connection, sim_factory, vehi
         assert not button.isEnabled()
     dialog.controller.refresh()                             # asked anyway: the same words, nothing breaks
     assert dialog.status.text() == why and not dialog.controller.busy
+
+
+def test_leaving_the_vehicle_stops_its_download_resumable_and_clears_its_list(qtbot, sim_factory, vehicle_factory,
+                                                                               window_factory, tmp_path):
+    _sim, _v, w, dialog, _folder = logs_window(qtbot, sim_factory, vehicle_factory, window_factory, tmp_path,
+                                               [600_000], **SLOW_LINK)
+    qtbot.mouseClick(dialog.table.button(1), Qt.LeftButton)
+    qtbot.waitUntil(lambda: row(dialog, 1).held > 30_000, timeout=30000)
+    w.use_connection(Disconnected())                        # File › Disconnect (or another vehicle picked)
+    qtbot.waitUntil(lambda: dialog.table.rowCount() == 0, timeout=5000)
+    assert dialog.status.text() == NOT_CONNECTED and not dialog.controller.busy
+    assert not dialog.refresh_button.isEnabled() and not dialog.download_all_button.isEnabled()
+    saved = os.path.join(str(tmp_path / "station-logs"), "00000001.BIN")
+    assert eventually(lambda: os.path.exists(saved + ".part.json") and not os.path.exists(saved), 10)

@@ -25,17 +25,19 @@ from PyQt5.QtWidgets import QAction
 
 from driver.logs.control import DISARM_TEXT
 from driver.logs.ranges import load_part_map
+from driver.vehicle.state import LinkStatus
 
 from ..widgets.menus import menu_named
 from .rows import LogRow, RowState, size_text
 
-__all__ = ["FlightLogsController", "NO_LOGS", "REPLAYED"]
+__all__ = ["FlightLogsController", "NO_LOGS", "NOT_CONNECTED", "REPLAYED"]
 
 log = logging.getLogger(__name__)
 
 NO_LOGS = ("this connection cannot download the vehicle's DataFlash logs (a remote drone: its server holds the "
            "link; run 'log download' in that server's console)")
 REPLAYED = "a replayed recording has no vehicle to download DataFlash logs from"
+NOT_CONNECTED = "no vehicle to download DataFlash logs from: File › Connect picks one"
 PROGRESS_MS = 200
 
 
@@ -115,7 +117,7 @@ class FlightLogsController(QObject):
         if getattr(drone, "replay", None) is not None:
             return REPLAYED
         if getattr(drone, "logs", None) is None:
-            return NO_LOGS
+            return NOT_CONNECTED if drone.state().link.status is LinkStatus.CLOSED else NO_LOGS
         return ""
 
     def path(self, log_id: int) -> str:
@@ -123,7 +125,8 @@ class FlightLogsController(QObject):
 
     # -- what the pilot asks -----------------------------------------------------------------------------------
     def refresh(self) -> None:
-        self._queue(_Op("list"))
+        if not any(op.kind == "list" for op in self._ops):     # one list waiting is enough
+            self._queue(_Op("list"))
 
     def download(self, log_ids) -> None:
         """These logs, one after another; a saved one again only when asked for by name (not by Download all)."""
