@@ -180,6 +180,8 @@ class FlightLogsController(QObject):
     def _next(self) -> None:
         while self._running is None and self._ops:
             op = self._ops.popleft()
+            if op.kind == "download" and op.log_id not in self._rows:
+                continue                             # erased, or gone from the list, while it waited
             op.logs = logs = self.adapter.drone.logs
             try:
                 if op.kind == "list":
@@ -193,6 +195,8 @@ class FlightLogsController(QObject):
             except Exception as exc:                 # noqa: BLE001 - said in the window, which flies on
                 log.exception("log %s failed to start", op.kind)
                 self._say(f"log {op.kind}: {exc}")
+                if op.kind == "download":
+                    self._rows[op.log_id] = self._rows[op.log_id].but(state=RowState.FAILED, reason=str(exc))
                 continue
             self._running = op
             self._say(words)
@@ -214,6 +218,8 @@ class FlightLogsController(QObject):
             log.exception("log %s", op.kind)
             outcome = None
             self._say(f"log {op.kind}: {type(exc).__name__}: {exc}")
+            if op.kind == "download" and op.log_id in self._rows:
+                self._rows[op.log_id] = self._resting(self._rows[op.log_id], str(exc)).but(state=RowState.FAILED)
         if outcome is not None:
             {"list": self._listed, "download": self._downloaded, "erase": self._erased}[op.kind](op, outcome)
         self._emit_rows()
