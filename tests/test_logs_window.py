@@ -81,6 +81,7 @@ def test_a_download_shows_its_progress_then_opens_byte_identical(qtbot, sim_fact
     assert same_bytes(saved, folder, 2)
     assert bar.value() == 1000 and table.text(2, 4) == "" and table.text(2, 5) == ""
     assert dialog.status.text().startswith(f"log 2 saved: {saved}")
+    assert f"Flight log 2 saved: {saved}" in w.messages.texts()      # said where the pilot looks, window closed too
     with qtbot.waitSignal(w.review.opened, timeout=20000) as opened:
         qtbot.mouseClick(table.button(2), Qt.LeftButton)
     view = opened.args[0]
@@ -119,6 +120,7 @@ def test_armed_the_vehicle_refuses_in_its_own_words_and_land_stays_at_hand(qtbot
     qtbot.waitUntil(lambda: row(dialog, 1).state is RowState.FAILED, timeout=20000)
     assert "Disarm for log download" in dialog.table.bar(1).format()
     assert "Disarm for log download" in dialog.status.text()
+    assert any(t.startswith("Flight log 1 not downloaded: Disarm for log download") for t in w.messages.texts())
     assert row(dialog, 2).state is RowState.ON_VEHICLE           # the next one is not asked to be refused again
     assert not dialog.controller.busy
     land = w.flightControls.main_button

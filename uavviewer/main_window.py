@@ -121,7 +121,8 @@ class MainWindow(QMainWindow):
         self.fleet_dock = FleetDock(self)
         self.review = ReviewController(self)                # File › Open log…: docs/review.md
         self.inspector = InspectorController(self)          # Tools › MAVLink inspector
-        self.flight_logs = FlightLogsController(self.adapter, lambda: self.logs.downloads, self.review.open, self)
+        self.flight_logs = FlightLogsController(self.adapter, lambda: self.logs.downloads, self.review.open, self,
+                                                say=self.log_message)
         self.flight_logs.add_to_menu(self)                  # Logs › Flight logs…: the vehicle's DataFlash logs
 
         self.preferences.apply()

@@ -25,7 +25,7 @@ from PyQt5.QtWidgets import QAction
 
 from driver.logs.control import DISARM_TEXT
 from driver.logs.ranges import load_part_map
-from driver.vehicle.state import LinkStatus
+from driver.vehicle.state import LinkStatus, Severity
 
 from ..widgets.menus import menu_named
 from .rows import LogRow, RowState, size_text
@@ -55,18 +55,20 @@ class _Op:
 
 
 class FlightLogsController(QObject):
-    """``folder()``: where logs are saved; ``open_log(path)``: the review view opens a saved one."""
+    """``folder()``: where logs are saved; ``open_log(path)``: the review view opens a saved one; ``say(text,
+    severity)``: how a download or an erase ended, for the window's Messages."""
 
     rowsChanged = pyqtSignal(object)             # tuple of LogRow, by number
     statusChanged = pyqtSignal(str)              # what runs, what came of it, or why not
     busyChanged = pyqtSignal(bool)               # an operation runs or waits
 
     def __init__(self, adapter, folder: Callable[[], str], open_log: Callable[[str], object],
-                 parent: QObject | None = None) -> None:
+                 parent: QObject | None = None, say: Callable[[str, Severity], None] | None = None) -> None:
         super().__init__(parent)
         self.adapter = adapter
         self.folder = folder
         self.open_log = open_log
+        self.tell = say or (lambda _text, _severity: None)   # Messages: a download ends with its window closed too
         self.status = ""
         self.dialog = None
         self._rows: dict[int, LogRow] = {}
@@ -268,6 +270,7 @@ class FlightLogsController(QObject):
                                             path=outcome.path, rate=0.0, seconds_left=None, reason="")
             self._say(f"log {op.log_id} saved: {outcome.path} ({size_text(outcome.size)} in {outcome.seconds:.1f} s, "
                       f"{size_text(int(outcome.rate))}/s)")
+            self.tell(f"Flight log {op.log_id} saved: {outcome.path}", Severity.INFO)
             return
         rest = self._resting(row, outcome.reason)
         if rest.state is RowState.ON_VEHICLE and outcome.reason != "cancelled":
@@ -276,6 +279,8 @@ class FlightLogsController(QObject):
             rest = rest.but(reason=f"cancelled: {size_text(rest.held)} kept to resume from")
         self._rows[op.log_id] = rest
         self._say(f"log {op.log_id}: {rest.reason}")
+        if outcome.reason != "cancelled":
+            self.tell(f"Flight log {op.log_id} not downloaded: {outcome.reason}", Severity.WARNING)
         if outcome.reason.startswith(DISARM_TEXT):   # the rest would be refused alike: they wait no more
             for waiting in [o for o in self._ops if o.kind == "download"]:
                 self._ops.remove(waiting)

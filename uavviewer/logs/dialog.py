@@ -49,6 +49,7 @@ class FlightLogsDialog(QDialog):
         layout.addLayout(buttons)
         self.resize(860, 420)
         self.table.actionClicked.connect(self._row_action)
+        self.table.cellDoubleClicked.connect(lambda index, _column: c.open(self.table.ids[index]))  # a saved one
         self.table.itemSelectionChanged.connect(self._enable)
         c.rowsChanged.connect(self.show_rows)
         c.statusChanged.connect(self.status.setText)
