@@ -147,13 +147,6 @@ def _setup_logging(verbose: int, log_dir: Path | None) -> None:
                         format="%(asctime)s %(levelname)s %(name)s: %(message)s")
 
 
-def default_log_dir() -> Path:
-    """The per-user data folder Qt knows for this platform, plus logs/."""
-    from PyQt5.QtCore import QCoreApplication, QStandardPaths
-    QCoreApplication.setApplicationName("UavViewerPy")
-    return Path(QStandardPaths.writableLocation(QStandardPaths.AppDataLocation)) / "logs"
-
-
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
     if args.ice_certs and args.ice is None and args.ice_host is None and args.registry is None:
@@ -169,6 +162,7 @@ def main(argv: list[str] | None = None) -> int:
     if args.no_log:
         args.log_dir = None
     elif args.log_dir is None:
+        from uavviewer.replay.logs_folder import default_log_dir
         args.log_dir = default_log_dir()
     _setup_logging(args.verbose, args.log_dir)
     # Ctrl+C or kill while the driver and the window are still starting: remembered, and the window closes

@@ -28,6 +28,7 @@ from .flight.commands import FlightCommands
 from .flight.timer import FlightTimer
 from .input.controller import PilotSticks
 from .inspector.controller import InspectorController
+from .logs.controller import FlightLogsController
 from .input.keys_dialog import KeysDialog
 from .map.controller import MapController
 from .params import ParamsController
@@ -63,7 +64,7 @@ class MainWindow(QMainWindow):
 
     Parts: ``preferences``, ``sticks`` (and its ``gamepad``), ``flight`` (the buttons' commands), ``camera``,
     ``gimbal``, ``map``, ``plan``, ``readouts``, ``replay``, ``tools`` (connecting, alerts, preflight, guided),
-    ``params``, ``fleet_dock`` and ``closing``.
+    ``params``, ``flight_logs``, ``fleet_dock`` and ``closing``.
     """
 
     def __init__(self, drone: Drone, qsettings: QSettings | None = None,
@@ -120,6 +121,9 @@ class MainWindow(QMainWindow):
         self.fleet_dock = FleetDock(self)
         self.review = ReviewController(self)                # File › Open log…: docs/review.md
         self.inspector = InspectorController(self)          # Tools › MAVLink inspector
+        self.flight_logs = FlightLogsController(self.adapter, lambda: self.logs.downloads, self.review.open, self,
+                                                say=self.log_message)
+        self.flight_logs.add_to_menu(self)                  # Logs › Flight logs…: the vehicle's DataFlash logs
 
         self.preferences.apply()
         self._restore_window()

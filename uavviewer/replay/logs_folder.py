@@ -7,14 +7,21 @@ flown finds it here, without knowing the platform's data folder.
 from __future__ import annotations
 
 import os
+from pathlib import Path
 
-from PyQt5.QtCore import QObject, QUrl
+from PyQt5.QtCore import QCoreApplication, QObject, QStandardPaths, QUrl
 from PyQt5.QtGui import QDesktopServices
 from PyQt5.QtWidgets import QAction
 
 from driver.vehicle.state import Severity
 
-__all__ = ["LogsFolder"]
+__all__ = ["LogsFolder", "default_log_dir"]
+
+
+def default_log_dir() -> Path:
+    """The per-user data folder Qt knows for this platform, plus logs/."""
+    QCoreApplication.setApplicationName("UavViewerPy")
+    return Path(QStandardPaths.writableLocation(QStandardPaths.AppDataLocation)) / "logs"
 
 
 class LogsFolder(QObject):
@@ -30,6 +37,12 @@ class LogsFolder(QObject):
     def path(self) -> str | None:
         """The folder live links record into; None with --no-log."""
         return getattr(self._window.connections, "log_dir", None)
+
+    @property
+    def downloads(self) -> str:
+        """Where the vehicle's DataFlash logs are saved (Logs › Flight logs): this folder, or with --no-log the
+        default one (downloading a log is asked for by name; --no-log is about recording the link)."""
+        return self.path or str(default_log_dir())
 
     def about_line(self) -> str:
         return f"Flight logs: {self.path}" if self.path else "Flight logs: not recorded (--no-log)"
