@@ -8,6 +8,7 @@ from PyQt5.QtWidgets import (
 )
 
 from .bars import ChannelBars
+from .frames import layout
 
 __all__ = ["MotorsPage", "motor_test_problem"]
 
@@ -26,12 +27,11 @@ def motor_test_problem(s, propellers_removed: bool) -> str:
 
 
 def motors(s) -> int:
-    """How many motors the vehicle's frame has (FRAME_CLASS), 4 while it is not read."""
-    frame = s.parameters.get("FRAME_CLASS")
-    return _MOTORS.get(int(frame.value), 4) if frame is not None else 4
-
-
-_MOTORS = {1: 4, 2: 6, 3: 8, 4: 8, 5: 6, 7: 3, 10: 8, 12: 4, 14: 4}     # ArduCopter's FRAME_CLASS
+    """How many outputs the motor test steps through on the vehicle's frame (its layout, the tricopter's servo
+    included), 4 while the frame is not read or has no layout."""
+    c, t = s.parameters.get("FRAME_CLASS"), s.parameters.get("FRAME_TYPE")
+    frame = layout(c.value, t.value) if c is not None and t is not None else None
+    return len(frame.motors) if frame else 4
 
 
 class MotorsPage(QWidget):
@@ -51,7 +51,7 @@ class MotorsPage(QWidget):
         layout.addWidget(self.props_off)
         form = QFormLayout()
         self.motor = QSpinBox()
-        self.motor.setRange(1, 8)
+        self.motor.setRange(1, 12)
         self.all = QCheckBox("All motors in sequence (from this one)")
         self.throttle = QDoubleSpinBox()
         self.throttle.setRange(0.0, 100.0)
