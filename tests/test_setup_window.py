@@ -95,7 +95,8 @@ def test_summary_says_each_area(qtbot, bench_window):
     _sim, vehicle, w = bench_window()
     page = open_setup(w, "Summary")
     assert vehicle.wait_for(lambda s: s.firmware, 10)
-    qtbot.waitUntil(lambda: f"ArduCopter {vehicle.state().firmware}" in page.firmware.text(), timeout=10000)
+    qtbot.waitUntil(lambda: page.firmware.text().startswith(f"ArduCopter V{vehicle.state().firmware}, board: "),
+                    timeout=10000)
     qtbot.waitUntil(lambda: page.verdict("Radio") == "done", timeout=10000)
     assert page.verdict("Motors") == "done"
     assert vehicle.arm().result(timeout=20).ok
