@@ -13,8 +13,10 @@ from .frames import layout
 __all__ = ["MotorsPage", "motor_test_problem"]
 
 
-def motor_test_problem(s, propellers_removed: bool) -> str:
+def motor_test_problem(s, propellers_removed: bool, no_setup: str = "") -> str:
     """Why the test may not start now, in the pilot's words ("" when it may)."""
+    if no_setup:
+        return f"No motor test on this connection: {no_setup}."
     if not s.connected:
         return "No vehicle connected."
     if s.in_air:
@@ -89,8 +91,13 @@ class MotorsPage(QWidget):
         layout.addWidget(self.outputs)
         layout.addStretch(1)
 
+    def _problem(self) -> str:
+        if self._state is None:
+            return "No vehicle."
+        return motor_test_problem(self._state, self.props_off.isChecked(), self._runner.no_setup())
+
     def spin(self) -> None:
-        problem = motor_test_problem(self._state, self.props_off.isChecked()) if self._state else "No vehicle."
+        problem = self._problem()
         if problem:
             self.reason.setText(problem)
             return
@@ -105,7 +112,7 @@ class MotorsPage(QWidget):
         self.result.setText(str(result))          # the vehicle's verdict, in its own words
 
     def _show_reason(self) -> None:
-        problem = motor_test_problem(self._state, self.props_off.isChecked()) if self._state else "No vehicle."
+        problem = self._problem()
         self.test.setEnabled(not problem)
         self.reason.setText(problem)
 
@@ -114,4 +121,4 @@ class MotorsPage(QWidget):
         self.motor.setMaximum(motors(s))                 # the frame's motors, in test order
         self._show_reason()
         self.outputs.show_values(s.setup.outputs.values[:8])
-        self.stop.setEnabled(s.connected)
+        self.stop.setEnabled(s.connected and not self._runner.no_setup())
