@@ -3,6 +3,8 @@ scripts/frames-table from AP_MotorsMatrix.cpp and AP_MotorsTri.cpp), checked as 
 ArduPilot 4.6.3's source, and the page drawing the ones a pilot picks."""
 from __future__ import annotations
 
+from dataclasses import replace
+
 import pytest
 from PyQt5.QtGui import QColor
 
@@ -108,3 +110,15 @@ def test_a_helicopter_says_why_it_is_not_drawn(qtbot):
     qtbot.addWidget(page)
     page.show_state(_state(6, 0))
     assert page.drawing.missing().startswith("No drawing for this frame: FRAME_CLASS 6 is a helicopter")
+
+
+def test_the_cached_table_shown_while_the_list_is_read_is_not_taken_for_the_booted_frame(qtbot):
+    """The parameter cache (the vehicle as last seen: a quad) shows while its own list is read (an octa): that is
+    no frame change waiting for a reboot."""
+    page = FramePage(_Runner())
+    qtbot.addWidget(page)
+    cached = _state(1, 1)
+    page.show_state(replace(cached, parameters=replace(cached.parameters, downloading=True)))
+    page.show_state(_state(3, 1))
+    assert page.drawing.layout_.name == "OCTA/X" and page.reboot.isHidden()
+    assert "reboot" not in page.status.text()

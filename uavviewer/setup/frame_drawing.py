@@ -8,7 +8,7 @@ import math
 from collections import defaultdict
 
 from PyQt5.QtCore import QPointF, QRectF, Qt
-from PyQt5.QtGui import QColor, QPainter, QPen
+from PyQt5.QtGui import QColor, QPainter, QPalette, QPen
 from PyQt5.QtWidgets import QWidget
 
 from .frames import CW, Layout, Motor, layout
@@ -52,12 +52,14 @@ class FrameDrawing(QWidget):
     def paintEvent(self, _event) -> None:
         p = QPainter(self)
         p.setRenderHint(QPainter.Antialiasing)
+        words = self.palette().color(QPalette.WindowText)          # the theme's text colour, light or dark
         if self.layout_ is None:
+            p.setPen(words)
             p.drawText(self.rect(), Qt.AlignCenter | Qt.TextWordWrap, self.missing())
             return
         side = min(self.width(), self.height())
         p.translate(self.width() / 2, self.height() / 2)
-        p.setPen(Qt.black)
+        p.setPen(words)
         p.drawText(QRectF(-side / 2, side / 2 - 18, side, 18), Qt.AlignCenter, self.layout_.name)
         p.setPen(QPen(QColor("#999"), 2))
         p.setBrush(QColor("#555"))

@@ -94,14 +94,14 @@ class FramePage(QWidget):
         if c is None or t is None:
             return                                # not read yet: "Frame not read yet", or what the pilot picked
         reported = (int(c.value), int(t.value))
-        if self._booted is None:
-            self._booted = reported
+        if self._booted is None and not s.parameters.downloading:
+            self._booted = reported               # the vehicle's own list, not the cache shown while it is read
         if reported != self._reported:
             self._reported = reported
             self.frame_class.setCurrentIndex(max(0, self.frame_class.findData(reported[0])))
             self.frame_type.setCurrentIndex(max(0, self.frame_type.findData(reported[1])))
             self._draw_chosen()
-        reboot = reported != self._booted
+        reboot = self._booted is not None and reported != self._booted
         self.reboot.setVisible(reboot)
         self.reboot.setEnabled(reboot and not s.armed)
         if reboot:
