@@ -95,7 +95,8 @@ def test_summary_says_each_area(qtbot, bench_window):
     _sim, vehicle, w = bench_window()
     page = open_setup(w, "Summary")
     assert vehicle.wait_for(lambda s: s.firmware, 10)
-    qtbot.waitUntil(lambda: f"ArduCopter {vehicle.state().firmware}" in page.firmware.text(), timeout=10000)
+    qtbot.waitUntil(lambda: page.firmware.text().startswith(f"ArduCopter V{vehicle.state().firmware}, board: "),
+                    timeout=10000)
     qtbot.waitUntil(lambda: page.verdict("Radio") == "done", timeout=10000)
     assert page.verdict("Motors") == "done"
     assert vehicle.arm().result(timeout=20).ok
@@ -150,7 +151,7 @@ def test_frame_is_drawn_and_a_change_asks_for_a_reboot(qtbot, bench_window):
     page = open_setup(w, "Frame")
     assert vehicle.wait_for(lambda s: read(s), 30)
     qtbot.waitUntil(lambda: page.drawing.frame == (1, 1), timeout=5000)       # the sim: "Frame: QUAD/X"
-    assert [m[2] for m in page.drawing.motors] == [1, 3, 4, 2]                 # AP_MotorsMatrix's test order
+    assert [m.test for m in page.drawing.motors] == [1, 3, 4, 2]                 # AP_MotorsMatrix's test order
     assert not page.reboot.isVisible()
     page.frame_type.setCurrentIndex(page.frame_type.findData(0))
     qtbot.mouseClick(page.write, Qt.LeftButton)
@@ -158,7 +159,7 @@ def test_frame_is_drawn_and_a_change_asks_for_a_reboot(qtbot, bench_window):
     assert w.params.model.pending == {"FRAME_TYPE": 0.0}
     qtbot.mouseClick(w.params.review.write_button, Qt.LeftButton)
     qtbot.waitUntil(lambda: page.drawing.frame == (1, 0) and page.reboot.isVisible(), timeout=15000)
-    assert [m[2] for m in page.drawing.motors] == [2, 4, 1, 3]
+    assert [m.test for m in page.drawing.motors] == [2, 4, 1, 3]
     assert "reboot" in page.status.text()
 
 

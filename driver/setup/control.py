@@ -247,6 +247,19 @@ class VehicleSetup:
         self._v._post(mavlink.MAVLink_request_data_stream_message(system, component,
                                                                   mavlink.MAV_DATA_STREAM_RC_CHANNELS, rate_hz, 1))
 
+    def request_banner(self) -> Future:
+        """MAV_CMD_DO_SEND_BANNER: the vehicle says its firmware, its board's id line and its frame again
+        (state().autopilot); a refusal is kept there as the reason the board is not known."""
+        future = self._v._command_long(mavlink.MAV_CMD_DO_SEND_BANNER, (), "send banner")
+        future.add_done_callback(lambda f: self._banner_answered(f.result()))
+        return future
+
+    def _banner_answered(self, result: CommandResult) -> None:
+        with self._store.lock:
+            autopilot = self._store.view()["autopilot"]
+            self._store.set(autopilot=replace(autopilot, asked="" if result.ok else f"DO_SEND_BANNER {result.status.value}"
+                                              + (f": {result.reason}" if result.reason else "")))
+
     # -- traffic --------------------------------------------------------------------------------------------
     def set_alert_limits(self, limits: AlertLimits) -> AlertLimits:
         problem = limits.problem()

@@ -37,6 +37,7 @@ from .ftp import FtpServer
 from .logs import LogServer
 from .params import ParamProtocol, SimParams
 from .missions import Missions
+from .motors import FRAME_CLASSES, FRAME_TYPES
 from .profiles import POSITION_REASONS, profile_of
 from .setup import Setup
 from .telemetry import EARTH_RADIUS, GRAVITY, METRES_PER_DEG, Telemetry
@@ -149,6 +150,7 @@ class Autopilot(Setup, Telemetry, Commands, ParamProtocol, FtpServer, LogServer,
     def _boot(self) -> None:
         """Power-on (and reboot) state: disarmed on the ground, coming up stage by stage (profiles.py)."""
         self.boot_time = self.t
+        self.frame_at_boot = (int(self.params["FRAME_CLASS"]), int(self.params["FRAME_TYPE"]))   # AP_Motors reads it once
         self.stage_index = -1
         self.stage = self.profile.boot[0]
         self.ready = False
@@ -185,9 +187,22 @@ class Autopilot(Setup, Telemetry, Commands, ParamProtocol, FtpServer, LogServer,
         self.rebooting_until = self.t + REBOOT_SILENCE
         self.armed = False
 
-    def _banner(self) -> None:
-        self._text(mavlink.MAV_SEVERITY_INFO, f"{self.profile.banner} (2a3dc4b7)")
-        self._text(mavlink.MAV_SEVERITY_INFO, "Frame: QUAD/X")
+    def _banner(self, asked: bool = False) -> None:
+        """GCS_MAVLINK_Copter::send_banner (4.x), the PARAM_REQUEST_LIST / DO_SEND_BANNER texts of 3.3: the
+        firmware, the OS, the board's id line (3.3: only when ``asked``), the frame it booted with."""
+        p = self.profile
+        lines = [f"{p.banner} ({p.git_hash})", p.banner_os, p.banner_id if asked or p.banner_id_on_list else "",
+                 f"Frame: {self._frame_string()}"]
+        for line in lines:
+            if line:
+                self._text(mavlink.MAV_SEVERITY_INFO, line)
+
+    def _frame_string(self) -> str:
+        """AP_Motors::get_frame_and_type_string of the frame read at boot ("QUAD/X"); 3.3's FRAME_CONFIG_STRING
+        ("QUAD") was fixed at build time."""
+        frame_class, frame_type = self.frame_at_boot
+        name = FRAME_CLASSES.get(frame_class, str(frame_class))
+        return name if self.profile.version[0] < 4 else f"{name}/{FRAME_TYPES.get(frame_type, frame_type)}"
 
     # -- time --------------------------------------------------------------------------------------
     def step(self, dt: float) -> None:

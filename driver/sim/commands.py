@@ -212,6 +212,11 @@ class Commands:
     def _cmd_request_autopilot_capabilities(self, *_):
         return mavlink.MAV_RESULT_ACCEPTED, lambda: self._send_now("AUTOPILOT_VERSION")
 
+    def _cmd_do_send_banner(self, *_):
+        """GCS_MAVLINK::handle_command_long_packet: send_banner(), ACCEPTED (3.3: the same, with the board's id)."""
+        self._banner(asked=True)
+        return mavlink.MAV_RESULT_ACCEPTED, None
+
     # -- the rest ------------------------------------------------------------------------------------
     def _cmd_preflight_calibration(self, *_):
         if self.armed:       # recording, 44.50 s: FAILED, then "Disarm to allow calibration" (NOTICE)

@@ -18,11 +18,15 @@ from __future__ import annotations
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-__all__ = ["MotorTest", "TEST_ORDER", "RC_DEFAULT"]
+__all__ = ["MotorTest", "TEST_ORDER", "RC_DEFAULT", "FRAME_CLASSES", "FRAME_TYPES"]
 
 # FRAME_TYPE → outputs in test order (AP_MotorsMatrix: QUAD_PLUS motors 1 right, 2 left, 3 front, 4 back with
 # test order 2, 4, 1, 3; QUAD_X 1 front right, 2 back left, 3 front left, 4 back right with 1, 3, 4, 2).
 TEST_ORDER = {0: (3, 1, 4, 2), 1: (1, 4, 2, 3)}
+# AP_Motors' _frame_class_string / _frame_type_string, which the banner's "Frame: QUAD/X" line joins
+FRAME_CLASSES = {1: "QUAD", 2: "HEXA", 3: "OCTA", 4: "OCTAQUAD", 5: "Y6", 7: "TRI", 12: "DODECAHEXA", 14: "DECA"}
+FRAME_TYPES = {0: "PLUS", 1: "X", 2: "V", 3: "H", 4: "VTAIL", 5: "ATAIL", 6: "PLUSREV", 10: "Y6B", 11: "Y6F",
+               12: "BF_X", 13: "DJI_X", 14: "CW_X", 15: "I", 18: "X_REV", 19: "Y4"}
 RC_DEFAULT = (1500, 1500, 1000, 1500, 1800, 1000, 1000, 1800)
 ARMED_IDLE = 1100
 REST_BETWEEN = 1.0                  # s at rest between two motors of a sequence

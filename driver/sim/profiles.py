@@ -112,6 +112,10 @@ class Profile:
     disarm_in_air_result: int       # COMMAND_ACK result of an unforced disarm in the air
     sitl_texts: bool                # SITL's own lines ("SIM Hit ground at ... m/s")
     texts_after_ack: bool           # a command's STATUSTEXT follows its COMMAND_ACK (4.x queues text)
+    banner_id: str = ""             # the banner's system-id line (GCS_MAVLINK::send_banner, see driver/setup/banner.py)
+    banner_os: str = ""             # its OS line ("" on SITL: AP_FWVersion has no os_name there)
+    banner_id_on_list: bool = True  # the id line comes with every banner (4.x); 3.3: only on DO_SEND_BANNER
+    git_hash: str = ""              # fw_string's "(hash)" and AUTOPILOT_VERSION.flight_custom_version
     fence_types: int = 7            # FENCE_TYPE's default: 4.x ceiling|circle|polygon, 3.3 ceiling|circle (3)
     mount: str = "servo"            # gimbal.py: "servo" (4.6 recording, gimbal manager) or "solo" (3.3, MOUNT_*)
 
@@ -121,12 +125,15 @@ class Profile:
 # the NAV_TAKEOFF, HEARTBEAT STANDBY (land_complete) until then, so a second NAV_TAKEOFF 2 s into the "climb" was
 # ACCEPTED: Mode::do_user_takeoff() only refuses once !ap.land_complete ("can't takeoff again",
 # ArduCopter/takeoff.cpp), and _AutoTakeoff::run() keeps land_complete while the throttle slews up.
+# Its name and banner are 4.6.3 SITL's (the params, ftp-params and mission recordings): "ArduCopter V4.6.3
+# (92b0cd78)", the host's machine id (AP_HAL_SITL get_system_id: no board name), "Frame: QUAD/PLUS"; its
+# AUTOPILOT_VERSION 4.6.3 official (type 255), board_version, USB ids and uid 0, uid2 the machine id.
 COPTER_4 = Profile(
-    name="copter-4", banner="ArduCopter V4.7.0-dev", version=(4, 7, 0, 0), boot=COPTER4_BOOT, mavlink2=True,
+    name="copter-4", banner="ArduCopter V4.6.3", version=(4, 6, 3, 255), boot=COPTER4_BOOT, mavlink2=True,
     do_set_mode=True, message_commands=True, extended_sys_state=True, home_pushed=True, mode_heartbeat=True,
     setpoint_frames=True, setpoint_yaw=True, local_z_from_home=False, arming_delay=2.0, liftoff_after=1.3,
     arm_severity=2, arm_texts=True, calibration_text=True, disarm_in_air_result=4, sitl_texts=True,
-    texts_after_ack=True)
+    texts_after_ack=True, banner_id="7d1219c7c4c5404aaa1f6d2a48adfda4", git_hash="92b0cd78")
 
 # solo, from 3drobotics/ardupilot-solo ArduCopter/GCS_Mavlink.pde (the 3.3-based Solo branch):
 # * COMMAND_LONG's switch has no MAV_CMD_DO_SET_MODE, REQUEST_MESSAGE nor SET_MESSAGE_INTERVAL: "default:
@@ -138,6 +145,9 @@ COPTER_4 = Profile(
 #   as soon as the throttle passes get_non_takeoff_throttle() (land_detector.pde): a second NAV_TAKEOFF
 #   during the climb is FAILED. No arming delay in 3.3.
 # * Disarm in the air without the 21196 force: "result = MAV_RESULT_UNSUPPORTED".
+# * The banner on PARAM_REQUEST_LIST: FIRMWARE_STRING, "PX4: <hash> NuttX: <hash>", "Frame: QUAD"; the board's id
+#   line ("PX4v2 " and the serial, AP_HAL_PX4 get_system_id) only on MAV_CMD_DO_SEND_BANNER (the hashes and the
+#   serial here are the sim's own).
 # * "ARMING MOTORS"/"DISARMING MOTORS" only in SITL/HIL builds (motors.pde #if); PREFLIGHT_CALIBRATION
 #   while armed is a bare MAV_RESULT_FAILED.
 SOLO = Profile(
@@ -145,7 +155,9 @@ SOLO = Profile(
     do_set_mode=False, message_commands=False, extended_sys_state=False, home_pushed=False,
     mode_heartbeat=False, setpoint_frames=False, setpoint_yaw=False, local_z_from_home=True, arming_delay=0.0,
     liftoff_after=0.5, arm_severity=SOLO_SEVERITY_HIGH, arm_texts=False, calibration_text=False,
-    disarm_in_air_result=3, sitl_texts=False, texts_after_ack=False, fence_types=3, mount="solo")
+    disarm_in_air_result=3, sitl_texts=False, texts_after_ack=False, fence_types=3, mount="solo",
+    banner_id="PX4v2 0030001F 3133470C 35363834", banner_os="PX4: 8a5b1bd1 NuttX: 1f4e7e0f", banner_id_on_list=False,
+    git_hash="2a3dc4b7")
 
 PROFILES = {p.name: p for p in (COPTER_4, SOLO)}
 

@@ -297,5 +297,8 @@ class Telemetry:
         if major >= 4:
             caps |= mavlink.MAV_PROTOCOL_CAPABILITY_FTP      # @PARAM/param.pck (sim/ftp.py), as 4.6.3 says
         version = (major << 24) | (minor << 16) | (patch << 8) | kind
-        return self.factory.autopilot_version_encode(caps, version, 0, 0, 0, [0] * 8, [0] * 8, [0] * 8,
-                                                     0x1209, 0x5740, 0x0123456789ABCDEF)
+        # as 4.6.3 SITL (the mission recording): no board id, no USB ids, uid 0, the git hash, uid2 the machine id
+        # as ASCII (17 characters and a NUL); 3.3 (GCS_Common.cpp) has no uid2 and sends 0 for the board too
+        custom = list(self.profile.git_hash.encode()[:8].ljust(8, b"\0"))
+        uid2 = list(self.profile.banner_id.encode()[:17].ljust(18, b"\0")) if self.profile.banner_id_on_list else [0] * 18
+        return self.factory.autopilot_version_encode(caps, version, 0, 0, 0, custom, [0] * 8, [0] * 8, 0, 0, 0, uid2)

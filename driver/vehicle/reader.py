@@ -17,6 +17,7 @@ from ..core import frames
 from ..link.transport import LinkError
 from ..params.manager import param_name
 from ..payload.control import PAYLOAD_MESSAGES
+from ..setup.banner import heard_text, heard_version
 from ..setup.control import SETUP_MESSAGES
 from .inspector import MessageInspector
 from .state import FENCE_PARAMS, Severity
@@ -245,6 +246,9 @@ class Reader:
             self._v._signing_control.settle(self._signing.statustext(text))
             self._missions.on_text(text)
             self._v.logs.on_text(text)                  # 'Disarm for log download'
+            autopilot = heard_text(self._store.view()["autopilot"], text)    # the banner: firmware, board
+            if autopilot is not None:
+                self._store.set(autopilot=autopilot)
 
     def _on_command_ack(self, m) -> None:
         self._commands.on_ack(m, time.monotonic())
@@ -256,6 +260,7 @@ class Reader:
         self._link.version_known = True
         self._params.ftp_capable = bool(m.capabilities & mavlink.MAV_PROTOCOL_CAPABILITY_FTP)
         self._missions.on_autopilot_version(m)
+        self._store.set(autopilot=heard_version(self._store.view()["autopilot"], m))
         if major:
             self._commands.capabilities.setpoint_yaw = (major, minor) >= (3, 5)
             self._store.set(firmware=f"{major}.{minor}.{patch}")

@@ -20,6 +20,7 @@ from ..mission.plan import MissionProgress
 from ..params.model import ParameterTable
 from ..payload.model import Gimbal, VehicleCamera
 from .battery import Battery, BatteryAlarm, BatteryThresholds
+from ..setup.banner import Autopilot
 from ..setup.model import SetupState
 from ..traffic.model import Traffic
 
@@ -296,6 +297,7 @@ class VehicleState:
     rejected_values: int = 0                         # telemetry messages dropped for impossible values
     gcs_failsafe: int | None = None                  # the vehicle's FS_GCS_ENABLE, None until read
     firmware: str = ""                               # AUTOPILOT_VERSION's flight software, "3.3.1"; "" until known
+    autopilot: Autopilot = field(default_factory=Autopilot)   # driver.setup.banner: its banner, its board
     signing: Signing = field(default_factory=Signing)
     fence: Fence = field(default_factory=Fence)      # FENCE_* parameters, as they are read
     mission: MissionProgress = field(default_factory=MissionProgress)   # driver.mission: progress, transfers

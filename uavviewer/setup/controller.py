@@ -1,7 +1,9 @@
 """Vehicle › Setup's logic: builds the pages, gives them each snapshot while the window is open, and runs what a
 page asks of ``drone.setup`` (driver/setup/control.py) without waiting: its answer comes back on the UI thread.
 
-A connection without a setup part (a replayed recording, an Ice drone) answers every action with why not."""
+A connection without a setup part (a remote Ice drone, no vehicle) answers every action with why not, and every page
+says so (:meth:`SetupController.no_setup`). A replayed recording has one, whose every command is refused by the
+driver ("replaying a recording: no vehicle to command")."""
 from __future__ import annotations
 
 import logging
@@ -27,7 +29,8 @@ from .summary_page import SummaryPage
 __all__ = ["SetupController"]
 
 log = logging.getLogger(__name__)
-NO_SETUP = "this connection has no vehicle setup (a replayed recording or a remote drone)"
+NO_SETUP = ("this connection has no vehicle setup: a remote drone's server offers no calibrations, motor test, "
+            "radio channels nor banner")
 
 
 class _Relay(QObject):
@@ -45,6 +48,7 @@ class SetupController(QObject):
         self.dialog: SetupDialog | None = None
         self._relay = _Relay()
         self._relay.done.connect(lambda callback, result: callback(result))
+        self._banner_asked = False                   # DO_SEND_BANNER sent to this vehicle (once: its board)
         adapter.stateChanged.connect(self.show_state)
         adapter.droneChanged.connect(lambda _drone: self._vehicle_changed())
 
@@ -60,7 +64,7 @@ class SetupController(QObject):
 
     def open(self, page: str = "") -> SetupDialog:
         if self.dialog is None:
-            pages = [SummaryPage(), FramePage(self), SensorsPage(self), RadioPage(self), ModesPage(self),
+            pages = [SummaryPage(self), FramePage(self), SensorsPage(self), RadioPage(self), ModesPage(self),
                      PowerPage(self), FailsafesPage(self), MotorsPage(self)]
             self.dialog = SetupDialog(pages, self._parent)
             self.dialog.pageShown.connect(lambda _title: self._watch())
@@ -76,6 +80,7 @@ class SetupController(QObject):
 
     def _vehicle_changed(self) -> None:
         """Another vehicle (a fleet's pick, File › Connect): the pages start again from its own reports."""
+        self._banner_asked = False
         if self.dialog is None:
             return
         dialog, self.dialog = self.dialog, None
@@ -89,10 +94,29 @@ class SetupController(QObject):
         setup = getattr(self.adapter.drone, "setup", None)
         if setup is not None:
             setup.watch_radio()                      # RC_CHANNELS and SERVO_OUTPUT_RAW while the pages show them
+            self._ask_banner(setup, self.adapter.state)
+
+    def _ask_banner(self, setup, s) -> None:
+        """The board is named only in the banner's id line, which ArduCopter 3.3 sends only on DO_SEND_BANNER
+        (4.x also on a parameter download): ask once a connected vehicle has not named it."""
+        known = s.autopilot.board or s.autopilot.simulated
+        if s.connected and not known and not self._banner_asked:
+            self._banner_asked = True
+            setup.request_banner()
+
+    def no_setup(self) -> str:
+        """Why this connection has no vehicle setup ("" when it has one): every page says it."""
+        return "" if getattr(self.adapter.drone, "setup", None) is not None else NO_SETUP
 
     def show_state(self, s) -> None:
         if self.dialog is None or not self.dialog.isVisible():
             return
+        setup = getattr(self.adapter.drone, "setup", None)
+        if setup is not None:
+            self._ask_banner(setup, s)
+        why = self.no_setup()
+        self.dialog.set_notice(f"Not on this connection: {why}. Parameters are still read and written." if why
+                               else "")
         for page in self.dialog.pages.values():
             page.show_state(s)
 

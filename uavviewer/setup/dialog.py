@@ -3,7 +3,7 @@ from __future__ import annotations
 
 from PyQt5.QtCore import Qt, pyqtSignal
 from PyQt5.QtWidgets import (
-    QDialog, QDialogButtonBox, QHBoxLayout, QListWidget, QScrollArea, QStackedWidget, QVBoxLayout, QWidget,
+    QDialog, QDialogButtonBox, QHBoxLayout, QLabel, QListWidget, QScrollArea, QStackedWidget, QVBoxLayout, QWidget,
 )
 
 __all__ = ["SetupDialog"]
@@ -33,6 +33,12 @@ class SetupDialog(QDialog):
         body.addWidget(self.list)
         body.addWidget(self.stack, 1)
         layout = QVBoxLayout(self)
+        self.notice = QLabel("")                     # what this connection cannot do, above every page
+        self.notice.setObjectName("setupNotice")
+        self.notice.setWordWrap(True)
+        self.notice.setStyleSheet("background: #fff3cd; color: #5d4300; padding: 4px")
+        self.notice.setVisible(False)
+        layout.addWidget(self.notice)
         layout.addLayout(body, 1)
         buttons = QDialogButtonBox(QDialogButtonBox.Close)
         buttons.rejected.connect(self.reject)
@@ -45,6 +51,11 @@ class SetupDialog(QDialog):
         self.stack.setCurrentIndex(row)
         if row >= 0:
             self.pageShown.emit(self.list.item(row).text())
+
+    def set_notice(self, text: str) -> None:
+        if text != self.notice.text():
+            self.notice.setText(text)
+        self.notice.setVisible(bool(text))
 
     def turn_to(self, title: str) -> QWidget:
         row = list(self.pages).index(title)

@@ -93,9 +93,12 @@ class ModesPage(QWidget):
         channel = _param(s, "FLTMODE_CH")
         pwm = s.setup.rc.channel(int(channel)) if channel else None
         lit = slot_of(pwm)
+        no_setup = self._runner.no_setup()
         self.channel.setText("Mode switch: channel not read yet" if channel is None else
                              f"Mode switch on channel {channel:g}: " + (f"{pwm} µs, slot {lit}" if pwm else
                                                                          "not received"))
+        if no_setup:
+            self.channel.setText(self.channel.text() + f" (the switch is not shown live: {no_setup})")
         if lit != self.lit:
             self.lit = lit
             for i, label in enumerate(self.slots):

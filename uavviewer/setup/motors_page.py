@@ -8,12 +8,15 @@ from PyQt5.QtWidgets import (
 )
 
 from .bars import ChannelBars
+from .frames import layout
 
 __all__ = ["MotorsPage", "motor_test_problem"]
 
 
-def motor_test_problem(s, propellers_removed: bool) -> str:
+def motor_test_problem(s, propellers_removed: bool, no_setup: str = "") -> str:
     """Why the test may not start now, in the pilot's words ("" when it may)."""
+    if no_setup:
+        return f"No motor test on this connection: {no_setup}."
     if not s.connected:
         return "No vehicle connected."
     if s.in_air:
@@ -26,12 +29,11 @@ def motor_test_problem(s, propellers_removed: bool) -> str:
 
 
 def motors(s) -> int:
-    """How many motors the vehicle's frame has (FRAME_CLASS), 4 while it is not read."""
-    frame = s.parameters.get("FRAME_CLASS")
-    return _MOTORS.get(int(frame.value), 4) if frame is not None else 4
-
-
-_MOTORS = {1: 4, 2: 6, 3: 8, 4: 8, 5: 6, 7: 3, 10: 8, 12: 4, 14: 4}     # ArduCopter's FRAME_CLASS
+    """How many outputs the motor test steps through on the vehicle's frame (its layout, the tricopter's servo
+    included), 4 while the frame is not read or has no layout."""
+    c, t = s.parameters.get("FRAME_CLASS"), s.parameters.get("FRAME_TYPE")
+    frame = layout(c.value, t.value) if c is not None and t is not None else None
+    return len(frame.motors) if frame else 4
 
 
 class MotorsPage(QWidget):
@@ -51,7 +53,7 @@ class MotorsPage(QWidget):
         layout.addWidget(self.props_off)
         form = QFormLayout()
         self.motor = QSpinBox()
-        self.motor.setRange(1, 8)
+        self.motor.setRange(1, 12)
         self.all = QCheckBox("All motors in sequence (from this one)")
         self.throttle = QDoubleSpinBox()
         self.throttle.setRange(0.0, 100.0)
@@ -89,8 +91,13 @@ class MotorsPage(QWidget):
         layout.addWidget(self.outputs)
         layout.addStretch(1)
 
+    def _problem(self) -> str:
+        if self._state is None:
+            return "No vehicle."
+        return motor_test_problem(self._state, self.props_off.isChecked(), self._runner.no_setup())
+
     def spin(self) -> None:
-        problem = motor_test_problem(self._state, self.props_off.isChecked()) if self._state else "No vehicle."
+        problem = self._problem()
         if problem:
             self.reason.setText(problem)
             return
@@ -105,7 +112,7 @@ class MotorsPage(QWidget):
         self.result.setText(str(result))          # the vehicle's verdict, in its own words
 
     def _show_reason(self) -> None:
-        problem = motor_test_problem(self._state, self.props_off.isChecked()) if self._state else "No vehicle."
+        problem = self._problem()
         self.test.setEnabled(not problem)
         self.reason.setText(problem)
 
@@ -114,4 +121,4 @@ class MotorsPage(QWidget):
         self.motor.setMaximum(motors(s))                 # the frame's motors, in test order
         self._show_reason()
         self.outputs.show_values(s.setup.outputs.values[:8])
-        self.stop.setEnabled(s.connected)
+        self.stop.setEnabled(s.connected and not self._runner.no_setup())

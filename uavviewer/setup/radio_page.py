@@ -82,7 +82,11 @@ class RadioPage(QWidget):
         self.channels.show_values(rc.values[:16])
         if self._calibration is not None:
             self._calibration.feed(rc.values)
-        if not rc.updated:
+        no_setup = self._runner.no_setup()
+        self.start.setEnabled(not no_setup)
+        if no_setup:
+            self.status.setText(f"No RC channels on this connection: {no_setup}.")
+        elif not rc.updated:
             self.status.setText("Waiting for the vehicle's RC channels…")
         elif not self.status.text().startswith("Not staged"):
             sent = len([v for v in rc.values if v])

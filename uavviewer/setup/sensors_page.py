@@ -138,13 +138,18 @@ class SensorsPage(QWidget):
 
     # -- the vehicle's state ------------------------------------------------------------------------
     def show_state(self, s) -> None:
+        no_setup = self._runner.no_setup()
         notes = [why for why in (unavailable(a, s.firmware) for a in ("level", "accel_simple", "fixed_yaw")) if why]
         if s.armed:
             notes.insert(0, "Armed: the vehicle refuses calibrations until it is disarmed.")
+        if no_setup:
+            notes = [f"No calibration on this connection: {no_setup}."]
         self.notes.setText("\n".join(notes))
-        self.level.setEnabled(not unavailable("level", s.firmware))
-        self.simple.setEnabled(not unavailable("accel_simple", s.firmware))
-        self.fixed_yaw.setEnabled(not unavailable("fixed_yaw", s.firmware))
+        for button in (self.gyro, self.baro, self.accel_start, self.compass_start):
+            button.setEnabled(not no_setup)
+        self.level.setEnabled(not no_setup and not unavailable("level", s.firmware))
+        self.simple.setEnabled(not no_setup and not unavailable("accel_simple", s.firmware))
+        self.fixed_yaw.setEnabled(not no_setup and not unavailable("fixed_yaw", s.firmware))
         accel = s.setup.accel
         self.pose.set_position(accel.position if accel.step is AccelStep.WAITING else None)
         waiting = accel.step is AccelStep.WAITING

@@ -32,8 +32,9 @@ def _calibrated(s, area: str, names: tuple[str, ...], what: str) -> Line:
     return Line(area, DONE, f"{what} calibrated")
 
 
-def summary(s) -> list[Line]:
-    """One line per setup area for the state ``s`` (a VehicleState)."""
+def summary(s, no_setup: str = "") -> list[Line]:
+    """One line per setup area for the state ``s`` (a VehicleState); ``no_setup``: why this connection has no
+    vehicle setup (its radio, traffic and motor test are then not applicable, with that reason)."""
     lines = []
     frame = _param(s, "FRAME_CLASS")
     lines.append(Line("Frame", UNKNOWN, "parameters not read yet") if frame is None else
@@ -43,7 +44,9 @@ def summary(s) -> list[Line]:
                              "accelerometer"))
     lines.append(_calibrated(s, "Compass", ("COMPASS_OFS_X", "COMPASS_OFS_Y", "COMPASS_OFS_Z"), "compass"))
     rc = s.setup.rc
-    if rc.channel(3) is None:
+    if no_setup:
+        lines.append(Line("Radio", NOT_APPLICABLE, no_setup))
+    elif rc.channel(3) is None:
         lines.append(Line("Radio", ATTENTION, "no RC channels received from the vehicle (transmitter off, or no "
                                               "receiver)" if rc.updated else "RC channels not received yet"))
     else:
@@ -56,9 +59,10 @@ def summary(s) -> list[Line]:
     lines.append(Line("Power", UNKNOWN, "parameters not read yet") if batt is None else
                  Line("Power", ATTENTION, "no battery monitor (BATT_MONITOR 0)") if batt == 0 else
                  Line("Power", DONE, f"battery monitor {batt:g}, capacity {_param(s, 'BATT_CAPACITY') or 0:g} mAh"))
-    why = unavailable("adsb", s.firmware)
+    why = no_setup or unavailable("adsb", s.firmware)
     lines.append(Line("Traffic (ADS-B)", NOT_APPLICABLE, why) if why else
                  Line("Traffic (ADS-B)", DONE, f"{len(s.traffic.contacts)} aircraft heard"))
-    lines.append(Line("Motors", NOT_APPLICABLE, "armed: the motor test is for a disarmed vehicle on the ground")
+    lines.append(Line("Motors", NOT_APPLICABLE, no_setup) if no_setup else
+                 Line("Motors", NOT_APPLICABLE, "armed: the motor test is for a disarmed vehicle on the ground")
                  if s.armed else Line("Motors", DONE, "motor test available (disarmed, propellers off)"))
     return lines
