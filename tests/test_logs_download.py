@@ -136,6 +136,9 @@ def test_an_unknown_log_id_and_an_empty_log(sim_factory, vehicle_factory, tmp_pa
     assert not os.path.exists(tmp_path / "x.BIN.part")
     outcome = v.logs.download(2, str(tmp_path / "x.BIN")).result(20)
     assert not outcome.ok and outcome.reason == "log 2 is empty (0 bytes) on the vehicle"
+    for wrong in (0, 70_000, "2"):
+        outcome = v.logs.download(wrong, str(tmp_path / "x.BIN")).result(5)
+        assert not outcome.ok and outcome.reason == f"no log {wrong}: log numbers go from 1 to 65535"
 
 
 def test_a_corrupt_or_truncated_bin_is_told(tmp_path):
@@ -147,6 +150,55 @@ def test_a_corrupt_or_truncated_bin_is_told(tmp_path):
         (tmp_path / name).write_bytes(raw)
         with pytest.raises(LogFileError, match=word):
             check_dataflash(str(tmp_path / name))
+
+
+def tmpfs_available() -> bool:
+    """A tmpfs in a mount namespace of our own (unprivileged user namespaces): a real small disk, without root."""
+    import shutil
+    import subprocess
+    return shutil.which("unshare") is not None and subprocess.run(
+        ["unshare", "-Urm", "mount", "-t", "tmpfs", "-o", "size=64k", "tmpfs", "/mnt"],
+        capture_output=True).returncode == 0
+
+
+@pytest.mark.parametrize("disk", ["tmpfs", "fsize"])
+def test_a_full_disk_keeps_the_partial_file_and_resumes_once_there_is_room(sim_factory, tmp_path, disk):
+    """The disk fills up for real mid-download: a 512 kB tmpfs with 128 kB free (ENOSPC), or RLIMIT_FSIZE at
+    128 kB (EFBIG), in a process of its own (tests/logs_full_disk.py). The download ends with the reason, the
+    bytes the map names are the vehicle's, the driver goes on answering, and with room again the download resumes
+    from the .part to a byte-identical file."""
+    import json
+    import subprocess
+    import sys
+    if disk == "tmpfs" and not tmpfs_available():
+        pytest.skip("no unprivileged mount namespace here for a small tmpfs")
+    sim, folder = logs_sim(sim_factory, tmp_path, [400_000], radio_baud=1_000_000)   # ~25 kB a .part flush
+    mount = tmp_path / "disk"
+    mount.mkdir()
+    room = 128 * 1024
+    helper = [sys.executable, os.path.join(os.path.dirname(__file__), "logs_full_disk.py"), disk,
+              str(sim.tcp_port), "1", str(mount), str(room), str(tmp_path / "got.BIN")]
+    if disk == "tmpfs":
+        helper = ["unshare", "-Urm", "sh", "-c", 'mount -t tmpfs -o size=512k tmpfs "$0" && exec "$@"',
+                  str(mount)] + helper
+    done = subprocess.run(helper, capture_output=True, text=True, timeout=110)
+    assert done.returncode == 0, done.stderr[-3000:]
+    report = json.loads(done.stdout.strip().splitlines()[-1])
+    first, second = report["first"], report["second"]
+    out = f"{mount}/one.BIN"
+    kept = sum(b - a for a, b in report["kept"])
+    words = "no space left on the disk" if disk == "tmpfs" else "no room for a larger file"
+    assert not first["ok"] and first["reason"].startswith(f"{words}: {out}.part") \
+        and first["reason"].endswith(f"kept {kept} bytes in {out}.part, resumable"), first["reason"]
+    assert 0 < kept <= room
+    vehicle_bytes = open(folder.path(1), "rb").read()
+    part = open(tmp_path / "got.BIN.part", "rb").read()
+    assert all(part[a:b] == vehicle_bytes[a:b] for a, b in report["kept"])
+    assert report["listed"], "the driver stopped answering after the full disk"
+    assert second["ok"], second["reason"]
+    assert second["resumed_from"] == kept and second["size"] == len(vehicle_bytes)
+    assert open(tmp_path / "got.BIN", "rb").read() == vehicle_bytes
+    assert report["left"] == ["one.BIN"]
 
 
 def test_the_solo_downloads_by_log_data(sim_factory, vehicle_factory, tmp_path):
