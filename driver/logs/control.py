@@ -80,6 +80,8 @@ class LogOutcome:
     bytes_rerequested: int = 0  # of those, bytes already held when asked (merged into a gap's window)
     resumed_from: int = 0       # bytes already held in the .part when this download began
     messages: int = 0           # DataFlash messages DFReader read
+    ending: str = ""            # what the log ends with after its last whole message (an unfinished record,
+                                # padding), as check.py tells it; "" when it ends on a whole message
 
     @property
     def rate(self) -> float:
@@ -370,8 +372,8 @@ class LogControl:
             self._abort(job, f"{self._disk_words(exc)}: {job.path}: {exc.strerror or exc}")
             return None
         d = _Download(job, entry, part, part.ranges.total())
-        if part.size:
-            d.end = part.size
+        if part.size and part.size >= entry.size:
+            d.end = part.size                   # (a smaller end is stale: the log grew, or its stream broke off)
         d.file = handle
         d.progress_at = d.flushed_at = now
         if job.ftp:
@@ -571,27 +573,32 @@ class LogControl:
         fields = dict(log_id=d.entry.id, path=job.path, size=d.end, seconds=seconds, bytes_received=d.received,
                       bytes_requested=d.requested, bytes_rerequested=d.rerequested, resumed_from=d.resumed)
         job.checking = True
-        thread = threading.Thread(target=self._check, args=(job, fields), name="log-check", daemon=True)
+        thread = threading.Thread(target=self._check, args=(job, fields, d.entry.size), name="log-check",
+                                  daemon=True)
         self._check_thread = thread
         thread.start()
         return done + [self._end_message()]
 
-    def _check(self, job: _Job, fields: dict) -> None:
-        """DFReader reads the whole .part (off the driver's threads), then it becomes the file."""
+    def _check(self, job: _Job, fields: dict, announced: int) -> None:
+        """DFReader reads the whole .part (off the driver's threads), then it becomes the file. ``announced``: the
+        size the vehicle listed just before this download; a stream that ended short of it is no whole log."""
         path = job.path
         try:
-            messages = check_dataflash(path + ".part")
+            checked = check_dataflash(path + ".part", announced)
             os.replace(path + ".part", path)
             os.remove(path + ".part.json")
             ok, reason = True, f"log {fields['log_id']} saved to {path}"
+            if checked.ending:
+                reason += f"; it ends with {checked.ending}"
+            more = dict(messages=checked.messages, ending=checked.ending)
         except (LogFileError, OSError) as exc:
-            messages, ok = 0, False
+            ok, more = False, {}
             reason = f"log {fields['log_id']} downloaded ({fields['size']} bytes) but {exc}"
         with self._v._lock:
             if self._jobs and self._jobs[0] is job:
                 self._jobs.popleft()
             self.progress = None
-            self._finish(job, ok, reason, messages=messages, **fields)
+            self._finish(job, ok, reason, **more, **fields)
         self._v._wake.set()
 
     # -- erasing -----------------------------------------------------------------------------------------------
