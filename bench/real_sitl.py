@@ -346,6 +346,11 @@ class Bench:
             self.add(Row("log download (newest)", f"no answer in {TIMEOUT['log']:g} s", "-", seconds, "wrong",
                          "no answer within the time limit"))
             return
+        if not outcome.ok and "Disarm for log download" in outcome.reason:
+            armed = self.judge.armed
+            self.add(Row("log download (newest)", said_log(outcome), "armed" if armed else "disarmed", seconds,
+                         "right" if armed else "wrong", "" if armed else "told armed, but the vehicle is disarmed"))
+            return
         own_path = os.path.join(self.scratch, "logs", f"{outcome.log_id:08d}.BIN")
         if not outcome.log_id or not os.path.exists(own_path):
             listed = self.judge.logs()
