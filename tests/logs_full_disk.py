@@ -44,7 +44,7 @@ def main() -> None:
         with open(filler, "wb") as f:
             f.write(b"\0" * (free.f_bavail * free.f_frsize - room))
     out = os.path.join(disk, "one.BIN")
-    v = Vehicle(VehicleConfig(connection=f"tcp:127.0.0.1:{port}")).start()
+    v = Vehicle(VehicleConfig(connection=f"tcp:127.0.0.1:{port}", param_cache=None)).start()   # no other file
     try:
         if not v.wait_for(lambda s: s.connected, 20):
             raise SystemExit("no heartbeat from the simulated vehicle")
