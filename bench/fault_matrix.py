@@ -1,7 +1,7 @@
 """The fault matrix: takeoff, forward, stop, land under every firmware profile and link fault.
 
     .venv/bin/python bench/fault_matrix.py [--speedup 2] [--profiles copter-4,solo] [--faults clean,loss30]
-                                           [--markdown] [--rows flights,transfers]
+                                           [--markdown] [--rows flights,transfers,params,logs]
 
 Each cell flies the simulated vehicle (real sockets, real time scaled by --speedup) with the embedded
 driver: takeoff to 3 m, 2 m/s forward along the nose (at 60°) for 3 s (a stick refreshed every 100 ms, as the viewer does), Stop,
@@ -16,6 +16,9 @@ The transfer rows (bench/transfer_matrix.py) follow: a 50-item mission and a fen
 each cell, each answer checked against what the vehicle holds; target 0 corrupted plans, 0 wrong reports.
 The parameter row (bench/param_cells.py): per profile, read path (MAVLink FTP in the recorded ArduCopter 4.6.3
 shape, and the list) and fault, every parameter downloaded and no wrong "set" report.
+The log rows (bench/log_cells.py): per profile, download path (LOG_DATA; MAVLink FTP where the profile has it) and
+fault, the vehicle's DataFlash log downloaded, byte-identical to the simulator's own file (or, not finished, a
+resumable .part truthfully told).
 """
 from __future__ import annotations
 
@@ -33,6 +36,7 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 from driver.sim import SimConfig, SimVehicle  # noqa: E402
 from driver.vehicle.state import CommandStatus, LandedState  # noqa: E402
 from driver.vehicle import Vehicle, VehicleConfig  # noqa: E402
+import log_cells  # noqa: E402
 import param_cells  # noqa: E402
 import tables  # noqa: E402
 from faults import FAULTS, PROFILES  # noqa: E402
@@ -199,9 +203,9 @@ def main() -> int:
     ap.add_argument("--profiles", default=",".join(PROFILES))
     ap.add_argument("--faults", default=",".join(FAULTS))
     ap.add_argument("--markdown", action="store_true")
-    ap.add_argument("--rows", default="flights,transfers,params",
-                    help="flights (takeoff, forward, stop, land), transfers (bench/transfer_matrix.py) and/or params "
-                         "(bench/param_cells.py)")
+    ap.add_argument("--rows", default="flights,transfers,params,logs",
+                    help="flights (takeoff, forward, stop, land), transfers (bench/transfer_matrix.py), params "
+                         "(bench/param_cells.py) and/or logs (bench/log_cells.py)")
     args = ap.parse_args()
     logging.basicConfig(level=logging.ERROR)        # the table says what happened
     rows = args.rows.split(",")
@@ -233,8 +237,36 @@ def main() -> int:
         for c in checks:
             for w in c.wrong:
                 print(f"WRONG parameters {c.profile}/{c.fault}: {w}")
-    return 0 if all(c.completed and not c.wrong for c in cells + checks) and \
+    logs = run_logs(args.profiles.split(","), args.faults.split(","), args.speedup, args.markdown) \
+        if "logs" in rows else []
+    return 0 if all(c.completed and not c.wrong for c in cells + checks + logs) and \
         all(not c.wrong and not c.error and not c.corrupted for c in transfers) else 1
+
+
+def run_logs(profiles, faults, speedup: float, markdown: bool) -> list:
+    """The log rows (bench/log_cells.py), printed as a table; the cells."""
+    import shutil
+    import tempfile
+    folder = log_cells.make_log(tempfile.mkdtemp(prefix="fault-matrix-logs-"))
+    cells = []
+    try:
+        for profile in profiles:
+            for path in log_cells.paths(profile):
+                for fault in faults:
+                    cells.append(log_cells.check(profile, fault, path, speedup, FAULTS[fault][1], folder))
+                    c = cells[-1]
+                    print(f"{profile:9s} {fault:11s} log over {path}: {c.error or c.told} identical={c.identical} "
+                          f"wrong={len(c.wrong)}", file=sys.stderr, flush=True)
+    finally:
+        shutil.rmtree(folder, ignore_errors=True)
+    if cells:
+        head, lines = log_cells.rows(cells)
+        print(f"\nLogs (a {cells[0].size:,}-byte DataFlash log; real seconds at sim speed-up {speedup:g}):")
+        print("\n".join(tables.render(head, lines, markdown)))
+        for c in cells:
+            for w in c.wrong:
+                print(f"WRONG log {c.profile}/{c.fault}/{c.path}: {w}")
+    return cells
 
 
 if __name__ == "__main__":

@@ -14,7 +14,8 @@ the link out. The truth is read on SERIAL1, loss-free, with plain pymavlink (ben
 ready to arm; a 40-item mission, a 5-vertex inclusion fence and 3 rally points uploaded; every parameter fetched
 (over MAVLink FTP where the driver chooses it); five parameters set; a 5-item mission flown (takeoff, three
 waypoints, land) with a pause and a resume; every parameter fetched again by the list (a second driver with FTP
-off); and, once the driver can, a log download (``op_log_download``: a hook until then).
+off); and the newest DataFlash log downloaded, disarmed (``op_log_download``), compared byte for byte with the
+SITL's own file in its scratch folder's logs/.
 
 Each answer is judged against what the vehicle holds or did once the answer is given:
 
@@ -49,6 +50,7 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink  # noqa: E402
 
+from log_cells import LogCell, judge as judge_log_download  # noqa: E402
 from lossy_relay import LossyRelay, free_udp_port  # noqa: E402
 from sitl_judge import HeldItem, Judge  # noqa: E402
 import tables  # noqa: E402
@@ -70,7 +72,7 @@ SETS = (("WPNAV_SPEED", 750.0), ("RTL_ALT", 1200.0), ("LAND_SPEED", 100.0), ("PI
 VOLATILE = ("STAT_", "SR0_", "SR1_")
 #: Seconds each operation may take before "no answer".
 TIMEOUT = dict(ready=120.0, upload=60.0, params=60.0, set=15.0, start=60.0, pause=20.0, resume=20.0,
-               flown=150.0, connect=30.0)
+               flown=150.0, connect=30.0, log=300.0)
 
 
 # -- the plans ------------------------------------------------------------------------------------------------
@@ -333,16 +335,38 @@ class Bench:
         self.fetch_parameters("parameters (list, FTP off)")
 
     def op_log_download(self) -> None:
-        """The hook for the log download (issue 28): the driver has no API for it yet. Once it has, ask it here
-        for the newest log and judge its bytes against the judge's LOG_ENTRY size (and, kept in the scratch
-        folder's logs/, the vehicle's own file)."""
-        entries = self.judge.logs()
-        newest = f"log {entries[-1].id}, {entries[-1].size} bytes" if entries else "no log listed"
-        download = getattr(self.vehicle, "download_log", None)
-        if download is None:
-            self.add(Row("log download", "not in the driver yet", newest, verdict="-"))
+        """The newest log, once the vehicle has disarmed (armed, ArduPilot ignores every LOG_* request), judged
+        against the SITL's own file (``logs/0000000N.BIN`` in its scratch folder). The newest log grows until a
+        download starts, so the file is compared as the vehicle's stream ended: its first ``outcome.size`` bytes
+        (the driver's size) must be the downloaded file, byte for byte."""
+        self.judge.wait(lambda: self.judge.armed is False, 30.0)
+        out = os.path.join(self.scratch, "downloaded", "newest.BIN")
+        outcome, seconds = answer(self.vehicle.logs.download_latest(out), TIMEOUT["log"])
+        if outcome is None:
+            self.add(Row("log download (newest)", f"no answer in {TIMEOUT['log']:g} s", "-", seconds, "wrong",
+                         "no answer within the time limit"))
             return
-        self.add(Row("log download", "driver API present: judge it in op_log_download", newest, verdict="-"))
+        if not outcome.ok and "Disarm for log download" in outcome.reason:
+            armed = self.judge.armed
+            self.add(Row("log download (newest)", said_log(outcome), "armed" if armed else "disarmed", seconds,
+                         "right" if armed else "wrong", "" if armed else "told armed, but the vehicle is disarmed"))
+            return
+        own_path = os.path.join(self.scratch, "logs", f"{outcome.log_id:08d}.BIN")
+        if not outcome.log_id or not os.path.exists(own_path):
+            listed = self.judge.logs()
+            holds = f"newest log {listed[-1].id}, {listed[-1].size} bytes listed" if listed else "no log listed"
+            self.add(Row("log download (newest)", said_log(outcome), holds + "; no SITL file at hand to compare",
+                         seconds, "-"))
+            return
+        with open(own_path, "rb") as f:
+            own = f.read()
+        cell = LogCell("sitl", "", "log_data")
+        judge_log_download(cell, outcome, out, own[:outcome.size] if outcome.ok else own)
+        holds = f"{own_path[len(self.scratch) + 1:]}: {len(own):,} bytes now" + \
+            (f"; its first {outcome.size:,} {'are' if cell.identical else 'are NOT'} the download" if outcome.ok
+             else "")
+        self.add(Row("log download (newest)", said_log(outcome), holds, seconds,
+                     "wrong" if cell.wrong else "right", "; ".join(cell.wrong)))
 
     def run(self) -> None:
         self.ready()
@@ -357,11 +381,20 @@ class Bench:
         self.op_log_download()
 
 
-def start_sim(instance: int):
-    """driver.sim on the SITL's ports: its USB-like port as SERIAL0, its telemetry port as SERIAL1."""
+def said_log(outcome) -> str:
+    if not outcome.ok:
+        return outcome.reason if len(outcome.reason) <= 110 else outcome.reason[:107] + "..."
+    return f"log {outcome.log_id}: {outcome.size:,} bytes in {outcome.seconds:.1f} s " \
+           f"({outcome.rate / 1000:,.0f} kB/s), {outcome.bytes_received:,} received" + \
+           (f"; ends with {outcome.ending}" if outcome.ending else "")
+
+
+def start_sim(instance: int, scratch: str):
+    """driver.sim on the SITL's ports: its USB-like port as SERIAL0, its telemetry port as SERIAL1; its logs in
+    the scratch folder's logs/, where the SITL keeps its own."""
     from driver.sim import SimConfig, SimVehicle
     sim = SimVehicle(SimConfig(usb_port=5760 + 10 * instance, tcp_port=5762 + 10 * instance, home=HOME,
-                               ready_after=5.0, seed=1))
+                               ready_after=5.0, seed=1, log_dir=os.path.join(scratch, "logs")))
     sim.start()
     return sim
 
@@ -469,7 +502,7 @@ def main() -> int:
         if sitl:
             sitl.start()
         elif args.sim:
-            simulated = start_sim(args.instance)
+            simulated = start_sim(args.instance, scratch)
             atexit.register(simulated.stop)
         serial0, serial1 = 5760 + 10 * args.instance, 5762 + 10 * args.instance
         try:

@@ -57,7 +57,7 @@ def test_the_sim_logs_while_armed_and_dfreader_reads_it(sim_factory, vehicle_fac
     while (m := reader.recv_msg()) is not None:
         kinds.add(m.get_type())
     assert {"FMT", "PARM", "MODE", "MSG", "ATT", "GPS", "BAT", "CTUN", "CAM"} <= kinds
-    assert check_dataflash(folder.path(1)) > 100
+    assert check_dataflash(folder.path(1)).messages > 100
     listed = v.logs.list().result(20)
     assert listed.ok and [(e.id, e.size) for e in listed.entries] == [(1, os.path.getsize(folder.path(1)))]
 
@@ -136,17 +136,143 @@ def test_an_unknown_log_id_and_an_empty_log(sim_factory, vehicle_factory, tmp_pa
     assert not os.path.exists(tmp_path / "x.BIN.part")
     outcome = v.logs.download(2, str(tmp_path / "x.BIN")).result(20)
     assert not outcome.ok and outcome.reason == "log 2 is empty (0 bytes) on the vehicle"
+    for wrong in (0, 70_000, "2"):
+        outcome = v.logs.download(wrong, str(tmp_path / "x.BIN")).result(5)
+        assert not outcome.ok and outcome.reason == f"no log {wrong}: log numbers go from 1 to 65535"
 
 
 def test_a_corrupt_or_truncated_bin_is_told(tmp_path):
     folder = LogFolder(str(tmp_path / "logs"))
     data = open(folder.path(write_flight_log(folder, 20_000)), "rb").read()
-    cases = {"cut.BIN": (data[:-7], "truncated"), "bad.BIN": (data[:9000] + b"x" * 40 + data[9040:], "corrupt"),
+    cases = {"cut.BIN": (data[:9000] + data[9100:], "corrupt"),          # cut in the middle
+             "bad.BIN": (data[:9000] + b"x" * 40 + data[9040:], "corrupt"),
+             "tail.BIN": (data + b"hello, not a log", "truncated or corrupt"),   # garbage after the last record
+             "unknown.BIN": (data + b"\xa3\x95\x10" + bytes(5), "truncated or corrupt"),   # a type never declared
+             "zeros.BIN": (data + bytes(70_000), "truncated or corrupt"),   # more than any page or cluster pads
              "empty.BIN": (b"", "empty"), "text.BIN": (b"hello, not a log\n" * 10, "not a DataFlash log")}
     for name, (raw, word) in cases.items():
         (tmp_path / name).write_bytes(raw)
         with pytest.raises(LogFileError, match=word):
             check_dataflash(str(tmp_path / name))
+    (tmp_path / "short.BIN").write_bytes(data[:-24])                      # a whole record less than announced
+    with pytest.raises(LogFileError, match=f"{len(data) - 24} bytes, shorter than the {len(data)} bytes the "
+                                           "vehicle announced"):
+        check_dataflash(str(tmp_path / "short.BIN"), announced=len(data))
+
+
+def test_a_log_may_end_with_an_unfinished_record_or_padding(tmp_path):
+    """A power loss stops AP_Logger inside a record; AP_Logger_Block pads its last page with zeros and erased flash
+    reads 0xFF: such a tail is told, the file left as it is, and DFReader's messages all counted."""
+    folder = LogFolder(str(tmp_path / "logs"))
+    data = open(folder.path(write_flight_log(folder, 20_000)), "rb").read()      # it ends with a whole BAT (24 B)
+    whole = check_dataflash(folder.path(1))
+    assert whole.ending == "" and whole.tail == 0
+    msg = data[data.rindex(b"\xa3\x95\x42"):][:37]                             # a MSG record's first 37 of 75 bytes
+    cases = {"power-loss.BIN": (data[:-7], whole.messages - 1, 17, "an unfinished BAT record"),
+             "msg.BIN": (data + msg, whole.messages, 37, "an unfinished MSG record"),
+             "head.BIN": (data + b"\xa3", whole.messages, 1, "an unfinished record"),
+             "page.BIN": (data + bytes(249), whole.messages, 249, "padding (0x00)"),
+             "erased.BIN": (data + b"\xff" * 2042, whole.messages, 2042, "padding (0xFF)")}
+    for name, (raw, messages, tail, ending) in cases.items():
+        path = tmp_path / name
+        path.write_bytes(raw)
+        checked = check_dataflash(str(path), announced=len(raw))
+        assert (checked.messages, checked.tail, checked.ending) == (messages, tail, f"{tail} bytes of {ending}"), name
+        assert path.read_bytes() == raw
+    real = os.path.join(os.path.dirname(__file__), "data", "logs", "pymavlink-test.BIN")   # a real ArduCopter log
+    assert check_dataflash(real).ending == "24 bytes of an unfinished AHR2 record"
+
+
+def test_a_vehicle_log_ending_inside_a_record_downloads_as_it_is(sim_factory, vehicle_factory, tmp_path):
+    sim, folder = logs_sim(sim_factory, tmp_path, [30_000])
+    with open(folder.path(1), "ab") as f:
+        f.write(b"\xa3\x95\x42" + bytes(34))                 # a power loss 37 bytes into a MSG record (75)
+    v = connect(vehicle_factory, sim)
+    out = tmp_path / "cut.BIN"
+    outcome = v.logs.download(1, str(out)).result(60)
+    assert outcome.ok, outcome.reason
+    assert outcome.ending == "37 bytes of an unfinished MSG record" and outcome.reason.endswith(
+        "; it ends with 37 bytes of an unfinished MSG record")
+    assert same_bytes(out, folder, 1)
+
+
+def test_a_stream_ending_short_of_the_listed_size_is_no_log_and_resumes(sim_factory, vehicle_factory, tmp_path):
+    """The vehicle's stream ends (a short LOG_DATA) on a record boundary before the size it listed, as ArduPilot's
+    "report as EOF on error" does after a read error: DFReader would read that file to its end, the size check
+    refuses it, and the next download goes on from the .part to the whole log."""
+    sim, folder = logs_sim(sim_factory, tmp_path, [600_000], radio_baud=1_000_000)
+    whole = open(folder.path(1), "rb").read()
+    reader = DFReader_binary(folder.path(1))
+    while reader.recv_msg() is not None and reader.offset < 300_000:
+        pass
+    cut = reader.offset                                 # a record boundary
+    stamp = os.stat(folder.path(1))                     # LOG_ENTRY's time_utc is the file's mtime, as ArduPilot's
+    v = connect(vehicle_factory, sim)
+    out = str(tmp_path / "one.BIN")
+    future = v.logs.download(1, out)
+    assert eventually(lambda: v.logs.progress and 0 < v.logs.progress.held < cut - 100_000, 30)
+    with open(folder.path(1), "r+b") as f:
+        f.truncate(cut)                                 # what the vehicle can read of it now
+    os.utime(folder.path(1), ns=(stamp.st_atime_ns, stamp.st_mtime_ns))
+    outcome = future.result(60)
+    assert not outcome.ok and outcome.reason.endswith(
+        f"{cut} bytes, shorter than the {len(whole)} bytes the vehicle announced (truncated)"), outcome.reason
+    assert not os.path.exists(out) and os.path.getsize(out + ".part") == cut
+    with open(folder.path(1), "r+b") as f:
+        f.write(whole)                                  # readable again
+    os.utime(folder.path(1), ns=(stamp.st_atime_ns, stamp.st_mtime_ns))
+    outcome = v.logs.download(1, out).result(60)
+    assert outcome.ok, outcome.reason
+    assert outcome.resumed_from == cut and same_bytes(out, folder, 1)
+
+
+def tmpfs_available() -> bool:
+    """A tmpfs in a mount namespace of our own (unprivileged user namespaces): a real small disk, without root."""
+    import shutil
+    import subprocess
+    return shutil.which("unshare") is not None and subprocess.run(
+        ["unshare", "-Urm", "mount", "-t", "tmpfs", "-o", "size=64k", "tmpfs", "/mnt"],
+        capture_output=True).returncode == 0
+
+
+@pytest.mark.parametrize("disk", ["tmpfs", "fsize"])
+def test_a_full_disk_keeps_the_partial_file_and_resumes_once_there_is_room(sim_factory, tmp_path, disk):
+    """The disk fills up for real mid-download: a 512 kB tmpfs with 128 kB free (ENOSPC), or RLIMIT_FSIZE at
+    128 kB (EFBIG), in a process of its own (tests/logs_full_disk.py). The download ends with the reason, the
+    bytes the map names are the vehicle's, the driver goes on answering, and with room again the download resumes
+    from the .part to a byte-identical file."""
+    import json
+    import subprocess
+    import sys
+    if disk == "tmpfs" and not tmpfs_available():
+        pytest.skip("no unprivileged mount namespace here for a small tmpfs")
+    sim, folder = logs_sim(sim_factory, tmp_path, [400_000], radio_baud=1_000_000)   # ~25 kB a .part flush
+    mount = tmp_path / "disk"
+    mount.mkdir()
+    room = 128 * 1024
+    helper = [sys.executable, os.path.join(os.path.dirname(__file__), "logs_full_disk.py"), disk,
+              str(sim.tcp_port), "1", str(mount), str(room), str(tmp_path / "got.BIN")]
+    if disk == "tmpfs":
+        helper = ["unshare", "-Urm", "sh", "-c", 'mount -t tmpfs -o size=512k tmpfs "$0" && exec "$@"',
+                  str(mount)] + helper
+    done = subprocess.run(helper, capture_output=True, text=True, timeout=110)
+    assert done.returncode == 0, done.stderr[-3000:]
+    report = json.loads(done.stdout.strip().splitlines()[-1])
+    first, second = report["first"], report["second"]
+    out = f"{mount}/one.BIN"
+    kept = sum(b - a for a, b in report["kept"])
+    words = "no space left on the disk" if disk == "tmpfs" else "no room for a larger file"
+    assert not first["ok"] and first["reason"].startswith(f"{words}: {out}.part") \
+        and first["reason"].endswith(f"kept {kept} bytes in {out}.part, resumable"), first["reason"]
+    assert 0 < kept <= room
+    vehicle_bytes = open(folder.path(1), "rb").read()
+    part = open(tmp_path / "got.BIN.part", "rb").read()
+    assert all(part[a:b] == vehicle_bytes[a:b] for a, b in report["kept"])
+    assert report["listed"], "the driver stopped answering after the full disk"
+    assert second["ok"], second["reason"]
+    assert second["resumed_from"] == kept and second["size"] == len(vehicle_bytes)
+    assert open(tmp_path / "got.BIN", "rb").read() == vehicle_bytes
+    assert report["left"] == ["one.BIN"]
 
 
 def test_the_solo_downloads_by_log_data(sim_factory, vehicle_factory, tmp_path):

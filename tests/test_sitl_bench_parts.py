@@ -84,3 +84,30 @@ def test_the_judge_reads_what_the_vehicle_holds(sim_factory, vehicle_factory):
         assert judge.wait(lambda: judge.mode == sim.truth().mode and judge.armed is False, 10)
     finally:
         judge.close()
+
+
+def test_the_bench_downloads_the_newest_log_and_compares_it_with_the_vehicles_file(sim_factory, tmp_path):
+    """real_sitl.py's log row against the simulator in the SITL's place: its logs in the scratch folder's logs/,
+    as the SITL keeps them; the newest downloaded through the relay and judged byte for byte."""
+    import argparse
+    sys.path.insert(0, os.path.join(os.path.dirname(os.path.dirname(os.path.abspath(__file__))), "bench"))
+    import real_sitl
+    from driver.sim.dataflash import LogFolder, write_flight_log
+    logs = LogFolder(str(tmp_path / "logs"))
+    write_flight_log(logs, 40_000)
+    newest = os.path.getsize(logs.path(write_flight_log(logs, 150_000, seed=1)))
+    sim = sim_factory(usb_port=0, log_dir=logs.folder)
+    relay = LossyRelay(sim.usb_port, free_udp_port(), loss=0.1, seed=1)
+    judge = Judge(sim.tcp_port)
+    bench = real_sitl.Bench(judge, relay, argparse.Namespace(keep=False), str(tmp_path))
+    try:
+        assert bench.vehicle.wait_for(lambda s: s.connected, 20)
+        bench.op_log_download()
+        row = bench.rows[-1]
+        assert row.verdict == "right", row
+        assert row.said.startswith(f"log 2: {newest:,} bytes in ")
+        assert row.holds == f"logs/00000002.BIN: {newest:,} bytes now; its first {newest:,} are the download"
+    finally:
+        bench.vehicle.close()
+        judge.close()
+        relay.close()

@@ -147,5 +147,6 @@ class LogCommands:
                 self.say(f"{len(outcome.entries)} logs")
             if outcome.path:
                 self.say(f"Finished downloading {outcome.path} ({outcome.size} bytes in {outcome.seconds:.1f} s, "
-                         f"{outcome.rate / 1000:.1f} kB/s, {outcome.messages} messages read back)")
+                         f"{outcome.rate / 1000:.1f} kB/s, {outcome.messages} messages read back"
+                         + (f"; it ends with {outcome.ending})" if outcome.ending else ")"))
         future.add_done_callback(done)

@@ -27,6 +27,7 @@ on a thread of its own.
 """
 from __future__ import annotations
 
+import errno
 import logging
 import os
 import threading
@@ -79,6 +80,8 @@ class LogOutcome:
     bytes_rerequested: int = 0  # of those, bytes already held when asked (merged into a gap's window)
     resumed_from: int = 0       # bytes already held in the .part when this download began
     messages: int = 0           # DataFlash messages DFReader read
+    ending: str = ""            # what the log ends with after its last whole message (an unfinished record,
+                                # padding), as check.py tells it; "" when it ends on a whole message
 
     @property
     def rate(self) -> float:
@@ -137,6 +140,7 @@ class _Download:
         self.rtt = 0.3
         self.rate = 0.0                         # packets/s seen while a window streams
         self.received = self.requested = self.rerequested = 0
+        self.kept = resumed                     # bytes the .part map on disk names (what survives a failure)
         self.progress_at = 0.0
         self.flushed_at = 0.0
         self.history: deque = deque()           # (time, held) for the rate shown
@@ -365,15 +369,16 @@ class LogControl:
             if fresh:
                 save_part_map(job.path, part)
         except OSError as exc:
-            self._abort(job, f"{job.path}: {exc.strerror or exc}")
+            self._abort(job, f"{self._disk_words(exc)}: {job.path}: {exc.strerror or exc}")
             return None
         d = _Download(job, entry, part, part.ranges.total())
-        if part.size:
-            d.end = part.size
+        if part.size and part.size >= entry.size:
+            d.end = part.size                   # (a smaller end is stale: the log grew, or its stream broke off)
         d.file = handle
         d.progress_at = d.flushed_at = now
         if job.ftp:
-            self._flush(d)
+            if not self._flush(d):
+                return None
             self._start_ftp(d, now)
         if d.resumed:
             log.info("log %d: resuming with %d bytes held", entry.id, d.resumed)
@@ -403,10 +408,7 @@ class LogControl:
         if d.ftp is not None:
             return self._service_ftp(d, now)
         if now - d.progress_at > STALL_LIMIT:
-            self._flush(d)
-            self._close_download(d)
-            self._abort(job, f"no data from the vehicle for {STALL_LIMIT:.0f} s: {d.ranges.total()} bytes of "
-                             f"{self._size_text(d)} kept in {job.path}.part, download again to resume")
+            self._give_up(d, f"no data from the vehicle for {STALL_LIMIT:.0f} s")
             return [self._end_message()]
         if d.window is not None:
             quiet = now - max(d.sent_at, d.last_rx)
@@ -420,10 +422,7 @@ class LogControl:
         msgs, failure = d.ftp.service(now, self._v._target_ids())
         failure = failure or d.ftp_failure
         if failure:
-            self._flush(d)
-            self._close_download(d)
-            self._abort(d.job, f"MAVLink FTP {failure}: {d.ranges.total()} bytes kept in {d.job.path}.part, "
-                               "download again to resume")
+            self._give_up(d, f"MAVLink FTP {failure}")
             return msgs + [d.ftp.terminate(self._v._target_ids())]
         return msgs
 
@@ -503,6 +502,8 @@ class LogControl:
             d.rate = rate if d.rate == 0 else 0.5 * d.rate + 0.5 * rate
 
     def _flush(self, d: _Download) -> bool:
+        """The bytes received since the last flush into the .part, then the map that names them; False (the
+        download ended, resumable) when the disk refuses them."""
         d.flushed_at = time.monotonic()
         try:
             for ofs, data in d.pending:
@@ -511,12 +512,31 @@ class LogControl:
             d.file.flush()
             d.pending.clear()
             save_part_map(d.job.path, d.part)
+            d.kept = d.ranges.total()
             return True
-        except OSError as exc:                  # a full disk: what is on disk stays resumable
+        except OSError as exc:
+            # The map on disk is still the last one saved, and it names only bytes that were flushed before it:
+            # the .part stays resumable whatever this write left behind it.
+            waiting = sum(len(data) for _, data in d.pending)
             self._close_download(d)
-            self._abort(d.job, f"{d.job.path}.part: {exc.strerror or exc}; the partial file is kept, download "
-                               "again to resume")
+            self._abort(d.job, f"{self._disk_words(exc)}: {d.job.path}.part could not take {waiting} more bytes "
+                               f"({exc.strerror or exc}); kept {d.kept} bytes in {d.job.path}.part, resumable")
             return False
+
+    @staticmethod
+    def _disk_words(exc: OSError) -> str:
+        if exc.errno in (errno.ENOSPC, errno.EDQUOT):
+            return "no space left on the disk"
+        if exc.errno == errno.EFBIG:
+            return "no room for a larger file"      # the file system's or the process's (RLIMIT_FSIZE) limit
+        return "could not write the log"
+
+    def _give_up(self, d: _Download, why: str) -> None:
+        """End the download, resumable: what is held goes to the .part first (a full disk tells its own reason)."""
+        if self._flush(d):
+            self._close_download(d)
+            self._abort(d.job, f"{why}: {d.kept} bytes of {self._size_text(d)} kept in {d.job.path}.part, "
+                               "download again to resume")
 
     def _show(self, d: _Download, now: float) -> None:
         held = d.ranges.total()
@@ -533,7 +553,10 @@ class LogControl:
 
     def _close_download(self, d: _Download) -> None:
         if d.file is not None:
-            d.file.close()
+            try:
+                d.file.close()
+            except OSError as exc:              # bytes still buffered on a full disk: the map does not name them
+                log.info("log %d: %s.part closed without its last bytes (%s)", d.entry.id, d.job.path, exc)
             d.file = None
         self._download = None
         self.progress = None
@@ -550,27 +573,32 @@ class LogControl:
         fields = dict(log_id=d.entry.id, path=job.path, size=d.end, seconds=seconds, bytes_received=d.received,
                       bytes_requested=d.requested, bytes_rerequested=d.rerequested, resumed_from=d.resumed)
         job.checking = True
-        thread = threading.Thread(target=self._check, args=(job, fields), name="log-check", daemon=True)
+        thread = threading.Thread(target=self._check, args=(job, fields, d.entry.size), name="log-check",
+                                  daemon=True)
         self._check_thread = thread
         thread.start()
         return done + [self._end_message()]
 
-    def _check(self, job: _Job, fields: dict) -> None:
-        """DFReader reads the whole .part (off the driver's threads), then it becomes the file."""
+    def _check(self, job: _Job, fields: dict, announced: int) -> None:
+        """DFReader reads the whole .part (off the driver's threads), then it becomes the file. ``announced``: the
+        size the vehicle listed just before this download; a stream that ended short of it is no whole log."""
         path = job.path
         try:
-            messages = check_dataflash(path + ".part")
+            checked = check_dataflash(path + ".part", announced)
             os.replace(path + ".part", path)
             os.remove(path + ".part.json")
             ok, reason = True, f"log {fields['log_id']} saved to {path}"
+            if checked.ending:
+                reason += f"; it ends with {checked.ending}"
+            more = dict(messages=checked.messages, ending=checked.ending)
         except (LogFileError, OSError) as exc:
-            messages, ok = 0, False
+            ok, more = False, {}
             reason = f"log {fields['log_id']} downloaded ({fields['size']} bytes) but {exc}"
         with self._v._lock:
             if self._jobs and self._jobs[0] is job:
                 self._jobs.popleft()
             self.progress = None
-            self._finish(job, ok, reason, messages=messages, **fields)
+            self._finish(job, ok, reason, **more, **fields)
         self._v._wake.set()
 
     # -- erasing -----------------------------------------------------------------------------------------------
@@ -607,20 +635,20 @@ class LogControl:
         return self._message("log_request_end")
 
     def _post_end(self) -> None:
-        if self._download is not None:
-            self._flush(self._download) if self._download.file is not None else None
-            if self._download is not None:
-                self._close_download(self._download)
+        d = self._download
+        if d is not None and (d.file is None or self._flush(d)):
+            self._close_download(d)
         self._listing = None
         self._v._post(self._end_message())
 
     def _abort(self, job: _Job, reason: str) -> None:
+        d = self._download
+        if d is not None and d.job is job:
+            if d.file is not None and not self._flush(d):
+                return                          # the disk refused the last bytes: that is the reason told
+            self._close_download(d)
         if self._jobs and self._jobs[0] is job:
             self._jobs.popleft()
-            if self._download is not None and self._download.job is job:
-                self._flush(self._download) if self._download.file is not None else None
-                if self._download is not None:
-                    self._close_download(self._download)
             self._listing = None
         elif job in self._jobs:
             self._jobs.remove(job)

@@ -88,7 +88,16 @@ def load_part_map(path: str) -> PartMap | None:
 
 
 def save_part_map(path: str, part: PartMap) -> None:
+    """Written whole to a temporary file, then renamed: a full disk leaves the previous map as it was."""
     tmp = path + ".part.json.tmp"
-    with open(tmp, "w") as f:
-        json.dump({"id": part.log_id, "time_utc": part.time_utc, "size": part.size, "ranges": part.ranges.spans}, f)
-    os.replace(tmp, path + ".part.json")
+    try:
+        with open(tmp, "w") as f:
+            json.dump({"id": part.log_id, "time_utc": part.time_utc, "size": part.size, "ranges": part.ranges.spans},
+                      f)
+        os.replace(tmp, path + ".part.json")
+    except OSError:
+        try:
+            os.remove(tmp)
+        except OSError:
+            pass
+        raise
