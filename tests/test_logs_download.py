@@ -203,3 +203,16 @@ def test_cmd_log_download_latest_runs_unattended(sim_factory, tmp_path):
         proc.terminate()
         proc.wait(timeout=15)
     assert same_bytes(tmp_path / "got.bin", folder, 2)
+
+
+def test_an_erase_the_vehicle_never_got_is_not_told_done(sim_factory, vehicle_factory, tmp_path):
+    sim, folder = logs_sim(sim_factory, tmp_path, [5_000, 6_000])
+    v = connect(vehicle_factory, sim)                   # nothing listed yet this session
+    sim.autopilot._on_log_erase = lambda msg: None      # every LOG_ERASE lost on the way
+    outcome = v.logs.erase().result(60)
+    assert not outcome.ok and "still there" in outcome.reason
+    assert folder.numbers() == [1, 2]
+    del sim.autopilot._on_log_erase
+    outcome = v.logs.erase().result(60)
+    assert outcome.ok, outcome.reason
+    assert folder.numbers() == [] and outcome.entries == ()

@@ -200,6 +200,7 @@ class LogControl:
             self._jobs.clear()
             for job in jobs:
                 self._finish(job, False, "cancelled")
+            self._erase_tries = 0               # a new erase lists and judges afresh
             self._post_end()
         v._wake.set()
 
@@ -575,14 +576,18 @@ class LogControl:
 
     # -- erasing -----------------------------------------------------------------------------------------------
     def _service_erase(self, job: _Job, now: float, link_up: bool) -> list:
+        """The list first (what is there now), LOG_ERASE (no reply), then lists until none of those logs is left."""
         if not link_up:
             return []
+        if not job.listed:
+            self._erase_tries = 0
+            return self._service_list(job, now, link_up)
         if self._erase_tries:
             if now < self._erase_at:
                 return []
             if self.entries is None:             # the list that tells whether the erase was done
                 return self._service_list(job, now, link_up)
-            if not set(self.entries) & set(self._erase_before):
+            if not any(self._still_there(e) for e in self.entries):
                 self._erase_tries = 0
                 self._jobs.popleft()
                 self._finish(job, True, f"logs erased; {len(self.entries)} on the vehicle now", entries=self.entries)
@@ -591,12 +596,24 @@ class LogControl:
                 self._erase_tries = 0
                 self._abort(job, f"the logs are still there after {ERASE_TRIES} LOG_ERASE")
                 return []
-        self._erase_before = self.entries or ()
+        if not self._erase_tries:
+            self._erase_before = self.entries
+            if not self._erase_before:
+                self._jobs.popleft()
+                self._finish(job, True, "no logs on the vehicle to erase", entries=())
+                return []
         self._erase_tries += 1
         self._erase_at = now + ERASE_WAIT
         self.progress = LogProgress(0, "", 0, 0, 0.0, "erasing")
         self.entries = None
         return [self._message("log_erase")]
+
+    def _still_there(self, entry: LogEntry) -> bool:
+        """A log from the list before the erase: same id and time, as big or bigger (the open log grows). A vehicle
+        logging while disarmed (LOG_DISARMED) begins log 1 again right after an erase: smaller, so not "still
+        there"; ids restart at 1, so an id alone proves nothing."""
+        return any(e.id == entry.id and e.time_utc == entry.time_utc and entry.size >= e.size
+                   for e in self._erase_before)
 
     # -- helpers -----------------------------------------------------------------------------------------------
     def _message(self, name: str, *fields):
