@@ -10,6 +10,7 @@ import pytest
 from pymavlink.DFReader import DFReader_binary
 
 from driver.console.console import Console
+from driver.logs import ranges
 from driver.logs.check import LogFileError, check_dataflash
 from driver.sim.dataflash import LogFolder, write_flight_log
 from driver.sim.faults import LinkFaults
@@ -216,3 +217,29 @@ def test_an_erase_the_vehicle_never_got_is_not_told_done(sim_factory, vehicle_fa
     outcome = v.logs.erase().result(60)
     assert outcome.ok, outcome.reason
     assert folder.numbers() == [] and outcome.entries == ()
+
+
+def test_the_part_is_on_disk_before_the_map_that_names_it(tmp_path, monkeypatch):
+    path = str(tmp_path / "one.BIN")
+    with open(path + ".part", "wb") as f:
+        f.write(b"x" * 900)
+    done = []
+    real_fsync, real_replace = os.fsync, os.replace
+    monkeypatch.setattr(ranges.os, "fsync", lambda fd: (done.append(os.readlink(f"/proc/self/fd/{fd}")),
+                                                        real_fsync(fd))[1])
+    monkeypatch.setattr(ranges.os, "replace", lambda a, b: (done.append(f"replace {a}"), real_replace(a, b))[1])
+    ranges.save_part_map(path, ranges.PartMap(1, 0, ranges.Ranges([(0, 900)]), None))
+    assert done == [path + ".part", path + ".part.json.tmp", f"replace {path}.part.json.tmp"]
+
+
+def test_a_map_that_claims_more_than_the_part_holds_is_clipped(sim_factory, vehicle_factory, tmp_path):
+    sim, folder = logs_sim(sim_factory, tmp_path, [200_000])
+    out = str(tmp_path / "one.BIN")
+    entry = folder.entries()[0]
+    with open(folder.path(1), "rb") as f, open(out + ".part", "wb") as part:
+        part.write(f.read(50_000))                      # a power loss kept only half of what the map names
+    ranges.save_part_map(out, ranges.PartMap(1, entry[2], ranges.Ranges([(0, 100_000)]), None))
+    v = connect(vehicle_factory, sim)
+    outcome = v.logs.download(1, out).result(120)
+    assert outcome.ok, outcome.reason
+    assert outcome.resumed_from == 50_000 and same_bytes(out, folder, 1)

@@ -2,7 +2,9 @@
 
 A download keeps ``FILE.part`` (the bytes at their offsets) and ``FILE.part.json`` (the log's id, its
 time_utc and the ranges written to the .part), so a dropped link or an app restart resumes where it was instead
-of fetching the log again. The map is written only after the bytes it names are in the .part file.
+of fetching the log again. The map is written only after the bytes it names are in the .part file: the .part is
+fsynced before the map, the map's tmp file before it replaces the map, so after a power loss the map never claims
+bytes the disk does not hold; and a map read back is clipped to the .part's size all the same.
 """
 from __future__ import annotations
 
@@ -82,13 +84,22 @@ def load_part_map(path: str) -> PartMap | None:
     try:
         with open(path + ".part.json") as f:
             raw = json.load(f)
-        return PartMap(int(raw["id"]), int(raw["time_utc"]), Ranges(raw["ranges"]), raw.get("size"))
+        ranges = Ranges(raw["ranges"]).clipped(os.path.getsize(path + ".part"))
+        return PartMap(int(raw["id"]), int(raw["time_utc"]), ranges, raw.get("size"))
     except (OSError, ValueError, KeyError, TypeError):
         return None
 
 
 def save_part_map(path: str, part: PartMap) -> None:
+    """The map of what ``path``.part holds (its writes flushed by the caller), once the .part is on the disk."""
+    try:
+        with open(path + ".part", "rb") as data:
+            os.fsync(data.fileno())             # fsync is per file: it writes what any handle of it wrote
+    except FileNotFoundError:
+        pass
     tmp = path + ".part.json.tmp"
     with open(tmp, "w") as f:
         json.dump({"id": part.log_id, "time_utc": part.time_utc, "size": part.size, "ranges": part.ranges.spans}, f)
+        f.flush()
+        os.fsync(f.fileno())
     os.replace(tmp, path + ".part.json")
