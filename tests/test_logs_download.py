@@ -242,4 +242,48 @@ def test_a_map_that_claims_more_than_the_part_holds_is_clipped(sim_factory, vehi
     v = connect(vehicle_factory, sim)
     outcome = v.logs.download(1, out).result(120)
     assert outcome.ok, outcome.reason
-    assert outcome.resumed_from == 50_000 and same_bytes(out, folder, 1)
+    assert outcome.resumed_from == 50_000 - 90 and same_bytes(out, folder, 1)   # (its last 90 bytes: asked again)
+
+
+def test_another_log_with_the_same_number_and_date_is_not_spliced_into_the_part(sim_factory, vehicle_factory,
+                                                                               tmp_path):
+    sim, folder = logs_sim(sim_factory, tmp_path, [300_000], radio_baud=1_000_000)
+    stamp = int(os.path.getmtime(folder.path(1)))      # the date the vehicle lists: the file's (closed) mtime
+    first = connect(vehicle_factory, sim)
+    out = str(tmp_path / "one.BIN")
+    future = first.logs.download(1, out)
+    assert eventually(lambda: first.logs.progress and first.logs.progress.held > 50_000, 30)
+    first.logs.cancel()
+    assert not future.result(10).ok
+    assert first.logs.erase().result(60).ok            # erased: the next log is number 1 again
+    first.close()
+    with open(out + ".part", "rb") as f:
+        old_part = f.read()
+    write_flight_log(folder, 400_000, seed=7)
+    os.utime(folder.path(1), (stamp, stamp))            # a board without a clock: every log has the same date
+    second = connect(vehicle_factory, sim)
+    outcome = second.logs.download(1, out).result(120)
+    assert outcome.ok, outcome.reason
+    assert same_bytes(out, folder, 1) and outcome.resumed_from == 0
+    with open(out + ".part.old", "rb") as f:
+        assert f.read() == old_part                     # kept aside, not mixed in
+
+
+def test_a_part_resumes_though_the_logs_time_changed_and_the_stream_end_is_stale(sim_factory, vehicle_factory,
+                                                                                 tmp_path):
+    sim, folder = logs_sim(sim_factory, tmp_path, [300_000], radio_baud=1_000_000)
+    first = connect(vehicle_factory, sim)
+    out = str(tmp_path / "one.BIN")
+    future = first.logs.download(1, out)
+    assert eventually(lambda: first.logs.progress and first.logs.progress.held > 50_000, 30)
+    first.close()
+    assert not future.result(10).ok
+    part = ranges.load_part_map(out)
+    held = part.ranges.total()
+    part.time_utc += 60                                 # listed while open: the vehicle's clock then, not the file's
+    part.size = 100_000                                 # the end its stream told then: the log has grown since
+    ranges.save_part_map(out, part)
+    second = connect(vehicle_factory, sim)
+    outcome = second.logs.download(1, out).result(120)
+    assert outcome.ok, outcome.reason
+    assert same_bytes(out, folder, 1) and outcome.resumed_from >= held - 90

@@ -143,6 +143,7 @@ class _Download:
         self.file = None
         self.ftp: FtpRead | None = None         # the FTP read, when the log comes that way
         self.ftp_failure = ""
+        self.verify: tuple[int, bytes] | None = None   # held bytes asked again: (offset, what the .part had)
 
 
 class LogControl:
@@ -235,6 +236,8 @@ class LogControl:
         payload = bytes(m.payload)
         offset = FTP_HEADER.unpack(payload[:12])[7]
         chunk = d.ftp.chunks.get(offset)
+        if chunk is not None and d.verify is not None:
+            self._same_log(d, offset, chunk)
         if chunk is not None and d.ranges.add(offset, offset + len(chunk)):
             d.pending.append((offset, chunk))
             d.received += len(chunk)
@@ -354,10 +357,12 @@ class LogControl:
             self._abort(job, f"log {entry.id} is empty (0 bytes) on the vehicle")
             return None
         part = load_part_map(job.path)
-        fresh = part is None or part.log_id != entry.id or part.time_utc != entry.time_utc \
-            or not os.path.exists(job.path + ".part")
+        fresh = part is None or part.log_id != entry.id or not part.ranges.spans \
+            or part.ranges.spans[-1][1] > entry.size or not os.path.exists(job.path + ".part")
+        if fresh and part is not None and part.ranges.spans:
+            self._set_aside(job.path)           # another log (a shorter one) with that number: not mixed in
         if fresh:
-            part = PartMap(entry.id, entry.time_utc, Ranges(), None)
+            part = PartMap(entry.id, entry.time_utc, Ranges(), None, entry.size)
         try:
             folder = os.path.dirname(job.path)
             if folder:
@@ -368,8 +373,10 @@ class LogControl:
         except OSError as exc:
             self._abort(job, f"{job.path}: {exc.strerror or exc}")
             return None
+        verify = None if fresh else self._recheck(part, handle, entry)
         d = _Download(job, entry, part, part.ranges.total())
-        if part.size:
+        d.verify = verify
+        if part.size and part.size == entry.size:   # the end the stream told, while the list still says it
             d.end = part.size
         d.file = handle
         d.progress_at = d.flushed_at = now
@@ -379,6 +386,60 @@ class LogControl:
         if d.resumed:
             log.info("log %d: resuming with %d bytes held", entry.id, d.resumed)
         return d
+
+    @staticmethod
+    def _recheck(part: PartMap, handle, entry: LogEntry) -> tuple[int, bytes]:
+        """The .part's last held bytes are fetched again and must come back the same, else it is another log.
+
+        Neither id nor time tells a log apart: ids restart at 1 after an erase, a board without a clock dates every
+        log alike, and the open log's time is the clock's now at each list (AP_Logger_File::_get_log_time). The
+        last held bytes (DataFlash records with their TimeUS) differ between two logs; the first ones (FMT, PARM)
+        do not. So they are un-held here and compared when they come (:meth:`_same_log`)."""
+        a, b = part.ranges.spans[-1]
+        start = max(a, b - CHUNK)
+        handle.seek(start)
+        expect = handle.read(b - start)
+        part.ranges = Ranges(part.ranges.spans[:-1] + ([[a, start]] if start > a else []))
+        part.time_utc, part.listed = entry.time_utc, entry.size
+        return start, expect
+
+    def _same_log(self, d: _Download, ofs: int, data: bytes) -> None:
+        """Bytes at ``ofs`` from the vehicle against what the resumed .part held there (see :meth:`_recheck`)."""
+        start, expect = d.verify
+        lo, hi = max(ofs, start), min(ofs + len(data), start + len(expect))
+        if lo >= hi:
+            return
+        if data[lo - ofs:hi - ofs] != expect[lo - start:hi - start]:
+            self._another_log(d, lo)
+        elif lo == start:
+            d.verify = (hi, expect[hi - start:]) if hi < start + len(expect) else None
+
+    def _another_log(self, d: _Download, ofs: int) -> None:
+        """The .part was another log's: set aside as .part.old; only this session's bytes are kept."""
+        path = d.job.path
+        log.warning("log %d: byte %d differs from %s.part: another log with that number; kept as .part.old, "
+                    "fetched afresh", d.entry.id, ofs, path)
+        d.file.close()
+        self._set_aside(path)
+        try:
+            d.file = open(path + ".part", "wb")
+        except OSError as exc:
+            d.file = None
+            self._abort(d.job, f"{path}.part: {exc.strerror or exc}")
+            return
+        d.part = PartMap(d.entry.id, d.entry.time_utc, Ranges((o, o + len(b)) for o, b in d.pending), None,
+                         d.entry.size)
+        d.ranges, d.end, d.resumed, d.verify = d.part.ranges, None, 0, None
+        if d.ftp is not None:
+            d.ftp.chunks = {o: b for o, b in d.pending}
+            d.ftp.next_burst = 0
+
+    @staticmethod
+    def _set_aside(path: str) -> None:
+        try:
+            os.replace(path + ".part", path + ".part.old")
+        except OSError:
+            pass
 
     def _service_download(self, job: _Job, now: float, link_up: bool) -> list:
         if job.checking:
@@ -478,6 +539,8 @@ class LogControl:
         d.received += count
         if count:
             data = bytes(m.data[:count])
+            if d.verify is not None:
+                self._same_log(d, ofs, data)
             if d.ranges.add(ofs, ofs + count):
                 d.pending.append((ofs, data))
                 d.progress_at = now

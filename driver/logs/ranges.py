@@ -75,8 +75,10 @@ class Ranges:
 
 
 class PartMap:
-    def __init__(self, log_id: int, time_utc: int, ranges: Ranges, size: int | None) -> None:
-        self.log_id, self.time_utc, self.ranges, self.size = log_id, time_utc, ranges, size
+    """``size``: where the vehicle's stream said the log ends; ``listed``: its size in the list it was fetched by."""
+
+    def __init__(self, log_id: int, time_utc: int, ranges: Ranges, size: int | None, listed: int = 0) -> None:
+        self.log_id, self.time_utc, self.ranges, self.size, self.listed = log_id, time_utc, ranges, size, listed
 
 
 def load_part_map(path: str) -> PartMap | None:
@@ -85,7 +87,7 @@ def load_part_map(path: str) -> PartMap | None:
         with open(path + ".part.json") as f:
             raw = json.load(f)
         ranges = Ranges(raw["ranges"]).clipped(os.path.getsize(path + ".part"))
-        return PartMap(int(raw["id"]), int(raw["time_utc"]), ranges, raw.get("size"))
+        return PartMap(int(raw["id"]), int(raw["time_utc"]), ranges, raw.get("size"), int(raw.get("listed", 0)))
     except (OSError, ValueError, KeyError, TypeError):
         return None
 
@@ -99,7 +101,8 @@ def save_part_map(path: str, part: PartMap) -> None:
         pass
     tmp = path + ".part.json.tmp"
     with open(tmp, "w") as f:
-        json.dump({"id": part.log_id, "time_utc": part.time_utc, "size": part.size, "ranges": part.ranges.spans}, f)
+        json.dump({"id": part.log_id, "time_utc": part.time_utc, "size": part.size, "listed": part.listed,
+                   "ranges": part.ranges.spans}, f)
         f.flush()
         os.fsync(f.fileno())
     os.replace(tmp, path + ".part.json")
