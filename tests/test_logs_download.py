@@ -287,3 +287,17 @@ def test_a_part_resumes_though_the_logs_time_changed_and_the_stream_end_is_stale
     outcome = second.logs.download(1, out).result(120)
     assert outcome.ok, outcome.reason
     assert same_bytes(out, folder, 1) and outcome.resumed_from >= held - 90
+
+
+@pytest.mark.parametrize("via", ["ftp", "log_data"])
+def test_a_log_id_is_a_place_in_the_list_not_the_files_number(sim_factory, vehicle_factory, tmp_path, via):
+    sim, folder = logs_sim(sim_factory, tmp_path, [20_000, 30_000, 40_000])
+    os.remove(folder.path(1))                           # deleted for space (AP_Logger_File::Prep_MinSpace)
+    v = connect(vehicle_factory, sim)
+    listed = v.logs.list().result(30)
+    sizes = [os.path.getsize(folder.path(2)), os.path.getsize(folder.path(3))]
+    assert [(e.id, e.size) for e in listed.entries] == [(1, sizes[0]), (2, sizes[1]), (3, 0)]
+    out = str(tmp_path / "first.BIN")
+    outcome = v.logs.download(1, out, via=via).result(60)
+    assert outcome.ok, outcome.reason
+    assert same_bytes(out, folder, 2)                   # the oldest log there: file 2

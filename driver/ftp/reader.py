@@ -1,6 +1,7 @@
 """One MAVLink FTP engine: read a file from the vehicle by BurstReadFile, fill the gaps with ReadFile, learn the
 file's end from the vehicle, as ArduPilot (GCS_FTP.cpp) answers. It serves the parameters (``@PARAM/param.pck``,
-driver.params.ftp) and the DataFlash logs (``logs/0000000N.BIN``, driver.logs).
+driver.params.ftp) and the DataFlash logs (``/APM/LOGS/0000000N.BIN`` or SITL's ``logs/…``, driver.logs), whose folder
+:class:`FtpList` lists.
 
 What ArduCopter 4.6.3 does (tests/data/recordings/README.md, "MAVFTP parameter download" and "Log download"):
 
@@ -26,11 +27,11 @@ from dataclasses import dataclass, field
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-__all__ = ["FtpRead", "CHUNK", "HEADER", "STALL_SECONDS", "NAK_TEXT"]
+__all__ = ["FtpRead", "FtpList", "CHUNK", "HEADER", "STALL_SECONDS", "NAK_TEXT"]
 
 CHUNK = 239                # bytes a packet: the most one FILE_TRANSFER_PROTOCOL carries
 HEADER = struct.Struct("<HBBBBBBI")
-OP_TERMINATE, OP_RESET, OP_OPEN_RO, OP_READ, OP_BURST, OP_ACK, OP_NAK = 1, 2, 4, 5, 15, 128, 129
+OP_TERMINATE, OP_RESET, OP_LIST, OP_OPEN_RO, OP_READ, OP_BURST, OP_ACK, OP_NAK = 1, 2, 3, 4, 5, 15, 128, 129
 ERR_FAIL, ERR_EOF = 1, 6
 NAK_TEXT = {1: "failed", 2: "failed (errno)", 3: "invalid size", 4: "invalid session", 5: "no session available",
             6: "end of file", 7: "unknown command", 10: "file not found"}
@@ -41,7 +42,13 @@ BURST_GAPS = 8             # ... or this many of its packet intervals (a radio's
 READ_WINDOW = 4            # ReadFiles out at once (ArduPilot queues 5 FTP requests and drops one more)
 READ_TIMEOUT_MIN = 0.2     # s before a ReadFile is asked again (or 3 round trips, whichever is longer)
 READ_TRIES = 20            # ReadFiles for one chunk before FTP is given up
+LIST_RETRY = 0.5           # s before a ListDirectory without its answer is asked again
 BURSTS = 20                # BurstReadFiles at most by default (a 16-byte-packet file of 15 kB needs 2; param.pck: 1)
+
+
+def _frame(target: tuple[int, int], seq: int, session: int, opcode: int, size: int, offset: int, data: bytes = b""):
+    payload = HEADER.pack(seq, session, opcode, size, 0, 0, 0, offset) + data
+    return mavlink.MAVLink_file_transfer_protocol_message(0, target[0], target[1], list(payload.ljust(251, b"\0")))
 
 
 @dataclass
@@ -89,8 +96,7 @@ class FtpRead:
     def _request(self, target: tuple[int, int], opcode: int, offset: int = 0, data: bytes = b"", size=None, now=0.0):
         self.seq = (self.seq + 1) & 0xFFFF
         self.sent[self.seq] = (opcode, offset, now)
-        payload = HEADER.pack(self.seq, 0, opcode, len(data) if size is None else size, 0, 0, 0, offset) + data
-        return mavlink.MAVLink_file_transfer_protocol_message(0, target[0], target[1], list(payload.ljust(251, b"\0")))
+        return _frame(target, self.seq, 0, opcode, len(data) if size is None else size, offset, data)
 
     def missing(self) -> list[int]:
         """Offsets of the chunks not received below what is known of the file (its end, else the highest chunk)."""
@@ -276,3 +282,80 @@ class FtpRead:
             return None
         data = b"".join(self.chunks[o] for o in sorted(self.chunks) if o < self.end)
         return data if len(data) == self.end else None
+
+
+@dataclass
+class FtpList:
+    """ListDirectory of the first of ``folders`` the vehicle has (GCS_FTP ftp_list_dir): ``files`` {name: size} of
+    ``folder``. A folder it has not: NAK FailErrno (opendir failed), the next is tried. Entries come a packet at a
+    time from entry ``offset`` on, each ``F<name>\\t<size>`` or ``D<name>`` ended by NUL; NAK EOF after the last.
+    One request at a time, asked again after :data:`LIST_RETRY` without its answer (same seq: the vehicle sends its
+    last reply again)."""
+    started: float
+    folders: tuple = ()
+    session: int = 0
+    stall: float = STALL_SECONDS
+    seq: int = 0
+    files: dict = field(default_factory=dict)
+    folder: bytes = b""
+    tried: int = 0                       # index of the folder asked
+    entry: int = 0                       # the next entry to ask for
+    sent: float = -1.0                   # when the request out was sent (-1: send the next now)
+    progress: float = 0.0
+    phase: str = "list"
+
+    def __post_init__(self) -> None:
+        self.progress = self.started
+
+    def _ask(self, target: tuple[int, int], now: float, again: bool):
+        if not again:
+            self.seq = (self.seq + 1) & 0xFFFF
+        self.sent = now
+        path = self.folders[self.tried]
+        return _frame(target, self.seq, self.session, OP_LIST, len(path), self.entry, path)
+
+    def terminate(self, target: tuple[int, int]):
+        self.seq = (self.seq + 1) & 0xFFFF
+        return _frame(target, self.seq, self.session, OP_TERMINATE, 0, 0)
+
+    def service(self, now: float, target: tuple[int, int]) -> tuple[list, str | None]:
+        if self.phase == "done":
+            return [], None
+        if now - self.progress >= self.stall:
+            return [], f"got no answer to the listing of {self.folders[self.tried].decode()} in {self.stall:g} s"
+        if self.sent < 0:
+            return [self._ask(target, now, False)], None
+        if now - self.sent >= LIST_RETRY:
+            return [self._ask(target, now, True)], None
+        return [], None
+
+    def on_message(self, m, now: float) -> str | None:
+        payload = bytes(m.payload)
+        seq, session, opcode, size, req_opcode, _, _, _ = HEADER.unpack(payload[:12])
+        if req_opcode != OP_LIST or session != self.session or seq != (self.seq + 1) & 0xFFFF or self.sent < 0 \
+                or self.phase == "done":
+            return None                                 # not the answer to the request out
+        data = payload[12:12 + size]
+        self.seq, self.sent, self.progress = seq, -1.0, now
+        if opcode == OP_ACK:
+            for raw in data.split(b"\0"):
+                if not raw:
+                    continue
+                self.entry += 1
+                if raw[:1] == b"F" and b"\t" in raw:
+                    name, _, length = raw[1:].partition(b"\t")
+                    self.files[name.decode(errors="replace")] = int(length or 0)
+            return None
+        error = data[0] if data else 0
+        if error == ERR_EOF:
+            self.phase, self.folder = "done", self.folders[self.tried]
+            return None
+        if self.tried + 1 < len(self.folders):
+            self.tried, self.entry, self.files = self.tried + 1, 0, {}
+            return None
+        return "found no folder: " + ", ".join(f.decode() for f in self.folders) + \
+            f" (the vehicle said {NAK_TEXT.get(error, error)})"
+
+    @property
+    def done(self) -> bool:
+        return self.phase == "done"

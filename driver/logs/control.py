@@ -37,7 +37,7 @@ from dataclasses import dataclass
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-from ..ftp.reader import CHUNK as FTP_CHUNK, HEADER as FTP_HEADER, FtpRead
+from ..ftp.reader import CHUNK as FTP_CHUNK, HEADER as FTP_HEADER, FtpList, FtpRead
 from .check import LogFileError, check_dataflash
 from .ranges import PartMap, Ranges, load_part_map, save_part_map
 
@@ -54,6 +54,7 @@ STALL_LIMIT = 20.0              # s without one new byte (link up) before a down
 FLUSH_INTERVAL = 0.25           # s between writes of the .part file and its map
 ERASE_WAIT = 1.0                # s after LOG_ERASE before the list that confirms it
 ERASE_TRIES = 3
+LOG_FOLDERS = (b"/APM/LOGS", b"logs")   # HAL_BOARD_LOG_DIRECTORY: a flight controller's SD card, then SITL's
 
 
 @dataclass(frozen=True)
@@ -170,7 +171,8 @@ class LogControl:
     def download(self, log_id: int, path: str, via: str = "auto") -> Future:
         """Log ``log_id`` into ``path`` (resuming from ``path``.part where one is there); a LogOutcome.
 
-        ``via``: "log_data" (LOG_REQUEST_DATA), "ftp" (MAVLink FTP of ``logs/0000000N.BIN``) or "auto", which is
+        ``via``: "log_data" (LOG_REQUEST_DATA), "ftp" (MAVLink FTP of its file, found by listing
+        ``/APM/LOGS`` or SITL's ``logs``) or "auto", which is
         LOG_DATA: measured on ArduCopter 4.6.3 over TCP it moved 5.5 MB/s against FTP's 43 kB/s (the logs
         recording), and on a radio ArduPilot keeps FTP bursts to a third of the link while LOG_DATA takes what is
         free. The Solo (3.3) has no FTP at all."""
@@ -233,6 +235,10 @@ class LogControl:
             return
         now = time.monotonic()
         failure = d.ftp.on_message(m, now)
+        if isinstance(d.ftp, FtpList):
+            d.ftp_failure = failure or d.ftp_failure
+            self._v._wake.set()
+            return
         payload = bytes(m.payload)
         offset = FTP_HEADER.unpack(payload[:12])[7]
         chunk = d.ftp.chunks.get(offset)
@@ -480,6 +486,10 @@ class LogControl:
 
     def _service_ftp(self, d: _Download, now: float) -> list:
         msgs, failure = d.ftp.service(now, self._v._target_ids())
+        if isinstance(d.ftp, FtpList) and d.ftp.done:
+            path, failure = self._log_file(d)
+            if path:
+                self._open_ftp(d, now, path)
         failure = failure or d.ftp_failure
         if failure:
             self._flush(d)
@@ -490,8 +500,28 @@ class LogControl:
         return msgs
 
     def _start_ftp(self, d: _Download, now: float) -> None:
-        """The FTP read of ``logs/0000000N.BIN``, given every whole chunk the .part holds already."""
-        ftp = d.ftp = FtpRead(now, f"logs/{d.entry.id:08d}.BIN".encode(), max_bursts=1 << 30, stall=STALL_LIMIT)
+        """The log folder listed first: a LOG_ENTRY id is a place in the list, not the file's number."""
+        d.ftp = FtpList(now, LOG_FOLDERS, stall=STALL_LIMIT)
+
+    @staticmethod
+    def _log_file(d: _Download) -> tuple[str, str]:
+        """(path, "") of the file of log ``d.entry.id`` in the folder listed, else ("", why not): the oldest log's
+        number + id - 1 (AP_Logger_Backend::log_num_from_list_entry), and its size must be the list's."""
+        listing = d.ftp
+        numbers = sorted(int(n[:-4]) for n in listing.files if n.upper().endswith(".BIN") and n[:-4].isdigit())
+        if not numbers:
+            return "", f"found no log in {listing.folder.decode()}"
+        name = f"{numbers[0] + d.entry.id - 1:08d}.BIN"
+        path = f"{listing.folder.decode().rstrip('/')}/{name}"
+        size = next((s for n, s in listing.files.items() if n.upper() == name), None)
+        if size != d.entry.size:
+            return "", (f"found {path} with {size} bytes where log {d.entry.id} has {d.entry.size}" if size is not None
+                        else f"found no {path} for log {d.entry.id}") + ": download it by LOG_DATA"
+        return path, ""
+
+    def _open_ftp(self, d: _Download, now: float, path: str) -> None:
+        """The FTP read of the log's file, given every whole chunk the .part holds already."""
+        ftp = d.ftp = FtpRead(now, path.encode(), max_bursts=1 << 30, stall=STALL_LIMIT, seq=d.ftp.seq)
         first_missing = None
         held_to = d.ranges.spans[-1][1] if d.ranges.spans else 0
         for offset in range(0, held_to, FTP_CHUNK):
