@@ -301,3 +301,22 @@ def test_a_log_id_is_a_place_in_the_list_not_the_files_number(sim_factory, vehic
     outcome = v.logs.download(1, out, via=via).result(60)
     assert outcome.ok, outcome.reason
     assert same_bytes(out, folder, 2)                   # the oldest log there: file 2
+
+
+def test_a_parameter_refresh_during_a_log_read_by_ftp_leaves_both_whole(sim_factory, vehicle_factory, tmp_path):
+    sim, folder = logs_sim(sim_factory, tmp_path, [400_000], radio_baud=1_000_000)
+    v = connect(vehicle_factory, sim)
+    assert v.wait_for(lambda s: s.firmware, 10)         # AUTOPILOT_VERSION offers FTP
+    out = str(tmp_path / "one.BIN")
+    future = v.logs.download(1, out, via="ftp")
+    assert eventually(lambda: v.logs.progress and v.logs.progress.held > 50_000, 30)
+    params = v.fetch_parameters(refresh=True).result(60)
+    outcome = future.result(120)
+    assert outcome.ok, outcome.reason
+    assert same_bytes(out, folder, 1)
+    assert params.ok, params
+    # the log's session holds the vehicle's one open file: param.pck is refused (InvalidSession) and the list read;
+    # it never takes the log's replies for its own (the base commit: "MAVLink FTP stalled at byte 358,500")
+    assert "invalid session" in params.reason and "stalled" not in params.reason, params.reason
+    table = v.state().parameters
+    assert table.complete and table.get("SYSID_THISMAV").value == sim.autopilot.params["SYSID_THISMAV"]

@@ -32,7 +32,7 @@ __all__ = ["FtpRead", "FtpList", "CHUNK", "HEADER", "STALL_SECONDS", "NAK_TEXT"]
 CHUNK = 239                # bytes a packet: the most one FILE_TRANSFER_PROTOCOL carries
 HEADER = struct.Struct("<HBBBBBBI")
 OP_TERMINATE, OP_RESET, OP_LIST, OP_OPEN_RO, OP_READ, OP_BURST, OP_ACK, OP_NAK = 1, 2, 3, 4, 5, 15, 128, 129
-ERR_FAIL, ERR_EOF = 1, 6
+ERR_FAIL, ERR_INVALID_SESSION, ERR_EOF = 1, 4, 6
 NAK_TEXT = {1: "failed", 2: "failed (errno)", 3: "invalid size", 4: "invalid session", 5: "no session available",
             6: "end of file", 7: "unknown command", 10: "file not found"}
 STALL_SECONDS = 3.0        # no FTP progress (an answer to the open, a new byte of the file) this long: the list instead
@@ -57,6 +57,7 @@ class FtpRead:
     per 500 packets); ``stall``: seconds without progress before it is given up."""
     started: float
     path: bytes = b""
+    session: int = 0                     # replies echo it: another engine's (another session's) are not ours
     max_bursts: int = BURSTS
     stall: float = STALL_SECONDS
     estimate: int | None = None          # the open's size: ArduPilot's guess, shown, never relied on
@@ -96,7 +97,7 @@ class FtpRead:
     def _request(self, target: tuple[int, int], opcode: int, offset: int = 0, data: bytes = b"", size=None, now=0.0):
         self.seq = (self.seq + 1) & 0xFFFF
         self.sent[self.seq] = (opcode, offset, now)
-        return _frame(target, self.seq, 0, opcode, len(data) if size is None else size, offset, data)
+        return _frame(target, self.seq, self.session, opcode, len(data) if size is None else size, offset, data)
 
     def missing(self) -> list[int]:
         """Offsets of the chunks not received below what is known of the file (its end, else the highest chunk)."""
@@ -116,6 +117,8 @@ class FtpRead:
         """A FILE_TRANSFER_PROTOCOL reply; returns why the transfer failed, else None."""
         payload = bytes(m.payload)
         seq, session, opcode, size, req_opcode, burst_complete, _, offset = HEADER.unpack(payload[:12])
+        if session != self.session:
+            return None                         # another engine's file (the parameters' or a log's)
         data = payload[12:12 + size]
         self.frames += 1
         self.heard = now
@@ -301,6 +304,7 @@ class FtpList:
     tried: int = 0                       # index of the folder asked
     entry: int = 0                       # the next entry to ask for
     sent: float = -1.0                   # when the request out was sent (-1: send the next now)
+    wait: float = 0.0                    # another session has a file open: ask again after this
     progress: float = 0.0
     phase: str = "list"
 
@@ -324,7 +328,7 @@ class FtpList:
         if now - self.progress >= self.stall:
             return [], f"got no answer to the listing of {self.folders[self.tried].decode()} in {self.stall:g} s"
         if self.sent < 0:
-            return [self._ask(target, now, False)], None
+            return ([self._ask(target, now, False)] if now >= self.wait else []), None
         if now - self.sent >= LIST_RETRY:
             return [self._ask(target, now, True)], None
         return [], None
@@ -336,8 +340,9 @@ class FtpList:
                 or self.phase == "done":
             return None                                 # not the answer to the request out
         data = payload[12:12 + size]
-        self.seq, self.sent, self.progress = seq, -1.0, now
+        self.seq, self.sent = seq, -1.0
         if opcode == OP_ACK:
+            self.progress = now
             for raw in data.split(b"\0"):
                 if not raw:
                     continue
@@ -347,6 +352,10 @@ class FtpList:
                     self.files[name.decode(errors="replace")] = int(length or 0)
             return None
         error = data[0] if data else 0
+        if error == ERR_INVALID_SESSION:                # the parameters' file is read: after it (stall bounds it)
+            self.wait = now + LIST_RETRY
+            return None
+        self.progress = now
         if error == ERR_EOF:
             self.phase, self.folder = "done", self.folders[self.tried]
             return None

@@ -54,6 +54,7 @@ STALL_LIMIT = 20.0              # s without one new byte (link up) before a down
 FLUSH_INTERVAL = 0.25           # s between writes of the .part file and its map
 ERASE_WAIT = 1.0                # s after LOG_ERASE before the list that confirms it
 ERASE_TRIES = 3
+FTP_SESSION = 1                 # the parameters' FTP uses session 0: the vehicle keeps the two files apart
 LOG_FOLDERS = (b"/APM/LOGS", b"logs")   # HAL_BOARD_LOG_DIRECTORY: a flight controller's SD card, then SITL's
 
 
@@ -501,7 +502,7 @@ class LogControl:
 
     def _start_ftp(self, d: _Download, now: float) -> None:
         """The log folder listed first: a LOG_ENTRY id is a place in the list, not the file's number."""
-        d.ftp = FtpList(now, LOG_FOLDERS, stall=STALL_LIMIT)
+        d.ftp = FtpList(now, LOG_FOLDERS, session=FTP_SESSION, stall=STALL_LIMIT)
 
     @staticmethod
     def _log_file(d: _Download) -> tuple[str, str]:
@@ -521,7 +522,7 @@ class LogControl:
 
     def _open_ftp(self, d: _Download, now: float, path: str) -> None:
         """The FTP read of the log's file, given every whole chunk the .part holds already."""
-        ftp = d.ftp = FtpRead(now, path.encode(), max_bursts=1 << 30, stall=STALL_LIMIT, seq=d.ftp.seq)
+        ftp = d.ftp = FtpRead(now, path.encode(), FTP_SESSION, max_bursts=1 << 30, stall=STALL_LIMIT, seq=d.ftp.seq)
         first_missing = None
         held_to = d.ranges.spans[-1][1] if d.ranges.spans else 0
         for offset in range(0, held_to, FTP_CHUNK):
