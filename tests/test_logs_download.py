@@ -320,3 +320,23 @@ def test_a_parameter_refresh_during_a_log_read_by_ftp_leaves_both_whole(sim_fact
     assert "invalid session" in params.reason and "stalled" not in params.reason, params.reason
     table = v.state().parameters
     assert table.complete and table.get("SYSID_THISMAV").value == sim.autopilot.params["SYSID_THISMAV"]
+
+
+def test_a_log_read_by_ftp_goes_to_the_part_not_to_memory(sim_factory, vehicle_factory, tmp_path):
+    import tracemalloc
+    size = 1_500_000
+    sim, folder = logs_sim(sim_factory, tmp_path, [size], speedup=8.0)
+    v = connect(vehicle_factory, sim)
+    out = str(tmp_path / "one.BIN")
+    tracemalloc.start()
+    try:
+        future = v.logs.download(1, out, via="ftp")
+        assert eventually(lambda: v.logs.progress and v.logs.progress.held > 1_000_000, 60)
+        engine = [tracemalloc.Filter(True, "*driver/ftp/*"), tracemalloc.Filter(True, "*driver/logs/*")]
+        held = sum(s.size for s in tracemalloc.take_snapshot().filter_traces(engine).statistics("filename"))
+    finally:
+        tracemalloc.stop()
+    outcome = future.result(120)
+    assert outcome.ok, outcome.reason
+    assert same_bytes(out, folder, 1)
+    assert held < 300_000, held                         # the log's bytes are written as they come, never all held

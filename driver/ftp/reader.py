@@ -27,7 +27,7 @@ from dataclasses import dataclass, field
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-__all__ = ["FtpRead", "FtpList", "CHUNK", "HEADER", "STALL_SECONDS", "NAK_TEXT"]
+__all__ = ["FtpRead", "FtpSpanRead", "FtpList", "CHUNK", "HEADER", "STALL_SECONDS", "NAK_TEXT"]
 
 CHUNK = 239                # bytes a packet: the most one FILE_TRANSFER_PROTOCOL carries
 HEADER = struct.Struct("<HBBBBBBI")
@@ -99,18 +99,34 @@ class FtpRead:
         self.sent[self.seq] = (opcode, offset, now)
         return _frame(target, self.seq, self.session, opcode, len(data) if size is None else size, offset, data)
 
-    def missing(self) -> list[int]:
-        """Offsets of the chunks not received below what is known of the file (its end, else the highest chunk)."""
-        top = self.end if self.end is not None else self.bound if self.bound is not None else \
-            max(self.chunks, default=-CHUNK) + CHUNK
-        return [o for o in range(0, top, CHUNK) if o not in self.chunks]
+    # -- where the bytes go: kept in ``chunks`` here (FtpSpanRead hands them on) ------------------------------
+    def _held(self, offset: int) -> bool:
+        return offset in self.chunks
+
+    def _keep(self, offset: int, data: bytes) -> None:
+        self.chunks[offset] = data
+
+    def _top(self) -> int:
+        """The end of the highest chunk slot received."""
+        return max(self.chunks, default=-CHUNK) + CHUNK
+
+    def _whole_to(self, bound: int) -> bool:
+        """The last chunk below ``bound`` is full (every one below it has come)."""
+        last = max((o for o in self.chunks if o < bound), default=None)
+        return last is None or len(self.chunks[last]) == CHUNK
+
+    def _known_top(self) -> int:
+        return self.end if self.end is not None else self.bound if self.bound is not None else self._top()
+
+    def missing(self, most: int | None = None) -> list[int]:
+        """Offsets of the chunks not received below what is known of the file (its end, else the highest chunk);
+        the first ``most`` of them where that is all the caller needs."""
+        return [o for o in range(0, self._known_top(), CHUNK) if o not in self.chunks]
 
     def _learn_end(self) -> None:
         """A bound below which every chunk has arrived, the last one full: the file ends exactly there."""
-        if self.end is None and self.bound is not None and not self.missing():
-            last = max((o for o in self.chunks if o < self.bound), default=None)
-            if last is None or len(self.chunks[last]) == CHUNK:
-                self.end = self.bound
+        if self.end is None and self.bound is not None and not self.missing(1) and self._whole_to(self.bound):
+            self.end = self.bound
 
     # -- the vehicle's answers ----------------------------------------------------------------------
     def on_message(self, m, now: float) -> str | None:
@@ -136,8 +152,8 @@ class FtpRead:
         elif req_opcode in (OP_READ, OP_BURST) and self.phase == "read" and offset % CHUNK == 0 and data:
             if req_opcode == OP_BURST:
                 self._burst_packet(seq, now)
-            if offset not in self.chunks:
-                self.chunks[offset] = data
+            if not self._held(offset):
+                self._keep(offset, data)
                 self.progress = now
             if len(data) < CHUNK:
                 self.end = offset + len(data)
@@ -248,10 +264,10 @@ class FtpRead:
                 return [], None
             self.sent.pop(self.burst, None)             # its end was lost, or it stalled: read what is missing
             self.burst = None
-        missing = self.missing()
+        missing = self.missing(2 * READ_WINDOW)
         if not missing and self.end is None and self.bound is None:
             # the tail's packets and the EOF were all lost: burst again from the first byte not read
-            self.next_burst = max(self.chunks, default=-CHUNK) + CHUNK
+            self.next_burst = self._top()
             return self.service(now, target)
         if not missing and self.end is not None:
             self.phase = "done"
@@ -285,6 +301,43 @@ class FtpRead:
             return None
         data = b"".join(self.chunks[o] for o in sorted(self.chunks) if o < self.end)
         return data if len(data) == self.end else None
+
+
+@dataclass
+class FtpSpanRead(FtpRead):
+    """A read whose bytes are not kept here (a log of hundreds of MB): each new chunk is left in ``taken`` for the
+    caller to write, and what is held is the caller's ``held`` (driver.logs.ranges.Ranges: sorted spans, found by
+    binary search), so a resumed read loads nothing and a tick looks only at the first gaps."""
+    held: object = None
+    taken: tuple | None = None           # (offset, data) of the chunk the last reply brought, if new
+
+    @property
+    def received(self) -> int:
+        return self.held.total()
+
+    def _held(self, offset: int) -> bool:
+        upto = offset + CHUNK if self.end is None else min(offset + CHUNK, self.end)
+        return self.held.held_from(offset) >= upto > offset
+
+    def _keep(self, offset: int, data: bytes) -> None:
+        self.held.add(offset, offset + len(data))
+        self.taken = (offset, data)
+
+    def _top(self) -> int:
+        return -(-self.held.spans[-1][1] // CHUNK) * CHUNK if self.held.spans else 0
+
+    def _whole_to(self, bound: int) -> bool:
+        return bound == 0 or self.held.held_from(bound - 1) >= bound
+
+    def missing(self, most: int | None = None) -> list[int]:
+        out: list[int] = []
+        for a, b in self.held.missing(self._known_top()):
+            for offset in range(a // CHUNK * CHUNK, b, CHUNK):
+                if not out or out[-1] != offset:
+                    out.append(offset)
+                if most is not None and len(out) >= most:
+                    return out
+        return out
 
 
 @dataclass

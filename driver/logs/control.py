@@ -37,7 +37,7 @@ from dataclasses import dataclass
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-from ..ftp.reader import CHUNK as FTP_CHUNK, HEADER as FTP_HEADER, FtpList, FtpRead
+from ..ftp.reader import FtpList, FtpSpanRead
 from .check import LogFileError, check_dataflash
 from .ranges import PartMap, Ranges, load_part_map, save_part_map
 
@@ -143,7 +143,7 @@ class _Download:
         self.flushed_at = 0.0
         self.history: deque = deque()           # (time, held) for the rate shown
         self.file = None
-        self.ftp: FtpRead | None = None         # the FTP read, when the log comes that way
+        self.ftp: FtpSpanRead | None = None     # the FTP read, when the log comes that way
         self.ftp_failure = ""
         self.verify: tuple[int, bytes] | None = None   # held bytes asked again: (offset, what the .part had)
 
@@ -240,12 +240,11 @@ class LogControl:
             d.ftp_failure = failure or d.ftp_failure
             self._v._wake.set()
             return
-        payload = bytes(m.payload)
-        offset = FTP_HEADER.unpack(payload[:12])[7]
-        chunk = d.ftp.chunks.get(offset)
-        if chunk is not None and d.verify is not None:
-            self._same_log(d, offset, chunk)
-        if chunk is not None and d.ranges.add(offset, offset + len(chunk)):
+        if d.ftp.taken is not None:             # a new chunk, already counted held in d.ranges by the engine
+            (offset, chunk), d.ftp.taken = d.ftp.taken, None
+            if d.verify is not None:
+                self._same_log(d, offset, chunk)
+            d.ranges.add(offset, offset + len(chunk))   # (again, if _same_log began afresh)
             d.pending.append((offset, chunk))
             d.received += len(chunk)
             d.progress_at = now
@@ -437,9 +436,8 @@ class LogControl:
         d.part = PartMap(d.entry.id, d.entry.time_utc, Ranges((o, o + len(b)) for o, b in d.pending), None,
                          d.entry.size)
         d.ranges, d.end, d.resumed, d.verify = d.part.ranges, None, 0, None
-        if d.ftp is not None:
-            d.ftp.chunks = {o: b for o, b in d.pending}
-            d.ftp.next_burst = 0
+        if isinstance(d.ftp, FtpSpanRead):
+            d.ftp.held, d.ftp.next_burst = d.ranges, 0
 
     @staticmethod
     def _set_aside(path: str) -> None:
@@ -521,17 +519,12 @@ class LogControl:
         return path, ""
 
     def _open_ftp(self, d: _Download, now: float, path: str) -> None:
-        """The FTP read of the log's file, given every whole chunk the .part holds already."""
-        ftp = d.ftp = FtpRead(now, path.encode(), FTP_SESSION, max_bursts=1 << 30, stall=STALL_LIMIT, seq=d.ftp.seq)
-        first_missing = None
-        held_to = d.ranges.spans[-1][1] if d.ranges.spans else 0
-        for offset in range(0, held_to, FTP_CHUNK):
-            if d.ranges.held_from(offset) >= offset + FTP_CHUNK:
-                d.file.seek(offset)
-                ftp.chunks[offset] = d.file.read(FTP_CHUNK)
-            elif first_missing is None:
-                first_missing = offset
-        ftp.next_burst = first_missing if first_missing is not None else len(ftp.chunks) * FTP_CHUNK
+        """The FTP read of the log's file: its bytes go to the .part as they come, what is held is ``d.ranges``;
+        the first burst begins at the first chunk the .part lacks."""
+        ftp = d.ftp = FtpSpanRead(now, path.encode(), FTP_SESSION, max_bursts=1 << 30, stall=STALL_LIMIT,
+                                  seq=d.ftp.seq, held=d.ranges)
+        first = ftp.missing(1)
+        ftp.next_burst = first[0] if first else ftp._top()
 
     def _next_window(self, d: _Download, now: float):
         known = d.end if d.end is not None else max(d.size, d.ranges.spans[-1][1] if d.ranges.spans else 0)

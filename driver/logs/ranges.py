@@ -52,9 +52,9 @@ class Ranges:
 
     def held_from(self, offset: int) -> int:
         """The end of the held run that covers ``offset`` (``offset`` itself when it is not held)."""
-        for a, b in self.spans:
-            if a <= offset < b:
-                return b
+        i = bisect.bisect_right(self._starts, offset) - 1
+        if i >= 0 and self.spans[i][1] > offset:
+            return self.spans[i][1]
         return offset
 
     def missing(self, end: int) -> list[tuple[int, int]]:
