@@ -245,8 +245,9 @@ def test_a_map_that_claims_more_than_the_part_holds_is_clipped(sim_factory, vehi
     assert outcome.resumed_from == 50_000 - 90 and same_bytes(out, folder, 1)   # (its last 90 bytes: asked again)
 
 
+@pytest.mark.parametrize("via", ["log_data", "ftp"])
 def test_another_log_with_the_same_number_and_date_is_not_spliced_into_the_part(sim_factory, vehicle_factory,
-                                                                               tmp_path):
+                                                                               tmp_path, via):
     sim, folder = logs_sim(sim_factory, tmp_path, [300_000], radio_baud=1_000_000)
     stamp = int(os.path.getmtime(folder.path(1)))      # the date the vehicle lists: the file's (closed) mtime
     first = connect(vehicle_factory, sim)
@@ -262,15 +263,16 @@ def test_another_log_with_the_same_number_and_date_is_not_spliced_into_the_part(
     write_flight_log(folder, 400_000, seed=7)
     os.utime(folder.path(1), (stamp, stamp))            # a board without a clock: every log has the same date
     second = connect(vehicle_factory, sim)
-    outcome = second.logs.download(1, out).result(120)
+    outcome = second.logs.download(1, out, via=via).result(120)
     assert outcome.ok, outcome.reason
     assert same_bytes(out, folder, 1) and outcome.resumed_from == 0
     with open(out + ".part.old", "rb") as f:
         assert f.read() == old_part                     # kept aside, not mixed in
 
 
+@pytest.mark.parametrize("via", ["log_data", "ftp"])
 def test_a_part_resumes_though_the_logs_time_changed_and_the_stream_end_is_stale(sim_factory, vehicle_factory,
-                                                                                 tmp_path):
+                                                                                 tmp_path, via):
     sim, folder = logs_sim(sim_factory, tmp_path, [300_000], radio_baud=1_000_000)
     first = connect(vehicle_factory, sim)
     out = str(tmp_path / "one.BIN")
@@ -284,7 +286,7 @@ def test_a_part_resumes_though_the_logs_time_changed_and_the_stream_end_is_stale
     part.size = 100_000                                 # the end its stream told then: the log has grown since
     ranges.save_part_map(out, part)
     second = connect(vehicle_factory, sim)
-    outcome = second.logs.download(1, out).result(120)
+    outcome = second.logs.download(1, out, via=via).result(120)
     assert outcome.ok, outcome.reason
     assert same_bytes(out, folder, 1) and outcome.resumed_from >= held - 90
 
