@@ -10,6 +10,7 @@ import pytest
 from pymavlink.DFReader import DFReader_binary
 
 from driver.console.console import Console
+from driver.logs import ranges
 from driver.logs.check import LogFileError, check_dataflash
 from driver.sim.dataflash import LogFolder, write_flight_log
 from driver.sim.faults import LinkFaults
@@ -223,7 +224,8 @@ def test_a_stream_ending_short_of_the_listed_size_is_no_log_and_resumes(sim_fact
     os.utime(folder.path(1), ns=(stamp.st_atime_ns, stamp.st_mtime_ns))
     outcome = v.logs.download(1, out).result(60)
     assert outcome.ok, outcome.reason
-    assert outcome.resumed_from == cut and same_bytes(out, folder, 1)
+    assert outcome.resumed_from == cut - 90 and same_bytes(out, folder, 1)   # (its last 90 bytes: asked again, to
+    #                                                                          check it is still the same log)
 
 
 def tmpfs_available() -> bool:
@@ -270,7 +272,7 @@ def test_a_full_disk_keeps_the_partial_file_and_resumes_once_there_is_room(sim_f
     assert all(part[a:b] == vehicle_bytes[a:b] for a, b in report["kept"])
     assert report["listed"], "the driver stopped answering after the full disk"
     assert second["ok"], second["reason"]
-    assert second["resumed_from"] == kept and second["size"] == len(vehicle_bytes)
+    assert second["resumed_from"] == kept - 90 and second["size"] == len(vehicle_bytes)   # (the last 90: re-read)
     assert open(tmp_path / "got.BIN", "rb").read() == vehicle_bytes
     assert report["left"] == ["one.BIN"]
 
@@ -329,3 +331,141 @@ def test_cmd_log_download_latest_runs_unattended(sim_factory, tmp_path):
         proc.terminate()
         proc.wait(timeout=15)
     assert same_bytes(tmp_path / "got.bin", folder, 2)
+
+
+def test_an_erase_the_vehicle_never_got_is_not_told_done(sim_factory, vehicle_factory, tmp_path):
+    sim, folder = logs_sim(sim_factory, tmp_path, [5_000, 6_000])
+    v = connect(vehicle_factory, sim)                   # nothing listed yet this session
+    sim.autopilot._on_log_erase = lambda msg: None      # every LOG_ERASE lost on the way
+    outcome = v.logs.erase().result(60)
+    assert not outcome.ok and "still there" in outcome.reason
+    assert folder.numbers() == [1, 2]
+    del sim.autopilot._on_log_erase
+    outcome = v.logs.erase().result(60)
+    assert outcome.ok, outcome.reason
+    assert folder.numbers() == [] and outcome.entries == ()
+
+
+def test_the_part_is_on_disk_before_the_map_that_names_it(tmp_path, monkeypatch):
+    path = str(tmp_path / "one.BIN")
+    with open(path + ".part", "wb") as f:
+        f.write(b"x" * 900)
+    done = []
+    real_fsync, real_replace = os.fsync, os.replace
+    monkeypatch.setattr(ranges.os, "fsync", lambda fd: (done.append(os.readlink(f"/proc/self/fd/{fd}")),
+                                                        real_fsync(fd))[1])
+    monkeypatch.setattr(ranges.os, "replace", lambda a, b: (done.append(f"replace {a}"), real_replace(a, b))[1])
+    ranges.save_part_map(path, ranges.PartMap(1, 0, ranges.Ranges([(0, 900)]), None))
+    assert done == [path + ".part", path + ".part.json.tmp", f"replace {path}.part.json.tmp"]
+
+
+def test_a_map_that_claims_more_than_the_part_holds_is_clipped(sim_factory, vehicle_factory, tmp_path):
+    sim, folder = logs_sim(sim_factory, tmp_path, [200_000])
+    out = str(tmp_path / "one.BIN")
+    entry = folder.entries()[0]
+    with open(folder.path(1), "rb") as f, open(out + ".part", "wb") as part:
+        part.write(f.read(50_000))                      # a power loss kept only half of what the map names
+    ranges.save_part_map(out, ranges.PartMap(1, entry[2], ranges.Ranges([(0, 100_000)]), None))
+    v = connect(vehicle_factory, sim)
+    outcome = v.logs.download(1, out).result(120)
+    assert outcome.ok, outcome.reason
+    assert outcome.resumed_from == 50_000 - 90 and same_bytes(out, folder, 1)   # (its last 90 bytes: asked again)
+
+
+@pytest.mark.parametrize("via", ["log_data", "ftp"])
+def test_another_log_with_the_same_number_and_date_is_not_spliced_into_the_part(sim_factory, vehicle_factory,
+                                                                               tmp_path, via):
+    sim, folder = logs_sim(sim_factory, tmp_path, [300_000], radio_baud=1_000_000)
+    stamp = int(os.path.getmtime(folder.path(1)))      # the date the vehicle lists: the file's (closed) mtime
+    first = connect(vehicle_factory, sim)
+    out = str(tmp_path / "one.BIN")
+    future = first.logs.download(1, out)
+    assert eventually(lambda: first.logs.progress and first.logs.progress.held > 50_000, 30)
+    first.logs.cancel()
+    assert not future.result(10).ok
+    assert first.logs.erase().result(60).ok            # erased: the next log is number 1 again
+    first.close()
+    with open(out + ".part", "rb") as f:
+        old_part = f.read()
+    write_flight_log(folder, 400_000, seed=7)
+    os.utime(folder.path(1), (stamp, stamp))            # a board without a clock: every log has the same date
+    second = connect(vehicle_factory, sim)
+    outcome = second.logs.download(1, out, via=via).result(120)
+    assert outcome.ok, outcome.reason
+    assert same_bytes(out, folder, 1) and outcome.resumed_from == 0
+    with open(out + ".part.old", "rb") as f:
+        assert f.read() == old_part                     # kept aside, not mixed in
+
+
+@pytest.mark.parametrize("via", ["log_data", "ftp"])
+def test_a_part_resumes_though_the_logs_time_changed_and_the_stream_end_is_stale(sim_factory, vehicle_factory,
+                                                                                 tmp_path, via):
+    sim, folder = logs_sim(sim_factory, tmp_path, [300_000], radio_baud=1_000_000)
+    first = connect(vehicle_factory, sim)
+    out = str(tmp_path / "one.BIN")
+    future = first.logs.download(1, out)
+    assert eventually(lambda: first.logs.progress and first.logs.progress.held > 50_000, 30)
+    first.close()
+    assert not future.result(10).ok
+    part = ranges.load_part_map(out)
+    held = part.ranges.total()
+    part.time_utc += 60                                 # listed while open: the vehicle's clock then, not the file's
+    part.size = 100_000                                 # the end its stream told then: the log has grown since
+    ranges.save_part_map(out, part)
+    second = connect(vehicle_factory, sim)
+    outcome = second.logs.download(1, out, via=via).result(120)
+    assert outcome.ok, outcome.reason
+    assert same_bytes(out, folder, 1) and outcome.resumed_from >= held - 90
+
+
+@pytest.mark.parametrize("via", ["ftp", "log_data"])
+def test_a_log_id_is_a_place_in_the_list_not_the_files_number(sim_factory, vehicle_factory, tmp_path, via):
+    sim, folder = logs_sim(sim_factory, tmp_path, [20_000, 30_000, 40_000])
+    os.remove(folder.path(1))                           # deleted for space (AP_Logger_File::Prep_MinSpace)
+    v = connect(vehicle_factory, sim)
+    listed = v.logs.list().result(30)
+    sizes = [os.path.getsize(folder.path(2)), os.path.getsize(folder.path(3))]
+    assert [(e.id, e.size) for e in listed.entries] == [(1, sizes[0]), (2, sizes[1]), (3, 0)]
+    out = str(tmp_path / "first.BIN")
+    outcome = v.logs.download(1, out, via=via).result(60)
+    assert outcome.ok, outcome.reason
+    assert same_bytes(out, folder, 2)                   # the oldest log there: file 2
+
+
+def test_a_parameter_refresh_during_a_log_read_by_ftp_leaves_both_whole(sim_factory, vehicle_factory, tmp_path):
+    sim, folder = logs_sim(sim_factory, tmp_path, [400_000], radio_baud=1_000_000)
+    v = connect(vehicle_factory, sim)
+    assert v.wait_for(lambda s: s.firmware, 10)         # AUTOPILOT_VERSION offers FTP
+    out = str(tmp_path / "one.BIN")
+    future = v.logs.download(1, out, via="ftp")
+    assert eventually(lambda: v.logs.progress and v.logs.progress.held > 50_000, 30)
+    params = v.fetch_parameters(refresh=True).result(60)
+    outcome = future.result(120)
+    assert outcome.ok, outcome.reason
+    assert same_bytes(out, folder, 1)
+    assert params.ok, params
+    # the log's session holds the vehicle's one open file: param.pck is refused (InvalidSession) and the list read;
+    # it never takes the log's replies for its own (the base commit: "MAVLink FTP stalled at byte 358,500")
+    assert "invalid session" in params.reason and "stalled" not in params.reason, params.reason
+    table = v.state().parameters
+    assert table.complete and table.get("SYSID_THISMAV").value == sim.autopilot.params["SYSID_THISMAV"]
+
+
+def test_a_log_read_by_ftp_goes_to_the_part_not_to_memory(sim_factory, vehicle_factory, tmp_path):
+    import tracemalloc
+    size = 1_500_000
+    sim, folder = logs_sim(sim_factory, tmp_path, [size], speedup=8.0)
+    v = connect(vehicle_factory, sim)
+    out = str(tmp_path / "one.BIN")
+    tracemalloc.start()
+    try:
+        future = v.logs.download(1, out, via="ftp")
+        assert eventually(lambda: v.logs.progress and v.logs.progress.held > 1_000_000, 60)
+        engine = [tracemalloc.Filter(True, "*driver/ftp/*"), tracemalloc.Filter(True, "*driver/logs/*")]
+        held = sum(s.size for s in tracemalloc.take_snapshot().filter_traces(engine).statistics("filename"))
+    finally:
+        tracemalloc.stop()
+    outcome = future.result(120)
+    assert outcome.ok, outcome.reason
+    assert same_bytes(out, folder, 1)
+    assert held < 300_000, held                         # the log's bytes are written as they come, never all held

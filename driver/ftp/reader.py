@@ -1,6 +1,7 @@
 """One MAVLink FTP engine: read a file from the vehicle by BurstReadFile, fill the gaps with ReadFile, learn the
 file's end from the vehicle, as ArduPilot (GCS_FTP.cpp) answers. It serves the parameters (``@PARAM/param.pck``,
-driver.params.ftp) and the DataFlash logs (``logs/0000000N.BIN``, driver.logs).
+driver.params.ftp) and the DataFlash logs (``/APM/LOGS/0000000N.BIN`` or SITL's ``logs/…``, driver.logs), whose folder
+:class:`FtpList` lists.
 
 What ArduCopter 4.6.3 does (tests/data/recordings/README.md, "MAVFTP parameter download" and "Log download"):
 
@@ -26,12 +27,12 @@ from dataclasses import dataclass, field
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-__all__ = ["FtpRead", "CHUNK", "HEADER", "STALL_SECONDS", "NAK_TEXT"]
+__all__ = ["FtpRead", "FtpSpanRead", "FtpList", "CHUNK", "HEADER", "STALL_SECONDS", "NAK_TEXT"]
 
 CHUNK = 239                # bytes a packet: the most one FILE_TRANSFER_PROTOCOL carries
 HEADER = struct.Struct("<HBBBBBBI")
-OP_TERMINATE, OP_RESET, OP_OPEN_RO, OP_READ, OP_BURST, OP_ACK, OP_NAK = 1, 2, 4, 5, 15, 128, 129
-ERR_FAIL, ERR_EOF = 1, 6
+OP_TERMINATE, OP_RESET, OP_LIST, OP_OPEN_RO, OP_READ, OP_BURST, OP_ACK, OP_NAK = 1, 2, 3, 4, 5, 15, 128, 129
+ERR_FAIL, ERR_INVALID_SESSION, ERR_EOF = 1, 4, 6
 NAK_TEXT = {1: "failed", 2: "failed (errno)", 3: "invalid size", 4: "invalid session", 5: "no session available",
             6: "end of file", 7: "unknown command", 10: "file not found"}
 STALL_SECONDS = 3.0        # no FTP progress (an answer to the open, a new byte of the file) this long: the list instead
@@ -41,7 +42,13 @@ BURST_GAPS = 8             # ... or this many of its packet intervals (a radio's
 READ_WINDOW = 4            # ReadFiles out at once (ArduPilot queues 5 FTP requests and drops one more)
 READ_TIMEOUT_MIN = 0.2     # s before a ReadFile is asked again (or 3 round trips, whichever is longer)
 READ_TRIES = 20            # ReadFiles for one chunk before FTP is given up
+LIST_RETRY = 0.5           # s before a ListDirectory without its answer is asked again
 BURSTS = 20                # BurstReadFiles at most by default (a 16-byte-packet file of 15 kB needs 2; param.pck: 1)
+
+
+def _frame(target: tuple[int, int], seq: int, session: int, opcode: int, size: int, offset: int, data: bytes = b""):
+    payload = HEADER.pack(seq, session, opcode, size, 0, 0, 0, offset) + data
+    return mavlink.MAVLink_file_transfer_protocol_message(0, target[0], target[1], list(payload.ljust(251, b"\0")))
 
 
 @dataclass
@@ -50,6 +57,7 @@ class FtpRead:
     per 500 packets); ``stall``: seconds without progress before it is given up."""
     started: float
     path: bytes = b""
+    session: int = 0                     # replies echo it: another engine's (another session's) are not ours
     max_bursts: int = BURSTS
     stall: float = STALL_SECONDS
     estimate: int | None = None          # the open's size: ArduPilot's guess, shown, never relied on
@@ -89,27 +97,44 @@ class FtpRead:
     def _request(self, target: tuple[int, int], opcode: int, offset: int = 0, data: bytes = b"", size=None, now=0.0):
         self.seq = (self.seq + 1) & 0xFFFF
         self.sent[self.seq] = (opcode, offset, now)
-        payload = HEADER.pack(self.seq, 0, opcode, len(data) if size is None else size, 0, 0, 0, offset) + data
-        return mavlink.MAVLink_file_transfer_protocol_message(0, target[0], target[1], list(payload.ljust(251, b"\0")))
+        return _frame(target, self.seq, self.session, opcode, len(data) if size is None else size, offset, data)
 
-    def missing(self) -> list[int]:
-        """Offsets of the chunks not received below what is known of the file (its end, else the highest chunk)."""
-        top = self.end if self.end is not None else self.bound if self.bound is not None else \
-            max(self.chunks, default=-CHUNK) + CHUNK
-        return [o for o in range(0, top, CHUNK) if o not in self.chunks]
+    # -- where the bytes go: kept in ``chunks`` here (FtpSpanRead hands them on) ------------------------------
+    def _held(self, offset: int) -> bool:
+        return offset in self.chunks
+
+    def _keep(self, offset: int, data: bytes) -> None:
+        self.chunks[offset] = data
+
+    def _top(self) -> int:
+        """The end of the highest chunk slot received."""
+        return max(self.chunks, default=-CHUNK) + CHUNK
+
+    def _whole_to(self, bound: int) -> bool:
+        """The last chunk below ``bound`` is full (every one below it has come)."""
+        last = max((o for o in self.chunks if o < bound), default=None)
+        return last is None or len(self.chunks[last]) == CHUNK
+
+    def _known_top(self) -> int:
+        return self.end if self.end is not None else self.bound if self.bound is not None else self._top()
+
+    def missing(self, most: int | None = None) -> list[int]:
+        """Offsets of the chunks not received below what is known of the file (its end, else the highest chunk);
+        the first ``most`` of them where that is all the caller needs."""
+        return [o for o in range(0, self._known_top(), CHUNK) if o not in self.chunks]
 
     def _learn_end(self) -> None:
         """A bound below which every chunk has arrived, the last one full: the file ends exactly there."""
-        if self.end is None and self.bound is not None and not self.missing():
-            last = max((o for o in self.chunks if o < self.bound), default=None)
-            if last is None or len(self.chunks[last]) == CHUNK:
-                self.end = self.bound
+        if self.end is None and self.bound is not None and not self.missing(1) and self._whole_to(self.bound):
+            self.end = self.bound
 
     # -- the vehicle's answers ----------------------------------------------------------------------
     def on_message(self, m, now: float) -> str | None:
         """A FILE_TRANSFER_PROTOCOL reply; returns why the transfer failed, else None."""
         payload = bytes(m.payload)
         seq, session, opcode, size, req_opcode, burst_complete, _, offset = HEADER.unpack(payload[:12])
+        if session != self.session:
+            return None                         # another engine's file (the parameters' or a log's)
         data = payload[12:12 + size]
         self.frames += 1
         self.heard = now
@@ -127,8 +152,8 @@ class FtpRead:
         elif req_opcode in (OP_READ, OP_BURST) and self.phase == "read" and offset % CHUNK == 0 and data:
             if req_opcode == OP_BURST:
                 self._burst_packet(seq, now)
-            if offset not in self.chunks:
-                self.chunks[offset] = data
+            if not self._held(offset):
+                self._keep(offset, data)
                 self.progress = now
             if len(data) < CHUNK:
                 self.end = offset + len(data)
@@ -239,10 +264,10 @@ class FtpRead:
                 return [], None
             self.sent.pop(self.burst, None)             # its end was lost, or it stalled: read what is missing
             self.burst = None
-        missing = self.missing()
+        missing = self.missing(2 * READ_WINDOW)
         if not missing and self.end is None and self.bound is None:
             # the tail's packets and the EOF were all lost: burst again from the first byte not read
-            self.next_burst = max(self.chunks, default=-CHUNK) + CHUNK
+            self.next_burst = self._top()
             return self.service(now, target)
         if not missing and self.end is not None:
             self.phase = "done"
@@ -276,3 +301,123 @@ class FtpRead:
             return None
         data = b"".join(self.chunks[o] for o in sorted(self.chunks) if o < self.end)
         return data if len(data) == self.end else None
+
+
+@dataclass
+class FtpSpanRead(FtpRead):
+    """A read whose bytes are not kept here (a log of hundreds of MB): each new chunk is left in ``taken`` for the
+    caller to write, and what is held is the caller's ``held`` (driver.logs.ranges.Ranges: sorted spans, found by
+    binary search), so a resumed read loads nothing and a tick looks only at the first gaps."""
+    held: object = None
+    taken: tuple | None = None           # (offset, data) of the chunk the last reply brought, if new
+
+    @property
+    def received(self) -> int:
+        return self.held.total()
+
+    def _held(self, offset: int) -> bool:
+        upto = offset + CHUNK if self.end is None else min(offset + CHUNK, self.end)
+        return self.held.held_from(offset) >= upto > offset
+
+    def _keep(self, offset: int, data: bytes) -> None:
+        self.held.add(offset, offset + len(data))
+        self.taken = (offset, data)
+
+    def _top(self) -> int:
+        return -(-self.held.spans[-1][1] // CHUNK) * CHUNK if self.held.spans else 0
+
+    def _whole_to(self, bound: int) -> bool:
+        return bound == 0 or self.held.held_from(bound - 1) >= bound
+
+    def missing(self, most: int | None = None) -> list[int]:
+        out: list[int] = []
+        for a, b in self.held.missing(self._known_top()):
+            for offset in range(a // CHUNK * CHUNK, b, CHUNK):
+                if not out or out[-1] != offset:
+                    out.append(offset)
+                if most is not None and len(out) >= most:
+                    return out
+        return out
+
+
+@dataclass
+class FtpList:
+    """ListDirectory of the first of ``folders`` the vehicle has (GCS_FTP ftp_list_dir): ``files`` {name: size} of
+    ``folder``. A folder it has not: NAK FailErrno (opendir failed), the next is tried. Entries come a packet at a
+    time from entry ``offset`` on, each ``F<name>\\t<size>`` or ``D<name>`` ended by NUL; NAK EOF after the last.
+    One request at a time, asked again after :data:`LIST_RETRY` without its answer (same seq: the vehicle sends its
+    last reply again)."""
+    started: float
+    folders: tuple = ()
+    session: int = 0
+    stall: float = STALL_SECONDS
+    seq: int = 0
+    files: dict = field(default_factory=dict)
+    folder: bytes = b""
+    tried: int = 0                       # index of the folder asked
+    entry: int = 0                       # the next entry to ask for
+    sent: float = -1.0                   # when the request out was sent (-1: send the next now)
+    wait: float = 0.0                    # another session has a file open: ask again after this
+    progress: float = 0.0
+    phase: str = "list"
+
+    def __post_init__(self) -> None:
+        self.progress = self.started
+
+    def _ask(self, target: tuple[int, int], now: float, again: bool):
+        if not again:
+            self.seq = (self.seq + 1) & 0xFFFF
+        self.sent = now
+        path = self.folders[self.tried]
+        return _frame(target, self.seq, self.session, OP_LIST, len(path), self.entry, path)
+
+    def terminate(self, target: tuple[int, int]):
+        self.seq = (self.seq + 1) & 0xFFFF
+        return _frame(target, self.seq, self.session, OP_TERMINATE, 0, 0)
+
+    def service(self, now: float, target: tuple[int, int]) -> tuple[list, str | None]:
+        if self.phase == "done":
+            return [], None
+        if now - self.progress >= self.stall:
+            return [], f"got no answer to the listing of {self.folders[self.tried].decode()} in {self.stall:g} s"
+        if self.sent < 0:
+            return ([self._ask(target, now, False)] if now >= self.wait else []), None
+        if now - self.sent >= LIST_RETRY:
+            return [self._ask(target, now, True)], None
+        return [], None
+
+    def on_message(self, m, now: float) -> str | None:
+        payload = bytes(m.payload)
+        seq, session, opcode, size, req_opcode, _, _, _ = HEADER.unpack(payload[:12])
+        if req_opcode != OP_LIST or session != self.session or seq != (self.seq + 1) & 0xFFFF or self.sent < 0 \
+                or self.phase == "done":
+            return None                                 # not the answer to the request out
+        data = payload[12:12 + size]
+        self.seq, self.sent = seq, -1.0
+        if opcode == OP_ACK:
+            self.progress = now
+            for raw in data.split(b"\0"):
+                if not raw:
+                    continue
+                self.entry += 1
+                if raw[:1] == b"F" and b"\t" in raw:
+                    name, _, length = raw[1:].partition(b"\t")
+                    self.files[name.decode(errors="replace")] = int(length or 0)
+            return None
+        error = data[0] if data else 0
+        if error == ERR_INVALID_SESSION:                # the parameters' file is read: after it (stall bounds it)
+            self.wait = now + LIST_RETRY
+            return None
+        self.progress = now
+        if error == ERR_EOF:
+            self.phase, self.folder = "done", self.folders[self.tried]
+            return None
+        if self.tried + 1 < len(self.folders):
+            self.tried, self.entry, self.files = self.tried + 1, 0, {}
+            return None
+        return "found no folder: " + ", ".join(f.decode() for f in self.folders) + \
+            f" (the vehicle said {NAK_TEXT.get(error, error)})"
+
+    @property
+    def done(self) -> bool:
+        return self.phase == "done"

@@ -38,7 +38,7 @@ from dataclasses import dataclass
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-from ..ftp.reader import CHUNK as FTP_CHUNK, HEADER as FTP_HEADER, FtpRead
+from ..ftp.reader import FtpList, FtpSpanRead
 from .check import LogFileError, check_dataflash
 from .ranges import PartMap, Ranges, load_part_map, save_part_map
 
@@ -55,6 +55,8 @@ STALL_LIMIT = 20.0              # s without one new byte (link up) before a down
 FLUSH_INTERVAL = 0.25           # s between writes of the .part file and its map
 ERASE_WAIT = 1.0                # s after LOG_ERASE before the list that confirms it
 ERASE_TRIES = 3
+FTP_SESSION = 1                 # the parameters' FTP uses session 0: the vehicle keeps the two files apart
+LOG_FOLDERS = (b"/APM/LOGS", b"logs")   # HAL_BOARD_LOG_DIRECTORY: a flight controller's SD card, then SITL's
 
 
 @dataclass(frozen=True)
@@ -145,8 +147,9 @@ class _Download:
         self.flushed_at = 0.0
         self.history: deque = deque()           # (time, held) for the rate shown
         self.file = None
-        self.ftp: FtpRead | None = None         # the FTP read, when the log comes that way
+        self.ftp: FtpSpanRead | None = None     # the FTP read, when the log comes that way
         self.ftp_failure = ""
+        self.verify: tuple[int, bytes] | None = None   # held bytes asked again: (offset, what the .part had)
 
 
 class LogControl:
@@ -173,7 +176,8 @@ class LogControl:
     def download(self, log_id: int, path: str, via: str = "auto") -> Future:
         """Log ``log_id`` into ``path`` (resuming from ``path``.part where one is there); a LogOutcome.
 
-        ``via``: "log_data" (LOG_REQUEST_DATA), "ftp" (MAVLink FTP of ``logs/0000000N.BIN``) or "auto", which is
+        ``via``: "log_data" (LOG_REQUEST_DATA), "ftp" (MAVLink FTP of its file, found by listing
+        ``/APM/LOGS`` or SITL's ``logs``) or "auto", which is
         LOG_DATA: measured on ArduCopter 4.6.3 over TCP it moved 5.5 MB/s against FTP's 43 kB/s (the logs
         recording), and on a radio ArduPilot keeps FTP bursts to a third of the link while LOG_DATA takes what is
         free. The Solo (3.3) has no FTP at all."""
@@ -204,6 +208,7 @@ class LogControl:
             self._jobs.clear()
             for job in jobs:
                 self._finish(job, False, "cancelled")
+            self._erase_tries = 0               # a new erase lists and judges afresh
             self._post_end()
         v._wake.set()
 
@@ -235,10 +240,15 @@ class LogControl:
             return
         now = time.monotonic()
         failure = d.ftp.on_message(m, now)
-        payload = bytes(m.payload)
-        offset = FTP_HEADER.unpack(payload[:12])[7]
-        chunk = d.ftp.chunks.get(offset)
-        if chunk is not None and d.ranges.add(offset, offset + len(chunk)):
+        if isinstance(d.ftp, FtpList):
+            d.ftp_failure = failure or d.ftp_failure
+            self._v._wake.set()
+            return
+        if d.ftp.taken is not None:             # a new chunk, already counted held in d.ranges by the engine
+            (offset, chunk), d.ftp.taken = d.ftp.taken, None
+            if d.verify is not None:
+                self._same_log(d, offset, chunk)
+            d.ranges.add(offset, offset + len(chunk))   # (again, if _same_log began afresh)
             d.pending.append((offset, chunk))
             d.received += len(chunk)
             d.progress_at = now
@@ -357,10 +367,12 @@ class LogControl:
             self._abort(job, f"log {entry.id} is empty (0 bytes) on the vehicle")
             return None
         part = load_part_map(job.path)
-        fresh = part is None or part.log_id != entry.id or part.time_utc != entry.time_utc \
-            or not os.path.exists(job.path + ".part")
+        fresh = part is None or part.log_id != entry.id or not part.ranges.spans \
+            or part.ranges.spans[-1][1] > entry.size or not os.path.exists(job.path + ".part")
+        if fresh and part is not None and part.ranges.spans:
+            self._set_aside(job.path)           # another log (a shorter one) with that number: not mixed in
         if fresh:
-            part = PartMap(entry.id, entry.time_utc, Ranges(), None)
+            part = PartMap(entry.id, entry.time_utc, Ranges(), None, entry.size)
         try:
             folder = os.path.dirname(job.path)
             if folder:
@@ -371,9 +383,13 @@ class LogControl:
         except OSError as exc:
             self._abort(job, f"{self._disk_words(exc)}: {job.path}: {exc.strerror or exc}")
             return None
+        verify = None if fresh else self._recheck(part, handle, entry)
         d = _Download(job, entry, part, part.ranges.total())
-        if part.size and part.size >= entry.size:
-            d.end = part.size                   # (a smaller end is stale: the log grew, or its stream broke off)
+        d.verify = verify
+        # the end the stream told, while the list still gives the size it was fetched by (a smaller end than the
+        # list's is stale: the log grew, or its stream broke off)
+        if part.size and part.size >= entry.size and part.listed in (0, entry.size):
+            d.end = part.size
         d.file = handle
         d.progress_at = d.flushed_at = now
         if job.ftp:
@@ -383,6 +399,59 @@ class LogControl:
         if d.resumed:
             log.info("log %d: resuming with %d bytes held", entry.id, d.resumed)
         return d
+
+    @staticmethod
+    def _recheck(part: PartMap, handle, entry: LogEntry) -> tuple[int, bytes]:
+        """The .part's last held bytes are fetched again and must come back the same, else it is another log.
+
+        Neither id nor time tells a log apart: ids restart at 1 after an erase, a board without a clock dates every
+        log alike, and the open log's time is the clock's now at each list (AP_Logger_File::_get_log_time). The
+        last held bytes (DataFlash records with their TimeUS) differ between two logs; the first ones (FMT, PARM)
+        do not. So they are un-held here and compared when they come (:meth:`_same_log`)."""
+        a, b = part.ranges.spans[-1]
+        start = max(a, b - CHUNK)
+        handle.seek(start)
+        expect = handle.read(b - start)
+        part.ranges = Ranges(part.ranges.spans[:-1] + ([[a, start]] if start > a else []))
+        part.time_utc, part.listed = entry.time_utc, entry.size
+        return start, expect
+
+    def _same_log(self, d: _Download, ofs: int, data: bytes) -> None:
+        """Bytes at ``ofs`` from the vehicle against what the resumed .part held there (see :meth:`_recheck`)."""
+        start, expect = d.verify
+        lo, hi = max(ofs, start), min(ofs + len(data), start + len(expect))
+        if lo >= hi:
+            return
+        if data[lo - ofs:hi - ofs] != expect[lo - start:hi - start]:
+            self._another_log(d, lo)
+        elif lo == start:
+            d.verify = (hi, expect[hi - start:]) if hi < start + len(expect) else None
+
+    def _another_log(self, d: _Download, ofs: int) -> None:
+        """The .part was another log's: set aside as .part.old; only this session's bytes are kept."""
+        path = d.job.path
+        log.warning("log %d: byte %d differs from %s.part: another log with that number; kept as .part.old, "
+                    "fetched afresh", d.entry.id, ofs, path)
+        d.file.close()
+        self._set_aside(path)
+        try:
+            d.file = open(path + ".part", "wb")
+        except OSError as exc:
+            d.file = None
+            self._abort(d.job, f"{path}.part: {exc.strerror or exc}")
+            return
+        d.part = PartMap(d.entry.id, d.entry.time_utc, Ranges((o, o + len(b)) for o, b in d.pending), None,
+                         d.entry.size)
+        d.ranges, d.end, d.resumed, d.verify = d.part.ranges, None, 0, None
+        if isinstance(d.ftp, FtpSpanRead):
+            d.ftp.held, d.ftp.next_burst = d.ranges, 0
+
+    @staticmethod
+    def _set_aside(path: str) -> None:
+        try:
+            os.replace(path + ".part", path + ".part.old")
+        except OSError:
+            pass
 
     def _service_download(self, job: _Job, now: float, link_up: bool) -> list:
         if job.checking:
@@ -420,6 +489,10 @@ class LogControl:
 
     def _service_ftp(self, d: _Download, now: float) -> list:
         msgs, failure = d.ftp.service(now, self._v._target_ids())
+        if isinstance(d.ftp, FtpList) and d.ftp.done:
+            path, failure = self._log_file(d)
+            if path:
+                self._open_ftp(d, now, path)
         failure = failure or d.ftp_failure
         if failure:
             self._give_up(d, f"MAVLink FTP {failure}")
@@ -427,17 +500,32 @@ class LogControl:
         return msgs
 
     def _start_ftp(self, d: _Download, now: float) -> None:
-        """The FTP read of ``logs/0000000N.BIN``, given every whole chunk the .part holds already."""
-        ftp = d.ftp = FtpRead(now, f"logs/{d.entry.id:08d}.BIN".encode(), max_bursts=1 << 30, stall=STALL_LIMIT)
-        first_missing = None
-        held_to = d.ranges.spans[-1][1] if d.ranges.spans else 0
-        for offset in range(0, held_to, FTP_CHUNK):
-            if d.ranges.held_from(offset) >= offset + FTP_CHUNK:
-                d.file.seek(offset)
-                ftp.chunks[offset] = d.file.read(FTP_CHUNK)
-            elif first_missing is None:
-                first_missing = offset
-        ftp.next_burst = first_missing if first_missing is not None else len(ftp.chunks) * FTP_CHUNK
+        """The log folder listed first: a LOG_ENTRY id is a place in the list, not the file's number."""
+        d.ftp = FtpList(now, LOG_FOLDERS, session=FTP_SESSION, stall=STALL_LIMIT)
+
+    @staticmethod
+    def _log_file(d: _Download) -> tuple[str, str]:
+        """(path, "") of the file of log ``d.entry.id`` in the folder listed, else ("", why not): the oldest log's
+        number + id - 1 (AP_Logger_Backend::log_num_from_list_entry), and its size must be the list's."""
+        listing = d.ftp
+        numbers = sorted(int(n[:-4]) for n in listing.files if n.upper().endswith(".BIN") and n[:-4].isdigit())
+        if not numbers:
+            return "", f"found no log in {listing.folder.decode()}"
+        name = f"{numbers[0] + d.entry.id - 1:08d}.BIN"
+        path = f"{listing.folder.decode().rstrip('/')}/{name}"
+        size = next((s for n, s in listing.files.items() if n.upper() == name), None)
+        if size != d.entry.size:
+            return "", (f"found {path} with {size} bytes where log {d.entry.id} has {d.entry.size}" if size is not None
+                        else f"found no {path} for log {d.entry.id}") + ": download it by LOG_DATA"
+        return path, ""
+
+    def _open_ftp(self, d: _Download, now: float, path: str) -> None:
+        """The FTP read of the log's file: its bytes go to the .part as they come, what is held is ``d.ranges``;
+        the first burst begins at the first chunk the .part lacks."""
+        ftp = d.ftp = FtpSpanRead(now, path.encode(), FTP_SESSION, max_bursts=1 << 30, stall=STALL_LIMIT,
+                                  seq=d.ftp.seq, held=d.ranges)
+        first = ftp.missing(1)
+        ftp.next_burst = first[0] if first else ftp._top()
 
     def _next_window(self, d: _Download, now: float):
         known = d.end if d.end is not None else max(d.size, d.ranges.spans[-1][1] if d.ranges.spans else 0)
@@ -476,6 +564,8 @@ class LogControl:
         d.received += count
         if count:
             data = bytes(m.data[:count])
+            if d.verify is not None:
+                self._same_log(d, ofs, data)
             if d.ranges.add(ofs, ofs + count):
                 d.pending.append((ofs, data))
                 d.progress_at = now
@@ -603,14 +693,18 @@ class LogControl:
 
     # -- erasing -----------------------------------------------------------------------------------------------
     def _service_erase(self, job: _Job, now: float, link_up: bool) -> list:
+        """The list first (what is there now), LOG_ERASE (no reply), then lists until none of those logs is left."""
         if not link_up:
             return []
+        if not job.listed:
+            self._erase_tries = 0
+            return self._service_list(job, now, link_up)
         if self._erase_tries:
             if now < self._erase_at:
                 return []
             if self.entries is None:             # the list that tells whether the erase was done
                 return self._service_list(job, now, link_up)
-            if not set(self.entries) & set(self._erase_before):
+            if not any(self._still_there(e) for e in self.entries):
                 self._erase_tries = 0
                 self._jobs.popleft()
                 self._finish(job, True, f"logs erased; {len(self.entries)} on the vehicle now", entries=self.entries)
@@ -619,12 +713,24 @@ class LogControl:
                 self._erase_tries = 0
                 self._abort(job, f"the logs are still there after {ERASE_TRIES} LOG_ERASE")
                 return []
-        self._erase_before = self.entries or ()
+        if not self._erase_tries:
+            self._erase_before = self.entries
+            if not self._erase_before:
+                self._jobs.popleft()
+                self._finish(job, True, "no logs on the vehicle to erase", entries=())
+                return []
         self._erase_tries += 1
         self._erase_at = now + ERASE_WAIT
         self.progress = LogProgress(0, "", 0, 0, 0.0, "erasing")
         self.entries = None
         return [self._message("log_erase")]
+
+    def _still_there(self, entry: LogEntry) -> bool:
+        """A log from the list before the erase: same id and time, as big or bigger (the open log grows). A vehicle
+        logging while disarmed (LOG_DISARMED) begins log 1 again right after an erase: smaller, so not "still
+        there"; ids restart at 1, so an id alone proves nothing."""
+        return any(e.id == entry.id and e.time_utc == entry.time_utc and entry.size >= e.size
+                   for e in self._erase_before)
 
     # -- helpers -----------------------------------------------------------------------------------------------
     def _message(self, name: str, *fields):

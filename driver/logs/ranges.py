@@ -2,7 +2,9 @@
 
 A download keeps ``FILE.part`` (the bytes at their offsets) and ``FILE.part.json`` (the log's id, its
 time_utc and the ranges written to the .part), so a dropped link or an app restart resumes where it was instead
-of fetching the log again. The map is written only after the bytes it names are in the .part file.
+of fetching the log again. The map is written only after the bytes it names are in the .part file: the .part is
+fsynced before the map, the map's tmp file before it replaces the map, so after a power loss the map never claims
+bytes the disk does not hold; and a map read back is clipped to the .part's size all the same.
 """
 from __future__ import annotations
 
@@ -50,9 +52,9 @@ class Ranges:
 
     def held_from(self, offset: int) -> int:
         """The end of the held run that covers ``offset`` (``offset`` itself when it is not held)."""
-        for a, b in self.spans:
-            if a <= offset < b:
-                return b
+        i = bisect.bisect_right(self._starts, offset) - 1
+        if i >= 0 and self.spans[i][1] > offset:
+            return self.spans[i][1]
         return offset
 
     def missing(self, end: int) -> list[tuple[int, int]]:
@@ -73,8 +75,10 @@ class Ranges:
 
 
 class PartMap:
-    def __init__(self, log_id: int, time_utc: int, ranges: Ranges, size: int | None) -> None:
-        self.log_id, self.time_utc, self.ranges, self.size = log_id, time_utc, ranges, size
+    """``size``: where the vehicle's stream said the log ends; ``listed``: its size in the list it was fetched by."""
+
+    def __init__(self, log_id: int, time_utc: int, ranges: Ranges, size: int | None, listed: int = 0) -> None:
+        self.log_id, self.time_utc, self.ranges, self.size, self.listed = log_id, time_utc, ranges, size, listed
 
 
 def load_part_map(path: str) -> PartMap | None:
@@ -82,18 +86,27 @@ def load_part_map(path: str) -> PartMap | None:
     try:
         with open(path + ".part.json") as f:
             raw = json.load(f)
-        return PartMap(int(raw["id"]), int(raw["time_utc"]), Ranges(raw["ranges"]), raw.get("size"))
+        ranges = Ranges(raw["ranges"]).clipped(os.path.getsize(path + ".part"))
+        return PartMap(int(raw["id"]), int(raw["time_utc"]), ranges, raw.get("size"), int(raw.get("listed", 0)))
     except (OSError, ValueError, KeyError, TypeError):
         return None
 
 
 def save_part_map(path: str, part: PartMap) -> None:
-    """Written whole to a temporary file, then renamed: a full disk leaves the previous map as it was."""
+    """The map of what ``path``.part holds (its writes flushed by the caller), once the .part is on the disk:
+    written whole to a temporary file, then renamed, so a full disk leaves the previous map as it was."""
+    try:
+        with open(path + ".part", "rb") as data:
+            os.fsync(data.fileno())             # fsync is per file: it writes what any handle of it wrote
+    except FileNotFoundError:
+        pass
     tmp = path + ".part.json.tmp"
     try:
         with open(tmp, "w") as f:
-            json.dump({"id": part.log_id, "time_utc": part.time_utc, "size": part.size, "ranges": part.ranges.spans},
-                      f)
+            json.dump({"id": part.log_id, "time_utc": part.time_utc, "size": part.size, "listed": part.listed,
+                       "ranges": part.ranges.spans}, f)
+            f.flush()
+            os.fsync(f.fileno())
         os.replace(tmp, path + ".part.json")
     except OSError:
         try:

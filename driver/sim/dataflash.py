@@ -77,7 +77,10 @@ class LogFolder:
     """The vehicle's log folder: ``0000000N.BIN`` files, the newest one open while armed.
 
     ``entries()`` is what LOG_ENTRY says: (id, size, time_utc) for ids 1..last, in order; ids are numbered
-    from 1 after an erase, as ArduPilot does.
+    from 1 after an erase, as ArduPilot does. An id is a place in the list, not a file's number: id N is the file
+    oldest + N - 1, and there are as many ids as the newest file's number (AP_Logger_File::get_num_logs,
+    AP_Logger_Backend::log_num_from_list_entry): once old logs are deleted to free space, ids past the newest
+    log come with size 0.
     """
 
     def __init__(self, folder: str | None = None) -> None:
@@ -100,18 +103,25 @@ class LogFolder:
                 out.append(int(stem))
         return sorted(out)
 
+    def file_number(self, list_id: int) -> int:
+        """The file of LOG_ENTRY id ``list_id`` (0: no logs)."""
+        numbers = self.numbers()
+        return numbers[0] + list_id - 1 if numbers else 0
+
     def entries(self) -> list[tuple[int, int, int]]:
         if self._file is not None:
             self._file.flush()
+        numbers = self.numbers()
         out = []
-        for number in self.numbers():
+        for list_id in range(1, numbers[-1] + 1 if numbers else 1):
+            number = numbers[0] + list_id - 1
             path = self.path(number)
             try:
                 size = os.path.getsize(path)
                 stamp = self._times.get(number) or int(os.path.getmtime(path))
             except OSError:
-                continue
-            out.append((number, size, stamp))
+                size = stamp = 0                 # get_log_info of a file that is not there
+            out.append((list_id, size, stamp))
         return out
 
     def read(self, number: int, offset: int, count: int) -> bytes | None:

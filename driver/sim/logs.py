@@ -46,7 +46,7 @@ class LogServer:
 
     log_folder_: LogFolder | None = None
     log_listing: list | None = None       # [peer, next id, last id, num_logs]
-    log_sending: list | None = None       # [peer, id, ofs, bytes left, packets left after END or None]
+    log_sending: list | None = None       # [peer, id, ofs, bytes left, packets left after END or None, file]
     log_told_armed = False
     log_credit = 0.0
     log_list_credit = 0.0
@@ -100,14 +100,15 @@ class LogServer:
                 self._text(mavlink.MAV_SEVERITY_INFO, BUSY_TEXT)
             return                                      # dropped (the recording: during a listing, silently)
         folder = self.log_folder
-        if msg.id not in folder.numbers():
+        if not 1 <= msg.id <= len(folder.entries()):
             self.log_sending = None
             return                                      # an unknown id: nothing at all
-        if msg.id == folder.current:
+        number = folder.file_number(msg.id)             # the id is a place in the list (log_num_from_list_entry)
+        if number == folder.current:
             folder.end()                                # a download closes the log being written
-        size = next((e[1] for e in folder.entries() if e[0] == msg.id), 0)
+        size = folder.entries()[msg.id - 1][1]
         remaining = min(msg.count, max(0, size - msg.ofs))   # the size as it is now (get_log_info)
-        self.log_sending = [self.sender, msg.id, msg.ofs, remaining, None]
+        self.log_sending = [self.sender, msg.id, msg.ofs, remaining, None, number]
 
     def _on_log_request_end(self, msg) -> None:
         if self._log_refused():
@@ -160,10 +161,10 @@ class LogServer:
 
     def _log_data(self) -> None:
         sending = self.log_sending
-        peer, number, ofs, remaining, after_end = sending
+        peer, log_id, ofs, remaining, after_end, number = sending
         n = min(LOG_DATA_SIZE, remaining)
         data = self.log_folder.read(number, ofs, n) or b"" if n else b""
-        self.emit_to(self.factory.log_data_encode(number, ofs, len(data), data.ljust(LOG_DATA_SIZE, b"\0")), peer)
+        self.emit_to(self.factory.log_data_encode(log_id, ofs, len(data), data.ljust(LOG_DATA_SIZE, b"\0")), peer)
         sending[2], sending[3] = ofs + n, remaining - n
         if after_end is not None:
             sending[4] = after_end - 1
