@@ -11,7 +11,7 @@ from pymavlink import DFReader
 
 from driver.review import LogError, open_log
 from driver.review.log import param_diff
-from driver.review.writer import sample_flight
+from driver.review.writer import DataFlashWriter, sample_flight
 
 RECORDINGS = os.path.join(os.path.dirname(__file__), "data", "recordings")
 
@@ -51,6 +51,48 @@ def test_modes_events_path_and_parameters(bin_path):
     assert log.params()["RTL_ALT"] == 1500.0
     assert param_diff(log.params(), {"RTL_ALT": 2000.0, "WPNAV_SPEED": 500.0, "NEW": 1.0}) == [
         ("BATT_LOW_VOLT", 10.5, None), ("NEW", None, 1.0), ("RTL_ALT", 1500.0, 2000.0)]
+
+
+def test_each_gps_imu_and_battery_is_its_own_series(tmp_path):
+    """Two GPS, two IMUs, two batteries interleave record by record: each instance is its own type in the tree
+    (GPS[0], GPS[1], as pymavlink names them), and the path and the presets follow the first."""
+    path = str(tmp_path / "dual.BIN")
+    sample_flight(seconds=20, rate_hz=10, sensors=2).save(path)
+    log = open_log(path)
+    tree = log.tree()
+    assert {"GPS[0]", "GPS[1]", "VIBE[0]", "VIBE[1]", "BAT[0]", "BAT[1]"} <= set(tree)
+    assert not {"GPS", "VIBE", "BAT"} & set(tree) and "Lat" in tree["GPS[1]"]
+    assert log.count("GPS[0]") == log.count("GPS[1]") == log.count("GPS") // 2
+    (t0, lat0), (t1, lat1) = log.series("GPS[0]", "Lat"), log.series("GPS[1]", "Lat")
+    assert np.allclose(lat1 - lat0, 1e-4, atol=2e-7) and np.array_equal(t0, t1)
+    assert np.allclose(log.series("VIBE[1]", "VibeX")[1] - log.series("VIBE[0]", "VibeX")[1], 10.0)
+    flown = log.flight_path()
+    assert np.array_equal(flown.lat, lat0)              # one receiver, not a zig-zag between the two
+    assert log.preset("Vibration") == [("VIBE[0]", "VibeX", 0), ("VIBE[0]", "VibeY", 0), ("VIBE[0]", "VibeZ", 0)]
+    assert ("GPS[0]", "NSats", 0) in log.preset("GPS") and ("BAT[0]", "Volt", 0) in log.preset("Battery")
+    sample_flight(seconds=5, rate_hz=10).save(str(tmp_path / "one.BIN"))
+    single = open_log(str(tmp_path / "one.BIN")).tree()
+    assert "GPS" in single and "GPS[0]" not in single           # one receiver: nothing to tell apart
+
+
+def test_the_instance_column_is_the_one_fmtu_marks(tmp_path):
+    """ArduPilot's FMTU marks the instance field with the unit '#': a type this reader has never heard of splits
+    by it, and FMTU wins over the known columns."""
+    w = DataFlashWriter()
+    w.define(140, "FMTU", "QBNN", "TimeUS,FmtType,UnitIds,MultIds")
+    w.define(141, "NEWS", "QBBf", "TimeUS,Unit,Core,Val")
+    w.define(142, "GPS", "QBBL", "TimeUS,I,Rcv,Lat")
+    w.record("FMTU", 1, 141, "s-#-", "F---")
+    w.record("FMTU", 2, 142, "s-#D", "F--G")
+    for k in range(10):
+        w.record("NEWS", 100 + k, 0, k % 3, float(k))
+        w.record("GPS", 100 + k, 0, k % 2, -353632621 + k)
+    path = str(tmp_path / "fmtu.BIN")
+    w.save(path)
+    log = open_log(path)
+    assert {"NEWS[0]", "NEWS[1]", "NEWS[2]", "GPS[0]", "GPS[1]"} <= set(log.tree())
+    assert log.series("NEWS[2]", "Val")[1].tolist() == [2.0, 5.0, 8.0]
+    assert log.count("GPS[1]") == 5 and log.first_instance("GPS") == "GPS[0]"
 
 
 def test_csv_holds_the_chosen_fields(bin_path, tmp_path):

@@ -9,6 +9,7 @@ import pytest
 from PyQt5.QtCore import Qt
 
 from driver.review import open_log
+from driver.review.writer import sample_flight
 from uavviewer.review.view import ReviewWindow
 from test_review_log import bin_path  # noqa: F401  (fixture: a 20 s flight)
 from viewer_fixtures import viewer_settings, window_factory, window  # noqa: F401  (fixtures)
@@ -48,6 +49,19 @@ def test_presets_plot_what_the_log_has(view):
     assert view.apply_preset("Battery") == 2 and view.plots.curves[("BAT", "Curr")][1] == 1
     for name in ("Altitude", "Vibration", "GPS"):
         assert view.apply_preset(name) > 0
+
+
+def test_two_gps_and_imus_show_apart_and_presets_take_the_first(qtbot, tmp_path):
+    path = str(tmp_path / "dual.BIN")
+    sample_flight(seconds=20, rate_hz=10, sensors=2).save(path)
+    v = ReviewWindow(open_log(path))
+    qtbot.addWidget(v)
+    tops = [v.tree.tree.topLevelItem(i).text(0) for i in range(v.tree.tree.topLevelItemCount())]
+    assert {"GPS[0]", "GPS[1]", "VIBE[0]", "VIBE[1]"} <= set(tops) and "GPS" not in tops
+    assert v.apply_preset("Vibration") == 3 and {k[0] for k in v.plots.curves} == {"VIBE[0]"}
+    v.add_field("GPS[1]", "Lat")
+    assert ("GPS[1]", "Lat") in v.plots.curves
+    assert len(v.path_overlay._t) == v.log.count("GPS[0]")           # the path: one receiver's fixes
 
 
 def test_the_cursor_moves_the_marker_along_the_path_and_back(qtbot, view):

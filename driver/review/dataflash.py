@@ -32,6 +32,16 @@ _NUMERIC = {
 }
 _STRINGS = {"n": 4, "N": 16, "Z": 64, "a": 64}
 
+#: type -> its instance column, from ArduPilot 4.6's LogStructure (the field whose unit is '#'), for a log that has
+#: no FMTU (one written before 3.6, or by the simulator); a log's own FMTU wins
+INSTANCE_COLUMNS = {
+    "GPS": "I", "GPA": "I", "IMU": "I", "ACC": "I", "GYR": "I", "VIBE": "IMU", "MAG": "I", "BARO": "I",
+    "BARD": "I", "ARSP": "I", "BAT": "Inst", "BCL": "Instance", "RFND": "Instance", "ESC": "Instance",
+    "RPM": "I", "CAM": "I", "TRIG": "I", "MNT": "I",
+    **{name: "C" for name in ("XKF0", "XKF1", "XKF2", "XKF3", "XKF4", "XKF5", "XKFD", "XKFM", "XKFS", "XKQ", "XKT",
+                              "XKTV", "XKV1", "XKV2", "NKF0", "NKF1", "NKF2", "NKF3", "NKF4", "NKF5", "NKQ", "NKT")},
+}
+
 
 class DataFlashError(ValueError):
     """The file is not a DataFlash log we can read; the message says why in words for the pilot."""
@@ -89,7 +99,8 @@ def _parse_fmt(record: bytes) -> MessageFormat | None:
 class DataFlashLog:
     """One .BIN, indexed: ``formats`` by name, ``offsets`` (numpy) by name, ``count(name)``, ``column(name, field)``,
     ``strings(name, field)``, ``times(name)`` in seconds from the log's first TimeUS. ``skipped``: bytes outside
-    the chain of records (corruption, a truncated tail)."""
+    the chain of records (corruption, a truncated tail). ``instances``: a type logged by several sensors -> the
+    names of each one's records, ``GPS[0]``, ``GPS[1]`` (each a name the methods take; ``GPS`` is all of them)."""
 
     def __init__(self, path: str) -> None:
         self.path = path
@@ -101,6 +112,7 @@ class DataFlashLog:
         self.data = np.frombuffer(self._map, dtype=np.uint8)
         self.formats: dict[str, MessageFormat] = {}
         self.offsets: dict[str, np.ndarray] = {}
+        self.instances: dict[str, list[str]] = {}
         self.skipped = 0
         self._index()
         self.t0 = self._first_time()
@@ -151,6 +163,33 @@ class DataFlashLog:
             raise DataFlashError("no records after the formats: the log is empty or cut short")
         if self.skipped:
             log.info("%s: %d bytes outside the records skipped", self.path, self.skipped)
+        self._split_instances({fmt.type: fmt.name for fmt in by_type.values()})
+
+    def _split_instances(self, names_by_type: dict[int, str]) -> None:
+        """A type logged by several sensors (two GPS, three IMUs, two batteries) interleaves them record by record;
+        each instance becomes ``NAME[i]`` (as pymavlink names them) where the type's instance column holds more
+        than one value. The column is the one FMTU marks '#' in its units, else ArduPilot's own (INSTANCE_COLUMNS)."""
+        columns = {name: column for name, column in INSTANCE_COLUMNS.items()}
+        if "FMTU" in self.formats and {"FmtType", "UnitIds"} <= {f.name for f in self.formats["FMTU"].fields}:
+            for mtype, units in zip(self.column("FMTU", "FmtType").tolist(), self.strings("FMTU", "UnitIds")):
+                fmt = self.formats.get(names_by_type.get(int(mtype), ""))
+                if fmt is not None and "#" in units and units.index("#") < len(fmt.fields):
+                    columns[fmt.name] = fmt.fields[units.index("#")].name
+        for name, column in columns.items():
+            fmt = self.formats.get(name)
+            if fmt is None or not any(f.name == column and f.numeric for f in fmt.fields):
+                continue
+            which = self._raw(name, column)
+            values = np.unique(which)
+            if len(values) < 2:
+                continue
+            offsets = self.offsets[name]
+            self.instances[name] = []
+            for value in values.tolist():
+                key = f"{name}[{int(value) if float(value).is_integer() else value}]"
+                self.instances[name].append(key)
+                self.formats[key] = fmt
+                self.offsets[key] = offsets[which == value]
 
     def _first_time(self) -> float:
         """The earliest TimeUS among each type's first record (one record read per type, not its column)."""
@@ -160,7 +199,8 @@ class DataFlashLog:
 
     # -- reading ------------------------------------------------------------------------------------------------
     def names(self) -> list[str]:
-        return sorted(self.formats)
+        """The message types (an instance's ``NAME[i]`` is in ``instances[NAME]``)."""
+        return sorted(name for name in self.formats if "[" not in name)
 
     def count(self, name: str) -> int:
         return len(self.offsets.get(name, ()))

@@ -97,11 +97,20 @@ class FlightLog:
 
     # -- the tree and fields -----------------------------------------------------------------------------------
     def tree(self) -> dict[str, list[str]]:
-        """Message type -> its numeric fields (TimeUS left out: it is the axis)."""
+        """Message type -> its numeric fields (TimeUS left out: it is the axis). A type several sensors log (two
+        GPS, three IMUs) is one entry per instance, ``GPS[0]``, ``GPS[1]``: mixed, their records interleave."""
         if self._bin is not None:
-            return {n: [f.name for f in self._bin.formats[n].fields if f.numeric and f.name != "TimeUS"]
-                    for n in self._bin.names() if n != "FMT"}
+            b = self._bin
+            return {n: [f.name for f in b.formats[n].fields if f.numeric and f.name != "TimeUS"]
+                    for base in b.names() if base != "FMT" for n in b.instances.get(base, [base])}
         return {n: sorted(cols) for n, cols in sorted(self._tlog.columns.items())}
+
+    def first_instance(self, mtype: str) -> str:
+        """``GPS[0]`` where the log has several GPS (the first sensor: the one presets and the path follow), else
+        ``mtype`` itself."""
+        if self._bin is not None and mtype in self._bin.instances:
+            return self._bin.instances[mtype][0]
+        return mtype
 
     def count(self, mtype: str) -> int:
         if self._bin is not None:
@@ -122,6 +131,12 @@ class FlightLog:
         ends = [self.series(t, f)[0][-1] for t, f in (("ATT", "Roll"), ("GPS", "Lat"), ("ATTITUDE", "roll"),
                                                      ("HEARTBEAT", "custom_mode")) if self.has(t, f)]
         return float(max(ends)) if ends else 0.0
+
+    def preset(self, name: str) -> list[tuple[str, str, int]]:
+        """The fields of preset ``name`` this log has, (type, field, axis); a type several sensors log gives its
+        first instance's (VIBE[0], not every IMU's records in one sawtooth)."""
+        chosen = [(self.first_instance(t), f, axis) for t, f, axis in PRESETS.get(name, [])]
+        return [(t, f, axis) for t, f, axis in chosen if self.has(t, f)]
 
     # -- modes, events, path, parameters ------------------------------------------------------------------------
     def modes(self) -> list[tuple[float, str]]:
@@ -175,9 +190,10 @@ class FlightLog:
         return sorted(out, key=lambda e: e.t)
 
     def flight_path(self) -> FlightPath | None:
-        if self._bin is not None and self.has("GPS", "Lat"):
-            t, lat = self.series("GPS", "Lat")
-            lon, alt = self.series("GPS", "Lng")[1], self.series("GPS", "Alt")[1]
+        gps = self.first_instance("GPS")           # one receiver: two interleaved zig-zag between their fixes
+        if self._bin is not None and self.has(gps, "Lat"):
+            t, lat = self.series(gps, "Lat")
+            lon, alt = self.series(gps, "Lng")[1], self.series(gps, "Alt")[1]
         elif self._tlog is not None and "GLOBAL_POSITION_INT" in self._tlog.columns:
             cols = self._tlog.columns["GLOBAL_POSITION_INT"]
             t, lat, lon, alt = (self._tlog.times["GLOBAL_POSITION_INT"], cols["lat"] / 1e7, cols["lon"] / 1e7,

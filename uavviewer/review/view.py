@@ -122,7 +122,7 @@ class ReviewWindow(QMainWindow):
         if name not in PRESETS:
             return 0
         self.plots.clear_fields()
-        chosen = [(t, f, axis) for t, f, axis in PRESETS[name] if self.log.has(t, f)]
+        chosen = self.log.preset(name)
         for t, f, axis in chosen:
             self.add_field(t, f, axis)
         self.status.setText(f"{name}: {len(chosen)} fields" if chosen else f"{name}: none of its fields in this log")
