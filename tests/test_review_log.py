@@ -95,6 +95,35 @@ def test_the_instance_column_is_the_one_fmtu_marks(tmp_path):
     assert log.count("GPS[1]") == 5 and log.first_instance("GPS") == "GPS[0]"
 
 
+def test_events_and_errors_say_what_ardupilot_4_6_means(tmp_path):
+    """EV ids and ERR subsystems/codes as AP_Logger.h (4.6.3) numbers them; arming once, from ARM, though EV logs
+    it too; a flight mode error names the mode refused."""
+    w = DataFlashWriter()
+    w.define(130, "EV", "QB", "TimeUS,Id")
+    w.define(131, "ERR", "QBB", "TimeUS,Subsys,ECode")
+    w.define(132, "ARM", "QBIBB", "TimeUS,ArmState,ArmChecks,Forced,Method")
+    w.record("ARM", 1000, 1, 0, 0, 0)
+    w.record("EV", 1000, 10)                              # AP_Arming writes both
+    for k, i in enumerate((41, 62, 64, 15)):
+        w.record("EV", 2000 + k, i)
+    for k, (sub, code) in enumerate(((19, 1), (24, 1), (27, 1), (20, 1), (29, 0), (23, 1), (10, 5), (16, 2),
+                                     (12, 1), (6, 1), (99, 7))):
+        w.record("ERR", 3000 + k, sub, code)
+    w.record("EV", 9000, 11)
+    w.record("ARM", 9000, 0, 0, 0, 0)
+    path = str(tmp_path / "events.BIN")
+    w.save(path)
+    events = [(e.kind, e.text) for e in open_log(path).events()]
+    assert events == [
+        ("arming", "armed"), ("event", "fence enabled"), ("event", "EKF yaw reset"),
+        ("event", "ADS-B avoidance disabled"), ("event", "auto armed"),
+        ("failsafe", "CPU failsafe triggered"), ("event", "EKF primary changed to core 1"),
+        ("failsafe", "leak failsafe triggered"), ("failsafe", "ADS-B failsafe triggered"),
+        ("failsafe", "vibration failsafe cleared"), ("failsafe", "terrain failsafe triggered"),
+        ("error", "flight mode LOITER refused"), ("error", "EKF check: bad variance"), ("error", "crash check: crash"),
+        ("failsafe", "battery failsafe triggered"), ("error", "subsystem 99: code 7"), ("arming", "disarmed")]
+
+
 def test_csv_holds_the_chosen_fields(bin_path, tmp_path):
     log = open_log(bin_path)
     out = str(tmp_path / "f.csv")
