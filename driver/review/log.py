@@ -174,7 +174,7 @@ class FlightLog:
         """(seconds, values) of one field, read now from the index."""
         if self._bin is not None:
             return self._bin.times(mtype), self._bin.column(mtype, field)
-        return self._tlog.times[mtype], self._tlog.columns[mtype][field]
+        return self._tlog.series(mtype, field)
 
     def duration(self) -> float:
         ends = [self.series(t, f)[0][-1] for t, f in (("ATT", "Roll"), ("GPS", "Lat"), ("ATTITUDE", "roll"),
