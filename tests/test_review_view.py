@@ -4,6 +4,7 @@ parameters as flown (and their differences) show, CSV exports; a bad log says wh
 from __future__ import annotations
 
 import os
+import threading
 
 import pytest
 from PyQt5.QtCore import Qt
@@ -103,14 +104,26 @@ def test_events_and_parameters_as_flown(qtbot, view):
     assert p.differences == [("RTL_ALT", 1500.0, 2000.0)] and p.table.rowCount() == 1
 
 
-def test_export_csv_of_the_plotted_fields(view, tmp_path):
+def test_export_csv_of_the_plotted_fields_off_the_window_thread(qtbot, view, tmp_path):
+    """The rows are built and written on a worker (a long log takes seconds); the status line says when it is done,
+    and why when it fails."""
     view.add_field("ATT", "Roll")
     view.add_field("BAT", "Volt", 1)
+    writer = view.log.export_csv
+    threads = []
+    view.log.export_csv = lambda *a: threads.append(threading.current_thread()) or writer(*a)
     out = str(tmp_path / "chosen.csv")
-    rows = view.export(out)
+    with qtbot.waitSignal(view.exported) as done:
+        future = view.export(out)
+        assert not view.export_button.isEnabled() and "exporting 2 fields" in view.status.text()
+    rows = done.args[0]
+    assert future.result() == rows and threads and threads[0] is not threading.main_thread()
     lines = open(out).read().splitlines()
     assert lines[0] == "time_s,ATT.Roll,BAT.Volt" and len(lines) == rows + 1 > 100
-    assert "exported 2 fields" in view.status.text()
+    assert "exported 2 fields" in view.status.text() and view.export_button.isEnabled()
+    with qtbot.waitSignal(view.exported) as failed:
+        view.export(str(tmp_path / "no such folder" / "x.csv"))
+    assert "No such file" in failed.args[0] and "failed" in view.status.text() and view.export_button.isEnabled()
 
 
 def test_file_open_log_opens_a_tlog_and_a_bad_log_says_why(qtbot, window, tmp_path):

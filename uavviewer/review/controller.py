@@ -63,7 +63,7 @@ class ReviewController(QObject):
             log.exception("opening %s", path)
             self._fail(f"{path}: cannot be read ({e})")
             return
-        view = ReviewWindow(flight, self.current_params)
+        view = ReviewWindow(flight, self.current_params, submit=self._pool.submit)
         view.resize(1366, 768)
         view.show()
         self.views.append(view)
