@@ -3,8 +3,10 @@ thread; the tree searches, presets plot, the cursor moves the path's marker and 
 parameters as flown (and their differences) show, CSV exports; a bad log says why and the window flies on."""
 from __future__ import annotations
 
+import gc
 import os
 import threading
+import weakref
 
 import pytest
 from PyQt5.QtCore import Qt
@@ -143,3 +145,18 @@ def test_file_open_log_opens_a_tlog_and_a_bad_log_says_why(qtbot, window, tmp_pa
     assert view.apply_preset("Attitude") == 2
     assert view.path_overlay.marker == 0
     qtbot.waitUntil(lambda: window.adapter.state.connected)         # the window still flies its vehicle
+
+
+def test_a_closed_review_lets_its_window_and_log_go(qtbot, window, bin_path):
+    """The controller kept every review it opened: each closed window held its log's arrays until the app quit."""
+    review = window.review
+    with qtbot.waitSignal(review.opened, timeout=20000) as opened:
+        review.open(bin_path)
+    view = opened.args[0]
+    flight = weakref.ref(view.log)
+    assert review.views == [view]
+    with qtbot.waitSignal(view.destroyed):
+        view.close()
+    del view, opened
+    assert review.views == []
+    qtbot.waitUntil(lambda: gc.collect() >= 0 and flight() is None)   # once Qt has let its slots' proxies go
