@@ -284,13 +284,10 @@ def _follow_chain(heads: np.ndarray, lengths: np.ndarray, n: int) -> tuple[np.nd
 
 
 def _gather(data: np.ndarray, offsets: np.ndarray, f: Field) -> np.ndarray:
-    """One numeric field at each record offset, byte by byte into a (records, size) array viewed as its type: no
-    index array of records × size."""
-    out = np.empty((len(offsets), f.size), np.uint8)
-    where = offsets + f.offset
-    for b in range(f.size):
-        out[:, b] = data[where]
-        where += 1
+    """One numeric field at each record offset: rows of a sliding window over the file (a view, no copy) taken at
+    the offsets, so the only temporary is the (records, size) result, not an index of records x size."""
+    windows = np.lib.stride_tricks.sliding_window_view(data, f.size)
+    out = np.ascontiguousarray(windows[offsets + f.offset])
     return out.view(np.dtype(_NUMERIC[f.kind][0])).reshape(-1)
 
 
