@@ -84,3 +84,27 @@ def test_rates_come_from_the_counts_between_snapshots():
     assert dict(text.fields)["text"] == "Hello" and text.age_s == 2.0
     now[0] = 104.0
     assert inspector.snapshot().messages[0].rate_hz == 0.0          # it stopped: the rate falls to 0
+
+
+def test_the_plot_follows_its_field_when_another_message_is_selected(qtbot):
+    """The plot was fed from the selected message only: picking another froze it. It follows its own key."""
+    from pymavlink.dialects.v20 import ardupilotmega as mavlink
+    from driver.vehicle.inspector import MessageInspector
+    inspector = MessageInspector()
+    view = InspectorWindow(inspector.snapshot)
+    qtbot.addWidget(view)
+
+    def arrive(roll: float) -> None:
+        inspector.seen(mavlink.MAVLink_attitude_message(0, roll, 0.0, 0.0, 0, 0, 0), 1, 1, "ATTITUDE")
+        inspector.seen(mavlink.MAVLink_heartbeat_message(2, 3, 81, 4, 3, 3), 1, 1, "HEARTBEAT")
+        view.refresh()
+    arrive(0.1)
+    assert view.select(1, 1, "ATTITUDE")
+    rows = {view.fields.item(r, 0).text(): r for r in range(view.fields.rowCount())}
+    view.fields.cellDoubleClicked.emit(rows["roll"], 0)
+    arrive(0.2)
+    assert view.select(1, 1, "HEARTBEAT") and view.fields.item(0, 0).text() == "type"
+    arrive(0.3)
+    arrive(0.4)
+    assert view.field_plot.key == (1, 1, "ATTITUDE", "roll")
+    assert [round(v, 3) for _t, v in view.field_plot.points] == [0.2, 0.3, 0.4]

@@ -3,12 +3,16 @@ thread; the tree searches, presets plot, the cursor moves the path's marker and 
 parameters as flown (and their differences) show, CSV exports; a bad log says why and the window flies on."""
 from __future__ import annotations
 
+import gc
 import os
+import threading
+import weakref
 
 import pytest
 from PyQt5.QtCore import Qt
 
 from driver.review import open_log
+from driver.review.writer import sample_flight
 from uavviewer.review.view import ReviewWindow
 from test_review_log import bin_path  # noqa: F401  (fixture: a 20 s flight)
 from viewer_fixtures import viewer_settings, window_factory, window  # noqa: F401  (fixtures)
@@ -50,6 +54,19 @@ def test_presets_plot_what_the_log_has(view):
         assert view.apply_preset(name) > 0
 
 
+def test_two_gps_and_imus_show_apart_and_presets_take_the_first(qtbot, tmp_path):
+    path = str(tmp_path / "dual.BIN")
+    sample_flight(seconds=20, rate_hz=10, sensors=2).save(path)
+    v = ReviewWindow(open_log(path))
+    qtbot.addWidget(v)
+    tops = [v.tree.tree.topLevelItem(i).text(0) for i in range(v.tree.tree.topLevelItemCount())]
+    assert {"GPS[0]", "GPS[1]", "VIBE[0]", "VIBE[1]"} <= set(tops) and "GPS" not in tops
+    assert v.apply_preset("Vibration") == 3 and {k[0] for k in v.plots.curves} == {"VIBE[0]"}
+    v.add_field("GPS[1]", "Lat")
+    assert ("GPS[1]", "Lat") in v.plots.curves
+    assert len(v.path_overlay._t) == v.log.count("GPS[0]")           # the path: one receiver's fixes
+
+
 def test_the_cursor_moves_the_marker_along_the_path_and_back(qtbot, view):
     overlay = view.path_overlay
     assert overlay.marker == 0 and view.map.frame is not None
@@ -89,14 +106,26 @@ def test_events_and_parameters_as_flown(qtbot, view):
     assert p.differences == [("RTL_ALT", 1500.0, 2000.0)] and p.table.rowCount() == 1
 
 
-def test_export_csv_of_the_plotted_fields(view, tmp_path):
+def test_export_csv_of_the_plotted_fields_off_the_window_thread(qtbot, view, tmp_path):
+    """The rows are built and written on a worker (a long log takes seconds); the status line says when it is done,
+    and why when it fails."""
     view.add_field("ATT", "Roll")
     view.add_field("BAT", "Volt", 1)
+    writer = view.log.export_csv
+    threads = []
+    view.log.export_csv = lambda *a: threads.append(threading.current_thread()) or writer(*a)
     out = str(tmp_path / "chosen.csv")
-    rows = view.export(out)
+    with qtbot.waitSignal(view.exported) as done:
+        future = view.export(out)
+        assert not view.export_button.isEnabled() and "exporting 2 fields" in view.status.text()
+    rows = done.args[0]
+    assert future.result() == rows and threads and threads[0] is not threading.main_thread()
     lines = open(out).read().splitlines()
     assert lines[0] == "time_s,ATT.Roll,BAT.Volt" and len(lines) == rows + 1 > 100
-    assert "exported 2 fields" in view.status.text()
+    assert "exported 2 fields" in view.status.text() and view.export_button.isEnabled()
+    with qtbot.waitSignal(view.exported) as failed:
+        view.export(str(tmp_path / "no such folder" / "x.csv"))
+    assert "No such file" in failed.args[0] and "failed" in view.status.text() and view.export_button.isEnabled()
 
 
 def test_file_open_log_opens_a_tlog_and_a_bad_log_says_why(qtbot, window, tmp_path):
@@ -116,3 +145,18 @@ def test_file_open_log_opens_a_tlog_and_a_bad_log_says_why(qtbot, window, tmp_pa
     assert view.apply_preset("Attitude") == 2
     assert view.path_overlay.marker == 0
     qtbot.waitUntil(lambda: window.adapter.state.connected)         # the window still flies its vehicle
+
+
+def test_a_closed_review_lets_its_window_and_log_go(qtbot, window, bin_path):
+    """The controller kept every review it opened: each closed window held its log's arrays until the app quit."""
+    review = window.review
+    with qtbot.waitSignal(review.opened, timeout=20000) as opened:
+        review.open(bin_path)
+    view = opened.args[0]
+    flight = weakref.ref(view.log)
+    assert review.views == [view]
+    with qtbot.waitSignal(view.destroyed):
+        view.close()
+    del view, opened
+    assert review.views == []
+    qtbot.waitUntil(lambda: gc.collect() >= 0 and flight() is None)   # once Qt has let its slots' proxies go

@@ -21,6 +21,7 @@ log = logging.getLogger(__name__)
 HEAD = b"\xa3\x95"
 FMT_ID = 128
 FMT_LENGTH = 89
+CHUNK = 1 << 24          # bytes scanned at a time for record heads
 
 #: format char -> (numpy dtype, scale); strings are bytes of the given size
 _NUMERIC = {
@@ -30,6 +31,16 @@ _NUMERIC = {
     "c": ("<i2", 0.01), "C": ("<u2", 0.01), "e": ("<i4", 0.01), "E": ("<u4", 0.01), "L": ("<i4", 1e-7),
 }
 _STRINGS = {"n": 4, "N": 16, "Z": 64, "a": 64}
+
+#: type -> its instance column, from ArduPilot 4.6's LogStructure (the field whose unit is '#'), for a log that has
+#: no FMTU (one written before 3.6, or by the simulator); a log's own FMTU wins
+INSTANCE_COLUMNS = {
+    "GPS": "I", "GPA": "I", "IMU": "I", "ACC": "I", "GYR": "I", "VIBE": "IMU", "MAG": "I", "BARO": "I",
+    "BARD": "I", "ARSP": "I", "BAT": "Inst", "BCL": "Instance", "RFND": "Instance", "ESC": "Instance",
+    "RPM": "I", "CAM": "I", "TRIG": "I", "MNT": "I",
+    **{name: "C" for name in ("XKF0", "XKF1", "XKF2", "XKF3", "XKF4", "XKF5", "XKFD", "XKFM", "XKFS", "XKQ", "XKT",
+                              "XKTV", "XKV1", "XKV2", "NKF0", "NKF1", "NKF2", "NKF3", "NKF4", "NKF5", "NKQ", "NKT")},
+}
 
 
 class DataFlashError(ValueError):
@@ -88,7 +99,8 @@ def _parse_fmt(record: bytes) -> MessageFormat | None:
 class DataFlashLog:
     """One .BIN, indexed: ``formats`` by name, ``offsets`` (numpy) by name, ``count(name)``, ``column(name, field)``,
     ``strings(name, field)``, ``times(name)`` in seconds from the log's first TimeUS. ``skipped``: bytes outside
-    the chain of records (corruption, a truncated tail)."""
+    the chain of records (corruption, a truncated tail). ``instances``: a type logged by several sensors -> the
+    names of each one's records, ``GPS[0]``, ``GPS[1]`` (each a name the methods take; ``GPS`` is all of them)."""
 
     def __init__(self, path: str) -> None:
         self.path = path
@@ -100,6 +112,7 @@ class DataFlashLog:
         self.data = np.frombuffer(self._map, dtype=np.uint8)
         self.formats: dict[str, MessageFormat] = {}
         self.offsets: dict[str, np.ndarray] = {}
+        self.instances: dict[str, list[str]] = {}
         self.skipped = 0
         self._index()
         self.t0 = self._first_time()
@@ -115,14 +128,14 @@ class DataFlashLog:
     def _index(self) -> None:
         data = self.data
         n = len(data)
-        heads = np.flatnonzero((data[:-2] == 0xA3) & (data[1:-1] == 0x95)) if n > 3 else np.zeros(0, np.int64)
+        heads = _record_heads(data)
         if len(heads) == 0:
             raise DataFlashError("no DataFlash records: not a .BIN log")
         ids = data[heads + 2]
         lengths = np.zeros(256, np.int64)
         by_type: dict[int, MessageFormat] = {}
         buf = self._map
-        for p in heads[(ids == FMT_ID) & (heads + FMT_LENGTH <= n)]:
+        for p in heads[(ids == FMT_ID) & (heads + FMT_LENGTH <= n)].tolist():
             fmt = _parse_fmt(buf[p:p + FMT_LENGTH])
             if fmt is None or fmt.type == FMT_ID and fmt.length != FMT_LENGTH:
                 continue
@@ -135,25 +148,7 @@ class DataFlashLog:
                                                       "Type,Length,Name,Format,Columns"))
         if len(by_type) <= 1:
             raise DataFlashError("no FMT records: not a DataFlash log, or its start is missing")
-        # follow the chain: each record's end is where the next head must be; where it is not, skip to the next head
-        ends = heads + lengths[ids]
-        known = lengths[ids] > 0
-        nxt = np.searchsorted(heads, ends)                # the first head at or after this record's end
-        chained = np.zeros(len(heads), bool)
-        heads_l, nxt_l, known_l, ends_l = heads.tolist(), nxt.tolist(), known.tolist(), ends.tolist()
-        i, count, skipped = 0, len(heads_l), heads_l[0]
-        while i < count:
-            if known_l[i] and ends_l[i] <= n:
-                chained[i] = True
-                j = nxt_l[i]
-                if j < count and heads_l[j] != ends_l[i]:
-                    skipped += heads_l[j] - ends_l[i]
-                elif j >= count:
-                    skipped += n - ends_l[i]
-                i = j
-            else:
-                skipped += (heads_l[i + 1] if i + 1 < count else n) - heads_l[i]
-                i += 1
+        chained, skipped = _follow_chain(heads, lengths[ids], n)
         self.skipped = int(skipped)
         good, good_ids = heads[chained], ids[chained]
         order = np.argsort(good_ids, kind="stable")
@@ -168,15 +163,44 @@ class DataFlashLog:
             raise DataFlashError("no records after the formats: the log is empty or cut short")
         if self.skipped:
             log.info("%s: %d bytes outside the records skipped", self.path, self.skipped)
+        self._split_instances({fmt.type: fmt.name for fmt in by_type.values()})
+
+    def _split_instances(self, names_by_type: dict[int, str]) -> None:
+        """A type logged by several sensors (two GPS, three IMUs, two batteries) interleaves them record by record;
+        each instance becomes ``NAME[i]`` (as pymavlink names them) where the type's instance column holds more
+        than one value. The column is the one FMTU marks '#' in its units, else ArduPilot's own (INSTANCE_COLUMNS)."""
+        columns = {name: column for name, column in INSTANCE_COLUMNS.items()}
+        if "FMTU" in self.formats and {"FmtType", "UnitIds"} <= {f.name for f in self.formats["FMTU"].fields}:
+            for mtype, units in zip(self.column("FMTU", "FmtType").tolist(), self.strings("FMTU", "UnitIds")):
+                fmt = self.formats.get(names_by_type.get(int(mtype), ""))
+                if fmt is not None and "#" in units and units.index("#") < len(fmt.fields):
+                    columns[fmt.name] = fmt.fields[units.index("#")].name
+        for name, column in columns.items():
+            fmt = self.formats.get(name)
+            if fmt is None or not any(f.name == column and f.numeric for f in fmt.fields):
+                continue
+            which = self._raw(name, column)
+            values = np.unique(which)
+            if len(values) < 2:
+                continue
+            offsets = self.offsets[name]
+            self.instances[name] = []
+            for value in values.tolist():
+                key = f"{name}[{int(value) if float(value).is_integer() else value}]"
+                self.instances[name].append(key)
+                self.formats[key] = fmt
+                self.offsets[key] = offsets[which == value]
 
     def _first_time(self) -> float:
-        starts = [self._raw(name, "TimeUS")[0] for name, fmt in self.formats.items()
-                  if any(f.name == "TimeUS" for f in fmt.fields)]
+        """The earliest TimeUS among each type's first record (one record read per type, not its column)."""
+        starts = [_gather(self.data, self.offsets[name][:1], fmt.field("TimeUS"))[0]
+                  for name, fmt in self.formats.items() if any(f.name == "TimeUS" for f in fmt.fields)]
         return float(min(starts)) if starts else 0.0
 
     # -- reading ------------------------------------------------------------------------------------------------
     def names(self) -> list[str]:
-        return sorted(self.formats)
+        """The message types (an instance's ``NAME[i]`` is in ``instances[NAME]``)."""
+        return sorted(name for name in self.formats if "[" not in name)
 
     def count(self, name: str) -> int:
         return len(self.offsets.get(name, ()))
@@ -187,9 +211,7 @@ class DataFlashLog:
         offs = self.offsets[name]
         if f.kind in _STRINGS:
             raise TypeError(f"{name}.{field} is text")
-        dtype = np.dtype(_NUMERIC[f.kind][0])
-        gathered = self.data[offs[:, None] + (f.offset + np.arange(f.size))]
-        return np.ascontiguousarray(gathered).view(dtype).reshape(-1)
+        return _gather(self.data, offs, f)
 
     def column(self, name: str, field: str) -> np.ndarray:
         """One numeric field of every record of ``name``, as ArduPilot means it (scaled), in float64."""
@@ -212,6 +234,61 @@ class DataFlashLog:
         if any(f.name == "TimeUS" for f in fmt.fields):
             return (self._raw(name, "TimeUS").astype(np.float64) - self.t0) / 1e6
         return np.arange(self.count(name), dtype=np.float64)
+
+
+def _record_heads(data: np.ndarray) -> np.ndarray:
+    """Offsets of every 0xA3 0x95 pair: the 0xA3 bytes found a slice at a time (a temporary of CHUNK bytes, not
+    of the file's size), kept where the next byte is 0x95."""
+    n = len(data)
+    if n <= 3:
+        return np.zeros(0, np.int64)
+    parts = []
+    for start in range(0, n - 2, CHUNK):
+        found = np.flatnonzero(data[start:min(start + CHUNK, n - 2)] == HEAD[0])   # a type byte follows
+        found += start
+        parts.append(found[data[found + 1] == HEAD[1]])
+    return np.concatenate(parts).astype(np.int64, copy=False)
+
+
+def _follow_chain(heads: np.ndarray, lengths: np.ndarray, n: int) -> tuple[np.ndarray, int]:
+    """Which heads are records (a bool per head) and how many bytes lie outside them, following the chain: each
+    record ends where the next must begin; where it does not (corruption, a 0xA3 0x95 inside a payload, an unknown
+    type), the walk goes on from the next head at or after the end. A run of records each ending exactly on the
+    next head is taken in one step, so Python walks only the places where the chain breaks."""
+    count = len(heads)
+    ends = heads + lengths
+    fits = (lengths > 0) & (ends <= n)
+    follows = np.empty(count, bool)                           # the next head is right at this record's end
+    follows[:-1] = heads[1:] == ends[:-1]
+    follows[-1] = ends[-1] == n
+    broken = np.flatnonzero(~(fits & follows))
+    del follows
+    chained = np.zeros(count, bool)
+    i, k, skipped = 0, 0, int(heads[0])
+    while i < count:
+        k = int(np.searchsorted(broken, i, side="left")) if k < len(broken) and broken[k] < i else k
+        stop = int(broken[k]) if k < len(broken) else count
+        if stop > i:                                          # a clean run: every record chained, nothing skipped
+            chained[i:stop] = True
+            i = stop
+            continue
+        if fits[i]:
+            chained[i] = True
+            j = int(np.searchsorted(heads, ends[i]))          # the first head at or after its end
+            skipped += (int(heads[j]) if j < count else n) - int(ends[i])
+            i = j
+        else:
+            skipped += (int(heads[i + 1]) if i + 1 < count else n) - int(heads[i])
+            i += 1
+    return chained, skipped
+
+
+def _gather(data: np.ndarray, offsets: np.ndarray, f: Field) -> np.ndarray:
+    """One numeric field at each record offset: rows of a sliding window over the file (a view, no copy) taken at
+    the offsets, so the only temporary is the (records, size) result, not an index of records x size."""
+    windows = np.lib.stride_tricks.sliding_window_view(data, f.size)
+    out = np.ascontiguousarray(windows[offsets + f.offset])
+    return out.view(np.dtype(_NUMERIC[f.kind][0])).reshape(-1)
 
 
 def _fmt_record(mtype: int, length: int, name: str, fmt: str, columns: str) -> bytes:

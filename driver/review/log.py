@@ -19,13 +19,62 @@ from .tlog import TlogColumns, TlogError
 log = logging.getLogger(__name__)
 
 MODE_NAMES = dict(mavutil.mode_mapping_acm)
-#: ArduCopter's EV ids (AP_Logger LogEvent) that a reviewer looks for
-EVENT_NAMES = {10: "armed", 11: "disarmed", 15: "auto armed", 17: "land complete maybe", 18: "land complete",
-               25: "set home", 28: "not landed", 41: "mission complete", 64: "EKF yaw reset"}
-#: ERR subsystems (AP_Logger LogErrorSubsystem) that are failsafes
-FAILSAFES = {5: "radio failsafe", 6: "battery failsafe", 7: "GPS failsafe", 8: "GCS failsafe", 9: "fence",
-             10: "flight mode", 12: "crash check", 13: "flip", 16: "EKF check", 17: "EKF failsafe",
-             19: "terrain", 22: "navigation", 24: "ADS-B failsafe", 27: "vibration failsafe"}
+#: EV ids: AP_Logger.h's LogEvent (ArduPilot 4.6.3), in words
+EVENT_NAMES = {
+    10: "armed", 11: "disarmed", 15: "auto armed", 17: "land complete maybe", 18: "land complete", 19: "lost GPS",
+    21: "flip start", 22: "flip end", 25: "set home", 26: "simple mode on", 27: "simple mode off", 28: "not landed",
+    29: "super simple mode on", 30: "autotune initialised", 31: "autotune off", 32: "autotune restart",
+    33: "autotune success", 34: "autotune failed", 35: "autotune reached limit", 36: "autotune pilot testing",
+    37: "autotune saved gains", 38: "save trim", 39: "save waypoint added", 41: "fence enabled",
+    42: "fence disabled", 43: "acro trainer off", 44: "acro trainer leveling", 45: "acro trainer limited",
+    46: "gripper grab", 47: "gripper release", 49: "parachute disabled", 50: "parachute enabled",
+    51: "parachute released", 52: "landing gear deployed", 53: "landing gear retracted",
+    54: "motors emergency stopped", 55: "motors emergency stop cleared", 56: "motor interlock disabled",
+    57: "motor interlock enabled", 58: "rotor run-up complete", 59: "rotor speed below critical",
+    60: "EKF altitude reset", 61: "land cancelled by pilot", 62: "EKF yaw reset", 63: "ADS-B avoidance enabled",
+    64: "ADS-B avoidance disabled", 65: "proximity avoidance enabled", 66: "proximity avoidance disabled",
+    67: "GPS primary changed", 71: "ZigZag point A stored", 72: "ZigZag point B stored",
+    73: "land repositioning active", 74: "standby enabled", 75: "standby disabled",
+    76: "fence max altitude enabled", 77: "fence max altitude disabled", 78: "fence circle enabled",
+    79: "fence circle disabled", 80: "fence min altitude enabled", 81: "fence min altitude disabled",
+    82: "fence polygon enabled", 83: "fence polygon disabled", 85: "EKF sources set to primary",
+    86: "EKF sources set to secondary", 87: "EKF sources set to tertiary", 90: "airspeed primary changed",
+    163: "surfaced", 164: "not surfaced", 165: "bottomed", 166: "not bottomed"}
+#: the EV ids that are arming, shown as such where the log has no ARM records (4.6 writes both)
+ARMING_EVENTS = {10: "armed", 11: "disarmed"}
+#: ERR subsystems: AP_Logger.h's LogErrorSubsystem (4.6.3)
+ERROR_SUBSYSTEMS = {
+    1: "main loop", 2: "radio", 3: "compass", 4: "optical flow", 5: "radio failsafe", 6: "battery failsafe",
+    7: "GPS failsafe", 8: "GCS failsafe", 9: "fence failsafe", 10: "flight mode", 11: "GPS", 12: "crash check",
+    13: "flip", 14: "autotune", 15: "parachute", 16: "EKF check", 17: "EKF failsafe", 18: "barometer",
+    19: "CPU failsafe", 20: "ADS-B failsafe", 21: "terrain", 22: "navigation", 23: "terrain failsafe",
+    24: "EKF primary", 25: "thrust loss check", 26: "sensors failsafe", 27: "leak failsafe", 28: "pilot input",
+    29: "vibration failsafe", 30: "internal error", 31: "dead reckoning failsafe"}
+#: the subsystems whose code is 1 (or a fence's breaches) when the failsafe triggers, 0 when it clears
+FAILSAFE_SUBSYSTEMS = {5, 6, 7, 8, 9, 17, 19, 20, 23, 26, 27, 29, 31}
+#: ERR codes: LogErrorCode (4.6.3), by (subsystem, code); the general ones by (None, code)
+ERROR_CODES = {
+    (None, 0): "resolved", (None, 1): "failed to initialise", (None, 4): "unhealthy",
+    (1, 1): "INS delay", (2, 2): "late frame", (11, 2): "glitch", (11, 0): "glitch cleared", (12, 1): "crash",
+    (12, 2): "loss of control", (13, 2): "abandoned", (15, 2): "not released: too low",
+    (15, 3): "not released: landed", (16, 2): "bad variance", (16, 0): "variance cleared", (18, 2): "glitch",
+    (21, 2): "missing terrain data", (22, 2): "failed to set destination",
+    (22, 3): "restarted RTL", (22, 4): "failed to start circle", (22, 5): "destination outside the fence",
+    (22, 6): "RTL without a rangefinder", (25, 1): "thrust lost", (30, 1): "internal errors detected"}
+
+
+def error_event(subsystem: int, code: int) -> tuple[str, str]:
+    """(kind, words) of one ERR record, as AP_Logger's enums mean it: a failsafe triggers or clears; a flight mode
+    error's code is the mode refused, an EKF primary's the core now primary."""
+    name = ERROR_SUBSYSTEMS.get(subsystem, f"subsystem {subsystem}")
+    if subsystem in FAILSAFE_SUBSYSTEMS:
+        return "failsafe", f"{name} {'cleared' if code == 0 else 'triggered'}"
+    if subsystem == 10:
+        return "error", f"flight mode {MODE_NAMES.get(code, f'mode {code}')} refused"
+    if subsystem == 24:
+        return "event", f"EKF primary changed to core {code}"
+    what = ERROR_CODES.get((subsystem, code), ERROR_CODES.get((None, code), f"code {code}"))
+    return "error", f"{name}: {what}"
 
 
 class LogError(ValueError):
@@ -97,11 +146,20 @@ class FlightLog:
 
     # -- the tree and fields -----------------------------------------------------------------------------------
     def tree(self) -> dict[str, list[str]]:
-        """Message type -> its numeric fields (TimeUS left out: it is the axis)."""
+        """Message type -> its numeric fields (TimeUS left out: it is the axis). A type several sensors log (two
+        GPS, three IMUs) is one entry per instance, ``GPS[0]``, ``GPS[1]``: mixed, their records interleave."""
         if self._bin is not None:
-            return {n: [f.name for f in self._bin.formats[n].fields if f.numeric and f.name != "TimeUS"]
-                    for n in self._bin.names() if n != "FMT"}
+            b = self._bin
+            return {n: [f.name for f in b.formats[n].fields if f.numeric and f.name != "TimeUS"]
+                    for base in b.names() if base != "FMT" for n in b.instances.get(base, [base])}
         return {n: sorted(cols) for n, cols in sorted(self._tlog.columns.items())}
+
+    def first_instance(self, mtype: str) -> str:
+        """``GPS[0]`` where the log has several GPS (the first sensor: the one presets and the path follow), else
+        ``mtype`` itself."""
+        if self._bin is not None and mtype in self._bin.instances:
+            return self._bin.instances[mtype][0]
+        return mtype
 
     def count(self, mtype: str) -> int:
         if self._bin is not None:
@@ -116,12 +174,18 @@ class FlightLog:
         """(seconds, values) of one field, read now from the index."""
         if self._bin is not None:
             return self._bin.times(mtype), self._bin.column(mtype, field)
-        return self._tlog.times[mtype], self._tlog.columns[mtype][field]
+        return self._tlog.series(mtype, field)
 
     def duration(self) -> float:
         ends = [self.series(t, f)[0][-1] for t, f in (("ATT", "Roll"), ("GPS", "Lat"), ("ATTITUDE", "roll"),
                                                      ("HEARTBEAT", "custom_mode")) if self.has(t, f)]
         return float(max(ends)) if ends else 0.0
+
+    def preset(self, name: str) -> list[tuple[str, str, int]]:
+        """The fields of preset ``name`` this log has, (type, field, axis); a type several sensors log gives its
+        first instance's (VIBE[0], not every IMU's records in one sawtooth)."""
+        chosen = [(self.first_instance(t), f, axis) for t, f, axis in PRESETS.get(name, [])]
+        return [(t, f, axis) for t, f, axis in chosen if self.has(t, f)]
 
     # -- modes, events, path, parameters ------------------------------------------------------------------------
     def modes(self) -> list[tuple[float, str]]:
@@ -143,23 +207,23 @@ class FlightLog:
         out = [Event(t, "mode", name) for t, name in self.modes()]
         if self._bin is not None:
             b = self._bin
+            logs_arming = "ARM" in b.formats and self.has("ARM", "ArmState")
             if "EV" in b.formats:
                 for t, i in zip(*self.series("EV", "Id")):
-                    name = EVENT_NAMES.get(int(i), f"event {int(i)}")
-                    out.append(Event(float(t), "arming" if int(i) in (10, 11, 15) else "event", name))
-            if "ARM" in b.formats and self.has("ARM", "ArmState"):
+                    i = int(i)
+                    if i in ARMING_EVENTS:
+                        if not logs_arming:
+                            out.append(Event(float(t), "arming", ARMING_EVENTS[i]))
+                        continue
+                    out.append(Event(float(t), "event", EVENT_NAMES.get(i, f"event {i}")))
+            if logs_arming:
                 for t, s in zip(*self.series("ARM", "ArmState")):
                     out.append(Event(float(t), "arming", "armed" if s else "disarmed"))
             if "ERR" in b.formats:
                 t, sub = self.series("ERR", "Subsys")
                 _t, code = self.series("ERR", "ECode")
                 for a, s, c in zip(t, sub, code):
-                    s, c = int(s), int(c)
-                    if s in FAILSAFES:
-                        what = f"{FAILSAFES[s]} {'cleared' if c == 0 else 'triggered'}"
-                        out.append(Event(float(a), "failsafe" if s not in (10,) else "error", what))
-                    else:
-                        out.append(Event(float(a), "error", f"error subsystem {s} code {c}"))
+                    out.append(Event(float(a), *error_event(int(s), int(c))))
             if "MSG" in b.formats:
                 for t, text in zip(b.times("MSG"), b.strings("MSG", "Message")):
                     out.append(Event(float(t), "message", text))
@@ -175,9 +239,10 @@ class FlightLog:
         return sorted(out, key=lambda e: e.t)
 
     def flight_path(self) -> FlightPath | None:
-        if self._bin is not None and self.has("GPS", "Lat"):
-            t, lat = self.series("GPS", "Lat")
-            lon, alt = self.series("GPS", "Lng")[1], self.series("GPS", "Alt")[1]
+        gps = self.first_instance("GPS")           # one receiver: two interleaved zig-zag between their fixes
+        if self._bin is not None and self.has(gps, "Lat"):
+            t, lat = self.series(gps, "Lat")
+            lon, alt = self.series(gps, "Lng")[1], self.series(gps, "Alt")[1]
         elif self._tlog is not None and "GLOBAL_POSITION_INT" in self._tlog.columns:
             cols = self._tlog.columns["GLOBAL_POSITION_INT"]
             t, lat, lon, alt = (self._tlog.times["GLOBAL_POSITION_INT"], cols["lat"] / 1e7, cols["lon"] / 1e7,

@@ -51,10 +51,12 @@ __all__ = ["DataFlashWriter", "FMT_ID", "FMT_LENGTH", "record_struct", "text_siz
 
 
 def sample_flight(seconds: float = 60.0, rate_hz: float = 25.0, params: dict[str, float] | None = None,
-                  lat: float = -35.3632621, lon: float = 149.1652374) -> DataFlashWriter:
+                  lat: float = -35.3632621, lon: float = 149.1652374, sensors: int = 1) -> DataFlashWriter:
     """A made-up flight in ArduCopter's record layouts: arm, take off in GUIDED, fly a circle in LOITER, RTL,
     land, disarm; ATT, CTUN, BAT, VIBE, GPS at ``rate_hz`` (GPS at a fifth of it), with MODE, EV, ERR, MSG and
-    PARM. The bench makes its 100 MB log with it."""
+    PARM. ``sensors``: how many GPS, IMUs and batteries log (instance k's GPS reads 0.0001 k degrees north of the
+    first, its vibration 10 k m/s/s more, its battery 0.1 k V less), their records interleaved as ArduPilot
+    writes them. The bench makes its 100 MB log with it."""
     import math
     w = DataFlashWriter()
     w.define(129, "PARM", "QNf", "TimeUS,Name,Value")
@@ -93,12 +95,17 @@ def sample_flight(seconds: float = 60.0, rate_hz: float = 25.0, params: dict[str
         w.record("ATT", t, int(roll * 100), int((roll + 0.5 * math.sin(7 * s)) * 100), int(200 * math.cos(s)),
                  int(210 * math.cos(s)), 9000, 9000, 10, 20)
         w.record("CTUN", t, 0.5, 0.0, 0.5, 0.5, alt, alt + 0.1 * math.sin(3 * s), alt, 0, 0, 0)
-        w.record("BAT", t, 0, 12.6 - 2.2 * phase, 12.6, 15.0 + math.sin(s), 2200 * phase, 0.0, 2500, 0.01)
-        w.record("VIBE", t, 0, 5 + math.sin(s), 6 + math.cos(s), 12 + math.sin(2 * s), 0)
+        for i in range(sensors):
+            w.record("BAT", t, i, 12.6 - 2.2 * phase - 0.1 * i, 12.6, 15.0 + math.sin(s), 2200 * phase, 0.0, 2500,
+                     0.01)
+        for i in range(sensors):
+            w.record("VIBE", t, i, 5 + math.sin(s) + 10 * i, 6 + math.cos(s) + 10 * i, 12 + math.sin(2 * s) + 10 * i,
+                     0)
         if k % 5 == 0:
             r = 0.0005 if mode == 5 else 0.0001 * phase
-            w.record("GPS", t, 0, 3, 0, 0, 14, 70, int((lat + r * math.sin(s / 4)) * 1e7),
-                     int((lon + r * math.cos(s / 4)) * 1e7), int((584 + alt) * 100), 2.0, 0.0, 0.0, 0.0)
+            for i in range(sensors):
+                w.record("GPS", t, i, 3, 0, 0, 14, 70, int((lat + 0.0001 * i + r * math.sin(s / 4)) * 1e7),
+                         int((lon + r * math.cos(s / 4)) * 1e7), int((584 + alt) * 100), 2.0, 0.0, 0.0, 0.0)
     end = t0 + int(steps * 1e6 / rate_hz)
     w.record("EV", end, 18)
     w.record("EV", end + 1000, 11)

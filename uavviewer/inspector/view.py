@@ -101,6 +101,7 @@ class InspectorWindow(QWidget):
             item.setText(2, str(m.count))
             if key == self.selected:
                 self._show_fields(m)
+            self._feed_plot(m)
         self.tree.resizeColumnToContents(0)
 
     def _pick(self, item, _previous=None) -> None:
@@ -128,6 +129,9 @@ class InspectorWindow(QWidget):
             text = _text(value)
             if cell.text() != text:
                 cell.setText(text)
+
+    def _feed_plot(self, m) -> None:
+        """The plotted field's newest value, whichever message is selected now (the plot follows its own key)."""
         plot = self.field_plot.key
         if plot is not None and plot[:3] == (m.system, m.component, m.name) and m.count != self._plotted_count:
             self._plotted_count = m.count

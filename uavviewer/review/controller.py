@@ -5,7 +5,8 @@ from __future__ import annotations
 import logging
 from concurrent.futures import Future, ThreadPoolExecutor
 
-from PyQt5.QtCore import QObject, pyqtSignal
+from PyQt5 import sip
+from PyQt5.QtCore import QObject, Qt, pyqtSignal
 from PyQt5.QtWidgets import QAction, QFileDialog, QMessageBox
 
 from driver.review import LogError, open_log
@@ -63,11 +64,17 @@ class ReviewController(QObject):
             log.exception("opening %s", path)
             self._fail(f"{path}: cannot be read ({e})")
             return
-        view = ReviewWindow(flight, self.current_params)
+        view = ReviewWindow(flight, self.current_params, submit=self._pool.submit)
+        view.setAttribute(Qt.WA_DeleteOnClose)          # closed, its window and its log's arrays go
+        view.destroyed.connect(self._forget)
         view.resize(1366, 768)
         view.show()
         self.views.append(view)
         self.opened.emit(view)
+
+    def _forget(self, _view=None) -> None:
+        """Drop the reviews Qt has deleted since they closed: kept here, each held its log's arrays for good."""
+        self.views = [v for v in self.views if not sip.isdeleted(v)]
 
     def _fail(self, text: str) -> None:
         self.failed.emit(text)

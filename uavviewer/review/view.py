@@ -5,8 +5,9 @@ from __future__ import annotations
 
 import logging
 import os
+from concurrent.futures import CancelledError, Future, ThreadPoolExecutor
 
-from PyQt5.QtCore import Qt
+from PyQt5.QtCore import Qt, pyqtSignal
 from PyQt5.QtWidgets import (QComboBox, QFileDialog, QHBoxLayout, QLabel, QMainWindow, QPushButton, QSplitter,
                              QTabWidget, QVBoxLayout, QWidget)
 
@@ -26,11 +27,21 @@ __all__ = ["ReviewWindow"]
 
 
 class ReviewWindow(QMainWindow):
-    """``current_params``: a callable giving the vehicle's parameters now (name -> value; empty when none)."""
+    """``current_params``: a callable giving the vehicle's parameters now (name -> value; empty when none).
+    ``submit``: runs slow work off the window's thread (the controller's pool; the view's own worker if not given).
+    ``exported`` gives the rows a CSV export wrote, or the words of its error."""
 
-    def __init__(self, flight: FlightLog, current_params=dict, parent: QWidget | None = None) -> None:
+    exported = pyqtSignal(object)
+    _export_done = pyqtSignal(object, str, int)
+
+    def __init__(self, flight: FlightLog, current_params=dict, parent: QWidget | None = None,
+                 submit=None) -> None:
         super().__init__(parent)
         self.log = flight
+        self._own_pool = ThreadPoolExecutor(1, thread_name_prefix="review-export") if submit is None else None
+        self._submit = submit or self._own_pool.submit
+        self.export_future: Future | None = None
+        self._export_done.connect(self._show_export, Qt.QueuedConnection)     # after export() returns, always
         self.setWindowTitle(f"Review — {os.path.basename(flight.path)}")
         self.tree = FieldTree()
         self.plots = ReviewPlots()
@@ -122,18 +133,36 @@ class ReviewWindow(QMainWindow):
         if name not in PRESETS:
             return 0
         self.plots.clear_fields()
-        chosen = [(t, f, axis) for t, f, axis in PRESETS[name] if self.log.has(t, f)]
+        chosen = self.log.preset(name)
         for t, f, axis in chosen:
             self.add_field(t, f, axis)
         self.status.setText(f"{name}: {len(chosen)} fields" if chosen else f"{name}: none of its fields in this log")
         self.preset.setCurrentIndex(0)
         return len(chosen)
 
-    def export(self, path: str) -> int:
+    def export(self, path: str) -> Future:
+        """Write the plotted fields to ``path`` off the window's thread (a long log's rows take seconds); the status
+        line says when it is done, or why it failed."""
         fields = list(self.plots.curves)
-        rows = self.log.export_csv(path, fields)
-        self.status.setText(f"exported {len(fields)} fields, {rows:,} rows to {os.path.basename(path)}")
-        return rows
+        self.export_button.setEnabled(False)
+        self.status.setText(f"exporting {len(fields)} fields to {os.path.basename(path)}…")
+        self.export_future = self._submit(self.log.export_csv, path, fields)
+        self.export_future.add_done_callback(lambda f: self._export_done.emit(f, path, len(fields)))
+        return self.export_future
+
+    def _show_export(self, future: Future, path: str, fields: int) -> None:
+        self.export_button.setEnabled(True)
+        try:
+            rows = future.result()
+        except CancelledError:                              # the application closes
+            return
+        except Exception as e:                              # noqa: BLE001 - a full disk never takes the window down
+            log.exception("export %s", path)
+            self.status.setText(f"export to {os.path.basename(path)} failed: {e}")
+            self.exported.emit(str(e))
+            return
+        self.status.setText(f"exported {fields} fields, {rows:,} rows to {os.path.basename(path)}")
+        self.exported.emit(rows)
 
     def ask_export(self) -> None:
         if not self.plots.curves:
@@ -154,7 +183,12 @@ class ReviewWindow(QMainWindow):
     def closeEvent(self, event) -> None:  # noqa: N802
         if self.geotag_dialog is not None:
             self.geotag_dialog.shutdown()
-        self.log.close()
+        if self.export_future is not None and not self.export_future.done():
+            self.export_future.add_done_callback(lambda _f: self.log.close())     # the file is read to the end
+        else:
+            self.log.close()
+        if self._own_pool is not None:
+            self._own_pool.shutdown(wait=False)
         super().closeEvent(event)
 
 
