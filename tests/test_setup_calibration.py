@@ -120,3 +120,20 @@ def test_compass_from_a_known_yaw_exists_on_4x_only(bench):
     else:
         assert result.status is CommandStatus.REFUSED and "UNSUPPORTED" in result.reason
     assert v.setup.fixed_mag_yaw(float("nan")).result(T).status is CommandStatus.REJECTED
+
+
+def test_the_previous_runs_repeated_verdict_does_not_settle_a_new_accel_calibration(sim_factory, vehicle_factory):
+    """AP_AccelCal re-sends its last result every second until the next start: one sent before the vehicle read
+    our new PREFLIGHT_CALIBRATION arrives while the new run is starting, and must not be taken as its verdict."""
+    sim = sim_factory(calibration_model=True)
+    v = vehicle_factory(f"tcp:127.0.0.1:{sim.tcp_port}", command_timeout=10.0)
+    assert v.wait_for(lambda s: s.connected and s.readiness.prearm_ok, T)
+    first = v.setup.accel_calibration()
+    assert confirm_each(first, v) == [1, 2, 3, 4, 5, 6]
+    assert first.verdict.result(T).status is CommandStatus.ACCEPTED
+    sim.faults.uplink.latency = 2.0                  # real s: repeats of the old success cross our new start
+    second = v.setup.accel_calibration()
+    assert second.started.result(T).ok
+    sim.faults.uplink.latency = 0.0
+    state = v.wait_for(lambda s: s.setup.accel.step is AccelStep.WAITING, T)
+    assert state.setup.accel.position == 1 and not second.verdict.done()

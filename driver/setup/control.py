@@ -322,8 +322,8 @@ class VehicleSetup:
                 confirmed = state.confirmed + ((state.position,) if state.position else ())
                 self._set(accel=AccelCalState(AccelStep.WAITING, position, confirmed, state.texts))
             return
-        if position not in (ACCEL_SUCCESS, ACCEL_FAILED) or state.step not in (AccelStep.WAITING, AccelStep.STARTING):
-            return                              # the verdict is repeated every second: told once
+        if position not in (ACCEL_SUCCESS, ACCEL_FAILED) or not self._verdict_is_this_runs(state, cal):
+            return
         ok = position == ACCEL_SUCCESS
         self._set(accel=AccelCalState(AccelStep.SUCCESS if ok else AccelStep.FAILED, None, state.confirmed))
         if cal is not None and not cal.verdict.done():
@@ -332,6 +332,17 @@ class VehicleSetup:
             reason = said[-1] if said else ("Calibration successful" if ok else "Calibration FAILED")
             self._v._notifier.settle(cal.verdict, self._store.record_locked(
                 "accel calibration", CommandStatus.ACCEPTED if ok else CommandStatus.REFUSED, reason))
+
+    @staticmethod
+    def _verdict_is_this_runs(state: AccelCalState, cal: AccelCalibration | None) -> bool:
+        """AP_AccelCal re-sends its last result every second until the next start (AP_AccelCal.cpp update()):
+        one sent before the vehicle read our new start reaches us while the new run is starting. A verdict is this
+        run's once the vehicle asked a position of it, or once it acknowledged the start (the same link carries the
+        old repeats before that ACK, none after it). Told once: the later repeats find the run settled."""
+        if state.step is AccelStep.WAITING:
+            return True
+        return (state.step is AccelStep.STARTING and cal is not None and cal.started is not None
+                and cal.started.done() and cal.started.result().ok)
 
     def _on_adsb_vehicle(self, m) -> None:
         self._traffic.on_adsb_vehicle(m, time.monotonic())
