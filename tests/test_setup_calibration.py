@@ -104,7 +104,6 @@ def test_unmoved_compass_calibration_stays_at_zero_and_a_cancel_needs_a_reboot(b
     assert cal.started.result(T).ok
     state = v.wait_for(lambda s: len(s.setup.compass.progress) == 3, T)
     assert [p.percent for p in state.setup.compass.progress] == [0, 0, 0]
-    assert cal.accept().result(T).status is CommandStatus.REFUSED      # nothing to accept yet
     assert cal.cancel().result(T).ok
     assert cal.finished.result(T).status is CommandStatus.ABORTED
     assert v.set_mode("GUIDED").result(T).ok
@@ -137,3 +136,30 @@ def test_the_previous_runs_repeated_verdict_does_not_settle_a_new_accel_calibrat
     sim.faults.uplink.latency = 0.0
     state = v.wait_for(lambda s: s.setup.accel.step is AccelStep.WAITING, T)
     assert state.setup.accel.position == 1 and not second.verdict.done()
+
+
+def test_accept_while_a_compass_still_runs_stops_every_calibrator_and_ends_the_run_with_the_vehicles_verdict(bench):
+    """AP_Compass_Calibration.cpp _accept_calibration_mask: every calibrator is stopped, FAILED when one was not
+    done; the run is over whatever the answer."""
+    sim, v = bench()
+    cal = v.setup.compass_calibration()
+    assert cal.started.result(T).ok
+    assert v.wait_for(lambda s: len(s.setup.compass.progress) == 3, T)
+    refused = cal.accept().result(T)
+    assert refused.status is CommandStatus.REFUSED
+    assert cal.finished.result(T) == refused                       # the vehicle's verdict ends the run
+    assert v.wait_for(lambda s: not s.setup.compass.running, T)
+    assert sim.autopilot.mag_started is None                       # the vehicle stopped calibrating
+    assert v.set_mode("GUIDED").result(T).ok
+    refused = v.arm().result(T)
+    assert refused.status is CommandStatus.REFUSED and "Compass calibrated requires reboot" in refused.reason
+
+
+def test_a_second_compass_calibration_settles_the_first_as_superseded(bench):
+    sim, v = bench()
+    first = v.setup.compass_calibration()
+    assert first.started.result(T).ok
+    second = v.setup.compass_calibration()
+    result = first.finished.result(T)
+    assert result.status is CommandStatus.ABORTED and "superseded" in result.reason
+    assert second.started.result(T).ok and not second.finished.done()

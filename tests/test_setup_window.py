@@ -248,3 +248,24 @@ def test_all_motors_in_sequence_each_output_spins(qtbot, bench_window):
     qtbot.mouseClick(page.test, Qt.LeftButton)
     qtbot.waitUntil(lambda: raised == {1, 2, 3, 4}, timeout=20000)
     assert page.result.text().startswith("motor test 1: accepted")
+
+
+def test_compass_accept_waits_until_no_compass_is_still_in_progress(qtbot, bench_window):
+    """ArduPilot's accept stops every calibrator and fails when one still runs: Accept is offered only once every
+    compass has reported."""
+    from dataclasses import replace
+
+    from driver.setup.model import CompassCalState, CompassProgress, CompassReport
+
+    _sim, vehicle, w = bench_window()
+    page = open_setup(w, "Sensors")
+    state = vehicle.state()
+    report = CompassReport(0, 4, 0.037, (5.0, 13.0, -18.0), False)
+    still = CompassCalState(running=True, progress=(CompassProgress(1, 75, 3, 1), CompassProgress(2, 75, 3, 1)),
+                            reports=(report,))
+    w.setup.dialog.hide()                          # only this snapshot reaches the page
+    page.show_state(replace(state, setup=replace(state.setup, compass=still)))
+    assert not page.compass_accept.isEnabled()
+    page.show_state(replace(state, setup=replace(state.setup, compass=replace(still, progress=(), reports=(
+        report, replace(report, compass=1), replace(report, compass=2))))))
+    assert page.compass_accept.isEnabled()

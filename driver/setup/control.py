@@ -153,7 +153,10 @@ class VehicleSetup:
         """DO_START_MAG_CAL for every compass, no retry, no autosave (the pilot accepts), no reboot."""
         cal = CompassCalibration(self)
         with self._lock:
-            self._compass = cal
+            old, self._compass = self._compass, cal
+        if old is not None and not old.finished.done():
+            self._v._notifier.settle(old.finished, self._store.record(
+                "compass calibration", CommandStatus.ABORTED, "superseded by a new compass calibration"))
         with self._store.lock:
             self._set(compass=CompassCalState(running=True))
         cal.started = self._v._command_long(mavlink.MAV_CMD_DO_START_MAG_CAL, (0, 0, 0, 0, 0), "compass calibration")
@@ -168,8 +171,11 @@ class VehicleSetup:
         self._v._notifier.settle(cal.finished, result)
 
     def accept_compass(self) -> Future:
+        """ArduPilot's accept stops every calibrator, and answers FAILED when one was not done
+        (AP_Compass_Calibration.cpp _accept_calibration_mask): whatever the answer, the run is over and its
+        result is the vehicle's verdict."""
         future = self._v._command_long(mavlink.MAV_CMD_DO_ACCEPT_MAG_CAL, (0,), "accept compass calibration")
-        future.add_done_callback(lambda f: f.result().ok and self._compass_ended(accepted=True))
+        future.add_done_callback(lambda f: self._compass_ended(accepted=f.result().ok, verdict=f.result()))
         return future
 
     def cancel_compass(self) -> Future:
@@ -177,16 +183,20 @@ class VehicleSetup:
         future.add_done_callback(lambda f: f.result().ok and self._compass_ended(cancelled=True))
         return future
 
-    def _compass_ended(self, accepted: bool = False, cancelled: bool = False) -> None:
+    def _compass_ended(self, accepted: bool = False, cancelled: bool = False,
+                       verdict: CommandResult | None = None) -> None:
         with self._store.lock:
             state = self._store.view()["setup"].compass
             self._set(compass=replace(state, running=False, accepted=accepted, cancelled=cancelled,
-                                      progress=() if cancelled else state.progress))
+                                      progress=() if cancelled or verdict is not None else state.progress))
             self._store.publish()
         cal = self._compass
-        if cancelled and cal is not None:
-            self._v._notifier.settle(cal.finished, self._store.record("compass calibration", CommandStatus.ABORTED,
-                                                                      "cancelled"))
+        if cal is None:
+            return
+        if cancelled:
+            verdict = self._store.record("compass calibration", CommandStatus.ABORTED, "cancelled")
+        if verdict is not None:
+            self._v._notifier.settle(cal.finished, verdict)
 
     def fixed_mag_yaw(self, yaw_deg: float, lat: float = 0.0, lon: float = 0.0) -> Future:
         """Calibrate the compasses from a known heading (large vehicles); lat/lon 0: the vehicle's own position."""

@@ -14,7 +14,8 @@ Mixed into :class:`~driver.sim.autopilot.Autopilot` (through :class:`~driver.sim
 * compass (DO_START_MAG_CAL): MAG_CAL_PROGRESS per compass 0..2 at about 4 Hz each; unmoved it stays 0 %
   (status 2); tumbled by the calibration model it reaches 25/33/50/75 % and after 38.5 s each compass says
   "Mag(n) good orientation" and sends MAG_CAL_REPORT (status 4, fitness 0.037, offsets 5, 13, -18) until
-  accepted (COMPASS_OFS* written) or cancelled; a cancel leaves "Compass calibrated requires reboot";
+  accepted (COMPASS_OFS* written) or cancelled; a cancel leaves "Compass calibrated requires reboot"; an accept
+  while a compass still runs stops them all and is FAILED (AP_Compass_Calibration.cpp _accept_calibration_mask);
 * armed: gyro/accel/baro/level FAILED "Disarm to allow calibration", DO_START_MAG_CAL FAILED "Disarm to allow
   compass calibration"; FIXED_MAG_CAL_YAW is ACCEPTED even armed.
 
@@ -240,7 +241,9 @@ class Calibration:
 
     def _cmd_do_accept_mag_cal(self, *_):
         if self.mag_started is not None and not self.mag_done:
-            return mavlink.MAV_RESULT_FAILED, None          # still running: nothing to accept yet
+            self.mag_started = None                         # every calibrator stops (_accept_calibration_mask),
+            self.mag_reboot = True                          # FAILED as one was not done; started: reboot needed
+            return mavlink.MAV_RESULT_FAILED, None
         if self.mag_done:
             for axis, value in zip("XYZ", MAG_OFFSETS):
                 for prefix in ("COMPASS_OFS_", "COMPASS_OFS2_", "COMPASS_OFS3_"):

@@ -180,5 +180,6 @@ class SensorsPage(QWidget):
             report = next((r for r in state.reports if r.compass == compass), None)
             words.setText("" if report is None else f"fitness {report.fitness:.1f}"
                           + ("" if report.ok else f" FAILED (status {report.status})"))
-        self.compass_accept.setEnabled(bool(state.reports) and not state.accepted)
+        # ArduPilot's accept stops every calibrator and fails when one still runs: only once each has reported
+        self.compass_accept.setEnabled(state.running and bool(state.reports) and not state.progress)
         self.compass_cancel.setEnabled(state.running)
