@@ -269,3 +269,26 @@ def test_compass_accept_waits_until_no_compass_is_still_in_progress(qtbot, bench
     page.show_state(replace(state, setup=replace(state.setup, compass=replace(still, progress=(), reports=(
         report, replace(report, compass=1), replace(report, compass=2))))))
     assert page.compass_accept.isEnabled()
+
+
+def test_a_late_answer_after_the_vehicle_changed_is_dropped_and_the_app_goes_on(qtbot, caplog, sim_factory,
+                                                                                 vehicle_factory, window_factory):
+    """The pages of the old vehicle are deleted when another is picked; a calibration's answer arriving after
+    that must not reach them ("wrapped C/C++ object has been deleted" in a slot aborts the app)."""
+    from PyQt5 import sip
+
+    sims = [sim_factory(), sim_factory()]
+    vehicles = [vehicle_factory(f"tcp:127.0.0.1:{s.tcp_port}") for s in sims]
+    for v in vehicles:
+        assert v.wait_for(lambda s: s.connected and s.readiness.prearm_ok, 30), "vehicle not ready"
+    w = window_factory(vehicles[0])
+    page = open_setup(w, "Sensors")
+    sims[0].faults.uplink.latency = 1.0              # real s: the answer comes after the pages are gone
+    qtbot.mouseClick(page.gyro, Qt.LeftButton)
+    w.adapter.use(vehicles[1])
+    qtbot.waitUntil(lambda: sip.isdeleted(page), timeout=5000)
+    qtbot.waitUntil(lambda: "dropped the answer of gyro" in caplog.text, timeout=15000)
+    assert any(r.command == "gyro calibration" and r.ok for r in vehicles[0].state().results)
+    fresh = w.setup.dialog.pages["Sensors"]          # the new vehicle's pages work
+    qtbot.mouseClick(fresh.gyro, Qt.LeftButton)
+    qtbot.waitUntil(lambda: "accepted" in fresh.result.text(), timeout=10000)

@@ -31,9 +31,8 @@ NO_SETUP = "this connection has no vehicle setup (a replayed recording or a remo
 
 
 class _Relay(QObject):
-    """Carries a finished setup action to the UI thread; parentless, so a late answer never lands on a deleted
-    page (as the adapter's relay)."""
-    done = pyqtSignal(object, object)            # the page's callback, CommandResult
+    """Carries a finished setup action to the UI thread (parentless: it outlives the dialogs)."""
+    done = pyqtSignal(object, object, object)    # the page's callback, CommandResult, the dialog's generation
 
 
 class SetupController(QObject):
@@ -43,8 +42,9 @@ class SetupController(QObject):
         self.params = params                         # the Parameters page's controller: the one checked write path
         self._parent = parent
         self.dialog: SetupDialog | None = None
+        self._generation = 0                         # the dialog's: its pages are deleted when the vehicle changes
         self._relay = _Relay()
-        self._relay.done.connect(lambda callback, result: callback(result))
+        self._relay.done.connect(self._answer)
         adapter.stateChanged.connect(self.show_state)
         adapter.droneChanged.connect(lambda _drone: self._vehicle_changed())
 
@@ -79,6 +79,7 @@ class SetupController(QObject):
         if self.dialog is None:
             return
         dialog, self.dialog = self.dialog, None
+        self._generation += 1                        # answers still on their way belong to deleted pages
         title = dialog.list.currentItem().text() if dialog.isVisible() and dialog.list.currentItem() else ""
         dialog.close()
         dialog.deleteLater()
@@ -134,8 +135,16 @@ class SetupController(QObject):
             log.exception("setup action %s failed to start", name)
             done(CommandResult(name, CommandStatus.REJECTED, str(exc)))
             return
-        relay = self._relay
-        future.add_done_callback(lambda f: relay.done.emit(done, _result(name, f)))
+        relay, generation = self._relay, self._generation
+        future.add_done_callback(lambda f: relay.done.emit(done, _result(name, f), generation))
+
+    def _answer(self, done: Callable[[CommandResult], None], result: CommandResult, generation: int) -> None:
+        """An answer for a page of an older dialog is dropped: that page was deleted with its vehicle (its
+        verdict is in Messages, as every command's)."""
+        if generation != self._generation:
+            log.info("dropped the answer of %s: the vehicle changed (%s)", result.command, result)
+            return
+        done(result)
 
 
 def _result(name: str, future: Future) -> CommandResult:
