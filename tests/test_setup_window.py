@@ -76,10 +76,13 @@ def test_motor_test_needs_the_tick_and_a_disarmed_vehicle_and_the_outputs_move(q
     idle = page.outputs.value(1)
     page.throttle.setValue(30.0)
     page.seconds.setValue(5.0)
+    assert not page.stop.isEnabled()                 # idle, a stop would start a test (motor_test.cpp)
     qtbot.mouseClick(page.test, Qt.LeftButton)
     qtbot.waitUntil(lambda: (page.outputs.value(1) or 0) > idle, timeout=10000)
+    qtbot.waitUntil(page.stop.isEnabled, timeout=5000)
     qtbot.mouseClick(page.stop, Qt.LeftButton)
     qtbot.waitUntil(lambda: page.outputs.value(1) == idle, timeout=10000)
+    qtbot.waitUntil(lambda: not page.stop.isEnabled(), timeout=10000)
 
 
 def test_radio_bars_follow_the_transmitter(qtbot, bench_window):

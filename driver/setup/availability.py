@@ -7,7 +7,7 @@ ADS-B (AP_ADSB, 3.4). Where exactly between 3.3 and 4.x each came is not checked
 """
 from __future__ import annotations
 
-__all__ = ["unavailable", "SETUP_ACTIONS"]
+__all__ = ["unavailable", "SETUP_ACTIONS", "version"]
 
 SETUP_ACTIONS = ("gyro", "baro", "level", "accel", "accel_simple", "compass", "fixed_yaw", "motor_test", "radio",
                  "adsb")
@@ -22,7 +22,8 @@ _SINCE = {
 }
 
 
-def _version(firmware: str) -> tuple[int, int] | None:
+def version(firmware: str) -> tuple[int, int] | None:
+    """(major, minor) of "3.3.1", None when unknown."""
     try:
         major, minor = firmware.split(".")[:2]
         return int(major), int(minor)
@@ -34,8 +35,8 @@ def unavailable(action: str, firmware: str) -> str:
     """Why ``action`` is not available on ``firmware`` ("3.3.1"), or "" when it is (or the version is unknown)."""
     if action not in SETUP_ACTIONS:
         raise ValueError(f"unknown setup action {action!r}")
-    version = _version(firmware)
+    have = version(firmware)
     since = _SINCE.get(action)
-    if version is None or since is None or version >= since[0]:
+    if have is None or since is None or have >= since[0]:
         return ""
     return since[1].format(v=firmware)

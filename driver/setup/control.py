@@ -11,7 +11,9 @@ How ArduCopter runs each (tests/data/recordings/arducopter-4.6-sitl-setup and -c
 * compass: DO_START_MAG_CAL, MAG_CAL_PROGRESS per compass, MAG_CAL_REPORT, DO_ACCEPT_MAG_CAL or
   DO_CANCEL_MAG_CAL (:class:`CompassCalibration`); FIXED_MAG_CAL_YAW from a known heading;
 * motor test: DO_MOTOR_TEST. The vehicle accepts it even armed (recorded): here it is refused unless the
-  vehicle is disarmed and on the ground and the pilot said the propellers are off.
+  vehicle is disarmed and on the ground and the pilot said the propellers are off. It runs from the vehicle's
+  ACCEPTED until it says "finished motor test" (4.x) or disarms (the test armed it; 3.3 says nothing), with
+  motor_test.cpp's duration as a bound (:func:`motor_test_bound`).
 
 Methods marked "(lock held)" run on the driver's reader or ticker with the state lock held; the rest may be
 called from any thread and never wait on the network.
@@ -27,9 +29,10 @@ from dataclasses import replace
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-from ..core.results import CommandResult, CommandStatus, Severity
+from ..core.results import CommandResult, CommandStatus, Severity, chain
 from ..traffic.approach import AlertLimits
 from ..traffic.tracker import TrafficTracker
+from .availability import version
 from .model import (
     ACCEL_FAILED, ACCEL_POSITIONS, ACCEL_SUCCESS, AccelCalState, AccelStep, CompassCalState, CompassProgress,
     CompassReport, RcChannels, ServoOutputs,
@@ -44,6 +47,8 @@ SETUP_MESSAGES = ("RC_CHANNELS", "RC_CHANNELS_RAW", "SERVO_OUTPUT_RAW", "MAG_CAL
 RADIO_RATE_HZ = 10                 # RC_CHANNELS and SERVO_OUTPUT_RAW while a setup page or the motor test watches
 TRAFFIC_REFRESH = 0.5              # s between traffic snapshots (ages, fading, alerts)
 MOTOR_TEST_MAX_SECONDS = 600.0     # ArduCopter's MOTOR_TEST_TIMEOUT_MAX
+MOTOR_TEST_MAX_SECONDS_33 = 30.0   # the Solo's 3.3 (motor_test.pde MOTOR_TEST_TIMEOUT_MS_MAX)
+MOTOR_TEST_MARGIN = 3.0            # s past the vehicle's own duration before the test counts as over unheard
 PWM_RANGE = (800, 2200)
 
 
@@ -105,7 +110,9 @@ class VehicleSetup:
         self._store = vehicle._store
         self._accel: AccelCalibration | None = None
         self._compass: CompassCalibration | None = None
-        self._test_until = 0.0                 # monotonic end of our motor test
+        self._test_until = 0.0                 # monotonic bound of our motor test (the vehicle ends it first)
+        self._test_from = 0                    # the vehicle's words from this message index on
+        self._test_armed = False               # the vehicle reported armed by the test
         self._traffic = TrafficTracker()
         self._traffic_at = 0.0
         self._alerted: set[int] = set()
@@ -216,6 +223,7 @@ class VehicleSetup:
         if problem:
             return self._v._finish(name, CommandStatus.REJECTED, problem)
         ours = self.motor_test_running          # our own test armed the motors: a new one may replace it
+        firmware = self._v.state().firmware
 
         def problem(s) -> str | None:           # checked now and again as the command goes out
             if s.in_air:
@@ -228,28 +236,48 @@ class VehicleSetup:
             return self._v._finish(name, CommandStatus.REJECTED, refusal)
         kind, value = (0, float(throttle_pct)) if pwm is None else (1, float(pwm))
         self.watch_radio()
-        self._test_until = time.monotonic() + seconds * count + (count - 1) * 1.0 + 1.0
         with self._store.lock:
-            self._set(motor_test_running=True)
+            self._test_from = self._store.message_index
         future = self._v._command_long(mavlink.MAV_CMD_DO_MOTOR_TEST, (motor, kind, value, seconds, count), name,
                                        guard=problem)
-        future.add_done_callback(lambda f: f.result().ok or self._test_ended())
-        return future
+        return chain(future, lambda result: self._test_started(result, motor_test_bound(seconds, count, firmware)),
+                     name)
 
-    def _test_ended(self) -> None:
-        self._test_until = 0.0
-        with self._store.lock:
-            self._set(motor_test_running=False)
-            self._store.publish()
+    def _test_started(self, result: CommandResult, seconds: float) -> CommandResult:
+        """The vehicle accepted: the test runs (set before the caller hears the answer)."""
+        if result.ok:
+            with self._store.lock:
+                self._test_until = time.monotonic() + seconds + MOTOR_TEST_MARGIN
+                self._test_armed = False
+                self._set(motor_test_running=True)
+                self._store.publish()
+        return result
+
+    def _test_ended(self, result: CommandResult) -> CommandResult:
+        """The vehicle accepted the stop: it ends the test at its next loop."""
+        if result.ok:
+            with self._store.lock:
+                self._test_until = 0.0
+                self._set(motor_test_running=False)
+                self._store.publish()
+        return result
 
     @property
     def motor_test_running(self) -> bool:
-        return time.monotonic() < self._test_until
+        """As the vehicle reports it: from its ACCEPTED to its "finished motor test" or disarm."""
+        return self._v.state().setup.motor_test_running
 
     def stop_motor_test(self) -> Future:
-        """End the running test at once (DO_MOTOR_TEST with timeout 0, as ArduCopter's motor_test_output reads it)."""
-        self._test_ended()
-        return self._v._command_long(mavlink.MAV_CMD_DO_MOTOR_TEST, (1, 0, 0, 0, 0), "stop motor test")
+        """End the running test at its next loop: DO_MOTOR_TEST with timeout 0 (motor_test.cpp takes it as a new
+        timeout). Only while one runs: sent otherwise it *starts* a test that arms, then disarms the vehicle."""
+        def problem(_s) -> str | None:
+            return None if self.motor_test_running else "no motor test is running"
+        refusal = problem(None)
+        if refusal:
+            return self._v._finish("stop motor test", CommandStatus.REJECTED, refusal)
+        future = self._v._command_long(mavlink.MAV_CMD_DO_MOTOR_TEST, (1, 0, 0, 0, 0), "stop motor test",
+                                       guard=problem)
+        return chain(future, self._test_ended, "stop motor test")
 
     def watch_radio(self, rate_hz: int = RADIO_RATE_HZ) -> None:
         """Ask for RC_CHANNELS and SERVO_OUTPUT_RAW (the RC_CHANNELS stream: 3.3 and 4.x both have it)."""
@@ -291,9 +319,6 @@ class VehicleSetup:
         count = 16 if m.get_msgbuf()[0] == 0xFD else 8
         values = tuple(int(getattr(m, f"servo{i}_raw", 0) or 0) for i in range(1, count + 1))
         self._set(outputs=ServoOutputs(values, time.time()))
-        if self._test_until and not self.motor_test_running:
-            self._test_until = 0.0
-            self._set(motor_test_running=False)
 
     def _on_mag_cal_progress(self, m) -> None:
         state = self._store.view()["setup"].compass
@@ -358,7 +383,21 @@ class VehicleSetup:
         self._traffic.on_adsb_vehicle(m, time.monotonic())
 
     # -- the ticker (lock held) ------------------------------------------------------------------------------
+    def _follow_motor_test(self, now: float, state) -> None:
+        """The test ends when the vehicle says so ("finished motor test", 4.x), disarms (the test armed it; 3.3
+        says nothing), or past its bound."""
+        said = self._store.messages_since(self._test_from)
+        if said:
+            self._test_from = said[-1].index
+        finished = any(m.source == "vehicle" and m.text == "finished motor test" for m in said)
+        self._test_armed = self._test_armed or state.armed
+        if finished or (self._test_armed and not state.armed) or now > self._test_until:
+            self._test_until = 0.0
+            self._set(motor_test_running=False)
+
     def service(self, now: float, state) -> list:
+        if state.setup.motor_test_running:
+            self._follow_motor_test(now, state)
         if now - self._traffic_at >= TRAFFIC_REFRESH:
             self._traffic_at = now
             traffic = self._traffic.snapshot(now, state)
@@ -375,6 +414,16 @@ class VehicleSetup:
                         f"{a.time:.0f} s, {abs(a.vertical):.0f} m {above})")
             self._alerted &= {c.icao for c in traffic.alerts}
         return []
+
+
+def motor_test_bound(seconds: float, count: int, firmware: str) -> float:
+    """How long the vehicle runs a test: each motor its seconds, then half as long at rest before the next
+    (ArduCopter/motor_test.cpp); the Solo's 3.3 runs one motor, at most 30 s, whatever the count."""
+    have = version(firmware)
+    if have is not None and have < (3, 4):
+        return min(seconds, MOTOR_TEST_MAX_SECONDS_33)
+    seconds = min(seconds, MOTOR_TEST_MAX_SECONDS)
+    return seconds * count + 0.5 * seconds * (count - 1)
 
 
 def _motor_test_problem(motor, throttle_pct, pwm, seconds, count, propellers_removed) -> str:
