@@ -63,3 +63,14 @@ def test_motortest_rc_and_adsb(sim_factory, vehicle_factory):
     assert eventually(lambda: len(v.state().traffic.contacts) >= 3, T)
     console.onecmd("adsb")
     assert "SIM" in out.getvalue() and " m at " in out.getvalue() and "m/s" in out.getvalue(), out.getvalue()
+
+
+def test_rc_asks_the_channels_off_again_and_a_second_rc_shows_fresh_ones(sim_factory, vehicle_factory):
+    sim, v, console, out = ready(sim_factory, vehicle_factory)
+    console.onecmd("rc")
+    assert "rc in  1:1500 2:1500 3:1000" in out.getvalue(), out.getvalue()
+    assert eventually(lambda: "RC_CHANNELS" not in sim.autopilot.intervals, T)      # the stream is off again
+    sim.autopilot.move_stick(1, 1700)
+    console.onecmd("rc")                            # asks again and waits for a fresh one
+    assert "rc in  1:1700 2:1500 3:1000" in out.getvalue(), out.getvalue()
+    assert eventually(lambda: "RC_CHANNELS" not in sim.autopilot.intervals, T)

@@ -295,3 +295,16 @@ def test_a_late_answer_after_the_vehicle_changed_is_dropped_and_the_app_goes_on(
     fresh = w.setup.dialog.pages["Sensors"]          # the new vehicle's pages work
     qtbot.mouseClick(fresh.gyro, Qt.LeftButton)
     qtbot.waitUntil(lambda: "accepted" in fresh.result.text(), timeout=10000)
+
+
+def test_the_rc_stream_is_asked_off_on_pages_without_it_and_when_the_window_closes(qtbot, bench_window):
+    sim, _vehicle, w = bench_window()
+    page = open_setup(w, "Radio")
+    qtbot.waitUntil(lambda: page.channels.value(1) is not None, timeout=10000)
+    assert "RC_CHANNELS" in sim.autopilot.intervals
+    w.setup.dialog.turn_to("Sensors")
+    qtbot.waitUntil(lambda: "RC_CHANNELS" not in sim.autopilot.intervals, timeout=10000)
+    w.setup.dialog.turn_to("Flight modes")
+    qtbot.waitUntil(lambda: "RC_CHANNELS" in sim.autopilot.intervals, timeout=10000)
+    w.setup.dialog.close()
+    qtbot.waitUntil(lambda: "RC_CHANNELS" not in sim.autopilot.intervals, timeout=10000)

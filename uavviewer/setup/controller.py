@@ -28,6 +28,7 @@ __all__ = ["SetupController"]
 
 log = logging.getLogger(__name__)
 NO_SETUP = "this connection has no vehicle setup (a replayed recording or a remote drone)"
+RADIO_PAGES = ("Summary", "Radio", "Flight modes", "Motors")     # the pages that show RC_CHANNELS / outputs
 
 
 class _Relay(QObject):
@@ -64,6 +65,7 @@ class SetupController(QObject):
                      PowerPage(self), FailsafesPage(self), MotorsPage(self)]
             self.dialog = SetupDialog(pages, self._parent)
             self.dialog.pageShown.connect(lambda _title: self._watch())
+            self.dialog.finished.connect(lambda _code: self._watch(closed=True))
         if page:
             self.dialog.turn_to(page)
         self.dialog.show()
@@ -86,10 +88,17 @@ class SetupController(QObject):
         if title:
             self.open(title)
 
-    def _watch(self) -> None:
+    def _watch(self, closed: bool = False) -> None:
+        """RC_CHANNELS and SERVO_OUTPUT_RAW while a page shows them, asked off otherwise (not during a motor test:
+        its outputs are what the pilot watches, wherever the window is)."""
         setup = getattr(self.adapter.drone, "setup", None)
-        if setup is not None:
-            setup.watch_radio()                      # RC_CHANNELS and SERVO_OUTPUT_RAW while the pages show them
+        if setup is None or self.dialog is None:
+            return
+        item = self.dialog.list.currentItem()
+        if not closed and item is not None and item.text() in RADIO_PAGES:
+            setup.watch_radio()
+        elif not setup.motor_test_running:
+            setup.unwatch_radio()
 
     def show_state(self, s) -> None:
         if self.dialog is None or not self.dialog.isVisible():
