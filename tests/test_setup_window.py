@@ -308,3 +308,23 @@ def test_the_rc_stream_is_asked_off_on_pages_without_it_and_when_the_window_clos
     qtbot.waitUntil(lambda: "RC_CHANNELS" in sim.autopilot.intervals, timeout=10000)
     w.setup.dialog.close()
     qtbot.waitUntil(lambda: "RC_CHANNELS" not in sim.autopilot.intervals, timeout=10000)
+
+
+def test_radio_calibration_takes_the_throttle_from_rcmap_throttle(qtbot, bench_window):
+    """A transmitter with the throttle on channel 1 (RCMAP_THROTTLE 1) has its pitch on 3: channel 3's trim is
+    its centre, channel 1's its lowest."""
+    sim, vehicle, w = bench_window()
+    page = open_setup(w, "Radio")
+    assert vehicle.wait_for(lambda s: read(s) and s.parameters.get("RCMAP_THROTTLE") is not None, 30)
+    assert vehicle.set_parameter("RCMAP_THROTTLE", 1).result(timeout=15).ok
+    assert vehicle.set_parameter("RCMAP_PITCH", 3).result(timeout=15).ok
+    qtbot.waitUntil(lambda: page.channels.value(1) is not None, timeout=10000)
+    qtbot.mouseClick(page.start, Qt.LeftButton)
+    for channel, pwms in ((1, (1900, 1100)), (3, (1100, 1900, 1500))):
+        for pwm in pwms:
+            sim.autopilot.move_stick(channel, pwm)
+            qtbot.waitUntil(lambda c=channel, p=pwm: page.channels.value(c) == p, timeout=10000)
+    qtbot.mouseClick(page.finish, Qt.LeftButton)
+    plan = page.plan.toPlainText()
+    assert "RC3_MIN 1000, RC3_MAX 1900, RC3_TRIM 1500" in plan, plan     # 1000: where the sim starts it
+    assert "RC1_MIN 1100, RC1_MAX 1900, RC1_TRIM 1100" in plan, plan

@@ -6,6 +6,8 @@ from dataclasses import dataclass
 
 from driver.setup.availability import unavailable
 
+from .radio_calibration import throttle_channel
+
 __all__ = ["Line", "summary", "DONE", "ATTENTION", "NOT_APPLICABLE", "UNKNOWN"]
 
 DONE, ATTENTION, NOT_APPLICABLE, UNKNOWN = "done", "needs attention", "not applicable", "not known yet"
@@ -43,7 +45,7 @@ def summary(s) -> list[Line]:
                              "accelerometer"))
     lines.append(_calibrated(s, "Compass", ("COMPASS_OFS_X", "COMPASS_OFS_Y", "COMPASS_OFS_Z"), "compass"))
     rc = s.setup.rc
-    if rc.channel(3) is None:
+    if rc.channel(throttle_channel(s)) is None:
         lines.append(Line("Radio", ATTENTION, "no RC channels received from the vehicle (transmitter off, or no "
                                               "receiver)" if rc.updated else "RC channels not received yet"))
     else:
