@@ -328,3 +328,18 @@ def test_radio_calibration_takes_the_throttle_from_rcmap_throttle(qtbot, bench_w
     plan = page.plan.toPlainText()
     assert "RC3_MIN 1000, RC3_MAX 1900, RC3_TRIM 1500" in plan, plan     # 1000: where the sim starts it
     assert "RC1_MIN 1100, RC1_MAX 1900, RC1_TRIM 1100" in plan, plan
+
+
+def test_next_comes_back_after_a_position_confirm_that_got_no_answer(qtbot, bench_window):
+    sim, _vehicle, w = bench_window(calibration_model=True)
+    page = open_setup(w, "Sensors")
+    qtbot.mouseClick(page.accel_start, Qt.LeftButton)
+    qtbot.waitUntil(lambda: page.next.isEnabled() and page.pose.position == 1, timeout=20000)
+    sim.faults.uplink.loss = 1.0                     # the confirm never reaches the vehicle
+    qtbot.mouseClick(page.next, Qt.LeftButton)
+    assert not page.next.isEnabled()
+    qtbot.waitUntil(lambda: page.result.text().startswith("accel position"), timeout=20000)
+    sim.faults.uplink.loss = 0.0
+    qtbot.waitUntil(page.next.isEnabled, timeout=5000)   # the vehicle still asks for position 1
+    qtbot.mouseClick(page.next, Qt.LeftButton)
+    qtbot.waitUntil(lambda: page.next.isEnabled() and page.pose.position == 2, timeout=20000)

@@ -127,7 +127,8 @@ class SensorsPage(QWidget):
             self._runner.run("accel position", lambda _s: self._accel.confirm_position(), self._position_done)
 
     def _position_done(self, result) -> None:
-        if not result.ok:
+        if not result.ok:                           # not confirmed (lost, refused): Next again for the same one
+            self._confirming = None
             self._done(result)
 
     def _compass(self, call: str) -> None:
