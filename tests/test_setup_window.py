@@ -343,3 +343,12 @@ def test_next_comes_back_after_a_position_confirm_that_got_no_answer(qtbot, benc
     qtbot.waitUntil(page.next.isEnabled, timeout=5000)   # the vehicle still asks for position 1
     qtbot.mouseClick(page.next, Qt.LeftButton)
     qtbot.waitUntil(lambda: page.next.isEnabled() and page.pose.position == 2, timeout=20000)
+
+
+def test_the_mode_switch_slots_at_arducopters_edges():
+    """RC_Channel::read_6pos_switch: below 1231, 1361, 1491, 1621, 1750; at or past 800 / 2200 no position."""
+    from uavviewer.setup.modes_page import slot_of
+
+    edges = {800: None, 801: 1, 1230: 1, 1231: 2, 1360: 2, 1361: 3, 1490: 3, 1491: 4, 1620: 4, 1621: 5,
+             1749: 5, 1750: 6, 2199: 6, 2200: None, 0: None, None: None}
+    assert {pwm: slot_of(pwm) for pwm in edges} == edges
