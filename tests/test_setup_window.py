@@ -352,3 +352,21 @@ def test_the_mode_switch_slots_at_arducopters_edges():
     edges = {800: None, 801: 1, 1230: 1, 1231: 2, 1360: 2, 1361: 3, 1490: 3, 1491: 4, 1620: 4, 1621: 5,
              1749: 5, 1750: 6, 2199: 6, 2200: None, 0: None, None: None}
     assert {pwm: slot_of(pwm) for pwm in edges} == edges
+
+
+def test_change_in_parameters_opens_the_rows_own_parameter(qtbot, bench_window):
+    """The "Battery critical" row ends "(no voltage set: BATT_CRT_VOLT 0)": its parameter is BATT_FS_CRT_ACT,
+    kept with the row, not read back from its words."""
+    from PyQt5.QtWidgets import QPushButton
+
+    _sim, vehicle, w = bench_window()
+    page = open_setup(w, "Failsafes")
+    assert vehicle.wait_for(lambda s: read(s), 30)
+    qtbot.waitUntil(lambda: page.lines.topLevelItemCount() == 6
+                    and "BATT_CRT_VOLT 0" in page.lines.topLevelItem(1).text(1), timeout=5000)
+    change = next(b for b in page.findChildren(QPushButton) if b.text().startswith("Change in Parameters"))
+    for row, name in ((1, "BATT_FS_CRT_ACT"), (4, "FS_EKF_ACTION"), (5, "FENCE_ENABLE")):
+        page.lines.setCurrentItem(page.lines.topLevelItem(row))
+        qtbot.mouseClick(change, Qt.LeftButton)
+        qtbot.waitUntil(lambda n=name: w.params.page is not None and w.params.page.current_name() == n,
+                        timeout=5000)
