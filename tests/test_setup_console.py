@@ -53,7 +53,11 @@ def test_motortest_rc_and_adsb(sim_factory, vehicle_factory):
     sim, v, console, out = ready(sim_factory, vehicle_factory, adsb=3)
     console.onecmd("rc")            # the first 'rc' asks for RC_CHANNELS and waits for it, as against real SITL
     assert "rc in  1:1500 2:1500 3:1000 4:1500 5:1800 6:1000 7:1000 8:1800" in out.getvalue(), out.getvalue()
-    console.onecmd("motortest 1 0 20 1")
+    console.onecmd("motortest 1 0 20 1")           # without the word: refused, nothing sent
+    assert "take the propellers off, then end the line with 'props-off' (motortest 1 0 20 1 props-off)" in \
+        out.getvalue(), out.getvalue()
+    assert not sim.autopilot.motor_testing and "motor test 1" not in out.getvalue()
+    console.onecmd("motortest 1 0 20 1 props-off")
     assert eventually(lambda: "motor test 1: accepted" in out.getvalue(), T), out.getvalue()
     assert eventually(lambda: 1200 in v.state().setup.outputs.values, T)
     console.onecmd("motortest stop")
