@@ -39,8 +39,23 @@ def confirm_each(cal, vehicle) -> list[int]:
     return asked
 
 
+def solo_says_it_does_not_drive_its_accel_calibration(sim, v) -> bool:
+    """3.3's six-position calibration asks by text and takes a bare COMMAND_ACK: refused here, with the reason,
+    and nothing sent (the sim's 3.3 is not calibrating)."""
+    if not v.state().firmware.startswith("3.3"):
+        return False
+    cal = v.setup.accel_calibration()
+    result = cal.verdict.result(T)
+    assert result.status is CommandStatus.REJECTED and "older way" in result.reason and cal.started.done()
+    assert sim.autopilot.accel_step is None
+    return True
+
+
 def test_six_position_accel_calibration_succeeds_when_the_airframe_is_turned(bench):
     sim, v = bench(calibration_model=True)
+    assert v.wait_for(lambda s: s.firmware, T)
+    if solo_says_it_does_not_drive_its_accel_calibration(sim, v):
+        return
     cal = v.setup.accel_calibration()
     assert cal.started.result(T).ok
     assert confirm_each(cal, v) == [1, 2, 3, 4, 5, 6]
@@ -54,6 +69,9 @@ def test_six_position_accel_calibration_succeeds_when_the_airframe_is_turned(ben
 
 def test_accel_calibration_fails_at_the_second_position_on_an_unturned_airframe_and_arming_is_refused(bench):
     sim, v = bench()
+    assert v.wait_for(lambda s: s.firmware, T)
+    if solo_says_it_does_not_drive_its_accel_calibration(sim, v):
+        return
     cal = v.setup.accel_calibration()
     assert confirm_each(cal, v) == [1, 2]
     verdict = cal.verdict.result(T)
@@ -66,8 +84,10 @@ def test_accel_calibration_fails_at_the_second_position_on_an_unturned_airframe_
 def test_calibrations_while_armed_are_refused_with_the_vehicles_reason(bench):
     sim, v = bench()
     assert v.set_mode("GUIDED").result(T).ok and v.arm().result(T).ok
-    for result in (v.setup.calibrate_gyro().result(T), v.setup.calibrate_baro().result(T),
-                   v.setup.accel_calibration().verdict.result(T), v.setup.compass_calibration().finished.result(T)):
+    calls = [v.setup.calibrate_gyro, v.setup.calibrate_baro, lambda: v.setup.compass_calibration().finished]
+    if bench.profile == "copter-4":                    # 3.3's is not driven here (see above)
+        calls.append(lambda: v.setup.accel_calibration().verdict)
+    for result in (call().result(T) for call in calls):
         assert result.status is CommandStatus.REFUSED, result
         if bench.profile == "copter-4":
             assert "Disarm to allow" in result.reason, result

@@ -230,8 +230,9 @@ def test_the_solos_33_says_what_it_lacks(qtbot, sim_factory, vehicle_factory, wi
     page = open_setup(w, "Sensors")
     qtbot.waitUntil(lambda: "does not handle a level calibration" in page.notes.text(), timeout=5000)
     assert "no compass calibration from a known yaw" in page.notes.text()
+    assert "six-position accelerometer calibration the older way" in page.notes.text()
     assert not page.level.isEnabled() and not page.simple.isEnabled() and not page.fixed_yaw.isEnabled()
-    assert page.gyro.isEnabled() and page.accel_start.isEnabled()
+    assert page.gyro.isEnabled() and not page.accel_start.isEnabled()
     summary = w.setup.dialog.turn_to("Summary")
     qtbot.waitUntil(lambda: summary.verdict("Traffic (ADS-B)") == "not applicable", timeout=5000)
 

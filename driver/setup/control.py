@@ -32,7 +32,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink
 from ..core.results import CommandResult, CommandStatus, Severity, chain
 from ..traffic.approach import AlertLimits
 from ..traffic.tracker import TrafficTracker
-from .availability import version
+from .availability import unavailable, version
 from .model import (
     ACCEL_FAILED, ACCEL_POSITIONS, ACCEL_SUCCESS, AccelCalState, AccelStep, CompassCalState, CompassProgress,
     CompassReport, RcChannels, ServoOutputs,
@@ -137,6 +137,11 @@ class VehicleSetup:
     def accel_calibration(self) -> AccelCalibration:
         """Start the six-position calibration; the vehicle asks for each position in turn."""
         cal = AccelCalibration(self)
+        why = unavailable("accel", self._v.state().firmware)
+        if why:                                 # 3.3: positions by text and COMMAND_ACK, not driven here
+            cal.started = self._v._finish("accel calibration", CommandStatus.REJECTED, why)
+            cal.verdict.set_result(cal.started.result())
+            return cal
         with self._lock:
             old, self._accel = self._accel, cal
         if old is not None and not old.verdict.done():

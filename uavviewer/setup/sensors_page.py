@@ -139,13 +139,15 @@ class SensorsPage(QWidget):
 
     # -- the vehicle's state ------------------------------------------------------------------------
     def show_state(self, s) -> None:
-        notes = [why for why in (unavailable(a, s.firmware) for a in ("level", "accel_simple", "fixed_yaw")) if why]
+        notes = [why for why in (unavailable(a, s.firmware) for a in ("level", "accel_simple", "accel", "fixed_yaw"))
+                 if why]
         if s.armed:
             notes.insert(0, "Armed: the vehicle refuses calibrations until it is disarmed.")
         self.notes.setText("\n".join(notes))
         self.level.setEnabled(not unavailable("level", s.firmware))
         self.simple.setEnabled(not unavailable("accel_simple", s.firmware))
         self.fixed_yaw.setEnabled(not unavailable("fixed_yaw", s.firmware))
+        self.accel_start.setEnabled(not unavailable("accel", s.firmware))
         accel = s.setup.accel
         self.pose.set_position(accel.position if accel.step is AccelStep.WAITING else None)
         waiting = accel.step is AccelStep.WAITING
