@@ -275,9 +275,9 @@ class VehicleSetup:
     def stop_motor_test(self) -> Future:
         """End the running test at its next loop: DO_MOTOR_TEST with timeout 0 (motor_test.cpp takes it as a new
         timeout). Only while one runs: sent otherwise it *starts* a test that arms, then disarms the vehicle."""
-        def problem(_s) -> str | None:
-            return None if self.motor_test_running else "no motor test is running"
-        refusal = problem(None)
+        def problem(s) -> str | None:           # checked now and again as the command goes out
+            return None if s.setup.motor_test_running else "no motor test is running"
+        refusal = problem(self._v.state())
         if refusal:
             return self._v._finish("stop motor test", CommandStatus.REJECTED, refusal)
         future = self._v._command_long(mavlink.MAV_CMD_DO_MOTOR_TEST, (1, 0, 0, 0, 0), "stop motor test",
