@@ -29,7 +29,7 @@ def test_a_plus_quad_runs_motors_1_to_4_on_outputs_3_1_4_2_then_disarms(bench):
     sim.autopilot.params["FRAME_TYPE"] = 0                    # + quad, as the recording's SITL
     v.setup.watch_radio()
     assert v.wait_for(lambda s: s.setup.outputs.values[:4] == (1000, 1000, 1000, 1000), T)
-    result = v.setup.motor_test(1, throttle_pct=20, seconds=1.0, count=4, propellers_removed=True).result(T)
+    result = v.setup.motor_test(1, throttle_pct=20, seconds=2.0, count=4, propellers_removed=True).result(T)
     assert result.status is CommandStatus.ACCEPTED
     finished = outputs_in_turn(v, lambda: not sim.autopilot.motor_testing, 1200)
     assert finished == ([3, 1, 4, 2] if bench.profile == "copter-4" else [3])     # 3.3 takes no count
