@@ -53,7 +53,11 @@ def test_motortest_rc_and_adsb(sim_factory, vehicle_factory):
     sim, v, console, out = ready(sim_factory, vehicle_factory, adsb=3)
     console.onecmd("rc")            # the first 'rc' asks for RC_CHANNELS and waits for it, as against real SITL
     assert "rc in  1:1500 2:1500 3:1000 4:1500 5:1800 6:1000 7:1000 8:1800" in out.getvalue(), out.getvalue()
-    console.onecmd("motortest 1 0 20 1")
+    console.onecmd("motortest 1 0 20 1")           # without the word: refused, nothing sent
+    assert "take the propellers off, then end the line with 'props-off' (motortest 1 0 20 1 props-off)" in \
+        out.getvalue(), out.getvalue()
+    assert not sim.autopilot.motor_testing and "motor test 1" not in out.getvalue()
+    console.onecmd("motortest 1 0 20 1 props-off")
     assert eventually(lambda: "motor test 1: accepted" in out.getvalue(), T), out.getvalue()
     assert eventually(lambda: 1200 in v.state().setup.outputs.values, T)
     console.onecmd("motortest stop")
@@ -63,3 +67,14 @@ def test_motortest_rc_and_adsb(sim_factory, vehicle_factory):
     assert eventually(lambda: len(v.state().traffic.contacts) >= 3, T)
     console.onecmd("adsb")
     assert "SIM" in out.getvalue() and " m at " in out.getvalue() and "m/s" in out.getvalue(), out.getvalue()
+
+
+def test_rc_asks_the_channels_off_again_and_a_second_rc_shows_fresh_ones(sim_factory, vehicle_factory):
+    sim, v, console, out = ready(sim_factory, vehicle_factory)
+    console.onecmd("rc")
+    assert "rc in  1:1500 2:1500 3:1000" in out.getvalue(), out.getvalue()
+    assert eventually(lambda: "RC_CHANNELS" not in sim.autopilot.intervals, T)      # the stream is off again
+    sim.autopilot.move_stick(1, 1700)
+    console.onecmd("rc")                            # asks again and waits for a fresh one
+    assert "rc in  1:1700 2:1500 3:1000" in out.getvalue(), out.getvalue()
+    assert eventually(lambda: "RC_CHANNELS" not in sim.autopilot.intervals, T)

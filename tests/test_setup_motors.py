@@ -29,10 +29,10 @@ def test_a_plus_quad_runs_motors_1_to_4_on_outputs_3_1_4_2_then_disarms(bench):
     sim.autopilot.params["FRAME_TYPE"] = 0                    # + quad, as the recording's SITL
     v.setup.watch_radio()
     assert v.wait_for(lambda s: s.setup.outputs.values[:4] == (1000, 1000, 1000, 1000), T)
-    result = v.setup.motor_test(1, throttle_pct=20, seconds=1.0, count=4, propellers_removed=True).result(T)
+    result = v.setup.motor_test(1, throttle_pct=20, seconds=2.0, count=4, propellers_removed=True).result(T)
     assert result.status is CommandStatus.ACCEPTED
     finished = outputs_in_turn(v, lambda: not sim.autopilot.motor_testing, 1200)
-    assert finished == [3, 1, 4, 2]
+    assert finished == ([3, 1, 4, 2] if bench.profile == "copter-4" else [3])     # 3.3 takes no count
     assert v.wait_for(lambda s: not s.armed and s.setup.outputs.values[:4] == (1000,) * 4, T)
     if bench.profile == "copter-4":
         assert "starting motor test" in texts(v) and "finished motor test" in texts(v)
@@ -71,3 +71,48 @@ def test_the_transmitters_sticks_show_in_the_rc_channels(bench):
     assert state.setup.rc.values[:8] == (1500, 1500, 1000, 1500, 1800, 1000, 1000, 1800)
     sim.autopilot.move_stick(3, 1620)
     assert v.wait_for(lambda s: s.setup.rc.channel(3) == 1620, T)
+
+
+def test_the_test_runs_until_the_vehicle_ends_it_even_when_another_station_stops_it(bench):
+    """The running state is the vehicle's: its "finished motor test" (4.x) or its disarm (3.3 says nothing),
+    not a clock guess."""
+    from pymavlink.dialects.v20 import ardupilotmega as mavlink
+
+    from driver.sim.gcs import OtherGroundStation
+
+    sim, v = bench()
+    assert v.setup.motor_test(1, throttle_pct=20, seconds=25, propellers_removed=True).result(T).ok
+    assert v.wait_for(lambda s: s.setup.motor_test_running and s.armed, T)
+    other = OtherGroundStation(f"tcp:127.0.0.1:{sim.tcp_port}", mavlink1=bench.profile == "solo").start()
+    try:
+        ack = other.command(mavlink.MAV_CMD_DO_MOTOR_TEST, 1, 0, 0, 0, 0)
+        assert ack is not None and ack.result == mavlink.MAV_RESULT_ACCEPTED
+    finally:
+        other.close()
+    assert v.wait_for(lambda s: not s.setup.motor_test_running, 15)
+    assert not sim.autopilot.motor_testing
+
+
+def test_stop_is_sent_only_while_a_test_runs(bench):
+    """DO_MOTOR_TEST with timeout 0 while none runs starts a test that arms then disarms the vehicle
+    (motor_test.cpp): an idle Stop is refused here, and the armed vehicle stays armed."""
+    sim, v = bench()
+    assert v.set_mode("GUIDED").result(T).ok and v.arm().result(T).ok
+    assert v.wait_for(lambda s: s.armed, T)
+    refused = v.setup.stop_motor_test().result(T)
+    assert refused.status is CommandStatus.REJECTED and "no motor test is running" in refused.reason
+    assert v.state().armed and sim.autopilot.armed
+
+
+def test_a_sequence_rests_half_each_motors_seconds_and_the_solo_runs_one_motor(bench):
+    sim, v = bench()
+    assert v.setup.motor_test(1, throttle_pct=20, seconds=4, count=4, propellers_removed=True).result(T).ok
+    starts = [entry[0] for entry in sim.autopilot.motor_queue]      # the next motors (the first may be out)
+    if bench.profile == "copter-4":                  # motor_test.cpp: timeout, then 0.5 x timeout at rest
+        gaps = [round(b - a, 6) for a, b in zip(starts, starts[1:])]
+        assert len(gaps) >= 2 and set(gaps) == {6.0}
+    else:                                            # 3.3's motor_test.pde takes no count
+        assert sim.autopilot.motor_test is not None or len(starts) == 1
+        assert len(starts) <= 1
+    assert v.setup.stop_motor_test().result(T).ok
+    assert v.wait_for(lambda s: not s.setup.motor_test_running and not s.armed, T)

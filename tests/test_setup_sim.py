@@ -75,7 +75,45 @@ def test_each_page_can_say_what_the_solos_firmware_lacks(sim_factory, vehicle_fa
     state = v.wait_for(lambda s: s.firmware, 30)
     assert state.firmware == "3.3.1"
     missing = {a for a in SETUP_ACTIONS if unavailable(a, state.firmware)}
-    assert missing == {"level", "accel_simple", "fixed_yaw", "adsb"}
+    assert missing == {"level", "accel_simple", "accel", "fixed_yaw", "adsb"}
     assert "MAV_CMD_FIXED_MAG_CAL_YAW" in unavailable("fixed_yaw", state.firmware)
     assert not any(unavailable(a, "4.6.3") for a in SETUP_ACTIONS)
     assert not any(unavailable(a, "") for a in SETUP_ACTIONS)      # not known yet: the vehicle decides
+
+
+def test_the_solos_33_asks_each_accel_position_by_text_and_takes_a_command_ack():
+    """ardupilot-solo: PREFLIGHT_CALIBRATION p5=1 starts it but is answered FAILED; "Place vehicle ... and press
+    any key." per position, any COMMAND_ACK takes the sample, no ACCELCAL_VEHICLE_POS; a success reboots."""
+    b = Bench(profile="solo", calibration_model=True)
+    b.run(3.0)
+    acks, texts = b.command(mavlink.MAV_CMD_PREFLIGHT_CALIBRATION, 0, 0, 0, 0, 1, wait=0.5)
+    assert acks == [mavlink.MAV_RESULT_FAILED] and texts == ["Place vehicle level and press any key."]
+    asked = [texts[0]]
+    for _ in range(6):
+        b.out.clear()
+        b.ap.handle(b.factory.command_ack_encode(0, 1), 1)
+        b.run(1.0)
+        asked += [m.text for m in b.out if m.get_type() == "STATUSTEXT"]
+        assert not any(m.get_type() == "COMMAND_LONG" for m in b.out)          # never ACCELCAL_VEHICLE_POS
+    assert asked == ["Place vehicle level and press any key.", "Place vehicle on its LEFT side and press any key.",
+                     "Place vehicle on its RIGHT side and press any key.", "Place vehicle nose DOWN and press any key.",
+                     "Place vehicle nose UP and press any key.", "Place vehicle on its BACK and press any key.",
+                     "Calibration successful"]
+    b.run(1.0)
+    assert b.ap.rebooting_until is not None                                   # AP_AccelCal::success reboots
+    assert b.command(mavlink.MAV_CMD_ACCELCAL_VEHICLE_POS, 1)[0] in ([], [mavlink.MAV_RESULT_UNSUPPORTED])
+
+
+def test_the_solos_33_has_no_accelcal_vehicle_pos():
+    b = Bench(profile="solo")
+    b.run(3.0)
+    assert b.command(mavlink.MAV_CMD_ACCELCAL_VEHICLE_POS, 1)[0] == [mavlink.MAV_RESULT_UNSUPPORTED]
+
+
+def test_a_timeout_zero_motor_test_while_none_runs_arms_then_disarms_the_vehicle():
+    """motor_test.cpp: a stop sent idle goes through mavlink_motor_test_start and ends at the next loop."""
+    b = Bench()
+    b.run(3.0)
+    acks, texts = b.command(mavlink.MAV_CMD_DO_MOTOR_TEST, 1, 0, 0, 0, wait=0.2)
+    assert acks == [mavlink.MAV_RESULT_ACCEPTED] and texts == ["starting motor test", "finished motor test"]
+    assert not b.ap.motor_testing and not b.ap.armed

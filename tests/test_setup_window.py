@@ -76,10 +76,13 @@ def test_motor_test_needs_the_tick_and_a_disarmed_vehicle_and_the_outputs_move(q
     idle = page.outputs.value(1)
     page.throttle.setValue(30.0)
     page.seconds.setValue(5.0)
+    assert not page.stop.isEnabled()                 # idle, a stop would start a test (motor_test.cpp)
     qtbot.mouseClick(page.test, Qt.LeftButton)
     qtbot.waitUntil(lambda: (page.outputs.value(1) or 0) > idle, timeout=10000)
+    qtbot.waitUntil(page.stop.isEnabled, timeout=5000)
     qtbot.mouseClick(page.stop, Qt.LeftButton)
     qtbot.waitUntil(lambda: page.outputs.value(1) == idle, timeout=10000)
+    qtbot.waitUntil(lambda: not page.stop.isEnabled(), timeout=10000)
 
 
 def test_radio_bars_follow_the_transmitter(qtbot, bench_window):
@@ -228,8 +231,9 @@ def test_the_solos_33_says_what_it_lacks(qtbot, sim_factory, vehicle_factory, wi
     page = open_setup(w, "Sensors")
     qtbot.waitUntil(lambda: "does not handle a level calibration" in page.notes.text(), timeout=5000)
     assert "no compass calibration from a known yaw" in page.notes.text()
+    assert "six-position accelerometer calibration the older way" in page.notes.text()
     assert not page.level.isEnabled() and not page.simple.isEnabled() and not page.fixed_yaw.isEnabled()
-    assert page.gyro.isEnabled() and page.accel_start.isEnabled()
+    assert page.gyro.isEnabled() and not page.accel_start.isEnabled()
     summary = w.setup.dialog.turn_to("Summary")
     qtbot.waitUntil(lambda: summary.verdict("Traffic (ADS-B)") == "not applicable", timeout=5000)
 
@@ -249,3 +253,122 @@ def test_all_motors_in_sequence_each_output_spins(qtbot, bench_window):
     qtbot.mouseClick(page.test, Qt.LeftButton)
     qtbot.waitUntil(lambda: raised == {1, 2, 3, 4}, timeout=20000)
     assert page.result.text().startswith("motor test 1: accepted")
+
+
+def test_compass_accept_waits_until_no_compass_is_still_in_progress(qtbot, bench_window):
+    """ArduPilot's accept stops every calibrator and fails when one still runs: Accept is offered only once every
+    compass has reported."""
+    from dataclasses import replace
+
+    from driver.setup.model import CompassCalState, CompassProgress, CompassReport
+
+    _sim, vehicle, w = bench_window()
+    page = open_setup(w, "Sensors")
+    state = vehicle.state()
+    report = CompassReport(0, 4, 0.037, (5.0, 13.0, -18.0), False)
+    still = CompassCalState(running=True, progress=(CompassProgress(1, 75, 3, 1), CompassProgress(2, 75, 3, 1)),
+                            reports=(report,))
+    w.setup.dialog.hide()                          # only this snapshot reaches the page
+    page.show_state(replace(state, setup=replace(state.setup, compass=still)))
+    assert not page.compass_accept.isEnabled()
+    page.show_state(replace(state, setup=replace(state.setup, compass=replace(still, progress=(), reports=(
+        report, replace(report, compass=1), replace(report, compass=2))))))
+    assert page.compass_accept.isEnabled()
+
+
+def test_a_late_answer_after_the_vehicle_changed_is_dropped_and_the_app_goes_on(qtbot, caplog, sim_factory,
+                                                                                 vehicle_factory, window_factory):
+    """The pages of the old vehicle are deleted when another is picked; a calibration's answer arriving after
+    that must not reach them ("wrapped C/C++ object has been deleted" in a slot aborts the app)."""
+    from PyQt5 import sip
+
+    sims = [sim_factory(), sim_factory()]
+    vehicles = [vehicle_factory(f"tcp:127.0.0.1:{s.tcp_port}") for s in sims]
+    for v in vehicles:
+        assert v.wait_for(lambda s: s.connected and s.readiness.prearm_ok, 30), "vehicle not ready"
+    w = window_factory(vehicles[0])
+    page = open_setup(w, "Sensors")
+    sims[0].faults.uplink.latency = 1.0              # real s: the answer comes after the pages are gone
+    qtbot.mouseClick(page.gyro, Qt.LeftButton)
+    w.adapter.use(vehicles[1])
+    qtbot.waitUntil(lambda: sip.isdeleted(page), timeout=5000)
+    qtbot.waitUntil(lambda: "dropped the answer of gyro" in caplog.text, timeout=15000)
+    assert any(r.command == "gyro calibration" and r.ok for r in vehicles[0].state().results)
+    fresh = w.setup.dialog.pages["Sensors"]          # the new vehicle's pages work
+    qtbot.mouseClick(fresh.gyro, Qt.LeftButton)
+    qtbot.waitUntil(lambda: "accepted" in fresh.result.text(), timeout=10000)
+
+
+def test_the_rc_stream_is_asked_off_on_pages_without_it_and_when_the_window_closes(qtbot, bench_window):
+    sim, _vehicle, w = bench_window()
+    page = open_setup(w, "Radio")
+    qtbot.waitUntil(lambda: page.channels.value(1) is not None, timeout=10000)
+    assert "RC_CHANNELS" in sim.autopilot.intervals
+    w.setup.dialog.turn_to("Sensors")
+    qtbot.waitUntil(lambda: "RC_CHANNELS" not in sim.autopilot.intervals, timeout=10000)
+    w.setup.dialog.turn_to("Flight modes")
+    qtbot.waitUntil(lambda: "RC_CHANNELS" in sim.autopilot.intervals, timeout=10000)
+    w.setup.dialog.close()
+    qtbot.waitUntil(lambda: "RC_CHANNELS" not in sim.autopilot.intervals, timeout=10000)
+
+
+def test_radio_calibration_takes_the_throttle_from_rcmap_throttle(qtbot, bench_window):
+    """A transmitter with the throttle on channel 1 (RCMAP_THROTTLE 1) has its pitch on 3: channel 3's trim is
+    its centre, channel 1's its lowest."""
+    sim, vehicle, w = bench_window()
+    page = open_setup(w, "Radio")
+    assert vehicle.wait_for(lambda s: read(s) and s.parameters.get("RCMAP_THROTTLE") is not None, 30)
+    assert vehicle.set_parameter("RCMAP_THROTTLE", 1).result(timeout=15).ok
+    assert vehicle.set_parameter("RCMAP_PITCH", 3).result(timeout=15).ok
+    qtbot.waitUntil(lambda: page.channels.value(1) is not None, timeout=10000)
+    qtbot.mouseClick(page.start, Qt.LeftButton)
+    for channel, pwms in ((1, (1900, 1100)), (3, (1100, 1900, 1500))):
+        for pwm in pwms:
+            sim.autopilot.move_stick(channel, pwm)
+            qtbot.waitUntil(lambda c=channel, p=pwm: page.channels.value(c) == p, timeout=10000)
+    qtbot.mouseClick(page.finish, Qt.LeftButton)
+    plan = page.plan.toPlainText()
+    assert "RC3_MIN 1000, RC3_MAX 1900, RC3_TRIM 1500" in plan, plan     # 1000: where the sim starts it
+    assert "RC1_MIN 1100, RC1_MAX 1900, RC1_TRIM 1100" in plan, plan
+
+
+def test_next_comes_back_after_a_position_confirm_that_got_no_answer(qtbot, bench_window):
+    sim, _vehicle, w = bench_window(calibration_model=True)
+    page = open_setup(w, "Sensors")
+    qtbot.mouseClick(page.accel_start, Qt.LeftButton)
+    qtbot.waitUntil(lambda: page.next.isEnabled() and page.pose.position == 1, timeout=20000)
+    sim.faults.uplink.loss = 1.0                     # the confirm never reaches the vehicle
+    qtbot.mouseClick(page.next, Qt.LeftButton)
+    assert not page.next.isEnabled()
+    qtbot.waitUntil(lambda: page.result.text().startswith("accel position"), timeout=20000)
+    sim.faults.uplink.loss = 0.0
+    qtbot.waitUntil(page.next.isEnabled, timeout=5000)   # the vehicle still asks for position 1
+    qtbot.mouseClick(page.next, Qt.LeftButton)
+    qtbot.waitUntil(lambda: page.next.isEnabled() and page.pose.position == 2, timeout=20000)
+
+
+def test_the_mode_switch_slots_at_arducopters_edges():
+    """RC_Channel::read_6pos_switch: below 1231, 1361, 1491, 1621, 1750; at or past 800 / 2200 no position."""
+    from uavviewer.setup.modes_page import slot_of
+
+    edges = {800: None, 801: 1, 1230: 1, 1231: 2, 1360: 2, 1361: 3, 1490: 3, 1491: 4, 1620: 4, 1621: 5,
+             1749: 5, 1750: 6, 2199: 6, 2200: None, 0: None, None: None}
+    assert {pwm: slot_of(pwm) for pwm in edges} == edges
+
+
+def test_change_in_parameters_opens_the_rows_own_parameter(qtbot, bench_window):
+    """The "Battery critical" row ends "(no voltage set: BATT_CRT_VOLT 0)": its parameter is BATT_FS_CRT_ACT,
+    kept with the row, not read back from its words."""
+    from PyQt5.QtWidgets import QPushButton
+
+    _sim, vehicle, w = bench_window()
+    page = open_setup(w, "Failsafes")
+    assert vehicle.wait_for(lambda s: read(s), 30)
+    qtbot.waitUntil(lambda: page.lines.topLevelItemCount() == 6
+                    and "BATT_CRT_VOLT 0" in page.lines.topLevelItem(1).text(1), timeout=5000)
+    change = next(b for b in page.findChildren(QPushButton) if b.text().startswith("Change in Parameters"))
+    for row, name in ((1, "BATT_FS_CRT_ACT"), (4, "FS_EKF_ACTION"), (5, "FENCE_ENABLE")):
+        page.lines.setCurrentItem(page.lines.topLevelItem(row))
+        qtbot.mouseClick(change, Qt.LeftButton)
+        qtbot.waitUntil(lambda n=name: w.params.page is not None and w.params.page.current_name() == n,
+                        timeout=5000)

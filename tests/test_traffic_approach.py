@@ -78,3 +78,15 @@ def test_a_head_on_aircraft_from_the_simulator_raises_an_alert_and_a_passing_one
     assert not state.traffic.contact(4343).alert
     assert [c.icao for c in state.traffic.alerts] == [4242]
     assert v.wait_for(lambda s: any(m.text.startswith("Traffic SIM4242: within 500 m and 150 m") for m in s.messages), T)
+
+
+def test_a_contacts_age_counts_from_when_the_receiver_last_heard_it():
+    """ADSB_VEHICLE's tslc: the autopilot forwards what its receiver heard tslc seconds ago."""
+    own = SimpleNamespace(position=GlobalPosition(40.0, -3.0, 600.0), velocity=Velocity())
+    tracker = TrafficTracker()
+    old = adsb(78, 40.01, -3.0, 600.0, 180.0, 50.0)
+    old.tslc = 8
+    assert tracker.on_adsb_vehicle(old, now=100.0)
+    contact = tracker.snapshot(100.5, own).contact(78)
+    assert contact.age == pytest.approx(8.5) and contact.stale and not contact.alert
+    assert tracker.snapshot(112.5, own).contacts == ()            # 20.5 s since heard: dropped

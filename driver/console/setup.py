@@ -2,12 +2,15 @@
 accelcal, accelcalsimple, level, gyrocal, calpress, magcal, motortest, rc, adsb.
 
 ``accelcal`` starts the six-position calibration; each position the vehicle asks for is printed, and an empty
-line (Enter, as in MAVProxy) tells the vehicle it is in place. ``motortest`` takes MAVProxy's arguments; typing
-it is the pilot's word that the propellers are off (the driver still refuses it armed or in the air).
+line (Enter, as in MAVProxy) tells the vehicle it is in place. ``motortest`` takes MAVProxy's arguments followed
+by the word ``props-off``: the pilot's explicit word that the propellers are off (a motortest recalled from
+MAVProxy's history, or typed out of habit, does not spin a propeller); the driver still refuses it armed or in
+the air.
 """
 from __future__ import annotations
 
 import threading
+import time
 
 from ..setup.model import AccelStep
 from .words import number
@@ -16,7 +19,9 @@ from ..traffic.model import Traffic
 __all__ = ["SetupCommands", "traffic_lines", "rc_line"]
 
 MAGCAL_USAGE = "magcal start|accept|cancel|status | magcal yaw DEG"
-MOTORTEST_USAGE = "motortest MOTOR TYPE VALUE SECONDS [COUNT] (TYPE 0 percent, 1 PWM) | motortest stop"
+PROPS_OFF = "props-off"
+MOTORTEST_USAGE = (f"motortest MOTOR TYPE VALUE SECONDS [COUNT] {PROPS_OFF} (TYPE 0 percent, 1 PWM) | "
+                   "motortest stop")
 RC_WAIT = 3.0                  # s 'rc' waits for the first RC_CHANNELS it asked for
 WATCH_TIMEOUT = 120.0          # s an accel calibration waits for the vehicle's next word
 
@@ -117,30 +122,40 @@ class SetupCommands:
             raise ValueError(f"usage: {MAGCAL_USAGE}")
 
     def do_motortest(self, arg: str) -> None:
-        """motortest MOTOR TYPE VALUE SECONDS [COUNT]: spin a motor (test order) at VALUE percent (TYPE 0) or PWM
-        (TYPE 1) for SECONDS, COUNT motors in turn; propellers OFF; motortest stop ends it"""
+        """motortest MOTOR TYPE VALUE SECONDS [COUNT] props-off: spin a motor (test order) at VALUE percent (TYPE 0)
+        or PWM (TYPE 1) for SECONDS, COUNT motors in turn; props-off says the propellers are OFF; motortest stop
+        ends it"""
         words = arg.split()
         if words == ["stop"]:
             self._report(self.vehicle.setup.stop_motor_test())
             return
+        props_off = bool(words) and words[-1] == PROPS_OFF
+        words = words[:-1] if props_off else words
         if len(words) not in (4, 5) or words[1] not in ("0", "1"):
             raise ValueError(f"usage: {MOTORTEST_USAGE}")
+        if not props_off:
+            raise ValueError(f"the motors spin: take the propellers off, then end the line with '{PROPS_OFF}' "
+                             f"(motortest {' '.join(words)} {PROPS_OFF})")
         motor = int(number(words[0], "MOTOR", integer=True))
         value = number(words[2], "VALUE")
         seconds = number(words[3], "SECONDS")
         count = int(number(words[4], "COUNT", integer=True)) if len(words) == 5 else 1
         pct, pwm = (value, None) if words[1] == "0" else (None, value)
         self._report(self.vehicle.setup.motor_test(motor, throttle_pct=pct, pwm=pwm, seconds=seconds, count=count,
-                                                   propellers_removed=True))
+                                                   propellers_removed=props_off))
 
     def do_rc(self, arg: str) -> None:
         """rc: the transmitter's channels (RC_CHANNELS) and the outputs (SERVO_OUTPUT_RAW) as the vehicle sees them"""
-        state = self.vehicle.state()
-        if not state.setup.rc.values:
-            # RC_CHANNELS is in no stream a ground station asks for at connect: ask, then wait for the first one
-            # (4.6.3 SITL sent it about a second later), rather than say "nothing" to the first 'rc'
-            self.vehicle.setup.watch_radio()
-            state = self.vehicle.wait_for(lambda s: bool(s.setup.rc.values), RC_WAIT) or self.vehicle.state()
+        # RC_CHANNELS is in no stream a ground station asks for at connect: ask, wait for a fresh one (4.6.3 SITL
+        # sent it about a second later) rather than say "nothing" or show an old one, then ask the stream off
+        # again (10 Hz of RC_CHANNELS and SERVO_OUTPUT_RAW is about 18 % of a 57.6 kbaud radio)
+        asked = time.time()
+        self.vehicle.setup.watch_radio()
+        try:
+            state = self.vehicle.wait_for(lambda s: s.setup.rc.updated >= asked, RC_WAIT) or self.vehicle.state()
+        finally:
+            if not self.vehicle.setup.motor_test_running:
+                self.vehicle.setup.unwatch_radio()
         self.say(rc_line(state))
 
     def do_adsb(self, arg: str) -> None:

@@ -11,7 +11,9 @@ How ArduCopter runs each (tests/data/recordings/arducopter-4.6-sitl-setup and -c
 * compass: DO_START_MAG_CAL, MAG_CAL_PROGRESS per compass, MAG_CAL_REPORT, DO_ACCEPT_MAG_CAL or
   DO_CANCEL_MAG_CAL (:class:`CompassCalibration`); FIXED_MAG_CAL_YAW from a known heading;
 * motor test: DO_MOTOR_TEST. The vehicle accepts it even armed (recorded): here it is refused unless the
-  vehicle is disarmed and on the ground and the pilot said the propellers are off.
+  vehicle is disarmed and on the ground and the pilot said the propellers are off. It runs from the vehicle's
+  ACCEPTED until it says "finished motor test" (4.x) or disarms (the test armed it; 3.3 says nothing), with
+  motor_test.cpp's duration as a bound (:func:`motor_test_bound`).
 
 Methods marked "(lock held)" run on the driver's reader or ticker with the state lock held; the rest may be
 called from any thread and never wait on the network.
@@ -27,9 +29,10 @@ from dataclasses import replace
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-from ..core.results import CommandResult, CommandStatus, Severity
+from ..core.results import CommandResult, CommandStatus, Severity, chain
 from ..traffic.approach import AlertLimits
 from ..traffic.tracker import TrafficTracker
+from .availability import unavailable, version
 from .model import (
     ACCEL_FAILED, ACCEL_POSITIONS, ACCEL_SUCCESS, AccelCalState, AccelStep, CompassCalState, CompassProgress,
     CompassReport, RcChannels, ServoOutputs,
@@ -44,6 +47,8 @@ SETUP_MESSAGES = ("RC_CHANNELS", "RC_CHANNELS_RAW", "SERVO_OUTPUT_RAW", "MAG_CAL
 RADIO_RATE_HZ = 10                 # RC_CHANNELS and SERVO_OUTPUT_RAW while a setup page or the motor test watches
 TRAFFIC_REFRESH = 0.5              # s between traffic snapshots (ages, fading, alerts)
 MOTOR_TEST_MAX_SECONDS = 600.0     # ArduCopter's MOTOR_TEST_TIMEOUT_MAX
+MOTOR_TEST_MAX_SECONDS_33 = 30.0   # the Solo's 3.3 (motor_test.pde MOTOR_TEST_TIMEOUT_MS_MAX)
+MOTOR_TEST_MARGIN = 3.0            # s past the vehicle's own duration before the test counts as over unheard
 PWM_RANGE = (800, 2200)
 
 
@@ -105,7 +110,9 @@ class VehicleSetup:
         self._store = vehicle._store
         self._accel: AccelCalibration | None = None
         self._compass: CompassCalibration | None = None
-        self._test_until = 0.0                 # monotonic end of our motor test
+        self._test_until = 0.0                 # monotonic bound of our motor test (the vehicle ends it first)
+        self._test_from = 0                    # the vehicle's words from this message index on
+        self._test_armed = False               # the vehicle reported armed by the test
         self._traffic = TrafficTracker()
         self._traffic_at = 0.0
         self._alerted: set[int] = set()
@@ -130,6 +137,11 @@ class VehicleSetup:
     def accel_calibration(self) -> AccelCalibration:
         """Start the six-position calibration; the vehicle asks for each position in turn."""
         cal = AccelCalibration(self)
+        why = unavailable("accel", self._v.state().firmware)
+        if why:                                 # 3.3: positions by text and COMMAND_ACK, not driven here
+            cal.started = self._v._finish("accel calibration", CommandStatus.REJECTED, why)
+            cal.verdict.set_result(cal.started.result())
+            return cal
         with self._lock:
             old, self._accel = self._accel, cal
         if old is not None and not old.verdict.done():
@@ -153,7 +165,10 @@ class VehicleSetup:
         """DO_START_MAG_CAL for every compass, no retry, no autosave (the pilot accepts), no reboot."""
         cal = CompassCalibration(self)
         with self._lock:
-            self._compass = cal
+            old, self._compass = self._compass, cal
+        if old is not None and not old.finished.done():
+            self._v._notifier.settle(old.finished, self._store.record(
+                "compass calibration", CommandStatus.ABORTED, "superseded by a new compass calibration"))
         with self._store.lock:
             self._set(compass=CompassCalState(running=True))
         cal.started = self._v._command_long(mavlink.MAV_CMD_DO_START_MAG_CAL, (0, 0, 0, 0, 0), "compass calibration")
@@ -168,8 +183,11 @@ class VehicleSetup:
         self._v._notifier.settle(cal.finished, result)
 
     def accept_compass(self) -> Future:
+        """ArduPilot's accept stops every calibrator, and answers FAILED when one was not done
+        (AP_Compass_Calibration.cpp _accept_calibration_mask): whatever the answer, the run is over and its
+        result is the vehicle's verdict."""
         future = self._v._command_long(mavlink.MAV_CMD_DO_ACCEPT_MAG_CAL, (0,), "accept compass calibration")
-        future.add_done_callback(lambda f: f.result().ok and self._compass_ended(accepted=True))
+        future.add_done_callback(lambda f: self._compass_ended(accepted=f.result().ok, verdict=f.result()))
         return future
 
     def cancel_compass(self) -> Future:
@@ -177,16 +195,20 @@ class VehicleSetup:
         future.add_done_callback(lambda f: f.result().ok and self._compass_ended(cancelled=True))
         return future
 
-    def _compass_ended(self, accepted: bool = False, cancelled: bool = False) -> None:
+    def _compass_ended(self, accepted: bool = False, cancelled: bool = False,
+                       verdict: CommandResult | None = None) -> None:
         with self._store.lock:
             state = self._store.view()["setup"].compass
             self._set(compass=replace(state, running=False, accepted=accepted, cancelled=cancelled,
-                                      progress=() if cancelled else state.progress))
+                                      progress=() if cancelled or verdict is not None else state.progress))
             self._store.publish()
         cal = self._compass
-        if cancelled and cal is not None:
-            self._v._notifier.settle(cal.finished, self._store.record("compass calibration", CommandStatus.ABORTED,
-                                                                      "cancelled"))
+        if cal is None:
+            return
+        if cancelled:
+            verdict = self._store.record("compass calibration", CommandStatus.ABORTED, "cancelled")
+        if verdict is not None:
+            self._v._notifier.settle(cal.finished, verdict)
 
     def fixed_mag_yaw(self, yaw_deg: float, lat: float = 0.0, lon: float = 0.0) -> Future:
         """Calibrate the compasses from a known heading (large vehicles); lat/lon 0: the vehicle's own position."""
@@ -206,6 +228,7 @@ class VehicleSetup:
         if problem:
             return self._v._finish(name, CommandStatus.REJECTED, problem)
         ours = self.motor_test_running          # our own test armed the motors: a new one may replace it
+        firmware = self._v.state().firmware
 
         def problem(s) -> str | None:           # checked now and again as the command goes out
             if s.in_air:
@@ -218,34 +241,62 @@ class VehicleSetup:
             return self._v._finish(name, CommandStatus.REJECTED, refusal)
         kind, value = (0, float(throttle_pct)) if pwm is None else (1, float(pwm))
         self.watch_radio()
-        self._test_until = time.monotonic() + seconds * count + (count - 1) * 1.0 + 1.0
         with self._store.lock:
-            self._set(motor_test_running=True)
+            self._test_from = self._store.message_index
         future = self._v._command_long(mavlink.MAV_CMD_DO_MOTOR_TEST, (motor, kind, value, seconds, count), name,
                                        guard=problem)
-        future.add_done_callback(lambda f: f.result().ok or self._test_ended())
-        return future
+        return chain(future, lambda result: self._test_started(result, motor_test_bound(seconds, count, firmware)),
+                     name)
 
-    def _test_ended(self) -> None:
-        self._test_until = 0.0
-        with self._store.lock:
-            self._set(motor_test_running=False)
-            self._store.publish()
+    def _test_started(self, result: CommandResult, seconds: float) -> CommandResult:
+        """The vehicle accepted: the test runs (set before the caller hears the answer)."""
+        if result.ok:
+            with self._store.lock:
+                self._test_until = time.monotonic() + seconds + MOTOR_TEST_MARGIN
+                self._test_armed = False
+                self._set(motor_test_running=True)
+                self._store.publish()
+        return result
+
+    def _test_ended(self, result: CommandResult) -> CommandResult:
+        """The vehicle accepted the stop: it ends the test at its next loop."""
+        if result.ok:
+            with self._store.lock:
+                self._test_until = 0.0
+                self._set(motor_test_running=False)
+                self._store.publish()
+        return result
 
     @property
     def motor_test_running(self) -> bool:
-        return time.monotonic() < self._test_until
+        """As the vehicle reports it: from its ACCEPTED to its "finished motor test" or disarm."""
+        return self._v.state().setup.motor_test_running
 
     def stop_motor_test(self) -> Future:
-        """End the running test at once (DO_MOTOR_TEST with timeout 0, as ArduCopter's motor_test_output reads it)."""
-        self._test_ended()
-        return self._v._command_long(mavlink.MAV_CMD_DO_MOTOR_TEST, (1, 0, 0, 0, 0), "stop motor test")
+        """End the running test at its next loop: DO_MOTOR_TEST with timeout 0 (motor_test.cpp takes it as a new
+        timeout). Only while one runs: sent otherwise it *starts* a test that arms, then disarms the vehicle."""
+        def problem(s) -> str | None:           # checked now and again as the command goes out
+            return None if s.setup.motor_test_running else "no motor test is running"
+        refusal = problem(self._v.state())
+        if refusal:
+            return self._v._finish("stop motor test", CommandStatus.REJECTED, refusal)
+        future = self._v._command_long(mavlink.MAV_CMD_DO_MOTOR_TEST, (1, 0, 0, 0, 0), "stop motor test",
+                                       guard=problem)
+        return chain(future, self._test_ended, "stop motor test")
 
     def watch_radio(self, rate_hz: int = RADIO_RATE_HZ) -> None:
         """Ask for RC_CHANNELS and SERVO_OUTPUT_RAW (the RC_CHANNELS stream: 3.3 and 4.x both have it)."""
+        self._radio_stream(rate_hz)
+
+    def unwatch_radio(self) -> None:
+        """Back to the rate a connection asks for (none, as MAVProxy's): at 10 Hz the two messages take about
+        18 % of a 57.6 kbaud radio, for nothing once no page shows them."""
+        self._radio_stream(0)
+
+    def _radio_stream(self, rate_hz: int) -> None:
         system, component = self._v._target_ids()
-        self._v._post(mavlink.MAVLink_request_data_stream_message(system, component,
-                                                                  mavlink.MAV_DATA_STREAM_RC_CHANNELS, rate_hz, 1))
+        self._v._post(mavlink.MAVLink_request_data_stream_message(
+            system, component, mavlink.MAV_DATA_STREAM_RC_CHANNELS, rate_hz, 1 if rate_hz else 0))
 
     def request_banner(self) -> Future:
         """MAV_CMD_DO_SEND_BANNER: the vehicle says its firmware, its board's id line and its frame again
@@ -294,9 +345,6 @@ class VehicleSetup:
         count = 16 if m.get_msgbuf()[0] == 0xFD else 8
         values = tuple(int(getattr(m, f"servo{i}_raw", 0) or 0) for i in range(1, count + 1))
         self._set(outputs=ServoOutputs(values, time.time()))
-        if self._test_until and not self.motor_test_running:
-            self._test_until = 0.0
-            self._set(motor_test_running=False)
 
     def _on_mag_cal_progress(self, m) -> None:
         state = self._store.view()["setup"].compass
@@ -335,8 +383,8 @@ class VehicleSetup:
                 confirmed = state.confirmed + ((state.position,) if state.position else ())
                 self._set(accel=AccelCalState(AccelStep.WAITING, position, confirmed, state.texts))
             return
-        if position not in (ACCEL_SUCCESS, ACCEL_FAILED) or state.step not in (AccelStep.WAITING, AccelStep.STARTING):
-            return                              # the verdict is repeated every second: told once
+        if position not in (ACCEL_SUCCESS, ACCEL_FAILED) or not self._verdict_is_this_runs(state, cal):
+            return
         ok = position == ACCEL_SUCCESS
         self._set(accel=AccelCalState(AccelStep.SUCCESS if ok else AccelStep.FAILED, None, state.confirmed))
         if cal is not None and not cal.verdict.done():
@@ -346,11 +394,36 @@ class VehicleSetup:
             self._v._notifier.settle(cal.verdict, self._store.record_locked(
                 "accel calibration", CommandStatus.ACCEPTED if ok else CommandStatus.REFUSED, reason))
 
+    @staticmethod
+    def _verdict_is_this_runs(state: AccelCalState, cal: AccelCalibration | None) -> bool:
+        """AP_AccelCal re-sends its last result every second until the next start (AP_AccelCal.cpp update()):
+        one sent before the vehicle read our new start reaches us while the new run is starting. A verdict is this
+        run's once the vehicle asked a position of it, or once it acknowledged the start (the same link carries the
+        old repeats before that ACK, none after it). Told once: the later repeats find the run settled."""
+        if state.step is AccelStep.WAITING:
+            return True
+        return (state.step is AccelStep.STARTING and cal is not None and cal.started is not None
+                and cal.started.done() and cal.started.result().ok)
+
     def _on_adsb_vehicle(self, m) -> None:
         self._traffic.on_adsb_vehicle(m, time.monotonic())
 
     # -- the ticker (lock held) ------------------------------------------------------------------------------
+    def _follow_motor_test(self, now: float, state) -> None:
+        """The test ends when the vehicle says so ("finished motor test", 4.x), disarms (the test armed it; 3.3
+        says nothing), or past its bound."""
+        said = self._store.messages_since(self._test_from)
+        if said:
+            self._test_from = said[-1].index
+        finished = any(m.source == "vehicle" and m.text == "finished motor test" for m in said)
+        self._test_armed = self._test_armed or state.armed
+        if finished or (self._test_armed and not state.armed) or now > self._test_until:
+            self._test_until = 0.0
+            self._set(motor_test_running=False)
+
     def service(self, now: float, state) -> list:
+        if state.setup.motor_test_running:
+            self._follow_motor_test(now, state)
         if now - self._traffic_at >= TRAFFIC_REFRESH:
             self._traffic_at = now
             traffic = self._traffic.snapshot(now, state)
@@ -367,6 +440,16 @@ class VehicleSetup:
                         f"{a.time:.0f} s, {abs(a.vertical):.0f} m {above})")
             self._alerted &= {c.icao for c in traffic.alerts}
         return []
+
+
+def motor_test_bound(seconds: float, count: int, firmware: str) -> float:
+    """How long the vehicle runs a test: each motor its seconds, then half as long at rest before the next
+    (ArduCopter/motor_test.cpp); the Solo's 3.3 runs one motor, at most 30 s, whatever the count."""
+    have = version(firmware)
+    if have is not None and have < (3, 4):
+        return min(seconds, MOTOR_TEST_MAX_SECONDS_33)
+    seconds = min(seconds, MOTOR_TEST_MAX_SECONDS)
+    return seconds * count + 0.5 * seconds * (count - 1)
 
 
 def _motor_test_problem(motor, throttle_pct, pwm, seconds, count, propellers_removed) -> str:

@@ -104,4 +104,4 @@ class SetupState:
     outputs: ServoOutputs = field(default_factory=ServoOutputs)
     accel: AccelCalState = field(default_factory=AccelCalState)
     compass: CompassCalState = field(default_factory=CompassCalState)
-    motor_test_running: bool = False            # our DO_MOTOR_TEST is running (by its seconds)
+    motor_test_running: bool = False            # our DO_MOTOR_TEST runs: from the vehicle's ACCEPTED to its end

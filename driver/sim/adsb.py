@@ -24,6 +24,7 @@ BASE_ALT = 300.0                # m above sea level (SIM_ADSB_ALT)
 FIRST_AFTER = 9.0               # s after boot (recording: 9.2 s)
 LIST_INTERVAL = 1.0             # s: a new round of the list starts at most this often (AP_ADSB::send_adsb_vehicle)
 FLAGS = 511
+FLAG_HEADING = 4                # ADSB_FLAGS_VALID_HEADING
 
 
 @dataclass
@@ -32,7 +33,7 @@ class Aircraft:
     north: float                # m from home
     east: float
     alt: float                  # m above sea level
-    heading: float              # degrees
+    heading: float | None       # degrees; None: the receiver heard no heading (flag 4 clear, standing still)
     speed: float                # m/s
     climb: float                # m/s, up
     emitter: int
@@ -59,15 +60,18 @@ class AdsbTraffic:
                         speed=0.0 if still else rng.uniform(10, 150), climb=0.0 if still else rng.uniform(0, 9),
                         emitter=emitter)
 
-    def add_aircraft(self, icao: int, north: float, east: float, alt: float, heading: float, speed: float,
+    def add_aircraft(self, icao: int, north: float, east: float, alt: float, heading: float | None, speed: float,
                      climb: float = 0.0) -> Aircraft:
-        """A test's own aircraft (m from home, m above sea level, degrees, m/s): flown straight, never replaced."""
+        """A test's own aircraft (m from home, m above sea level, degrees, m/s): flown straight, never replaced;
+        heading None: sent without a heading (and it stands still)."""
         aircraft = Aircraft(icao, north, east, alt, heading, speed, climb, emitter=1, fixed=True)
         self.aircraft.append(aircraft)
         return aircraft
 
     def _adsb_step(self, dt: float) -> None:
         for i, a in enumerate(self.aircraft):
+            if a.heading is None:
+                continue
             rad = math.radians(a.heading)
             a.north += a.speed * math.cos(rad) * dt
             a.east += a.speed * math.sin(rad) * dt
@@ -91,5 +95,6 @@ class AdsbTraffic:
         lon = self.home_lon + a.east / self.m_per_deg_lon
         callsign = f"SIM{a.icao}".encode()[:9]
         return self.factory.adsb_vehicle_encode(
-            a.icao, int(lat * 1e7), int(lon * 1e7), 0, int(a.alt * 1000), int(a.heading * 100) % 36000,
-            int(a.speed * 100), int(a.climb * 100), callsign, a.emitter, 1, FLAGS, 1200)
+            a.icao, int(lat * 1e7), int(lon * 1e7), 0, int(a.alt * 1000), int((a.heading or 0.0) * 100) % 36000,
+            int(a.speed * 100), int(a.climb * 100), callsign, a.emitter, 1,
+            FLAGS if a.heading is not None else FLAGS & ~FLAG_HEADING, 1200)

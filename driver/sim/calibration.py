@@ -14,15 +14,20 @@ Mixed into :class:`~driver.sim.autopilot.Autopilot` (through :class:`~driver.sim
 * compass (DO_START_MAG_CAL): MAG_CAL_PROGRESS per compass 0..2 at about 4 Hz each; unmoved it stays 0 %
   (status 2); tumbled by the calibration model it reaches 25/33/50/75 % and after 38.5 s each compass says
   "Mag(n) good orientation" and sends MAG_CAL_REPORT (status 4, fitness 0.037, offsets 5, 13, -18) until
-  accepted (COMPASS_OFS* written) or cancelled; a cancel leaves "Compass calibrated requires reboot";
+  accepted (COMPASS_OFS* written) or cancelled; a cancel leaves "Compass calibrated requires reboot"; an accept
+  while a compass still runs stops them all and is FAILED (AP_Compass_Calibration.cpp _accept_calibration_mask);
 * armed: gyro/accel/baro/level FAILED "Disarm to allow calibration", DO_START_MAG_CAL FAILED "Disarm to allow
   compass calibration"; FIXED_MAG_CAL_YAW is ACCEPTED even armed.
 
 The Solo's 3.3 (3drobotics/ardupilot-solo ArduCopter/GCS_Mavlink.pde, compass_cal.pde): gyro and baro ACCEPTED
-at once (no IN_PROGRESS), level (p5=2) is not handled there (FAILED), the accelerometer and the compass are
-calibrated on board (compass_cal.pde: ``ins.acal_update()``, ``compass.compass_cal_update()``) and are driven as
-above; a refusal while armed is a bare FAILED (its compass library prints to the console only);
-FIXED_MAG_CAL_YAW does not exist (UNSUPPORTED: it came with 4.0). Texts on 3.3 are an assumption: the same words.
+at once (no IN_PROGRESS), level (p5=2) is not handled there (FAILED), the compass is driven as above; a refusal
+while armed is a bare FAILED (its compass library prints to the console only); FIXED_MAG_CAL_YAW does not exist
+(UNSUPPORTED: it came with 4.0). Its six-position accelerometer calibration is the older one (its
+libraries/AP_AccelCal/AP_AccelCal.cpp): PREFLIGHT_CALIBRATION p5=1 starts it but is answered FAILED (the handler
+never sets its result); each position is asked only by STATUSTEXT "Place vehicle <level / on its LEFT side /
+on its RIGHT side / nose DOWN / nose UP / on its BACK> and press any key." and the ground station confirms with
+any COMMAND_ACK (``accelcal.collect_sample()``); ACCELCAL_VEHICLE_POS is never sent and is UNSUPPORTED; the
+verdict is only its text, not repeated, and "Calibration successful" reboots the vehicle a second later.
 """
 from __future__ import annotations
 
@@ -38,6 +43,9 @@ ACCEL_SUCCESS = 16777215          # ACCELCAL_VEHICLE_POS_SUCCESS
 ACCEL_FAILED = 16777216           # ACCELCAL_VEHICLE_POS_FAILED
 POSITION_NAMES = {1: "level", 2: "on its left side", 3: "on its right side", 4: "nose down", 5: "nose up",
                   6: "on its back"}
+PROMPTS_33 = {1: "level", 2: "on its LEFT side", 3: "on its RIGHT side", 4: "nose DOWN", 5: "nose UP",
+              6: "on its BACK"}                  # 3.3's AP_AccelCal::update() words
+SEVERITY_HIGH_33 = 3                             # 3.3's SEVERITY_HIGH, as its STATUSTEXT carries it
 COMPASSES = (0, 1, 2)
 MAG_OFFSETS = (4.998, 12.998, -17.999)            # the calibration model's (recording: 5, 13, -18)
 MAG_FITNESS = 0.037
@@ -161,11 +169,12 @@ class Calibration:
         if int(p5) == 1:                                        # 3D accel, six positions
             if self.accel_step is not None:
                 return mavlink.MAV_RESULT_TEMPORARILY_REJECTED, None
-            if modern:
-                self._text(mavlink.MAV_SEVERITY_INFO, "Initialising ArduPilot")
             self.accel_verdict = None
             self.accel_step = 1
             self.airframe_pose = 1
+            if not modern:                                      # 3.3 starts it, yet answers FAILED
+                return mavlink.MAV_RESULT_FAILED, lambda: self.after(0.02, lambda: self._ask_position(1))
+            self._text(mavlink.MAV_SEVERITY_INFO, "Initialising ArduPilot")
             return None, lambda: self._ack_later(cmd, mavlink.MAV_RESULT_ACCEPTED, 0.5, lambda: self.after(
                 0.02, lambda: self._ask_position(1)))
         return mavlink.MAV_RESULT_UNSUPPORTED if int(p4) == 1 else mavlink.MAV_RESULT_FAILED, None
@@ -182,40 +191,65 @@ class Calibration:
             return
         if self.turned:
             self.airframe_pose = position        # the calibration model takes the pose before the answer
+        if not self.profile.calibration_text:    # 3.3: its words only
+            self._text(SEVERITY_HIGH_33, f"Place vehicle {PROMPTS_33[position]} and press any key.")
+            return
         self._accel_command(position)
         if position == 1:
             self._text(mavlink.MAV_SEVERITY_CRITICAL, "Place vehicle level and press any key.")
 
     def _cmd_accelcal_vehicle_pos(self, p1, *_):
         """The GCS says the vehicle is in the asked position (AP_AccelCal::gcs_vehicle_position)."""
+        if not self.profile.calibration_text:
+            return mavlink.MAV_RESULT_UNSUPPORTED, None      # 3.3's command switch has no such command
         if self.accel_step is None or int(p1) != self.accel_step:
             return mavlink.MAV_RESULT_FAILED, None
+        return mavlink.MAV_RESULT_ACCEPTED, self._accel_sample()
+
+    def _on_command_ack(self, msg) -> None:
+        """3.3: any COMMAND_ACK from a ground station while a position is asked takes the sample
+        (GCS_Mavlink.pde: ``accelcal.collect_sample()``); 4.x's snoop wants MAVProxy's own ACK, not used here."""
+        if not self.profile.calibration_text and self.accel_step is not None:
+            then = self._accel_sample()
+            if then is not None:
+                then()
+
+    def _accel_sample(self):
+        """The asked position's sample: the fit fails on a wrong pose, else the next position or the verdict."""
         position = self.accel_step
         if self.airframe_pose != position:      # the samples do not fit: the fit fails
             self.accel_step = None
             self.after(0.65, self._accel_failed)
-            return mavlink.MAV_RESULT_ACCEPTED, None
+            return None
         if position == 6:
             self.accel_step = None
-            self.after(0.68, self._trim_ok)
+            if self.profile.calibration_text:
+                self.after(0.68, self._trim_ok)
             self.after(0.78, self._accel_succeeded)
-            return mavlink.MAV_RESULT_ACCEPTED, None
+            return None
         self.accel_step = position + 1
-        return mavlink.MAV_RESULT_ACCEPTED, lambda: self.after(0.65, lambda: self._ask_position(position + 1))
+        return lambda: self.after(0.65, lambda: self._ask_position(position + 1))
 
     def _accel_failed(self) -> None:
-        self._text(mavlink.MAV_SEVERITY_CRITICAL, "Calibration FAILED")
+        self._text(self._accel_severity(), "Calibration FAILED")
         self.accel_needed = True
         self._accel_end(ACCEL_FAILED)
 
     def _accel_succeeded(self) -> None:
-        self._text(mavlink.MAV_SEVERITY_CRITICAL, "Calibration successful")
+        self._text(self._accel_severity(), "Calibration successful")
         self.accel_needed = False
         self.accel_reboot = True
         self._accel_end(ACCEL_SUCCESS)
 
+    def _accel_severity(self) -> int:
+        return mavlink.MAV_SEVERITY_CRITICAL if self.profile.calibration_text else SEVERITY_HIGH_33
+
     def _accel_end(self, verdict: int) -> None:
         self.accel_verdict = verdict
+        if not self.profile.calibration_text:    # 3.3: told once; a success reboots (AP_AccelCal::success)
+            if verdict == ACCEL_SUCCESS:
+                self.after(1.0, self.reboot)
+            return
         self.after(0.1, lambda: self._repeat_verdict(verdict))
 
     def _repeat_verdict(self, verdict: int) -> None:
@@ -240,7 +274,9 @@ class Calibration:
 
     def _cmd_do_accept_mag_cal(self, *_):
         if self.mag_started is not None and not self.mag_done:
-            return mavlink.MAV_RESULT_FAILED, None          # still running: nothing to accept yet
+            self.mag_started = None                         # every calibrator stops (_accept_calibration_mask),
+            self.mag_reboot = True                          # FAILED as one was not done; started: reboot needed
+            return mavlink.MAV_RESULT_FAILED, None
         if self.mag_done:
             for axis, value in zip("XYZ", MAG_OFFSETS):
                 for prefix in ("COMPASS_OFS_", "COMPASS_OFS2_", "COMPASS_OFS3_"):

@@ -4,15 +4,19 @@ Motor test (MAV_CMD_DO_MOTOR_TEST: p1 motor in test order, p2 0 percent / 1 PWM,
 ACCEPTED with "starting motor test", the motors armed for the test (the HEARTBEAT says armed), the tested
 output at the value (20 % = 1200 between MOT_PWM_MIN and MOT_PWM_MAX), the others at 1000 (1100, armed idle,
 when the vehicle was armed already); "finished motor test" and a disarm at the end. With a count each motor runs
-its seconds, then about 1 s at rest, then the next one. Test order 1..4 is outputs 3, 1, 4, 2 on a + quad
+its seconds, then rests half as long at the minimum output, then the next one (ArduCopter/motor_test.cpp
+motor_test_output: ``timeout*1.5``). Test order 1..4 is outputs 3, 1, 4, 2 on a + quad
 (FRAME_TYPE 0, recorded) and 1, 4, 2, 3 on an X quad (ArduPilot's AP_MotorsMatrix). Refused "Motor Test:
-vehicle not landed" in the air (ArduCopter motor_test.cpp). A test with timeout 0 ends the running one.
+vehicle not landed" in the air (ArduCopter motor_test.cpp). A test with timeout 0 ends the running one at the
+next loop; sent while none runs it starts one that ends at once (arming, then disarming the vehicle: it goes
+through mavlink_motor_test_start like any other).
 
 The radio: RC_CHANNELS from a simulated transmitter, 8 channels at the recording's SITL values (sticks centred,
 throttle down, CH5 1800 and CH8 1800), as RC_CHANNELS_RAW on the Solo's 3.3; a test moves them with
 :meth:`MotorTest.move_stick`.
-The Solo's 3.3 (GCS_Mavlink.pde: ``mavlink_motor_test_start``) runs the same test; whether it says
-"starting motor test" is not in its sources we read: it says nothing here.
+The Solo's 3.3 (ardupilot-solo ArduCopter/motor_test.pde) runs one motor only: it ignores the count (param5 is
+not passed), caps the timeout at 30 s (MOTOR_TEST_TIMEOUT_MS_MAX) and says neither "starting" nor "finished
+motor test".
 """
 from __future__ import annotations
 
@@ -29,8 +33,9 @@ FRAME_TYPES = {0: "PLUS", 1: "X", 2: "V", 3: "H", 4: "VTAIL", 5: "ATAIL", 6: "PL
                12: "BF_X", 13: "DJI_X", 14: "CW_X", 15: "I", 18: "X_REV", 19: "Y4"}
 RC_DEFAULT = (1500, 1500, 1000, 1500, 1800, 1000, 1000, 1800)
 ARMED_IDLE = 1100
-REST_BETWEEN = 1.0                  # s at rest between two motors of a sequence
-TIMEOUT_MAX = 600.0                 # s (MOTOR_TEST_TIMEOUT_MAX)
+REST_SHARE = 0.5                    # of each motor's seconds at rest before the next (motor_test.cpp)
+TIMEOUT_MAX = 600.0                 # s (MOTOR_TEST_TIMEOUT_SEC)
+TIMEOUT_MAX_33 = 30.0               # s, the Solo's 3.3 (MOTOR_TEST_TIMEOUT_MS_MAX)
 
 
 class MotorTest:
@@ -57,20 +62,18 @@ class MotorTest:
         seq, kind = int(p1), int(p2)
         if not 1 <= seq <= len(order) or kind not in (0, 1) or p4 < 0:
             return mavlink.MAV_RESULT_FAILED, None
-        if p4 == 0:                                   # timeout 0 ends the running test at once
-            if self.motor_test is not None or self.motor_queue:
-                self._motor_test_end()
-            return mavlink.MAV_RESULT_ACCEPTED, None
+        modern = self.profile.calibration_text
         low, high = int(self.params["MOT_PWM_MIN"]), int(self.params["MOT_PWM_MAX"])
         pwm = low + (high - low) * min(max(p3, 0.0), 100.0) / 100.0 if kind == 0 else min(max(p3, low), high)
-        seconds = min(float(p4), TIMEOUT_MAX)
-        count = max(1, int(p5))
-        if self.motor_test is None and not self.motor_queue:
+        seconds = min(float(p4), TIMEOUT_MAX if modern else TIMEOUT_MAX_33)     # 0: ends at the next loop
+        count = max(1, int(p5)) if modern else 1
+        starting = self.motor_test is None and not self.motor_queue
+        if starting:
             self.test_armed_before = self.armed
-        self.motor_queue = [(self.t + i * (seconds + REST_BETWEEN), order[(seq - 1 + i) % len(order)], int(pwm),
+        self.motor_queue = [(self.t + i * seconds * (1.0 + REST_SHARE), order[(seq - 1 + i) % len(order)], int(pwm),
                              seconds) for i in range(count)]
         self.motor_test = None
-        if self.profile.calibration_text:
+        if starting and modern:
             self._text(mavlink.MAV_SEVERITY_INFO, "starting motor test")
         if not self.armed:
             self.armed = True                         # the test arms the motors (recording: HEARTBEAT armed)
@@ -80,13 +83,13 @@ class MotorTest:
         return mavlink.MAV_RESULT_ACCEPTED, None
 
     def _motors_step(self) -> None:
-        if self.motor_test is not None and self.t >= self.motor_test[2]:
+        if self.motor_queue and self.t >= self.motor_queue[0][0]:
+            start, output, pwm, seconds = self.motor_queue.pop(0)
+            self.motor_test = (output, pwm, self.t + seconds)     # out for one loop at least, even at 0 s
+        elif self.motor_test is not None and self.t >= self.motor_test[2]:
             self.motor_test = None
             if not self.motor_queue:
                 self._motor_test_end()
-        if self.motor_queue and self.t >= self.motor_queue[0][0]:
-            start, output, pwm, seconds = self.motor_queue.pop(0)
-            self.motor_test = (output, pwm, self.t + seconds)
         if (self.motor_test is not None or self.motor_queue) and self.armed:
             self.touchdown_at = self.t                # no auto-disarm while the test runs
 

@@ -2,7 +2,9 @@
 
 Only the autopilot's ADSB_VEHICLE are taken (ArduPilot forwards its receiver's); a message with impossible values
 (NaN is impossible in integers, but a latitude past 90°, an unknown heading marker) keeps only what is sane.
-A contact not heard for ``fade_after`` s is shown faded and never alerts; after ``drop_after`` s it is gone.
+A contact not heard for ``fade_after`` s is shown faded and never alerts; after ``drop_after`` s it is gone. Its
+age counts from when the receiver last heard it: the message's ``tslc`` (time since last communication, s) plus
+the time since the message came.
 """
 from __future__ import annotations
 
@@ -44,7 +46,7 @@ class TrafficTracker:
 
     def snapshot(self, now: float, own) -> Traffic:
         """The contacts at ``now`` against ``own`` (a VehicleState: position, velocity)."""
-        for icao in [i for i, h in self._heard.items() if now - h.at > self.drop_after]:
+        for icao in [i for i, h in self._heard.items() if _age(h, now) > self.drop_after]:
             del self._heard[icao]
         contacts = [self._contact(h, now, own) for h in self._heard.values()]
         contacts.sort(key=lambda c: (c.distance is None, c.distance or 0.0))
@@ -59,7 +61,7 @@ class TrafficTracker:
         climb = m.ver_velocity / 100.0 if m.flags & FLAG_VERTICAL_VELOCITY else None
         callsign = m.callsign if isinstance(m.callsign, str) else bytes(m.callsign).decode("ascii", "replace")
         callsign = callsign.rstrip("\x00").strip() if m.flags & FLAG_CALLSIGN else ""
-        age = max(0.0, now - h.at)
+        age = _age(h, now)
         stale = age > self.fade_after
         relative_alt = distance = bearing = approach = None
         position = own.position
@@ -81,3 +83,8 @@ class TrafficTracker:
                 else None
         return Contact(m.ICAO_address, callsign, lat, lon, alt, heading, speed, climb, m.emitter_type, m.squawk,
                        age, stale, relative_alt, distance, bearing, approach)
+
+
+def _age(h: _Heard, now: float) -> float:
+    """Seconds since the receiver last heard the aircraft: its tslc when the autopilot sent it, and since."""
+    return max(0.0, now - h.at) + float(getattr(h.msg, "tslc", 0) or 0)

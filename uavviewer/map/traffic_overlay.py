@@ -1,10 +1,10 @@
 """ADS-B traffic on the map (issue 32): each contact the vehicle forwards, where it was last heard, turned to its
-heading, with its callsign, height relative to us and how long ago it was heard; faded once stale, gone when the
+heading (a round mark when its heading is unknown: never an arrow pointing a guess), with its callsign, height relative to us and how long ago it was heard; faded once stale, gone when the
 driver drops it (driver.traffic); red while its closest approach comes within the alert limits."""
 from __future__ import annotations
 
-from PyQt5.QtCore import QObject, QPointF
-from PyQt5.QtGui import QColor, QFont
+from PyQt5.QtCore import QObject, QPointF, Qt
+from PyQt5.QtGui import QColor, QFont, QPen
 
 from driver.traffic.model import Contact
 
@@ -50,6 +50,18 @@ class TrafficOverlay(QObject):
             at = view.to_screen(east, north)
             colour = QColor(ALERT if c.alert else AIRCRAFT)
             p.setOpacity(0.35 if c.stale else 1.0)
-            view._arrow(p, at, c.heading_deg or 0.0, colour, 0.7)
+            if c.heading_deg is None:
+                _dot(p, at, colour)
+            else:
+                view._arrow(p, at, c.heading_deg, colour, 0.7)
             view._label(p, at + QPointF(10, -10), contact_label(c))
         p.setOpacity(1.0)
+
+
+def _dot(p, at: QPointF, fill: QColor, radius: float = 4.5) -> None:
+    """A contact whose heading is unknown: where it is, pointing nowhere."""
+    p.save()
+    p.setPen(QPen(Qt.black, 1.5))
+    p.setBrush(fill)
+    p.drawEllipse(at, radius, radius)
+    p.restore()

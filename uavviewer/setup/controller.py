@@ -31,12 +31,12 @@ __all__ = ["SetupController"]
 log = logging.getLogger(__name__)
 NO_SETUP = ("this connection has no vehicle setup: a remote drone's server offers no calibrations, motor test, "
             "radio channels nor banner")
+RADIO_PAGES = ("Summary", "Radio", "Flight modes", "Motors")     # the pages that show RC_CHANNELS / outputs
 
 
 class _Relay(QObject):
-    """Carries a finished setup action to the UI thread; parentless, so a late answer never lands on a deleted
-    page (as the adapter's relay)."""
-    done = pyqtSignal(object, object)            # the page's callback, CommandResult
+    """Carries a finished setup action to the UI thread (parentless: it outlives the dialogs)."""
+    done = pyqtSignal(object, object, object)    # the page's callback, CommandResult, the dialog's generation
 
 
 class SetupController(QObject):
@@ -46,8 +46,9 @@ class SetupController(QObject):
         self.params = params                         # the Parameters page's controller: the one checked write path
         self._parent = parent
         self.dialog: SetupDialog | None = None
+        self._generation = 0                         # the dialog's: its pages are deleted when the vehicle changes
         self._relay = _Relay()
-        self._relay.done.connect(lambda callback, result: callback(result))
+        self._relay.done.connect(self._answer)
         self._banner_asked = False                   # DO_SEND_BANNER sent to this vehicle (once: its board)
         adapter.stateChanged.connect(self.show_state)
         adapter.droneChanged.connect(lambda _drone: self._vehicle_changed())
@@ -68,6 +69,7 @@ class SetupController(QObject):
                      PowerPage(self), FailsafesPage(self), MotorsPage(self)]
             self.dialog = SetupDialog(pages, self._parent)
             self.dialog.pageShown.connect(lambda _title: self._watch())
+            self.dialog.finished.connect(lambda _code: self._watch(closed=True))
         if page:
             self.dialog.turn_to(page)
         self.dialog.show()
@@ -84,17 +86,25 @@ class SetupController(QObject):
         if self.dialog is None:
             return
         dialog, self.dialog = self.dialog, None
+        self._generation += 1                        # answers still on their way belong to deleted pages
         title = dialog.list.currentItem().text() if dialog.isVisible() and dialog.list.currentItem() else ""
         dialog.close()
         dialog.deleteLater()
         if title:
             self.open(title)
 
-    def _watch(self) -> None:
+    def _watch(self, closed: bool = False) -> None:
+        """RC_CHANNELS and SERVO_OUTPUT_RAW while a page shows them, asked off otherwise (not during a motor test:
+        its outputs are what the pilot watches, wherever the window is)."""
         setup = getattr(self.adapter.drone, "setup", None)
-        if setup is not None:
-            setup.watch_radio()                      # RC_CHANNELS and SERVO_OUTPUT_RAW while the pages show them
-            self._ask_banner(setup, self.adapter.state)
+        if setup is None or self.dialog is None:
+            return
+        self._ask_banner(setup, self.adapter.state)
+        item = self.dialog.list.currentItem()
+        if not closed and item is not None and item.text() in RADIO_PAGES:
+            setup.watch_radio()
+        elif not setup.motor_test_running:
+            setup.unwatch_radio()
 
     def _ask_banner(self, setup, s) -> None:
         """The board is named only in the banner's id line, which ArduCopter 3.3 sends only on DO_SEND_BANNER
@@ -158,8 +168,16 @@ class SetupController(QObject):
             log.exception("setup action %s failed to start", name)
             done(CommandResult(name, CommandStatus.REJECTED, str(exc)))
             return
-        relay = self._relay
-        future.add_done_callback(lambda f: relay.done.emit(done, _result(name, f)))
+        relay, generation = self._relay, self._generation
+        future.add_done_callback(lambda f: relay.done.emit(done, _result(name, f), generation))
+
+    def _answer(self, done: Callable[[CommandResult], None], result: CommandResult, generation: int) -> None:
+        """An answer for a page of an older dialog is dropped: that page was deleted with its vehicle (its
+        verdict is in Messages, as every command's)."""
+        if generation != self._generation:
+            log.info("dropped the answer of %s: the vehicle changed (%s)", result.command, result)
+            return
+        done(result)
 
 
 def _result(name: str, future: Future) -> CommandResult:

@@ -23,14 +23,15 @@ def _v(s, name: str) -> float | None:
     return None if p is None else p.value
 
 
-def failsafe_lines(s) -> tuple[list[tuple[str, str]], list[str]]:
-    """(area, what the vehicle does) per failsafe, and warnings; unread parameters say so."""
-    lines: list[tuple[str, str]] = []
+def failsafe_lines(s) -> tuple[list[tuple[str, str, str]], list[str]]:
+    """(area, what the vehicle does, the parameter that decides it) per failsafe, and warnings; unread parameters
+    say so."""
+    lines: list[tuple[str, str, str]] = []
 
     def say(area: str, name: str, words: dict, extra: str = "") -> float | None:
         value = _v(s, name)
         lines.append((area, "not read yet" if value is None else
-                      f"{words.get(int(value), f'action {value:g}')} ({name} {value:g}){extra}"))
+                      f"{words.get(int(value), f'action {value:g}')} ({name} {value:g}){extra}", name))
         return value
     low = _v(s, "BATT_LOW_VOLT")
     say("Battery low", "BATT_FS_LOW_ACT", BATTERY_ACTIONS, "" if low is None else f" below {low:g} V")
@@ -42,7 +43,7 @@ def failsafe_lines(s) -> tuple[list[tuple[str, str]], list[str]]:
     say("EKF unhealthy", "FS_EKF_ACTION", _EKF)
     fence = _v(s, "FENCE_ENABLE")
     if fence is not None and fence == 0:
-        lines.append(("Fence", "off (FENCE_ENABLE 0): nothing keeps it inside"))
+        lines.append(("Fence", "off (FENCE_ENABLE 0): nothing keeps it inside", "FENCE_ENABLE"))
     else:
         say("Fence breached", "FENCE_ACTION", _FENCE)
     warnings = []

@@ -3,6 +3,7 @@ station is lost, the EKF fails or the fence is breached, in plain words from its
 combination leaves it with no failsafe. Change… opens the parameter on the Parameters page."""
 from __future__ import annotations
 
+from PyQt5.QtCore import Qt
 from PyQt5.QtWidgets import QLabel, QPushButton, QTreeWidget, QTreeWidgetItem, QVBoxLayout, QWidget
 
 from .failsafe_words import failsafe_lines
@@ -33,9 +34,8 @@ class FailsafesPage(QWidget):
 
     def _change(self) -> None:
         item = self.lines.currentItem()
-        text = item.text(1) if item is not None else ""
-        name = text[text.rfind("(") + 1:].split(" ")[0] if "(" in text else "FS_THR_ENABLE"
-        self._runner.open_parameter(name)
+        name = item.data(0, Qt.UserRole) if item is not None else None     # the row's own parameter
+        self._runner.open_parameter(name or "FS_THR_ENABLE")
 
     def show_state(self, s) -> None:
         lines, warnings = failsafe_lines(s)
@@ -43,7 +43,9 @@ class FailsafesPage(QWidget):
             return
         self._shown = (lines, warnings)
         self.lines.clear()
-        for area, words in lines:
-            self.lines.addTopLevelItem(QTreeWidgetItem([area, words]))
+        for area, words, name in lines:
+            item = QTreeWidgetItem([area, words])
+            item.setData(0, Qt.UserRole, name)
+            self.lines.addTopLevelItem(item)
         self.lines.resizeColumnToContents(0)
         self.warnings.setText("\n".join(warnings))

@@ -12,11 +12,16 @@ __all__ = ["ModesPage", "slot_of"]
 _NAMES = {number: name for name, number in COPTER_MODES.items()}
 
 
+SLOT_TOPS = (1231, 1361, 1491, 1621, 1750)    # µs: each slot's pulse is below its top (read_6pos_switch)
+PWM_LIMITS = (800, 2200)                       # RC_MIN_LIMIT_PWM / RC_MAX_LIMIT_PWM: at or past them, no slot
+
+
 def slot_of(pwm: int | None) -> int | None:
-    """The switch position (1..6) ArduCopter reads from ``pwm`` (RC_Channel::read_6pos_switch), None if unknown."""
-    if not pwm:
+    """The switch position (1..6) ArduCopter reads from ``pwm`` (RC_Channel::read_6pos_switch), None if unknown
+    or out of its limits (the vehicle keeps its mode then)."""
+    if not pwm or not PWM_LIMITS[0] < pwm < PWM_LIMITS[1]:
         return None
-    for slot, top in enumerate((1230, 1360, 1490, 1620, 1749), start=1):
+    for slot, top in enumerate(SLOT_TOPS, start=1):
         if pwm < top:
             return slot
     return 6

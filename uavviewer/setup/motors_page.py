@@ -74,6 +74,7 @@ class MotorsPage(QWidget):
         self.test.clicked.connect(self.spin)
         self.stop = QPushButton("Stop")
         self.stop.setObjectName("setupMotorStop")
+        self.stop.setEnabled(False)
         self.stop.clicked.connect(lambda: self._runner.run("stop motor test", lambda s: s.stop_motor_test(),
                                                            self._done))
         row.addWidget(self.test)
@@ -121,4 +122,5 @@ class MotorsPage(QWidget):
         self.motor.setMaximum(motors(s))                 # the frame's motors, in test order
         self._show_reason()
         self.outputs.show_values(s.setup.outputs.values[:8])
-        self.stop.setEnabled(s.connected and not self._runner.no_setup())
+        # a stop sent idle would start a test: only while one runs
+        self.stop.setEnabled(s.connected and not self._runner.no_setup() and s.setup.motor_test_running)

@@ -5,10 +5,18 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 
-__all__ = ["RadioCalibration", "ChannelRange", "MIN_TRAVEL", "parameters"]
+__all__ = ["RadioCalibration", "ChannelRange", "MIN_TRAVEL", "parameters", "throttle_channel"]
 
 MIN_TRAVEL = 200                 # µs between lowest and highest before a channel counts as moved
-THROTTLE = 3                     # ArduCopter's default RCMAP_THROTTLE: its trim is its lowest
+THROTTLE = 3                     # ArduCopter's default RCMAP_THROTTLE
+
+
+def throttle_channel(s) -> int:
+    """The throttle's channel as the vehicle maps it (RCMAP_THROTTLE; 3, the default, until it is read): a
+    transmitter in another order (throttle first) has its pitch or roll on 3."""
+    p = s.parameters.get("RCMAP_THROTTLE")
+    channel = int(p.value) if p is not None else THROTTLE
+    return channel if 1 <= channel <= 16 else THROTTLE
 
 
 @dataclass(frozen=True)
@@ -40,13 +48,14 @@ class RadioCalibration:
                 self.low[i] = min(self.low.get(i, us), us)
                 self.high[i] = max(self.high.get(i, us), us)
 
-    def ranges(self, centred: tuple[int, ...]) -> list[ChannelRange]:
-        """Every channel seen, with ``centred`` (the channels as the pilot let the sticks go) as trims."""
+    def ranges(self, centred: tuple[int, ...], throttle: int = THROTTLE) -> list[ChannelRange]:
+        """Every channel seen, with ``centred`` (the channels as the pilot let the sticks go) as trims; the
+        ``throttle`` channel's trim is its lowest (RCn_TRIM at the bottom, as ArduCopter wants it)."""
         out = []
         for ch in sorted(self.low):
             low, high = self.low[ch], self.high[ch]
             now = centred[ch - 1] if ch <= len(centred) and centred[ch - 1] else (low + high) // 2
-            trim = low if ch == THROTTLE else min(max(now, low), high)
+            trim = low if ch == throttle else min(max(now, low), high)
             out.append(ChannelRange(ch, low, high, trim))
         return out
 

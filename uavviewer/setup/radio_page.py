@@ -8,7 +8,7 @@ from __future__ import annotations
 from PyQt5.QtWidgets import QHBoxLayout, QLabel, QPlainTextEdit, QPushButton, QVBoxLayout, QWidget
 
 from .bars import ChannelBars
-from .radio_calibration import RadioCalibration, parameters
+from .radio_calibration import THROTTLE, RadioCalibration, parameters, throttle_channel
 
 __all__ = ["RadioPage"]
 
@@ -22,6 +22,7 @@ class RadioPage(QWidget):
         self._calibration: RadioCalibration | None = None
         self._values: dict[str, float] = {}
         self._rc = ()
+        self._throttle = THROTTLE                    # RCMAP_THROTTLE as the vehicle reported it
         layout = QVBoxLayout(self)
         self.status = QLabel("Waiting for the vehicle's RC channels…")
         self.status.setObjectName("setupRadioStatus")
@@ -63,7 +64,7 @@ class RadioPage(QWidget):
     def finish_calibration(self) -> None:
         if self._calibration is None:
             return
-        ranges = self._calibration.ranges(self._rc)
+        ranges = self._calibration.ranges(self._rc, self._throttle)
         self._calibration = None
         self.finish.setEnabled(False)
         self._values = parameters(ranges)
@@ -79,6 +80,7 @@ class RadioPage(QWidget):
     def show_state(self, s) -> None:
         rc = s.setup.rc
         self._rc = rc.values
+        self._throttle = throttle_channel(s)
         self.channels.show_values(rc.values[:16])
         if self._calibration is not None:
             self._calibration.feed(rc.values)

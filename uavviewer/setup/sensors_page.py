@@ -127,7 +127,8 @@ class SensorsPage(QWidget):
             self._runner.run("accel position", lambda _s: self._accel.confirm_position(), self._position_done)
 
     def _position_done(self, result) -> None:
-        if not result.ok:
+        if not result.ok:                           # not confirmed (lost, refused): Next again for the same one
+            self._confirming = None
             self._done(result)
 
     def _compass(self, call: str) -> None:
@@ -139,17 +140,19 @@ class SensorsPage(QWidget):
     # -- the vehicle's state ------------------------------------------------------------------------
     def show_state(self, s) -> None:
         no_setup = self._runner.no_setup()
-        notes = [why for why in (unavailable(a, s.firmware) for a in ("level", "accel_simple", "fixed_yaw")) if why]
+        notes = [why for why in (unavailable(a, s.firmware) for a in ("level", "accel_simple", "accel", "fixed_yaw"))
+                 if why]
         if s.armed:
             notes.insert(0, "Armed: the vehicle refuses calibrations until it is disarmed.")
         if no_setup:
             notes = [f"No calibration on this connection: {no_setup}."]
         self.notes.setText("\n".join(notes))
-        for button in (self.gyro, self.baro, self.accel_start, self.compass_start):
+        for button in (self.gyro, self.baro, self.compass_start):
             button.setEnabled(not no_setup)
         self.level.setEnabled(not no_setup and not unavailable("level", s.firmware))
         self.simple.setEnabled(not no_setup and not unavailable("accel_simple", s.firmware))
         self.fixed_yaw.setEnabled(not no_setup and not unavailable("fixed_yaw", s.firmware))
+        self.accel_start.setEnabled(not no_setup and not unavailable("accel", s.firmware))
         accel = s.setup.accel
         self.pose.set_position(accel.position if accel.step is AccelStep.WAITING else None)
         waiting = accel.step is AccelStep.WAITING
@@ -185,5 +188,6 @@ class SensorsPage(QWidget):
             report = next((r for r in state.reports if r.compass == compass), None)
             words.setText("" if report is None else f"fitness {report.fitness:.1f}"
                           + ("" if report.ok else f" FAILED (status {report.status})"))
-        self.compass_accept.setEnabled(bool(state.reports) and not state.accepted)
+        # ArduPilot's accept stops every calibrator and fails when one still runs: only once each has reported
+        self.compass_accept.setEnabled(state.running and bool(state.reports) and not state.progress)
         self.compass_cancel.setEnabled(state.running)

@@ -6,6 +6,8 @@ from dataclasses import dataclass
 
 from driver.setup.availability import unavailable
 
+from .radio_calibration import throttle_channel
+
 __all__ = ["Line", "summary", "DONE", "ATTENTION", "NOT_APPLICABLE", "UNKNOWN"]
 
 DONE, ATTENTION, NOT_APPLICABLE, UNKNOWN = "done", "needs attention", "not applicable", "not known yet"
@@ -46,7 +48,7 @@ def summary(s, no_setup: str = "") -> list[Line]:
     rc = s.setup.rc
     if no_setup:
         lines.append(Line("Radio", NOT_APPLICABLE, no_setup))
-    elif rc.channel(3) is None:
+    elif rc.channel(throttle_channel(s)) is None:
         lines.append(Line("Radio", ATTENTION, "no RC channels received from the vehicle (transmitter off, or no "
                                               "receiver)" if rc.updated else "RC channels not received yet"))
     else:
