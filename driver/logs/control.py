@@ -30,7 +30,6 @@ from __future__ import annotations
 import logging
 import os
 import threading
-import time
 from collections import deque
 from concurrent.futures import Future
 from dataclasses import dataclass
@@ -229,7 +228,7 @@ class LogControl:
         d = self._download
         if d is None or d.ftp is None or d.job.checking:
             return
-        now = time.monotonic()
+        now = self._v.clock()
         failure = d.ftp.on_message(m, now)
         payload = bytes(m.payload)
         offset = FTP_HEADER.unpack(payload[:12])[7]
@@ -318,8 +317,8 @@ class LogControl:
             listing.last = m.last_log_num if listing.last is None else max(listing.last, m.last_log_num)
         if 1 <= m.id <= m.last_log_num:
             listing.entries[m.id] = LogEntry(m.id, m.size, m.time_utc)
-            listing.quiet_until = min(listing.quiet_until, time.monotonic() + 0.3) \
-                if not self._missing_ids(listing) else time.monotonic() + 0.3
+            listing.quiet_until = min(listing.quiet_until, self._v.clock() + 0.3) \
+                if not self._missing_ids(listing) else self._v.clock() + 0.3
         if not self._missing_ids(listing):
             listing.quiet_until = 0.0
             self._v._wake.set()
@@ -470,7 +469,7 @@ class LogControl:
 
     def _on_data(self, m) -> None:
         d = self._download
-        now = time.monotonic()
+        now = self._v.clock()
         count = min(int(m.count), CHUNK)
         ofs = int(m.ofs)
         d.last_rx = now
@@ -503,7 +502,7 @@ class LogControl:
             d.rate = rate if d.rate == 0 else 0.5 * d.rate + 0.5 * rate
 
     def _flush(self, d: _Download) -> bool:
-        d.flushed_at = time.monotonic()
+        d.flushed_at = self._v.clock()
         try:
             for ofs, data in d.pending:
                 d.file.seek(ofs)
@@ -546,7 +545,7 @@ class LogControl:
         d.file.truncate(d.end)
         self._close_download(d)
         self.progress = LogProgress(d.entry.id, job.path, d.end, d.end, 0.0, "checking")
-        seconds = time.monotonic() - job.started
+        seconds = self._v.clock() - job.started
         fields = dict(log_id=d.entry.id, path=job.path, size=d.end, seconds=seconds, bytes_received=d.received,
                       bytes_requested=d.requested, bytes_rerequested=d.rerequested, resumed_from=d.resumed)
         job.checking = True

@@ -218,7 +218,7 @@ class VehicleSetup:
             return self._v._finish(name, CommandStatus.REJECTED, refusal)
         kind, value = (0, float(throttle_pct)) if pwm is None else (1, float(pwm))
         self.watch_radio()
-        self._test_until = time.monotonic() + seconds * count + (count - 1) * 1.0 + 1.0
+        self._test_until = self._v.clock() + seconds * count + (count - 1) * 1.0 + 1.0
         with self._store.lock:
             self._set(motor_test_running=True)
         future = self._v._command_long(mavlink.MAV_CMD_DO_MOTOR_TEST, (motor, kind, value, seconds, count), name,
@@ -234,7 +234,7 @@ class VehicleSetup:
 
     @property
     def motor_test_running(self) -> bool:
-        return time.monotonic() < self._test_until
+        return self._v.clock() < self._test_until
 
     def stop_motor_test(self) -> Future:
         """End the running test at once (DO_MOTOR_TEST with timeout 0, as ArduCopter's motor_test_output reads it)."""
@@ -334,7 +334,7 @@ class VehicleSetup:
                 "accel calibration", CommandStatus.ACCEPTED if ok else CommandStatus.REFUSED, reason))
 
     def _on_adsb_vehicle(self, m) -> None:
-        self._traffic.on_adsb_vehicle(m, time.monotonic())
+        self._traffic.on_adsb_vehicle(m, self._v.clock())
 
     # -- the ticker (lock held) ------------------------------------------------------------------------------
     def service(self, now: float, state) -> list:
