@@ -12,6 +12,7 @@ import sys
 import sysconfig
 import tomllib
 import zipfile
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import Callable
 
@@ -193,18 +194,21 @@ def test_the_wheel_carries_the_files_the_program_loads(wheel):
 @pytest.mark.xdist_group("installed")
 def test_the_installed_commands_answer(installed, tmp_path):
     from driver.version import __version__
-    for argv, name in ((["uavviewer"], "uavviewer"), (["mavlinkserver"], "mavlinkserver"),
-                       ([str(installed / "bin" / "python"), "-m", "uavviewer"], "python -m uavviewer")):
-        version = run_installed(installed, *argv, "--version", cwd=tmp_path)
-        assert (version.returncode, version.stdout) == (0, f"{name} {__version__}\n"), version.stderr
-        usage = run_installed(installed, *argv, "--help", cwd=tmp_path)
-        assert usage.returncode == 0 and usage.stdout.startswith(f"usage: {name} "), usage.stderr
-    for sub in ("certs", "registry"):
-        usage = run_installed(installed, "mavlinkserver", sub, "--help", cwd=tmp_path)
-        assert usage.returncode == 0 and usage.stdout.startswith(f"usage: mavlinkserver {sub} "), usage.stderr
-    where = run_installed(installed, str(installed / "bin" / "python"), "-c",
-                          "import driver.ice.lab, uavviewer; print(driver.ice.SLICE_DIR); print(uavviewer.RESOURCES); "
-                          "print(driver.ice.lab.REGISTRY_CONFIG)", cwd=tmp_path)
+    python = str(installed / "bin" / "python")
+    commands = [(["uavviewer"], "uavviewer"), (["mavlinkserver"], "mavlinkserver"),
+                ([python, "-m", "uavviewer"], "python -m uavviewer")]
+    asked = {(name, option): [*argv, option] for argv, name in commands for option in ("--version", "--help")}
+    asked |= {(f"mavlinkserver {sub}", "--help"): ["mavlinkserver", sub, "--help"] for sub in ("certs", "registry")}
+    asked["where"] = [python, "-c", "import driver.ice.lab, uavviewer; print(driver.ice.SLICE_DIR); "
+                      "print(uavviewer.RESOURCES); print(driver.ice.lab.REGISTRY_CONFIG)"]
+    with ThreadPoolExecutor(len(asked)) as pool:          # the eleven start at once: each is a process of its own
+        done = dict(zip(asked, pool.map(lambda argv: run_installed(installed, *argv, cwd=tmp_path), asked.values())))
+    where = done.pop("where")
+    for (name, option), answer in done.items():
+        if option == "--version":
+            assert (answer.returncode, answer.stdout) == (0, f"{name} {__version__}\n"), answer.stderr
+        else:
+            assert answer.returncode == 0 and answer.stdout.startswith(f"usage: {name} "), answer.stderr
     purelib = sysconfig.get_path("purelib", vars={"base": str(installed), "platbase": str(installed)})
     assert where.stdout.split() == [f"{purelib}/driver/slice", f"{purelib}/uavviewer/resources",
                                     f"{purelib}/driver/config/icegrid-registry.cfg"], where.stderr
