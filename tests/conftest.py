@@ -17,6 +17,9 @@ from driver.vehicle import Vehicle, VehicleConfig  # noqa: E402
 SPEEDUP = 4.0
 #: The pace of a takeoff that only sets a test up (the ``flying`` fixture): 8.7 sim s, 2.2 s at SPEEDUP.
 TAKEOFF_SPEEDUP = 16.0
+#: The pace of what a test only waits out once it has done all it does to the vehicle (a mission's way home,
+#: its landing): what the vehicle did is checked after.
+LAST_LEG_SPEEDUP = 32.0
 #: A recording replayed (driver/sim/replay.py) at ten times its pace: a 1,392-parameter list in 0.07 s.
 REPLAY_SPEEDUP = 10.0
 #: s before an unechoed PARAM_SET goes again (MAVProxy's 1 s in flight): the sim on localhost answers in milliseconds,

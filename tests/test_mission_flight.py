@@ -7,6 +7,8 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from driver.mission.plan import MissionItem, MissionRunState, Plan, PlanKind
 from driver.vehicle.state import CommandStatus
+
+from conftest import LAST_LEG_SPEEDUP
 from test_mission_transfer import place, waypoint
 
 
@@ -21,10 +23,6 @@ def recorded_mission(vehicle) -> Plan:
                     lon=waypoint(vehicle, 0, 12, 7).lon, alt=7),
         MissionItem(mavlink.MAV_CMD_NAV_RETURN_TO_LAUNCH, frame=mavlink.MAV_FRAME_MISSION),
     ))
-
-
-#: The pace of what a test only waits out once it has done all it does (the rest of the mission, the landing).
-LAST_LEG_SPEEDUP = 32.0
 
 
 def fly(drone, sim, timeout=120):

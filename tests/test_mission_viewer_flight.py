@@ -10,14 +10,11 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from driver.mission.plan import MissionRunState, PlanKind
 
+from conftest import LAST_LEG_SPEEDUP
 from test_mission_viewer_plan import click, planning_window, right_click, settle
 from viewer_fixtures import viewer_settings, window_factory  # noqa: F401  (fixtures)
 
 pytestmark = pytest.mark.timeout(180)
-
-
-#: The pace of what a test only waits out once it has done all it does (the way home and the landing).
-LAST_LEG_SPEEDUP = 32.0
 
 
 @pytest.fixture
