@@ -25,9 +25,10 @@ def recorded_mission(vehicle) -> Plan:
     ))
 
 
-def fly(drone, sim, timeout=120):
+def fly(drone, sim, timeout=120, last_leg=LAST_LEG_SPEEDUP):
     """Start the uploaded mission, pause and resume on item 2, jump back to 2 from 4, fly it to the end (that last
-    leg at LAST_LEG_SPEEDUP: nothing is done to the vehicle any more, what it did is checked after)."""
+    leg at ``last_leg`` times real time, if given: nothing is done to the vehicle any more, what it did is checked
+    after)."""
     started = drone.start_mission().result(60)
     assert started.status is CommandStatus.ACCEPTED, str(started)
     assert drone.wait_for(lambda s: s.mission.current == 2, 60), drone.state().mission
@@ -41,7 +42,8 @@ def fly(drone, sim, timeout=120):
     jumped = drone.set_mission_item(2).result(10)
     assert jumped.ok, str(jumped)
     assert drone.wait_for(lambda s: s.mission.last_reached == 2, 60)
-    sim.speedup = LAST_LEG_SPEEDUP
+    if last_leg:
+        sim.speedup = last_leg
     done = drone.wait_for(lambda s: s.mission.state is MissionRunState.COMPLETE and not s.armed, timeout)
     assert done is not None, drone.state().mission
     truth = sim.truth()
