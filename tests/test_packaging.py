@@ -218,7 +218,7 @@ def test_the_installed_commands_answer(installed, tmp_path):
 def test_the_installed_window_flies_the_simulated_vehicle(installed, tmp_path):
     """Headless: take off, push both sticks, quit; the flight log it recorded shows the climb and the move."""
     shot = tmp_path / "shot.png"
-    run = run_installed(installed, "uavviewer", "--sim", "--speedup", "4", "--ready-after", "1", "--log-dir",
+    run = run_installed(installed, "uavviewer", "--sim", "--speedup", "8", "--ready-after", "1", "--log-dir",
                         str(tmp_path / "logs"), "--screenshot", str(shot), "--screenshot-fly",
                         "--screenshot-after", "1", cwd=tmp_path, timeout=120)
     assert run.returncode == 0 and "Traceback" not in run.stderr, run.stderr
