@@ -192,23 +192,29 @@ def test_the_wheel_carries_the_files_the_program_loads(wheel):
 
 
 @pytest.mark.xdist_group("installed")
-def test_the_installed_commands_answer(installed, tmp_path):
+@pytest.mark.parametrize("name", ["uavviewer", "mavlinkserver", "python -m uavviewer"])
+def test_the_installed_commands_answer(installed, tmp_path, name):
+    """--version and --help (the server's sub-commands' too) answer; each command is a test of its own, so the
+    suite's workers share the starts (eleven in one test took 11-32 s on the loaded machine)."""
     from driver.version import __version__
-    python = str(installed / "bin" / "python")
-    commands = [(["uavviewer"], "uavviewer"), (["mavlinkserver"], "mavlinkserver"),
-                ([python, "-m", "uavviewer"], "python -m uavviewer")]
-    asked = {(name, option): [*argv, option] for argv, name in commands for option in ("--version", "--help")}
-    asked |= {(f"mavlinkserver {sub}", "--help"): ["mavlinkserver", sub, "--help"] for sub in ("certs", "registry")}
-    asked["where"] = [python, "-c", "import driver.ice.lab, uavviewer; print(driver.ice.SLICE_DIR); "
-                      "print(uavviewer.RESOURCES); print(driver.ice.lab.REGISTRY_CONFIG)"]
-    with ThreadPoolExecutor(len(asked)) as pool:          # the eleven start at once: each is a process of its own
+    argv = [str(installed / "bin" / "python"), "-m", "uavviewer"] if name == "python -m uavviewer" else [name]
+    asked = {(name, option): [*argv, option] for option in ("--version", "--help")}
+    if name == "mavlinkserver":
+        asked |= {(f"mavlinkserver {sub}", "--help"): [*argv, sub, "--help"] for sub in ("certs", "registry")}
+    with ThreadPoolExecutor(len(asked)) as pool:          # at once: each is a process of its own
         done = dict(zip(asked, pool.map(lambda argv: run_installed(installed, *argv, cwd=tmp_path), asked.values())))
-    where = done.pop("where")
-    for (name, option), answer in done.items():
+    for (command, option), answer in done.items():
         if option == "--version":
-            assert (answer.returncode, answer.stdout) == (0, f"{name} {__version__}\n"), answer.stderr
+            assert (answer.returncode, answer.stdout) == (0, f"{command} {__version__}\n"), answer.stderr
         else:
-            assert answer.returncode == 0 and answer.stdout.startswith(f"usage: {name} "), answer.stderr
+            assert answer.returncode == 0 and answer.stdout.startswith(f"usage: {command} "), answer.stderr
+
+
+@pytest.mark.xdist_group("installed")
+def test_the_installed_package_finds_its_files(installed, tmp_path):
+    where = run_installed(installed, str(installed / "bin" / "python"), "-c",
+                          "import driver.ice.lab, uavviewer; print(driver.ice.SLICE_DIR); print(uavviewer.RESOURCES); "
+                          "print(driver.ice.lab.REGISTRY_CONFIG)", cwd=tmp_path)
     purelib = sysconfig.get_path("purelib", vars={"base": str(installed), "platbase": str(installed)})
     assert where.stdout.split() == [f"{purelib}/driver/slice", f"{purelib}/uavviewer/resources",
                                     f"{purelib}/driver/config/icegrid-registry.cfg"], where.stderr
