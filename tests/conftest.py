@@ -15,6 +15,11 @@ from driver.vehicle import Vehicle, VehicleConfig  # noqa: E402
 
 #: Simulated seconds per real second in tests: fast, yet slow enough for 20 Hz setpoints to matter.
 SPEEDUP = 4.0
+#: The pace of a takeoff that only sets a test up (the ``flying`` fixture): 8.7 sim s, 2.2 s at SPEEDUP.
+TAKEOFF_SPEEDUP = 16.0
+#: The pace of what a test only waits out once it has done all it does to the vehicle (a mission's way home,
+#: its landing): what the vehicle did is checked after.
+LAST_LEG_SPEEDUP = 32.0
 #: A recording replayed (driver/sim/replay.py) at ten times its pace: a 1,392-parameter list in 0.07 s.
 REPLAY_SPEEDUP = 10.0
 #: s before an unechoed PARAM_SET goes again (MAVProxy's 1 s in flight): the sim on localhost answers in milliseconds,
@@ -97,8 +102,18 @@ def vehicle(sim, vehicle_factory) -> Vehicle:
 
 
 @pytest.fixture
-def flying(vehicle):
-    """The driver with the simulated vehicle hovering at 3 m in GUIDED."""
-    result = vehicle.takeoff(3.0).result(timeout=60)
+def flying(vehicle, sim):
+    """The driver with the simulated vehicle hovering at 3 m in GUIDED. The takeoff is only how the test gets there
+    (tests of their own fly it at SPEEDUP): the sim flies it at TAKEOFF_SPEEDUP, the test at its own pace again."""
+    pace, sim.speedup = sim.speedup, max(sim.speedup, TAKEOFF_SPEEDUP)
+    try:
+        result = vehicle.takeoff(3.0).result(timeout=60)
+    finally:
+        sim.speedup = pace
+        since = sim.truth().time
     assert result.ok, str(result)
+    # Our heartbeat goes once a real second: 16 sim s apart meanwhile, more than FS_GCS_TIMEOUT (5 s). The test
+    # starts once the vehicle has heard one at its own pace, so a GCS failsafe it enables counts from there.
+    assert vehicle.wait_for(lambda s: any(t > since and kind == "HEARTBEAT" for t, kind, _ in list(sim.received_messages)),
+                            10), "the vehicle heard no heartbeat from us after the takeoff"
     return vehicle

@@ -162,6 +162,7 @@ def viewer_imports() -> dict[str, set[str]]:
     """module -> the uavviewer modules it imports (lazy imports too; a type-only import is no import)."""
     import ast
     graph: dict[str, set[str]] = {}
+    known = modules_of_viewer()
     for folder, _dirs, files in os.walk(VIEWER):
         for name in files:
             if not name.endswith(".py"):
@@ -179,7 +180,7 @@ def viewer_imports() -> dict[str, set[str]]:
                 if isinstance(node, ast.ImportFrom):
                     base = package.split(".")[:len(package.split(".")) - node.level + 1] if node.level else []
                     target = ".".join(base + ([node.module] if node.module else []))
-                    found |= {f"{target}.{a.name}" if f"{target}.{a.name}" in modules_of_viewer() else target
+                    found |= {f"{target}.{a.name}" if f"{target}.{a.name}" in known else target
                               for a in node.names}
                 elif isinstance(node, ast.Import):
                     found |= {a.name for a in node.names}

@@ -168,7 +168,7 @@ def test_tlog_reads_back_with_pymavlink_and_replays(flying, sim, vehicle_factory
                           capture_output=True, text=True, timeout=60)
     assert dump.returncode == 0 and dump.stdout.count("HEARTBEAT") > 5
 
-    replay = vehicle_factory(path, tlog_path=None, replay_speed=16.0)
+    replay = vehicle_factory(path, tlog_path=None, replay_speed=4.0)   # the takeoff was flown at 16x (the fixture)
     assert replay.replay is not None and replay.replay.duration > 2
     assert replay.wait_for(lambda s: s.armed and s.altitude > 2.0, 30), replay.state()
     assert replay.wait_for(lambda s: not s.armed and s.mode == "LAND", 30)

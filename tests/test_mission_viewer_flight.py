@@ -10,6 +10,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from driver.mission.plan import MissionRunState, PlanKind
 
+from conftest import LAST_LEG_SPEEDUP
 from test_mission_viewer_plan import click, planning_window, right_click, settle
 from viewer_fixtures import viewer_settings, window_factory  # noqa: F401  (fixtures)
 
@@ -17,14 +18,18 @@ pytestmark = pytest.mark.timeout(180)
 
 
 @pytest.fixture
-def fast_vehicle(sim_factory, vehicle_factory):
-    sim = sim_factory(speedup=8.0)
-    v = vehicle_factory(f"tcp:127.0.0.1:{sim.tcp_port}")
+def fast_sim(sim_factory):
+    return sim_factory(speedup=8.0)
+
+
+@pytest.fixture
+def fast_vehicle(fast_sim, vehicle_factory):
+    v = vehicle_factory(f"tcp:127.0.0.1:{fast_sim.tcp_port}")
     assert v.wait_for(lambda s: s.connected and s.home is not None, 20)
     return v
 
 
-def test_plan_upload_start_pause_resume_skip_and_land(qtbot, fast_vehicle, window_factory):
+def test_plan_upload_start_pause_resume_skip_and_land(qtbot, fast_sim, fast_vehicle, window_factory):
     vehicle = fast_vehicle
     w, view, plan = planning_window(qtbot, vehicle, window_factory)
     p = plan.panel
@@ -104,6 +109,7 @@ def test_plan_upload_start_pause_resume_skip_and_land(qtbot, fast_vehicle, windo
         return sum(m.text == "Reached command #2" for m in vehicle.state().messages)
     before = reached_2()
     qtbot.mouseClick(p.resumeButton, Qt.LeftButton)
+    fast_sim.speedup = LAST_LEG_SPEEDUP                  # item 2 again, 4, the way home and the landing
     qtbot.waitUntil(lambda: reached_2() > before, timeout=60000)
 
     # the RTL item brings it home, it lands and disarms in AUTO: the mission is complete

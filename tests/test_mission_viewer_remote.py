@@ -8,6 +8,7 @@ from PyQt5.QtWidgets import QMessageBox
 
 from driver.mission.plan import PlanKind
 
+from conftest import LAST_LEG_SPEEDUP
 from ice_fixtures import drone_factory, server_factory  # noqa: F401  (fixtures)
 from test_mission_viewer_plan import click, planning_window, settle
 from viewer_fixtures import viewer_settings, window_factory  # noqa: F401  (fixtures)
@@ -51,6 +52,7 @@ def test_the_remote_viewer_plans_and_flies_through_ice(qtbot, sim_factory, vehic
     qtbot.mouseClick(plan.panel.pauseButton, Qt.LeftButton)
     qtbot.waitUntil(lambda: "paused (BRAKE)" in plan.panel.progressLabel.text(), timeout=10000)
     qtbot.mouseClick(plan.panel.resumeButton, Qt.LeftButton)
+    sim.speedup = LAST_LEG_SPEEDUP                       # the rest of the mission is only waited out
     qtbot.waitUntil(lambda: plan.panel.progressLabel.text() == "Mission complete (4 items)", timeout=120000)
     assert not sim.truth().armed
 

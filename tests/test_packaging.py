@@ -12,6 +12,7 @@ import sys
 import sysconfig
 import tomllib
 import zipfile
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import Callable
 
@@ -191,17 +192,26 @@ def test_the_wheel_carries_the_files_the_program_loads(wheel):
 
 
 @pytest.mark.xdist_group("installed")
-def test_the_installed_commands_answer(installed, tmp_path):
+@pytest.mark.parametrize("name", ["uavviewer", "mavlinkserver", "python -m uavviewer"])
+def test_the_installed_commands_answer(installed, tmp_path, name):
+    """--version and --help (the server's sub-commands' too) answer; each command is a test of its own, so the
+    suite's workers share the starts (eleven in one test took 11-32 s on the loaded machine)."""
     from driver.version import __version__
-    for argv, name in ((["uavviewer"], "uavviewer"), (["mavlinkserver"], "mavlinkserver"),
-                       ([str(installed / "bin" / "python"), "-m", "uavviewer"], "python -m uavviewer")):
-        version = run_installed(installed, *argv, "--version", cwd=tmp_path)
-        assert (version.returncode, version.stdout) == (0, f"{name} {__version__}\n"), version.stderr
-        usage = run_installed(installed, *argv, "--help", cwd=tmp_path)
-        assert usage.returncode == 0 and usage.stdout.startswith(f"usage: {name} "), usage.stderr
-    for sub in ("certs", "registry"):
-        usage = run_installed(installed, "mavlinkserver", sub, "--help", cwd=tmp_path)
-        assert usage.returncode == 0 and usage.stdout.startswith(f"usage: mavlinkserver {sub} "), usage.stderr
+    argv = [str(installed / "bin" / "python"), "-m", "uavviewer"] if name == "python -m uavviewer" else [name]
+    asked = {(name, option): [*argv, option] for option in ("--version", "--help")}
+    if name == "mavlinkserver":
+        asked |= {(f"mavlinkserver {sub}", "--help"): [*argv, sub, "--help"] for sub in ("certs", "registry")}
+    with ThreadPoolExecutor(len(asked)) as pool:          # at once: each is a process of its own
+        done = dict(zip(asked, pool.map(lambda argv: run_installed(installed, *argv, cwd=tmp_path), asked.values())))
+    for (command, option), answer in done.items():
+        if option == "--version":
+            assert (answer.returncode, answer.stdout) == (0, f"{command} {__version__}\n"), answer.stderr
+        else:
+            assert answer.returncode == 0 and answer.stdout.startswith(f"usage: {command} "), answer.stderr
+
+
+@pytest.mark.xdist_group("installed")
+def test_the_installed_package_finds_its_files(installed, tmp_path):
     where = run_installed(installed, str(installed / "bin" / "python"), "-c",
                           "import driver.ice.lab, uavviewer; print(driver.ice.SLICE_DIR); print(uavviewer.RESOURCES); "
                           "print(driver.ice.lab.REGISTRY_CONFIG)", cwd=tmp_path)
@@ -214,7 +224,7 @@ def test_the_installed_commands_answer(installed, tmp_path):
 def test_the_installed_window_flies_the_simulated_vehicle(installed, tmp_path):
     """Headless: take off, push both sticks, quit; the flight log it recorded shows the climb and the move."""
     shot = tmp_path / "shot.png"
-    run = run_installed(installed, "uavviewer", "--sim", "--speedup", "4", "--ready-after", "1", "--log-dir",
+    run = run_installed(installed, "uavviewer", "--sim", "--speedup", "8", "--ready-after", "1", "--log-dir",
                         str(tmp_path / "logs"), "--screenshot", str(shot), "--screenshot-fly",
                         "--screenshot-after", "1", cwd=tmp_path, timeout=120)
     assert run.returncode == 0 and "Traceback" not in run.stderr, run.stderr

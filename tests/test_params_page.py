@@ -55,6 +55,7 @@ def review_and_write(qtbot, w, page):
 
 def test_download_shows_progress_then_every_parameter(qtbot, sim, window):
     sim.faults.downlink = LinkFaults(loss=0.1)          # a real radio: the list takes more than one snapshot
+    sim.config.radio_baud = 460800    # and its rate: at TCP speed (0.4 s) a loaded machine showed no snapshot between
     seen: list[str] = []
     window.adapter.stateChanged.connect(lambda _s: window.params.page is not None
                                         and seen.append(window.params.page.status.text()))

@@ -68,7 +68,7 @@ def answer(qtbot, box_of, button) -> None:
 
 @pytest.mark.parametrize("size", SIZES, ids=[f"{w}x{h}" for w, h in SIZES])
 def test_no_control_moves_as_the_state_changes(qtbot, sim_factory, vehicle_factory, window_factory, size):
-    sim = sim_factory(camera=True)                               # a MAVLink camera: photos and video
+    sim = sim_factory(camera=True, speedup=8.0)                  # a MAVLink camera: photos and video
     sim.faults.link_down = True                                  # no vehicle heard yet
     vehicle = vehicle_factory(f"tcp:127.0.0.1:{sim.tcp_port}", loss_timeout=1.0)
     w = window_factory(vehicle, cameras=["sim"], takeoff_altitude=3.0)

@@ -31,7 +31,6 @@ import errno
 import logging
 import os
 import threading
-import time
 from collections import deque
 from concurrent.futures import Future
 from dataclasses import dataclass
@@ -238,7 +237,7 @@ class LogControl:
         d = self._download
         if d is None or d.ftp is None or d.job.checking:
             return
-        now = time.monotonic()
+        now = self._v.clock()
         failure = d.ftp.on_message(m, now)
         if isinstance(d.ftp, FtpList):
             d.ftp_failure = failure or d.ftp_failure
@@ -332,8 +331,8 @@ class LogControl:
             listing.last = m.last_log_num if listing.last is None else max(listing.last, m.last_log_num)
         if 1 <= m.id <= m.last_log_num:
             listing.entries[m.id] = LogEntry(m.id, m.size, m.time_utc)
-            listing.quiet_until = min(listing.quiet_until, time.monotonic() + 0.3) \
-                if not self._missing_ids(listing) else time.monotonic() + 0.3
+            listing.quiet_until = min(listing.quiet_until, self._v.clock() + 0.3) \
+                if not self._missing_ids(listing) else self._v.clock() + 0.3
         if not self._missing_ids(listing):
             listing.quiet_until = 0.0
             self._v._wake.set()
@@ -557,7 +556,7 @@ class LogControl:
 
     def _on_data(self, m) -> None:
         d = self._download
-        now = time.monotonic()
+        now = self._v.clock()
         count = min(int(m.count), CHUNK)
         ofs = int(m.ofs)
         d.last_rx = now
@@ -594,7 +593,7 @@ class LogControl:
     def _flush(self, d: _Download) -> bool:
         """The bytes received since the last flush into the .part, then the map that names them; False (the
         download ended, resumable) when the disk refuses them."""
-        d.flushed_at = time.monotonic()
+        d.flushed_at = self._v.clock()
         try:
             for ofs, data in d.pending:
                 d.file.seek(ofs)
@@ -659,7 +658,7 @@ class LogControl:
         d.file.truncate(d.end)
         self._close_download(d)
         self.progress = LogProgress(d.entry.id, job.path, d.end, d.end, 0.0, "checking")
-        seconds = time.monotonic() - job.started
+        seconds = self._v.clock() - job.started
         fields = dict(log_id=d.entry.id, path=job.path, size=d.end, seconds=seconds, bytes_received=d.received,
                       bytes_requested=d.requested, bytes_rerequested=d.rerequested, resumed_from=d.resumed)
         job.checking = True

@@ -329,7 +329,7 @@ class Payload:
                 self._settle(w, CommandStatus.ABORTED, f"superseded by {name}")
             self._v._post(mavlink.MAVLink_mount_configure_message(
                 system, component, mavlink.MAV_MOUNT_MODE_MAVLINK_TARGETING, 1, 1, 0))
-            w = _Wait(name, "mount", future, want=pitch, deadline=time.monotonic() + CONFIRM_TIMEOUT)
+            w = _Wait(name, "mount", future, want=pitch, deadline=self._v.clock() + CONFIRM_TIMEOUT)
             w.message = self._mount_control(pitch, yaw)
             self._waits.append(w)
             g = self._gimbal()
@@ -361,7 +361,7 @@ class Payload:
             else:
                 if self._rate is None:
                     self._rate_target = (g.pitch_deg if g.pitch_deg is not None else 0.0, g.yaw_deg or 0.0)
-                    self._rate_last = time.monotonic()
+                    self._rate_last = self._v.clock()
                 self._rate = (pitch_rate, yaw_rate)
                 self._store.set(gimbal=replace(self._gimbal(), control=GimbalControl.RATE, protocol=protocol))
             self._v._wake.set()
@@ -464,7 +464,7 @@ class Payload:
                 if self._gopro_mode != mavlink.GOPRO_CAPTURE_MODE_PHOTO:
                     self._gopro_queue.append((mavlink.GOPRO_COMMAND_CAPTURE_MODE, mavlink.GOPRO_CAPTURE_MODE_PHOTO))
                 self._gopro_queue.append((mavlink.GOPRO_COMMAND_SHUTTER, 1))
-                w.deadline = time.monotonic() + CONFIRM_TIMEOUT + GOPRO_WAIT * len(self._gopro_queue)
+                w.deadline = self._v.clock() + CONFIRM_TIMEOUT + GOPRO_WAIT * len(self._gopro_queue)
                 self._v._wake.set()
                 return future
         if cam.kind is CameraKind.MAVLINK:
@@ -483,7 +483,7 @@ class Payload:
             if not result.ok:
                 self._settle(w, result.status, result.reason)
             else:
-                w.deadline = time.monotonic() + CONFIRM_TIMEOUT
+                w.deadline = self._v.clock() + CONFIRM_TIMEOUT
 
     def record_video(self, on: bool) -> Future:
         name = f"record {'on' if on else 'off'}"
@@ -506,7 +506,7 @@ class Payload:
                 if on and self._gopro_mode != mavlink.GOPRO_CAPTURE_MODE_VIDEO:
                     self._gopro_queue.append((mavlink.GOPRO_COMMAND_CAPTURE_MODE, mavlink.GOPRO_CAPTURE_MODE_VIDEO))
                 self._gopro_queue.append((mavlink.GOPRO_COMMAND_SHUTTER, 1 if on else 0))
-                w.deadline = time.monotonic() + CONFIRM_TIMEOUT + GOPRO_WAIT * len(self._gopro_queue)
+                w.deadline = self._v.clock() + CONFIRM_TIMEOUT + GOPRO_WAIT * len(self._gopro_queue)
                 self._v._wake.set()
                 return future
         command = mavlink.MAV_CMD_VIDEO_START_CAPTURE if on else mavlink.MAV_CMD_VIDEO_STOP_CAPTURE

@@ -252,7 +252,7 @@ class VehicleSetup:
         """The vehicle accepted: the test runs (set before the caller hears the answer)."""
         if result.ok:
             with self._store.lock:
-                self._test_until = time.monotonic() + seconds + MOTOR_TEST_MARGIN
+                self._test_until = self._v.clock() + seconds + MOTOR_TEST_MARGIN
                 self._test_armed = False
                 self._set(motor_test_running=True)
                 self._store.publish()
@@ -406,7 +406,7 @@ class VehicleSetup:
                 and cal.started.done() and cal.started.result().ok)
 
     def _on_adsb_vehicle(self, m) -> None:
-        self._traffic.on_adsb_vehicle(m, time.monotonic())
+        self._traffic.on_adsb_vehicle(m, self._v.clock())
 
     # -- the ticker (lock held) ------------------------------------------------------------------------------
     def _follow_motor_test(self, now: float, state) -> None:

@@ -88,6 +88,7 @@ class SimVehicle:
         self.received_setpoints: deque = deque(maxlen=2000)
         self.received_messages: deque = deque(maxlen=2000)
         self.steps = 0                                   # physics steps taken so far
+        self._speedup = float(self.config.speedup)       # now (the config says how it started)
         self.signing = Signing(self.config)              # key (None: off), counters, every link's channel
         self._inbox: queue.SimpleQueue = queue.SimpleQueue()
         self._lock = threading.Lock()
@@ -126,6 +127,18 @@ class SimVehicle:
 
     def __exit__(self, *exc) -> None:
         self.stop()
+
+    @property
+    def speedup(self) -> float:
+        """Sim seconds per real second. It may change while the vehicle runs (from the next step on), as SITL's
+        SIM_SPEEDUP: a test flies what it merely sets up (a takeoff) faster than what it checks."""
+        return self._speedup
+
+    @speedup.setter
+    def speedup(self, value: float) -> None:
+        if not value > 0:
+            raise ValueError("speedup must be positive")
+        self._speedup = float(value)
 
     @property
     def tcp_port(self) -> int:
@@ -198,7 +211,6 @@ class SimVehicle:
     def _run(self) -> None:
         clock = self.clock
         dt = 1.0 / float(self.config.rate_hz)
-        real_step = dt / float(self.config.speedup)
         next_time = clock.now()
         while not self._stop.is_set():
             try:
@@ -206,7 +218,7 @@ class SimVehicle:
                     self._step(dt)
             except Exception:      # keep flying: a bug in one step must not freeze the vehicle
                 log.exception("sim step failed")
-            next_time += real_step
+            next_time += dt / self._speedup                   # read each step: see the speedup property
             delay = next_time - clock.now()
             if delay > 0:
                 if clock.wait(self._stop, delay):

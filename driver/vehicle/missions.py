@@ -11,7 +11,6 @@ from __future__ import annotations
 
 import collections
 import logging
-import time
 from concurrent.futures import Future
 from dataclasses import dataclass, replace
 from typing import Callable
@@ -147,7 +146,7 @@ class MissionControl:
                 done: Future = Future()
                 done.set_result(TransferOutcome(result) if outcome else result)
                 return done
-            future = begin(time.monotonic())
+            future = begin(self._v.clock())
             self._publish()
         v._wake.set()
         return future
@@ -168,7 +167,7 @@ class MissionControl:
                    f"the mission is not started: {_joined(limits)}" if limits else "")
         if problem:
             return v._finish("mission start", CommandStatus.REJECTED, problem)
-        return v._run_sequence(MissionStart(v, v.config, time.monotonic()), "mission start")
+        return v._run_sequence(MissionStart(v, v.config, self._v.clock()), "mission start")
 
     def pause(self) -> Future:
         s = self._v.state()
@@ -193,7 +192,7 @@ class MissionControl:
         name = f"mission item {seq}"
         if not isinstance(seq, int) or seq < 1 or (s.mission.count is not None and seq > s.mission.count):
             return v._finish(name, CommandStatus.REJECTED, f"no item {seq} (the mission has {s.mission.count} items)")
-        asked = time.monotonic()
+        asked = self._v.clock()
 
         def shown(st: VehicleState) -> bool:              # seen since asked, even if flown past at once
             return any(at >= asked and current == seq for at, current in self._currents)
@@ -227,20 +226,20 @@ class MissionControl:
         mtype = m.get_type()
         store = self._v._store
         if mtype == "MISSION_CURRENT":
-            self._currents.append((time.monotonic(), int(m.seq)))
+            self._currents.append((self._v.clock(), int(m.seq)))
             store.set(mission=fold_mission_current(store.view()["mission"], m))
             return
         if mtype == "MISSION_ITEM_REACHED":
             store.set(mission=fold_item_reached(store.view()["mission"], m))
             return
-        for msg in self.transfers.on_message(m, time.monotonic()):
+        for msg in self.transfers.on_message(m, self._v.clock()):
             self._v._post(msg)
         if self.transfers.changed:
             self._publish()
 
     def on_param(self, name: str, value: float) -> None:
         """A PARAM_VALUE (reader, lock held): RALLY_TOTAL confirms the Solo's rally transfers."""
-        for msg in self.transfers.on_param(name, value, time.monotonic()):
+        for msg in self.transfers.on_param(name, value, self._v.clock()):
             self._v._post(msg)
         if self.transfers.changed:
             self._publish()
@@ -252,7 +251,7 @@ class MissionControl:
         store = self._v._store
         folded = fold_text(store.view()["mission"], text)
         if folded is not None:
-            self._currents.append((time.monotonic(), folded.current))
+            self._currents.append((self._v.clock(), folded.current))
             store.set(mission=folded)
 
     def on_autopilot_version(self, m) -> None:

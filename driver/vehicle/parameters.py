@@ -7,7 +7,6 @@ link, state and cache.
 from __future__ import annotations
 
 import threading
-import time
 from concurrent.futures import Future
 
 from ..params.cache import ParameterCache
@@ -35,7 +34,7 @@ class Parameters:
             return self._v._finish("parameters", CommandStatus.REJECTED, "replaying a recording: no vehicle to ask")
         if refresh or self._param_cache is None:
             with self._lock:
-                future = self._params.fetch(refresh, time.monotonic(), None)
+                future = self._params.fetch(refresh, self._v.clock(), None)
             self._wake.set()
             return future
         outer: Future = Future()
@@ -44,7 +43,7 @@ class Parameters:
             s = self._v.state()
             cached = self._param_cache.load(s.system_id, s.firmware)
             with self._lock:
-                inner = self._params.fetch(refresh, time.monotonic(), cached)
+                inner = self._params.fetch(refresh, self._v.clock(), cached)
             self._wake.set()
             inner.add_done_callback(lambda f: outer.set_result(f.result()))
         threading.Thread(target=with_cache, name="param-cache-read", daemon=True).start()
@@ -76,7 +75,7 @@ class Parameters:
             self._store.add_message(Severity.WARNING, "No parameter metadata (ArduPilot's apm.pdef.xml): values are "
                                     "written without checking their bounds")
         with self._lock:
-            future = self._params.set(name, float(value), time.monotonic())
+            future = self._params.set(name, float(value), self._v.clock())
         self._wake.set()
         return future
 

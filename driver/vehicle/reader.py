@@ -47,7 +47,7 @@ class Reader:
         self.reopen = False                # the supervisor found a half-open link: reopen it
         self._open_error = ""
         self._gcs_failsafe_warned = False
-        self.inspector = vehicle.inspector = MessageInspector()   # what the link carries: Drone.inspection()
+        self.inspector = vehicle.inspector = MessageInspector(vehicle.clock)   # what the link carries: Drone.inspection()
 
     def _new_parser(self, carry=None):
         """A fresh incoming codec, signing as configured now; ``carry``: the old one, whose unparsed bytes
@@ -153,7 +153,7 @@ class Reader:
             if mtype == "HOME_POSITION" and "home" in changes:
                 self._link.home_received()
             elif mtype == "ATTITUDE":
-                self._link.last_attitude = time.monotonic()
+                self._link.last_attitude = self._v.clock()
         store.fields["link"] = self._link.health(self._v._version)   # packet counts as current as the telemetry
         if store.state.rejected_values == 0 and store.fields.get("rejected_values", 0) > 0:   # the first one
             store.add_message_locked(Severity.WARNING, "The vehicle sent impossible telemetry values (NaN, "
@@ -213,7 +213,7 @@ class Reader:
         if m.autopilot == mavlink.MAV_AUTOPILOT_INVALID:
             return
         store = self._store
-        now = time.monotonic()
+        now = self._v.clock()
         self._transport.heard_vehicle()
         self._v._signing_control.settle(self._signing.heartbeat(m))
         view = store.view()
@@ -251,7 +251,7 @@ class Reader:
                 self._store.set(autopilot=autopilot)
 
     def _on_command_ack(self, m) -> None:
-        self._commands.on_ack(m, time.monotonic())
+        self._commands.on_ack(m, self._v.clock())
         self._wake.set()
 
     def _on_autopilot_version(self, m) -> None:
@@ -273,7 +273,7 @@ class Reader:
         if not frames.finite(m.param_value):
             return
         name = param_name(m)
-        self._params.on_param_value(m, name, time.monotonic())
+        self._params.on_param_value(m, name, self._v.clock())
         if self._params.reasking:
             self._wake.set()                          # the next read goes out now, not on the next tick
         self._link.param_received(name)
@@ -291,7 +291,7 @@ class Reader:
     def _on_file_transfer_protocol(self, m) -> None:
         """MAVLink FTP: the parameters' file (driver.params.ftp)."""
         if m.target_system in (0, self.config.source_system) and m.target_component in (0, self.config.source_component):
-            self._params.on_ftp(m, time.monotonic())
+            self._params.on_ftp(m, self._v.clock())
             self._v.logs.on_ftp(m)                       # a log read by FTP (driver.logs)
             self._wake.set()
 

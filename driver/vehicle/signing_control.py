@@ -6,7 +6,6 @@ vehicle's side: the checks, the pilot's messages and the results.
 """
 from __future__ import annotations
 
-import time
 from concurrent.futures import Future
 
 from .state import CommandResult, CommandStatus, Severity
@@ -70,7 +69,7 @@ class SigningControl:
             if key is not None:
                 self._store.add_message_locked(Severity.WARNING, "SETUP_SIGNING carries the key in clear: anyone "
                                                "listening on this link learns it (use USB or a cable)")
-            self.settle(self._signing.begin(name, key, future, time.monotonic()))
+            self.settle(self._signing.begin(name, key, future, self._v.clock()))
             self._store.set(signing=self._signing.snapshot(self._v._version))
             self._store.publish()
         self._wake.set()

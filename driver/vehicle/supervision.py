@@ -33,16 +33,18 @@ WANTED_PARAMS = ("FS_GCS_ENABLE",) + FENCE_PARAMS + PLAN_PARAMS
 
 
 class LinkSupervisor:
-    def __init__(self, config, transport, capabilities: Capabilities, target):
+    def __init__(self, config, transport, capabilities: Capabilities, target, clock):
         self._cfg = config
         self._transport = transport
+        # what ages the heartbeat: the vehicle's clock, or the recording's when replaying one
+        self._clock = transport.clock if transport.is_replay else clock
         self._caps = capabilities
         self._target = target                 # () -> (system, component)
         self.status = LinkStatus.WAITING
         self.lost_count = 0
         self.lost_at = 0.0
-        self.last_heartbeat: float | None = None          # transport clock
-        self.last_attitude = 0.0                          # monotonic
+        self.last_heartbeat: float | None = None          # self._clock
+        self.last_attitude = 0.0                          # the vehicle's clock
         self.rx_count = 0
         self.rx_lost = 0
         self.bad_crc = 0
@@ -65,7 +67,7 @@ class LinkSupervisor:
 
     def heartbeat(self, now: float) -> str | None:
         """The autopilot's heartbeat; returns "first", "recovered" or None (no change of status)."""
-        self.last_heartbeat = self._transport.clock()
+        self.last_heartbeat = self._clock()
         if self.status is LinkStatus.OK:
             return None
         recovered = self.status is LinkStatus.LOST
@@ -92,7 +94,7 @@ class LinkSupervisor:
         event = None
         reopen = False
         cfg = self._cfg
-        clock = self._transport.clock()
+        clock = self._clock()
         if (self.status is LinkStatus.LOST and self._transport.reconnectable and self.last_heartbeat is not None
                 and clock - self.last_heartbeat > cfg.loss_timeout + REOPEN_AFTER and now - self.lost_at > REOPEN_AFTER):
             self.lost_at = now
@@ -173,7 +175,7 @@ class LinkSupervisor:
                                                      0, 0, 0, 0, 0, 0, 0)]
 
     def health(self, mavlink_version: int, status: LinkStatus | None = None) -> LinkHealth:
-        clock = self._transport.clock()
+        clock = self._clock()
         age = None if self.last_heartbeat is None else max(0.0, clock - self.last_heartbeat)
         rate = loss = 0.0
         if len(self._window) >= 2:

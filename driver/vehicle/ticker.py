@@ -11,7 +11,6 @@ import collections
 import logging
 import math
 import threading
-import time
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
@@ -45,6 +44,7 @@ class Ticker:
         self._outbox: collections.deque = collections.deque()   # messages posted by callers, sent by the ticker
         self._yaw_next = 0.0                  # old firmware: next CONDITION_YAW of a held yaw stick
         self._yaw_held = False                # old firmware: the heading is held by CONDITION_YAW
+        self._next_heartbeat = self._next_health = -1e9   # due at the first step, whatever the clock's origin
 
     def send(self, msg) -> None:
         """Pack and write one message; ``bytes`` are a frame packed already (SETUP_SIGNING)."""
@@ -114,35 +114,41 @@ class Ticker:
             self._yaw_held = True
         return out
 
+    def step(self, now: float) -> list:
+        """What is due at ``now`` (the vehicle's clock): the heartbeat, what callers posted, the takeoff's step,
+        the setpoint, every part's sends and, every 100 ms, supervision; decided under the state lock, sent by the
+        caller (:meth:`run`, or a test through ``Vehicle.step``)."""
+        out: list = []
+        try:
+            if now >= self._next_heartbeat:
+                self._next_heartbeat = now + self.config.heartbeat_interval
+                out.append(self.heartbeat_message())
+            while self._outbox:
+                out.append(self._outbox.popleft())
+            with self._lock:
+                self._sequence.step(now)
+                out += self._stream_setpoint(now)
+                out += self._commands.service(now, self._store.state)
+                out += self._params.service(now, self._link.status)
+                out += self._v._payload.service(now, self._store.state)
+                out += self._v._missions.service(now, self._store.state)
+                out += self._v.setup.service(now, self._store.state)
+                out += self._v.logs.service(now, self._store.state)
+                if now >= self._next_health:
+                    self._next_health = now + 0.1
+                    out += self._supervise(now)
+                    frames_out, settled = self._signing.service(now, self._v._target_ids(), self.new_encoder)
+                    out += frames_out
+                    self._v._signing_control.settle(settled)
+        except Exception:                             # heartbeat, setpoints and deadman must outlive any bug
+            log.exception("ticker step failed")
+        return out
+
     def run(self) -> None:
-        next_heartbeat = next_health = next_flush = 0.0
+        next_flush = 0.0
         while not self._closing.is_set():
-            now = time.monotonic()
-            out: list = []
-            try:
-                if now >= next_heartbeat:
-                    next_heartbeat = now + self.config.heartbeat_interval
-                    out.append(self.heartbeat_message())
-                while self._outbox:
-                    out.append(self._outbox.popleft())
-                with self._lock:
-                    self._sequence.step(now)
-                    out += self._stream_setpoint(now)
-                    out += self._commands.service(now, self._store.state)
-                    out += self._params.service(now, self._link.status)
-                    out += self._v._payload.service(now, self._store.state)
-                    out += self._v._missions.service(now, self._store.state)
-                    out += self._v.setup.service(now, self._store.state)
-                    out += self._v.logs.service(now, self._store.state)
-                    if now >= next_health:
-                        next_health = now + 0.1
-                        out += self._supervise(now)
-                        frames_out, settled = self._signing.service(now, self._v._target_ids(), self.new_encoder)
-                        out += frames_out
-                        self._v._signing_control.settle(settled)
-            except Exception:                         # heartbeat, setpoints and deadman must outlive any bug
-                log.exception("ticker step failed")
-            for msg in out:                           # outside the lock: a slow link stalls nobody else
+            now = self._v.clock()
+            for msg in self.step(now):                # outside the lock: a slow link stalls nobody else
                 self.send(msg)
             if self._v._tlog is not None and now >= next_flush:
                 next_flush = now + LOG_FLUSH_INTERVAL

@@ -107,10 +107,12 @@ class VehicleConfig:
 
 
 class Vehicle(Drone):
-    """An ArduCopter reached over MAVLink; the embedded driver behind the viewer and the Ice server."""
+    """An ArduCopter reached over MAVLink; the embedded driver behind the viewer and the Ice server. ``clock`` (s) times
+    all it does (link loss, retries, deadman, takeoff, transfers): real by default; a test's own, with :meth:`step`."""
 
-    def __init__(self, config: VehicleConfig | None = None):
+    def __init__(self, config: VehicleConfig | None = None, clock=time.monotonic):
         self.config = cfg = config or VehicleConfig()
+        self.clock = clock
         self._transport = open_transport(cfg.connection, cfg.baud, cfg.source_system,
                                          cfg.source_component, cfg.replay_speed, cfg.allowed_senders)
         self._replay = ReplayControl(self._transport) if self._transport.is_replay else None
@@ -126,7 +128,7 @@ class Vehicle(Drone):
         self._autopilot = cfg.target_component       # 0: any component speaks for the vehicle
         self._notifier = Notifier()
         self._commands = CommandSender(self._store, cfg, self._notifier, self._target_ids)
-        self._link = LinkSupervisor(cfg, self._transport, self._commands.capabilities, self._target_ids)
+        self._link = LinkSupervisor(cfg, self._transport, self._commands.capabilities, self._target_ids, clock)
         self._params = ParameterManager(self._store, self._notifier, self._target_ids, 2 * cfg.loss_timeout,
                                         cfg.param_retry)
         self._params.use_ftp = cfg.param_ftp
@@ -217,6 +219,11 @@ class Vehicle(Drone):
         if self._tlog:
             self._tlog.close()
 
+    def step(self) -> list:
+        """One pass of the ticker at ``clock()`` on a vehicle not started: what it would send (unsent), for tests."""
+        assert not self._started, "a started vehicle's ticker thread steps it"
+        return self._ticker.step(self.clock())
+
     def __enter__(self):
         return self.start()
 
@@ -261,7 +268,7 @@ class Vehicle(Drone):
         if self._replay is not None:
             return self._finish(name, CommandStatus.REJECTED, "replaying a recording: no vehicle to command")
         with self._lock:
-            future = self._commands.submit(name, command, params, time.monotonic(), guard=guard,
+            future = self._commands.submit(name, command, params, self.clock(), guard=guard,
                                            tag=self._sequence.tag)
         self._wake.set()
         return future
@@ -292,7 +299,7 @@ class Vehicle(Drone):
         if self.state().mode == name.upper() and self.state().connected:
             return self._finish(f"mode {name.upper()}", CommandStatus.ACCEPTED, "already in that mode")
         with self._lock:
-            future = self._commands.submit_mode(f"mode {name.upper()}", number, time.monotonic(),
+            future = self._commands.submit_mode(f"mode {name.upper()}", number, self.clock(),
                                                 tag=self._sequence.tag)
         self._wake.set()
         return future
@@ -360,7 +367,7 @@ class Vehicle(Drone):
                                 "takeoff aborted" if taking_off else "on the ground: nothing to stop")
         if s.mode == "GUIDED":
             with self._lock:
-                self._setpoints.stop(time.monotonic())
+                self._setpoints.stop(self.clock())
                 self._store.set(setpoint=self._setpoints.setpoint)
                 self._store.publish()
             self._wake.set()
@@ -371,7 +378,7 @@ class Vehicle(Drone):
         """Stop outside GUIDED: zeros wait to stream, GUIDED is asked; if refused, BRAKE (the sticks then stay
         inert until GUIDED is possible, and the result says why)."""
         with self._lock:
-            self._setpoints.stop(time.monotonic())
+            self._setpoints.stop(self.clock())
             self._store.set(setpoint=self._setpoints.setpoint)
 
         def guided_answered(r: CommandResult):
@@ -473,7 +480,7 @@ class Vehicle(Drone):
         if self.state().takeoff.active:
             return False
         with self._lock:
-            if self._setpoints.demand(sp, time.monotonic()):
+            if self._setpoints.demand(sp, self.clock()):
                 self._store.set(setpoint=sp)
                 self._store.publish()
                 self._wake.set()
@@ -537,7 +544,7 @@ class Vehicle(Drone):
                 return self._finish("takeoff", CommandStatus.REJECTED, "a takeoff is already running")
             if self.state().flying:
                 return self._finish("takeoff", CommandStatus.REJECTED, "already flying")
-            seq = TakeoffSequence(self, alt, self.config, time.monotonic())
+            seq = TakeoffSequence(self, alt, self.config, self.clock())
             self._sequence.start(seq)
         self._wake.set()
         return seq.future
