@@ -6,12 +6,21 @@ about it here:
 * LOG_REQUEST_LIST 0..0xffff gives one LOG_ENTRY per log; a list of ids past the last one floods LOG_ENTRY (size
   0) for ~40 s. So only 0..0xffff is asked, ids that went missing are asked again as a range inside last_log_num,
   entries outside 1..last_log_num are ignored, and LOG_REQUEST_END follows every listing.
-* LOG_REQUEST_DATA (ofs, count) streams 90-byte LOG_DATA in order; while it runs (or a listing does) a new
-  request is dropped (AP_Logger_MAVLinkLogTransfer.cpp), so the next one goes out only when the stream has ended
-  (its last packet, or silence), and every listing is preceded by LOG_REQUEST_END. A download asks for the first
-  gap to the end of the log (open-ended: the log's true end is where a short packet, or a packet of count 0, says
-  it is, so a log that grew since the list is fetched whole); then, where packets were lost, the next gap, merged
-  with the gaps after it while the bytes held between them cost less to send again than a round trip. Nothing held is ever thrown away: no log is restarted because chunks were lost.
+* LOG_REQUEST_DATA (ofs, count) streams 90-byte LOG_DATA in order. ArduPilot serves a request at once, on
+  receipt, up to num_sends packets (SITL 40, USB 250, a flow-controlled serial port 10, a radio without flow
+  control 1: AP_Logger_MAVLinkLogTransfer.cpp); one that ends within them ends the transfer, so the next request
+  of the same batch is served too. A longer one keeps the transfer running, and while it runs (or a listing does)
+  a new request is dropped (the Solo's 3.3 moves the transfer to it instead), so every listing is preceded by
+  LOG_REQUEST_END. A download first asks from where the held bytes end to the end of the log (open-ended: the
+  log's true end is where a short packet, or a packet of count 0, says it is, so a log that grew since the list
+  is fetched whole). Then the gaps that loss left are filled by pipelining: one request per missing packet (never
+  more than any link's one call sends, so never dropped for a transfer still running, and never a held byte asked
+  again), as many in flight as the link carries in a round trip (its packet rate, measured on the stream, times
+  the round trip), a new one sent as answers come. The vehicle answers in order, so when a request's
+  packet arrives every request sent before it that is still unanswered was lost (or its packet was): it is asked
+  again on the next sweep over the gaps; silence for three round trips clears them all. A gap longer than that
+  window (a dropped link) is streamed as one request. Nothing held is ever thrown away: no log is restarted
+  because chunks were lost.
 * LOG_REQUEST_END stops the stream but hundreds of queued LOG_DATA still come: any LOG_DATA of the log being
   fetched is kept, whichever request it answers.
 * Armed, the vehicle ignores every LOG_* request (the first with "Disarm for log download"): the request fails
@@ -31,7 +40,7 @@ import logging
 import os
 import threading
 import time
-from collections import deque
+from collections import OrderedDict, deque
 from concurrent.futures import Future
 from dataclasses import dataclass
 
@@ -49,11 +58,14 @@ CHUNK = 90                      # bytes in one LOG_DATA
 ALL_IDS = (0, 0xFFFF)
 OPEN_END = 0xFFFFFFFF
 DISARM_TEXT = "Disarm for log download"
-LIST_TRIES = 8                  # listings of the missing ids before the list is given up
+LIST_TRIES = 12                 # listings of the missing ids before the list is given up
 STALL_LIMIT = 20.0              # s without one new byte (link up) before a download is given up, resumable
 FLUSH_INTERVAL = 0.25           # s between writes of the .part file and its map
 ERASE_WAIT = 1.0                # s after LOG_ERASE before the list that confirms it
 ERASE_TRIES = 3
+FILL_MIN = 4                    # gap requests in flight at least (a radio port's transmit buffer holds ~9 LOG_DATA)
+FILL_MAX = 1024                 # ... and at most (what one batch of requests may ask of the vehicle)
+FILL_GAIN = 2.0                 # in flight: this many times the link's packets in a round trip
 
 
 @dataclass(frozen=True)
@@ -135,6 +147,10 @@ class _Download:
         self.first_rx: float | None = None      # the window's first packet: when, and its offset
         self.first_ofs = self.last_ofs = 0
         self.rtt = 0.3
+        self.rtt_seen = False                   # rtt is measured (else the first guess)
+        self.asks: OrderedDict[int, tuple[int, float]] = OrderedDict()   # offset: (count, sent at), in order sent
+        self.asked_at = 0.0
+        self.cursor = 0                         # where the sweep over the gaps goes on
         self.rate = 0.0                         # packets/s seen while a window streams
         self.received = self.requested = self.rerequested = 0
         self.progress_at = 0.0
@@ -299,7 +315,7 @@ class LogControl:
             self._abort(job, f"the log list is incomplete after {LIST_TRIES} tries (missing: {missing})")
             return [self._end_message()]
         listing.tries += 1
-        listing.quiet_until = now + 0.5 + 0.25 * listing.tries
+        listing.quiet_until = now + 0.25 + 0.1 * listing.tries
         start, end = (wanted[0], wanted[-1]) if listing.last is not None else ALL_IDS
         # a transfer still running (a cancelled download's, its END lost) would drop the list: END goes first
         return [self._end_message(), self._message("log_request_list", start, end)]
@@ -398,6 +414,7 @@ class LogControl:
             return self._complete(d)
         if not link_up:
             d.window = None
+            d.asks.clear()
             d.progress_at = now
             return []
         if d.ftp is not None:
@@ -414,7 +431,10 @@ class LogControl:
                 return []
             self._measure(d, now)
             d.window = None                     # silence: the rest of that window was lost
-        return [self._next_window(d, now)]
+        if d.end is None:                       # from where the held bytes end, to the log's own end
+            held_to = d.ranges.spans[-1][1] if d.ranges.spans else 0
+            return [self._stream(d, held_to, OPEN_END - held_to, now)]
+        return self._fill(d, now)
 
     def _service_ftp(self, d: _Download, now: float) -> list:
         msgs, failure = d.ftp.service(now, self._v._target_ids())
@@ -440,33 +460,65 @@ class LogControl:
                 first_missing = offset
         ftp.next_burst = first_missing if first_missing is not None else len(ftp.chunks) * FTP_CHUNK
 
-    def _next_window(self, d: _Download, now: float):
-        known = d.end if d.end is not None else max(d.size, d.ranges.spans[-1][1] if d.ranges.spans else 0)
-        gaps = d.ranges.missing(known)
-        if gaps:
-            start, stop = gaps[0]
-        else:
-            start, stop = known, known
-        merge = max(4 * CHUNK, int(d.rate * d.rtt) * CHUNK)   # held bytes worth sending again to save a round trip
-        for a, b in gaps[1:]:
-            if a - stop > merge:
-                break
-            stop = b
-        if d.end is None and stop >= known:
-            count = OPEN_END - start            # to the log's true end: a short packet will say where it is
-        else:
-            count = -(-(stop - start) // CHUNK) * CHUNK
-            if d.end is not None:
-                count = min(count, d.end - start)
+    def _stream(self, d: _Download, start: int, count: int, now: float):
+        """One request streamed as a window: the log's tail (open-ended) or a long gap."""
+        if d.end is not None:
+            count = min(count, d.end - start)
         d.window = (start, start + count)
-        log.debug("log %d: window %d+%d (rtt %.3f s, %.0f packets/s, %d gaps)", d.entry.id, start, count, d.rtt,
-                  d.rate, len(gaps))
+        log.debug("log %d: stream %d+%d (rtt %.3f s, %.0f packets/s)", d.entry.id, start, count, d.rtt, d.rate)
         d.sent_at = now
         d.first_rx = None
+        self._count_asked(d, start, count)
+        return self._message("log_request_data", d.entry.id, start, count)
+
+    def _count_asked(self, d: _Download, start: int, count: int) -> None:
         upto = min(start + count, d.end if d.end is not None else max(d.size, start))
         d.requested += max(0, upto - start)
-        d.rerequested += sum(max(0, min(b, upto) - max(a, start)) for a, b in d.ranges.spans)
-        return self._message("log_request_data", d.entry.id, start, count)
+        d.rerequested += d.ranges.held(start, upto)
+
+    def _fill_window(self, d: _Download) -> int:
+        """Gap requests in flight: what the link carries in a round trip (its packet rate on the stream times the
+        round trip), with a margin, so the vehicle's transmit buffer is not asked for much more."""
+        return int(min(FILL_MAX, max(FILL_MIN, FILL_GAIN * d.rate * d.rtt)))
+
+    def _fill(self, d: _Download, now: float) -> list:
+        """Ask for the missing packets one request each, sweeping the gaps from the cursor, while fewer than the
+        window are in flight; a gap longer than the window, with nothing in flight, is streamed instead."""
+        if d.asks and now - max(d.asked_at, d.last_rx) >= max(0.05, 2 * d.rtt):
+            d.asks.clear()                      # silence: all of them (or their answers) were lost
+        window = self._fill_window(d)
+        want = window - len(d.asks)
+        if want <= 0:
+            return []
+        out, end = [], d.end
+        gaps, wrapped = d.ranges.gaps(d.cursor, end), d.cursor == 0
+        while want > 0:
+            gap = next(gaps, None)
+            if gap is None:
+                if wrapped:
+                    break
+                d.cursor, wrapped = 0, True     # the next sweep: what went unanswered is asked again
+                gaps = d.ranges.gaps(0, end)
+                continue
+            a, b = gap
+            if b - a > max(window, 32) * CHUNK and not d.asks and not out:
+                d.cursor = b
+                return [self._stream(d, a, -(-(b - a) // CHUNK) * CHUNK, now)]
+            for ofs in range(a, b, CHUNK):
+                if ofs in d.asks:
+                    continue
+                count = min(CHUNK, b - ofs)
+                d.asks[ofs] = (count, now)
+                d.requested += count
+                out.append(self._message("log_request_data", d.entry.id, ofs, count))
+                d.cursor = ofs + count
+                want -= 1
+                if not want:
+                    break
+        if out:
+            d.asked_at = now
+            log.debug("log %d: %d gap requests (%d in flight, window %d)", d.entry.id, len(out), len(d.asks), window)
+        return out
 
     def _on_data(self, m) -> None:
         d = self._download
@@ -480,7 +532,16 @@ class LogControl:
             if d.ranges.add(ofs, ofs + count):
                 d.pending.append((ofs, data))
                 d.progress_at = now
-        if count < CHUNK and (d.end is None or ofs + count < d.end):
+        expected = CHUNK
+        ask = d.asks.get(ofs)
+        if ask is not None:                     # a gap request's answer: the ones sent before it went unanswered
+            while d.asks.popitem(last=False)[0] != ofs:
+                pass
+            expected = ask[0]
+            self._round_trip(d, now - ask[1])
+            if len(d.asks) <= self._fill_window(d) // 2:
+                self._v._wake.set()
+        if count < expected and (d.end is None or ofs + count < d.end):
             d.end = ofs + count                 # a short packet: the log ends here (the vehicle's word)
             d.part.size = d.end
         window = d.window
@@ -488,12 +549,17 @@ class LogControl:
             return                              # queued from an earlier request: kept, but it times nothing
         if d.first_rx is None:
             d.first_rx, d.first_ofs = now, ofs
-            d.rtt = 0.5 * d.rtt + 0.5 * (now - d.sent_at)
+            self._round_trip(d, now - d.sent_at)
         d.last_ofs = ofs
         if ofs + count >= window[1] or count < CHUNK:
             self._measure(d, now)
             d.window = None
             self._v._wake.set()
+
+    @staticmethod
+    def _round_trip(d: _Download, seconds: float) -> None:
+        d.rtt = 0.875 * d.rtt + 0.125 * seconds if d.rtt_seen else seconds
+        d.rtt_seen = True
 
     @staticmethod
     def _measure(d: _Download, now: float) -> None:
