@@ -64,8 +64,8 @@ FLUSH_INTERVAL = 0.25           # s between writes of the .part file and its map
 ERASE_WAIT = 1.0                # s after LOG_ERASE before the list that confirms it
 ERASE_TRIES = 3
 FILL_MIN = 4                    # gap requests in flight at least (a radio port's transmit buffer holds ~9 LOG_DATA)
-FILL_MAX = 1024                 # ... and at most (what one batch of requests may ask of the vehicle)
-FILL_GAIN = 2.0                 # in flight: this many times the link's packets in a round trip
+FILL_MAX = 2048                 # ... and at most (what one batch of requests may ask of the vehicle)
+FILL_GAIN = 3.0                 # in flight: this many times the link's packets in a round trip
 
 
 @dataclass(frozen=True)
@@ -151,6 +151,9 @@ class _Download:
         self.asks: OrderedDict[int, tuple[int, float]] = OrderedDict()   # offset: (count, sent at), in order sent
         self.asked_at = 0.0
         self.cursor = 0                         # where the sweep over the gaps goes on
+        self.tail_full: set[int] = set()        # offsets where a probe of the unknown end found a full packet
+        self.streamed = False                   # the open-ended pass was asked
+        self.short_asks: dict[int, int] = {}    # offset: count of the gap requests for less than a packet
         self.rate = 0.0                         # packets/s seen while a window streams
         self.received = self.requested = self.rerequested = 0
         self.progress_at = 0.0
@@ -315,7 +318,7 @@ class LogControl:
             self._abort(job, f"the log list is incomplete after {LIST_TRIES} tries (missing: {missing})")
             return [self._end_message()]
         listing.tries += 1
-        listing.quiet_until = now + 0.25 + 0.1 * listing.tries
+        listing.quiet_until = now + 0.1 + 0.1 * listing.tries
         start, end = (wanted[0], wanted[-1]) if listing.last is not None else ALL_IDS
         # a transfer still running (a cancelled download's, its END lost) would drop the list: END goes first
         return [self._end_message(), self._message("log_request_list", start, end)]
@@ -427,12 +430,13 @@ class LogControl:
             return [self._end_message()]
         if d.window is not None:
             quiet = now - max(d.sent_at, d.last_rx)
-            if quiet < max(0.1, 3 * d.rtt):
+            if quiet < max(0.05, 3 * d.rtt):
                 return []
             self._measure(d, now)
             d.window = None                     # silence: the rest of that window was lost
-        if d.end is None:                       # from where the held bytes end, to the log's own end
-            held_to = d.ranges.spans[-1][1] if d.ranges.spans else 0
+        held_to = d.ranges.spans[-1][1] if d.ranges.spans else 0
+        if d.end is None and (not d.streamed or held_to in d.tail_full):
+            # from where the held bytes end to the log's own end: the first pass, or a log still going on
             return [self._stream(d, held_to, OPEN_END - held_to, now)]
         return self._fill(d, now)
 
@@ -465,6 +469,7 @@ class LogControl:
         if d.end is not None:
             count = min(count, d.end - start)
         d.window = (start, start + count)
+        d.streamed = True
         log.debug("log %d: stream %d+%d (rtt %.3f s, %.0f packets/s)", d.entry.id, start, count, d.rtt, d.rate)
         d.sent_at = now
         d.first_rx = None
@@ -491,6 +496,13 @@ class LogControl:
         if want <= 0:
             return []
         out, end = [], d.end
+        if end is None:                         # the stream's last packet was lost: probe the end with the gaps
+            end = d.ranges.spans[-1][1]
+            if end not in d.asks:
+                d.asks[end] = (CHUNK, now)
+                probe = self._message("log_request_data", d.entry.id, end, CHUNK)
+                out += [probe, probe]           # twice: one packet, whose loss costs a whole round
+                want -= 1
         gaps, wrapped = d.ranges.gaps(d.cursor, end), d.cursor == 0
         while want > 0:
             gap = next(gaps, None)
@@ -509,6 +521,8 @@ class LogControl:
                     continue
                 count = min(CHUNK, b - ofs)
                 d.asks[ofs] = (count, now)
+                if count < CHUNK:
+                    d.short_asks[ofs] = count   # its answer is short too, and not the log's end
                 d.requested += count
                 out.append(self._message("log_request_data", d.entry.id, ofs, count))
                 d.cursor = ofs + count
@@ -532,13 +546,15 @@ class LogControl:
             if d.ranges.add(ofs, ofs + count):
                 d.pending.append((ofs, data))
                 d.progress_at = now
-        expected = CHUNK
+        expected = d.short_asks.get(ofs, CHUNK)
         ask = d.asks.get(ofs)
         if ask is not None:                     # a gap request's answer: the ones sent before it went unanswered
             while d.asks.popitem(last=False)[0] != ofs:
                 pass
             expected = ask[0]
             self._round_trip(d, now - ask[1])
+            if d.end is None and count == CHUNK and ofs + count == d.ranges.spans[-1][1]:
+                d.tail_full.add(ofs + count)    # the log goes on past the probe: stream the rest
             if len(d.asks) <= self._fill_window(d) // 2:
                 self._v._wake.set()
         if count < expected and (d.end is None or ofs + count < d.end):
