@@ -66,6 +66,7 @@ class LogServer:
     log_told_armed = False
     log_room = 0.0                          # LOG_DATA the port's transmit buffer takes now
     log_room_t: float | None = None         # sim time it was last refilled at
+    log_sizes: tuple | None = None          # (sim time, {log id: size}) for the requests of one step
     log_list_credit = 0.0
     log_next_sample = 0.0
     log_mode = None
@@ -155,15 +156,23 @@ class LogServer:
                 self._text(mavlink.MAV_SEVERITY_INFO, BUSY_TEXT)
             return                                      # dropped (the recording: during a listing, silently)
         folder = self.log_folder
-        if msg.id not in folder.numbers():
-            self.log_sending = None
-            return                                      # an unknown id: nothing at all
         if msg.id == folder.current:
             folder.end()                                # a download closes the log being written
-        size = next((e[1] for e in folder.entries() if e[0] == msg.id), 0)
+        size = self._log_size(msg.id)
+        if size is None:
+            self.log_sending = None
+            return                                      # an unknown id: nothing at all
         remaining = min(msg.count, max(0, size - msg.ofs))   # the size as it is now (get_log_info)
         self.log_sending = [self.sender, msg.id, msg.ofs, remaining, None]
         self._log_send(self._log_sends())               # at once, within the same batch of requests
+
+    def _log_size(self, number: int) -> int | None:
+        """get_log_info's size (None: no such log), read from the folder once a sim step: disarmed, nothing is
+        written between, and a batch of requests would otherwise list the folder for each one."""
+        cached = self.log_sizes
+        if cached is None or cached[0] != self.t:
+            cached = self.log_sizes = (self.t, {e[0]: e[1] for e in self.log_folder.entries()})
+        return cached[1].get(number)
 
     def _on_log_request_end(self, msg) -> None:
         if self._log_refused():
@@ -175,7 +184,7 @@ class LogServer:
     def _on_log_erase(self, msg) -> None:
         if self._log_refused():
             return                                      # (ArduPilot erases even during a transfer)
-        self.log_listing = self.log_sending = None
+        self.log_listing = self.log_sending = self.log_sizes = None
         self.log_folder.erase()
 
     # -- each step -----------------------------------------------------------------------------------------
