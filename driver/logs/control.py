@@ -435,7 +435,7 @@ class LogControl:
             self._measure(d, now)
             d.window = None                     # silence: the rest of that window was lost
         held_to = d.ranges.spans[-1][1] if d.ranges.spans else 0
-        if d.end is None and (not d.streamed or held_to in d.tail_full):
+        if d.end is None and (not d.streamed or not held_to or held_to in d.tail_full):
             # from where the held bytes end to the log's own end: the first pass, or a log still going on
             return [self._stream(d, held_to, OPEN_END - held_to, now)]
         return self._fill(d, now)
