@@ -496,6 +496,8 @@ class LogControl:
         if want <= 0:
             return []
         out, end = [], d.end
+        # the last few: each asked twice (a lost one costs a whole round trip, and nothing else is in flight)
+        copies = 2 if end is not None and end - d.ranges.total() < window * CHUNK // 4 else 1
         if end is None:                         # the stream's last packet was lost: probe the end with the gaps
             end = d.ranges.spans[-1][1]
             if end not in d.asks:
@@ -524,7 +526,7 @@ class LogControl:
                 if count < CHUNK:
                     d.short_asks[ofs] = count   # its answer is short too, and not the log's end
                 d.requested += count
-                out.append(self._message("log_request_data", d.entry.id, ofs, count))
+                out += [self._message("log_request_data", d.entry.id, ofs, count)] * copies
                 d.cursor = ofs + count
                 want -= 1
                 if not want:
