@@ -16,11 +16,12 @@ about it here:
   is fetched whole). Then the gaps that loss left are filled by pipelining: one request per missing packet (never
   more than any link's one call sends, so never dropped for a transfer still running, and never a held byte asked
   again), as many in flight as the link carries in a round trip (its packet rate, measured on the stream, times
-  the round trip), a new one sent as answers come. The vehicle answers in order, so when a request's
-  packet arrives every request sent before it that is still unanswered was lost (or its packet was): it is asked
-  again on the next sweep over the gaps; silence for three round trips clears them all. A gap longer than that
-  window (a dropped link) is streamed as one request. Nothing held is ever thrown away: no log is restarted
-  because chunks were lost.
+  the round trip, x1.5, over the share of requests and answers the stream's loss says arrive), a new one sent as
+  answers come. The vehicle answers in order, so when a request's packet arrives every request sent before it
+  that is still unanswered was lost (or its packet was): it is asked again on the next sweep over the gaps;
+  silence for two round trips clears them all; the last few go twice. A lost end (the stream's short packet) is
+  probed with the gaps. A gap longer than that window (a dropped link) is streamed as one request. Nothing held
+  is ever thrown away: no log is restarted because chunks were lost.
 * LOG_REQUEST_END stops the stream but hundreds of queued LOG_DATA still come: any LOG_DATA of the log being
   fetched is kept, whichever request it answers.
 * Armed, the vehicle ignores every LOG_* request (the first with "Disarm for log download"): the request fails
@@ -65,7 +66,8 @@ ERASE_WAIT = 1.0                # s after LOG_ERASE before the list that confirm
 ERASE_TRIES = 3
 FILL_MIN = 4                    # gap requests in flight at least (a radio port's transmit buffer holds ~9 LOG_DATA)
 FILL_MAX = 2048                 # ... and at most (what one batch of requests may ask of the vehicle)
-FILL_GAIN = 3.0                 # in flight: this many times the link's packets in a round trip
+TAIL_TWICE = 32                 # at most this many missing packets are each asked twice
+FILL_GAIN = 1.5                 # in flight: this many times the link's packets in a round trip (loss aside)
 
 
 @dataclass(frozen=True)
@@ -155,6 +157,8 @@ class _Download:
         self.streamed = False                   # the open-ended pass was asked
         self.short_asks: dict[int, int] = {}    # offset: count of the gap requests for less than a packet
         self.rate = 0.0                         # packets/s seen while a window streams
+        self.loss = 0.0                         # share of a stream's packets lost on the way
+        self.stream_got = 0                     # packets of the window that arrived
         self.received = self.requested = self.rerequested = 0
         self.progress_at = 0.0
         self.flushed_at = 0.0
@@ -473,6 +477,7 @@ class LogControl:
         log.debug("log %d: stream %d+%d (rtt %.3f s, %.0f packets/s)", d.entry.id, start, count, d.rtt, d.rate)
         d.sent_at = now
         d.first_rx = None
+        d.stream_got = 0
         self._count_asked(d, start, count)
         return self._message("log_request_data", d.entry.id, start, count)
 
@@ -483,8 +488,10 @@ class LogControl:
 
     def _fill_window(self, d: _Download) -> int:
         """Gap requests in flight: what the link carries in a round trip (its packet rate on the stream times the
-        round trip), with a margin, so the vehicle's transmit buffer is not asked for much more."""
-        return int(min(FILL_MAX, max(FILL_MIN, FILL_GAIN * d.rate * d.rtt)))
+        round trip), with a margin, and more for the requests and answers a loss takes (the stream's loss share,
+        taken for both ways): enough to keep the vehicle sending, not more, so a radio is not flooded."""
+        answered = (1.0 - d.loss) ** 2
+        return int(min(FILL_MAX, max(FILL_MIN, FILL_GAIN * d.rate * d.rtt / answered)))
 
     def _fill(self, d: _Download, now: float) -> list:
         """Ask for the missing packets one request each, sweeping the gaps from the cursor, while fewer than the
@@ -497,7 +504,7 @@ class LogControl:
             return []
         out, end = [], d.end
         # the last few: each asked twice (a lost one costs a whole round trip, and nothing else is in flight)
-        copies = 2 if end is not None and end - d.ranges.total() < window * CHUNK // 4 else 1
+        copies = 2 if end is not None and end - d.ranges.total() < min(window // 4, TAIL_TWICE) * CHUNK else 1
         if end is None:                         # the stream's last packet was lost: probe the end with the gaps
             end = d.ranges.spans[-1][1]
             if end not in d.asks:
@@ -569,6 +576,7 @@ class LogControl:
             d.first_rx, d.first_ofs = now, ofs
             self._round_trip(d, now - d.sent_at)
         d.last_ofs = ofs
+        d.stream_got += 1
         if ofs + count >= window[1] or count < CHUNK:
             self._measure(d, now)
             d.window = None
@@ -581,10 +589,14 @@ class LogControl:
 
     @staticmethod
     def _measure(d: _Download, now: float) -> None:
-        """The stream's rate (packets/s, lost ones counted) from this window's first and last packets."""
+        """The stream's rate (packets/s, lost ones counted) from this window's first and last packets, and the
+        share of its packets the link lost."""
         if d.first_rx is not None and d.last_rx > d.first_rx and d.last_ofs > d.first_ofs:
-            rate = (d.last_ofs - d.first_ofs) / CHUNK / (d.last_rx - d.first_rx)
+            span = (d.last_ofs - d.first_ofs) / CHUNK
+            rate = span / (d.last_rx - d.first_rx)
             d.rate = rate if d.rate == 0 else 0.5 * d.rate + 0.5 * rate
+            if span >= 50:
+                d.loss = min(0.9, max(0.0, 1.0 - d.stream_got / (span + 1)))
 
     def _flush(self, d: _Download) -> bool:
         d.flushed_at = time.monotonic()
