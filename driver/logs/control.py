@@ -66,6 +66,8 @@ ERASE_WAIT = 1.0                # s after LOG_ERASE before the list that confirm
 ERASE_TRIES = 3
 FILL_MIN = 4                    # gap requests in flight at least (a radio port's transmit buffer holds ~9 LOG_DATA)
 FILL_MAX = 2048                 # ... and at most (what one batch of requests may ask of the vehicle)
+ANSWERED_MIN = 0.4              # ... counting at most 2.5x for loss: frames a starved reader drops look like
+                                # loss too, and more requests would only drop more
 TAIL_TWICE = 32                 # at most this many missing packets are each asked twice
 FILL_GAIN = 1.5                 # in flight: this many times the link's packets in a round trip (loss aside)
 
@@ -490,7 +492,7 @@ class LogControl:
         """Gap requests in flight: what the link carries in a round trip (its packet rate on the stream times the
         round trip), with a margin, and more for the requests and answers a loss takes (the stream's loss share,
         taken for both ways): enough to keep the vehicle sending, not more, so a radio is not flooded."""
-        answered = (1.0 - d.loss) ** 2
+        answered = max(ANSWERED_MIN, (1.0 - d.loss) ** 2)
         return int(min(FILL_MAX, max(FILL_MIN, FILL_GAIN * d.rate * d.rtt / answered)))
 
     def _fill(self, d: _Download, now: float) -> list:
