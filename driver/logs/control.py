@@ -135,6 +135,7 @@ class _Listing:
         self.last: int | None = None
         self.tries = 0
         self.quiet_until = 0.0
+        self.asked_at = 0.0                     # the last LOG_REQUEST_LIST, until its first answer times it
 
 
 class _Download:
@@ -183,6 +184,7 @@ class LogControl:
         self._erase_before: tuple = ()
         self._erase_tries = 0
         self._check_thread: threading.Thread | None = None
+        self._list_rtt: float | None = None     # s from a LOG_REQUEST_LIST to its first LOG_ENTRY
         self.entries: tuple = ()                # the last complete list
         self.progress: LogProgress | None = None
 
@@ -325,6 +327,7 @@ class LogControl:
             return [self._end_message()]
         listing.tries += 1
         listing.quiet_until = now + 0.1 + 0.1 * listing.tries
+        listing.asked_at = now
         start, end = (wanted[0], wanted[-1]) if listing.last is not None else ALL_IDS
         # a transfer still running (a cancelled download's, its END lost) would drop the list: END goes first
         return [self._end_message(), self._message("log_request_list", start, end)]
@@ -337,6 +340,9 @@ class LogControl:
 
     def _on_entry(self, m) -> None:
         listing = self._listing
+        if listing.asked_at:                    # the link's round trip, a download's first guess of it
+            self._list_rtt = time.monotonic() - listing.asked_at
+            listing.asked_at = 0.0
         if m.num_logs == 0 or m.last_log_num == 0:
             listing.last = 0
         else:
@@ -393,6 +399,8 @@ class LogControl:
             self._abort(job, f"{job.path}: {exc.strerror or exc}")
             return None
         d = _Download(job, entry, part, part.ranges.total())
+        if self._list_rtt is not None:
+            d.rtt = self._list_rtt             # (a first request lost waits 3 of them, not 3 x 0.3 s)
         if part.size:
             d.end = part.size
         d.file = handle
