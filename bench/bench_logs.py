@@ -1,49 +1,94 @@
 """Log download bench (issue 31): a 2 MB and a 20 MB DataFlash log from the simulator, by LOG_DATA and by MAVLink
-FTP, over TCP at 0, 10 and 30 % loss each way, with the embedded driver; and the MAVProxy-style baseline
-(LOG_REQUEST_DATA for the whole log, started again from byte 0 after a silence).
+FTP, at 0, 10 and 30 % loss each way, with the embedded driver; and the MAVProxy-style baseline (LOG_REQUEST_DATA
+for the whole log, started again from byte 0 after a silence). Links: ``tcp`` (the copter-4 profile over TCP, as
+SITL), ``radio`` (copter-4 behind a 57,600-baud SiK radio without flow control: one LOG_DATA per call, a 1 kB
+transmit buffer) and ``solo`` (the Solo profile on its own 921,600-baud flow-controlled link to its companion
+computer: ten LOG_DATA per call, 3.3's request handling).
 
     .venv/bin/python bench/bench_logs.py [--sizes 2,20] [--paths log_data,ftp,baseline] [--loss 0,10,30]
-                                         [--speedup 1] [--ftp-speedup 20] [--markdown]
+                                         [--links tcp,radio,solo] [--speedup 1] [--ftp-speedup 20]
+                                         [--radio-speedup 10] [--markdown]
 
-Per cell: the time (from the request to the last byte, the DFReader check not counted), the protocol floor (the
-simulator's own pace for that path: LOG_DATA at min(61,000/s recorded, 600 a step x 50 steps) sim-s, FTP one
-239-byte packet every 5.5 ms sim-s, as recorded; divided by the speed-up), the ratio, bytes asked again that
-were held already, and whether the file is byte-identical to the simulator's own (and DFReader reads it). The
-simulator is Python: at 0 % loss LOG_DATA runs at what its CPU sends, well below the recorded 5.5 MB/s.
+Per cell: the time (from the request to the last byte, the log list the download reads first included, the
+DFReader check not counted), the protocol floor, the ratio, the lossy floor and its ratio, bytes asked again
+that were held already, and whether the file is byte-identical to the simulator's own (and DFReader reads it).
+
+The floor is the time the simulator's link needs to send every packet of the log once: LOG_DATA at
+min(61,000/s recorded, 600 a step x 50 steps) = 30,000 packets a sim second over TCP, and on a radio its baud / 10
+bytes a second of 109-byte LOG_DATA frames; FTP one 239-byte packet every 5.5 ms sim, as recorded; divided by the
+speed-up. The lossy floor is that floor / (1 - loss): through a link that drops that share every byte must cross
+at least once, so the vehicle sends each packet 1 / (1 - loss) times on average (lost requests cost round trips,
+not counted). The simulator is Python: at 0 % loss LOG_DATA runs at what its CPU sends, well below the recorded
+5.5 MB/s, and it shares this 2-core machine with the driver (and with whatever else runs).
 """
 from __future__ import annotations
 
 import argparse
+import contextlib
 import logging
 import math
 import os
+import re
 import shutil
 import socket
+import subprocess
 import sys
 import tempfile
+import threading
 import time
 
-sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, ROOT)
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink  # noqa: E402
 
-from driver.sim import SimConfig, SimVehicle  # noqa: E402
+from driver.sim import SimConfig  # noqa: E402
 from driver.sim import ftp as simftp  # noqa: E402
 from driver.sim import logs as simlogs  # noqa: E402
 from driver.sim.dataflash import LogFolder, write_flight_log  # noqa: E402
-from driver.sim.faults import LinkFaults  # noqa: E402
 from driver.vehicle import Vehicle, VehicleConfig  # noqa: E402
 import tables  # noqa: E402
 
+LINKS = {"tcp": ("copter-4", None), "radio": ("copter-4", 57_600), "solo": ("solo", 921_600)}
 BASELINE_SILENCE = 1.0       # s without LOG_DATA before the baseline starts the whole log again (MAVProxy-like)
 CELL_LIMIT = 300.0           # s a cell may take before it counts as not finished
 
 
-def floor_seconds(path: str, size: int, speedup: float) -> float:
+def floor_seconds(path: str, size: int, speedup: float, link: str = "tcp") -> float:
+    """The time the link needs to carry each packet of the log once (see the module's docstring)."""
     if path == "ftp":
         return math.ceil(size / simftp.CHUNK) * simftp.PACKET_INTERVAL / speedup
     rate = min(simlogs.LOG_DATA_RATE, simlogs.MAX_DATA_STEP * SimConfig.rate_hz)
+    baud = LINKS[link][1]
+    if baud:
+        rate = min(rate, baud / 10.0 / simlogs.LOG_DATA_FRAME)
     return math.ceil(size / simlogs.LOG_DATA_SIZE) / rate / speedup
+
+
+@contextlib.contextmanager
+def vehicle(logs: LogFolder, speedup: float, link: str, loss: float):
+    """``python -m driver.sim`` in a process of its own (a vehicle is a computer of its own: in this process it
+    would share the interpreter's lock with the driver), lossy from the start; yields its TCP port."""
+    profile, baud = LINKS[link]
+    cmd = [sys.executable, "-m", "driver.sim", "--tcp", "127.0.0.1:0", "--speedup", f"{speedup:g}", "--ready-after",
+           "1", "--seed", "7", "--log-dir", logs.folder, "--profile", profile, "--uplink-loss", f"{loss:g}",
+           "--downlink-loss", f"{loss:g}"] + (["--radio-baud", str(baud)] if baud else [])
+    proc = subprocess.Popen(cmd, cwd=ROOT, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL,
+                            stderr=subprocess.PIPE, text=True)
+    try:
+        port = None
+        for line in proc.stderr:
+            found = re.search(r"serving MAVLink on tcp:[\d.]+:(\d+)", line)
+            if found:
+                port = int(found.group(1))
+                break
+        threading.Thread(target=lambda: [None for _ in proc.stderr], daemon=True).start()   # drained
+        if port is None:
+            raise RuntimeError(f"the simulator did not start: {' '.join(cmd)}")
+        yield port
+    finally:
+        proc.terminate()
+        proc.wait(10)
 
 
 def make_log(folder: str, megabytes: float) -> tuple[LogFolder, int]:
@@ -51,14 +96,17 @@ def make_log(folder: str, megabytes: float) -> tuple[LogFolder, int]:
     return logs, write_flight_log(logs, int(megabytes * 1_000_000))
 
 
-def driver_cell(logs: LogFolder, number: int, path: str, loss: float, speedup: float, out: str) -> dict:
-    sim = SimVehicle(SimConfig(tcp_port=0, speedup=speedup, ready_after=1.0, seed=7, log_dir=logs.folder)).start()
-    v = Vehicle(VehicleConfig(connection=f"tcp:127.0.0.1:{sim.tcp_port}")).start()
+def driver_cell(logs: LogFolder, number: int, path: str, loss: float, speedup: float, out: str,
+                link: str = "tcp") -> dict:
+    with vehicle(logs, speedup, link, loss) as port:
+        return driver_download(port, logs, number, path, out)
+
+
+def driver_download(port: int, logs: LogFolder, number: int, path: str, out: str) -> dict:
+    v = Vehicle(VehicleConfig(connection=f"tcp:127.0.0.1:{port}")).start()
     try:
         if not v.wait_for(lambda s: s.connected, 20):
             return {"ok": False, "why": "no heartbeat"}
-        sim.faults.uplink = LinkFaults(loss=loss)
-        sim.faults.downlink = LinkFaults(loss=loss)
         outcome = v.logs.download(number, out, via=path).result(CELL_LIMIT)
         same = outcome.ok and open(out, "rb").read() == open(logs.path(number), "rb").read()
         return {"ok": outcome.ok, "why": outcome.reason, "seconds": outcome.seconds, "identical": same,
@@ -67,13 +115,16 @@ def driver_cell(logs: LogFolder, number: int, path: str, loss: float, speedup: f
         return {"ok": False, "why": f"not finished in {CELL_LIMIT:.0f} s"}
     finally:
         v.close()
-        sim.stop()
 
 
-def baseline_cell(logs: LogFolder, number: int, loss: float, speedup: float) -> dict:
+def baseline_cell(logs: LogFolder, number: int, loss: float, speedup: float, link: str = "tcp") -> dict:
     """MAVProxy-style: the whole log asked at once; after a silence with bytes missing, all of it again."""
-    sim = SimVehicle(SimConfig(tcp_port=0, speedup=speedup, ready_after=1.0, seed=7, log_dir=logs.folder)).start()
-    sock = socket.create_connection(("127.0.0.1", sim.tcp_port))
+    with vehicle(logs, speedup, link, loss) as port:
+        return baseline_download(port, logs, number)
+
+
+def baseline_download(port: int, logs: LogFolder, number: int) -> dict:
+    sock = socket.create_connection(("127.0.0.1", port))
     sock.settimeout(0.05)
     mav = mavlink.MAVLink(None, srcSystem=255, srcComponent=190)
     parser = mavlink.MAVLink(None)
@@ -81,8 +132,6 @@ def baseline_cell(logs: LogFolder, number: int, loss: float, speedup: float) -> 
     own = open(logs.path(number), "rb").read()
     size = len(own)
     try:
-        sim.faults.uplink = LinkFaults(loss=loss)
-        sim.faults.downlink = LinkFaults(loss=loss)
         start = time.monotonic()
         restarts, received = 0, 0
         chunks: dict[int, bytes] = {}
@@ -112,7 +161,6 @@ def baseline_cell(logs: LogFolder, number: int, loss: float, speedup: float) -> 
                 "rerequested": restarts * size, "received": received}
     finally:
         sock.close()
-        sim.stop()
 
 
 def main() -> None:
@@ -120,41 +168,53 @@ def main() -> None:
     p.add_argument("--sizes", default="2,20", help="MB, comma-separated")
     p.add_argument("--paths", default="log_data,ftp,baseline")
     p.add_argument("--loss", default="0,10,30", help="percent each way, comma-separated")
+    p.add_argument("--links", default="tcp", help="tcp, radio (57,600-baud SiK), solo (its 921,600-baud link)")
     p.add_argument("--speedup", type=float, default=1.0, help="the sim's speed-up for LOG_DATA and the baseline")
     p.add_argument("--ftp-speedup", type=float, default=20.0, help="the sim's speed-up for FTP (paced at 5.5 ms)")
+    p.add_argument("--radio-speedup", type=float, default=10.0, help="the sim's speed-up on the 57,600-baud radio")
     p.add_argument("--markdown", action="store_true")
     opts = p.parse_args()
     logging.basicConfig(level=logging.ERROR)
-    head = ("log", "path", "loss", "time s", "floor s", "x floor", "re-asked held B", "received B", "identical",
-            "note")
+    head = ("log", "link", "path", "loss", "time s", "floor s", "x floor", "lossy floor s", "x lossy floor",
+            "re-asked held B", "received B", "identical", "note")
     rows = []
     work = tempfile.mkdtemp(prefix="bench-logs-")
     try:
         for mb in (float(x) for x in opts.sizes.split(",")):
             logs, number = make_log(os.path.join(work, f"{mb:g}MB"), mb)
             size = os.path.getsize(logs.path(number))
-            for path in opts.paths.split(","):
-                speedup = opts.ftp_speedup if path == "ftp" else opts.speedup
-                for pct in (float(x) for x in opts.loss.split(",")):
-                    out = os.path.join(work, f"got-{mb:g}-{path}-{pct:g}.BIN")
-                    if path == "baseline":
-                        r = baseline_cell(logs, number, pct / 100, speedup)
-                    else:
-                        r = driver_cell(logs, number, path, pct / 100, speedup, out)
-                    floor = floor_seconds("ftp" if path == "ftp" else "log_data", size, speedup)
-                    secs = r.get("seconds")
-                    rows.append((f"{size / 1e6:.1f} MB", path, f"{pct:g} %",
-                                 f"{secs:.2f}" if secs is not None and r["ok"] else "-", f"{floor:.2f}",
-                                 f"{secs / floor:.1f}" if secs and r["ok"] else "-",
-                                 str(r.get("rerequested", "-")), str(r.get("received", "-")),
-                                 "yes" if r.get("identical") else "NO",
-                                 ("" if r["ok"] else r["why"][:60]) + (f" (x{speedup:g} sim)" if speedup != 1 else "")
-                                 if path != "baseline" else r["why"][:60]))
-                    print("  ".join(rows[-1]), flush=True)
+            for link in opts.links.split(","):
+                for path in opts.paths.split(","):
+                    if path == "ftp" and LINKS[link][0] == "solo":
+                        continue                                # the Solo has no MAVLink FTP
+                    speedup = opts.ftp_speedup if path == "ftp" else \
+                        opts.radio_speedup if link == "radio" else opts.speedup
+                    for pct in (float(x) for x in opts.loss.split(",")):
+                        rows.append(cell(logs, number, size, mb, link, path, pct, speedup, work))
+                        print("  ".join(rows[-1]), flush=True)
     finally:
         shutil.rmtree(work, ignore_errors=True)
     print()
     print("\n".join(tables.render(head, rows, opts.markdown)))
+
+
+def cell(logs: LogFolder, number: int, size: int, mb: float, link: str, path: str, pct: float, speedup: float,
+         work: str) -> tuple:
+    out = os.path.join(work, f"got-{mb:g}-{link}-{path}-{pct:g}.BIN")
+    if path == "baseline":
+        r = baseline_cell(logs, number, pct / 100, speedup, link)
+    else:
+        r = driver_cell(logs, number, path, pct / 100, speedup, out, link)
+    floor = floor_seconds("ftp" if path == "ftp" else "log_data", size, speedup, link)
+    lossy = floor / (1 - pct / 100)
+    secs = r.get("seconds") if r["ok"] else None
+    note = r["why"][:60] if path == "baseline" or not r["ok"] else ""
+    if speedup != 1:
+        note += f" (x{speedup:g} sim)"
+    return (f"{size / 1e6:.1f} MB", link, path, f"{pct:g} %", f"{secs:.2f}" if secs else "-", f"{floor:.2f}",
+            f"{secs / floor:.1f}" if secs else "-", f"{lossy:.2f}", f"{secs / lossy:.1f}" if secs else "-",
+            str(r.get("rerequested", "-")), str(r.get("received", "-")), "yes" if r.get("identical") else "NO",
+            note.strip())
 
 
 if __name__ == "__main__":

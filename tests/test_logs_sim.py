@@ -114,3 +114,37 @@ def test_a_request_during_a_transfer_is_dropped(sim_factory, tmp_path):
         bad = [(i, offsets[i - 2:i + 3]) for i in range(1, len(offsets)) if offsets[i] < offsets[i - 1]]
         assert not bad and 18_001 not in offsets      # one stream in order, the window dropped
         assert not [m for m in gcs.messages[mark:] if m.get_type() == "LOG_ENTRY"]
+
+
+def test_small_requests_streamed_back_to_back_are_all_served(sim_factory, tmp_path):
+    """handle_log_request_data serves a request at once, up to num_sends packets (SITL: 40), and one that ends
+    there ends the transfer: the next request of the same batch is served too (MAVProxy streams its gap
+    requests so). Asking for more than one call sends leaves a transfer running: what comes then is dropped."""
+    folder = LogFolder(str(tmp_path / "logs"))
+    write_flight_log(folder, 200_000)
+    sim = sim_factory(log_dir=folder.folder)
+    windows = [(ofs, 90 * n) for ofs, n in ((1000, 1), (5000, 3), (9001, 40), (60_000, 2), (90_000, 1),
+                                             (120_000, 5), (150_000, 1), (170_000, 7))]
+    with OtherGroundStation(f"tcp:127.0.0.1:{sim.tcp_port}") as gcs:
+        mark = gcs.mark()
+        for ofs, count in windows:
+            gcs.send(gcs.mav.log_request_data_encode(1, 1, 1, ofs, count))
+        got = quiet_after(gcs, "LOG_DATA", mark)
+        assert sorted((m.ofs, m.count) for m in got) == [(ofs + i, 90) for ofs, count in windows
+                                                         for i in range(0, count, 90)]
+
+
+def test_the_solo_moves_its_transfer_to_a_new_request(sim_factory, tmp_path):
+    """3.3 (ardupilot-solo GCS_Logs.cpp) has no "download in progress" check: a LOG_REQUEST_DATA for the log being
+    sent sets the transfer's offset and count, so a stream ends where the new window does."""
+    folder = LogFolder(str(tmp_path / "logs"))
+    write_flight_log(folder, 60_000)
+    sim = sim_factory(log_dir=folder.folder, profile="solo", radio_baud=200_000)
+    with OtherGroundStation(f"tcp:127.0.0.1:{sim.tcp_port}", mavlink1=True) as gcs:
+        mark = gcs.mark()
+        gcs.send(gcs.mav.log_request_data_encode(1, 1, 1, 0, 0xFFFFFFFF))
+        assert gcs.wait("LOG_DATA", 5, since=mark)
+        gcs.send(gcs.mav.log_request_data_encode(1, 1, 1, 50_001, 180))
+        got = quiet_after(gcs, "LOG_DATA", mark)
+        assert [(m.ofs, m.count) for m in got[-2:]] == [(50_001, 90), (50_091, 90)]
+        assert max(m.ofs for m in got if m.ofs < 50_001) < 20_000       # the stream stopped for it

@@ -6,12 +6,22 @@ about it here:
 * LOG_REQUEST_LIST 0..0xffff gives one LOG_ENTRY per log; a list of ids past the last one floods LOG_ENTRY (size
   0) for ~40 s. So only 0..0xffff is asked, ids that went missing are asked again as a range inside last_log_num,
   entries outside 1..last_log_num are ignored, and LOG_REQUEST_END follows every listing.
-* LOG_REQUEST_DATA (ofs, count) streams 90-byte LOG_DATA in order; while it runs (or a listing does) a new
-  request is dropped (AP_Logger_MAVLinkLogTransfer.cpp), so the next one goes out only when the stream has ended
-  (its last packet, or silence), and every listing is preceded by LOG_REQUEST_END. A download asks for the first
-  gap to the end of the log (open-ended: the log's true end is where a short packet, or a packet of count 0, says
-  it is, so a log that grew since the list is fetched whole); then, where packets were lost, the next gap, merged
-  with the gaps after it while the bytes held between them cost less to send again than a round trip. Nothing held is ever thrown away: no log is restarted because chunks were lost.
+* LOG_REQUEST_DATA (ofs, count) streams 90-byte LOG_DATA in order. ArduPilot serves a request at once, on
+  receipt, up to num_sends packets (SITL 40, USB 250, a flow-controlled serial port 10, a radio without flow
+  control 1: AP_Logger_MAVLinkLogTransfer.cpp); one that ends within them ends the transfer, so the next request
+  of the same batch is served too. A longer one keeps the transfer running, and while it runs (or a listing does)
+  a new request is dropped (the Solo's 3.3 moves the transfer to it instead), so every listing is preceded by
+  LOG_REQUEST_END. A download first asks from where the held bytes end to the end of the log (open-ended: the
+  log's true end is where a short packet, or a packet of count 0, says it is, so a log that grew since the list
+  is fetched whole). Then the gaps that loss left are filled by pipelining: one request per missing packet (never
+  more than any link's one call sends, so never dropped for a transfer still running, and never a held byte asked
+  again), as many in flight as the link carries in a round trip (its packet rate, measured on the stream, times
+  the round trip, x1.5, over the share of requests and answers the stream's loss says arrive), a new one sent as
+  answers come. The vehicle answers in order, so when a request's packet arrives every request sent before it
+  that is still unanswered was lost (or its packet was): it is asked again on the next sweep over the gaps;
+  silence for two round trips clears them all; the last few go twice. A lost end (the stream's short packet) is
+  probed with the gaps. A gap longer than that window (a dropped link) is streamed as one request. Nothing held
+  is ever thrown away: no log is restarted because chunks were lost.
 * LOG_REQUEST_END stops the stream but hundreds of queued LOG_DATA still come: any LOG_DATA of the log being
   fetched is kept, whichever request it answers.
 * Armed, the vehicle ignores every LOG_* request (the first with "Disarm for log download"): the request fails
@@ -31,7 +41,7 @@ import errno
 import logging
 import os
 import threading
-from collections import deque
+from collections import OrderedDict, deque
 from concurrent.futures import Future
 from dataclasses import dataclass
 
@@ -49,13 +59,19 @@ CHUNK = 90                      # bytes in one LOG_DATA
 ALL_IDS = (0, 0xFFFF)
 OPEN_END = 0xFFFFFFFF
 DISARM_TEXT = "Disarm for log download"
-LIST_TRIES = 8                  # listings of the missing ids before the list is given up
+LIST_TRIES = 12                 # listings of the missing ids before the list is given up
 STALL_LIMIT = 20.0              # s without one new byte (link up) before a download is given up, resumable
 FLUSH_INTERVAL = 0.25           # s between writes of the .part file and its map
 ERASE_WAIT = 1.0                # s after LOG_ERASE before the list that confirms it
 ERASE_TRIES = 3
 FTP_SESSION = 1                 # the parameters' FTP uses session 0: the vehicle keeps the two files apart
 LOG_FOLDERS = (b"/APM/LOGS", b"logs")   # HAL_BOARD_LOG_DIRECTORY: a flight controller's SD card, then SITL's
+FILL_MIN = 4                    # gap requests in flight at least (a radio port's transmit buffer holds ~9 LOG_DATA)
+FILL_MAX = 2048                 # ... and at most (what one batch of requests may ask of the vehicle)
+ANSWERED_MIN = 0.4              # ... counting at most 2.5x for loss: frames a starved reader drops look like
+                                # loss too, and more requests would only drop more
+TAIL_TWICE = 32                 # at most this many missing packets are each asked twice
+FILL_GAIN = 1.5                 # in flight: this many times the link's packets in a round trip (loss aside)
 
 
 @dataclass(frozen=True)
@@ -123,6 +139,7 @@ class _Listing:
         self.last: int | None = None
         self.tries = 0
         self.quiet_until = 0.0
+        self.asked_at = 0.0                     # the last LOG_REQUEST_LIST, until its first answer times it
 
 
 class _Download:
@@ -139,7 +156,16 @@ class _Download:
         self.first_rx: float | None = None      # the window's first packet: when, and its offset
         self.first_ofs = self.last_ofs = 0
         self.rtt = 0.3
+        self.rtt_seen = False                   # rtt is measured (else the first guess)
+        self.asks: OrderedDict[int, tuple[int, float]] = OrderedDict()   # offset: (count, sent at), in order sent
+        self.asked_at = 0.0
+        self.cursor = 0                         # where the sweep over the gaps goes on
+        self.tail_full: set[int] = set()        # offsets where a probe of the unknown end found a full packet
+        self.streamed = False                   # the open-ended pass was asked
+        self.short_asks: dict[int, int] = {}    # offset: count of the gap requests for less than a packet
         self.rate = 0.0                         # packets/s seen while a window streams
+        self.loss = 0.0                         # share of a stream's packets lost on the way
+        self.stream_got = 0                     # packets of the window that arrived
         self.received = self.requested = self.rerequested = 0
         self.kept = resumed                     # bytes the .part map on disk names (what survives a failure)
         self.progress_at = 0.0
@@ -164,6 +190,7 @@ class LogControl:
         self._erase_before: tuple = ()
         self._erase_tries = 0
         self._check_thread: threading.Thread | None = None
+        self._list_rtt: float | None = None     # s from a LOG_REQUEST_LIST to its first LOG_ENTRY
         self.entries: tuple = ()                # the last complete list
         self.progress: LogProgress | None = None
 
@@ -312,7 +339,8 @@ class LogControl:
             self._abort(job, f"the log list is incomplete after {LIST_TRIES} tries (missing: {missing})")
             return [self._end_message()]
         listing.tries += 1
-        listing.quiet_until = now + 0.5 + 0.25 * listing.tries
+        listing.quiet_until = now + 0.1 + 0.1 * listing.tries
+        listing.asked_at = now
         start, end = (wanted[0], wanted[-1]) if listing.last is not None else ALL_IDS
         # a transfer still running (a cancelled download's, its END lost) would drop the list: END goes first
         return [self._end_message(), self._message("log_request_list", start, end)]
@@ -325,6 +353,9 @@ class LogControl:
 
     def _on_entry(self, m) -> None:
         listing = self._listing
+        if listing.asked_at:                    # the link's round trip, a download's first guess of it
+            self._list_rtt = self._v.clock() - listing.asked_at
+            listing.asked_at = 0.0
         if m.num_logs == 0 or m.last_log_num == 0:
             listing.last = 0
         else:
@@ -385,6 +416,8 @@ class LogControl:
         verify = None if fresh else self._recheck(part, handle, entry)
         d = _Download(job, entry, part, part.ranges.total())
         d.verify = verify
+        if self._list_rtt is not None:
+            d.rtt = self._list_rtt             # (a first request lost waits 3 of them, not 3 x 0.3 s)
         # the end the stream told, while the list still gives the size it was fetched by (a smaller end than the
         # list's is stale: the log grew, or its stream broke off)
         if part.size and part.size >= entry.size and part.listed in (0, entry.size):
@@ -471,6 +504,7 @@ class LogControl:
             return self._complete(d)
         if not link_up:
             d.window = None
+            d.asks.clear()
             d.progress_at = now
             return []
         if d.ftp is not None:
@@ -480,11 +514,15 @@ class LogControl:
             return [self._end_message()]
         if d.window is not None:
             quiet = now - max(d.sent_at, d.last_rx)
-            if quiet < max(0.1, 3 * d.rtt):
+            if quiet < max(0.05, 3 * d.rtt):
                 return []
             self._measure(d, now)
             d.window = None                     # silence: the rest of that window was lost
-        return [self._next_window(d, now)]
+        held_to = d.ranges.spans[-1][1] if d.ranges.spans else 0
+        if d.end is None and (not d.streamed or not held_to or held_to in d.tail_full):
+            # from where the held bytes end to the log's own end: the first pass, or a log still going on
+            return [self._stream(d, held_to, OPEN_END - held_to, now)]
+        return self._fill(d, now)
 
     def _service_ftp(self, d: _Download, now: float) -> list:
         msgs, failure = d.ftp.service(now, self._v._target_ids())
@@ -526,33 +564,80 @@ class LogControl:
         first = ftp.missing(1)
         ftp.next_burst = first[0] if first else ftp._top()
 
-    def _next_window(self, d: _Download, now: float):
-        known = d.end if d.end is not None else max(d.size, d.ranges.spans[-1][1] if d.ranges.spans else 0)
-        gaps = d.ranges.missing(known)
-        if gaps:
-            start, stop = gaps[0]
-        else:
-            start, stop = known, known
-        merge = max(4 * CHUNK, int(d.rate * d.rtt) * CHUNK)   # held bytes worth sending again to save a round trip
-        for a, b in gaps[1:]:
-            if a - stop > merge:
-                break
-            stop = b
-        if d.end is None and stop >= known:
-            count = OPEN_END - start            # to the log's true end: a short packet will say where it is
-        else:
-            count = -(-(stop - start) // CHUNK) * CHUNK
-            if d.end is not None:
-                count = min(count, d.end - start)
+    def _stream(self, d: _Download, start: int, count: int, now: float):
+        """One request streamed as a window: the log's tail (open-ended) or a long gap."""
+        if d.end is not None:
+            count = min(count, d.end - start)
         d.window = (start, start + count)
-        log.debug("log %d: window %d+%d (rtt %.3f s, %.0f packets/s, %d gaps)", d.entry.id, start, count, d.rtt,
-                  d.rate, len(gaps))
+        d.streamed = True
+        log.debug("log %d: stream %d+%d (rtt %.3f s, %.0f packets/s)", d.entry.id, start, count, d.rtt, d.rate)
         d.sent_at = now
         d.first_rx = None
+        d.stream_got = 0
+        self._count_asked(d, start, count)
+        return self._message("log_request_data", d.entry.id, start, count)
+
+    def _count_asked(self, d: _Download, start: int, count: int) -> None:
         upto = min(start + count, d.end if d.end is not None else max(d.size, start))
         d.requested += max(0, upto - start)
-        d.rerequested += sum(max(0, min(b, upto) - max(a, start)) for a, b in d.ranges.spans)
-        return self._message("log_request_data", d.entry.id, start, count)
+        d.rerequested += d.ranges.held(start, upto)
+
+    def _fill_window(self, d: _Download) -> int:
+        """Gap requests in flight: what the link carries in a round trip (its packet rate on the stream times the
+        round trip), with a margin, and more for the requests and answers a loss takes (the stream's loss share,
+        taken for both ways): enough to keep the vehicle sending, not more, so a radio is not flooded."""
+        answered = max(ANSWERED_MIN, (1.0 - d.loss) ** 2)
+        return int(min(FILL_MAX, max(FILL_MIN, FILL_GAIN * d.rate * d.rtt / answered)))
+
+    def _fill(self, d: _Download, now: float) -> list:
+        """Ask for the missing packets one request each, sweeping the gaps from the cursor, while fewer than the
+        window are in flight; a gap longer than the window, with nothing in flight, is streamed instead."""
+        if d.asks and now - max(d.asked_at, d.last_rx) >= max(0.05, 2 * d.rtt):
+            d.asks.clear()                      # silence: all of them (or their answers) were lost
+        window = self._fill_window(d)
+        want = window - len(d.asks)
+        if want <= 0:
+            return []
+        out, end = [], d.end
+        # the last few: each asked twice (a lost one costs a whole round trip, and nothing else is in flight)
+        copies = 2 if end is not None and end - d.ranges.total() < min(window // 4, TAIL_TWICE) * CHUNK else 1
+        if end is None:                         # the stream's last packet was lost: probe the end with the gaps
+            end = d.ranges.spans[-1][1]
+            if end not in d.asks:
+                d.asks[end] = (CHUNK, now)
+                probe = self._message("log_request_data", d.entry.id, end, CHUNK)
+                out += [probe, probe]           # twice: one packet, whose loss costs a whole round
+                want -= 1
+        gaps, wrapped = d.ranges.gaps(d.cursor, end), d.cursor == 0
+        while want > 0:
+            gap = next(gaps, None)
+            if gap is None:
+                if wrapped:
+                    break
+                d.cursor, wrapped = 0, True     # the next sweep: what went unanswered is asked again
+                gaps = d.ranges.gaps(0, end)
+                continue
+            a, b = gap
+            if b - a > max(window, 32) * CHUNK and not d.asks and not out:
+                d.cursor = b
+                return [self._stream(d, a, -(-(b - a) // CHUNK) * CHUNK, now)]
+            for ofs in range(a, b, CHUNK):
+                if ofs in d.asks:
+                    continue
+                count = min(CHUNK, b - ofs)
+                d.asks[ofs] = (count, now)
+                if count < CHUNK:
+                    d.short_asks[ofs] = count   # its answer is short too, and not the log's end
+                d.requested += count
+                out += [self._message("log_request_data", d.entry.id, ofs, count)] * copies
+                d.cursor = ofs + count
+                want -= 1
+                if not want:
+                    break
+        if out:
+            d.asked_at = now
+            log.debug("log %d: %d gap requests (%d in flight, window %d)", d.entry.id, len(out), len(d.asks), window)
+        return out
 
     def _on_data(self, m) -> None:
         d = self._download
@@ -568,7 +653,18 @@ class LogControl:
             if d.ranges.add(ofs, ofs + count):
                 d.pending.append((ofs, data))
                 d.progress_at = now
-        if count < CHUNK and (d.end is None or ofs + count < d.end):
+        expected = d.short_asks.get(ofs, CHUNK)
+        ask = d.asks.get(ofs)
+        if ask is not None:                     # a gap request's answer: the ones sent before it went unanswered
+            while d.asks.popitem(last=False)[0] != ofs:
+                pass
+            expected = ask[0]
+            self._round_trip(d, now - ask[1])
+            if d.end is None and count == CHUNK and ofs + count == d.ranges.spans[-1][1]:
+                d.tail_full.add(ofs + count)    # the log goes on past the probe: stream the rest
+            if len(d.asks) <= self._fill_window(d) // 2:
+                self._v._wake.set()
+        if count < expected and (d.end is None or ofs + count < d.end):
             d.end = ofs + count                 # a short packet: the log ends here (the vehicle's word)
             d.part.size = d.end
         window = d.window
@@ -576,19 +672,29 @@ class LogControl:
             return                              # queued from an earlier request: kept, but it times nothing
         if d.first_rx is None:
             d.first_rx, d.first_ofs = now, ofs
-            d.rtt = 0.5 * d.rtt + 0.5 * (now - d.sent_at)
+            self._round_trip(d, now - d.sent_at)
         d.last_ofs = ofs
+        d.stream_got += 1
         if ofs + count >= window[1] or count < CHUNK:
             self._measure(d, now)
             d.window = None
             self._v._wake.set()
 
     @staticmethod
+    def _round_trip(d: _Download, seconds: float) -> None:
+        d.rtt = 0.875 * d.rtt + 0.125 * seconds if d.rtt_seen else seconds
+        d.rtt_seen = True
+
+    @staticmethod
     def _measure(d: _Download, now: float) -> None:
-        """The stream's rate (packets/s, lost ones counted) from this window's first and last packets."""
+        """The stream's rate (packets/s, lost ones counted) from this window's first and last packets, and the
+        share of its packets the link lost."""
         if d.first_rx is not None and d.last_rx > d.first_rx and d.last_ofs > d.first_ofs:
-            rate = (d.last_ofs - d.first_ofs) / CHUNK / (d.last_rx - d.first_rx)
+            span = (d.last_ofs - d.first_ofs) / CHUNK
+            rate = span / (d.last_rx - d.first_rx)
             d.rate = rate if d.rate == 0 else 0.5 * d.rate + 0.5 * rate
+            if span >= 50:
+                d.loss = min(0.9, max(0.0, 1.0 - d.stream_got / (span + 1)))
 
     def _flush(self, d: _Download) -> bool:
         """The bytes received since the last flush into the .part, then the map that names them; False (the

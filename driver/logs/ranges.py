@@ -70,6 +70,33 @@ class Ranges:
             out.append((at, end))
         return out
 
+    def held(self, start: int, end: int) -> int:
+        """How many bytes of [start, end) are held."""
+        spans, total = self.spans, 0
+        for a, b in spans[max(0, bisect.bisect_right(self._starts, start) - 1):]:
+            if a >= end:
+                break
+            total += max(0, min(b, end) - max(a, start))
+        return total
+
+    def gaps(self, start: int, end: int):
+        """The gaps in [start, end), in order, lazily (a binary search finds ``start``)."""
+        spans, at = self.spans, start
+        i = bisect.bisect_right(self._starts, start) - 1
+        if i >= 0 and spans[i][1] > at:
+            at = spans[i][1]
+        i += 1
+        while at < end:
+            if i < len(spans) and spans[i][0] < end:
+                a, b = spans[i]
+                if a > at:
+                    yield at, a
+                at = max(at, b)
+                i += 1
+            else:
+                yield at, end
+                return
+
     def clipped(self, end: int) -> "Ranges":
         return Ranges((a, min(b, end)) for a, b in self.spans if a < end)
 

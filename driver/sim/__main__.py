@@ -94,6 +94,10 @@ def parser() -> argparse.ArgumentParser:
                         help="the airframe turns as the accel calibration asks and tumbles for the compass one")
     parser.add_argument("--log-dir", metavar="DIR",
                         help="keep the DataFlash logs (written while armed, 0000000N.BIN) here (default: a temp folder)")
+    parser.add_argument("--radio-baud", type=whole(1200, 10_000_000), metavar="BAUD",
+                        help="a telemetry radio of this baud (no flow control): parameters, logs and FTP keep to "
+                             "its bandwidth, log download sends one LOG_DATA a call (the Solo: its 921,600-baud "
+                             "flow-controlled link to the companion computer)")
     parser.add_argument("--usb-port", type=whole(0, 65535), metavar="PORT",
                         help="also serve TCP on this port (on --tcp's host, 0 = any) as the USB port, SERIAL0: "
                              "unsigned frames are accepted there even with signing on (--tcp is a telemetry port)")
@@ -138,7 +142,7 @@ def configure(args: argparse.Namespace) -> SimVehicle:
                        origin_offset=args.origin_offset, gimbal=args.gimbal, companion=args.companion,
                        usb_port=args.usb_port, signing_key=key, camera=args.camera,
                        adsb=args.adsb, calibration_model=args.calibration_model,
-                       log_dir=args.log_dir)
+                       log_dir=args.log_dir, radio_baud=args.radio_baud)
     return _with_faults(SimVehicle(config), args)
 
 

@@ -12,7 +12,15 @@ Mixed into the Autopilot. What the recording shows, quirks included:
   replaces the stream under way.
 * LOG_REQUEST_DATA (id, ofs, count): LOG_DATA of 90 bytes in order until ``count`` is sent or a packet comes out
   short (the end of the log, whose size is taken at the request); an offset past the end: one LOG_DATA of count
-  0; an unknown id: nothing.
+  0; an unknown id: nothing. As handle_log_request_data does, the request is served AT ONCE, on receipt, up to
+  the link's packets per call (:meth:`LogServer._log_sends`: handle_log_sending's num_sends) and the room in the
+  port's transmit buffer (HAVE_PAYLOAD_SPACE); a request that ends within them ends the transfer there, so the
+  next request of the same batch is served too (MAVProxy streams its gap requests so). What is left of a longer
+  request goes on every step (update_send), and requests that come meanwhile are dropped. The Solo (3.3,
+  3drobotics/ardupilot-solo GCS_Logs.cpp) drops nothing: a request for the log being sent moves the transfer to
+  its offset and count (``_log_sending`` is only re-armed).
+* The transmit buffer (:attr:`LogServer.log_room`, in LOG_DATA) refills with sim time at the link's rate, up to
+  what one step carries (:data:`MAX_DATA_STEP` over TCP) or a radio port's buffer (:data:`RADIO_TX_BUFFER`).
 * LOG_REQUEST_END stops either, but :data:`QUEUED_AFTER_END` LOG_DATA already queued still go out.
 * Armed: every LOG_* request is ignored, the first with STATUSTEXT severity 3 "Disarm for log download".
 * LOG_ERASE: no reply.
@@ -28,12 +36,20 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from .dataflash import LogFolder
 
-__all__ = ["LogServer", "LOG_DATA_SIZE", "LOG_DATA_RATE", "LIST_RATE"]
+__all__ = ["LogServer", "LOG_DATA_SIZE", "LOG_DATA_RATE", "LIST_RATE", "SENDS_SITL", "SENDS_FLOW_CONTROL",
+           "SENDS_RADIO"]
 
 LOG_DATA_SIZE = 90               # bytes in one LOG_DATA
 LOG_DATA_RATE = 61_000.0         # LOG_DATA a (sim) second over TCP: the recording's 6.6 MB in 1.2 s
 LOG_DATA_FRAME = 12 + 97         # a LOG_DATA frame's bytes (MAVLink 2), for a radio's budget
 MAX_DATA_STEP = 600              # LOG_DATA one sim step sends at most (the sim's own CPU: telemetry keeps flowing)
+# LOG_DATA one handle_log_sending call sends at most (num_sends, AP_Logger_MAVLinkLogTransfer.cpp):
+SENDS_SITL = 40                  # SITL ("assume USB speeds"): the TCP link of the copter-4 profile
+SENDS_FLOW_CONTROL = 10          # a serial port with flow control: the Solo's telemetry UART to its companion
+                                 # computer (sololink.conf: telemBaud=921600, telemFlow=True; 3.3 has the same 10)
+SENDS_RADIO = 1                  # a serial radio without flow control (``radio_baud`` on the copter-4 profile)
+RADIO_TX_BUFFER = 1024           # bytes a radio port's transmit buffer holds (ChibiOS: HAL_UART_MIN_TX_SIZE 512,
+                                 # doubled on boards with the memory)
 LIST_RATE = 1_600.0              # LOG_ENTRY a second (the recording's flood)
 QUEUED_AFTER_END = 243           # LOG_DATA that still arrive after LOG_REQUEST_END (the recording)
 LOG_RATE = 10.0                  # Hz of ATT, CTUN, BAT (GPS at half of it)
@@ -48,7 +64,9 @@ class LogServer:
     log_listing: list | None = None       # [peer, next id, last id, num_logs]
     log_sending: list | None = None       # [peer, id, ofs, bytes left, packets left after END or None, file]
     log_told_armed = False
-    log_credit = 0.0
+    log_room = 0.0                          # LOG_DATA the port's transmit buffer takes now
+    log_room_t: float | None = None         # sim time it was last refilled at
+    log_sizes: tuple | None = None          # (sim time, {log id: size}) for the requests of one step
     log_list_credit = 0.0
     log_next_sample = 0.0
     log_mode = None
@@ -70,13 +88,51 @@ class LogServer:
             self._text(mavlink.MAV_SEVERITY_ERROR, DISARM_TEXT)
         return True
 
-    def _log_busy(self) -> bool:
+    def _log_busy(self, data: bool = False) -> bool:
         """A listing or a transfer runs (ArduPilot's _log_sending_link): a new LIST or DATA is dropped, with
-        "Log download in progress" unless it is a LOG_REQUEST_DATA on the link being served."""
+        "Log download in progress" unless it is a LOG_REQUEST_DATA on the link being served. The Solo (3.3) has
+        no such check for LOG_REQUEST_DATA: it moves the transfer (``data``)."""
         busy = self.log_listing or self.log_sending
         if busy is None or (busy is self.log_sending and busy[4] is not None):
             return False                                # what follows LOG_REQUEST_END is only the queue
+        if data and self._log_request_moves():
+            self.log_listing = None                     # (3.3: "_log_listing = false")
+            return False
         return True
+
+    def _log_request_moves(self) -> bool:
+        """3.3's handle_log_request_data sets the offset and count of the transfer under way."""
+        return self.profile.name == "solo"
+
+    def _log_sends(self) -> int:
+        """num_sends: LOG_DATA one call of handle_log_sending sends at most, by the link."""
+        if self.profile.name == "solo":
+            return SENDS_FLOW_CONTROL
+        return SENDS_RADIO if getattr(self.config, "radio_baud", None) else SENDS_SITL
+
+    def _log_refill(self) -> None:
+        """The transmit buffer empties onto the link as sim time passes: LOG_DATA_RATE over TCP, the baud on a
+        radio; it holds what one step sends (TCP) or RADIO_TX_BUFFER (a radio)."""
+        if self.log_room_t == self.t:
+            return
+        rate, dt = LOG_DATA_RATE, 1.0 / self.config.rate_hz
+        baud = getattr(self.config, "radio_baud", None)
+        if baud:
+            rate = min(rate, baud / 10.0 / LOG_DATA_FRAME)
+            cap = max(rate * dt + 1, RADIO_TX_BUFFER // LOG_DATA_FRAME)
+        else:
+            cap = min(rate * dt + 1, MAX_DATA_STEP)
+        elapsed = dt if self.log_room_t is None else self.t - self.log_room_t
+        self.log_room = min(self.log_room + rate * elapsed, cap)
+        self.log_room_t = self.t
+
+    def _log_send(self, budget: float) -> None:
+        """Send LOG_DATA of the transfer while ``budget`` and the transmit buffer allow (handle_log_sending)."""
+        self._log_refill()
+        while self.log_sending is not None and budget >= 1 and self.log_room >= 1:
+            self.log_room -= 1
+            budget -= 1
+            self._log_data()
 
     def _on_log_request_list(self, msg) -> None:
         if self._log_refused():
@@ -94,21 +150,33 @@ class LogServer:
     def _on_log_request_data(self, msg) -> None:
         if self._log_refused():
             return
-        if self._log_busy():
+        if self._log_busy(data=True):
             busy = self.log_listing or self.log_sending
             if busy[0] is not self.sender:
                 self._text(mavlink.MAV_SEVERITY_INFO, BUSY_TEXT)
             return                                      # dropped (the recording: during a listing, silently)
         folder = self.log_folder
-        if not 1 <= msg.id <= len(folder.entries()):
+        size = self._log_size(msg.id)
+        if size is None:
             self.log_sending = None
             return                                      # an unknown id: nothing at all
         number = folder.file_number(msg.id)             # the id is a place in the list (log_num_from_list_entry)
         if number == folder.current:
             folder.end()                                # a download closes the log being written
-        size = folder.entries()[msg.id - 1][1]
+            self.log_sizes = None
+            size = self._log_size(msg.id)
         remaining = min(msg.count, max(0, size - msg.ofs))   # the size as it is now (get_log_info)
         self.log_sending = [self.sender, msg.id, msg.ofs, remaining, None, number]
+        self._log_send(self._log_sends())               # at once, within the same batch of requests
+
+    def _log_size(self, list_id: int) -> int | None:
+        """get_log_info's size of LOG_ENTRY id ``list_id`` (None: no such log), read from the folder once a sim
+        step: disarmed, nothing is written between, and a batch of requests would otherwise list the folder for
+        each one."""
+        cached = self.log_sizes
+        if cached is None or cached[0] != self.t:
+            cached = self.log_sizes = (self.t, {e[0]: e[1] for e in self.log_folder.entries()})
+        return cached[1].get(list_id)
 
     def _on_log_request_end(self, msg) -> None:
         if self._log_refused():
@@ -120,7 +188,7 @@ class LogServer:
     def _on_log_erase(self, msg) -> None:
         if self._log_refused():
             return                                      # (ArduPilot erases even during a transfer)
-        self.log_listing = self.log_sending = None
+        self.log_listing = self.log_sending = self.log_sizes = None
         self.log_folder.erase()
 
     # -- each step -----------------------------------------------------------------------------------------
@@ -133,17 +201,7 @@ class LogServer:
                 self._log_entry()
         else:
             self.log_list_credit = 0.0
-        if self.log_sending is not None:
-            rate = LOG_DATA_RATE
-            baud = getattr(self.config, "radio_baud", None)
-            if baud:
-                rate = min(rate, baud / 10.0 / LOG_DATA_FRAME)
-            self.log_credit = min(self.log_credit + rate * dt, rate * dt + 1, MAX_DATA_STEP)
-            while self.log_sending is not None and self.log_credit >= 1:
-                self.log_credit -= 1
-                self._log_data()
-        else:
-            self.log_credit = 0.0
+        self._log_send(math.inf)                        # update_send: a long transfer goes on
 
     def _log_entry(self) -> None:
         peer, number, last, count = self.log_listing
