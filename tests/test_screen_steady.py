@@ -14,6 +14,7 @@ from driver.vehicle.state import LinkStatus
 from recordings import FLIGHT
 from uavviewer.replay.bar import clock_text
 
+from conftest import LAST_LEG_SPEEDUP
 from viewer_fixtures import app_style, viewer_settings, window_factory  # noqa: F401  (fixtures)
 
 pytestmark = [pytest.mark.timeout(240), pytest.mark.usefixtures("app_style")]
@@ -134,6 +135,7 @@ def test_no_control_moves_as_the_state_changes(qtbot, sim_factory, vehicle_facto
     watch.step("plan closed")
 
     qtbot.mouseClick(w.flightControls.main_button, Qt.LeftButton)            # Land
+    sim.speedup = LAST_LEG_SPEEDUP          # the descent is only waited out: the controls are watched all the way
     qtbot.waitUntil(lambda: not w.adapter.state.armed, timeout=60000)
     watch.step("landed")
 
