@@ -8,7 +8,7 @@ Calibrations: gyro, barometer, level (one COMMAND_LONG each, the verdict is the 
 accelerometer calibration on the calibration model (each position confirmed as soon as it is asked), the onboard
 compass calibration on the calibration model (start to the last MAG_CAL_REPORT). Motor test: from the call of
 ``motor_test()`` to the first VehicleState whose SERVO_OUTPUT_RAW shows the tested output changed (the outputs
-streamed at 10 Hz, as the setup asks for them); the target is 200 ms.
+streamed at 25 Hz while a motor test runs, as the setup asks for them); the target is 200 ms.
 """
 from __future__ import annotations
 
