@@ -499,3 +499,42 @@ def test_through_loss_on_a_radio_and_on_the_solo(sim_factory, vehicle_factory, t
     assert outcome.ok, outcome.reason
     assert same_bytes(out, folder, 1)
     assert outcome.bytes_rerequested <= 0.01 * outcome.size, outcome
+
+
+def test_a_burst_whose_end_is_lost_is_followed_by_the_next_burst_not_by_reads(sim_factory, vehicle_factory,
+                                                                             tmp_path, monkeypatch):
+    """Every burst's last packet (the one flagged burst_complete) is lost on the way, and 10 % of the others: the
+    read bursts on from past the last packet heard, and the gaps are read one by one only once the bursts have
+    reached the file's end (reading each burst's gaps before the next burst, a few in flight, took ten times the
+    bursts at 30 % loss)."""
+    from driver.ftp import reader
+    sim, folder = logs_sim(sim_factory, tmp_path, [500_000], speedup=8.0)
+    ap = sim.autopilot
+    send = ap.emit_to
+
+    def drop_burst_ends(msg, peer):
+        if msg.get_type() == "FILE_TRANSFER_PROTOCOL":
+            header = bytes(msg.payload)[:12]
+            if header[5] == reader.OP_BURST and header[6]:           # req_opcode, burst_complete
+                return
+        send(msg, peer)
+    monkeypatch.setattr(ap, "emit_to", drop_burst_ends)
+    sim.faults.downlink = LinkFaults(loss=0.1)
+    asked: list[int] = []
+    service = reader.FtpRead.service
+
+    def spy(self, now, target):
+        out, why = service(self, now, target)
+        asked.extend(bytes(m.payload)[3] for m in out)
+        return out, why
+    monkeypatch.setattr(reader.FtpRead, "service", spy)
+    v = connect(vehicle_factory, sim)
+    assert v.wait_for(lambda s: s.firmware, 10)
+    out = str(tmp_path / "one.BIN")
+    outcome = v.logs.download(1, out, via="ftp").result(120)
+    assert outcome.ok, outcome.reason
+    assert same_bytes(out, folder, 1)
+    bursts = [i for i, op in enumerate(asked) if op == reader.OP_BURST]
+    reads = [i for i, op in enumerate(asked) if op == reader.OP_READ]
+    assert len(bursts) >= 5 and reads, asked
+    assert not [i for i in reads if i < max(bursts)], "a burst's gaps were read before the next burst"

@@ -40,7 +40,8 @@ OPEN_RETRY = 0.25          # s between OpenFileRO tries (a retry after a lost AC
 BURST_QUIET = 0.3          # s without a packet before a burst counts as over (its end lost): gaps are then read
 BURST_GAPS = 8             # ... or this many of its packet intervals (a radio's burst sends one every 140 ms)
 READ_WINDOW = 4            # ReadFiles out at once (ArduPilot queues 5 FTP requests and drops one more)
-READ_TIMEOUT_MIN = 0.2     # s before a ReadFile is asked again (or 3 round trips, whichever is longer)
+READ_TIMEOUT_MIN = 0.05    # s before a ReadFile is asked again, or 3 round trips, whichever is longer (0.2 s made
+                           # each lost read of 4 in flight cost 0.2 s: 2 MB at 30 % loss 46 s, now 19 s on the sim)
 READ_TRIES = 20            # ReadFiles for one chunk before FTP is given up
 LIST_RETRY = 0.5           # s before a ListDirectory without its answer is asked again
 BURSTS = 20                # BurstReadFiles at most by default (a 16-byte-packet file of 15 kB needs 2; param.pck: 1)
@@ -262,8 +263,13 @@ class FtpRead:
         if self.burst is not None:
             if now - self.heard < max(BURST_QUIET, 4 * self.rtt, BURST_GAPS * self.gap):
                 return [], None
-            self.sent.pop(self.burst, None)             # its end was lost, or it stalled: read what is missing
+            self.sent.pop(self.burst, None)             # its end was lost, or it stalled
             self.burst = None
+            if self.end is None and self.bound is None and self.bursts < self.max_bursts and self._top():
+                # burst on from past the last packet heard; the gaps are read once the file's end is known: read
+                # one by one (a few in flight), a burst's gaps at 30 % loss took ten times the burst itself
+                self.next_burst = self._top()
+                return self.service(now, target)
         missing = self.missing(2 * READ_WINDOW)
         if not missing and self.end is None and self.bound is None:
             # the tail's packets and the EOF were all lost: burst again from the first byte not read
