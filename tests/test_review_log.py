@@ -183,6 +183,15 @@ def test_tlog_from_the_recordings():
     assert log.flight_path() is not None
 
 
+def test_a_tlog_gives_the_messages_above_id_255():
+    """MAVLink 2's ids above 255 (ESC_TELEMETRY_1_TO_4 is 11030, in the 4.7 recording) are read with MAVLink 2's
+    codec, whatever dialect mavutil picked for the process: with the 1.0 one they were UNKNOWN and dropped; and
+    its array fields are plotted element by element."""
+    log = open_log(os.path.join(RECORDINGS, "arducopter-4.7-sitl-flight.tlog"))
+    fields = log.tree()["ESC_TELEMETRY_1_TO_4"]
+    assert {"rpm[0]", "rpm[3]", "voltage[0]"} <= set(fields), fields     # an array field: a column per element
+
+
 @pytest.mark.parametrize("content,words", [(b"", "empty"), (b"\x00garbage" * 500, "no MAVLink")])
 def test_bad_tlog_is_a_clear_error(tmp_path, content, words):
     path = str(tmp_path / "x.tlog")

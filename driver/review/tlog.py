@@ -28,21 +28,33 @@ class TlogError(ValueError):
 
 
 class _Columns:
-    """One message type's numeric fields, an array each, appended message by message."""
+    """One message type's numeric fields, an array each, appended message by message; a field that is an array of
+    numbers (ESC_TELEMETRY_1_TO_4's rpm, ...) gives one column per element: rpm[0], rpm[1], ..."""
 
     def __init__(self, m) -> None:
         types = dict(zip(m.get_fieldnames(), getattr(m, "fieldtypes", ())))
-        self.names = [f for f in m.get_fieldnames()
-                      if isinstance(getattr(m, f), (int, float)) and not isinstance(getattr(m, f), bool)]
-        self.arrays = [array(_TYPECODES.get(types.get(f), "d")) for f in self.names]
-        self.read = attrgetter(*self.names) if self.names else (lambda _m: ())
+        scalars = [f for f in m.get_fieldnames()
+                   if isinstance(getattr(m, f), (int, float)) and not isinstance(getattr(m, f), bool)]
+        self.lists = [(f, len(getattr(m, f))) for f in m.get_fieldnames()
+                      if isinstance(getattr(m, f), (list, tuple)) and getattr(m, f)
+                      and all(isinstance(x, (int, float)) and not isinstance(x, bool) for x in getattr(m, f))]
+        self.scalars = len(scalars)
+        self.names = scalars + [f"{f}[{i}]" for f, n in self.lists for i in range(n)]
+        self.arrays = [array(_TYPECODES.get(types.get(f), "d")) for f in scalars] + \
+            [array(_TYPECODES.get(types.get(f), "d")) for f, n in self.lists for _ in range(n)]
+        self.read = attrgetter(*scalars) if scalars else (lambda _m: ())
         self.times = array("d")
 
     def add(self, t: float, m) -> None:
         self.times.append(t)
         values = self.read(m)
-        if len(self.names) == 1:
+        if self.scalars == 1:
             values = (values,)
+        if self.lists:
+            values = tuple(values)
+            for f, n in self.lists:
+                v = getattr(m, f, ())
+                values += tuple(v[:n]) + (float("nan"),) * (n - len(v[:n]))
         for a, v in zip(self.arrays, values):
             try:
                 a.append(v)
@@ -63,7 +75,12 @@ class TlogColumns:
         from pymavlink import mavutil
         if os.path.getsize(path) == 0:
             raise TlogError("the file is empty")
+        from pymavlink.dialects.v20 import ardupilotmega as mavlink2
         conn = mavutil.mavlink_connection(path, dialect="ardupilotmega", robust_parsing=True)
+        # MAVLink 2's codec whatever mavutil chose for the process (its MAVLINK20 switch): with the 1.0 one the
+        # messages above id 255 (ESC_TELEMETRY_1_TO_4 in the 4.7 recording, ...) parse to UNKNOWN_n and were dropped
+        conn.mav = mavlink2.MAVLink(conn)
+        conn.mav.robust_parsing = True
         kept: dict[str, _Columns] = {}
         self.texts: list[tuple[float, int, str]] = []
         self.params: dict[str, float] = {}
