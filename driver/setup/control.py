@@ -146,9 +146,7 @@ class VehicleSetup:
             return cal
         with self._lock:
             old, self._accel = self._accel, cal
-        if old is not None and not old.verdict.done():
-            self._v._notifier.settle(old.verdict, self._store.record("accel calibration", CommandStatus.ABORTED,
-                                                                     "superseded by a new accel calibration"))
+        self._supersede(old and old.verdict, "accel calibration")
         with self._store.lock:
             self._set(accel=AccelCalState(AccelStep.STARTING))
         cal.started = self._calibration("accel calibration", (0, 0, 0, 0, 1, 0, 0))
@@ -168,9 +166,7 @@ class VehicleSetup:
         cal = CompassCalibration(self)
         with self._lock:
             old, self._compass = self._compass, cal
-        if old is not None and not old.finished.done():
-            self._v._notifier.settle(old.finished, self._store.record(
-                "compass calibration", CommandStatus.ABORTED, "superseded by a new compass calibration"))
+        self._supersede(old and old.finished, "compass calibration")
         with self._store.lock:
             self._set(compass=CompassCalState(running=True))
         cal.started = self._v._command_long(mavlink.MAV_CMD_DO_START_MAG_CAL, (0, 0, 0, 0, 0), "compass calibration")
@@ -181,8 +177,15 @@ class VehicleSetup:
         if result.ok:
             return
         with self._store.lock:
-            self._set(compass=CompassCalState())
+            if self._compass is cal:            # (a refused start of a superseded run leaves the new one be)
+                self._set(compass=CompassCalState())
         self._v._notifier.settle(cal.finished, result)
+
+    def _supersede(self, outcome: Future | None, name: str) -> None:
+        """A new run of ``name`` replaced one whose outcome was still to come: it ends, aborted."""
+        if outcome is not None and not outcome.done():
+            self._v._notifier.settle(outcome, self._store.record(name, CommandStatus.ABORTED,
+                                                                 f"superseded by a new {name}"))
 
     def accept_compass(self) -> Future:
         """ArduPilot's accept stops every calibrator, and answers FAILED when one was not done
