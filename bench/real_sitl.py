@@ -403,8 +403,9 @@ def start_sim(instance: int, scratch: str):
 class Sitl:
     """ArduCopter SITL started here, wiped, in ``scratch``, on loopback only; stopped by its PID."""
 
-    def __init__(self, binary: str, instance: int, scratch: str, shim: str, defaults: str | None):
+    def __init__(self, binary: str, instance: int, scratch: str, shim: str, defaults: str | None, model: str = "+"):
         self.binary, self.instance, self.scratch, self.shim = os.path.abspath(binary), instance, scratch, shim
+        self.model = model                      # "+" (a quad); "calibration": the airframe turned by servos 5-8
         root = os.path.dirname(os.path.dirname(os.path.dirname(os.path.dirname(self.binary))))
         self.defaults = defaults or os.path.join(root, "Tools", "autotest", "default_params", "copter.parm")
         self.proc: subprocess.Popen | None = None
@@ -417,7 +418,7 @@ class Sitl:
         home = ",".join(f"{v:.7f}".rstrip("0").rstrip(".") for v in HOME)
         with open(self.log_path, "wb") as log:
             self.proc = subprocess.Popen(
-                [self.binary, "--model", "+", "--speedup", "1", "-I", str(self.instance), "-w",
+                [self.binary, "--model", self.model, "--speedup", "1", "-I", str(self.instance), "-w",
                  "--defaults", self.defaults, "--home", home, "--serial0", "tcp:0", "--serial1", "tcp:2"],
                 cwd=self.scratch, env=dict(os.environ, LD_PRELOAD=self.shim), stdin=subprocess.DEVNULL,
                 stdout=log, stderr=subprocess.STDOUT)

@@ -15,19 +15,18 @@ from __future__ import annotations
 
 import argparse
 import os
-import subprocess
 import sys
 import tempfile
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
-from pymavlink import mavutil  # noqa: E402
 from pymavlink.dialects.v20 import ardupilotmega as mavlink  # noqa: E402
 
 from driver.vehicle import Vehicle, VehicleConfig  # noqa: E402
+from real_sitl import SHIM, Sitl  # noqa: E402
+from sitl_judge import Judge  # noqa: E402
 
-HERE = os.path.dirname(os.path.abspath(__file__))
 # the airframe's pose for each position ArduPilot asks (ACCELCAL_VEHICLE_POS 1..6): servo 6 roll, servo 7 pitch
 # (1000..2000 = -180..180 degrees), as the calib recording turned it
 POSES = {1: (1500, 1500), 2: (1250, 1500), 3: (1750, 1500), 4: (1500, 1250), 5: (1500, 1750), 6: (2000, 1500)}
@@ -35,20 +34,14 @@ SETTLE = 4.0                    # s the airframe is given to reach a pose before
 
 
 class Airframe:
-    """SERIAL1: turns the calibration model's airframe (DO_SET_SERVO 5..8) and hears the vehicle's texts."""
+    """SERIAL1 (the judge's loss-free link): turns the calibration model's airframe with DO_SET_SERVO 5..8."""
 
     def __init__(self, port: int) -> None:
-        self.conn = mavutil.mavlink_connection(f"tcp:127.0.0.1:{port}", source_system=254, source_component=191,
-                                               retries=30)
-        self.conn.mav = mavlink.MAVLink(self.conn, srcSystem=254, srcComponent=191)
+        self.judge = Judge(port)
 
     def servo(self, number: int, pwm: int) -> None:
-        for _ in range(3):
-            self.conn.mav.command_long_send(1, 1, mavlink.MAV_CMD_DO_SET_SERVO, 0, number, pwm, 0, 0, 0, 0, 0)
-            ack = self.conn.recv_match(type="COMMAND_ACK", blocking=True, timeout=1.0)
-            if ack is not None and ack.command == mavlink.MAV_CMD_DO_SET_SERVO:
-                return
-        raise RuntimeError(f"DO_SET_SERVO {number} {pwm} not acknowledged")
+        if self.judge.command(mavlink.MAV_CMD_DO_SET_SERVO, number, pwm) is None:
+            raise RuntimeError(f"DO_SET_SERVO {number} {pwm} not acknowledged")
 
     def pose(self, roll_pwm: int, pitch_pwm: int) -> None:
         self.servo(5, 1150)             # attitude control
@@ -58,10 +51,6 @@ class Airframe:
 
     def tumble(self) -> None:
         self.servo(5, 1250)             # SIM_Calibration's calibration poses, over and over
-
-    def drain(self) -> None:
-        while self.conn.recv_match(blocking=False) is not None:
-            pass
 
 
 def texts_since(vehicle, since: float) -> str:
@@ -127,7 +116,8 @@ def run(port0: int, port1: int) -> None:
         row("motor test 1 at 10 %", f"{r.status.value}: {r.reason}; output moved: {seen}", texts_since(v, wall),
             time.monotonic() - t0)
     finally:
-        v.stop()
+        v.close()
+        air.judge.close()
 
 
 def main() -> None:
@@ -137,27 +127,18 @@ def main() -> None:
     p.add_argument("--instance", type=int, default=4)
     args = p.parse_args()
     port0, port1 = 5760 + 10 * args.instance, 5762 + 10 * args.instance
-    proc = None
+    sitl = None
     if not args.connect:
         if not args.sitl:
             p.error("--sitl PATH or --connect")
-        home = tempfile.mkdtemp(prefix="real-sitl-setup-")
-        shim = os.path.join(HERE, "bind_loopback.so")
-        env = dict(os.environ, LD_PRELOAD=shim) if os.path.exists(shim) else dict(os.environ)
-        defaults = os.path.join(os.path.dirname(os.path.dirname(os.path.dirname(args.sitl))),
-                                "../Tools/autotest/default_params/copter.parm")
-        cmd = [args.sitl, "--model", "calibration", "--speedup", "1", f"-I{args.instance}", "-w",
-               "--home", "-35.363261,149.165230,584,353", "--serial0", "tcp:0", "--serial1", "tcp:2"]
-        if os.path.exists(defaults):
-            cmd[1:1] = ["--defaults", os.path.normpath(defaults)]
-        proc = subprocess.Popen(cmd, cwd=home, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-        print(f"SITL pid {proc.pid} in {home}", file=sys.stderr)
+        sitl = Sitl(args.sitl, args.instance, tempfile.mkdtemp(prefix="real-sitl-setup-"), SHIM, None,
+                    model="calibration")
+        sitl.start()
     try:
         run(port0, port1)
     finally:
-        if proc is not None:
-            proc.kill()
-            proc.wait()
+        if sitl is not None:
+            sitl.stop()
 
 
 if __name__ == "__main__":

@@ -164,6 +164,12 @@ class Judge:
             with self._lock:
                 self._waiters.remove(entry)
 
+    def command(self, command: int, *params: float, timeout: float = 1.0, tries: int = 3):
+        """COMMAND_LONG to the vehicle until its COMMAND_ACK comes (None after ``tries``)."""
+        params = (list(params) + [0.0] * 7)[:7]
+        return self._ask(mavlink.MAVLink_command_long_message(1, 1, command, 0, *params),
+                         lambda m: m.get_type() == "COMMAND_ACK" and m.command == command, timeout, tries)
+
     # -- the vehicle's state ---------------------------------------------------------------------------
     @property
     def mode(self) -> str:
