@@ -160,7 +160,7 @@ class LogServer:
         if size is None:
             self.log_sending = None
             return                                      # an unknown id: nothing at all
-        number = folder.file_number(msg.id)             # the id is a place in the list (log_num_from_list_entry)
+        number = self._log_file_number(msg.id)          # the id is a place in the list (log_num_from_list_entry)
         if number == folder.current:
             folder.end()                                # a download closes the log being written
             self.log_sizes = None
@@ -173,10 +173,21 @@ class LogServer:
         """get_log_info's size of LOG_ENTRY id ``list_id`` (None: no such log), read from the folder once a sim
         step: disarmed, nothing is written between, and a batch of requests would otherwise list the folder for
         each one."""
+        return self._log_listed()[1].get(list_id)
+
+    def _log_listed(self) -> tuple:
+        """(sim time, {list id: size}, the first file's number), read once a sim step."""
         cached = self.log_sizes
         if cached is None or cached[0] != self.t:
-            cached = self.log_sizes = (self.t, {e[0]: e[1] for e in self.log_folder.entries()})
-        return cached[1].get(list_id)
+            folder = self.log_folder
+            numbers = folder.numbers()
+            cached = self.log_sizes = (self.t, {e[0]: e[1] for e in folder.entries()}, numbers[0] if numbers else 0)
+        return cached
+
+    def _log_file_number(self, list_id: int) -> int:
+        """LogFolder.file_number from the step's listing: a batch of requests would list the folder for each."""
+        first = self._log_listed()[2]
+        return first + list_id - 1 if first else 0
 
     def _on_log_request_end(self, msg) -> None:
         if self._log_refused():

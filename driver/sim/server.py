@@ -31,6 +31,7 @@ log = logging.getLogger(__name__)
 __all__ = ["LinkServer", "parse_address"]
 
 MAX_PENDING = 1 << 20          # bytes queued for a slow TCP peer before frames are dropped
+CORK_BYTES = 16384             # bytes of answers held while a read's requests are handled, then written at once
 V2_MARKER = mavlink.PROTOCOL_MARKER_V2
 
 
@@ -90,6 +91,7 @@ class TcpPeer(Peer):
         super().__init__(f"{'usb' if usb else 'tcp'} {address[0]}:{address[1]}", config, usb)
         self.sock = sock
         self.pending = bytearray()
+        self.corked = False                   # answering a read: frames gather up to CORK_BYTES, see uncork()
 
     def write(self, data: bytes) -> None:
         with self.lock:
@@ -98,13 +100,25 @@ class TcpPeer(Peer):
             if len(self.pending) + len(data) > MAX_PENDING:
                 return
             self.pending += data
-            try:
-                sent = self.sock.send(self.pending)
-                del self.pending[:sent]
-            except (BlockingIOError, InterruptedError):
-                pass
-            except OSError:
-                self.closed = True
+            if not self.corked or len(self.pending) >= CORK_BYTES:
+                self._push()
+
+    def uncork(self) -> None:
+        """Write what answering a read gathered. ArduPilot's SITL writes its serial port's buffer to the socket
+        in one piece each loop; a write a frame costs both ends a system call and a wake-up per frame, which a
+        batch of log requests (a thousand one-packet answers) turns into most of their cost."""
+        with self.lock:
+            self.corked = False
+            if self.pending and not self.closed:
+                self._push()
+
+    def _push(self) -> None:
+        try:
+            del self.pending[:self.sock.send(self.pending)]
+        except (BlockingIOError, InterruptedError):
+            pass
+        except OSError:
+            self.closed = True
 
 
 class UdpPeer(Peer):
@@ -383,14 +397,21 @@ class LinkServer:
             peer.parser.buf_index = 0
             return
         now = self.faults.clock()
-        for msg in messages:
-            kind = msg.get_type()
-            if kind in ("BAD_DATA", "UNKNOWN") or kind.startswith("UNKNOWN"):
-                self.bad_frames += 1
-                continue
-            version = 2 if msg.get_msgbuf()[0] == V2_MARKER else 1
-            for item in peer.up.send((msg, version, peer), now):
-                self._deliver(*item)
+        corked = isinstance(peer, TcpPeer) and len(messages) > 1
+        if corked:
+            peer.corked = True
+        try:
+            for msg in messages:
+                kind = msg.get_type()
+                if kind in ("BAD_DATA", "UNKNOWN") or kind.startswith("UNKNOWN"):
+                    self.bad_frames += 1
+                    continue
+                version = 2 if msg.get_msgbuf()[0] == V2_MARKER else 1
+                for item in peer.up.send((msg, version, peer), now):
+                    self._deliver(*item)
+        finally:
+            if corked:
+                peer.uncork()
 
     def _deliver(self, msg, version: int, peer: Peer) -> None:
         """What reached the vehicle through the uplink's faults."""
