@@ -28,6 +28,7 @@ class Transport:
     description = ""
     reconnectable = False        # TCP and serial: reopen after an error
     is_replay = False
+    byte_stream = False          # TCP and serial: frames may share a write (a datagram carries one frame)
 
     def open(self) -> None: ...
     def read(self, timeout: float) -> bytes: ...
@@ -78,6 +79,8 @@ class MavutilTransport(Transport):
         except Exception as exc:          # refused, no such device, bad string
             raise LinkError(f"cannot open {self._connection}: {exc}") from exc
         self._sock = self._conn.port if self._connection.startswith("tcp:") else None
+        self.byte_stream = self._sock is not None or not hasattr(self._conn, "port") or \
+            not isinstance(self._conn.port, socket.socket)
 
     def read(self, timeout: float) -> bytes:
         conn = self._conn

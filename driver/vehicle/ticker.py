@@ -26,6 +26,7 @@ MASK_VELOCITY = 3527               # use vx, vy, vz only
 YAW_LEAD = 0.5                     # s: old firmware's heading target is this far ahead of a turning nose
 YAW_RESEND = 0.2                   # s between those targets
 LOG_FLUSH_INTERVAL = 1.0           # s: a crash loses at most this much of the flight log
+WRITE_GROUP = 4096                 # bytes of whole frames written at once to a byte-stream link (TCP, serial)
 
 
 class Ticker:
@@ -45,24 +46,51 @@ class Ticker:
         self._yaw_next = 0.0                  # old firmware: next CONDITION_YAW of a held yaw stick
         self._yaw_held = False                # old firmware: the heading is held by CONDITION_YAW
         self._next_heartbeat = self._next_health = -1e9   # due at the first step, whatever the clock's origin
+        self._soon: float | None = None       # s: the next tick wanted sooner than the usual wait (tick_within)
 
     def send(self, msg) -> None:
         """Pack and write one message; ``bytes`` are a frame packed already (SETUP_SIGNING)."""
         if self._transport.is_replay:
             return
         with self._tx_lock:
-            if isinstance(msg, bytes):
-                self._write(msg)
-                return
-            signing, codec = self._signing, self._codec_out
-            if self._sender_generation != signing.generation:
-                self._sender_generation = signing.generation
-                signing.configure_sender(codec, signing.key)
-            signing.stamp(codec)
-            buf = msg.pack(codec, force_mavlink1=not self._v._v2)
-            codec.seq = (codec.seq + 1) % 256
-            signing.note_sent(codec)
-            self._write(buf)
+            self._write(self._pack(msg))
+
+    def send_all(self, msgs: list) -> None:
+        """Pack and write a tick's messages. On a byte stream (TCP, serial) whole frames go out up to WRITE_GROUP
+        bytes a write: a log download's gap requests are a thousand small frames a tick, and a write each costs
+        the driver and the vehicle a system call and a wake-up per frame. A datagram link keeps a frame a datagram.
+        """
+        if self._transport.is_replay or not msgs:
+            return
+        if len(msgs) == 1 or not self._transport.byte_stream:
+            for msg in msgs:
+                self.send(msg)
+            return
+        with self._tx_lock:
+            group: list[bytes] = []
+            size = 0
+            for msg in msgs:
+                buf = self._pack(msg)
+                if size + len(buf) > WRITE_GROUP and group:
+                    self._write_group(group)
+                    group, size = [], 0
+                group.append(buf)
+                size += len(buf)
+            self._write_group(group)
+
+    def _pack(self, msg) -> bytes:
+        """One frame, signed as configured now (caller holds _tx_lock); ``bytes`` are packed already."""
+        if isinstance(msg, bytes):
+            return msg
+        signing, codec = self._signing, self._codec_out
+        if self._sender_generation != signing.generation:
+            self._sender_generation = signing.generation
+            signing.configure_sender(codec, signing.key)
+        signing.stamp(codec)
+        buf = msg.pack(codec, force_mavlink1=not self._v._v2)
+        codec.seq = (codec.seq + 1) % 256
+        signing.note_sent(codec)
+        return buf
 
     def new_encoder(self):
         return mavlink.MAVLink(None, srcSystem=self.config.source_system, srcComponent=self.config.source_component)
@@ -80,6 +108,12 @@ class Ticker:
         """Whole frames only, one writer at a time (caller holds _tx_lock)."""
         if self._transport.write(buf) and self._v._tlog:       # the log holds what really went out
             self._v._tlog.write(buf)
+
+    def _write_group(self, frames: list[bytes]) -> None:
+        """Frames in one write, all or none (caller holds _tx_lock); the .tlog keeps a record per frame."""
+        if self._transport.write(b"".join(frames)) and self._v._tlog:
+            for frame in frames:
+                self._v._tlog.write(frame)
 
     def heartbeat_message(self):
         return mavlink.MAVLink_heartbeat_message(mavlink.MAV_TYPE_GCS, mavlink.MAV_AUTOPILOT_INVALID, 0, 0,
@@ -144,16 +178,22 @@ class Ticker:
             log.exception("ticker step failed")
         return out
 
+    def tick_within(self, seconds: float) -> None:
+        """A part wants the next tick this soon, with or without news from the link (a paced log download);
+        called during a step, it holds for the wait after it."""
+        self._soon = seconds if self._soon is None else min(self._soon, seconds)
+
     def run(self) -> None:
         next_flush = 0.0
         while not self._closing.is_set():
             now = self._v.clock()
-            for msg in self.step(now):                # outside the lock: a slow link stalls nobody else
-                self.send(msg)
+            self._soon = None
+            self.send_all(self.step(now))             # outside the lock: a slow link stalls nobody else
             if self._v._tlog is not None and now >= next_flush:
                 next_flush = now + LOG_FLUSH_INTERVAL
                 self._v._tlog.flush()
-            self._wake.wait(min(0.05, 1.0 / self.config.setpoint_rate))
+            wait = min(0.05, 1.0 / self.config.setpoint_rate)
+            self._wake.wait(wait if self._soon is None else min(wait, self._soon))
             self._wake.clear()
 
     def _supervise(self, now: float) -> list:
