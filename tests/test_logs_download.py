@@ -538,3 +538,44 @@ def test_a_burst_whose_end_is_lost_is_followed_by_the_next_burst_not_by_reads(si
     reads = [i for i, op in enumerate(asked) if op == reader.OP_READ]
     assert len(bursts) >= 5 and reads, asked
     assert not [i for i in reads if i < max(bursts)], "a burst's gaps were read before the next burst"
+
+
+def test_heartbeats_lost_while_the_log_flows_do_not_pause_the_download(sim_factory, vehicle_factory, tmp_path):
+    """At 30 % loss each way three heartbeats in a row go missing every half minute or so, and the link is told
+    lost; while LOG_DATA still comes the vehicle is plainly there, so the gaps are asked for all the same instead
+    of waiting for the next heartbeat (the download stalled until one came)."""
+    sim, folder = logs_sim(sim_factory, tmp_path, [200_000], radio_baud=200_000, speedup=4.0)
+    v = connect(vehicle_factory, sim, loss_timeout=1.0)
+    lossy(sim, 0.3)
+    sim.faults.heartbeats = False               # the stream takes ~3 s: the link is told lost during it
+    out = tmp_path / "heartless.BIN"
+    future = v.logs.download(1, str(out), via="log_data")
+    assert v.wait_for(lambda s: not s.connected, 10)
+    outcome = future.result(30)
+    assert outcome.ok, outcome.reason
+    assert not v.state().connected              # done with no heartbeat heard since
+    assert same_bytes(out, folder, 1)
+    sim.faults.heartbeats = True
+    assert v.wait_for(lambda s: s.connected, 10)
+
+
+def test_gap_requests_sent_many_a_write_are_recorded_a_frame_each(sim_factory, vehicle_factory, tmp_path):
+    """A tick's gap requests go to a TCP link in a few writes of many frames; the .tlog still holds one record
+    (a time stamp and a frame) per frame, so it replays and reviews as before."""
+    sim, folder = logs_sim(sim_factory, tmp_path, [200_000], speedup=4.0)
+    tlog = tmp_path / "flight.tlog"
+    v = connect(vehicle_factory, sim, tlog_path=str(tlog))
+    lossy(sim, 0.3)
+    outcome = v.logs.download(1, str(tmp_path / "got.BIN"), via="log_data").result(60)
+    assert outcome.ok, outcome.reason
+    v.close()
+    from pymavlink import mavutil
+    log = mavutil.mavlink_connection(str(tlog))
+    requests = bad = 0
+    while (m := log.recv_msg()) is not None:
+        if m.get_type() == "BAD_DATA":
+            bad += 1
+        elif m.get_type() == "LOG_REQUEST_DATA":
+            requests += 1
+    assert bad == 0
+    assert requests > 100                       # the gaps of 30 % loss, asked one packet each

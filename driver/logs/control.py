@@ -16,11 +16,13 @@ about it here:
   is fetched whole). Then the gaps that loss left are filled by pipelining: one request per missing packet (never
   more than any link's one call sends, so never dropped for a transfer still running, and never a held byte asked
   again), as many in flight as the link carries in a round trip (its packet rate, measured on the stream, times
-  the round trip, x1.5, over the share of requests and answers the stream's loss says arrive), a new one sent as
-  answers come. The vehicle answers in order, so when a request's packet arrives every request sent before it
-  that is still unanswered was lost (or its packet was): it is asked again on the next sweep over the gaps;
-  silence for two round trips clears them all; the last few go twice. A lost end (the stream's short packet) is
-  probed with the gaps. A gap longer than that window (a dropped link) is streamed as one request. Nothing held
+  the round trip, x1.5, over the share of requests and answers the stream's loss says arrive), sent at 1.25x the
+  pace the vehicle sends (over the share of requests that arrive) in bursts of at most 20 ms of it: a batch that
+  overflows the vehicle's transmit buffer leaves a transfer running, and every request after it is dropped. The
+  vehicle answers in order, so when a request's packet arrives every request sent before it that is still
+  unanswered was lost (or its packet was): it is asked again on the next sweep over the gaps; silence for two
+  round trips clears them all; the last few go twice, the very last three times. A lost end (the stream's short
+  packet) is probed with the gaps, or, short of the listed size, the packets up to it are gaps like the others. A gap longer than that window (a dropped link) is streamed as one request. Nothing held
   is ever thrown away: no log is restarted because chunks were lost.
 * LOG_REQUEST_END stops the stream but hundreds of queued LOG_DATA still come: any LOG_DATA of the log being
   fetched is kept, whichever request it answers.
@@ -60,6 +62,9 @@ ALL_IDS = (0, 0xFFFF)
 OPEN_END = 0xFFFFFFFF
 DISARM_TEXT = "Disarm for log download"
 LIST_TRIES = 12                 # listings of the missing ids before the list is given up
+LIST_RETRY_FIRST = 0.06         # s before the first list is asked again (half of it more each try), no round trip
+                                # known yet: a listing asked again is only ended and begun again
+LIST_RETRY_MIN = 0.05           # s, at least, when one is
 STALL_LIMIT = 20.0              # s without one new byte (link up) before a download is given up, resumable
 FLUSH_INTERVAL = 0.25           # s between writes of the .part file and its map
 ERASE_WAIT = 1.0                # s after LOG_ERASE before the list that confirms it
@@ -67,11 +72,22 @@ ERASE_TRIES = 3
 FTP_SESSION = 1                 # the parameters' FTP uses session 0: the vehicle keeps the two files apart
 LOG_FOLDERS = (b"/APM/LOGS", b"logs")   # HAL_BOARD_LOG_DIRECTORY: a flight controller's SD card, then SITL's
 FILL_MIN = 4                    # gap requests in flight at least (a radio port's transmit buffer holds ~9 LOG_DATA)
-FILL_MAX = 2048                 # ... and at most (what one batch of requests may ask of the vehicle)
+FILL_MAX = 8192                 # ... and at most (what one batch of requests may ask of the vehicle)
 ANSWERED_MIN = 0.4              # ... counting at most 2.5x for loss: frames a starved reader drops look like
                                 # loss too, and more requests would only drop more
 TAIL_TWICE = 32                 # at most this many missing packets are each asked twice
-FILL_GAIN = 1.5                 # in flight: this many times the link's packets in a round trip (loss aside)
+TAIL_THRICE = 8                 # ... and at most this many three times
+FILL_GAIN = 1.5                 # in flight: this many times the link's packets in a round trip (loss aside) ...
+FILL_RTT_MIN = 0.05             # ... a round trip of at least this (s): one measured while the vehicle's transmit
+                                # buffer runs dry is short, and fewer requests in flight would keep it dry; the
+                                # pace (PACE_GAIN) is what keeps the vehicle from being flooded
+PACE_GAIN = 1.25                # gap requests are sent at this many times the rate the vehicle answers them, ...
+PACE_BURST = 0.02               # ... at most this many seconds of them at once: a burst the vehicle's transmit
+                                # buffer cannot take at once leaves a transfer running, and ArduPilot drops every
+                                # request that comes while one runs ("Log download in progress")
+PACE_TICK = 0.005               # s between sends of paced gap requests, at most (their answers wake the sender)
+DATA_ALIVE = 1.0                # s since the last LOG_DATA within which a download goes on with no heartbeat heard:
+                                # at 30 % loss each way three heartbeats in a row are lost every half minute or so
 
 
 @dataclass(frozen=True)
@@ -166,6 +182,10 @@ class _Download:
         self.rate = 0.0                         # packets/s seen while a window streams
         self.loss = 0.0                         # share of a stream's packets lost on the way
         self.stream_got = 0                     # packets of the window that arrived
+        self.fill_got = 0                       # gap requests answered since fill_from
+        self.fill_from: float | None = None
+        self.tokens = 0.0                       # gap requests that may go now (paced at the answer rate)
+        self.tokens_at: float | None = None
         self.received = self.requested = self.rerequested = 0
         self.kept = resumed                     # bytes the .part map on disk names (what survives a failure)
         self.progress_at = 0.0
@@ -339,9 +359,14 @@ class LogControl:
             self._abort(job, f"the log list is incomplete after {LIST_TRIES} tries (missing: {missing})")
             return [self._end_message()]
         listing.tries += 1
-        listing.quiet_until = now + 0.1 + 0.1 * listing.tries
+        # re-asked after a few round trips (the last list's, else 0.1 s), each try waiting longer: at 30 % loss
+        # each way half of the round trips fail, and a listing under way is only ended and begun again (END goes
+        # first), while an entry that comes holds the next try back (_on_entry)
+        base = max(LIST_RETRY_MIN, 3 * self._list_rtt) if self._list_rtt is not None else LIST_RETRY_FIRST
+        listing.quiet_until = now + base * (1 + (listing.tries - 1) / 2)
         listing.asked_at = now
         start, end = (wanted[0], wanted[-1]) if listing.last is not None else ALL_IDS
+        log.debug("log list: try %d, ids %d-%d", listing.tries, start, end)
         # a transfer still running (a cancelled download's, its END lost) would drop the list: END goes first
         return [self._end_message(), self._message("log_request_list", start, end)]
 
@@ -500,9 +525,9 @@ class LogControl:
                 return [self._end_message()]
         self._show(d, now)
         end = d.end
-        if end is not None and not d.ranges.missing(end):
+        if end is not None and d.ranges.whole(end):
             return self._complete(d)
-        if not link_up:
+        if not link_up and now - d.last_rx > DATA_ALIVE:
             d.window = None
             d.asks.clear()
             d.progress_at = now
@@ -521,7 +546,13 @@ class LogControl:
         held_to = d.ranges.spans[-1][1] if d.ranges.spans else 0
         if d.end is None and (not d.streamed or not held_to or held_to in d.tail_full):
             # from where the held bytes end to the log's own end: the first pass, or a log still going on
-            return [self._stream(d, held_to, OPEN_END - held_to, now)]
+            # twice: the first pass (a second request is dropped while the first one streams, and 3.3 only
+            # begins again at the same place), and the last few packets (served within one call, so twice):
+            # a lost one would cost a round trip with nothing else in flight
+            first = not d.streamed and not held_to
+            tail = d.streamed and held_to and d.size - held_to <= TAIL_TWICE * CHUNK
+            ask = self._stream(d, held_to, OPEN_END - held_to, now)
+            return [ask, ask] if first or tail else [ask]
         return self._fill(d, now)
 
     def _service_ftp(self, d: _Download, now: float) -> list:
@@ -587,23 +618,30 @@ class LogControl:
         round trip), with a margin, and more for the requests and answers a loss takes (the stream's loss share,
         taken for both ways): enough to keep the vehicle sending, not more, so a radio is not flooded."""
         answered = max(ANSWERED_MIN, (1.0 - d.loss) ** 2)
-        return int(min(FILL_MAX, max(FILL_MIN, FILL_GAIN * d.rate * d.rtt / answered)))
+        return int(min(FILL_MAX, max(FILL_MIN, FILL_GAIN * d.rate * max(d.rtt, FILL_RTT_MIN) / answered)))
 
     def _fill(self, d: _Download, now: float) -> list:
         """Ask for the missing packets one request each, sweeping the gaps from the cursor, while fewer than the
         window are in flight; a gap longer than the window, with nothing in flight, is streamed instead."""
         if d.asks and now - max(d.asked_at, d.last_rx) >= max(0.05, 2 * d.rtt):
             d.asks.clear()                      # silence: all of them (or their answers) were lost
+        self._measure_fill(d, now)
         window = self._fill_window(d)
-        want = window - len(d.asks)
+        want = wanted = min(window - len(d.asks), self._paced(d, now))
         if want <= 0:
             return []
         out, end = [], d.end
         # the last few: each asked twice (a lost one costs a whole round trip, and nothing else is in flight)
-        copies = 2 if end is not None and end - d.ranges.total() < min(window // 4, TAIL_TWICE) * CHUNK else 1
+        left = (end - d.ranges.total()) // CHUNK if end is not None else None
+        copies = 1 if left is None or left >= min(window // 4, TAIL_TWICE) else 2 if left >= TAIL_THRICE else 3
         if end is None:                         # the stream's last packet was lost: probe the end with the gaps
             end = d.ranges.spans[-1][1]
-            if end not in d.asks:
+            listed = -(-d.size // CHUNK) * CHUNK
+            if end < listed:
+                # the log goes on at least to its listed size: those packets are gaps like the others, each asked
+                # for a whole packet, so the last one's answer comes short where the log ends (or full if it grew)
+                end = listed
+            elif end not in d.asks:
                 d.asks[end] = (CHUNK, now)
                 probe = self._message("log_request_data", d.entry.id, end, CHUNK)
                 out += [probe, probe]           # twice: one packet, whose loss costs a whole round
@@ -634,9 +672,14 @@ class LogControl:
                 want -= 1
                 if not want:
                     break
+        if d.rate > 0:
+            d.tokens -= wanted - want
+        if d.rate > 0 and d.tokens < 1.0 and len(d.asks) < window:
+            self._v._ticker.tick_within(PACE_TICK)    # more may go once the pace allows, answers or not
         if out:
             d.asked_at = now
-            log.debug("log %d: %d gap requests (%d in flight, window %d)", d.entry.id, len(out), len(d.asks), window)
+            log.debug("log %d: %d gap requests (%d in flight, window %d, rtt %.3f s, %.0f packets/s, loss %.2f)",
+                      d.entry.id, len(out), len(d.asks), window, d.rtt, d.rate, d.loss)
         return out
 
     def _on_data(self, m) -> None:
@@ -660,9 +703,10 @@ class LogControl:
                 pass
             expected = ask[0]
             self._round_trip(d, now - ask[1])
-            if d.end is None and count == CHUNK and ofs + count == d.ranges.spans[-1][1]:
-                d.tail_full.add(ofs + count)    # the log goes on past the probe: stream the rest
-            if len(d.asks) <= self._fill_window(d) // 2:
+            d.fill_got += 1
+            if d.end is None and count == CHUNK and ofs + count == d.ranges.spans[-1][1] and ofs + count >= d.size:
+                d.tail_full.add(ofs + count)    # the log goes on past the probe and its listed size: stream it
+            if len(d.asks) <= self._fill_window(d) // 2 or now - d.asked_at >= PACE_TICK:
                 self._v._wake.set()
         if count < expected and (d.end is None or ofs + count < d.end):
             d.end = ofs + count                 # a short packet: the log ends here (the vehicle's word)
@@ -695,6 +739,36 @@ class LogControl:
             d.rate = rate if d.rate == 0 else 0.5 * d.rate + 0.5 * rate
             if span >= 50:
                 d.loss = min(0.9, max(0.0, 1.0 - d.stream_got / (span + 1)))
+
+    @staticmethod
+    def _paced(d: _Download, now: float) -> int:
+        """Gap requests that may go now: a token bucket filled at PACE_GAIN times the rate the vehicle sends (over
+        the share of requests that reach it), holding PACE_BURST of it, so the requests come at the pace the
+        vehicle answers them rather than in bursts it drops. Unpaced while the rate is unknown."""
+        if d.rate <= 0:
+            return FILL_MAX
+        pace = PACE_GAIN * d.rate / max(ANSWERED_MIN, 1.0 - d.loss)
+        elapsed = PACE_BURST if d.tokens_at is None else now - d.tokens_at
+        d.tokens = min(max(1.0, pace * PACE_BURST), d.tokens + pace * elapsed)
+        d.tokens_at = now
+        return int(d.tokens)
+
+    @staticmethod
+    def _measure_fill(d: _Download, now: float) -> None:
+        """The rate the gap requests are answered at, lost answers counted, raises the stream's: a stream cut
+        short (a link that dropped, a log already mostly held) measures nothing, and a window left at FILL_MIN
+        would then crawl through the whole log. Requests paced PACE_GAIN faster than answered are answered faster
+        until the link is full, so the pace grows by up to PACE_GAIN each period until it stops paying."""
+        if d.fill_from is None or not d.asks:
+            d.fill_from, d.fill_got = now, 0
+            return
+        elapsed = now - d.fill_from
+        if elapsed < max(0.1, 2 * d.rtt):
+            return
+        sample = d.fill_got / elapsed / max(ANSWERED_MIN, 1.0 - d.loss)
+        if sample > d.rate:
+            d.rate = sample
+        d.fill_from, d.fill_got = now, 0
 
     def _flush(self, d: _Download) -> bool:
         """The bytes received since the last flush into the .part, then the map that names them; False (the

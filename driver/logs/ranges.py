@@ -57,6 +57,10 @@ class Ranges:
             return self.spans[i][1]
         return offset
 
+    def whole(self, end: int) -> bool:
+        """Every byte of [0, end) held: one span from 0 (a check each tick, so not a walk over the gaps)."""
+        return end <= 0 or bool(self.spans) and self.spans[0][0] == 0 and self.spans[0][1] >= end
+
     def missing(self, end: int) -> list[tuple[int, int]]:
         """The gaps in [0, end)."""
         out, at = [], 0
@@ -129,9 +133,12 @@ def save_part_map(path: str, part: PartMap) -> None:
         pass
     tmp = path + ".part.json.tmp"
     try:
+        # dumps, not dump: json.dump encodes in Python, and a lossy download's map holds tens of thousands of
+        # spans, written four times a second on the thread that reads the link
+        text = json.dumps({"id": part.log_id, "time_utc": part.time_utc, "size": part.size, "listed": part.listed,
+                           "ranges": part.ranges.spans}, separators=(",", ":"))
         with open(tmp, "w") as f:
-            json.dump({"id": part.log_id, "time_utc": part.time_utc, "size": part.size, "listed": part.listed,
-                       "ranges": part.ranges.spans}, f)
+            f.write(text)
             f.flush()
             os.fsync(f.fileno())
         os.replace(tmp, path + ".part.json")
