@@ -77,6 +77,8 @@ ANSWERED_MIN = 0.4              # ... counting at most 2.5x for loss: frames a s
                                 # loss too, and more requests would only drop more
 TAIL_TWICE = 32                 # at most this many missing packets are each asked twice
 TAIL_THRICE = 8                 # ... and at most this many three times
+STREAM_GAP = 256                # a gap of more packets than this (or than the window), nothing else in flight, is
+                                # streamed: one request instead of one a packet (a dropped link, a burst of loss)
 FILL_GAIN = 1.5                 # in flight: this many times the link's packets in a round trip (loss aside) ...
 FILL_RTT_MIN = 0.05             # ... a round trip of at least this (s): one measured while the vehicle's transmit
                                 # buffer runs dry is short, and fewer requests in flight would keep it dry; the
@@ -637,9 +639,10 @@ class LogControl:
         if end is None:                         # the stream's last packet was lost: probe the end with the gaps
             end = d.ranges.spans[-1][1]
             listed = -(-d.size // CHUNK) * CHUNK
-            if end < listed:
-                # the log goes on at least to its listed size: those packets are gaps like the others, each asked
-                # for a whole packet, so the last one's answer comes short where the log ends (or full if it grew)
+            if end < listed <= end + TAIL_TWICE * CHUNK:
+                # a few packets short of the listed size, where the log goes on at least: those packets are gaps
+                # like the others, each asked for a whole packet, so the last one's answer comes short where the
+                # log ends (or full if it grew); further short, the probe below, then a stream (a lost run)
                 end = listed
             elif end not in d.asks:
                 d.asks[end] = (CHUNK, now)
@@ -656,7 +659,7 @@ class LogControl:
                 gaps = d.ranges.gaps(0, end)
                 continue
             a, b = gap
-            if b - a > max(window, 32) * CHUNK and not d.asks and not out:
+            if b - a > max(min(window, STREAM_GAP), 32) * CHUNK and not d.asks and not out:
                 d.cursor = b
                 return [self._stream(d, a, -(-(b - a) // CHUNK) * CHUNK, now)]
             for ofs in range(a, b, CHUNK):
@@ -704,8 +707,10 @@ class LogControl:
             expected = ask[0]
             self._round_trip(d, now - ask[1])
             d.fill_got += 1
-            if d.end is None and count == CHUNK and ofs + count == d.ranges.spans[-1][1] and ofs + count >= d.size:
-                d.tail_full.add(ofs + count)    # the log goes on past the probe and its listed size: stream it
+            top = ofs + count
+            if d.end is None and count == CHUNK and top == d.ranges.spans[-1][1] and \
+                    not top < d.size <= top + TAIL_TWICE * CHUNK:
+                d.tail_full.add(top)            # the log goes on past the probe: stream the rest (not the last few)
             if len(d.asks) <= self._fill_window(d) // 2 or now - d.asked_at >= PACE_TICK:
                 self._v._wake.set()
         if count < expected and (d.end is None or ofs + count < d.end):
