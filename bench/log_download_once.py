@@ -2,6 +2,10 @@
 driver's side of the comparison with MAVProxy on ArduPilot's SITL in the README (Flight logs).
 
     .venv/bin/python bench/log_download_once.py tcp:127.0.0.1:5820 [--id 1] [--out FILE] [--compare SITL/logs/00000001.BIN]
+                                                [--via auto|log_data|ftp] [--loss 0.3 [--seed 1]]
+
+With ``--loss`` the driver reaches the vehicle's TCP port through bench/lossy_relay.py (frames lost each way with
+that share, the driver on ``udpin``), as bench/real_sitl.py does.
 """
 from __future__ import annotations
 
@@ -13,6 +17,7 @@ import tempfile
 import time
 
 sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 
 from driver.vehicle import Vehicle, VehicleConfig  # noqa: E402
 
@@ -24,8 +29,16 @@ def main() -> None:
     p.add_argument("--out", default=os.path.join(tempfile.mkdtemp(), "log.BIN"))
     p.add_argument("--via", default="auto", choices=("auto", "log_data", "ftp"))
     p.add_argument("--compare", help="the vehicle's own file, to say byte-identical or not")
+    p.add_argument("--loss", type=float, help="through a lossy relay: the share of frames lost each way")
+    p.add_argument("--seed", type=int, default=1, help="the relay's random streams")
     args = p.parse_args()
-    v = Vehicle(VehicleConfig(connection=args.connection, tlog_path=None)).start()
+    relay, connection = None, args.connection
+    if args.loss is not None:
+        from lossy_relay import LossyRelay, free_udp_port
+        udp = free_udp_port()
+        relay = LossyRelay(int(args.connection.rsplit(":", 1)[1]), udp, args.loss, args.seed)
+        connection = f"udpin:127.0.0.1:{udp}"
+    v = Vehicle(VehicleConfig(connection=connection, tlog_path=None)).start()
     try:
         if v.wait_for(lambda s: s.connected, 60) is None:
             raise SystemExit("no heartbeat in 60 s")
@@ -42,6 +55,8 @@ def main() -> None:
             print("byte-identical:", filecmp.cmp(args.out, args.compare, shallow=False))
     finally:
         v.close()
+        if relay is not None:
+            relay.close()
 
 
 if __name__ == "__main__":
