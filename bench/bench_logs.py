@@ -118,7 +118,8 @@ def driver_download(port: int, logs: LogFolder, number: int, path: str, out: str
 
 
 def baseline_cell(logs: LogFolder, number: int, loss: float, speedup: float, link: str = "tcp") -> dict:
-    """MAVProxy-style: the whole log asked at once; after a silence with bytes missing, all of it again."""
+    """MAVProxy-style: the whole log asked at once; after a silence with bytes missing, all of it again. Asked in
+    MAVLink 1, which every firmware reads (the Solo's 3.3 reads nothing else)."""
     with vehicle(logs, speedup, link, loss) as port:
         return baseline_download(port, logs, number)
 
@@ -136,7 +137,7 @@ def baseline_download(port: int, logs: LogFolder, number: int) -> dict:
         restarts, received = 0, 0
         chunks: dict[int, bytes] = {}
         last = 0.0
-        sock.sendall(mav.log_request_data_encode(1, 1, number, 0, 0xFFFFFFFF).pack(mav))
+        sock.sendall(mav.log_request_data_encode(1, 1, number, 0, 0xFFFFFFFF).pack(mav, force_mavlink1=True))
         last = time.monotonic()
         while time.monotonic() - start < CELL_LIMIT:
             try:
@@ -155,7 +156,7 @@ def baseline_download(port: int, logs: LogFolder, number: int) -> dict:
             if time.monotonic() - last > BASELINE_SILENCE:
                 restarts += 1
                 chunks.clear()
-                sock.sendall(mav.log_request_data_encode(1, 1, number, 0, 0xFFFFFFFF).pack(mav))
+                sock.sendall(mav.log_request_data_encode(1, 1, number, 0, 0xFFFFFFFF).pack(mav, force_mavlink1=True))
                 last = time.monotonic()
         return {"ok": False, "why": f"not finished in {CELL_LIMIT:.0f} s ({restarts} restarts)", "identical": False,
                 "rerequested": restarts * size, "received": received}
