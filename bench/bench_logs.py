@@ -57,7 +57,10 @@ CELL_LIMIT = 300.0           # s a cell may take before it counts as not finishe
 def floor_seconds(path: str, size: int, speedup: float, link: str = "tcp") -> float:
     """The time the link needs to carry each packet of the log once (see the module's docstring)."""
     if path == "ftp":
-        return math.ceil(size / simftp.CHUNK) * simftp.PACKET_INTERVAL / speedup
+        interval, baud = simftp.PACKET_INTERVAL, LINKS[link][1]
+        if baud and link == "radio":        # ArduPilot's burst delay leaves 2/3 of a radio without flow control free
+            interval = max(interval, simftp.BURST_SHARE * (simftp.FRAME_OVERHEAD + simftp.CHUNK) / (baud / 10.0))
+        return math.ceil(size / simftp.CHUNK) * interval / speedup
     rate = min(simlogs.LOG_DATA_RATE, simlogs.MAX_DATA_STEP * SimConfig.rate_hz)
     baud = LINKS[link][1]
     if baud:
@@ -195,8 +198,8 @@ def main() -> None:
                 for path in opts.paths.split(","):
                     if path == "ftp" and LINKS[link][0] == "solo":
                         continue                                # the Solo has no MAVLink FTP
-                    speedup = opts.ftp_speedup if path == "ftp" else \
-                        opts.radio_speedup if link == "radio" else opts.speedup
+                    speedup = opts.radio_speedup if link == "radio" else \
+                        opts.ftp_speedup if path == "ftp" else opts.speedup
                     for pct in (float(x) for x in opts.loss.split(",")):
                         rows.append(cell(logs, number, size, mb, link, path, pct, speedup, work))
                         print("  ".join(rows[-1]), flush=True)
