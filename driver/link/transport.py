@@ -79,8 +79,7 @@ class MavutilTransport(Transport):
         except Exception as exc:          # refused, no such device, bad string
             raise LinkError(f"cannot open {self._connection}: {exc}") from exc
         self._sock = self._conn.port if self._connection.startswith("tcp:") else None
-        self.byte_stream = self._sock is not None or not hasattr(self._conn, "port") or \
-            not isinstance(self._conn.port, socket.socket)
+        self.byte_stream = self._sock is not None or not isinstance(getattr(self._conn, "port", None), socket.socket)
 
     def read(self, timeout: float) -> bytes:
         conn = self._conn

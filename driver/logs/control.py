@@ -22,8 +22,10 @@ about it here:
   vehicle answers in order, so when a request's packet arrives every request sent before it that is still
   unanswered was lost (or its packet was): it is asked again on the next sweep over the gaps; silence for two
   round trips clears them all; the last few go twice, the very last three times. A lost end (the stream's short
-  packet) is probed with the gaps, or, short of the listed size, the packets up to it are gaps like the others. A gap longer than that window (a dropped link) is streamed as one request. Nothing held
-  is ever thrown away: no log is restarted because chunks were lost.
+  packet) is probed with the gaps, or, a few packets short of the listed size, the packets up to it are gaps like
+  the others. A gap longer than 256 packets or that window (a dropped link, a burst of loss), nothing else in
+  flight, is streamed as one request. Nothing held is ever thrown away: no log is restarted because chunks were
+  lost.
 * LOG_REQUEST_END stops the stream but hundreds of queued LOG_DATA still come: any LOG_DATA of the log being
   fetched is kept, whichever request it answers.
 * Armed, the vehicle ignores every LOG_* request (the first with "Disarm for log download"): the request fails
@@ -675,10 +677,10 @@ class LogControl:
                 want -= 1
                 if not want:
                     break
-        if d.rate > 0:
+        if d.rate > 0:                          # paced: what went is spent, more may go once the pace allows
             d.tokens -= wanted - want
-        if d.rate > 0 and d.tokens < 1.0 and len(d.asks) < window:
-            self._v._ticker.tick_within(PACE_TICK)    # more may go once the pace allows, answers or not
+            if d.tokens < 1.0 and len(d.asks) < window:
+                self._v._ticker.tick_within(PACE_TICK)
         if out:
             d.asked_at = now
             log.debug("log %d: %d gap requests (%d in flight, window %d, rtt %.3f s, %.0f packets/s, loss %.2f)",

@@ -103,9 +103,9 @@ class LogFolder:
                 out.append(int(stem))
         return sorted(out)
 
-    def file_number(self, list_id: int) -> int:
-        """The file of LOG_ENTRY id ``list_id`` (0: no logs)."""
-        numbers = self.numbers()
+    def file_number(self, list_id: int, numbers: list[int] | None = None) -> int:
+        """The file of LOG_ENTRY id ``list_id`` (0: no logs); ``numbers``: the folder's, if listed already."""
+        numbers = self.numbers() if numbers is None else numbers
         return numbers[0] + list_id - 1 if numbers else 0
 
     def entries(self) -> list[tuple[int, int, int]]:

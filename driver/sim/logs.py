@@ -66,7 +66,7 @@ class LogServer:
     log_told_armed = False
     log_room = 0.0                          # LOG_DATA the port's transmit buffer takes now
     log_room_t: float | None = None         # sim time it was last refilled at
-    log_sizes: tuple | None = None          # (sim time, {log id: size}) for the requests of one step
+    log_sizes: tuple | None = None          # (sim time, {log id: size}, file numbers) for the requests of one step
     log_list_credit = 0.0
     log_next_sample = 0.0
     log_mode = None
@@ -176,18 +176,17 @@ class LogServer:
         return self._log_listed()[1].get(list_id)
 
     def _log_listed(self) -> tuple:
-        """(sim time, {list id: size}, the first file's number), read once a sim step."""
+        """(sim time, {list id: size}, the files' numbers), read once a sim step."""
         cached = self.log_sizes
         if cached is None or cached[0] != self.t:
             folder = self.log_folder
             numbers = folder.numbers()
-            cached = self.log_sizes = (self.t, {e[0]: e[1] for e in folder.entries()}, numbers[0] if numbers else 0)
+            cached = self.log_sizes = (self.t, {e[0]: e[1] for e in folder.entries()}, numbers)
         return cached
 
     def _log_file_number(self, list_id: int) -> int:
         """LogFolder.file_number from the step's listing: a batch of requests would list the folder for each."""
-        first = self._log_listed()[2]
-        return first + list_id - 1 if first else 0
+        return self.log_folder.file_number(list_id, self._log_listed()[2])
 
     def _on_log_request_end(self, msg) -> None:
         if self._log_refused():

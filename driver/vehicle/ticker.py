@@ -106,12 +106,12 @@ class Ticker:
 
     def _write(self, buf: bytes) -> None:
         """Whole frames only, one writer at a time (caller holds _tx_lock)."""
-        if self._transport.write(buf) and self._v._tlog:       # the log holds what really went out
-            self._v._tlog.write(buf)
+        self._write_group((buf,))
 
-    def _write_group(self, frames: list[bytes]) -> None:
-        """Frames in one write, all or none (caller holds _tx_lock); the .tlog keeps a record per frame."""
-        if self._transport.write(b"".join(frames)) and self._v._tlog:
+    def _write_group(self, frames) -> None:
+        """Frames in one write, all or none (caller holds _tx_lock); the .tlog keeps a record per frame of what
+        really went out."""
+        if self._transport.write(frames[0] if len(frames) == 1 else b"".join(frames)) and self._v._tlog:
             for frame in frames:
                 self._v._tlog.write(frame)
 
