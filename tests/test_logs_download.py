@@ -72,6 +72,20 @@ def test_the_list_is_complete_under_loss(sim_factory, vehicle_factory, tmp_path)
     assert [(e.id, e.size) for e in listed.entries] == [(n, s) for n, s, _ in folder.entries()]
 
 
+def test_each_list_request_goes_twice_and_never_finds_the_vehicle_busy(sim_factory, vehicle_factory, tmp_path):
+    """The list is asked twice a try (a lost request or entry costs no try at 30 % loss), each LOG_REQUEST_LIST
+    behind a LOG_REQUEST_END: a second LIST on its own would find the first listing still running whenever there
+    is more than one log, and the pilot would read the vehicle's "Log download in progress"."""
+    sim, folder = logs_sim(sim_factory, tmp_path, [3000, 4000, 5000])
+    v = connect(vehicle_factory, sim)
+    listed = v.logs.list().result(20)
+    assert listed.ok and [e.id for e in listed.entries] == [1, 2, 3]
+    asked = [kind for _, kind, _ in list(sim.received_messages) if kind.startswith("LOG_REQUEST")]
+    assert asked[:4] == ["LOG_REQUEST_END", "LOG_REQUEST_LIST"] * 2
+    # (the vehicle says it on receipt, before the entries that end the list: on one TCP stream, read before them)
+    assert not [m.text for m in v.state().messages if "in progress" in m.text]
+
+
 @pytest.mark.parametrize("via, loss", [("log_data", 0.0), ("log_data", 0.3), ("ftp", 0.0), ("ftp", 0.3)])
 def test_download_is_byte_identical(sim_factory, vehicle_factory, tmp_path, via, loss):
     sim, folder = logs_sim(sim_factory, tmp_path, [20_000, 120_000], speedup=8.0)

@@ -58,6 +58,19 @@ def test_log_requests_as_the_recording(sim_factory, tmp_path):
         assert quiet_after(gcs, "LOG_DATA", mark) == []
 
 
+def test_a_list_of_one_log_ends_within_its_request(sim_factory, tmp_path):
+    """handle_log_request_list sends the first LOG_ENTRY at once (handle_log_send_listing): with one log the listing
+    is over before the next message is read, so a second LOG_REQUEST_LIST right behind it is answered too (a listing
+    of more logs runs on, and a second LIST meets "Log download in progress" as during a transfer, below)."""
+    gcs, folder = station(sim_factory, tmp_path, [20_000])
+    with gcs:
+        mark = gcs.mark()
+        gcs.send(gcs.mav.log_request_list_encode(1, 1, 0, 0xFFFF))
+        gcs.send(gcs.mav.log_request_list_encode(1, 1, 0, 0xFFFF))
+        assert [e.id for e in quiet_after(gcs, "LOG_ENTRY", mark)] == [1, 1]
+        assert not [m for m in gcs.messages[mark:] if m.get_type() == "STATUSTEXT" and "in progress" in m.text]
+
+
 def test_log_folder_over_ftp_as_the_recording(sim_factory, tmp_path):
     gcs, folder = station(sim_factory, tmp_path, [3_000, 5_000])
     seq = [0]

@@ -5,7 +5,9 @@ about it here:
 
 * LOG_REQUEST_LIST 0..0xffff gives one LOG_ENTRY per log; a list of ids past the last one floods LOG_ENTRY (size
   0) for ~40 s. So only 0..0xffff is asked, ids that went missing are asked again as a range inside last_log_num,
-  entries outside 1..last_log_num are ignored, and LOG_REQUEST_END follows every listing.
+  entries outside 1..last_log_num are ignored, and LOG_REQUEST_END follows every listing. The vehicle sends the
+  first entry on receipt (a list of one log is over at once), so each try asks twice, END before each LIST: the
+  second never finds the first listing running, and one lost request or entry costs no try.
 * LOG_REQUEST_DATA (ofs, count) streams 90-byte LOG_DATA in order. ArduPilot serves a request at once, on
   receipt, up to num_sends packets (SITL 40, USB 250, a flow-controlled serial port 10, a radio without flow
   control 1: AP_Logger_MAVLinkLogTransfer.cpp); one that ends within them ends the transfer, so the next request
@@ -21,9 +23,11 @@ about it here:
   overflows the vehicle's transmit buffer leaves a transfer running, and every request after it is dropped. The
   vehicle answers in order, so when a request's packet arrives every request sent before it that is still
   unanswered was lost (or its packet was): it is asked again on the next sweep over the gaps; silence for two
-  round trips clears them all; the last few go twice, the very last three times. A lost end (the stream's short
-  packet) is probed with the gaps, or, a few packets short of the listed size, the packets up to it are gaps like
-  the others. A gap longer than 256 packets or that window (a dropped link, a burst of loss), nothing else in
+  round trips clears them all; once fewer are missing than the vehicle sends in a round trip, each goes several
+  times (its spare room spent on copies, so the tail is not a string of round trips), the last few at least
+  twice, the very last three times. A stream silent for a round trip within a few packets of the listed size
+  lost its end (the short packet): that is probed with the gaps, or, a few packets short of the listed size, the
+  packets up to it are gaps like the others. A gap longer than 256 packets or that window (a dropped link, a burst of loss), nothing else in
   flight, is streamed as one request. Nothing held is ever thrown away: no log is restarted because chunks were
   lost.
 * LOG_REQUEST_END stops the stream but hundreds of queued LOG_DATA still come: any LOG_DATA of the log being
@@ -64,7 +68,7 @@ ALL_IDS = (0, 0xFFFF)
 OPEN_END = 0xFFFFFFFF
 DISARM_TEXT = "Disarm for log download"
 LIST_TRIES = 12                 # listings of the missing ids before the list is given up
-LIST_RETRY_FIRST = 0.06         # s before the first list is asked again (half of it more each try), no round trip
+LIST_RETRY_FIRST = 0.04         # s before the first list is asked again (half of it more each try), no round trip
                                 # known yet: a listing asked again is only ended and begun again
 LIST_RETRY_MIN = 0.05           # s, at least, when one is
 STALL_LIMIT = 20.0              # s without one new byte (link up) before a download is given up, resumable
@@ -79,6 +83,7 @@ ANSWERED_MIN = 0.4              # ... counting at most 2.5x for loss: frames a s
                                 # loss too, and more requests would only drop more
 TAIL_TWICE = 32                 # at most this many missing packets are each asked twice
 TAIL_THRICE = 8                 # ... and at most this many three times
+COPIES_MAX = 6                  # ... and at most this many times each (the vehicle's room in a round trip allowing)
 STREAM_GAP = 256                # a gap of more packets than this (or than the window), nothing else in flight, is
                                 # streamed: one request instead of one a packet (a dropped link, a burst of loss)
 FILL_GAIN = 1.5                 # in flight: this many times the link's packets in a round trip (loss aside) ...
@@ -90,6 +95,9 @@ PACE_BURST = 0.02               # ... at most this many seconds of them at once:
                                 # buffer cannot take at once leaves a transfer running, and ArduPilot drops every
                                 # request that comes while one runs ("Log download in progress")
 PACE_TICK = 0.005               # s between sends of paced gap requests, at most (their answers wake the sender)
+END_WAIT = 0.02                 # s of silence at least after the listed size's last whole packet before its end
+                                # counts as lost ...
+END_NEAR = 8                    # ... once a packet this close to it came (the few before the end may be lost too)
 DATA_ALIVE = 1.0                # s since the last LOG_DATA within which a download goes on with no heartbeat heard:
                                 # at 30 % loss each way three heartbeats in a row are lost every half minute or so
 
@@ -352,7 +360,10 @@ class LogControl:
         if listing is None:
             listing = self._listing = _Listing()
             self.progress = LogProgress(0, "", 0, 0, 0.0, "listing")
-        if now < listing.quiet_until or not link_up:
+        if not link_up:
+            return []
+        if now < listing.quiet_until:
+            self._v._ticker.tick_within(listing.quiet_until - now)     # asked again on time
             return []
         wanted = self._missing_ids(listing)
         if listing.last is not None and not wanted:
@@ -371,8 +382,12 @@ class LogControl:
         listing.asked_at = now
         start, end = (wanted[0], wanted[-1]) if listing.last is not None else ALL_IDS
         log.debug("log list: try %d, ids %d-%d", listing.tries, start, end)
-        # a transfer still running (a cancelled download's, its END lost) would drop the list: END goes first
-        return [self._end_message(), self._message("log_request_list", start, end)]
+        # a transfer still running (a cancelled download's, its END lost) would drop the list: END goes first; and
+        # all of it twice: the vehicle sends the first entry on receipt (a list of one log is over at once), the
+        # second END ends the first listing, so the second LIST is never dropped as busy, and one lost request or
+        # entry of the two costs no try
+        ask = [self._end_message(), self._message("log_request_list", start, end)]
+        return ask + ask
 
     @staticmethod
     def _missing_ids(listing: _Listing) -> list[int]:
@@ -542,8 +557,9 @@ class LogControl:
             self._give_up(d, f"no data from the vehicle for {STALL_LIMIT:.0f} s")
             return [self._end_message()]
         if d.window is not None:
-            quiet = now - max(d.sent_at, d.last_rx)
-            if quiet < max(0.05, 3 * d.rtt):
+            wait = self._stream_wait(d) - (now - max(d.sent_at, d.last_rx))
+            if wait > 0:
+                self._v._ticker.tick_within(wait)   # looked at again when the silence would end it
                 return []
             self._measure(d, now)
             d.window = None                     # silence: the rest of that window was lost
@@ -558,6 +574,15 @@ class LogControl:
             ask = self._stream(d, held_to, OPEN_END - held_to, now)
             return [ask, ask] if first or tail else [ask]
         return self._fill(d, now)
+
+    @staticmethod
+    def _stream_wait(d: _Download) -> float:
+        """Silence that ends a stream's window: three round trips; once its packets came within a few of the listed
+        size, one round trip (the end follows them at once, in the same call, so silence there means the end was
+        lost; a log that grew since the list keeps coming, and each packet restarts the wait)."""
+        if d.end is None and d.first_rx is not None and d.last_ofs + END_NEAR * CHUNK > d.size:
+            return max(END_WAIT, d.rtt)
+        return max(0.05, 3 * d.rtt)
 
     def _service_ftp(self, d: _Download, now: float) -> list:
         msgs, failure = d.ftp.service(now, self._v._target_ids())
@@ -624,20 +649,39 @@ class LogControl:
         answered = max(ANSWERED_MIN, (1.0 - d.loss) ** 2)
         return int(min(FILL_MAX, max(FILL_MIN, FILL_GAIN * d.rate * max(d.rtt, FILL_RTT_MIN) / answered)))
 
+    @staticmethod
+    def _copies(d: _Download, left: int | None, window: int) -> int:
+        """How many times each gap request goes, ``left`` packets still missing (None: the end is not known).
+
+        While the missing packets outnumber what the vehicle sends in a round trip, once: the vehicle is the
+        bottleneck, and a copy's answer would take a missing packet's place. Fewer, and the download waits on
+        round trips instead (at 30 % loss each way half the requests come to nothing, so the last thousand packets
+        take ten of them): the vehicle's spare room in a round trip is spent on copies, each of which lowers the
+        odds that a packet is still missing after the next one. The last few go twice, the very last three times,
+        even when no loss was seen: a lost one costs a whole round trip with nothing else in flight."""
+        if left is None:
+            return 1
+        copies = 1 if left >= min(window // 4, TAIL_TWICE) else 2 if left >= TAIL_THRICE else 3
+        if d.loss > 0 and d.rate > 0:
+            room = d.rate * d.rtt / max(ANSWERED_MIN, 1.0 - d.loss)    # requests answered in a round trip
+            copies = max(copies, min(COPIES_MAX, int(room // max(1, left))))
+        return copies
+
     def _fill(self, d: _Download, now: float) -> list:
         """Ask for the missing packets one request each, sweeping the gaps from the cursor, while fewer than the
         window are in flight; a gap longer than the window, with nothing in flight, is streamed instead."""
-        if d.asks and now - max(d.asked_at, d.last_rx) >= max(0.05, 2 * d.rtt):
+        silence = max(0.05, 2 * d.rtt) - (now - max(d.asked_at, d.last_rx))
+        if d.asks and silence <= 0:
             d.asks.clear()                      # silence: all of them (or their answers) were lost
+        elif d.asks:
+            self._v._ticker.tick_within(silence)    # looked at again when it would be
         self._measure_fill(d, now)
         window = self._fill_window(d)
         want = wanted = min(window - len(d.asks), self._paced(d, now))
         if want <= 0:
             return []
         out, end = [], d.end
-        # the last few: each asked twice (a lost one costs a whole round trip, and nothing else is in flight)
-        left = (end - d.ranges.total()) // CHUNK if end is not None else None
-        copies = 1 if left is None or left >= min(window // 4, TAIL_TWICE) else 2 if left >= TAIL_THRICE else 3
+        copies = self._copies(d, (end - d.ranges.total()) // CHUNK if end is not None else None, window)
         if end is None:                         # the stream's last packet was lost: probe the end with the gaps
             end = d.ranges.spans[-1][1]
             listed = -(-d.size // CHUNK) * CHUNK

@@ -4,7 +4,8 @@
 Mixed into the Autopilot. What the recording shows, quirks included:
 
 * LOG_REQUEST_LIST (start, end): ``end`` is clamped to the last log, then LOG_ENTRY counts from ``start`` up (the
-  id wrapping past 65535) until it has sent ``end``: ids that do not exist come with size 0 and time 0, about
+  id wrapping past 65535) until it has sent ``end``, the first on receipt (handle_log_request_list calls
+  handle_log_send_listing), the others one a call: ids that do not exist come with size 0 and time 0, about
   :data:`LIST_RATE` a second, so a list of ids past the last log floods for ~40 s unless LOG_REQUEST_END stops it.
   With no log at all: one LOG_ENTRY id 0, num_logs 0. While a listing or a transfer runs, a new LOG_REQUEST_LIST
   or LOG_REQUEST_DATA is dropped (AP_Logger_MAVLinkLogTransfer.cpp: "Log download in progress", except for a
@@ -146,6 +147,8 @@ class LogServer:
             self.log_listing = [self.sender, 0, 0, 0]
         else:
             self.log_listing = [self.sender, max(1, msg.start), min(msg.end, last), len(entries)]
+        self._log_entry()                               # the first at once (handle_log_send_listing): a list of one
+                                                        # log ends within its request
 
     def _on_log_request_data(self, msg) -> None:
         if self._log_refused():
