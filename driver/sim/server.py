@@ -85,13 +85,20 @@ class Peer:
     def write(self, data: bytes) -> None:
         raise NotImplementedError
 
+    def cork(self) -> None:
+        """Hold what is written until :meth:`uncork` (a byte stream only: a datagram is a frame)."""
+
+    def uncork(self) -> None:
+        """Write what :meth:`cork` held."""
+
 
 class TcpPeer(Peer):
     def __init__(self, sock: socket.socket, address, config, usb: bool = False) -> None:
         super().__init__(f"{'usb' if usb else 'tcp'} {address[0]}:{address[1]}", config, usb)
         self.sock = sock
         self.pending = bytearray()
-        self.corked = False                   # answering a read: frames gather up to CORK_BYTES, see uncork()
+        self.corked = 0                       # corks held (a step, a read's answers): frames gather up to
+                                              # CORK_BYTES, see uncork()
 
     def write(self, data: bytes) -> None:
         with self.lock:
@@ -103,13 +110,18 @@ class TcpPeer(Peer):
             if not self.corked or len(self.pending) >= CORK_BYTES:
                 self._push()
 
-    def uncork(self) -> None:
-        """Write what answering a read gathered. ArduPilot's SITL writes its serial port's buffer to the socket
-        in one piece each loop; a write a frame costs both ends a system call and a wake-up per frame, which a
-        batch of log requests (a thousand one-packet answers) turns into most of their cost."""
+    def cork(self) -> None:
         with self.lock:
-            self.corked = False
-            if self.pending and not self.closed:
+            self.corked += 1
+
+    def uncork(self) -> None:
+        """Write what a step, or answering a read, gathered, once no cork is left. ArduPilot's SITL writes its
+        serial port's buffer to the socket in one piece each loop; a write a frame costs both ends a system call
+        and a wake-up per frame: a batch of log requests (a thousand one-packet answers) turns that into most of
+        their cost, and a step's telemetry into a wake-up of the ground station's reader per message."""
+        with self.lock:
+            self.corked = max(0, self.corked - 1)
+            if not self.corked and self.pending and not self.closed:
                 self._push()
 
     def _push(self) -> None:
@@ -317,6 +329,14 @@ class LinkServer:
             for frame in peer.down.send(bytes(data), now, faults.drop_fraction):
                 peer.write(frame)
 
+    def corked(self) -> list:
+        """Every peer, corked (see Peer.cork): uncork each when done."""
+        with self.peers_lock:
+            peers = list(self.peers)
+        for peer in peers:
+            peer.cork()
+        return peers
+
     def pump(self) -> None:
         """Hand on what latency and reordering held back, now that its time has come (the clock thread)."""
         now = self.faults.clock()
@@ -397,9 +417,9 @@ class LinkServer:
             peer.parser.buf_index = 0
             return
         now = self.faults.clock()
-        corked = isinstance(peer, TcpPeer) and len(messages) > 1
+        corked = len(messages) > 1
         if corked:
-            peer.corked = True
+            peer.cork()
         try:
             for msg in messages:
                 kind = msg.get_type()

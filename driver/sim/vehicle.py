@@ -175,6 +175,17 @@ class SimVehicle:
         self._inbox.put((msg, version, peer))
 
     def _step(self, dt: float) -> None:
+        # what a step says goes out in one write a peer (SITL writes its port's buffer once a loop), not a frame
+        # at a time: a system call and a wake-up of the ground station's reader per message is most of the cost
+        # of a simulated vehicle at rest
+        peers = self.server.corked()
+        try:
+            self._step_corked(dt)
+        finally:
+            for peer in peers:
+                peer.uncork()
+
+    def _step_corked(self, dt: float) -> None:
         self.server.pump()                 # uplink frames whose latency is over join the inbox
         autopilot = self.autopilot
         while True:
