@@ -768,8 +768,9 @@ class LogControl:
             return                              # queued from an earlier request: kept, but it times nothing
         if d.first_rx is None:
             d.first_rx, d.first_ofs = now, ofs
-            self._round_trip(d, now - d.sent_at)
-            d.idle_rtt = now - d.sent_at if d.idle_rtt is None else min(d.idle_rtt, now - d.sent_at)
+            sample = now - d.sent_at
+            self._round_trip(d, sample)
+            d.idle_rtt = sample if d.idle_rtt is None else min(d.idle_rtt, sample)
         d.last_ofs = ofs
         d.stream_got += 1
         if ofs + count >= window[1] or count < CHUNK:

@@ -17,6 +17,7 @@ import random
 import selectors
 import socket
 import threading
+from contextlib import ExitStack, contextmanager
 from typing import Callable
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
@@ -91,13 +92,22 @@ class Peer:
     def uncork(self) -> None:
         """Write what :meth:`cork` held."""
 
+    @contextmanager
+    def held(self):
+        """Corked for the block (see :meth:`cork`), whatever it raises."""
+        self.cork()
+        try:
+            yield
+        finally:
+            self.uncork()
+
 
 class TcpPeer(Peer):
     def __init__(self, sock: socket.socket, address, config, usb: bool = False) -> None:
         super().__init__(f"{'usb' if usb else 'tcp'} {address[0]}:{address[1]}", config, usb)
         self.sock = sock
         self.pending = bytearray()
-        self.corked = 0                       # corks held (a step, a read's answers): frames gather up to
+        self.corks = 0                        # corks held (a step, a read's answers): frames gather up to
                                               # CORK_BYTES, see uncork()
 
     def write(self, data: bytes) -> None:
@@ -107,12 +117,12 @@ class TcpPeer(Peer):
             if len(self.pending) + len(data) > MAX_PENDING:
                 return
             self.pending += data
-            if not self.corked or len(self.pending) >= CORK_BYTES:
+            if not self.corks or len(self.pending) >= CORK_BYTES:
                 self._push()
 
     def cork(self) -> None:
         with self.lock:
-            self.corked += 1
+            self.corks += 1
 
     def uncork(self) -> None:
         """Write what a step, or answering a read, gathered, once no cork is left. ArduPilot's SITL writes its
@@ -120,8 +130,8 @@ class TcpPeer(Peer):
         and a wake-up per frame: a batch of log requests (a thousand one-packet answers) turns that into most of
         their cost, and a step's telemetry into a wake-up of the ground station's reader per message."""
         with self.lock:
-            self.corked = max(0, self.corked - 1)
-            if not self.corked and self.pending and not self.closed:
+            self.corks = max(0, self.corks - 1)
+            if not self.corks and self.pending and not self.closed:
                 self._push()
 
     def _push(self) -> None:
@@ -329,13 +339,15 @@ class LinkServer:
             for frame in peer.down.send(bytes(data), now, faults.drop_fraction):
                 peer.write(frame)
 
-    def corked(self) -> list:
-        """Every peer, corked (see Peer.cork): uncork each when done."""
+    @contextmanager
+    def held(self):
+        """Every peer corked for the block (see Peer.cork): a step's frames go out in one write a peer."""
         with self.peers_lock:
             peers = list(self.peers)
-        for peer in peers:
-            peer.cork()
-        return peers
+        with ExitStack() as stack:
+            for peer in peers:
+                stack.enter_context(peer.held())
+            yield
 
     def pump(self) -> None:
         """Hand on what latency and reordering held back, now that its time has come (the clock thread)."""
@@ -417,10 +429,7 @@ class LinkServer:
             peer.parser.buf_index = 0
             return
         now = self.faults.clock()
-        corked = len(messages) > 1
-        if corked:
-            peer.cork()
-        try:
+        with peer.held():                   # the answers to one read go out together
             for msg in messages:
                 kind = msg.get_type()
                 if kind in ("BAD_DATA", "UNKNOWN") or kind.startswith("UNKNOWN"):
@@ -429,9 +438,6 @@ class LinkServer:
                 version = 2 if msg.get_msgbuf()[0] == V2_MARKER else 1
                 for item in peer.up.send((msg, version, peer), now):
                     self._deliver(*item)
-        finally:
-            if corked:
-                peer.uncork()
 
     def _deliver(self, msg, version: int, peer: Peer) -> None:
         """What reached the vehicle through the uplink's faults."""

@@ -178,14 +178,10 @@ class SimVehicle:
         # what a step says goes out in one write a peer (SITL writes its port's buffer once a loop), not a frame
         # at a time: a system call and a wake-up of the ground station's reader per message is most of the cost
         # of a simulated vehicle at rest
-        peers = self.server.corked()
-        try:
-            self._step_corked(dt)
-        finally:
-            for peer in peers:
-                peer.uncork()
+        with self.server.held():
+            self._step_held(dt)
 
-    def _step_corked(self, dt: float) -> None:
+    def _step_held(self, dt: float) -> None:
         self.server.pump()                 # uplink frames whose latency is over join the inbox
         autopilot = self.autopilot
         while True:
