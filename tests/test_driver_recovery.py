@@ -48,12 +48,11 @@ def test_a_half_open_tcp_link_is_reopened(sim, vehicle_factory):
     assert sim.clients == 1
 
 
-def stop_all_streams(sim) -> None:
-    """Another ground station turns every stream off: to the vehicle it is as if it forgot our rates."""
+def stop_all_streams(sim, stream: int = mavlink.MAV_DATA_STREAM_ALL) -> None:
+    """Another ground station turns every stream (or one) off: to the vehicle it is as if it forgot our rates."""
     out = mavlink.MAVLink(None, srcSystem=254, srcComponent=190)
     with socket.create_connection(("127.0.0.1", sim.tcp_port), timeout=5) as other:
-        other.sendall(mavlink.MAVLink_request_data_stream_message(
-            1, 1, mavlink.MAV_DATA_STREAM_ALL, 0, 0).pack(out))
+        other.sendall(mavlink.MAVLink_request_data_stream_message(1, 1, stream, 0, 0).pack(out))
         seen = sim.truth().time
         deadline = time.monotonic() + 10
         # hold the connection (reading what the vehicle says to it) until the vehicle has read the request
@@ -64,6 +63,18 @@ def stop_all_streams(sim) -> None:
                 other.recv(65536)
             except socket.timeout:
                 pass
+
+
+def test_one_stream_lost_is_requested_again_while_the_others_flow(vehicle, sim):
+    """A REQUEST_DATA_STREAM lost on a lossy link leaves that one stream off: ATTITUDE keeps coming, but without
+    SYS_STATUS and GPS_RAW_INT the pilot would never see the vehicle ready to arm (real SITL at 30 % loss)."""
+    assert vehicle.wait_for(lambda s: s.readiness.ready_to_arm, 15)
+    stop_all_streams(sim, mavlink.MAV_DATA_STREAM_EXTENDED_STATUS)
+    stopped_at = sim.truth().time
+    asked = vehicle.wait_for(lambda s: any(kind == "REQUEST_DATA_STREAM" and t > stopped_at
+                                           for t, kind, _ in list(sim.received_messages)), 30)
+    assert asked is not None, "the stream was never requested again"
+    assert vehicle.wait_for(lambda s: s.readiness.ready_to_arm, 10)
 
 
 def test_streams_are_requested_again_when_the_vehicle_forgets_them(vehicle, sim):

@@ -152,8 +152,8 @@ class Reader:
             store.fields.update(changes)
             if mtype == "HOME_POSITION" and "home" in changes:
                 self._link.home_received()
-            elif mtype == "ATTITUDE":
-                self._link.last_attitude = self._v.clock()
+            if mtype in self._link.last_heard:
+                self._link.last_heard[mtype] = self._v.clock()
         store.fields["link"] = self._link.health(self._v._version)   # packet counts as current as the telemetry
         if store.state.rejected_values == 0 and store.fields.get("rejected_values", 0) > 0:   # the first one
             store.add_message_locked(Severity.WARNING, "The vehicle sent impossible telemetry values (NaN, "

@@ -25,7 +25,11 @@ __all__ = ["LinkSupervisor"]
 HOME_RETRY = 2.0             # s between home requests while the vehicle has not sent it
 PARAM_RETRY = 3.0            # s between reads of the parameters below while some are unanswered
 PARAM_TRIES = 3
-STREAM_SILENCE = 3.0         # s without ATTITUDE before the streams are asked for again
+STREAM_SILENCE = 3.0         # s without one of STREAM_WATCH before the streams are asked for again
+# a message of each stream the pilot's screen lives on (EXTRA1, EXTENDED_STATUS, POSITION): one REQUEST_DATA_STREAM
+# lost on a lossy link leaves that stream off while the others flow (at 30 % loss each way real SITL never sent
+# SYS_STATUS nor GPS_RAW_INT, and the driver never told it ready to arm)
+STREAM_WATCH = ("ATTITUDE", "SYS_STATUS", "GLOBAL_POSITION_INT")
 ADSB_RATE_HZ = 5.0           # ADSB_VEHICLE asked for: one aircraft of the list each time (see stream_requests)
 REOPEN_AFTER = 5.0           # s past the loss timeout before a reconnectable link is reopened
 PLAN_PARAMS = ("WPNAV_SPEED", "WPNAV_SPEED_UP", "WPNAV_SPEED_DN", "LAND_SPEED", "RTL_ALT", "BATT_CAPACITY")
@@ -44,7 +48,7 @@ class LinkSupervisor:
         self.lost_count = 0
         self.lost_at = 0.0
         self.last_heartbeat: float | None = None          # self._clock
-        self.last_attitude = 0.0                          # the vehicle's clock
+        self.last_heard = dict.fromkeys(STREAM_WATCH, 0.0)   # the vehicle's clock, by message
         self.rx_count = 0
         self.rx_lost = 0
         self.bad_crc = 0
@@ -116,7 +120,8 @@ class LinkSupervisor:
 
     def _requests(self, now: float) -> list:
         out = []
-        if self._streams_at is None or (now - self.last_attitude > STREAM_SILENCE and now - self._streams_at > 5.0):
+        silent = any(now - heard > STREAM_SILENCE for heard in self.last_heard.values())
+        if self._streams_at is None or (silent and now - self._streams_at > 5.0):
             out += self.stream_requests()
             self._streams_at = now
         if self._home_wanted_since is not None and now - self._home_asked_at >= HOME_RETRY:
