@@ -45,6 +45,7 @@ from .api import CEILING, Drone, Limits
 from .commands import CommandSender, Notifier, command_name
 from .missions import MissionControl
 from .parameters import Parameters
+from .ports import vehicle_ports
 from .reader import Reader
 from .rules import (
     COPTER_MODES, MAX_ALTITUDE, MIN_TAKEOFF_ALTITUDE, go_to_problem, ground_only, not_in_flight, takeoff_altitude_problem,
@@ -143,6 +144,9 @@ class Vehicle(Drone):
         self._started = False
         # the parts that do the work, each one job (see the module's docstring)
         self._ticker = Ticker(self)                    # the ticker thread and the one way out to the link
+        #: the narrow services the parts are handed (driver.core.ports), instead of this vehicle
+        self.ports = vehicle_ports(clock, self._store, self._ticker, self._wake, self._target_ids, lambda: self._v2,
+                                   self._command_long, self._set_mode, self._finish, self._notifier)
         self._parameters = Parameters(self)            # parameter table, cache, checked writes, metadata
         self._signing_control = SigningControl(self)   # keys and SETUP_SIGNING
         self._forwarder = Forwarder(cfg.outputs, cfg.baud, self._ticker.forward_to_vehicle,

@@ -1,0 +1,60 @@
+"""The vehicle's side of the ports (:mod:`driver.core.ports`): the few services each part is handed.
+
+Each adapter is a thin view of one thing the :class:`~driver.vehicle.vehicle.Vehicle` owns (its ticker, its
+command path), so a part never holds the vehicle itself and never reaches its private fields.
+"""
+from __future__ import annotations
+
+from concurrent.futures import Future
+
+from ..core.ports import Ports
+from ..core.results import CommandStatus
+
+__all__ = ["LinkOutbox", "VehicleCommands", "vehicle_ports"]
+
+
+class LinkOutbox:
+    """:class:`~driver.core.ports.Outbox` over the vehicle's ticker."""
+
+    def __init__(self, ticker, wake, target, mavlink2) -> None:
+        self._ticker, self._wake, self._target, self._mavlink2 = ticker, wake, target, mavlink2
+
+    def post(self, msg) -> None:
+        self._ticker.post(msg)
+
+    def wake(self) -> None:
+        self._wake.set()
+
+    def tick_within(self, seconds: float) -> None:
+        self._ticker.tick_within(seconds)
+
+    def target(self) -> tuple[int, int]:
+        return self._target()
+
+    def encoder(self):
+        return self._ticker.new_encoder()
+
+    @property
+    def mavlink2(self) -> bool:
+        return self._mavlink2()
+
+
+class VehicleCommands:
+    """:class:`~driver.core.ports.CommandPort` over the vehicle's one command path (the gate, the sender)."""
+
+    def __init__(self, long, mode, answer) -> None:
+        self._long, self._mode, self._answer = long, mode, answer
+
+    def long(self, command: int, params=(), name: str | None = None, *, guard=None) -> Future:
+        return self._long(command, params, name, guard=guard)
+
+    def mode(self, name: str) -> Future:
+        return self._mode(name)
+
+    def answer(self, name: str, status: CommandStatus, reason: str = "") -> Future:
+        return self._answer(name, status, reason)
+
+
+def vehicle_ports(clock, store, ticker, wake, target, mavlink2, long, mode, answer, settler) -> Ports:
+    return Ports(clock, store, LinkOutbox(ticker, wake, target, mavlink2), VehicleCommands(long, mode, answer),
+                 settler)
