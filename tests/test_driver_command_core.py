@@ -203,7 +203,7 @@ def test_a_ground_only_command_is_not_resent_once_the_vehicle_is_armed(vehicle, 
     assert vehicle.set_mode("GUIDED").result(timeout=10).ok
     assert vehicle.arm().result(timeout=10).ok and vehicle.wait_for(lambda s: s.armed, 10)
     result = future.result(timeout=10)
-    assert result.status is CommandStatus.REJECTED and "disarmed" in result.reason, str(result)
+    assert result.status is CommandStatus.REJECTED and "armed" in result.reason, str(result)
     assert list(sim.faults.ignored).count(command) == 1
     assert vehicle.disarm().result(timeout=10).ok
 

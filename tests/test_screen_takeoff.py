@@ -56,7 +56,7 @@ def test_cancel_after_guided_before_arming_switches_back(qtbot, sim, vehicle_fac
     qtbot.mouseClick(b, Qt.LeftButton)
     qtbot.waitUntil(lambda: sim.truth().mode == before, timeout=10000)          # back where it was
     assert not sim.truth().armed and not vehicle.state().takeoff.active
-    assert any("cancelled before liftoff" in t for t in w.messages.texts())
+    qtbot.waitUntil(lambda: any("cancelled before liftoff" in t for t in w.messages.texts()), timeout=10000)
 
 
 def test_arm_asks_first_and_says_what_happens_without_rc(qtbot, sim, vehicle_factory, window_factory):

@@ -232,13 +232,12 @@ class VehicleSetup:
         problem = _motor_test_problem(motor, throttle_pct, pwm, seconds, count, propellers_removed)
         if problem:
             return self._v._finish(name, CommandStatus.REJECTED, problem)
-        ours = self.motor_test_running          # our own test armed the motors: a new one may replace it
         firmware = self._v.state().firmware
 
-        def problem(s) -> str | None:           # checked now and again as the command goes out
-            if s.in_air:
-                return "the vehicle is flying"
-            if s.armed and not ours:
+        def problem(s) -> str | None:           # checked now and again as the command goes out (the flight rules
+            if s.may_be_airborne:               # check it too: driver.vehicle.safety)
+                return "the vehicle may be airborne (it has not reported itself landed and disarmed)"
+            if s.armed:
                 return "the vehicle is armed: disarm first"
             return None
         refusal = problem(self._v.state())

@@ -47,6 +47,7 @@ class Reader:
         self.reopen = False                # the supervisor found a half-open link: reopen it
         self._open_error = ""
         self._gcs_failsafe_warned = False
+        self._last_frame: dict[int, bytes] = {}   # each component's last frame: a repeat of it is dropped
         self.inspector = vehicle.inspector = MessageInspector(vehicle.clock)   # what the link carries: Drone.inspection()
 
     def _new_parser(self, carry=None):
@@ -104,8 +105,10 @@ class Reader:
                 with self._lock:                              # traffic paused: publish what is held back
                     self._fold_and_publish()
 
-    def ingest(self, data: bytes) -> int:
-        """Parse raw bytes as if read from the link and fold them into the state; returns messages parsed."""
+    def ingest(self, data: bytes, publish: bool = False) -> int:
+        """Parse raw bytes as if read from the link and fold them into the state; returns messages parsed.
+        ``publish``: fold and publish everything now (a caller feeding the reader itself, on its own clock), not
+        at most every PUBLISH_INTERVAL as the reader thread does."""
         if self._parser_generation != self._signing.generation:     # the key changed: check with the new one
             self.codec = self._new_parser(self.codec)
         try:
@@ -125,7 +128,7 @@ class Reader:
                     n += self._handle(msg)
                 except Exception:                     # a malformed field must not stop the reader
                     log.exception("error handling %s", msg.get_type())
-            if n and time.monotonic() - self._store.published_at >= PUBLISH_INTERVAL:
+            if n and (publish or time.monotonic() - self._store.published_at >= PUBLISH_INTERVAL):
                 self._fold_and_publish()
         return n
 
@@ -186,10 +189,14 @@ class Reader:
         component, seq = header.srcComponent, header.seq
         last = link.last_seq.get(component)           # sequence gaps: packet loss per component (inline: hot)
         if last is not None:
+            if seq == last and msg.get_msgbuf() == self._last_frame.get(component):
+                link.duplicates += 1                  # the same frame twice (a radio or router repeating it):
+                return 0                              # one answer is never taken for two
             gap = (seq - last - 1) & 0xFF
             if gap < 128:                             # larger jumps are a restart, not loss
                 link.rx_lost += gap
         link.last_seq[component] = seq
+        self._last_frame[component] = msg.get_msgbuf()
         link.rx_count += 1
         if mtype in PAYLOAD_MESSAGES:                 # the gimbal and camera speak from any component
             self._payload.on_message(msg, component)
@@ -220,7 +227,7 @@ class Reader:
         was_armed = view["armed"]
         changes = fold_heartbeat(view, m)
         store.fields.update(changes)
-        self._commands.on_mode(m.custom_mode)
+        self._commands.on_heartbeat(m.custom_mode, changes["armed"], now)
         if changes["armed"] != was_armed:
             self._link.armed_changed(changes["armed"], now)
         event = self._link.heartbeat(now)

@@ -27,7 +27,7 @@ from ..traffic.model import Traffic
 __all__ = [
     "LandedState", "LinkStatus", "Severity", "CommandStatus", "Attitude", "GlobalPosition",
     "LocalPosition", "Velocity", "BatteryAlarm", "BatteryThresholds", "Battery", "Gps", "Readiness", "LinkHealth", "SigningStatus", "Signing", "Message",
-    "CommandResult", "Setpoint", "SequencePhase", "SequenceProgress", "Environment", "Fence", "FENCE_PARAMS",
+    "CommandResult", "Setpoint", "SequencePhase", "SequenceProgress", "SequenceState", "Environment", "Fence", "FENCE_PARAMS",
     "VehicleState", "replace",
 ]
 
@@ -208,6 +208,15 @@ class SequenceProgress:
 
 
 @dataclass(frozen=True)
+class SequenceState:
+    """The sequence the driver runs now (takeoff, mission start, land, RTL, stop) and the state it is in, or the
+    last one's end ("done", "failed", "ended"); docs/driver.md draws them."""
+    name: str = ""
+    state: str = ""
+    detail: str = ""
+
+
+@dataclass(frozen=True)
 class Environment:
     """Sensor values JdeRobot's Navdata carries; None where the autopilot sent nothing."""
     mag: tuple[int, int, int] | None = None          # milligauss (SCALED_IMU / RAW_IMU)
@@ -293,6 +302,8 @@ class VehicleState:
     messages: tuple[Message, ...] = ()               # the most recent, oldest first
     results: tuple[CommandResult, ...] = ()          # the most recent command results, oldest first
     takeoff: SequenceProgress = field(default_factory=SequenceProgress)
+    sequence: SequenceState = field(default_factory=SequenceState)
+    may_be_airborne: bool = True                     # the flight rules' cautious view (driver.vehicle.safety)
     setpoint: Setpoint = field(default_factory=Setpoint)
     rejected_values: int = 0                         # telemetry messages dropped for impossible values
     gcs_failsafe: int | None = None                  # the vehicle's FS_GCS_ENABLE, None until read

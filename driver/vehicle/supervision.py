@@ -52,6 +52,7 @@ class LinkSupervisor:
         self.rx_count = 0
         self.rx_lost = 0
         self.bad_crc = 0
+        self.duplicates = 0                   # frames received twice (dropped: an answer counts once)
         self.last_seq: dict[int, int] = {}
         self._window: collections.deque[tuple[float, int, int]] = collections.deque(maxlen=6)
         self._streams_at: float | None = None
