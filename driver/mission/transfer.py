@@ -32,8 +32,9 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from ..core.results import CommandResult, CommandStatus
 from .legacy_rally import LegacyRally
+from .readback import ReadBack
 from .plan import Plan, PlanKind, TransferDirection, TransferOutcome, TransferProgress
-from .wire import difference, from_wire, home_slot, result_meaning, to_wire
+from .wire import from_wire, home_slot, result_meaning, to_wire
 
 __all__ = ["PlanTransfers", "MIN_RETRY", "MAX_RETRY"]
 
@@ -82,7 +83,7 @@ class _Transfer:
     said: str = ""                            # a MISSION_ACK ERROR the vehicle sent, kept until the plan decides
 
 
-class PlanTransfers(LegacyRally):
+class PlanTransfers(LegacyRally, ReadBack):
     """The transfers of one vehicle. ``record(name, status, reason)`` stores a result (lock held)."""
 
     def __init__(self, codec, source: tuple[int, int], target: Callable[[], tuple[int, int]],
@@ -439,28 +440,10 @@ class PlanTransfers(LegacyRally):
         if t.kind is PlanKind.MISSION and items:
             items = items[1:]                                     # the home slot
         plan = Plan(t.kind, tuple(items))
-        upload = t.upload
-        if upload is None:
+        if t.upload is None:
             self._end(t, CommandStatus.ACCEPTED, f"{len(plan)} items", plan)
-            return
-        why = difference(upload.plan, plan, self.integer)
-        said = f"{upload.said}; " if upload.said else ""
-        if upload.direction is TransferDirection.CLEAR:
-            if why:
-                self._end(t, CommandStatus.REFUSED, f"{said}the vehicle still holds {len(plan)} items", plan)
-            else:
-                self._end(t, CommandStatus.ACCEPTED, f"cleared (read back empty; the vehicle had answered "
-                          f"{upload.said})", plan)
-        elif why:
-            self._end(t, CommandStatus.REFUSED, f"{said}the plan read back differs: {why}", plan)
-        elif upload.said:
-            self._end(t, CommandStatus.ACCEPTED, f"{len(plan)} items read back as sent (the vehicle answered "
-                      f"{upload.said} to an item sent again after it had the plan)", plan)
-        elif upload.acked:
-            self._end(t, CommandStatus.ACCEPTED, f"{len(plan)} items, accepted and read back", plan)
         else:
-            self._end(t, CommandStatus.ACCEPTED, f"{len(plan)} items read back as sent (the vehicle's final "
-                      "MISSION_ACK was lost)", plan)
+            self._checked(t, plan)
 
     def _end(self, t: _Transfer, status: CommandStatus, reason: str, plan: Plan | None = None) -> None:
         if self._running.get(t.kind) is t:
