@@ -19,6 +19,10 @@ shape, and the list) and fault, every parameter downloaded and no wrong "set" re
 The log rows (bench/log_cells.py): per profile, download path (LOG_DATA; MAVLink FTP where the profile has it) and
 fault, the vehicle's DataFlash log downloaded, byte-identical to the simulator's own file (or, not finished, a
 resumable .part truthfully told).
+
+Then the gate (bench/verdicts.py): every cell right, wrong or unfinished, the cells that are not right named, and
+the exit code: 0 only when every cell is right (completed, or refused by the driver for what the firmware lacks,
+as the Solo's fence), 1 on any wrong report or unfinished cell.
 """
 from __future__ import annotations
 
@@ -39,8 +43,9 @@ from driver.vehicle import Vehicle, VehicleConfig  # noqa: E402
 import log_cells  # noqa: E402
 import param_cells  # noqa: E402
 import tables  # noqa: E402
+import verdicts  # noqa: E402
 from faults import FAULTS, PROFILES  # noqa: E402
-from transfer_matrix import run_transfers, transfer_table  # noqa: E402
+from transfer_matrix import run_transfers, transfer_table, verdict as transfer_verdict  # noqa: E402
 
 ALTITUDE = 3.0
 FORWARD_SPEED = 2.0
@@ -239,8 +244,14 @@ def main() -> int:
                 print(f"WRONG parameters {c.profile}/{c.fault}: {w}")
     logs = run_logs(args.profiles.split(","), args.faults.split(","), args.speedup, args.markdown) \
         if "logs" in rows else []
-    return 0 if all(c.completed and not c.wrong for c in cells + checks + logs) and \
-        all(not c.wrong and not c.error and not c.corrupted for c in transfers) else 1
+    return gate(cells, transfers, checks, logs)
+
+
+def gate(flights, transfers, checks, logs) -> int:
+    """Each cell's verdict (bench/verdicts.py), printed after the tables with the cells that are not right; the exit
+    code: 0 only when every cell is right."""
+    return verdicts.report([verdicts.flight(c) for c in flights] + [transfer_verdict(c) for c in transfers]
+                           + [verdicts.parameters(c) for c in checks] + [verdicts.log(c) for c in logs])
 
 
 def run_logs(profiles, faults, speedup: float, markdown: bool) -> list:
