@@ -13,13 +13,14 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
+from dataclasses import replace
 
 from pymavlink import mavutil
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from ..core import frames
 from .state import (
-    Attitude, Battery, Environment, GlobalPosition, Gps, LandedState, LocalPosition, Readiness, Velocity,
+    Attitude, Battery, Boot, Environment, GlobalPosition, Gps, LandedState, LocalPosition, Readiness, Velocity,
 )
 
 __all__ = ["TELEMETRY", "fold", "infer_cells", "COPTER_MODE_NAMES"]
@@ -69,7 +70,7 @@ def fold_sys_status(view: Mapping, m) -> dict:
     current = None if m.current_battery < 0 else m.current_battery / 100.0
     remaining = None if not 0 <= m.battery_remaining <= 100 else float(m.battery_remaining)
     b: Battery = view["battery"]
-    return dict(readiness=Readiness(prearm, r.ekf_ok, r.gps_ok, reported),
+    return dict(readiness=replace(r, prearm_ok=prearm, prearm_reported=reported),
                 battery=_battery(b, voltage, current, remaining, b.charge_state, None))
 
 
@@ -119,18 +120,19 @@ def fold_attitude(view: Mapping, m) -> dict:
             and _within(m.yaw, -2 * math.pi, 2 * math.pi)
             and all(_within(r, -_MAX_RATE, _MAX_RATE) for r in (m.rollspeed, m.pitchspeed, m.yawspeed))):
         return _rejected(view)
-    return dict(attitude=Attitude(m.roll, m.pitch, m.yaw, m.rollspeed, m.pitchspeed, m.yawspeed))
+    return dict(attitude=Attitude(m.roll, m.pitch, m.yaw, m.rollspeed, m.pitchspeed, m.yawspeed),
+                **_clock(view, m))
 
 
 def fold_global_position(view: Mapping, m) -> dict:
     lat, lon, alt, rel = m.lat * 1e-7, m.lon * 1e-7, m.alt * 1e-3, m.relative_alt * 1e-3
     if m.lat == 0 and m.lon == 0:                 # ArduPilot's "no position yet" (QGroundControl ignores it too)
-        return {}
+        return _clock(view, m)
     if not (-90.0 <= lat <= 90.0 and -180.0 <= lon <= 180.0 and _MIN_ALT <= alt <= _MAX_ALT
             and _MIN_ALT <= rel <= _MAX_ALT):
         return _rejected(view)
     changes = dict(position=GlobalPosition(lat, lon, alt), altitude=rel,
-                   velocity=Velocity(m.vx / 100.0, m.vy / 100.0, m.vz / 100.0))
+                   velocity=Velocity(m.vx / 100.0, m.vy / 100.0, m.vz / 100.0), **_clock(view, m))
     if 0 <= m.hdg < 36000:
         changes["heading_deg"] = m.hdg / 100.0
     home: GlobalPosition | None = view["home"]
@@ -138,6 +140,20 @@ def fold_global_position(view: Mapping, m) -> dict:
         north, east = frames.offset_ned(home.lat, home.lon, lat, lon)
         changes["local"] = LocalPosition(north, east, -rel)
     return changes
+
+
+def fold_system_time(view: Mapping, m) -> dict:
+    return _clock(view, m)
+
+
+def _clock(view: Mapping, m) -> dict:
+    """The vehicle's own clock from a message's ``time_boot_ms``: a restart when it went back (:class:`Boot`)."""
+    boot: Boot = view["boot"]
+    time_ms = m.time_boot_ms
+    if not isinstance(time_ms, int) or time_ms < 0:
+        return {}
+    heard = boot.heard_time(time_ms)
+    return {} if heard is boot else dict(boot=heard)
 
 
 def fold_home_position(view: Mapping, m) -> dict:
@@ -166,13 +182,13 @@ def fold_gps_raw(view: Mapping, m) -> dict:
     hdop = None if m.eph == 0xFFFF else m.eph / 100.0
     satellites = m.satellites_visible if m.satellites_visible != 255 else 0
     return dict(gps=Gps(m.fix_type, satellites, hdop),
-                readiness=Readiness(r.prearm_ok, r.ekf_ok, m.fix_type >= 3, r.prearm_reported))
+                readiness=replace(r, gps_ok=m.fix_type >= 3))
 
 
 def fold_ekf_status(view: Mapping, m) -> dict:
     r: Readiness = view["readiness"]
     ok = (m.flags & _EKF_NEEDED) == _EKF_NEEDED and not (m.flags & mavlink.EKF_UNINITIALIZED)
-    return dict(readiness=Readiness(r.prearm_ok, ok, r.gps_ok, r.prearm_reported))
+    return dict(readiness=replace(r, ekf_ok=ok))
 
 
 def fold_extended_sys_state(view: Mapping, m) -> dict:
@@ -223,6 +239,7 @@ TELEMETRY = {
     "SCALED_IMU": fold_imu,
     "SCALED_IMU2": fold_imu,
     "WIND": fold_wind,
+    "SYSTEM_TIME": fold_system_time,
 }
 
 

@@ -98,8 +98,12 @@ def stick_hint(s: VehicleState) -> str:
 
 
 def readiness_text(s: VehicleState) -> str:
-    """On the ground: what the autopilot still waits for before it can arm, the mode to switch to when this one
-    cannot be armed (RTL, LAND, ...), or "ready to arm"."""
+    """On the ground: why the vehicle says it will not arm (its own pre-arm reasons, until it says they pass),
+    what the autopilot still waits for before it can arm, the mode to switch to when this one cannot be armed
+    (RTL, LAND, ...), or "ready to arm"."""
+    reasons = s.readiness.reasons
+    if reasons:
+        return "not ready to arm: " + "; ".join(reasons)
     missing = s.readiness.missing
     if missing:
         return "waiting for " + ", ".join(missing)
