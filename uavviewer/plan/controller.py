@@ -69,6 +69,9 @@ class PlanController(QObject):
         self._synced: dict[PlanKind, tuple[Plan, Plan]] = {}   # (here, there) the driver last found the same
         self._outcome: dict[PlanKind, str] = {}         # each kind's last transfer, in words
         self._failed: dict[PlanKind, bool] = {}         # ... and whether the driver refused or failed it
+        self._restarts: int | None = None               # the vehicle's restarts seen (VehicleState.boot)
+        self._reread: set[PlanKind] = set()             # read again after a restart: into what it holds only
+        self._reread_due = False                        # ... asked once the link is up
         self._state = VehicleState()
         self._shown: tuple | None = None                # what the flying part last showed (redrawn on change)
         adapter.droneChanged.connect(self._vehicle_changed)     # a fleet's pick, File › Connect
@@ -301,12 +304,34 @@ class PlanController(QObject):
     # -- the vehicle ------------------------------------------------------------------------------------
     def _vehicle_changed(self, _drone) -> None:
         """Another vehicle is flown: nothing is known of its plans yet."""
-        for known in (self.on_vehicle, self._sending, self._synced, self._outcome, self._failed):
+        for known in (self.on_vehicle, self._sending, self._synced, self._outcome, self._failed, self._reread):
             known.clear()
+        self._restarts, self._reread_due = None, False
+
+    def _follow_restarts(self, s: VehicleState) -> None:
+        """A vehicle that started again may hold other plans than before (wiped, or changed by another ground
+        station meanwhile): what was known of them goes, and each is read again, into what the vehicle holds,
+        never into the plan being edited here. A recording is only watched: its restarts are not read."""
+        restarts = s.boot.restarts
+        if self._restarts is None or restarts < self._restarts or self.adapter.replay is not None:
+            self._restarts = restarts
+            return
+        if restarts > self._restarts:
+            self._restarts = restarts
+            for known in (self.on_vehicle, self._sending, self._synced):
+                known.clear()
+            self._reread, self._reread_due = set(PlanKind), True
+            self._shown = None
+        if self._reread_due and s.link.status is LinkStatus.OK:
+            self._reread_due = False
+            for kind in self._reread:
+                self._outcome[kind] = f"The vehicle restarted: reading its {kind.label} again…"
+                self.adapter.command("download_plan", kind)
 
     def show_state(self, s: VehicleState) -> None:
         old_home = self.home
         self._state = s
+        self._follow_restarts(s)
         self.layer.home = self.editor.home = self.home
         perf = Performance.from_parameters(s.parameters)
         if perf != self.editor.perf or self.home != old_home:
@@ -430,6 +455,7 @@ class PlanController(QObject):
             self._ask_removal(kind)
             return
         elif action == "download":
+            self._reread.discard(kind)          # the pilot's own download: into the list, as always
             self._outcome[kind] = f"Downloading the {kind.label}…"
             self.adapter.command("download_plan", kind)
         else:
@@ -466,7 +492,9 @@ class PlanController(QObject):
             return
         if result.ok and outcome.plan is not None:
             self.on_vehicle[kind] = outcome.plan
-            if name == "download_plan":
+            if name == "download_plan" and kind in self._reread:
+                self._reread.discard(kind)      # what the vehicle holds now; the plan here stays as it is
+            elif name == "download_plan":
                 self.editor.load(outcome.plan)
                 self._synced[kind] = (self.doc.plan(kind), outcome.plan)
             elif kind in self._sending:         # the driver read it back and found it the same in meaning
