@@ -138,20 +138,11 @@ def _no_gcs_failsafe(prev: VehicleState | None, s: VehicleState) -> list[Alert]:
 
 
 def _traffic(prev: VehicleState, s: VehicleState) -> list[Alert]:
-    """An aircraft whose closest approach (driver.traffic) newly comes within the alert limits: said once, short
-    ("Traffic SIM42, 900 metres, 50 metres above, closest in 20 seconds"); the driver's Messages line has it all."""
+    """An aircraft whose closest approach (driver.traffic) newly comes within the alert limits: said once, in the
+    one text the driver's Messages line has too (``Contact.threat``), so the banner never disagrees with it."""
     before = {c.icao for c in prev.traffic.alerts}
-    out = []
-    for c in s.traffic.alerts:
-        if c.icao in before:
-            continue
-        a = c.approach
-        where = "" if c.distance is None else f", {c.distance:.0f} metres"
-        height = "" if c.relative_alt is None else \
-            f", {abs(c.relative_alt):.0f} metres {'above' if c.relative_alt >= 0 else 'below'}"
-        out.append(Alert(AlertKind.TRAFFIC, f"Traffic {c.label}{where}{height}, closest in {a.time:.0f} seconds",
-                         Severity.WARNING))
-    return out
+    return [Alert(AlertKind.TRAFFIC, c.said or c.threat, Severity.WARNING) for c in s.traffic.alerts
+            if c.icao not in before]
 
 
 def _has_vehicle(s: VehicleState) -> bool:
