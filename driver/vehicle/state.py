@@ -189,6 +189,7 @@ class LinkHealth:
     foreign_packets: int = 0             # UDP datagrams dropped because they did not come from the vehicle
     pinned_to: str = ""                  # UDP: the vehicle's "ip:port", the only address we send to
     replay_ended: bool = False           # a replayed recording has played to its end: CLOSED, nothing was lost
+    replay: bool = False                 # the link is a recording played back: nothing on it is live
 
     @property
     def ended_words(self) -> str:

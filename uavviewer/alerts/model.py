@@ -16,7 +16,7 @@ from dataclasses import dataclass, replace
 from driver.vehicle.rules import gcs_failsafe_setting
 from driver.vehicle.state import BatteryAlarm, LinkStatus, SequencePhase, Severity, VehicleState
 
-__all__ = ["Alert", "AlertKind", "AlertModel", "MAV_STATE_CRITICAL", "MAV_STATE_EMERGENCY"]
+__all__ = ["Alert", "AlertKind", "AlertModel", "LIVE_ONLY", "MAV_STATE_CRITICAL", "MAV_STATE_EMERGENCY"]
 
 MAV_STATE_CRITICAL = 5       # HEARTBEAT.system_status: ArduCopter's failsafe state
 MAV_STATE_EMERGENCY = 6
@@ -39,6 +39,9 @@ class AlertKind(enum.Enum):
     TRAFFIC = "traffic"
 
 
+#: Kinds about the link and the airspace now, or advice to act on the vehicle: never raised while a recording plays
+#: (its traffic passed long ago, its link is not ours, and there is nothing to fix on it)
+LIVE_ONLY = {AlertKind.LINK_LOST, AlertKind.LINK_RECOVERED, AlertKind.NO_GCS_FAILSAFE, AlertKind.TRAFFIC}
 #: Kinds that also go to the banner in the pilot's eye line (the rest are spoken only)
 CRITICAL_KINDS = {AlertKind.LINK_LOST, AlertKind.BATTERY_WARNING, AlertKind.BATTERY_CRITICAL, AlertKind.FAILSAFE,
                   AlertKind.FENCE, AlertKind.MESSAGE, AlertKind.NO_GCS_FAILSAFE, AlertKind.TRAFFIC}
@@ -83,7 +86,7 @@ class AlertModel:
                 self._battery = s.battery.alarm
                 out.append(Alert(AlertKind.CONNECTED, f"Connected. {_mode_words(s.mode)}, "
                                  f"{'armed' if s.armed else 'disarmed'}", Severity.INFO))
-                out += _no_gcs_failsafe(None, s)
+                out += [] if s.link.replay else _no_gcs_failsafe(None, s)
             return out
         link_was, link = prev.link.status, s.link.status
         if link_was is LinkStatus.OK and link is LinkStatus.LOST:
@@ -110,6 +113,8 @@ class AlertModel:
         out += _traffic(prev, s)
         if s.takeoff.phase is SequencePhase.DONE and prev.takeoff.phase is not SequencePhase.DONE:
             out.append(Alert(AlertKind.TAKEOFF_COMPLETE, f"Takeoff complete, {s.altitude:.0f} metres", Severity.INFO))
+        if s.link.replay:
+            out = [a for a in out if a.kind not in LIVE_ONLY]
         return sorted((a if a.time else replace(a, time=s.time) for a in out), key=lambda a: a.severity)
 
     def _battery_alerts(self, s: VehicleState) -> list[Alert]:

@@ -69,7 +69,8 @@ class GimbalBar(QWidget):
         c = s.camera
         if self.record_button.isChecked() != bool(c.recording):     # a click the camera did not follow is undone
             self.record_button.setChecked(bool(c.recording))
-        shown = (s.gimbal, c, s.connected)
+        live = s.connected and not s.link.replay       # a recording's camera cannot be asked for anything
+        shown = (s.gimbal, c, live)
         if shown == self._shown:
             return
         self._shown = shown
@@ -87,4 +88,4 @@ class GimbalBar(QWidget):
         self.stop_looking_button.setVisible(s.gimbal.roi is not None)
         for b in (self.level_button, self.down_button, self.photo_button, self.record_button,
                   self.stop_looking_button):
-            b.setEnabled(s.connected)
+            b.setEnabled(live)
