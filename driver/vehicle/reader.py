@@ -315,6 +315,8 @@ class Reader:
         self._missions.on_param(name, m.param_value)
         if name in FENCE_PARAMS:
             self._store.set(fence=self._store.view()["fence"].with_param(name, m.param_value))
+        elif name == "BATT_CAPACITY":                   # the charge left is reckoned from it (battery.time_left)
+            self._store.set(battery=replace(self._store.view()["battery"], capacity_mah=m.param_value or None))
         elif name == "FS_GCS_ENABLE":
             self._store.set(gcs_failsafe=int(m.param_value))
             if int(m.param_value) == 0 and not self._gcs_failsafe_warned:

@@ -49,6 +49,12 @@ def _rejected(view: Mapping) -> dict:
     return {"rejected_values": view["rejected_values"] + 1}
 
 
+def _airborne(view: Mapping) -> bool:
+    """Armed and in the air between its takeoff and its landing (EXTENDED_SYS_STATE IN_AIR, or armed on a firmware
+    that does not say): the draw a time left is reckoned at is averaged only then, a climb out being no cruise."""
+    return bool(view["armed"]) and view["landed_state"] in (LandedState.IN_AIR, LandedState.UNDEFINED)
+
+
 def infer_cells(voltage: float) -> int:
     """The fewest LiPo cells that can give ``voltage``: a 12.6 V pack is 3S, 16.8 V 4S, 14.0 V 4S."""
     return max(1, math.ceil(voltage / LIPO_CELL_MAX - 1e-9))
@@ -71,7 +77,8 @@ def fold_sys_status(view: Mapping, m) -> dict:
     remaining = None if not 0 <= m.battery_remaining <= 100 else float(m.battery_remaining)
     b: Battery = view["battery"]
     return dict(readiness=replace(r, prearm_ok=prearm, prearm_reported=reported),
-                battery=_battery(b, voltage, current, remaining, b.charge_state, None))
+                battery=_battery(b, voltage, current, remaining, b.charge_state, None, at=view["boot"].seconds,
+                                 airborne=_airborne(view)))
 
 
 def fold_battery_status(view: Mapping, m) -> dict:
@@ -87,18 +94,20 @@ def fold_battery_status(view: Mapping, m) -> dict:
     consumed = float(m.current_consumed) if m.current_consumed >= 0 else None
     return dict(battery=_battery(b, voltage, current if current is not None else b.current,
                                  remaining if remaining is not None else b.reported_remaining,
-                                 charge_state, per_cell, consumed))
+                                 charge_state, per_cell, consumed, at=view["boot"].seconds,
+                                 airborne=_airborne(view)))
 
 
 def _battery(b: Battery, voltage, current, remaining, charge_state: int, cells_reported: int | None,
-             consumed_mah: float | None = None) -> Battery:
+             consumed_mah: float | None = None, at: float | None = None, airborne: bool = False) -> Battery:
     """The pack as the autopilot reports it; percent estimated from the cell voltage only when it gives none.
 
     The cell count comes from the vehicle (per-cell voltages) or, failing that, from the first voltage heard
     (a pack is not always a Solo's 4S: ArduPilot SITL's is 3S). "Low" is the autopilot's own battery
     failsafe state when it sends one (BATTERY_STATUS.charge_state), else 20 % or 3.7 V a cell (MAVProxy).
     ``alarm`` (derived) is the pilot's own thresholds (``b.thresholds``), whatever the vehicle's failsafe says;
-    ``consumed_mah`` stays what it was unless BATTERY_STATUS says.
+    ``consumed_mah`` stays what it was unless BATTERY_STATUS says; the averaged draw follows the current at the
+    vehicle's time ``at`` (its time_boot_ms, :class:`~driver.vehicle.state.Boot`) while ``airborne``.
     """
     cells, source = b.cells, b.cells_source
     if cells_reported and source != "configured":
@@ -111,8 +120,11 @@ def _battery(b: Battery, voltage, current, remaining, charge_state: int, cells_r
         low = charge_state >= mavlink.MAV_BATTERY_CHARGE_STATE_LOW
     else:
         low = (shown is not None and shown < 20.0) or (voltage is not None and cells > 0 and voltage / cells < 3.7)
+    drawing = dict(draw=b.draw, draw_at=b.draw_at, draw_weight=b.draw_weight)
+    drawing.update(b.drawing(current, at, airborne))
     return Battery(voltage, current, shown, estimated, cells, low, source, charge_state, remaining,
-                   consumed_mah=b.consumed_mah if consumed_mah is None else consumed_mah, thresholds=b.thresholds)
+                   consumed_mah=b.consumed_mah if consumed_mah is None else consumed_mah, thresholds=b.thresholds,
+                   capacity_mah=b.capacity_mah, **drawing)
 
 
 def fold_attitude(view: Mapping, m) -> dict:
