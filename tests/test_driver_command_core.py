@@ -170,7 +170,7 @@ def test_a_takeoff_whose_reply_was_lost_is_judged_by_the_climb(sim_factory, vehi
 
 
 def test_the_climb_timeout_grows_with_the_altitude():
-    from driver.vehicle.takeoff import climb_timeout
+    from driver.vehicle.sequences.takeoff import climb_timeout
     assert climb_timeout(20.0, 100.0) > climb_timeout(20.0, 3.0) + 150.0
 
 

@@ -19,7 +19,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from ..core.results import chain
 from .state import CommandResult, CommandStatus, SequencePhase, Severity, VehicleState
-from .takeoff import TakeoffSequence
+from .sequences.takeoff import TakeoffSequence
 from ..mission.limits import UNCHECKED, held_mission_problems, plan_problems, unchecked
 from ..mission.plan import MissionRunState, Plan, PlanKind, TransferOutcome
 from ..mission.progress import fold_item_reached, fold_mission_current, fold_text, fold_transfer_end

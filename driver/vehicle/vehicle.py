@@ -9,7 +9,7 @@ pilot's calls (the :class:`~driver.vehicle.api.Drone` interface) and hands each 
 * :mod:`driver.vehicle.supervision` keeps the link supervised and asks the vehicle for streams, home, parameters;
 * :mod:`driver.vehicle.commands` sends commands with retries and matches each reply to what it answers;
 * :mod:`driver.vehicle.setpoints` streams the velocity setpoint, with the deadman;
-* :mod:`driver.vehicle.takeoff` runs the takeoff sequence against the public :class:`~driver.vehicle.api.Drone` interface;
+* :mod:`driver.vehicle.sequences` runs the takeoff sequence against the public :class:`~driver.vehicle.api.Drone` interface;
 * :mod:`driver.vehicle.missions`, :mod:`driver.vehicle.parameters`, :mod:`driver.vehicle.signing_control`,
   :mod:`driver.payload.control`, :mod:`driver.setup.control` and :mod:`driver.logs.control`: plans, parameters,
   signing, the payload, setup and the DataFlash logs, wired to this vehicle;
@@ -50,7 +50,7 @@ from .reader import Reader
 from .rules import (
     COPTER_MODES, MAX_ALTITUDE, MIN_TAKEOFF_ALTITUDE, go_to_problem, ground_only, not_in_flight, takeoff_altitude_problem,
 )
-from .sequence import SequenceSlot
+from .sequences.slot import SequenceSlot
 from .setpoints import SetpointStreamer
 from .signing_control import SigningControl
 from .state import (
@@ -58,7 +58,7 @@ from .state import (
 )
 from .store import StateStore
 from .supervision import LinkSupervisor
-from .takeoff import TakeoffSequence
+from .sequences.takeoff import TakeoffSequence
 from .telemetry import COPTER_MODE_NAMES
 from .ticker import MASK_POSITION, Ticker
 
@@ -588,7 +588,7 @@ class Vehicle(Drone):
         return self._busy(f"mission item {seq}") or self._missions.go_to_item(seq)
 
     def _abort_takeoff(self, why: str) -> None:
-        """End a takeoff or mission start in progress (driver.vehicle.sequence), cancelling what it asked."""
+        """End a takeoff or mission start in progress (driver.vehicle.sequences), cancelling what it asked."""
         with self._lock:
             self._sequence.abort(why)
 

@@ -16,7 +16,7 @@ from typing import Protocol
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-from .state import CommandResult, CommandStatus, LandedState, SequencePhase, VehicleState
+from ..state import CommandResult, CommandStatus, LandedState, SequencePhase, VehicleState
 
 __all__ = ["TakeoffSequence", "climb_timeout", "is_climbing"]
 

@@ -1,4 +1,4 @@
-"""The one slot in which a takeoff or a mission start runs (driver.vehicle.takeoff, driver.vehicle.missions).
+"""The one slot in which a takeoff or a mission start runs (driver.vehicle.sequences).
 
 A sequence is stepped by the ticker; while it runs only Land and Stop are taken, and both end it. Aborting cancels
 what it asked the vehicle (its tagged commands), so no retry launches it afterwards. The slot owns no lock: every
@@ -10,7 +10,7 @@ import logging
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-from .state import CommandStatus, SequencePhase, SequenceProgress, Severity
+from ..state import CommandStatus, SequencePhase, SequenceProgress, Severity
 
 log = logging.getLogger("driver.vehicle")
 
