@@ -102,8 +102,8 @@ def readiness_text(s: VehicleState) -> str:
     what the autopilot still waits for before it can arm, the mode to switch to when this one cannot be armed
     (RTL, LAND, ...), or "ready to arm"."""
     reasons = s.readiness.reasons
-    if reasons:
-        return "not ready to arm: " + "; ".join(reasons)
+    if reasons:                             # the first in the phase line's two lines; all of them in Preflight
+        return "not ready to arm: " + reasons[0] + (f" (+{len(reasons) - 1} more)" if len(reasons) > 1 else "")
     missing = s.readiness.missing
     if missing:
         return "waiting for " + ", ".join(missing)

@@ -22,7 +22,7 @@ __all__ = ["UploadNotices", "fence_off_words"]
 
 def fence_off_words(s: VehicleState) -> str:
     """"The vehicle's fence is off (FENCE_ENABLE 0)" while the vehicle says so, else ""."""
-    return "The vehicle's fence is off (FENCE_ENABLE 0): it keeps nothing inside" if s.fence.enabled is False else ""
+    return "The vehicle's fence is off (FENCE_ENABLE 0)" if s.fence.enabled is False else ""
 
 
 class UploadNotices(QObject):
@@ -40,7 +40,7 @@ class UploadNotices(QObject):
         words = fence_off_words(s)
         if not plan.items or not words:
             return
-        text = (f"{words}: the fence just uploaded will not keep it inside, and a breach does nothing "
+        text = (f"{words}: the fence just uploaded keeps nothing inside, and a breach does nothing "
                 "(FENCE_ACTION never runs).\n\nTurn the fence on? FENCE_ENABLE 1 is written through Parameters, "
                 "where you review it first.")
         self.said.emit(f"{words}: the fence uploaded is not enforced", Severity.WARNING)

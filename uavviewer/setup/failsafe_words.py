@@ -38,8 +38,8 @@ class Failsafes:
 
     @property
     def summary(self) -> str:
-        """What is not set, then what is, in one line: "no battery failsafe action; GCS failsafe off
-        (FS_GCS_ENABLE 0); fence off (FENCE_ENABLE 0); radio lost: returns home (RTL)"."""
+        """What is not set, then what is, in one line: "no battery failsafe action; GCS failsafe off; fence off;
+        radio lost: returns home (RTL)" (the Failsafes page names each parameter)."""
         set_ = [f"{area.lower()}: {re.sub(rf' [(]{name} .*$', '', words)}" for area, words, name in self.lines
                 if name not in self.unread and not words.startswith(("nothing", "off"))]
         return "; ".join(list(self.missing) + set_)
@@ -77,8 +77,7 @@ def failsafes(s) -> Failsafes:
     if all(b == 0 for b in battery):
         warnings.append("No battery failsafe action: a low battery is only reported, the vehicle does not come back.")
         missing.append("no battery failsafe action")
-    for value, words in ((radio, "radio failsafe off (FS_THR_ENABLE 0)"), (gcs, "GCS failsafe off (FS_GCS_ENABLE 0)"),
-                         (fence, "fence off (FENCE_ENABLE 0)")):
+    for value, words in ((radio, "radio failsafe off"), (gcs, "GCS failsafe off"), (fence, "fence off")):
         if value == 0:
             missing.append(words)
     return Failsafes(tuple(lines), tuple(warnings), tuple(missing), tuple(unread))
