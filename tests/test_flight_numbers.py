@@ -7,10 +7,11 @@ from __future__ import annotations
 import pytest
 
 from driver.vehicle.battery import Battery, time_left
+from driver.mission.plan import MissionRunState
 from driver.vehicle.state import LandedState
 from uavviewer.flight.timer import FlightTimer, clock_text
 
-from test_sim_survey_photos import fly, quick_rtl
+from test_sim_survey_photos import one_pass, quick_rtl
 from viewer_fixtures import app_style, viewer_settings, window_factory  # noqa: F401  (fixtures)
 
 pytestmark = pytest.mark.timeout(120)
@@ -67,11 +68,18 @@ def test_a_motor_test_leaves_the_last_flights_time(sim, vehicle):
     assert clock_text(timer.seconds) == "07:42"              # a motor test is no flight
 
 
-def test_the_photo_button_counts_a_surveys_pictures(qtbot, sim_factory, vehicle_factory, window_factory):
+def test_the_mission_progress_counts_a_surveys_pictures(qtbot, sim_factory, vehicle_factory, window_factory):
     sim = quick_rtl(sim_factory(speedup=8.0, camera="trigger"))
     drone = vehicle_factory(f"tcp:127.0.0.1:{sim.tcp_port}")
     w = window_factory(drone)
-    assert w.gimbal_bar.photo_button.text() == "Photo"
-    done = fly(drone)                                        # a pass with the camera every 5 m: CAMERA_FEEDBACK
-    assert done.camera.photos == sim.autopilot.images >= 6
-    qtbot.waitUntil(lambda: w.gimbal_bar.photo_button.text() == f"Photo {done.camera.photos}", timeout=5000)
+    progress = w.plan.panel.progressLabel
+    qtbot.waitUntil(lambda: w.adapter.state.connected and w.adapter.state.home is not None, timeout=20000)
+    assert drone.upload_plan(one_pass(drone)).result(30).result.ok   # a pass with the camera every 5 m
+    drone.start_mission()
+    qtbot.waitUntil(lambda: progress.text().startswith("Item ") and progress.text().endswith(" photos"),
+                    timeout=60000)                                    # as the vehicle confirms them
+    qtbot.waitUntil(lambda: w.adapter.state.mission.state is MissionRunState.COMPLETE
+                    and not w.adapter.state.armed, timeout=100000)
+    n = w.adapter.state.camera.photos
+    assert n == sim.autopilot.images >= 6
+    qtbot.waitUntil(lambda: progress.text() == f"Mission complete (7 items) · {n} photos", timeout=5000)

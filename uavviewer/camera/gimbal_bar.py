@@ -53,8 +53,7 @@ class GimbalBar(QWidget):
         row.addStretch(1)
         # each as wide as its longest text from the start: a dot or a pitch appearing moves nothing (Stop looking
         # is not in the row: it stands over the video, see CameraPanel.add_overlay)
-        for w, longest in ((self.pitch_label, "Drone cam -90°"), (self.record_button, "Video ●"),
-                           (self.photo_button, "Photo 888")):
+        for w, longest in ((self.pitch_label, "Drone cam -90°"), (self.record_button, "Video ●")):
             w.setMinimumWidth(width_for(w, longest))
 
     def _button(self, text: str, tip: str) -> QToolButton:
@@ -79,8 +78,8 @@ class GimbalBar(QWidget):
         self.pitch_label.setText("Drone cam " + ("?°" if pitch is None else f"{pitch:.0f}°"))
         self.pitch_label.setToolTip(f"The vehicle's camera: gimbal {s.gimbal.describe()}, the pitch as the vehicle reports it "
                                     "(0 level, -90 straight down)")
-        # the pictures the vehicle confirmed (a survey's CAMERA_FEEDBACK too), in a width kept from the start
-        self.photo_button.setText(f"Photo {c.photos}" if c.photos else "Photo")
+        self.photo_button.setText("Photo")     # the count is in its tooltip (the row fits 1024 px and never moves)
+                                               # and in the mission's progress line (plan/progress.py)
         self.record_button.setText("Video ●" if c.recording else "Video")
         recording = "unknown" if c.recording is None else "yes" if c.recording else "no"
         self.photo_button.setToolTip(f"A picture with the vehicle's camera ({c.name or c.kind.value}), counted only "

@@ -349,6 +349,7 @@ class PlanController(QObject):
         m = s.mission
         kind = KINDS[self.panel.layer]
         key = (m, kind, self._doc_version(), s.mode, s.link.status, s.flying, self._outcome.get(kind), s.fence.enabled,
+               s.camera.photos,
                tuple(self.on_vehicle.items()), _rounded(s))
         if key == self._shown:
             return

@@ -12,7 +12,15 @@ __all__ = ["progress_text"]
 
 def progress_text(s: VehicleState, plan: Plan | None, cruise: float, held: bool = False) -> str:
     """``plan``: the mission the vehicle holds (its items name the current one); ``cruise``: the speed the time to
-    the item assumes while the vehicle moves slower than 0.5 m/s; ``held``: paused in another mode."""
+    the item assumes while the vehicle moves slower than 0.5 m/s; ``held``: paused in another mode. The pictures
+    the vehicle confirmed (a survey's CAMERA_FEEDBACK) follow, once there are any: "· 24 photos"."""
+    text = _progress(s, plan, cruise, held)
+    photos = s.camera.photos
+    flown = s.mission.state in (MissionRunState.ACTIVE, MissionRunState.PAUSED, MissionRunState.COMPLETE) or held
+    return text + (f" · {photos} photo{'s' if photos != 1 else ''}" if photos and flown else "")
+
+
+def _progress(s: VehicleState, plan: Plan | None, cruise: float, held: bool) -> str:
     m = s.mission
     if m.state is MissionRunState.UNKNOWN and m.count is None:
         return "Mission: the vehicle has not said yet"
