@@ -106,6 +106,9 @@ def test_a_clock_going_back_is_a_restart_and_reordering_is_not():
     assert state.boot.restarts == 1                              # (only 1.1 s back: reordering)
     state = fold(state, ENC.system_time_encode(0, 100))
     assert state.boot.restarts == 1
+    state = fold(state, ENC.attitude_encode(6_000, 0.1, 0.2, 0.3, 0, 0, 0))      # a slow stream's, 4.5 s older:
+    state = fold(state, ENC.system_time_encode(0, 1_500))                         # still no restart
+    assert state.boot.restarts == 1
     assert VehicleState().boot.heard_param_count(1397).heard_param_count(1397).restarts == 0
     assert VehicleState().boot.heard_param_count(1397).heard_param_count(1401).restarts == 1
 

@@ -147,14 +147,15 @@ class Readiness:
 class Boot:
     """The vehicle's own clock since it started, and how often it was seen to start again while we listened.
 
-    A restart is the vehicle's clock going back (any ``time_boot_ms``: ATTITUDE, GLOBAL_POSITION_INT,
-    SYSTEM_TIME) or its parameter count changing: whatever was known of its plans, its refusals, its
+    A restart is the vehicle's clock going back more than 5 s (any ``time_boot_ms``: ATTITUDE,
+    GLOBAL_POSITION_INT, SYSTEM_TIME) or its parameter count changing: whatever was known of its plans, its refusals, its
     parameters is then of a vehicle that is no more, and is read again (driver.vehicle.reader)."""
     restarts: int = 0                    # restarts seen since the link opened (0: the boot first heard)
     time_ms: int | None = None           # the newest time_boot_ms heard
     param_count: int | None = None       # PARAM_VALUE.param_count, as last heard
 
-    BACKWARDS_MS = 2000                  # a clock going back further than this is a restart, not reordering
+    BACKWARDS_MS = 5000                  # a clock going back further than this is a restart: not the newest of
+                                         # two messages folded in one read, one a slow stream's, under loss
 
     @property
     def seconds(self) -> float | None:
