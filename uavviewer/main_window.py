@@ -116,6 +116,7 @@ class MainWindow(QMainWindow):
         self.params = ParamsController(self.adapter, self, say=self.log_message)    # docs/parameters.md
         self.params.add_to_menu(self)                       # Vehicle › Parameters…
         self.params.offer_fixes(self.messages)              # a warning naming a parameter: Fix… opens it
+        self.plan.notices.fenceOnRequested.connect(lambda: self.params.propose({"FENCE_ENABLE": 1}))
         self.setup = SetupController(self.adapter, self, self.params)    # Vehicle › Setup…: calibrations, radio, motors
         self.setup.add_to_menu(self)
         self.fleet_dock = FleetDock(self)

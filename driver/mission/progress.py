@@ -12,7 +12,7 @@ from dataclasses import replace
 
 from .plan import MissionProgress, MissionRunState, Plan, PlanKind, TransferDirection
 
-__all__ = ["fold_mission_current", "fold_item_reached", "fold_text", "fold_transfer_end"]
+__all__ = ["fold_mission_current", "fold_item_reached", "fold_text", "fold_transfer_end", "fold_restart"]
 
 _STARTED = re.compile(r"^Mission: (\d+) (\S+)")
 
@@ -56,3 +56,9 @@ def fold_transfer_end(p: MissionProgress, kind: PlanKind, direction: TransferDir
     if direction is TransferDirection.UPLOAD:
         return replace(p, on_vehicle=others)
     return p
+
+
+def fold_restart(p: MissionProgress) -> MissionProgress:
+    """The vehicle started again: what it holds and where it was in its mission are not known until it says
+    (a plan held before may have been wiped or replaced meanwhile); transfers under way stay as they are."""
+    return MissionProgress(transfers=p.transfers)

@@ -18,7 +18,7 @@ from driver.vehicle.state import BatteryAlarm, LinkStatus, VehicleState
 from ..flight.phase import no_vehicle_words
 from ..units import fmt as _num
 
-__all__ = ["paint_hud", "text_rows", "HUD_COLOUR", "STALE_COLOUR", "hud_colour", "stale_text"]
+__all__ = ["arming_text", "paint_hud", "text_rows", "HUD_COLOUR", "STALE_COLOUR", "hud_colour", "stale_text"]
 
 HUD_COLOUR = QColor(120, 255, 140)
 SHADOW = QColor(0, 0, 0, 160)
@@ -69,6 +69,14 @@ def stale_text(state: VehicleState) -> str:
         return "REPLAY ENDED · its last moment"
     age = state.link.heartbeat_age
     return "LINK LOST · values " + (f"{age:.0f} s old" if age is not None else "stale")
+
+
+def arming_text(state: VehicleState) -> str:
+    """"ARMED" or "DISARMED" as the vehicle last said it; "ARMING UNKNOWN" while no vehicle is heard (nothing
+    heard yet, or after leaving one, which may well still be flying)."""
+    if state.link.status is LinkStatus.WAITING or not state.mode:
+        return "ARMING UNKNOWN"
+    return "ARMED" if state.armed else "DISARMED"
 
 
 def hud_colour(state: VehicleState) -> QColor:
@@ -185,11 +193,11 @@ def _readouts(p: QPainter, rect: QRectF, state: VehicleState, size: int) -> None
     _text(p, left.translated(0, 2 * line), Qt.AlignLeft | Qt.AlignVCenter, f"CAM {_num(gimbal, 0)}°", colour)
     # mode and arming top-left, battery top-right
     top = QRectF(rect.left() + margin, rect.top() + 4, rect.width() * 0.3, line)
-    armed = "ARMED" if state.armed else "DISARMED"
+    armed = arming_text(state)
     _text(p, top, Qt.AlignLeft | Qt.AlignVCenter, state.mode or no_vehicle_words(state),
           colour if stale else (HUD_COLOUR if state.connected else WARN))
     _text(p, top.translated(0, line), Qt.AlignLeft | Qt.AlignVCenter, armed,
-          colour if stale else (WARN if state.armed else HUD_COLOUR))
+          colour if stale else (WARN if state.armed or armed == "ARMING UNKNOWN" else HUD_COLOUR))
     b = state.battery
     parts = []
     if b.remaining is not None:

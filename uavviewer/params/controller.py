@@ -88,6 +88,8 @@ class ParamsController(QObject):
     def _offer_fix(self, messages, item: QTreeWidgetItem | None) -> None:
         if item is None or item.data(0, Qt.UserRole) is None or item.data(0, Qt.UserRole) > Severity.WARNING:
             return
+        if self.adapter.replay is not None:      # a recording: there is no vehicle to fix
+            return
         table = self.model.table
         known = table.values if table.values else self.model.metadata
         name = named_parameter(item.text(2), known, complete=table.complete)
