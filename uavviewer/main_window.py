@@ -119,7 +119,7 @@ class MainWindow(QMainWindow):
         self.setup = SetupController(self.adapter, self, self.params)    # Vehicle › Setup…: calibrations, radio, motors
         self.setup.add_to_menu(self)
         self.fleet_dock = FleetDock(self)
-        self.review = ReviewController(self)                # File › Open log…: docs/review.md
+        self.review = ReviewController(self)                # File › Review a log…: docs/review.md
         self.inspector = InspectorController(self)          # Tools › MAVLink inspector
         self.flight_logs = FlightLogsController(self.adapter, lambda: self.logs.downloads, self.review.open, self,
                                                 say=self.log_message)
@@ -173,7 +173,7 @@ class MainWindow(QMainWindow):
         """--takeoff-altitude for this run, else the Preferences' value."""
         return self.preferences.takeoff_altitude
 
-    # -- connecting (File › Connect, Disconnect, Open flight log: uavviewer/window/pilot_tools.py wires them) ----
+    # -- connecting (File › Connect, Disconnect, Replay a flight: uavviewer/window/pilot_tools.py wires them) ----
     def _connected(self, opened) -> None:
         """A connection opened by File › Connect (:class:`uavviewer.connect.opener.Opened`): a vehicle, or a lab's
         fleet with its Fleet panel."""
@@ -196,7 +196,7 @@ class MainWindow(QMainWindow):
             self.camera.set_sources(own)
 
     def use_connection(self, drone: Drone) -> None:
-        """Fly (or watch) ``drone`` from now on: File › Connect, Disconnect, Open flight log. The vehicle left
+        """Fly (or watch) ``drone`` from now on: File › Connect, Disconnect, Replay a flight. The vehicle left
         behind was sent zero velocity first, so it hovers."""
         self.sticks.centre()
         self.map.cancel()
