@@ -44,6 +44,7 @@ from .window.about import show_about
 from .window.closing import Closing
 from .window.layout import fit_restored, fit_screen, steady_slots
 from .window.pilot_tools import PilotTools
+from .window.secondary import SecondaryWindows
 
 __all__ = ["MainWindow", "load_style"]
 
@@ -64,7 +65,7 @@ class MainWindow(QMainWindow):
 
     Parts: ``preferences``, ``sticks`` (and its ``gamepad``), ``flight`` (the buttons' commands), ``camera``,
     ``gimbal``, ``map``, ``plan``, ``readouts``, ``replay``, ``tools`` (connecting, alerts, preflight, guided),
-    ``params``, ``flight_logs``, ``fleet_dock`` and ``closing``.
+    ``params``, ``flight_logs``, ``fleet_dock``, ``secondary`` (the other windows' places) and ``closing``.
     """
 
     def __init__(self, drone: Drone, qsettings: QSettings | None = None,
@@ -86,6 +87,7 @@ class MainWindow(QMainWindow):
         self.refresh = Refresh(self)        # views redraw at the rate the eye needs and not while minimised
         self.readouts = Readouts(self)
         self.closing = Closing(self)
+        self.secondary = SecondaryWindows(self, self._qsettings)   # other windows fit, and leave the controls in view
 
         self.setWindowTitle(f"UavViewerPy — {self.adapter.description}")
         self.signing_unavailable = signing_unavailable(drone)     # a remote drone is signed on its server
@@ -228,9 +230,10 @@ class MainWindow(QMainWindow):
             self.preferences.remember(last_connection=choice.target)
 
     def show_keys(self) -> None:
+        """Help › Keys, not modal: the flight controls stay in reach while it is read."""
         dialog = KeysDialog(self)
         dialog.setAttribute(Qt.WA_DeleteOnClose)
-        dialog.open()
+        dialog.show()
 
     # -- state in --------------------------------------------------------------------------------
     def show_state(self, s: VehicleState) -> None:
@@ -270,6 +273,7 @@ class MainWindow(QMainWindow):
         self.plan.show_plan(False)                # the docks that stepped out for Plan are saved as they were
         self.preferences.save(self.saveGeometry(), self.saveState())
         self.sticks.close()
+        self.secondary.close()
         self.alerts.close()
         self.review.close()
         self.inspector.close()

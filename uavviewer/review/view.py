@@ -15,6 +15,7 @@ from driver.review.log import PRESETS, FlightLog
 
 from ..map.log_path import LogPathOverlay, mode_colour
 from ..map.map_view import MapView
+from ..widgets.dialog_fit import close_buttons, closes_with_esc, scrollable
 from .events_list import EventsList
 from .field_tree import FieldTree
 from .geotag_dialog import GeotagDialog
@@ -43,6 +44,7 @@ class ReviewWindow(QMainWindow):
         self.export_future: Future | None = None
         self._export_done.connect(self._show_export, Qt.QueuedConnection)     # after export() returns, always
         self.setWindowTitle(f"Review — {os.path.basename(flight.path)}")
+        self.setObjectName("reviewWindow")
         self.tree = FieldTree()
         self.plots = ReviewPlots()
         self.map = MapView()
@@ -83,7 +85,8 @@ class ReviewWindow(QMainWindow):
         main.addWidget(self.tree)
         main.addWidget(right)
         main.setSizes([260, 1100])
-        self.setCentralWidget(main)
+        self.setCentralWidget(_column(scrollable(main, horizontal=True), close_buttons(self)))
+        closes_with_esc(self)                       # a window of its own closes as a dialog does
 
         self.tree.fieldChosen.connect(self.add_field)
         self.plots.cursorMoved.connect(self.path_overlay.set_time)
@@ -198,5 +201,8 @@ def _column(*parts) -> QWidget:
     layout = QVBoxLayout(box)
     layout.setContentsMargins(0, 0, 0, 0)
     for part in parts:
-        (layout.addLayout if isinstance(part, QHBoxLayout) else layout.addWidget)(part)
+        if isinstance(part, QHBoxLayout):
+            layout.addLayout(part)
+        else:
+            layout.addWidget(part, 1 if part is parts[0] else 0)
     return box
