@@ -42,7 +42,7 @@ from .settings import ViewerSettings, default_qsettings
 from .telemetry.readouts import Readouts
 from .window.about import show_about
 from .window.closing import Closing
-from .window.layout import fit_restored, fit_screen, steady_slots
+from .window.layout import docks_beside, fit_restored, fit_screen, steady_slots
 from .window.pilot_tools import PilotTools
 from .window.secondary import SecondaryWindows
 
@@ -104,7 +104,6 @@ class MainWindow(QMainWindow):
         self.setCorner(Qt.BottomRightCorner, Qt.RightDockWidgetArea)   # plots run the full height
         self.resizeDocks([self.telemetryDock, self.plotsDock], [390, 560], Qt.Vertical)
         self.resizeDocks([self.telemetryDock], [400], Qt.Horizontal)
-        self.resizeDocks([self.messagesDock], [110], Qt.Vertical)     # the latest line is in the status strip
         self.mapDock.raise_()
         self.instrumentSplitter.setStretchFactor(0, 3)
         self.instrumentSplitter.setStretchFactor(1, 2)
@@ -159,6 +158,7 @@ class MainWindow(QMainWindow):
             self.restoreState(state)
             if "preflightDock".encode("utf-16-be") not in bytes(state):   # saved before the dock existed
                 self.tools.tab_preflight()
+        docks_beside(self)                        # none under the flight controls (a layout saved so too)
         if geometry is not None:
             self.restoreGeometry(geometry)
             fit_restored(self)                    # saved on a larger screen: it still fits this one
