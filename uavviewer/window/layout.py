@@ -35,6 +35,10 @@ def steady_slots(window) -> None:
     # the buttons' column keeps its width whatever the phase says (a long phase wrapped wider and moved every
     # button and both sticks): the phase wraps inside it
     window.phaseLabel.setSizePolicy(QSizePolicy.Ignored, QSizePolicy.Preferred)
+    # Arm (in the air Disarm, the emergency motor stop behind a menu) in the mode's row, away from Stop; the mode
+    # list says "Mode" itself while empty, and its tooltip: the row's label gave its width to Arm
+    window.modeLabel.hide()
+    window.modeRow.addWidget(window.flightControls.arm_button)
     frame = window.controlsFrame
     frame.setFixedWidth(max(frame.minimumSizeHint().width(), CONTROLS_WIDTH))
     # two lines, always: a long phase ("waiting for GPS fix, EKF, pre-arm checks") wraps without pushing the
