@@ -65,6 +65,11 @@ class ReviewWindow(QMainWindow):
         self.geotag_button.clicked.connect(self.open_geotag)
         self.geotag_dialog: GeotagDialog | None = None
         self.status = QLabel()
+        self.warning = QLabel()                     # a damaged or cut-short log says so above everything
+        self.warning.setObjectName("reviewWarning")
+        self.warning.setWordWrap(True)
+        self.warning.setStyleSheet("background: #4a3a1c; color: #ffd27a; padding: 4px; font-weight: bold")
+        self.warning.hide()
         bar = QHBoxLayout()
         for w in (self.preset, clear, self.export_button, self.geotag_button):
             bar.addWidget(w)
@@ -85,7 +90,7 @@ class ReviewWindow(QMainWindow):
         main.addWidget(self.tree)
         main.addWidget(right)
         main.setSizes([260, 1100])
-        self.setCentralWidget(_column(scrollable(main, horizontal=True), close_buttons(self)))
+        self.setCentralWidget(_column(self.warning, scrollable(main, horizontal=True), close_buttons(self), stretch=1))
         closes_with_esc(self)                       # a window of its own closes as a dialog does
 
         self.tree.fieldChosen.connect(self.add_field)
@@ -125,6 +130,10 @@ class ReviewWindow(QMainWindow):
         skipped = self.log.skipped_bytes
         self.status.setText(f"{sum(self.log.count(t) for t in tree):,} records, {len(tree)} types"
                             + (f"; {skipped:,} unreadable bytes skipped" if skipped else ""))
+        if skipped:                                 # a truncated .BIN opened as if whole, its status line unread
+            self.warning.setText(f"This log is damaged or cut short: {skipped:,} bytes could not be read and were "
+                                 "skipped. The flight may end early or miss records; what is shown is what was read.")
+        self.warning.setVisible(bool(skipped))
 
     # -- fields --------------------------------------------------------------------------------------------------
     def add_field(self, mtype: str, field: str, axis: int = 0) -> None:
@@ -195,14 +204,14 @@ class ReviewWindow(QMainWindow):
         super().closeEvent(event)
 
 
-def _column(*parts) -> QWidget:
-    """Widgets and layouts stacked without margins."""
+def _column(*parts, stretch: int = -1) -> QWidget:
+    """Widgets and layouts stacked without margins; the part at index ``stretch`` takes the room left."""
     box = QWidget()
     layout = QVBoxLayout(box)
     layout.setContentsMargins(0, 0, 0, 0)
-    for part in parts:
+    for i, part in enumerate(parts):
         if isinstance(part, QHBoxLayout):
             layout.addLayout(part)
         else:
-            layout.addWidget(part, 1 if part is parts[0] else 0)
+            layout.addWidget(part, 1 if i == stretch else 0)
     return box
