@@ -35,7 +35,7 @@ def test_t_asks_and_t_takes_off_while_enter_and_a_held_key_cancel_or_wait(qtbot,
                     timeout=20000)
     qtbot.keyClick(w.centralWidget(), Qt.Key_T)                  # T: the takeoff question
     box = asked(qtbot, lambda: w.flight.takeoff_box)
-    assert "T: take off" in box.text()
+    said = box.text()
     qtbot.keyClick(box, Qt.Key_Return)                           # Enter is Cancel
     qtbot.waitUntil(lambda: not box.isVisible(), timeout=3000)
     assert not w.adapter.state.armed and not w.adapter.state.takeoff.active
@@ -48,6 +48,7 @@ def test_t_asks_and_t_takes_off_while_enter_and_a_held_key_cancel_or_wait(qtbot,
     qtbot.keyClick(box, Qt.Key_T)                                # T again: take off, no mouse
     qtbot.waitUntil(lambda: w.adapter.state.armed, timeout=30000)
     assert sip.isdeleted(box) or not box.isVisible()
+    assert "T: take off" in said                                 # and the question says so
 
 
 def test_a_arms_from_the_arm_question(qtbot, sim, vehicle, window_factory):
@@ -57,9 +58,10 @@ def test_a_arms_from_the_arm_question(qtbot, sim, vehicle, window_factory):
     qtbot.waitUntil(lambda: w.adapter.state.mode == "GUIDED", timeout=10000)
     qtbot.mouseClick(w.flightControls.arm_button, Qt.LeftButton)
     box = asked(qtbot, lambda: w.flight.arm_box)
-    assert "A: arm" in box.text() and box.defaultButton() is box.button(QMessageBox.Cancel)
+    said, default = box.text(), box.defaultButton() is box.button(QMessageBox.Cancel)
     qtbot.keyClick(box, Qt.Key_A)
     qtbot.waitUntil(lambda: w.adapter.state.armed, timeout=20000)
+    assert "A: arm" in said and default
 
 
 def test_the_focused_button_wears_a_ring(qtbot, sim, vehicle, window_factory):
