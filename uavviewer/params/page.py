@@ -13,7 +13,7 @@ from PyQt5.QtWidgets import (
 
 from driver.params.model import ParameterTable
 
-from ..widgets.dialog_fit import closes_with_esc, scrollable
+from ..widgets.dialog_fit import closes_with_esc, scrollable, stack_when_narrow
 from .editor import ParamEditor
 from .filter_model import ParameterFilter
 from .table_model import Column, NAME_ROLE, ParameterModel
@@ -37,7 +37,6 @@ QTableView#paramTable { alternate-background-color: #1a2029; gridline-color: #23
 QPushButton#reviewButton:enabled { background: #1f5fa8; border-color: #2f81f7; }
 """
 
-NARROW = 760                                # px: narrower than this, the three parts stand in a column
 PARAM_FILES = "Parameter files (*.param *.parm *.txt);;All files (*)"
 SAVE_FORMATS = "MAVProxy: NAME VALUE (*.param);;Mission Planner: NAME,VALUE (*.param)"
 METADATA_FILES = "ArduPilot parameter metadata (*.xml);;All files (*)"
@@ -188,12 +187,9 @@ class ParametersPage(QWidget):
 
     def resizeEvent(self, event) -> None:  # noqa: N802 (Qt's name)
         """Beside the flight controls (430 px at 1024×600) the groups, the table and the editor stand one above the
-        other, each as wide as the page; side by side they left the table 50 px."""
+        other."""
         super().resizeEvent(event)
-        narrow = event.size().width() < NARROW
-        if narrow != (self.splitter.orientation() == Qt.Vertical):
-            self.splitter.setOrientation(Qt.Vertical if narrow else Qt.Horizontal)
-            self.splitter.setSizes([90, 300, 200] if narrow else [140, 640, 300])
+        stack_when_narrow(self.splitter, event.size().width(), [140, 640, 300], [90, 300, 200])
 
     # -- shown state -------------------------------------------------------------------------------
     def show_download(self, table: ParameterTable, connected: bool) -> None:

@@ -15,7 +15,7 @@ from driver.review.log import PRESETS, FlightLog
 
 from ..map.log_path import LogPathOverlay, mode_colour
 from ..map.map_view import MapView
-from ..widgets.dialog_fit import close_buttons, closes_with_esc, scrollable
+from ..widgets.dialog_fit import close_buttons, closes_with_esc, scrollable, stack_when_narrow
 from .events_list import EventsList
 from .field_tree import FieldTree
 from .geotag_dialog import GeotagDialog
@@ -90,6 +90,7 @@ class ReviewWindow(QMainWindow):
         main.addWidget(self.tree)
         main.addWidget(right)
         main.setSizes([260, 1100])
+        self.main_splitter = main
         self.setCentralWidget(_column(self.warning, scrollable(main, horizontal=True), close_buttons(self), stretch=1))
         closes_with_esc(self)                       # a window of its own closes as a dialog does
 
@@ -101,6 +102,11 @@ class ReviewWindow(QMainWindow):
         self.flown_params = self.log.params()
         side.currentChanged.connect(lambda index: index == side.indexOf(self.params) and self.compare_params())
         self._fill()
+
+    def resizeEvent(self, event) -> None:  # noqa: N802 (Qt's name)
+        """Beside the flight controls the field tree stands above the plots and the path."""
+        super().resizeEvent(event)
+        stack_when_narrow(self.main_splitter, event.size().width(), [260, 1100], [140, 600])
 
     def compare_params(self) -> None:
         """The parameters as flown beside the vehicle's now (read again each time the tab is shown: the vehicle

@@ -19,13 +19,14 @@ from __future__ import annotations
 from collections.abc import Sequence
 
 from PyQt5.QtCore import QEvent, QObject, QRect, QSize, Qt
-from PyQt5.QtWidgets import QApplication, QDialog, QDialogButtonBox, QFrame, QScrollArea, QWidget
+from PyQt5.QtWidgets import QApplication, QDialog, QDialogButtonBox, QFrame, QScrollArea, QSplitter, QWidget
 
 FRAME_ALLOWANCE = 40               # px a window manager's title bar and borders take
 GAP = 8                            # px between a window and what it keeps clear of
+NARROW = 760                       # px: a window narrower than this stacks its side-by-side parts
 
-__all__ = ["FRAME_ALLOWANCE", "GAP", "close_buttons", "closes_with_esc", "fit_dialog", "fit_window", "room_beside",
-           "scrollable"]
+__all__ = ["FRAME_ALLOWANCE", "GAP", "NARROW", "close_buttons", "closes_with_esc", "fit_dialog", "fit_window",
+           "room_beside", "scrollable", "stack_when_narrow"]
 
 
 def scrollable(content: QWidget, horizontal: bool = False) -> QScrollArea:
@@ -42,6 +43,16 @@ def scrollable(content: QWidget, horizontal: bool = False) -> QScrollArea:
         area.setHorizontalScrollBarPolicy(Qt.ScrollBarAlwaysOff)
         area.setMinimumWidth(content.minimumSizeHint().width() + area.verticalScrollBar().sizeHint().width())
     return area
+
+
+def stack_when_narrow(splitter: QSplitter, width: int, wide: list[int], narrow: list[int]) -> None:
+    """A window ``width`` px wide: its ``splitter``'s parts side by side (``wide`` sizes) when roomy, one above the
+    other (``narrow`` sizes) beside the flight controls, each as wide as the window (side by side at 430 px, a
+    table or a field tree was left 50 px)."""
+    stacked = width < NARROW
+    if stacked != (splitter.orientation() == Qt.Vertical):
+        splitter.setOrientation(Qt.Vertical if stacked else Qt.Horizontal)
+        splitter.setSizes(narrow if stacked else wide)
 
 
 def close_buttons(window: QWidget) -> QDialogButtonBox:
