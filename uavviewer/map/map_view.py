@@ -58,7 +58,7 @@ class MapView(QWidget):
     def __init__(self, parent: QWidget | None = None) -> None:
         super().__init__(parent)
         self.setSizePolicy(QSizePolicy.Expanding, QSizePolicy.Expanding)
-        self.setMinimumSize(200, 160)
+        self.setMinimumSize(200, 136)             # beside the Plan list at 1024×600: room to aim a click
         self.setMouseTracking(False)
         self.setFocusPolicy(Qt.ClickFocus)
         self.frame: MapFrame | None = None           # None: no home with a latitude yet (metres only)

@@ -141,7 +141,7 @@ class PlanController(QObject):
     def _file_menu(self, window) -> None:
         """File › Open plan… / Save plan…, above Quit."""
         menu = window.menuFile
-        # Ctrl+O is File › Open flight log's (the pilot's tools): the plan's is Ctrl+Shift+O
+        # Ctrl+O is File › Replay a flight's (the pilot's tools): the plan's is Ctrl+Shift+O
         self.new_action = QAction("New plan", window, shortcut=QKeySequence.New, triggered=self.ask_new)
         self.open_action = QAction("Open plan…", window, shortcut=QKeySequence("Ctrl+Shift+O"),
                                    triggered=self.ask_open)
