@@ -121,7 +121,8 @@ class MissionControl:
     def resume(self) -> Future:
         v = self._v
         s = v.state()
-        if s.mode == "AUTO" and s.mission.state is MissionRunState.ACTIVE:
+        if s.mode == "AUTO" and s.mission.state is MissionRunState.ACTIVE and v.ports.commands.settled(
+                mavlink.MAV_CMD_DO_SET_MODE):               # (a mode change on its way may make it otherwise)
             return v._finish("mission resume", CommandStatus.ACCEPTED, "the mission is running")
         if not s.flying:
             return v._finish("mission resume", CommandStatus.REJECTED, "on the ground: start the mission instead")

@@ -42,8 +42,8 @@ class LinkOutbox:
 class VehicleCommands:
     """:class:`~driver.core.ports.CommandPort` over the vehicle's one command path (the gate, the sender)."""
 
-    def __init__(self, long, mode, answer) -> None:
-        self._long, self._mode, self._answer = long, mode, answer
+    def __init__(self, long, mode, answer, settled) -> None:
+        self._long, self._mode, self._answer, self._settled = long, mode, answer, settled
 
     def long(self, command: int, params=(), name: str | None = None, *, guard=None) -> Future:
         return self._long(command, params, name, guard=guard)
@@ -54,10 +54,13 @@ class VehicleCommands:
     def answer(self, name: str, status: CommandStatus, reason: str = "") -> Future:
         return self._answer(name, status, reason)
 
+    def settled(self, command: int) -> bool:
+        return self._settled(command)
 
-def vehicle_ports(clock, store, ticker, wake, target, mavlink2, long, mode, answer, settler) -> Ports:
-    return Ports(clock, store, LinkOutbox(ticker, wake, target, mavlink2), VehicleCommands(long, mode, answer),
-                 settler)
+
+def vehicle_ports(clock, store, ticker, wake, target, mavlink2, long, mode, answer, settled, settler) -> Ports:
+    return Ports(clock, store, LinkOutbox(ticker, wake, target, mavlink2),
+                 VehicleCommands(long, mode, answer, settled), settler)
 
 
 class SequencePilot:

@@ -154,7 +154,8 @@ class Vehicle(Drone):
         self._ticker = Ticker(self)                    # the ticker thread and the one way out to the link
         #: the narrow services the parts are handed (driver.core.ports), instead of this vehicle
         self.ports = vehicle_ports(clock, self._store, self._ticker, self._wake, self._target_ids, lambda: self._v2,
-                                   self._command_long, self._set_mode, self._finish, self._notifier)
+                                   self._command_long, self._set_mode, self._finish,
+                                   lambda command: self._commands.settled_by_state(command, clock()), self._notifier)
         self._parameters = Parameters(self)            # parameter table, cache, checked writes, metadata
         self._signing_control = SigningControl(self)   # keys and SETUP_SIGNING
         self._forwarder = Forwarder(cfg.outputs, cfg.baud, self._ticker.forward_to_vehicle,
@@ -383,9 +384,10 @@ class Vehicle(Drone):
             interrupted = ended if ended is not None and ended.exclusive else None
             s = self.state()
             airborne = (self._rules.may_be_airborne(s) or (interrupted is not None and interrupted.lifting_sent))
+            armed = s.armed or not self._commands.settled_by_state(mavlink.MAV_CMD_COMPONENT_ARM_DISARM, now)
             self._setpoints.stop(now)                 # zeros at once, whatever the mode turns out to be
             self._store.set(setpoint=self._setpoints.setpoint)
-            seq = StopSequence(self._pilot, now, interrupted, airborne)
+            seq = StopSequence(self._pilot, now, interrupted, airborne, armed)
             self._sequence.start(seq)
         self._wake.set()
         return seq.future

@@ -256,7 +256,8 @@ def hud_labels(rect: QRectF, state: VehicleState, font: QFont) -> list[Label]:
     labels.append(Label(top_right, R, battery, colour if stale else alarm))
     heading = state.heading_deg if math.isfinite(state.heading_deg) else 0.0
     if compact:
-        labels.append(Label(top_right.translated(0, line), R, f"HDG {heading:03.0f}°", colour))
+        if armed != "ARMING UNKNOWN":             # no vehicle heard: no heading to give, and the words need the row
+            labels.append(Label(top_right.translated(0, line), R, f"HDG {heading:03.0f}°", colour))
     else:
         labels.append(Label(QRectF(rect.center().x() - 40, rect.top() + 4, 80, size * 1.3), Qt.AlignCenter,
                             f"{heading:03.0f}°", colour))

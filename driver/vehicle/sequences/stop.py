@@ -29,13 +29,14 @@ LIFTING = (mavlink.MAV_CMD_MISSION_START, mavlink.MAV_CMD_NAV_TAKEOFF)
 
 class StopSequence:
     """One Stop. ``interrupted``: the takeoff or mission start it ends (None: none ran), with ``lifting_sent``,
-    ``armed_before`` and ``mode_before``; ``airborne``: the flight rules' "may be airborne" at the press."""
+    ``armed_before`` and ``mode_before``; ``airborne``: the flight rules' "may be airborne" at the press; ``armed``:
+    armed as shown, or an arm or disarm still on its way."""
 
     name = "stop"
     exclusive = False
     altitude = 0.0
 
-    def __init__(self, pilot: Pilot, now: float, interrupted=None, airborne: bool = True) -> None:
+    def __init__(self, pilot: Pilot, now: float, interrupted=None, airborne: bool = True, armed: bool = True) -> None:
         self.pilot = pilot
         self.future: Future = Future()
         self.answer: Outcome | None = None
@@ -45,6 +46,7 @@ class StopSequence:
             "decide": self._decide, "disarm": self._disarm, "restore": self._restore, "guided": self._guided,
             "brake": self._brake, "holding": self._holding, "watching": self._watching})
         self._airborne = airborne
+        self._armed = armed                           # armed, or an arm or disarm on its way may have made it so
         self._held_in = ""
         self._guided_refusal = ""
         self._again = False                           # holding again after a late lifting message
@@ -59,10 +61,11 @@ class StopSequence:
     # -- the states --------------------------------------------------------------------------------------------
     def _decide(self, s: VehicleState, now: float):
         m, seq = self.machine, self._interrupted
-        if not self._airborne and seq is not None and not seq.armed_before and (seq.ground.arm_sent or s.armed):
+        armed = self._armed or s.armed
+        if not self._airborne and seq is not None and not seq.armed_before and (seq.ground.arm_sent or armed):
             m.go("disarm", now)                       # armed by the cancelled takeoff, nothing lifted: undo it (the
             return None                               # state may not show the arm yet: disarm all the same)
-        if not self._airborne and not s.armed:
+        if not self._airborne and not armed:
             if seq is not None and seq.ground.guided_sent and seq.mode_before and seq.mode_before != "GUIDED":
                 m.go("restore", now)                  # a takeoff cancelled after it asked GUIDED
                 return None
