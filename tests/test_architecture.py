@@ -30,7 +30,7 @@ def test_driver_never_imports_qt():
     assert done.returncode == 0, done.stdout + done.stderr
 
 
-# -- the driver by layer (issue 30): see docs/architecture.md -------------------------------------------------------
+# -- the driver by layer: see docs/architecture.md -------------------------------------------------------
 #: The driver's folders from the ground up: a module may import its own folder and any folder on a lower floor, never
 #: one on its own floor or above. The loose modules at the top (options, __main__) stand above everything they start.
 FLOORS = {

@@ -145,7 +145,7 @@ def test_parameters_over_mavlink_ftp_as_recorded(replay_factory, connect):
     version = next(m for _, m in read_tlog(MISSION + ".tlog") if m.get_type() == "AUTOPILOT_VERSION")
     assert version.capabilities & mavlink.MAV_PROTOCOL_CAPABILITY_FTP
     with v._lock:
-        v._params.ftp_capable = True
+        v.ports.firmware.heard_version(version)     # (the firmware, as AUTOPILOT_VERSION says it)
     result = v.fetch_parameters().result(timeout=3)      # the recorded read took 0.4 s (0.04 s here)
     assert result.status is CommandStatus.ACCEPTED and "FTP" in result.reason, result
     # the same session's PARAM_REQUEST_LIST on SERIAL1: 1,397 parameters, equal to param.pck (the README)

@@ -69,7 +69,7 @@ def test_a_position_that_was_not_asked_is_failed_and_a_second_start_is_turned_aw
 
 
 def test_each_page_can_say_what_the_solos_firmware_lacks(sim_factory, vehicle_factory):
-    from driver.setup.availability import SETUP_ACTIONS, unavailable
+    from driver.core.firmware import SETUP_ACTIONS, unavailable
     sim = sim_factory(profile="solo")
     v = vehicle_factory(f"tcp:127.0.0.1:{sim.tcp_port}")
     state = v.wait_for(lambda s: s.firmware, 30)

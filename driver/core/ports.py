@@ -9,7 +9,16 @@ is given the few of these it needs, so what it depends on at run time is what it
 * :class:`CommandPort`: commands to the autopilot, each through the flight rules' gate
   (:mod:`driver.vehicle.safety`), retried and matched to its own reply;
 * :class:`Settler`: futures settled off the lock, on a small fixed pool;
-* a clock: ``Callable[[], float]``, seconds, the vehicle's own (a test's manual clock).
+* a clock: ``Callable[[], float]``, seconds, the vehicle's own (a test's manual clock);
+* the firmware's profile (:class:`~driver.core.firmware.FirmwareProfile`): what this vehicle's firmware does
+  differently, asked instead of testing versions;
+* the link's one round trip (:class:`~driver.core.roundtrip.RoundTrip`): every part that waits for an answer
+  waits its timeout, and feeds it the answers that can only be to one request;
+* ``replaying``: the link is a recording played back (nothing may be commanded).
+
+What the vehicle says reaches a part through the handlers the vehicle registers for it
+(:class:`driver.vehicle.inbox.Inbox`, MAVSDK's ``MavlinkMessageHandler``); its periodic work through the ticker's
+``serve`` (MAVSDK's ``call_every``).
 
 :class:`Ports` bundles them for the vehicle to hand out. These are protocols: the ground floor imports nothing
 of the driver, and the parts on floors 1 and 2 type against them without importing the vehicle.
@@ -21,7 +30,9 @@ from concurrent.futures import Future
 from dataclasses import dataclass
 from typing import Any, Callable, Protocol
 
+from .firmware import FirmwareProfile
 from .results import CommandResult, CommandStatus
+from .roundtrip import RoundTrip
 
 __all__ = ["Clock", "StatePort", "Outbox", "CommandPort", "Settler", "Ports"]
 
@@ -99,3 +110,6 @@ class Ports:
     outbox: Outbox
     commands: CommandPort
     settler: Settler
+    firmware: FirmwareProfile
+    roundtrip: RoundTrip
+    replaying: bool = False

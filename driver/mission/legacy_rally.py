@@ -28,7 +28,7 @@ class LegacyRally:
     """The RALLY_POINT path; the transfer machinery (``_Transfer``, ``_end``, ``_retry``) is PlanTransfers'."""
 
     def legacy_rally(self, kind: PlanKind) -> bool:
-        return kind is PlanKind.RALLY and (self.mission_int is False or not self._mavlink2())
+        return kind is PlanKind.RALLY and not self._firmware.mission_types
 
     def _legacy_start(self, t, now: float) -> None:
         system, component = self._target()

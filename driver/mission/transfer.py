@@ -8,8 +8,10 @@ vehicle cannot send it again (it has left its upload), so the read-back alone de
 Our side times out and re-asks too: MISSION_COUNT until the first request, MISSION_REQUEST_LIST until the
 count, each missing item of a download, and the item last sent while the vehicle's next request does not come
 (a lost item costs one re-ask time, not the vehicle's own 1 s; if it was the request that was lost, the
-vehicle answers INVALID_SEQUENCE, which does not end an upload and tells us it wants the next item). The re-ask time follows the link: three
-round trips measured on this transfer, between :data:`MIN_RETRY` and :data:`MAX_RETRY`.
+vehicle answers INVALID_SEQUENCE, which does not end an upload and tells us it wants the next item). The re-ask
+time follows the link: three round trips measured on this transfer, between :data:`MIN_RETRY` and
+:data:`MAX_RETRY`. What the firmware speaks (MISSION_ITEM_INT, fences and rally points in the mission
+protocol) is its profile's (:class:`driver.core.firmware.FirmwareProfile`).
 
 MISSION_ACK ERROR proves nothing by itself: ArduPilot sends it for every item that arrives while it is not
 receiving that plan (GCS_Common.cpp, GCS_MAVLINK::handle_mission_item, ``if (!prot->receiving)``), so our last
@@ -30,6 +32,7 @@ from typing import Callable
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
+from ..core.firmware import FirmwareProfile
 from ..core.results import CommandResult, CommandStatus
 from .legacy_rally import LegacyRally
 from .readback import READ_PATIENCE, ReadBack
@@ -91,31 +94,32 @@ class PlanTransfers(LegacyRally, ReadBack):
 
     def __init__(self, codec, source: tuple[int, int], target: Callable[[], tuple[int, int]],
                  record: Callable[[str, CommandStatus, str], CommandResult], settle, home: Callable[[], object],
-                 mavlink2: Callable[[], bool]):
+                 firmware: FirmwareProfile):
         self._codec = codec                   # a pymavlink MAVLink used only to build messages
         self._source = source                 # our (system, component): what the vehicle's answers target
         self._target = target
         self._record = record
         self._settle = settle                 # (future, value): settles on the notifier
         self._home = home
-        self._mavlink2 = mavlink2
-        self.mission_int: bool | None = None  # AUTOPILOT_VERSION advertises MISSION_INT (None: not said yet)
+        self._firmware = firmware             # what the vehicle's mission protocol carries
         self._running: dict[PlanKind, _Transfer] = {}
         self._out: list = []
         self.changed = False                  # progress changed since the last look (the driver republishes)
         self.ended: list = []                 # (kind, direction, status, plan) of transfers ended since then
 
     # -- what the vehicle speaks -----------------------------------------------------------------------
+    def _mavlink2(self) -> bool:
+        return self._firmware.mavlink2
+
     @property
     def integer(self) -> bool:
-        """MISSION_ITEM_INT: advertised, or (not said yet) a MAVLink 2 vehicle, which is ArduCopter 3.5 or later."""
-        return self.mission_int if self.mission_int is not None else self._mavlink2()
+        return self._firmware.integer_items
 
     def unsupported(self, kind: PlanKind) -> str:
         """Why this vehicle cannot transfer ``kind`` here ("" when it can)."""
         if kind is PlanKind.MISSION:
             return ""
-        if (self.mission_int is False or not self._mavlink2()) and kind is PlanKind.FENCE:
+        if not self._firmware.mission_types and kind is PlanKind.FENCE:
             return ("this vehicle's firmware has no polygon fence (ArduCopter 3.3, as on the Solo, fences only with "
                     "FENCE_RADIUS around home and FENCE_ALT_MAX: set those parameters)")
         return ""

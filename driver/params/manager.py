@@ -13,6 +13,7 @@ import math
 from concurrent.futures import Future
 from typing import Callable
 
+from ..core.firmware import FirmwareProfile
 from ..core.results import CommandStatus, LinkStatus, Severity
 from .cache import changed_names
 from .download import Download
@@ -38,12 +39,14 @@ def param_name(m) -> str:
 class ParameterManager:
     """Parameters of one vehicle; every method runs with the driver's state lock held."""
 
-    def __init__(self, store, notifier, target: Callable[[], tuple[int, int]], give_up_after: float = 7.0,
-                 set_retry: float = SET_RETRY) -> None:
+    def __init__(self, store, notifier, target: Callable[[], tuple[int, int]], firmware: FirmwareProfile,
+                 give_up_after: float = 7.0, set_retry: float = SET_RETRY) -> None:
         self._store = store
+        self._firmware = firmware                # whether the vehicle reads its table over FTP
         self._set_retry = set_retry              # s without an echo before a PARAM_SET (or read back) goes again
         self._give_up_after = give_up_after      # s of a lost link before a download ends (it waits until then)
         self._lost_since: float | None = None
+        self._losses = 0                         # the link's losses seen (LinkSupervisor.lost_count)
         self._notifier = notifier
         self._target = target
         self._values: dict[str, Parameter] = {}
@@ -60,7 +63,6 @@ class ParameterManager:
         self._ftp_note = ""                          # why this download reads the list though FTP was offered
         self._ftp_given_up: FtpDownload | None = None   # its TerminateSession goes out on the next tick
         self.use_ftp = True                          # read the whole table over MAVLink FTP where it is offered
-        self.ftp_capable: bool | None = None         # AUTOPILOT_VERSION's MAV_PROTOCOL_CAPABILITY_FTP
         self.on_complete: Callable[[ParameterTable], None] | None = None   # the cache's hook
 
     # -- what callers ask (any thread, under the lock) ------------------------------------------------
@@ -90,7 +92,7 @@ class ParameterManager:
         self._waiting.append(future)
         self._detail = "asking for the list" if download.listing else f"asking for {download.missing} missing"
         self._ftp_note = ""
-        if download.listing and self.use_ftp and self.ftp_capable:
+        if download.listing and self.use_ftp and self._firmware.ftp:
             self._ftp = FtpDownload(now)
             self._since_ftp = {}
             self._detail = "reading @PARAM/param.pck over MAVLink FTP"
@@ -143,11 +145,16 @@ class ParameterManager:
         if self._download is not None:
             self._end_download(CommandStatus.ABORTED, reason)
 
-    def link_lost(self) -> None:
+    def _link_lost(self) -> None:
         """Writes keep their tries for when the link is back (none is spent on a dead link)."""
         for pending in self._sets.values():
             pending.attempts = min(pending.attempts, max(0, pending.tries - 2))
             pending.reads = 0
+
+    @property
+    def ftp_capable(self) -> bool | None:
+        """Whether the vehicle's table (and its logs) may be read over FTP (the firmware profile's answer)."""
+        return self._firmware.ftp
 
     @property
     def reasking(self) -> bool:
@@ -211,9 +218,13 @@ class ParameterManager:
         return param
 
     # -- the ticker ---------------------------------------------------------------------------------------
-    def service(self, now: float, link: LinkStatus) -> list:
-        """Messages to send now (the caller sends them after releasing the lock)."""
+    def service(self, now: float, link: LinkStatus, losses: int) -> list:
+        """Messages to send now (the caller sends them after releasing the lock); ``link``: the link's status now,
+        ``losses``: how many times it was lost so far (each loss spares the writes' tries)."""
         out: list = []
+        if losses != self._losses:
+            self._losses = losses
+            self._link_lost()
         if link is LinkStatus.LOST or link is LinkStatus.CLOSED:
             # a few lost heartbeats on a bad radio pause the download; a link gone for longer ends it
             self._lost_since = now if self._lost_since is None else self._lost_since
@@ -304,7 +315,7 @@ class ParameterManager:
         pilot is told why, in the download's progress (the Parameters page), its result and the messages (the
         console prints them)."""
         self._ftp_given_up, self._ftp = self._ftp, None
-        self.ftp_capable = False
+        self._firmware.ftp_failed()
         self._ftp_note = f"MAVLink FTP {reason}; reading the list instead"
         self._detail = self._ftp_note
         self._store.add_message_locked(Severity.NOTICE, f"Parameters: {self._ftp_note}")

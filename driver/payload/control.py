@@ -1,6 +1,7 @@
 """The payload part of the embedded driver: point the gimbal, look at a point, take pictures and video.
 
-Which protocol, decided from what the vehicle has shown (and learnt again from an UNSUPPORTED):
+Which protocol, decided from what the vehicle has shown and what its firmware profile
+(:class:`driver.core.firmware.FirmwareProfile`) learnt, its UNSUPPORTED answers among them:
 
 * **gimbal manager** (ArduCopter 4.1+, the gimbal recording): DO_GIMBAL_MANAGER_PITCHYAW by angle; a rate
   is stepped here as angles every 0.1 s, because the protocol's own rate form needs NaN in the angle fields
@@ -19,7 +20,7 @@ CAMERA_FEEDBACK, CAMERA_IMAGE_CAPTURED or the GoPro's answer do; video only on C
 GoPro heartbeat's recording flag.
 
 All methods run with the driver's state lock held unless they say otherwise; messages are returned or posted,
-never written here.
+never written here. The part is handed the ports it uses (driver.core.ports), never the vehicle.
 """
 from __future__ import annotations
 
@@ -31,6 +32,8 @@ from dataclasses import dataclass, replace
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from ..core import frames
+from ..core.firmware import FirmwareProfile
+from ..core.ports import Clock, CommandPort, Outbox, Settler, StatePort
 from ..core.results import CommandResult, CommandStatus, Severity, chain
 from .model import (
     GIMBAL_PITCH_RANGE, RETRACT_FLAG, YAW_IN_EARTH_FRAME, CameraKind, Gimbal, GimbalControl, VehicleCamera,
@@ -74,12 +77,11 @@ class _Wait:
 class Payload:
     """Gimbal, ROI and camera of one vehicle; owned by :class:`driver.vehicle.vehicle.Vehicle`."""
 
-    def __init__(self, vehicle) -> None:
-        self._v = vehicle
-        self._store = vehicle._store
-        self._manager: bool | None = None        # DO_GIMBAL_MANAGER_PITCHYAW works (None: not known)
-        self._mount_command: bool | None = None  # DO_MOUNT_CONTROL works
-        self._roi_location: bool | None = None   # DO_SET_ROI_LOCATION works
+    def __init__(self, state: StatePort, outbox: Outbox, commands: CommandPort, settler: Settler, clock: Clock,
+                 firmware: FirmwareProfile, replaying: bool = False) -> None:
+        self._store, self._outbox, self._commands, self._settler = state, outbox, commands, settler
+        self._clock, self._firmware, self._replaying = clock, firmware, replaying
+        self._manager: bool | None = None        # a gimbal manager was heard (None: not known)
         self._asked_at: float | None = None      # when the gimbal/camera information was asked for
         self._waits: list[_Wait] = []
         self._rate: tuple[float, float] | None = None      # stepped rate (deg/s pitch, yaw)
@@ -91,10 +93,11 @@ class Payload:
         self._gopro_mode: int | None = None      # the GoPro's capture mode (its heartbeat, or what we set)
 
     # -- what the vehicle says (reader thread) ---------------------------------------------------------
-    def on_message(self, m, component: int) -> None:
-        """Into the pending fields; the reader publishes them with the telemetry it folds (not here: publishing
-        would hold the telemetry fold back, and the newest-of-each-kind would lose a message)."""
-        getattr(self, "_on_" + m.get_type().lower())(m, component)
+    def on_message(self, m) -> None:
+        """From any component of the vehicle (the gimbal, the camera, the autopilot): into the pending fields; the
+        reader publishes them with the telemetry it folds (not here: publishing would hold the telemetry fold back,
+        and the newest-of-each-kind would lose a message)."""
+        getattr(self, "_on_" + m.get_type().lower())(m, m.get_header().srcComponent)
 
     def _gimbal(self) -> Gimbal:
         return self._store.view()["gimbal"]
@@ -209,23 +212,23 @@ class Payload:
     def _settle(self, w: _Wait, status: CommandStatus, reason: str) -> None:
         if w in self._waits:
             self._waits.remove(w)
-        self._v._notifier.settle(w.future, self._store.record_locked(w.name, status, reason))
+        self._settler.settle(w.future, self._store.record_locked(w.name, status, reason))
 
     def _autopilot(self) -> int:
-        return self._v._target_ids()[1]
+        return self._outbox.target()[1]
 
     # -- the ticker ----------------------------------------------------------------------------------------
     def service(self, now: float, state) -> list:
         """Requests, stepped rates, GoPro queue and confirmation timeouts; returns messages to send."""
         out: list = []
-        if not state.connected or self._v._replay is not None:
+        if not state.connected or self._replaying:
             self._asked_at = None if not state.connected else self._asked_at
             return out
-        system, component = self._v._target_ids()
+        system, component = self._outbox.target()
         if self._asked_at is None:
             self._asked_at = now
-            caps = self._v._commands.capabilities
-            if caps.message_interval is not False and not self._legacy(state):
+            fw = self._firmware
+            if fw.payload_commands and fw.knows(mavlink.MAV_CMD_SET_MESSAGE_INTERVAL) is not False:
                 out.append(mavlink.MAVLink_command_long_message(
                     system, component, mavlink.MAV_CMD_SET_MESSAGE_INTERVAL, 0,
                     mavlink.MAVLINK_MSG_ID_GIMBAL_DEVICE_ATTITUDE_STATUS, 1e6 / ATTITUDE_RATE_HZ, 0, 0, 0, 0, 0))
@@ -255,22 +258,23 @@ class Payload:
                 "the vehicle sent no MOUNT_STATUS") + f" after {CONFIRM_TIMEOUT:g} s"
 
     # -- helpers --------------------------------------------------------------------------------------------
-    def _legacy(self, state) -> bool:
-        """3DR's ArduCopter 3.3 (the Solo): no mount or message commands in COMMAND_LONG."""
-        version = _version(state.firmware)
-        return version is not None and version < (3, 4)
-
     def protocol(self, state) -> str:
-        if self._legacy(state) or self._mount_command is False:
+        fw = self._firmware
+        if not fw.payload_commands or fw.knows(mavlink.MAV_CMD_DO_MOUNT_CONTROL) is False:
             return MOUNT_MSG
-        if self._manager is False:
+        if fw.knows(mavlink.MAV_CMD_DO_GIMBAL_MANAGER_PITCHYAW) is False:
             return MOUNT_CMD
         if self._manager or state.gimbal.source != "MOUNT_STATUS":
             return MANAGER
         return MOUNT_CMD
 
     def _answered(self, name: str, status: CommandStatus, reason: str) -> Future:
-        return self._v._finish(name, status, reason)
+        return self._commands.answer(name, status, reason)
+
+    def _roi_by_location(self) -> bool:
+        """DO_SET_ROI_LOCATION (else the Solo's DO_SET_ROI, whose zeros stop it)."""
+        fw = self._firmware
+        return fw.payload_commands and fw.knows(mavlink.MAV_CMD_DO_SET_ROI_LOCATION) is not False
 
     @staticmethod
     def _unsupported(result: CommandResult) -> bool:
@@ -283,7 +287,7 @@ class Payload:
             return self._answered("gimbal", CommandStatus.REJECTED, "angle is not a finite number")
         pitch = min(max(float(pitch), GIMBAL_PITCH_RANGE[0]), GIMBAL_PITCH_RANGE[1])
         yaw = None if yaw is None else frames.wrap_180(float(yaw))
-        state = self._v.state()
+        state = self._store.state
         problem = self._problem(state)
         if problem:
             return self._answered(name, CommandStatus.REJECTED, problem)
@@ -293,26 +297,22 @@ class Payload:
 
     def _point_by(self, protocol: str, name: str, pitch: float, yaw: float | None) -> Future:
         if protocol == MANAGER:
-            inner = self._v._command_long(mavlink.MAV_CMD_DO_GIMBAL_MANAGER_PITCHYAW,
+            inner = self._commands.long(mavlink.MAV_CMD_DO_GIMBAL_MANAGER_PITCHYAW,
                                           (pitch, yaw or 0.0, 0, 0, 0, 0, 0), f"{name} (DO_GIMBAL_MANAGER_PITCHYAW)")
             return chain(inner, lambda r: self._pointed(r, name, pitch, yaw, GimbalControl.ANGLE, MANAGER), name)
         if protocol == MOUNT_CMD:
-            inner = self._v._command_long(mavlink.MAV_CMD_DO_MOUNT_CONTROL,
+            inner = self._commands.long(mavlink.MAV_CMD_DO_MOUNT_CONTROL,
                                           (pitch, 0, yaw or 0.0, 0, 0, 0, mavlink.MAV_MOUNT_MODE_MAVLINK_TARGETING),
                                           f"{name} (DO_MOUNT_CONTROL)")
             return chain(inner, lambda r: self._pointed(r, name, pitch, yaw, GimbalControl.ANGLE, MOUNT_CMD), name)
         return self._mount_message(name, pitch, yaw)
 
     def _pointed(self, result: CommandResult, name: str, pitch, yaw, control: GimbalControl, protocol: str):
-        if self._unsupported(result):
+        if self._unsupported(result):           # (the firmware profile learnt it from the answer)
             with self._store.lock:
-                if protocol == MANAGER:
-                    self._manager = False
-                else:
-                    self._mount_command = False
                 self._store.add_message_locked(Severity.NOTICE, f"The vehicle does not know {protocol}: "
-                                               f"pointing its gimbal with {self.protocol(self._v.state())}")
-            return self._point_by(self.protocol(self._v.state()), name, pitch, yaw)
+                                               f"pointing its gimbal with {self.protocol(self._store.state)}")
+            return self._point_by(self.protocol(self._store.state), name, pitch, yaw)
         with self._store.lock:
             if result.ok:
                 g = self._gimbal()
@@ -322,24 +322,24 @@ class Payload:
 
     def _mount_message(self, name: str, pitch: float, yaw: float | None) -> Future:
         """The Solo: MOUNT_CONFIGURE to MAVLink targeting, then MOUNT_CONTROL until MOUNT_STATUS shows it."""
-        system, component = self._v._target_ids()
+        system, component = self._outbox.target()
         future: Future = Future()
         with self._store.lock:
             for w in [w for w in self._waits if w.kind == "mount"]:
                 self._settle(w, CommandStatus.ABORTED, f"superseded by {name}")
-            self._v._post(mavlink.MAVLink_mount_configure_message(
+            self._outbox.post(mavlink.MAVLink_mount_configure_message(
                 system, component, mavlink.MAV_MOUNT_MODE_MAVLINK_TARGETING, 1, 1, 0))
-            w = _Wait(name, "mount", future, want=pitch, deadline=self._v.clock() + CONFIRM_TIMEOUT)
+            w = _Wait(name, "mount", future, want=pitch, deadline=self._clock() + CONFIRM_TIMEOUT)
             w.message = self._mount_control(pitch, yaw)
             self._waits.append(w)
             g = self._gimbal()
             self._store.set(gimbal=replace(g, control=GimbalControl.ANGLE, protocol=MOUNT_MSG, roi=None))
             self._store.publish()
-        self._v._wake.set()
+        self._outbox.wake()
         return future
 
     def _mount_control(self, pitch: float, yaw: float | None):
-        system, component = self._v._target_ids()
+        system, component = self._outbox.target()
         return mavlink.MAVLink_mount_control_message(system, component, int(round(pitch * 100)), 0,
                                                      int(round((yaw or 0.0) * 100)), 0)
 
@@ -349,7 +349,7 @@ class Payload:
             return self._answered("gimbal rate", CommandStatus.REJECTED, "rate is not a finite number")
         pitch_rate = min(max(float(pitch_rate), -MAX_GIMBAL_RATE), MAX_GIMBAL_RATE)
         yaw_rate = min(max(float(yaw_rate), -MAX_GIMBAL_RATE), MAX_GIMBAL_RATE)
-        state = self._v.state()
+        state = self._store.state
         problem = self._problem(state)
         if problem:
             return self._answered(name, CommandStatus.REJECTED, problem)
@@ -361,24 +361,12 @@ class Payload:
             else:
                 if self._rate is None:
                     self._rate_target = (g.pitch_deg if g.pitch_deg is not None else 0.0, g.yaw_deg or 0.0)
-                    self._rate_last = self._v.clock()
+                    self._rate_last = self._clock()
                 self._rate = (pitch_rate, yaw_rate)
                 self._store.set(gimbal=replace(self._gimbal(), control=GimbalControl.RATE, protocol=protocol))
-            self._v._wake.set()
-            return self._v._finish(name, CommandStatus.ACCEPTED,
-                                   f"stepping the {protocol} angle every {STEP_INTERVAL:g} s")
-
-    def _rate_done(self, result: CommandResult, name: str, pitch_rate: float, yaw_rate: float):
-        if self._unsupported(result):
-            with self._store.lock:
-                self._manager = False
-            return self.rate(pitch_rate, yaw_rate)
-        with self._store.lock:
-            if result.ok:
-                self._store.set(gimbal=replace(self._gimbal(), control=GimbalControl.RATE, protocol=MANAGER,
-                                               roi=None))
-                self._store.publish()
-            return result                       # its own record says what went out and what came back
+            self._outbox.wake()
+            return self._commands.answer(name, CommandStatus.ACCEPTED,
+                                         f"stepping the {protocol} angle every {STEP_INTERVAL:g} s")
 
     def _step_rate(self, now: float, state) -> list:
         dt = min(now - self._rate_last, 0.5)
@@ -387,7 +375,7 @@ class Payload:
         pitch = min(max(pitch, GIMBAL_PITCH_RANGE[0]), GIMBAL_PITCH_RANGE[1])
         yaw = frames.wrap_180(self._rate_target[1] + self._rate[1] * dt)
         self._rate_target = (pitch, yaw)
-        system, component = self._v._target_ids()
+        system, component = self._outbox.target()
         protocol = self.protocol(state)
         if protocol == MOUNT_MSG:
             return [self._mount_control(pitch, yaw)]
@@ -404,22 +392,22 @@ class Payload:
         name = f"look at {lat:.6f}, {lon:.6f}"
         if not frames.finite(lat, lon, alt) or not (-90 <= lat <= 90 and -180 <= lon <= 180) or abs(alt) > 10000:
             return self._answered("look at", CommandStatus.REJECTED, "not a place on Earth")
-        state = self._v.state()
+        state = self._store.state
         problem = self._problem(state)
         if problem:
             return self._answered(name, CommandStatus.REJECTED, problem)
         with self._store.lock:
             self._rate = None
-        if self._legacy(state) or self._roi_location is False:
-            inner = self._v._command_long(mavlink.MAV_CMD_DO_SET_ROI, (0, 0, 0, 0, lat, lon, alt),
-                                          f"{name} (DO_SET_ROI)")
+        by_location = self._roi_by_location()
+        if not by_location:
+            inner = self._commands.long(mavlink.MAV_CMD_DO_SET_ROI, (0, 0, 0, 0, lat, lon, alt),
+                                        f"{name} (DO_SET_ROI)")
         else:
-            inner = self._v._command_long(mavlink.MAV_CMD_DO_SET_ROI_LOCATION, (0, 0, 0, 0, lat, lon, alt),
-                                          f"{name} (DO_SET_ROI_LOCATION)")
+            inner = self._commands.long(mavlink.MAV_CMD_DO_SET_ROI_LOCATION, (0, 0, 0, 0, lat, lon, alt),
+                                        f"{name} (DO_SET_ROI_LOCATION)")
 
         def done(r: CommandResult):
-            if self._unsupported(r) and self._roi_location is not False and not self._legacy(state):
-                self._roi_location = False
+            if self._unsupported(r) and by_location:   # the profile knows it now: DO_SET_ROI next
                 return self.look_at(lat, lon, alt)
             with self._store.lock:
                 if r.ok:
@@ -430,14 +418,14 @@ class Payload:
 
     def stop_looking(self) -> Future:
         name = "stop looking (ROI none)"
-        state = self._v.state()
+        state = self._store.state
         problem = self._problem(state)
         if problem:
             return self._answered(name, CommandStatus.REJECTED, problem)
-        if self._legacy(state) or self._roi_location is False:
-            inner = self._v._command_long(mavlink.MAV_CMD_DO_SET_ROI, (0, 0, 0, 0, 0, 0, 0), f"{name} (DO_SET_ROI 0)")
+        if not self._roi_by_location():
+            inner = self._commands.long(mavlink.MAV_CMD_DO_SET_ROI, (0, 0, 0, 0, 0, 0, 0), f"{name} (DO_SET_ROI 0)")
         else:
-            inner = self._v._command_long(mavlink.MAV_CMD_DO_SET_ROI_NONE, (0,), f"{name} (DO_SET_ROI_NONE)")
+            inner = self._commands.long(mavlink.MAV_CMD_DO_SET_ROI_NONE, (0,), f"{name} (DO_SET_ROI_NONE)")
 
         def done(r: CommandResult):
             with self._store.lock:
@@ -449,7 +437,7 @@ class Payload:
 
     # -- camera -------------------------------------------------------------------------------------------
     def take_photo(self) -> Future:
-        state = self._v.state()
+        state = self._store.state
         problem = self._problem(state)
         if problem:
             return self._answered("photo", CommandStatus.REJECTED, problem)
@@ -457,21 +445,21 @@ class Payload:
         future: Future = Future()
         with self._store.lock:
             if any(w.kind == "photo" for w in self._waits):
-                return self._v._finish("photo", CommandStatus.REJECTED, "the last picture is not confirmed yet")
+                return self._answered("photo", CommandStatus.REJECTED, "the last picture is not confirmed yet")
             w = _Wait("photo", "photo", future, photos_before=cam.photos)
             self._waits.append(w)
             if cam.kind is CameraKind.GOPRO:
                 if self._gopro_mode != mavlink.GOPRO_CAPTURE_MODE_PHOTO:
                     self._gopro_queue.append((mavlink.GOPRO_COMMAND_CAPTURE_MODE, mavlink.GOPRO_CAPTURE_MODE_PHOTO))
                 self._gopro_queue.append((mavlink.GOPRO_COMMAND_SHUTTER, 1))
-                w.deadline = self._v.clock() + CONFIRM_TIMEOUT + GOPRO_WAIT * len(self._gopro_queue)
-                self._v._wake.set()
+                w.deadline = self._clock() + CONFIRM_TIMEOUT + GOPRO_WAIT * len(self._gopro_queue)
+                self._outbox.wake()
                 return future
         if cam.kind is CameraKind.MAVLINK:
-            inner = self._v._command_long(mavlink.MAV_CMD_IMAGE_START_CAPTURE, (0, 0, 1, 0), "IMAGE_START_CAPTURE")
+            inner = self._commands.long(mavlink.MAV_CMD_IMAGE_START_CAPTURE, (0, 0, 1, 0), "IMAGE_START_CAPTURE")
         else:
-            inner = self._v._command_long(mavlink.MAV_CMD_DO_DIGICAM_CONTROL, (0, 0, 0, 0, 1, 0, 0),
-                                          "DO_DIGICAM_CONTROL shoot")
+            inner = self._commands.long(mavlink.MAV_CMD_DO_DIGICAM_CONTROL, (0, 0, 0, 0, 1, 0, 0),
+                                        "DO_DIGICAM_CONTROL shoot")
         inner.add_done_callback(lambda f: self._acked(w, f.result()))
         return future
 
@@ -483,11 +471,11 @@ class Payload:
             if not result.ok:
                 self._settle(w, result.status, result.reason)
             else:
-                w.deadline = self._v.clock() + CONFIRM_TIMEOUT
+                w.deadline = self._clock() + CONFIRM_TIMEOUT
 
     def record_video(self, on: bool) -> Future:
         name = f"record {'on' if on else 'off'}"
-        state = self._v.state()
+        state = self._store.state
         problem = self._problem(state)
         if problem:
             return self._answered(name, CommandStatus.REJECTED, problem)
@@ -506,11 +494,11 @@ class Payload:
                 if on and self._gopro_mode != mavlink.GOPRO_CAPTURE_MODE_VIDEO:
                     self._gopro_queue.append((mavlink.GOPRO_COMMAND_CAPTURE_MODE, mavlink.GOPRO_CAPTURE_MODE_VIDEO))
                 self._gopro_queue.append((mavlink.GOPRO_COMMAND_SHUTTER, 1 if on else 0))
-                w.deadline = self._v.clock() + CONFIRM_TIMEOUT + GOPRO_WAIT * len(self._gopro_queue)
-                self._v._wake.set()
+                w.deadline = self._clock() + CONFIRM_TIMEOUT + GOPRO_WAIT * len(self._gopro_queue)
+                self._outbox.wake()
                 return future
         command = mavlink.MAV_CMD_VIDEO_START_CAPTURE if on else mavlink.MAV_CMD_VIDEO_STOP_CAPTURE
-        inner = self._v._command_long(command, (0, 0), "VIDEO_START_CAPTURE" if on else "VIDEO_STOP_CAPTURE")
+        inner = self._commands.long(command, (0, 0), "VIDEO_START_CAPTURE" if on else "VIDEO_STOP_CAPTURE")
         inner.add_done_callback(lambda f: self._acked(w, f.result()))
         return future
 
@@ -525,7 +513,7 @@ class Payload:
         return [mavlink.MAVLink_gopro_set_request_message(system, GIMBAL_COMPONENT, cmd, [value, 0, 0, 0])]
 
     def _problem(self, state) -> str | None:
-        if self._v._replay is not None:
+        if self._replaying:
             return "replaying a recording: no vehicle to command"
         if not state.connected:
             return "no vehicle connected"
@@ -539,10 +527,3 @@ def _text(value) -> str:
         value = bytes(int(v) & 0xFF for v in value).split(b"\0", 1)[0].decode("ascii", "replace")
     return str(value).rstrip("\0").strip()
 
-
-def _version(text: str) -> tuple[int, int] | None:
-    try:
-        major, minor = text.split(".")[:2]
-        return int(major), int(minor)
-    except ValueError:
-        return None

@@ -16,7 +16,8 @@ How ArduCopter runs each (tests/data/recordings/arducopter-4.6-sitl-setup and -c
   motor_test.cpp's duration as a bound (:func:`motor_test_bound`).
 
 Methods marked "(lock held)" run on the driver's reader or ticker with the state lock held; the rest may be
-called from any thread and never wait on the network.
+called from any thread and never wait on the network. What the firmware lacks is its profile's
+(:class:`driver.core.firmware.FirmwareProfile`); the part is handed the ports it uses, never the vehicle.
 """
 from __future__ import annotations
 
@@ -29,10 +30,11 @@ from dataclasses import replace
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
+from ..core.firmware import MOTOR_TEST_LONGEST, FirmwareProfile
+from ..core.ports import Clock, CommandPort, Outbox, Settler, StatePort
 from ..core.results import CommandResult, CommandStatus, Severity, chain
 from ..traffic.approach import AlertLimits
 from ..traffic.tracker import TrafficTracker
-from .availability import unavailable, version
 from .model import (
     ACCEL_FAILED, ACCEL_POSITIONS, ACCEL_SUCCESS, AccelCalState, AccelStep, CompassCalState, CompassProgress,
     CompassReport, RcChannels, ServoOutputs,
@@ -48,8 +50,6 @@ RADIO_RATE_HZ = 10                 # RC_CHANNELS and SERVO_OUTPUT_RAW while a se
 MOTOR_TEST_RATE_HZ = 25            # ... while a motor test runs: its first output change within 200 ms of the command
                                    # (at 10 Hz bench_setup saw it at 100 ms median but 201 ms worst); back to 10 after
 TRAFFIC_REFRESH = 0.5              # s between traffic snapshots (ages, fading, alerts)
-MOTOR_TEST_MAX_SECONDS = 600.0     # ArduCopter's MOTOR_TEST_TIMEOUT_MAX
-MOTOR_TEST_MAX_SECONDS_33 = 30.0   # the Solo's 3.3 (motor_test.pde MOTOR_TEST_TIMEOUT_MS_MAX)
 MOTOR_TEST_MARGIN = 3.0            # s past the vehicle's own duration before the test counts as over unheard
 PWM_RANGE = (800, 2200)
 
@@ -58,14 +58,14 @@ class AccelCalibration:
     """One six-position accelerometer calibration. ``state`` is what the vehicle asked last; the pilot puts the
     vehicle there and calls :meth:`confirm_position`; ``verdict`` resolves with the vehicle's own verdict."""
 
-    def __init__(self, setup: "VehicleSetup") -> None:
-        self._setup = setup
+    def __init__(self, store: StatePort, commands: CommandPort) -> None:
+        self._store, self._commands = store, commands
         self.verdict: Future = Future()
         self.started: Future | None = None
 
     @property
     def state(self) -> AccelCalState:
-        return self._setup._v.state().setup.accel
+        return self._store.state.setup.accel
 
     @property
     def position(self) -> int | None:
@@ -79,23 +79,23 @@ class AccelCalibration:
         """Tell the vehicle it is in the position it asked for (COMMAND_LONG ACCELCAL_VEHICLE_POS)."""
         position = self.position
         if position is None:
-            return self._setup._v._finish("accel position", CommandStatus.REJECTED,
-                                          "the vehicle is not asking for a position now")
-        return self._setup._v._command_long(mavlink.MAV_CMD_ACCELCAL_VEHICLE_POS, (position,),
-                                            f"accel position {position} ({ACCEL_POSITIONS[position]})")
+            return self._commands.answer("accel position", CommandStatus.REJECTED,
+                                         "the vehicle is not asking for a position now")
+        return self._commands.long(mavlink.MAV_CMD_ACCELCAL_VEHICLE_POS, (position,),
+                                   f"accel position {position} ({ACCEL_POSITIONS[position]})")
 
 
 class CompassCalibration:
     """One onboard compass calibration: progress and reports per compass, then accept or cancel."""
 
-    def __init__(self, setup: "VehicleSetup") -> None:
-        self._setup = setup
+    def __init__(self, setup: "VehicleSetup", store: StatePort) -> None:
+        self._setup, self._store = setup, store
         self.started: Future | None = None
         self.finished: Future = Future()       # the reports of every compass in progress, or the cancel
 
     @property
     def state(self) -> CompassCalState:
-        return self._setup._v.state().setup.compass
+        return self._store.state.setup.compass
 
     def accept(self) -> Future:
         return self._setup.accept_compass()
@@ -107,9 +107,10 @@ class CompassCalibration:
 class VehicleSetup:
     """The setup part of one :class:`~driver.vehicle.Vehicle`."""
 
-    def __init__(self, vehicle) -> None:
-        self._v = vehicle
-        self._store = vehicle._store
+    def __init__(self, state: StatePort, outbox: Outbox, commands: CommandPort, settler: Settler, clock: Clock,
+                 firmware: FirmwareProfile) -> None:
+        self._store, self._outbox, self._commands, self._settler = state, outbox, commands, settler
+        self._clock, self._firmware = clock, firmware
         self._accel: AccelCalibration | None = None
         self._compass: CompassCalibration | None = None
         self._test_until = 0.0                 # monotonic bound of our motor test (the vehicle ends it first)
@@ -122,7 +123,7 @@ class VehicleSetup:
 
     # -- calibrations ------------------------------------------------------------------------------------
     def _calibration(self, name: str, params) -> Future:
-        return self._v._command_long(mavlink.MAV_CMD_PREFLIGHT_CALIBRATION, params, name)
+        return self._commands.long(mavlink.MAV_CMD_PREFLIGHT_CALIBRATION, params, name)
 
     def calibrate_gyro(self) -> Future:
         return self._calibration("gyro calibration", (1, 0, 0, 0, 0, 0, 0))
@@ -138,10 +139,10 @@ class VehicleSetup:
 
     def accel_calibration(self) -> AccelCalibration:
         """Start the six-position calibration; the vehicle asks for each position in turn."""
-        cal = AccelCalibration(self)
-        why = unavailable("accel", self._v.state().firmware)
+        cal = AccelCalibration(self._store, self._commands)
+        why = self._firmware.unavailable("accel")
         if why:                                 # 3.3: positions by text and COMMAND_ACK, not driven here
-            cal.started = self._v._finish("accel calibration", CommandStatus.REJECTED, why)
+            cal.started = self._commands.answer("accel calibration", CommandStatus.REJECTED, why)
             cal.verdict.set_result(cal.started.result())
             return cal
         with self._lock:
@@ -159,17 +160,17 @@ class VehicleSetup:
         with self._store.lock:
             if self._accel is cal:
                 self._set(accel=AccelCalState(AccelStep.FAILED))
-        self._v._notifier.settle(cal.verdict, result)
+        self._settler.settle(cal.verdict, result)
 
     def compass_calibration(self) -> CompassCalibration:
         """DO_START_MAG_CAL for every compass, no retry, no autosave (the pilot accepts), no reboot."""
-        cal = CompassCalibration(self)
+        cal = CompassCalibration(self, self._store)
         with self._lock:
             old, self._compass = self._compass, cal
         self._supersede(old and old.finished, "compass calibration")
         with self._store.lock:
             self._set(compass=CompassCalState(running=True))
-        cal.started = self._v._command_long(mavlink.MAV_CMD_DO_START_MAG_CAL, (0, 0, 0, 0, 0), "compass calibration")
+        cal.started = self._commands.long(mavlink.MAV_CMD_DO_START_MAG_CAL, (0, 0, 0, 0, 0), "compass calibration")
         cal.started.add_done_callback(lambda f: self._compass_started(cal, f.result()))
         return cal
 
@@ -179,24 +180,24 @@ class VehicleSetup:
         with self._store.lock:
             if self._compass is cal:            # (a refused start of a superseded run leaves the new one be)
                 self._set(compass=CompassCalState())
-        self._v._notifier.settle(cal.finished, result)
+        self._settler.settle(cal.finished, result)
 
     def _supersede(self, outcome: Future | None, name: str) -> None:
         """A new run of ``name`` replaced one whose outcome was still to come: it ends, aborted."""
         if outcome is not None and not outcome.done():
-            self._v._notifier.settle(outcome, self._store.record(name, CommandStatus.ABORTED,
-                                                                 f"superseded by a new {name}"))
+            self._settler.settle(outcome, self._store.record(name, CommandStatus.ABORTED,
+                                                             f"superseded by a new {name}"))
 
     def accept_compass(self) -> Future:
         """ArduPilot's accept stops every calibrator, and answers FAILED when one was not done
         (AP_Compass_Calibration.cpp _accept_calibration_mask): whatever the answer, the run is over and its
         result is the vehicle's verdict."""
-        future = self._v._command_long(mavlink.MAV_CMD_DO_ACCEPT_MAG_CAL, (0,), "accept compass calibration")
+        future = self._commands.long(mavlink.MAV_CMD_DO_ACCEPT_MAG_CAL, (0,), "accept compass calibration")
         future.add_done_callback(lambda f: self._compass_ended(accepted=f.result().ok, verdict=f.result()))
         return future
 
     def cancel_compass(self) -> Future:
-        future = self._v._command_long(mavlink.MAV_CMD_DO_CANCEL_MAG_CAL, (0,), "cancel compass calibration")
+        future = self._commands.long(mavlink.MAV_CMD_DO_CANCEL_MAG_CAL, (0,), "cancel compass calibration")
         future.add_done_callback(lambda f: f.result().ok and self._compass_ended(cancelled=True))
         return future
 
@@ -213,14 +214,14 @@ class VehicleSetup:
         if cancelled:
             verdict = self._store.record("compass calibration", CommandStatus.ABORTED, "cancelled")
         if verdict is not None:
-            self._v._notifier.settle(cal.finished, verdict)
+            self._settler.settle(cal.finished, verdict)
 
     def fixed_mag_yaw(self, yaw_deg: float, lat: float = 0.0, lon: float = 0.0) -> Future:
         """Calibrate the compasses from a known heading (large vehicles); lat/lon 0: the vehicle's own position."""
         if not (math.isfinite(yaw_deg) and 0.0 <= yaw_deg <= 360.0):
-            return self._v._finish("compass from yaw", CommandStatus.REJECTED, "yaw must be 0 to 360 degrees")
-        return self._v._command_long(mavlink.MAV_CMD_FIXED_MAG_CAL_YAW, (yaw_deg, 0, lat, lon),
-                                     f"compass from yaw {yaw_deg:g}")
+            return self._commands.answer("compass from yaw", CommandStatus.REJECTED, "yaw must be 0 to 360 degrees")
+        return self._commands.long(mavlink.MAV_CMD_FIXED_MAG_CAL_YAW, (yaw_deg, 0, lat, lon),
+                                   f"compass from yaw {yaw_deg:g}")
 
     # -- motor test -----------------------------------------------------------------------------------------
     def motor_test(self, motor: int, throttle_pct: float | None = None, pwm: int | None = None,
@@ -231,8 +232,7 @@ class VehicleSetup:
         name = f"motor test {motor}"
         problem = _motor_test_problem(motor, throttle_pct, pwm, seconds, count, propellers_removed)
         if problem:
-            return self._v._finish(name, CommandStatus.REJECTED, problem)
-        firmware = self._v.state().firmware
+            return self._commands.answer(name, CommandStatus.REJECTED, problem)
 
         def problem(s) -> str | None:           # checked now and again as the command goes out (the flight rules
             if s.may_be_airborne:               # check it too: driver.vehicle.safety)
@@ -240,23 +240,23 @@ class VehicleSetup:
             if s.armed:
                 return "the vehicle is armed: disarm first"
             return None
-        refusal = problem(self._v.state())
+        refusal = problem(self._store.state)
         if refusal:
-            return self._v._finish(name, CommandStatus.REJECTED, refusal)
+            return self._commands.answer(name, CommandStatus.REJECTED, refusal)
         kind, value = (0, float(throttle_pct)) if pwm is None else (1, float(pwm))
         self.watch_radio(MOTOR_TEST_RATE_HZ)
         with self._store.lock:
             self._test_from = self._store.message_index
-        future = self._v._command_long(mavlink.MAV_CMD_DO_MOTOR_TEST, (motor, kind, value, seconds, count), name,
-                                       guard=problem)
-        return chain(future, lambda result: self._test_started(result, motor_test_bound(seconds, count, firmware)),
-                     name)
+        bound = self._firmware.motor_test_bound(seconds, count)
+        future = self._commands.long(mavlink.MAV_CMD_DO_MOTOR_TEST, (motor, kind, value, seconds, count), name,
+                                     guard=problem)
+        return chain(future, lambda result: self._test_started(result, bound), name)
 
     def _test_started(self, result: CommandResult, seconds: float) -> CommandResult:
         """The vehicle accepted: the test runs (set before the caller hears the answer)."""
         if result.ok:
             with self._store.lock:
-                self._test_until = self._v.clock() + seconds + MOTOR_TEST_MARGIN
+                self._test_until = self._clock() + seconds + MOTOR_TEST_MARGIN
                 self._test_armed = False
                 self._set(motor_test_running=True)
                 self._store.publish()
@@ -274,18 +274,18 @@ class VehicleSetup:
     @property
     def motor_test_running(self) -> bool:
         """As the vehicle reports it: from its ACCEPTED to its "finished motor test" or disarm."""
-        return self._v.state().setup.motor_test_running
+        return self._store.state.setup.motor_test_running
 
     def stop_motor_test(self) -> Future:
         """End the running test at its next loop: DO_MOTOR_TEST with timeout 0 (motor_test.cpp takes it as a new
         timeout). Only while one runs: sent otherwise it *starts* a test that arms, then disarms the vehicle."""
         def problem(s) -> str | None:           # checked now and again as the command goes out
             return None if s.setup.motor_test_running else "no motor test is running"
-        refusal = problem(self._v.state())
+        refusal = problem(self._store.state)
         if refusal:
-            return self._v._finish("stop motor test", CommandStatus.REJECTED, refusal)
-        future = self._v._command_long(mavlink.MAV_CMD_DO_MOTOR_TEST, (1, 0, 0, 0, 0), "stop motor test",
-                                       guard=problem)
+            return self._commands.answer("stop motor test", CommandStatus.REJECTED, refusal)
+        future = self._commands.long(mavlink.MAV_CMD_DO_MOTOR_TEST, (1, 0, 0, 0, 0), "stop motor test",
+                                     guard=problem)
         return chain(future, self._test_ended, "stop motor test")
 
     def watch_radio(self, rate_hz: int = RADIO_RATE_HZ) -> None:
@@ -298,17 +298,17 @@ class VehicleSetup:
         self._radio_stream(0)
 
     def _radio_stream(self, rate_hz: int) -> None:
-        self._v._post(self._radio_request(rate_hz))
+        self._outbox.post(self._radio_request(rate_hz))
 
     def _radio_request(self, rate_hz: int):
-        system, component = self._v._target_ids()
+        system, component = self._outbox.target()
         return mavlink.MAVLink_request_data_stream_message(
             system, component, mavlink.MAV_DATA_STREAM_RC_CHANNELS, rate_hz, 1 if rate_hz else 0)
 
     def request_banner(self) -> Future:
         """MAV_CMD_DO_SEND_BANNER: the vehicle says its firmware, its board's id line and its frame again
         (state().autopilot); a refusal is kept there as the reason the board is not known."""
-        future = self._v._command_long(mavlink.MAV_CMD_DO_SEND_BANNER, (), "send banner")
+        future = self._commands.long(mavlink.MAV_CMD_DO_SEND_BANNER, (), "send banner")
         future.add_done_callback(lambda f: self._banner_answered(f.result()))
         return future
 
@@ -375,7 +375,7 @@ class VehicleSetup:
             ok = all(r.ok for r in reports.values())
             words = ", ".join(f"compass {r.compass} fitness {r.fitness:.3f}{'' if r.ok else ' FAILED'}"
                               for r in reports.values())
-            self._v._notifier.settle(cal.finished, self._store.record_locked(
+            self._settler.settle(cal.finished, self._store.record_locked(
                 "compass calibration", CommandStatus.ACCEPTED if ok else CommandStatus.REFUSED, words))
 
     def _on_command_long(self, m) -> None:
@@ -398,7 +398,7 @@ class VehicleSetup:
             said = [t.text for t in self._store.messages_since(0)[-5:] if t.source == "vehicle"
                     and "alibration" in t.text]
             reason = said[-1] if said else ("Calibration successful" if ok else "Calibration FAILED")
-            self._v._notifier.settle(cal.verdict, self._store.record_locked(
+            self._settler.settle(cal.verdict, self._store.record_locked(
                 "accel calibration", CommandStatus.ACCEPTED if ok else CommandStatus.REFUSED, reason))
 
     @staticmethod
@@ -413,7 +413,7 @@ class VehicleSetup:
                 and cal.started.done() and cal.started.result().ok)
 
     def _on_adsb_vehicle(self, m) -> None:
-        self._traffic.on_adsb_vehicle(m, self._v.clock())
+        self._traffic.on_adsb_vehicle(m, self._clock())
 
     # -- the ticker (lock held) ------------------------------------------------------------------------------
     def _follow_motor_test(self, now: float, state) -> list:
@@ -445,16 +445,6 @@ class VehicleSetup:
         return out
 
 
-def motor_test_bound(seconds: float, count: int, firmware: str) -> float:
-    """How long the vehicle runs a test: each motor its seconds, then half as long at rest before the next
-    (ArduCopter/motor_test.cpp); the Solo's 3.3 runs one motor, at most 30 s, whatever the count."""
-    have = version(firmware)
-    if have is not None and have < (3, 4):
-        return min(seconds, MOTOR_TEST_MAX_SECONDS_33)
-    seconds = min(seconds, MOTOR_TEST_MAX_SECONDS)
-    return seconds * count + 0.5 * seconds * (count - 1)
-
-
 def _motor_test_problem(motor, throttle_pct, pwm, seconds, count, propellers_removed) -> str:
     if not propellers_removed:
         return "take the propellers off first (propellers_removed=True)"
@@ -466,8 +456,8 @@ def _motor_test_problem(motor, throttle_pct, pwm, seconds, count, propellers_rem
         return "throttle must be 0 to 100 %"
     if pwm is not None and not (math.isfinite(pwm) and PWM_RANGE[0] <= pwm <= PWM_RANGE[1]):
         return f"PWM must be {PWM_RANGE[0]} to {PWM_RANGE[1]} µs"
-    if not (math.isfinite(seconds) and 0.0 < seconds <= MOTOR_TEST_MAX_SECONDS):
-        return f"seconds must be above 0 and at most {MOTOR_TEST_MAX_SECONDS:g}"
+    if not (math.isfinite(seconds) and 0.0 < seconds <= MOTOR_TEST_LONGEST):
+        return f"seconds must be above 0 and at most {MOTOR_TEST_LONGEST:g}"
     if not isinstance(count, int) or not 1 <= count <= 12:
         return "count is 1 to 12 motors"
     return ""

@@ -12,8 +12,9 @@ What a pilot must be able to trust, on a lossy link shared with other systems:
 * a mode change is confirmed by the HEARTBEAT, never by the ACK alone: an ACK cannot say which of two
   DO_SET_MODEs it answers, so a late one for an earlier switch would otherwise confirm a lost packet; arming and
   disarming likewise, by the heartbeat's armed bit;
-* firmware without MAV_CMD_DO_SET_MODE (the stock Solo) is remembered per vehicle after its first
-  UNSUPPORTED: later mode changes go straight to SET_MODE, re-sent about every second until the heartbeat
+* firmware without MAV_CMD_DO_SET_MODE (the stock Solo) is remembered in the vehicle's firmware profile
+  (:class:`driver.core.firmware.FirmwareProfile`, which learns every command an ACK calls UNSUPPORTED) after its
+  first UNSUPPORTED: later mode changes go straight to SET_MODE, re-sent about every second until the heartbeat
   shows the mode, within the command's time;
 * MAV_RESULT_IN_PROGRESS waits for the final answer and never re-sends (a re-sent long command restarts);
 * a command with a guard (ground-only commands) is checked each time it is about to go out, and every one
@@ -32,11 +33,12 @@ from typing import Callable
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
+from ..core.firmware import FirmwareProfile
 from .state import CommandResult, CommandStatus, Severity, VehicleState
 
 log = logging.getLogger(__name__)
 
-__all__ = ["Capabilities", "CommandSender", "Notifier", "command_name"]
+__all__ = ["CommandSender", "Notifier", "command_name"]
 
 MODE_RESEND = 1.0            # s between SET_MODE messages on firmware that answers none (one heartbeat)
 ACKED_MODE_WAIT = 1.5        # s an accepted mode change waits for a heartbeat showing it before re-sending
@@ -72,15 +74,6 @@ class Notifier:
 
     def close(self) -> None:
         self._pool.shutdown(wait=False)
-
-
-@dataclass
-class Capabilities:
-    """What this vehicle's firmware turned out to understand (None: not known yet)."""
-    set_mode_command: bool | None = None      # MAV_CMD_DO_SET_MODE
-    request_message: bool | None = None       # MAV_CMD_REQUEST_MESSAGE
-    message_interval: bool | None = None      # MAV_CMD_SET_MESSAGE_INTERVAL
-    setpoint_yaw: bool | None = None          # SET_POSITION_TARGET_LOCAL_NED reads its frame and yaw rate (3.5+)
 
 
 @dataclass(eq=False)
@@ -123,15 +116,15 @@ class _Command:
 class CommandSender:
     """Pending commands of one vehicle; all methods run with the driver's state lock held."""
 
-    def __init__(self, store, config, notifier: Notifier, target: Callable[[], tuple[int, int]], rules=None,
-                 roundtrip=None):
+    def __init__(self, store, config, notifier: Notifier, target: Callable[[], tuple[int, int]],
+                 firmware: FirmwareProfile, rules=None, roundtrip=None):
         self._store = store
         self._cfg = config
         self._notifier = notifier
         self._target = target                 # () -> (system, component) of the autopilot
         self._rules = rules                   # the flight rules (driver.vehicle.safety): checked before each send
         self._roundtrip = roundtrip           # the link's round trip (driver.core.roundtrip), fed by clean answers
-        self.capabilities = Capabilities()
+        self._firmware = firmware             # learns what the vehicle calls UNSUPPORTED
         self._pending: dict[object, _Command] = {}
         self._echoes: dict[object, float] = {}     # command id -> until when an earlier request may be answered
         self._custom_mode: int | None = None       # the mode the heartbeat shows now
@@ -164,7 +157,7 @@ class CommandSender:
         c = _Command(name, mavlink.MAV_CMD_DO_SET_MODE, mavlink.MAV_CMD_DO_SET_MODE,
                      [mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, number, 0, 0, 0, 0, 0],
                      Future(), self._store.message_index, mode=number, early=early)
-        c.legacy = self.capabilities.set_mode_command is False
+        c.legacy = self._firmware.mode_by_message
         return self._add(c, now, tag)
 
     def _add(self, c: _Command, now: float, tag) -> Future:
@@ -233,7 +226,9 @@ class CommandSender:
         cfg = self._cfg
         if to_system not in (0, cfg.source_system) or to_component not in (0, cfg.source_component):
             return                                # another ground station's (or component's) answer
-        self._learn(m.command, m.result)
+        told = self._firmware.heard_answer(m.command, m.result)
+        if told:
+            self._store.add_message_locked(Severity.NOTICE, told)
         c = self._pending.get(m.command)
         if c is None or c.attempts == 0:
             return                                # nothing of ours is waiting, or ours has not gone out yet
@@ -264,20 +259,6 @@ class CommandSender:
             self._resolve(c, CommandStatus.ACCEPTED, now=now)
         else:
             self._refuse(c, result, now)
-
-    def _learn(self, command: int, result: int) -> None:
-        known = result != mavlink.MAV_RESULT_UNSUPPORTED
-        caps = self.capabilities
-        if command == mavlink.MAV_CMD_DO_SET_MODE and (caps.set_mode_command is None or not known):
-            caps.set_mode_command = known
-            if not known:
-                self._store.add_message_locked(
-                    5, "The vehicle does not know MAV_CMD_DO_SET_MODE (old firmware): modes are set with "
-                       "SET_MODE and confirmed by its heartbeat")
-        elif command == mavlink.MAV_CMD_REQUEST_MESSAGE:
-            caps.request_message = known
-        elif command == mavlink.MAV_CMD_SET_MESSAGE_INTERVAL:
-            caps.message_interval = known
 
     def _refuse(self, c: _Command, result: int, now: float) -> None:
         entry = mavlink.enums["MAV_RESULT"].get(result)

@@ -16,14 +16,20 @@ from typing import Callable
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
+from ..core.ports import Ports
 from ..core.results import chain
 from .state import CommandResult, CommandStatus, Severity, VehicleState
 from ..mission.limits import UNCHECKED, held_mission_problems, plan_problems, unchecked
 from ..mission.plan import MissionRunState, Plan, PlanKind, TransferOutcome
 from ..mission.progress import fold_item_reached, fold_mission_current, fold_text, fold_transfer_end
 from ..mission.transfer import PlanTransfers
+from ..params.manager import param_name
 
-__all__ = ["MissionControl"]
+__all__ = ["MissionControl", "MISSION_MESSAGES"]
+
+#: What the mission part hears: the mission protocol's messages and the Solo's RALLY_POINT
+MISSION_MESSAGES = ("MISSION_CURRENT", "MISSION_ITEM_REACHED", "MISSION_REQUEST", "MISSION_REQUEST_INT",
+                    "MISSION_COUNT", "MISSION_ITEM", "MISSION_ITEM_INT", "MISSION_ACK", "RALLY_POINT")
 
 log = logging.getLogger(__name__)
 
@@ -43,14 +49,18 @@ class _Watch:
 
 
 class MissionControl:
-    """Owned by one Vehicle; ``vehicle`` gives the lock, the store, the notifier and the command paths."""
+    """Owned by one Vehicle; ``ports`` (driver.core.ports) are its way to the state, the link and the commands;
+    ``pilot_mode`` changes the mode as the pilot does (ending what runs in the sequence slot)."""
 
-    def __init__(self, vehicle) -> None:
-        self._v = vehicle
-        cfg = vehicle.config
-        self.transfers = PlanTransfers(vehicle._ticker.new_encoder(), (cfg.source_system, cfg.source_component),
-                                       vehicle._target_ids, vehicle._store.record_locked, self._settle_later,
-                                       lambda: vehicle._store.state.home, lambda: vehicle._v2)
+    def __init__(self, config, ports: Ports, pilot_mode: Callable[[str], Future]) -> None:
+        self.config = config
+        self._state, self._outbox, self._commands = ports.state, ports.outbox, ports.commands
+        self._settler, self._clock, self._replaying = ports.settler, ports.clock, ports.replaying
+        self._firmware = ports.firmware
+        self._pilot_mode = pilot_mode
+        self.transfers = PlanTransfers(ports.outbox.encoder(), (config.source_system, config.source_component),
+                                       ports.outbox.target, ports.state.record_locked, self._settle_later,
+                                       lambda: ports.state.state.home, ports.firmware)
         self._settling: list = []      # transfers ended, settled once the state shows what they did (_publish)
         self._watches: list[_Watch] = []
         self._currents: collections.deque = collections.deque(maxlen=64)   # (time, item) as the vehicle says
@@ -58,20 +68,19 @@ class MissionControl:
 
     # -- transfers (any thread) -------------------------------------------------------------------------
     def _refusal(self, kind: PlanKind) -> str:
-        v = self._v
-        if v._replay is not None:
+        if self._replaying:
             return "replaying a recording: no vehicle to command"
-        if not v.state().connected:
+        if not self._state.state.connected:
             return "no vehicle connected"
         return self.transfers.unsupported(kind)
 
     def upload(self, plan: Plan) -> Future:
         name = f"upload {plan.kind.label}"
-        s = self._v.state()
-        problems = plan_problems(plan, s, self._v.config)
+        s = self._state.state
+        problems = plan_problems(plan, s, self.config)
         problem = _joined(problems)
         if not problem and unchecked(plan, s.home):
-            self._v._store.add_message(Severity.NOTICE, f"Mission uploaded before the vehicle's home is known: "
+            self._state.add_message(Severity.NOTICE, f"Mission uploaded before the vehicle's home is known: "
                                        f"{UNCHECKED}; they are checked when it is, and it is not started until then")
         return self._start(name, plan.kind, problem,
                            lambda now: self.transfers.upload(plan, now), outcome=True)
@@ -85,64 +94,64 @@ class MissionControl:
                            outcome=False)
 
     def _start(self, name: str, kind: PlanKind, problem: str, begin, outcome: bool) -> Future:
-        v = self._v
         problem = problem or self._refusal(kind)
-        with v._lock:
+        with self._state.lock:
             problem = problem or self.transfers.busy(kind)
             if problem:
-                result = v._store.record_locked(name, CommandStatus.REJECTED, problem)
+                result = self._state.record_locked(name, CommandStatus.REJECTED, problem)
                 done: Future = Future()
                 done.set_result(TransferOutcome(result) if outcome else result)
                 return done
-            future = begin(self._v.clock())
+            future = begin(self._clock())
             self._publish()
-        v._wake.set()
+        self._outbox.wake()
         return future
 
     def cancel(self, kind: PlanKind) -> None:
-        with self._v._lock:
+        with self._state.lock:
             if self.transfers.cancel(kind):
                 self._publish()
 
     # -- flying it (any thread) ------------------------------------------------------------------------------
     def start_problem(self, s: VehicleState) -> str:
         """Why the mission the vehicle holds is not to be started now ("" when it may be)."""
-        limits = held_mission_problems(s, self._v.config)
+        limits = held_mission_problems(s, self.config)
         return ("no mission on the vehicle: upload one first" if s.mission.count == 0 else
                 f"the mission is not started: {UNCHECKED}" if limits == (UNCHECKED,) else
                 f"the mission is not started: {_joined(limits)}" if limits else "")
 
     def pause(self) -> Future:
-        s = self._v.state()
+        s = self._state.state
         if s.mode != "AUTO":
-            return self._v._finish("mission pause", CommandStatus.REJECTED, f"not flying a mission (mode {s.mode})")
-        return self._v.set_mode("BRAKE")
+            return self._commands.answer("mission pause", CommandStatus.REJECTED,
+                                         f"not flying a mission (mode {s.mode})")
+        return self._pilot_mode("BRAKE")
 
     def resume(self) -> Future:
-        v = self._v
-        s = v.state()
-        if s.mode == "AUTO" and s.mission.state is MissionRunState.ACTIVE and v.ports.commands.settled(
+        s = self._state.state
+        answer = self._commands.answer
+        if s.mode == "AUTO" and s.mission.state is MissionRunState.ACTIVE and self._commands.settled(
                 mavlink.MAV_CMD_DO_SET_MODE):               # (a mode change on its way may make it otherwise)
-            return v._finish("mission resume", CommandStatus.ACCEPTED, "the mission is running")
+            return answer("mission resume", CommandStatus.ACCEPTED, "the mission is running")
         if not s.flying:
-            return v._finish("mission resume", CommandStatus.REJECTED, "on the ground: start the mission instead")
+            return answer("mission resume", CommandStatus.REJECTED, "on the ground: start the mission instead")
         if not s.mission.count:
-            return v._finish("mission resume", CommandStatus.REJECTED, "no mission on the vehicle")
-        return self._watch("mission resume", v.set_mode("AUTO"), _running, "MISSION_CURRENT shows it running")
+            return answer("mission resume", CommandStatus.REJECTED, "no mission on the vehicle")
+        return self._watch("mission resume", self._pilot_mode("AUTO"), _running, "MISSION_CURRENT shows it running")
 
     def go_to_item(self, seq: int) -> Future:
-        v = self._v
-        s = v.state()
+        s = self._state.state
         name = f"mission item {seq}"
         if not isinstance(seq, int) or seq < 1 or (s.mission.count is not None and seq > s.mission.count):
-            return v._finish(name, CommandStatus.REJECTED, f"no item {seq} (the mission has {s.mission.count} items)")
-        asked = self._v.clock()
+            return self._commands.answer(name, CommandStatus.REJECTED,
+                                         f"no item {seq} (the mission has {s.mission.count} items)")
+        asked = self._clock()
 
         def shown(st: VehicleState) -> bool:              # seen since asked, even if flown past at once
             return any(at >= asked and current == seq for at, current in self._currents)
-        if self.transfers.mission_int is False:       # 3.3: no DO_SET_MISSION_CURRENT, the message only
+        if self._firmware.mission_current_by_message:
             return self._watch(name, self._set_current_message(seq, name), shown, f"MISSION_CURRENT shows {seq}")
-        inner = v.command_long(mavlink.MAV_CMD_DO_SET_MISSION_CURRENT, (seq,), name)
+        inner = self._commands.long(mavlink.MAV_CMD_DO_SET_MISSION_CURRENT, (seq,), name)
 
         def fallback(r: CommandResult) -> Future:
             if not r.ok and "UNSUPPORTED" in r.reason:
@@ -151,40 +160,40 @@ class MissionControl:
         return chain(inner, fallback, name)
 
     def _set_current_message(self, seq: int, name: str) -> Future:
-        v = self._v
-        system, component = v._target_ids()
-        v._post(mavlink.MAVLink_mission_set_current_message(system, component, seq))
+        system, component = self._outbox.target()
+        self._outbox.post(mavlink.MAVLink_mission_set_current_message(system, component, seq))
         done: Future = Future()
         done.set_result(CommandResult(name, CommandStatus.ACCEPTED, "MISSION_SET_CURRENT sent"))
         return done
 
     def _watch(self, name: str, inner: Future, done: Callable[[VehicleState], bool], what: str) -> Future:
         w = _Watch(name, Future(), inner, done, what)
-        with self._v._lock:
+        with self._state.lock:
             self._watches.append(w)
-        self._v._wake.set()
+        self._outbox.wake()
         return w.future
 
     # -- the driver's threads (lock held) ----------------------------------------------------------------
     def on_message(self, m) -> None:
+        """A MISSION_* or RALLY_POINT message from the autopilot (reader, lock held)."""
         mtype = m.get_type()
-        store = self._v._store
+        store = self._state
         if mtype == "MISSION_CURRENT":
-            self._currents.append((self._v.clock(), int(m.seq)))
+            self._currents.append((self._clock(), int(m.seq)))
             store.set(mission=fold_mission_current(store.view()["mission"], m))
             return
         if mtype == "MISSION_ITEM_REACHED":
             store.set(mission=fold_item_reached(store.view()["mission"], m))
             return
-        for msg in self.transfers.on_message(m, self._v.clock()):
-            self._v._post(msg)
+        for msg in self.transfers.on_message(m, self._clock()):
+            self._outbox.post(msg)
         if self.transfers.changed:
             self._publish()
 
-    def on_param(self, name: str, value: float) -> None:
+    def on_param_value(self, m) -> None:
         """A PARAM_VALUE (reader, lock held): RALLY_TOTAL confirms the Solo's rally transfers."""
-        for msg in self.transfers.on_param(name, value, self._v.clock()):
-            self._v._post(msg)
+        for msg in self.transfers.on_param(param_name(m), m.param_value, self._clock()):
+            self._outbox.post(msg)
         if self.transfers.changed:
             self._publish()
 
@@ -192,14 +201,11 @@ class MissionControl:
         self.transfers.on_text(text)
         if self.transfers.changed:
             self._publish()
-        store = self._v._store
+        store = self._state
         folded = fold_text(store.view()["mission"], text)
         if folded is not None:
-            self._currents.append((self._v.clock(), folded.current))
+            self._currents.append((self._clock(), folded.current))
             store.set(mission=folded)
-
-    def on_autopilot_version(self, m) -> None:
-        self.transfers.mission_int = bool(m.capabilities & mavlink.MAV_PROTOCOL_CAPABILITY_MISSION_INT)
 
     def service(self, now: float, state: VehicleState) -> list:
         out = self.transfers.service(now)
@@ -213,11 +219,11 @@ class MissionControl:
             if not r.ok:
                 self._settle(w, r)
             elif w.done(state):
-                self._settle(w, self._v._store.record_locked(w.name, CommandStatus.ACCEPTED, w.what))
+                self._settle(w, self._state.record_locked(w.name, CommandStatus.ACCEPTED, w.what))
             elif w.deadline is None:
                 w.deadline = now + CONFIRM_TIME
             elif now > w.deadline:
-                self._settle(w, self._v._store.record_locked(
+                self._settle(w, self._state.record_locked(
                     w.name, CommandStatus.TIMED_OUT, f"{r.command} was accepted but {w.what} never happened"))
         return out
 
@@ -228,8 +234,8 @@ class MissionControl:
         if all(a is b for a, b in zip(key, self._limits_of)):
             return
         self._limits_of = key
-        problems = held_mission_problems(s, self._v.config)
-        store = self._v._store
+        problems = held_mission_problems(s, self.config)
+        store = self._state
         before = store.view()["mission"].limit_problems
         if problems == before:
             return
@@ -244,10 +250,10 @@ class MissionControl:
 
     def _settle(self, w: _Watch, result: CommandResult) -> None:
         self._watches.remove(w)
-        self._v._notifier.settle(w.future, result)
+        self._settler.settle(w.future, result)
 
     def close(self) -> None:
-        with self._v._lock:
+        with self._state.lock:
             self.transfers.abort_all("driver closed")
             self._publish()
             for w in list(self._watches):
@@ -259,7 +265,7 @@ class MissionControl:
         self._settling.append((future, result))
 
     def _publish(self) -> None:
-        store = self._v._store
+        store = self._state
         t = self.transfers
         p = store.view()["mission"]
         for kind, direction, status, plan in t.ended:
@@ -270,7 +276,7 @@ class MissionControl:
         store.publish()
         settling, self._settling = self._settling, []
         for future, result in settling:
-            self._v._notifier.settle(future, result)
+            self._settler.settle(future, result)
 
 
 def _joined(problems) -> str:

@@ -8,16 +8,15 @@ from __future__ import annotations
 from concurrent.futures import Future
 
 from ..core.ports import Ports
-from ..core.results import CommandStatus
 
-__all__ = ["LinkOutbox", "VehicleCommands", "SequencePilot", "vehicle_ports"]
+__all__ = ["LinkOutbox", "SequencePilot", "vehicle_ports"]
 
 
 class LinkOutbox:
-    """:class:`~driver.core.ports.Outbox` over the vehicle's ticker."""
+    """:class:`~driver.core.ports.Outbox` over the vehicle's ticker and the peer it talks to."""
 
-    def __init__(self, ticker, wake, target, mavlink2) -> None:
-        self._ticker, self._wake, self._target, self._mavlink2 = ticker, wake, target, mavlink2
+    def __init__(self, ticker, wake, peer) -> None:
+        self._ticker, self._wake, self._peer = ticker, wake, peer
 
     def post(self, msg) -> None:
         self._ticker.post(msg)
@@ -29,38 +28,18 @@ class LinkOutbox:
         self._ticker.tick_within(seconds)
 
     def target(self) -> tuple[int, int]:
-        return self._target()
+        return self._peer.target()
 
     def encoder(self):
         return self._ticker.new_encoder()
 
     @property
     def mavlink2(self) -> bool:
-        return self._mavlink2()
+        return self._peer.mavlink2
 
 
-class VehicleCommands:
-    """:class:`~driver.core.ports.CommandPort` over the vehicle's one command path (the gate, the sender)."""
-
-    def __init__(self, long, mode, answer, settled) -> None:
-        self._long, self._mode, self._answer, self._settled = long, mode, answer, settled
-
-    def long(self, command: int, params=(), name: str | None = None, *, guard=None) -> Future:
-        return self._long(command, params, name, guard=guard)
-
-    def mode(self, name: str) -> Future:
-        return self._mode(name)
-
-    def answer(self, name: str, status: CommandStatus, reason: str = "") -> Future:
-        return self._answer(name, status, reason)
-
-    def settled(self, command: int) -> bool:
-        return self._settled(command)
-
-
-def vehicle_ports(clock, store, ticker, wake, target, mavlink2, long, mode, answer, settled, settler) -> Ports:
-    return Ports(clock, store, LinkOutbox(ticker, wake, target, mavlink2),
-                 VehicleCommands(long, mode, answer, settled), settler)
+def vehicle_ports(*, clock, store, ticker, wake, peer, commands, settler, firmware, roundtrip, replaying) -> Ports:
+    return Ports(clock, store, LinkOutbox(ticker, wake, peer), commands, settler, firmware, roundtrip, replaying)
 
 
 class SequencePilot:

@@ -1,9 +1,11 @@
 """The reader thread of a :class:`~driver.vehicle.vehicle.Vehicle`: it opens the link (reopening TCP and serial links
 that fail), parses every byte with pymavlink's codec and folds it into the state.
 
-Telemetry is folded once per read (:data:`driver.vehicle.telemetry.TELEMETRY`, newest of each kind); events
-(heartbeat, STATUSTEXT, COMMAND_ACK, parameters, missions, fence, FTP) go one by one to the part that owns them.
-Everything here runs on the reader thread with the state lock held, and never writes to the link itself.
+Telemetry is folded once per read (:data:`driver.vehicle.telemetry.TELEMETRY`, newest of each kind); events go one
+by one first to the reader's own handling (heartbeat, STATUSTEXT, COMMAND_ACK, AUTOPILOT_VERSION, parameters,
+fence, FTP: the link, the state's fields, the firmware profile), then to the parts that asked for them
+(:class:`~driver.vehicle.inbox.Inbox`). Everything here runs on the reader thread with the state lock held, and
+never writes to the link itself.
 """
 from __future__ import annotations
 
@@ -17,10 +19,7 @@ from ..core import frames
 from ..link.transport import LinkError
 from ..mission.progress import fold_restart
 from ..params.manager import param_name
-from ..payload.control import PAYLOAD_MESSAGES
 from ..setup.banner import heard_text, heard_version
-from ..setup.control import SETUP_MESSAGES
-from .inspector import MessageInspector
 from .prearm import PreArmReasons
 from .state import FENCE_PARAMS, Severity
 from .telemetry import TELEMETRY, fold_heartbeat
@@ -34,24 +33,36 @@ PUBLISH_INTERVAL = 0.01            # s: state is republished at most at 100 Hz w
 
 class Reader:
     """Reads, parses and dispatches what the vehicle sends; its own state is the incoming codec and what is held
-    back for the next fold. Built last by the vehicle: it hands every message to the vehicle's other parts."""
+    back for the next fold. The link's ends and the vehicle's command path are handed to it; every part hears
+    its messages through the :class:`~driver.vehicle.inbox.Inbox`."""
 
-    def __init__(self, vehicle):
-        self._v = vehicle
-        self.config = vehicle.config
-        self._transport, self._signing, self._store = vehicle._transport, vehicle._signing, vehicle._store
-        self._lock, self._link, self._commands = vehicle._lock, vehicle._link, vehicle._commands
-        self._params, self._payload, self._missions = vehicle._params, vehicle._payload, vehicle._missions
-        self._forwarder, self._closing, self._wake = vehicle._forwarder, vehicle._closing, vehicle._wake
+    def __init__(self, *, config, clock, transport, signing, store, link, peer, commands, firmware, inbox, tlog,
+                 forwarder, inspector, closing, wake, greet):
+        self.config = config
+        self._clock = clock
+        self._transport, self._signing, self._store = transport, signing, store
+        self._lock, self._link, self._commands = store.lock, link, commands
+        self._peer, self._firmware, self._inbox, self._tlog = peer, firmware, inbox, tlog
+        self._forwarder, self._closing, self._wake = forwarder, closing, wake
+        self._greet = greet                # the first heartbeat out on a link just opened
         self.codec = self._signing.parser()
         self._parser_generation = self._signing.generation
         self.latest: dict = {}             # newest telemetry message of each type in this read
-        self.reopen = False                # the supervisor found a half-open link: reopen it
+        self.reopen = False                # the supervisor found a half-open link: reopen it (ask_reopen)
         self._open_error = ""
         self._gcs_failsafe_warned = False
         self._last_frame: dict[int, bytes] = {}   # each component's last frame: a repeat of it is dropped
         self._prearm = PreArmReasons()     # the vehicle's own reasons for refusing to arm (Readiness.reasons)
-        self.inspector = vehicle.inspector = MessageInspector(vehicle.clock)   # what the link carries: Drone.inspection()
+        self.inspector = inspector         # what the link carries: Drone.inspection()
+        #: Events the reader handles itself before the parts hear them (a False return keeps it from them)
+        self._events = {
+            "HEARTBEAT": self._on_heartbeat, "STATUSTEXT": self._on_statustext, "COMMAND_ACK": self._on_command_ack,
+            "PARAM_VALUE": self._on_param_value, "AUTOPILOT_VERSION": self._on_autopilot_version,
+            "FENCE_STATUS": self._on_fence_status, "FILE_TRANSFER_PROTOCOL": self._on_file_transfer_protocol}
+
+    def ask_reopen(self) -> None:
+        """The link is half-open (TCP that never errors): close and open it again on the next read."""
+        self.reopen = True
 
     def _new_parser(self, carry=None):
         """A fresh incoming codec, signing as configured now; ``carry``: the old one, whose unparsed bytes
@@ -72,9 +83,9 @@ class Reader:
                     opened, backoff = True, 0.2
                     self._open_error = ""
                     self.reopen = False
-                    self._v._v2 = self.config.mavlink_version == 2
+                    self._peer.reopened()
                     log.info("link open: %s", self._transport.description)
-                    self._v._ticker.send(self._v._ticker.heartbeat_message())   # speak first: udpout and serial peers learn of us
+                    self._greet()                             # speak first: udpout and serial peers learn of us
                 except LinkError as exc:
                     if str(exc) != self._open_error:          # say it once, and again when the reason changes
                         self._open_error = str(exc)
@@ -159,9 +170,9 @@ class Reader:
             if mtype == "HOME_POSITION" and "home" in changes:
                 self._link.home_received()
             if mtype in self._link.last_heard:
-                self._link.last_heard[mtype] = self._v.clock()
+                self._link.last_heard[mtype] = self._clock()
         self._follow_boot_and_readiness("SYS_STATUS" in latest)
-        store.fields["link"] = self._link.health(self._v._version)   # packet counts as current as the telemetry
+        store.fields["link"] = self._link.health(self._peer.version)   # packet counts as current as the telemetry
         if store.state.rejected_values == 0 and store.fields.get("rejected_values", 0) > 0:   # the first one
             store.add_message_locked(Severity.WARNING, "The vehicle sent impossible telemetry values (NaN, "
                                      "infinity or out of range): ignored, the last good values stay")
@@ -177,7 +188,7 @@ class Reader:
             view = store.view()
         r = view["readiness"]
         healthy = (r.prearm_ok if r.prearm_reported else None) if sys_status else None
-        if self._prearm.checked(healthy, view["armed"], self._v.clock()):
+        if self._prearm.checked(healthy, view["armed"], self._clock()):
             store.set(readiness=replace(r, reasons=self._prearm.reasons))
 
     def _restarted(self) -> None:
@@ -203,14 +214,15 @@ class Reader:
             return 0
         header = msg.get_header()
         self.inspector.seen(msg, header.srcSystem, header.srcComponent, mtype)    # every system's, for the inspector
-        if self._v._tlog:
-            self._v._tlog.write(bytes(msg.get_msgbuf()))
+        if self._tlog is not None:
+            self._tlog.write(bytes(msg.get_msgbuf()))
         system = header.srcSystem
-        if system != self._v._target:
-            if self._v._target or not (mtype == "HEARTBEAT" and msg.autopilot != mavlink.MAV_AUTOPILOT_INVALID
-                                    and msg.type != mavlink.MAV_TYPE_GCS):
+        peer = self._peer
+        if system != peer.system:
+            if peer.system or not (mtype == "HEARTBEAT" and msg.autopilot != mavlink.MAV_AUTOPILOT_INVALID
+                                   and msg.type != mavlink.MAV_TYPE_GCS):
                 return 0                              # another system (a second GCS), or no vehicle yet
-            self._v._target = system
+            peer.system = system
             self._store.set(system_id=system)
             log.info("vehicle found: system %d", system)
         component, seq = header.srcComponent, header.seq
@@ -225,31 +237,35 @@ class Reader:
         link.last_seq[component] = seq
         self._last_frame[component] = msg.get_msgbuf()
         link.rx_count += 1
-        if mtype in PAYLOAD_MESSAGES:                 # the gimbal and camera speak from any component
-            self._payload.on_message(msg, component)
+        handlers = self._inbox.from_any.get(mtype)
+        if handlers:                                  # the gimbal and camera speak from any component
+            for handler in handlers:
+                handler(msg)
             return 1
-        if component != self._v._autopilot and self._v._autopilot:   # a gimbal, camera or companion computer
+        if component != peer.component and peer.component:   # a gimbal, camera or companion computer
             if mtype == "STATUSTEXT":
                 self._on_statustext(msg)
             return 1
-        if not self._v._v2 and msg.get_msgbuf()[0] == 0xFD and self.config.mavlink_version is None:
-            self._v._v2 = True                           # the autopilot's own framing, never another component's
+        if peer.heard_frame(msg.get_msgbuf()[0]):     # the autopilot's own framing, never another component's
             log.info("vehicle speaks MAVLink 2: following it")
         if mtype in TELEMETRY:
             self.latest[mtype] = msg                 # folded once per read, see ingest()
-        else:
-            handler = _EVENTS.get(mtype)
-            if handler is not None:
-                handler(self, msg)
+            return 1
+        own = self._events.get(mtype)
+        if own is not None and own(msg) is False:
+            return 1
+        for handler in self._inbox.handlers.get(mtype, ()):
+            handler(msg)
+        if mtype == "FILE_TRANSFER_PROTOCOL":
+            self._wake.set()                          # a transfer's next requests go out now
         return 1
 
-    def _on_heartbeat(self, m) -> None:
+    def _on_heartbeat(self, m) -> bool | None:
         if m.autopilot == mavlink.MAV_AUTOPILOT_INVALID:
-            return
+            return False
         store = self._store
-        now = self._v.clock()
+        now = self._clock()
         self._transport.heard_vehicle()
-        self._v._signing_control.settle(self._signing.heartbeat(m))
         view = store.view()
         was_armed = view["armed"]
         changes = fold_heartbeat(view, m)
@@ -259,17 +275,20 @@ class Reader:
             self._link.armed_changed(changes["armed"], now)
         event = self._link.heartbeat(now)
         if event is None:
-            return
-        store.set(link=self._link.health(self._v._version))
+            return None
+        store.set(link=self._link.health(self._peer.version))
         self._wake.set()                              # the ticker asks for streams at once
         if event == "recovered":
             self._commands.link_recovered(now)
             store.publish()
             store.add_message_locked(Severity.NOTICE, "Link recovered")
         elif event == "first":
-            store.add_message_locked(Severity.INFO, f"Vehicle {self._v._target} connected on {self._v.description}")
+            store.add_message_locked(Severity.INFO, f"Vehicle {self._peer.system} connected on "
+                                     f"{self._transport.description}")
+        return None
 
-    def _on_statustext(self, m) -> None:
+    def _on_statustext(self, m) -> bool:
+        """The vehicle's words, from any of its components: in Messages, then to every part that listens."""
         text = m.text.rstrip("\x00").strip() if isinstance(m.text, str) else bytes(m.text).decode("ascii", "replace")
         if text:
             try:
@@ -277,37 +296,31 @@ class Reader:
             except ValueError:
                 sev = Severity.INFO
             self._store.add_message_locked(sev, text, "vehicle")
-            if self._prearm.heard(text, self._v.clock()):
+            if self._prearm.heard(text, self._clock()):
                 self._store.set(readiness=replace(self._store.view()["readiness"], reasons=self._prearm.reasons))
-            self._v._signing_control.settle(self._signing.statustext(text))
-            self._missions.on_text(text)
-            self._v.logs.on_text(text)                  # 'Disarm for log download'
+            for handler in self._inbox.text_handlers:   # signing, missions, the logs ('Disarm for log download')
+                handler(text)
             autopilot = heard_text(self._store.view()["autopilot"], text)    # the banner: firmware, board
             if autopilot is not None:
                 self._store.set(autopilot=autopilot)
+        return False                                  # (the parts hear the text, decoded, above)
 
     def _on_command_ack(self, m) -> None:
-        self._commands.on_ack(m, self._v.clock())
+        self._commands.on_ack(m, self._clock())
         self._wake.set()
 
     def _on_autopilot_version(self, m) -> None:
-        v = m.flight_sw_version
-        major, minor, patch = (v >> 24) & 0xFF, (v >> 16) & 0xFF, (v >> 8) & 0xFF
         self._link.version_known = True
-        self._params.ftp_capable = bool(m.capabilities & mavlink.MAV_PROTOCOL_CAPABILITY_FTP)
-        self._missions.on_autopilot_version(m)
+        told = self._firmware.heard_version(m)        # what the firmware does differently (driver.core.firmware)
         self._store.set(autopilot=heard_version(self._store.view()["autopilot"], m))
-        if major:
-            self._commands.capabilities.setpoint_yaw = (major, minor) >= (3, 5)
-            self._store.set(firmware=f"{major}.{minor}.{patch}")
-            if (major, minor) < (3, 5):
-                self._store.add_message_locked(
-                    Severity.NOTICE, f"Firmware {major}.{minor}.{patch}: velocity goes north/east and the nose is "
-                    "steered with CONDITION_YAW (it ignores body frames and yaw rates)")
+        if self._firmware.firmware:
+            self._store.set(firmware=self._firmware.firmware)
+        if told:
+            self._store.add_message_locked(Severity.NOTICE, told)
 
-    def _on_param_value(self, m) -> None:
+    def _on_param_value(self, m) -> bool | None:
         if not frames.finite(m.param_value):
-            return
+            return False
         name = param_name(m)
         boot = self._store.view()["boot"]
         counted = boot.heard_param_count(m.param_count)
@@ -315,11 +328,7 @@ class Reader:
             self._store.set(boot=counted)
             if counted.restarts != boot.restarts:
                 self._restarted()
-        self._params.on_param_value(m, name, self._v.clock())
-        if self._params.reasking:
-            self._wake.set()                          # the next read goes out now, not on the next tick
         self._link.param_received(name)
-        self._missions.on_param(name, m.param_value)
         if name in FENCE_PARAMS:
             self._store.set(fence=self._store.view()["fence"].with_param(name, m.param_value))
         elif name == "BATT_CAPACITY":                   # the charge left is reckoned from it (battery.time_left)
@@ -331,16 +340,12 @@ class Reader:
                 self._store.add_message_locked(
                     Severity.WARNING, "GCS failsafe is off on the vehicle (FS_GCS_ENABLE=0): if this link is lost "
                     "or you quit in flight, it keeps hovering until its battery failsafe")
+        return None
 
-    def _on_file_transfer_protocol(self, m) -> None:
-        """MAVLink FTP: the parameters' file (driver.params.ftp)."""
-        if m.target_system in (0, self.config.source_system) and m.target_component in (0, self.config.source_component):
-            self._params.on_ftp(m, self._v.clock())
-            self._v.logs.on_ftp(m)                       # a log read by FTP (driver.logs)
-            self._wake.set()
-
-    def _on_mission(self, m) -> None:
-        self._missions.on_message(m)
+    def _on_file_transfer_protocol(self, m) -> bool:
+        """MAVLink FTP (the parameters' file, the logs): only what is addressed to us reaches them."""
+        cfg = self.config
+        return m.target_system in (0, cfg.source_system) and m.target_component in (0, cfg.source_component)
 
     def _on_fence_status(self, m) -> None:
         """FENCE_STATUS, sent while the fence is enabled: a new breach is told once, with what it was."""
@@ -353,20 +358,3 @@ class Reader:
                                            "(FENCE_ACTION: RTL or land)")
         if breached != fence.breached:
             self._store.set(fence=replace(fence, breached=breached))
-
-
-#: Events: every one counts (mode/arming changes, the pilot's messages, command answers).
-_EVENTS = {
-    "HEARTBEAT": Reader._on_heartbeat,
-    "STATUSTEXT": Reader._on_statustext,
-    "COMMAND_ACK": Reader._on_command_ack,
-    "PARAM_VALUE": Reader._on_param_value,
-    "AUTOPILOT_VERSION": Reader._on_autopilot_version,
-    "FENCE_STATUS": Reader._on_fence_status,
-    "FILE_TRANSFER_PROTOCOL": Reader._on_file_transfer_protocol,
-    **{name: Reader._on_mission for name in ("MISSION_CURRENT", "MISSION_ITEM_REACHED", "MISSION_REQUEST",
-                                              "MISSION_REQUEST_INT", "MISSION_COUNT", "MISSION_ITEM",
-                                              "MISSION_ITEM_INT", "MISSION_ACK", "RALLY_POINT")},
-    **{name: (lambda r, m: r._v.setup.on_message(m)) for name in SETUP_MESSAGES},
-    **{name: (lambda r, m: r._v.logs.on_message(m)) for name in ("LOG_ENTRY", "LOG_DATA")},
-}

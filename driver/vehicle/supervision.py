@@ -17,7 +17,7 @@ import collections
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-from .commands import Capabilities
+from ..core.firmware import FirmwareProfile
 from .state import FENCE_PARAMS, LinkHealth, LinkStatus
 
 __all__ = ["LinkSupervisor"]
@@ -37,12 +37,12 @@ WANTED_PARAMS = ("FS_GCS_ENABLE",) + FENCE_PARAMS + PLAN_PARAMS
 
 
 class LinkSupervisor:
-    def __init__(self, config, transport, capabilities: Capabilities, target, clock):
+    def __init__(self, config, transport, firmware: FirmwareProfile, target, clock):
         self._cfg = config
         self._transport = transport
         # what ages the heartbeat: the vehicle's clock, or the recording's when replaying one
         self._clock = transport.clock if transport.is_replay else clock
-        self._caps = capabilities
+        self._firmware = firmware             # which requests the vehicle's firmware knows
         self._target = target                 # () -> (system, component)
         self.status = LinkStatus.WAITING
         self.lost_count = 0
@@ -165,7 +165,7 @@ class LinkSupervisor:
                                   (mavlink.MAV_DATA_STREAM_EXTRA2, fast),
                                   (mavlink.MAV_DATA_STREAM_EXTRA3, max(1, rate // 2)),
                                   (mavlink.MAV_DATA_STREAM_RAW_SENSORS, max(1, rate // 2)))]
-        if self._caps.message_interval is not False:   # 4.7 sends EXTENDED_SYS_STATE only when asked so
+        if self._firmware.knows(mavlink.MAV_CMD_SET_MESSAGE_INTERVAL) is not False:   # 4.7 sends EXTENDED_SYS_STATE only when asked so
             for msg_id, hz in ((mavlink.MAVLINK_MSG_ID_EXTENDED_SYS_STATE, rate),
                                (mavlink.MAVLINK_MSG_ID_HOME_POSITION, 0.5),
                                # ADS-B traffic is in no data stream (SRn_ADSB, 0 by default): unasked, 4.6.3
@@ -179,7 +179,7 @@ class LinkSupervisor:
     def _home_request(self) -> list:
         system, component = self._target()
         self._home_tries += 1
-        if self._caps.request_message is not False and self._home_tries % 2:
+        if self._firmware.knows(mavlink.MAV_CMD_REQUEST_MESSAGE) is not False and self._home_tries % 2:
             return [mavlink.MAVLink_command_long_message(system, component, mavlink.MAV_CMD_REQUEST_MESSAGE, 0,
                                                          mavlink.MAVLINK_MSG_ID_HOME_POSITION, 0, 0, 0, 0, 0, 0)]
         return [mavlink.MAVLink_command_long_message(system, component, mavlink.MAV_CMD_GET_HOME_POSITION, 0,

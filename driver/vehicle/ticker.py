@@ -1,9 +1,10 @@
 """The ticker thread of a :class:`~driver.vehicle.vehicle.Vehicle`, and the one way out to the link.
 
 Every tick it sends the heartbeat, steps the takeoff or mission start, streams the velocity setpoint, and lets
-the command sender, the parameters, the payload, the missions and signing say what they want sent. All of it is
-decided under the state lock and written after releasing it, so a slow serial write stalls nobody. Callers on
-other threads (the UI) only :meth:`Ticker.post`: the ticker writes for them.
+every part that :meth:`Ticker.serve` registered (the command sender, the parameters, the payload, the missions,
+setup, the logs, signing) say what it wants sent. All of it is decided under the state lock and written after
+releasing it, so a slow serial write stalls nobody. Callers on other threads (the UI) only :meth:`Ticker.post`:
+the ticker writes for them.
 """
 from __future__ import annotations
 
@@ -32,14 +33,17 @@ WRITE_GROUP = 4096                 # bytes of whole frames written at once to a 
 class Ticker:
     """Sends for the vehicle: the outbox, the encoder (signing as configured now) and the periodic work."""
 
-    def __init__(self, vehicle):
-        self._v = vehicle
-        self.config = vehicle.config
-        self._transport, self._signing, self._store = vehicle._transport, vehicle._signing, vehicle._store
-        self._lock, self._link, self._commands = vehicle._lock, vehicle._link, vehicle._commands
-        self._params, self._setpoints, self._sequence = vehicle._params, vehicle._setpoints, vehicle._sequence
-        self._rules = vehicle._rules
-        self._closing, self._wake = vehicle._closing, vehicle._wake
+    def __init__(self, *, config, clock, transport, signing, store, link, rules, peer, firmware, sequence, setpoints,
+                 tlog, closing, wake, reopen):
+        self.config = config
+        self._clock = clock
+        self._transport, self._signing, self._store = transport, signing, store
+        self._lock, self._link, self._rules = store.lock, link, rules
+        self._peer, self._firmware, self._sequence, self._setpoints = peer, firmware, sequence, setpoints
+        self._tlog = tlog                     # the flight log (driver.link.tlog), None when not recording
+        self._tlog_told = False
+        self._closing, self._wake, self._reopen = closing, wake, reopen
+        self._services: list = []             # every part's (now, state) -> messages, in the order served
         self._codec_out = self.new_encoder()
         self._sender_generation = -1          # the encoder is (re)configured for signing on the next send
         self._tx_lock = threading.Lock()
@@ -48,6 +52,11 @@ class Ticker:
         self._yaw_held = False                # old firmware: the heading is held by CONDITION_YAW
         self._next_heartbeat = self._next_health = -1e9   # due at the first step, whatever the clock's origin
         self._soon: float | None = None       # s: the next tick wanted sooner than the usual wait (tick_within)
+
+    def serve(self, service) -> None:
+        """``service(now, state)`` runs every tick with the state lock held and returns the messages its part wants
+        sent, after the setpoint and in the order registered (MAVSDK's call-every)."""
+        self._services.append(service)
 
     def send(self, msg) -> None:
         """Pack and write one message; ``bytes`` are a frame packed already (SETUP_SIGNING)."""
@@ -93,7 +102,7 @@ class Ticker:
             self._sender_generation = signing.generation
             signing.configure_sender(codec, signing.key)
         signing.stamp(codec)
-        buf = msg.pack(codec, force_mavlink1=not self._v._v2)
+        buf = msg.pack(codec, force_mavlink1=not self._peer.mavlink2)
         codec.seq = (codec.seq + 1) % 256
         signing.note_sent(codec)
         return buf
@@ -117,16 +126,16 @@ class Ticker:
     def _write_group(self, frames) -> None:
         """Frames in one write, all or none (caller holds _tx_lock); the .tlog keeps a record per frame of what
         really went out."""
-        if self._transport.write(frames[0] if len(frames) == 1 else b"".join(frames)) and self._v._tlog:
+        if self._transport.write(frames[0] if len(frames) == 1 else b"".join(frames)) and self._tlog is not None:
             for frame in frames:
-                self._v._tlog.write(frame)
+                self._tlog.write(frame)
 
     def heartbeat_message(self):
         return mavlink.MAVLink_heartbeat_message(mavlink.MAV_TYPE_GCS, mavlink.MAV_AUTOPILOT_INVALID, 0, 0,
                                                  mavlink.MAV_STATE_ACTIVE, 3)
 
     def setpoint_message(self, sp: Setpoint):
-        system, component = self._v._target_ids()
+        system, component = self._peer.target()
         return mavlink.MAVLink_set_position_target_local_ned_message(
             0, system, component, mavlink.MAV_FRAME_BODY_OFFSET_NED,
             MASK_VELOCITY_YAW_RATE, 0, 0, 0, sp.forward, sp.right, -sp.up, 0, 0, 0, 0, sp.yaw_rate)
@@ -136,7 +145,7 @@ class Ticker:
         SET_POSITION_TARGET_LOCAL_NED ("for future use" in its GCS_Mavlink): body velocities are turned to
         north/east here, with the heading the vehicle reports, and the nose is steered with CONDITION_YAW
         heading targets a little ahead of it (else the vehicle turns its nose to the direction of travel)."""
-        system, component = self._v._target_ids()
+        system, component = self._peer.target()
         yaw = self._store.state.attitude.yaw
         c, s = math.cos(yaw), math.sin(yaw)
         out = [mavlink.MAVLink_set_position_target_local_ned_message(
@@ -168,18 +177,11 @@ class Ticker:
             with self._lock:
                 self._sequence.step(now)
                 out += self._stream_setpoint(now)
-                out += self._commands.service(now, self._store.state)
-                out += self._params.service(now, self._link.status)
-                out += self._v._payload.service(now, self._store.state)
-                out += self._v._missions.service(now, self._store.state)
-                out += self._v.setup.service(now, self._store.state)
-                out += self._v.logs.service(now, self._store.state)
+                for service in self._services:
+                    out += service(now, self._store.state)
                 if now >= self._next_health:
                     self._next_health = now + 0.1
                     out += self._supervise(now)
-                    frames_out, settled = self._signing.service(now, self._v._target_ids(), self.new_encoder)
-                    out += frames_out
-                    self._v._signing_control.settle(settled)
                 out = self._screen(out, now)
         except Exception:                             # heartbeat, setpoints and deadman must outlive any bug
             log.exception("ticker step failed")
@@ -210,12 +212,12 @@ class Ticker:
     def run(self) -> None:
         next_flush = 0.0
         while not self._closing.is_set():
-            now = self._v.clock()
+            now = self._clock()
             self._soon = None
             self.send_all(self.step(now))             # outside the lock: a slow link stalls nobody else
-            if self._v._tlog is not None and now >= next_flush:
+            if self._tlog is not None and now >= next_flush:
                 next_flush = now + LOG_FLUSH_INTERVAL
-                self._v._tlog.flush()
+                self._tlog.flush()
             wait = min(0.05, 1.0 / self.config.setpoint_rate)
             self._wake.wait(wait if self._soon is None else min(wait, self._soon))
             self._wake.clear()
@@ -223,22 +225,22 @@ class Ticker:
     def _supervise(self, now: float) -> list:
         """Link health, loss, log failures and requests to the vehicle; republishes every 100 ms."""
         store = self._store
-        if self._v._tlog is not None and self._v._tlog.error:
-            error, self._v._tlog = self._v._tlog.error, None
-            store.add_message_locked(Severity.WARNING, f"Flight log stopped: {error}")
+        version = self._peer.version
+        if self._tlog is not None and self._tlog.error and not self._tlog_told:
+            self._tlog_told = True                    # (the writer stopped itself: it writes nothing more)
+            store.add_message_locked(Severity.WARNING, f"Flight log stopped: {self._tlog.error}")
         out, event, reopen = self._link.tick(now)
         if reopen:
-            self._v._reader.reopen = True
-        store.set(link=self._link.health(self._v._version), signing=self._signing.snapshot(self._v._version))
+            self._reopen()
+        store.set(link=self._link.health(version), signing=self._signing.snapshot(version))
         for ip, port in self._transport.strangers():
             store.add_message_locked(Severity.WARNING, f"Ignored MAVLink from {ip}:{port}: the link is pinned to the "
-                                     f"vehicle at {self._link.health(self._v._version).pinned_to} (--allow {ip} "
+                                     f"vehicle at {self._link.health(version).pinned_to} (--allow {ip} "
                                      "accepts that sender)")
         store.publish()
         if event == "lost":
-            age = self._link.health(self._v._version).heartbeat_age or 0.0
+            age = self._link.health(version).heartbeat_age or 0.0
             store.add_message_locked(Severity.CRITICAL, f"Link lost: no heartbeat for {age:.1f} s")
-            self._params.link_lost()
         elif event == "finished":
             store.add_message_locked(Severity.NOTICE, "Replay ended: the whole recording has been played")
         return out
@@ -252,6 +254,6 @@ class Ticker:
             self._yaw_held = False                    # the next stick movement holds the heading it finds
         if sp is None or self._store.state.mode != "GUIDED":
             return []
-        if self._commands.capabilities.setpoint_yaw is False:
+        if self._firmware.body_frame_velocity is False:
             return self._legacy_setpoint_messages(sp, now)
         return [self.setpoint_message(sp)]

@@ -25,6 +25,7 @@ from dataclasses import dataclass, field, replace
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from ..core import frames
+from ..core.firmware import FirmwareProfile
 from ..core.roundtrip import RoundTrip
 from ..link.forwarding import Forwarder
 from ..link.signing import LinkSigning, SigningConfig
@@ -33,13 +34,17 @@ from ..link.tlog import ReplayControl, TlogWriter
 from ..mission.plan import Plan, PlanKind
 from ..params.manager import ParameterManager
 from ..params.setter import SET_RETRY
-from ..payload.control import Payload
+from ..payload.control import PAYLOAD_MESSAGES, Payload
 from ..logs.control import LogControl
-from ..setup.control import VehicleSetup
+from ..setup.control import SETUP_MESSAGES, VehicleSetup
 from .api import CEILING, Drone, Limits
+from .command_path import REPLAYING, CommandPath
 from .commands import CommandSender, Notifier, command_name
-from .missions import MissionControl
+from .inbox import Inbox
+from .inspector import MessageInspector
+from .missions import MISSION_MESSAGES, MissionControl
 from .parameters import Parameters
+from .peer import Peer
 from .ports import SequencePilot, vehicle_ports
 from .reader import Reader
 from .rules import (
@@ -114,55 +119,91 @@ class Vehicle(Drone):
         self._transport = open_transport(cfg.connection, cfg.baud, cfg.source_system,
                                          cfg.source_component, cfg.replay_speed, cfg.allowed_senders)
         self._replay = ReplayControl(self._transport) if self._transport.is_replay else None
+        replaying = self._replay is not None
         self._signing = LinkSigning(cfg.signing, self._transport.description)
-        self._v2 = cfg.mavlink_version == 2
+        self._peer = Peer(cfg.target_system, cfg.target_component, cfg.mavlink_version)   # who we talk to, and how
+        self._firmware = FirmwareProfile(lambda: self._peer.mavlink2)   # what its firmware does differently
+        self._roundtrip = RoundTrip(initial=cfg.command_timeout / 3)    # the link's round trip, one estimate for all
         self._tlog = TlogWriter(cfg.tlog_path, cfg.tlog_append) if cfg.tlog_path and not self._replay else None
         battery = Battery(cells=cfg.battery_cells, cells_source="configured") if cfg.battery_cells else Battery()
         battery = replace(battery, thresholds=cfg.battery_thresholds)
         self._store = StateStore(VehicleState(link=LinkHealth(address=self._transport.description), battery=battery),
                                  self._transport.wall_time)
         self._lock = self._store.lock
-        self._target = cfg.target_system
-        self._autopilot = cfg.target_component       # 0: any component speaks for the vehicle
         self._notifier = Notifier()
         self._rules = FlightRules(lambda now, judged: not all(  # the flight rules every message passes (safety)
             self._commands.settled_by_state(c, now, pending=c != judged)
             for c in (mavlink.MAV_CMD_COMPONENT_ARM_DISARM, mavlink.MAV_CMD_DO_MOTOR_TEST)))
-        self._roundtrip = RoundTrip(initial=cfg.command_timeout / 3)    # the link's round trip, one estimate for all
-        self._commands = CommandSender(self._store, cfg, self._notifier, self._target_ids, self._rules,
-                                       self._roundtrip)
-        self._link = LinkSupervisor(cfg, self._transport, self._commands.capabilities, self._target_ids, clock)
-        self._params = ParameterManager(self._store, self._notifier, self._target_ids, 2 * cfg.loss_timeout,
-                                        cfg.param_retry)
+        self._commands = CommandSender(self._store, cfg, self._notifier, self._peer.target, self._firmware,
+                                       self._rules, self._roundtrip)
+        self._link = LinkSupervisor(cfg, self._transport, self._firmware, self._peer.target, clock)
+        self._params = ParameterManager(self._store, self._notifier, self._peer.target, self._firmware,
+                                        2 * cfg.loss_timeout, cfg.param_retry)
         self._params.use_ftp = cfg.param_ftp
         self._setpoints = SetpointStreamer(cfg.deadman, cfg.setpoint_rate)
-        self._payload = Payload(self)         # gimbal, region of interest, camera (driver.payload)
         self._sequence = SequenceSlot(self._store, self._commands, self._notifier, clock)   # the flight's sequences
-        self._pilot = SequencePilot(                   # what a sequence is handed (driver.vehicle.sequences.machine)
-            state=self.state, airborne=lambda: self._rules.may_be_airborne(self.state()), mode=self._set_mode,
-            arm=lambda early=False: self._arming(True, early=early),
-            disarm=lambda: self._command_long(mavlink.MAV_CMD_COMPONENT_ARM_DISARM, (0, 0), "disarm"),
-            long=self._command_long, retry_interval=lambda: min(cfg.command_timeout, self._roundtrip.timeout()),
-            hold=self._hold, quiet=lambda command: self._commands.settled_by_state(command, self.clock()))
         self._limits = cfg.limits.within(CEILING)
         self._wake = threading.Event()
         self._closing = threading.Event()
         self._threads: list[threading.Thread] = []
-        self._ticker_thread: threading.Thread | None = None
         self._started = False
+        self._path = CommandPath(self._store, self._rules, self._commands, self._sequence, clock, self._wake,
+                                 replaying)           # every command's one way (the flight rules, the sender)
+        self._pilot = SequencePilot(                   # what a sequence is handed (driver.vehicle.sequences.machine)
+            state=self.state, airborne=lambda: self._rules.may_be_airborne(self.state()), mode=self._path.mode,
+            arm=lambda early=False: self._path.arming(True, early=early),
+            disarm=lambda: self._path.long(mavlink.MAV_CMD_COMPONENT_ARM_DISARM, (0, 0), "disarm"),
+            long=self._path.long, retry_interval=lambda: min(cfg.command_timeout, self._roundtrip.timeout()),
+            hold=self._hold, quiet=lambda command: self._commands.settled_by_state(command, self.clock()))
         # the parts that do the work, each one job (see the module's docstring)
-        self._ticker = Ticker(self)                    # the ticker thread and the one way out to the link
+        self._ticker = Ticker(                         # the ticker thread and the one way out to the link
+            config=cfg, clock=clock, transport=self._transport, signing=self._signing, store=self._store,
+            link=self._link, rules=self._rules, peer=self._peer, firmware=self._firmware, sequence=self._sequence,
+            setpoints=self._setpoints, tlog=self._tlog, closing=self._closing, wake=self._wake,
+            reopen=lambda: self._reader.ask_reopen())
         #: the narrow services the parts are handed (driver.core.ports), instead of this vehicle
-        self.ports = vehicle_ports(clock, self._store, self._ticker, self._wake, self._target_ids, lambda: self._v2,
-                                   self._command_long, self._set_mode, self._finish,
-                                   lambda command: self._commands.settled_by_state(command, clock()), self._notifier)
-        self._parameters = Parameters(self)            # parameter table, cache, checked writes, metadata
-        self._signing_control = SigningControl(self)   # keys and SETUP_SIGNING
+        self.ports = ports = vehicle_ports(
+            clock=clock, store=self._store, ticker=self._ticker, wake=self._wake, peer=self._peer,
+            commands=self._path, settler=self._notifier, firmware=self._firmware, roundtrip=self._roundtrip,
+            replaying=replaying)
+        self._payload = Payload(ports.state, ports.outbox, ports.commands, ports.settler, clock, self._firmware,
+                                replaying)            # gimbal, region of interest, camera (driver.payload)
+        self._parameters = Parameters(cfg, ports, self._params)   # parameter table, cache, checked writes, metadata
+        self._signing_control = SigningControl(self._signing, self._peer, ports)   # keys and SETUP_SIGNING
         self._forwarder = Forwarder(cfg.outputs, cfg.baud, self._ticker.forward_to_vehicle,
                                     lambda text: self._store.add_message(Severity.WARNING, text), self._closing)
-        self._missions = MissionControl(self)          # transfers, mission state, AUTO (driver.vehicle.missions)
-        self.setup, self.logs = VehicleSetup(self), LogControl(self)     # calibrations, motor test, traffic; logs
-        self._reader = Reader(self)                    # the reader thread: parse, fold, dispatch (built last)
+        self._missions = MissionControl(cfg, ports, self.set_mode)   # transfers, mission state, AUTO
+        self.setup = VehicleSetup(ports.state, ports.outbox, ports.commands, ports.settler, clock, self._firmware)
+        self.logs = LogControl(self)                   # the DataFlash logs (driver.logs)
+        self.inspector = MessageInspector(clock)       # what the link carries: Drone.inspection()
+        self._inbox = Inbox()                          # what the vehicle says, to the parts that asked
+        self._reader = Reader(                         # the reader thread: parse, fold, dispatch
+            config=cfg, clock=clock, transport=self._transport, signing=self._signing, store=self._store,
+            link=self._link, peer=self._peer, commands=self._commands, firmware=self._firmware, inbox=self._inbox,
+            tlog=self._tlog, forwarder=self._forwarder, inspector=self.inspector, closing=self._closing,
+            wake=self._wake, greet=lambda: self._ticker.send(self._ticker.heartbeat_message()))
+        self._wire()
+
+    def _wire(self) -> None:
+        """Each part hears its messages and does its periodic work, in this order (the reader's and the ticker's)."""
+        inbox, serve = self._inbox, self._ticker.serve
+        inbox.on(PAYLOAD_MESSAGES, self._payload.on_message, any_component=True)
+        inbox.on("HEARTBEAT", self._signing_control.on_heartbeat)
+        inbox.on_text(self._signing_control.on_text)
+        inbox.on_text(self._missions.on_text)
+        inbox.on_text(self.logs.on_text)                # 'Disarm for log download'
+        inbox.on("PARAM_VALUE", self._parameters.on_param_value)
+        inbox.on("PARAM_VALUE", self._missions.on_param_value)
+        inbox.on(MISSION_MESSAGES, self._missions.on_message)
+        inbox.on(SETUP_MESSAGES, self.setup.on_message)
+        inbox.on(("LOG_ENTRY", "LOG_DATA"), self.logs.on_message)
+        inbox.on("FILE_TRANSFER_PROTOCOL", self._parameters.on_ftp)
+        inbox.on("FILE_TRANSFER_PROTOCOL", self.logs.on_ftp)
+        link = self._link
+        serve(self._commands.service)
+        serve(lambda now, state: self._params.service(now, link.status, link.lost_count))
+        for part in (self._payload, self._missions, self.setup, self.logs, self._signing_control):
+            serve(part.service)
 
     # -- lifecycle ---------------------------------------------------------------------------------
     @property
@@ -201,7 +242,6 @@ class Vehicle(Drone):
             t = threading.Thread(target=target, name=name, daemon=True)
             t.start()
             self._threads.append(t)
-        self._ticker_thread = self._threads[-1]
         self._threads += self._forwarder.start()
         threading.Thread(target=self._parameters.metadata, name="param-metadata", daemon=True).start()
         return self
@@ -225,7 +265,7 @@ class Vehicle(Drone):
         with self._lock:
             self._commands.abort_all("driver closed")
             self._params.abort_all("driver closed")
-            self._store.set(link=self._link.health(self._version, LinkStatus.CLOSED))
+            self._store.set(link=self._link.health(self._peer.version, LinkStatus.CLOSED))
             self._store.publish()
         self._notifier.close()
         self._signing.save()
@@ -253,12 +293,8 @@ class Vehicle(Drone):
         """Block until ``predicate(state)`` holds; for tests and the console, never the UI thread."""
         return self._store.wait_for(predicate, timeout, self._closing)
 
-    @property
-    def _version(self) -> int:
-        return 2 if self._v2 else 1
-
     def _target_ids(self) -> tuple[int, int]:
-        return self._target or 1, self.config.target_component
+        return self._peer.target()
 
     # -- the link, both ways (driver.vehicle.reader, driver.vehicle.ticker) ------------------------
     def ingest(self, data: bytes, publish: bool = False) -> int:
@@ -270,84 +306,23 @@ class Vehicle(Drone):
         self._ticker.post(msg)
 
     # -- commands ----------------------------------------------------------------------------------
-    # Every command goes through one path (_command_long, _set_mode: the command sender, which checks the flight
-    # rules before each attempt) and every message out through the ticker's screen (driver.vehicle.safety).
+    # Every command goes through one path (driver.vehicle.command_path: the flight rules, then the command sender)
+    # and every message out through the ticker's screen (driver.vehicle.safety).
     def command_long(self, command: int, params=(), name: str | None = None, *, guard=None) -> Future:
         """Send any MAV_CMD as COMMAND_LONG with ACK handling and retries, within the flight rules."""
         name = name or command_name(command)
-        return self._busy(name) or self._command_long(command, params, name, guard=guard)
-
-    def _command_long(self, command: int, params=(), name: str | None = None, *, guard=None,
-                      retry: float | None = None, early: bool = False) -> Future:
-        name = name or command_name(command)
-        params = [float(p) for p in (list(params) + [0.0] * 7)[:7]]
-        if not frames.finite(*params):
-            return self._finish(name, CommandStatus.REJECTED, "parameter is not a finite number")
-        if self._replay is not None:
-            return self._finish(name, CommandStatus.REJECTED, "replaying a recording: no vehicle to command")
-        with self._lock:
-            problem = self._rules.command_problem(command, params, self.state(), self.clock())
-            if problem:
-                return self._finish(name, CommandStatus.REJECTED, problem)
-            future = self._commands.submit(name, command, params, self.clock(), guard=guard,
-                                           tag=self._sequence.tag, retry=retry, early=early)
-        self._wake.set()
-        return future
-
-    def _finish(self, command: str, status: CommandStatus, reason: str = "") -> Future:
-        f: Future = Future()
-        f.set_result(self._store.record(command, status, reason))
-        return f
-
-    def _busy(self, command: str) -> Future | None:
-        """While a takeoff or mission start runs, only Land, Stop and RTL (each of which ends it)."""
-        seq = self._sequence.exclusive
-        if seq is not None:
-            return self._finish(command, CommandStatus.REJECTED, f"{seq.name} in progress: only Land, Stop and RTL")
-        return None
+        return self._path.busy(name) or self._path.long(command, params, name, guard=guard)
 
     def set_mode(self, name: str) -> Future:
-        busy = self._busy(f"mode {name}")
+        busy = self._path.busy(f"mode {name}")
         if busy:
             return busy
         with self._lock:
             self._sequence.end(f"mode {name.upper()} asked")
-        return self._set_mode(name)
-
-    def _set_mode(self, name: str, *, early: bool = False, ask: bool = False) -> Future:
-        """A mode change through the flight rules; ``ask``: sent even if the state shows the mode already (it may
-        be stale: a command on its way, a MISSION_START, may have changed it)."""
-        number = COPTER_MODES.get(name.upper())
-        if number is None:
-            return self._finish(f"mode {name}", CommandStatus.REJECTED,
-                                f"unknown mode; known: {', '.join(sorted(COPTER_MODES))}")
-        if self._replay is not None:
-            return self._finish(f"mode {name.upper()}", CommandStatus.REJECTED,
-                                "replaying a recording: no vehicle to command")
-        with self._lock:
-            s = self.state()
-            problem = self._rules.mode_problem(number, s)
-            if problem:
-                return self._finish(f"mode {name.upper()}", CommandStatus.REJECTED, problem)
-            if not ask and s.mode == name.upper() and s.connected and self._commands.settled_by_state(
-                    mavlink.MAV_CMD_DO_SET_MODE, self.clock()):
-                return self._finish(f"mode {name.upper()}", CommandStatus.ACCEPTED, "already in that mode")
-            future = self._commands.submit_mode(f"mode {name.upper()}", number, self.clock(),
-                                                tag=self._sequence.tag, early=early)
-        self._wake.set()
-        return future
+        return self._path.mode(name)
 
     def arm(self, force: bool = False) -> Future:
-        return self._busy("arm") or self._arming(True, force)
-
-    def _arming(self, armed: bool, force: bool = False, early: bool = False) -> Future:
-        name = ("arm" if armed else "disarm") + (" (forced)" if force else "")
-        with self._lock:
-            if self.state().armed == armed and self._commands.settled_by_state(mavlink.MAV_CMD_COMPONENT_ARM_DISARM,
-                                                                                self.clock()):
-                return self._finish(name, CommandStatus.ACCEPTED, f"already {'armed' if armed else 'disarmed'}")
-        return self._command_long(mavlink.MAV_CMD_COMPONENT_ARM_DISARM, (1 if armed else 0,
-                                  ARM_FORCE_MAGIC if force else 0), name, early=early)
+        return self._path.busy("arm") or self._path.arming(True, force)
 
     def disarm(self, force: bool = False, emergency: bool = False) -> Future:
         """A disarm on the ground; in the air (or maybe in the air) only the emergency motor stop, which the pilot
@@ -356,9 +331,9 @@ class Vehicle(Drone):
             with self._lock:
                 self._sequence.end("emergency motor stop")
                 self._rules.allow_emergency_stop(self.clock())
-            return self._command_long(mavlink.MAV_CMD_COMPONENT_ARM_DISARM, (0, ARM_FORCE_MAGIC),
+            return self._path.long(mavlink.MAV_CMD_COMPONENT_ARM_DISARM, (0, ARM_FORCE_MAGIC),
                                       "emergency motor stop")
-        return self._busy("disarm") or self._arming(False, force)
+        return self._path.busy("disarm") or self._path.arming(False, force)
 
     def land(self) -> Future:
         """LAND, always taken: it ends whatever runs (a takeoff, a mission start, a Stop)."""
@@ -377,7 +352,7 @@ class Vehicle(Drone):
         holding (GUIDED at zero velocity, BRAKE if GUIDED is refused) or on the ground disarmed, never in a mode
         that needs a throttle stick (driver.vehicle.sequences.stop)."""
         if self._replay is not None:
-            return self._finish("stop", CommandStatus.REJECTED, "replaying a recording: no vehicle to command")
+            return self._path.answer("stop", CommandStatus.REJECTED, REPLAYING)
         with self._lock:
             now = self.clock()
             ended = self._sequence.end("stop")
@@ -401,7 +376,7 @@ class Vehicle(Drone):
     def _replace_sequence(self, seq, why: str) -> Future:
         """Start ``seq`` in the slot, ending whatever runs there (Land and RTL win over any sequence)."""
         if self._replay is not None:
-            return self._finish(seq.name, CommandStatus.REJECTED, "replaying a recording: no vehicle to command")
+            return self._path.answer(seq.name, CommandStatus.REJECTED, REPLAYING)
         with self._lock:
             self._sequence.end(why)
             self._sequence.start(seq)
@@ -409,26 +384,26 @@ class Vehicle(Drone):
         return seq.future
 
     def reboot(self) -> Future:
-        return self._busy("reboot") or self._command_long(mavlink.MAV_CMD_PREFLIGHT_REBOOT_SHUTDOWN, (1,), "reboot")
+        return self._path.busy("reboot") or self._path.long(mavlink.MAV_CMD_PREFLIGHT_REBOOT_SHUTDOWN, (1,), "reboot")
 
     def calibrate_level(self) -> Future:
         """Level (accelerometer trim) calibration; only sensible disarmed on the ground."""
-        return self._busy("level calibration") or self._command_long(
+        return self._path.busy("level calibration") or self._path.long(
             mavlink.MAV_CMD_PREFLIGHT_CALIBRATION, (0, 0, 0, 0, 2, 0, 0), "level calibration")
 
     def parachute(self, action: str) -> Future:
         actions = {"disable": mavlink.PARACHUTE_DISABLE, "enable": mavlink.PARACHUTE_ENABLE,
                    "release": mavlink.PARACHUTE_RELEASE}
         if action not in actions:
-            return self._finish(f"parachute {action}", CommandStatus.REJECTED, "use enable, disable or release")
+            return self._path.answer(f"parachute {action}", CommandStatus.REJECTED, "use enable, disable or release")
         # never blocked by a takeoff: a parachute is the last resort
-        return self._command_long(mavlink.MAV_CMD_DO_PARACHUTE, (actions[action],), f"parachute {action}")
+        return self._path.long(mavlink.MAV_CMD_DO_PARACHUTE, (actions[action],), f"parachute {action}")
 
     def set_safety(self, on: bool) -> Future:
         """Safety switch on (motors locked) or off, as MAVProxy's ``arm safetyon/safetyoff``."""
         self._post(mavlink.MAVLink_set_mode_message(
             self._target_ids()[0], mavlink.MAV_MODE_FLAG_DECODE_POSITION_SAFETY, 1 if on else 0))
-        return self._finish(f"safety {'on' if on else 'off'}", CommandStatus.ACCEPTED, "sent (not acknowledged)")
+        return self._path.answer(f"safety {'on' if on else 'off'}", CommandStatus.ACCEPTED, "sent (not acknowledged)")
 
     # -- parameters (driver.vehicle.parameters) ----------------------------------------------------
     def fetch_parameters(self, refresh: bool = False) -> Future:
@@ -500,21 +475,21 @@ class Vehicle(Drone):
 
     def go_to(self, north: float, east: float, altitude: float) -> Future:
         if not frames.finite(north, east, altitude):
-            return self._finish("go to", CommandStatus.REJECTED, "coordinates are not finite numbers")
+            return self._path.answer("go to", CommandStatus.REJECTED, "coordinates are not finite numbers")
         name = f"go to N{north:.1f} E{east:.1f} alt {altitude:.1f}"
         cfg = self.config
         problem = (go_to_problem(north, east, altitude, cfg.max_altitude, cfg.max_distance)
                    or self.state().fence.destination_problem(north, east, altitude))
         if problem:
-            return self._finish(name, CommandStatus.REJECTED, problem)
-        busy = self._busy(name)
+            return self._path.answer(name, CommandStatus.REJECTED, problem)
+        busy = self._path.busy(name)
         if busy:
             return busy
         s = self.state()
         if s.mode != "GUIDED" or not s.flying:
-            return self._finish(name, CommandStatus.REJECTED, f"needs GUIDED and flying (mode {s.mode or '?'})")
+            return self._path.answer(name, CommandStatus.REJECTED, f"needs GUIDED and flying (mode {s.mode or '?'})")
         if s.home is None:
-            return self._finish(name, CommandStatus.REJECTED, "the vehicle has not sent its home position yet")
+            return self._path.answer(name, CommandStatus.REJECTED, "the vehicle has not sent its home position yet")
         with self._lock:                              # a velocity stream would override the target
             self._setpoints.silence()
             self._store.set(setpoint=self._setpoints.setpoint)
@@ -524,12 +499,12 @@ class Vehicle(Drone):
         self._post(mavlink.MAVLink_set_position_target_global_int_message(
             0, system, component, mavlink.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT,
             MASK_POSITION, int(round(lat * 1e7)), int(round(lon * 1e7)), float(altitude), 0, 0, 0, 0, 0, 0, 0, 0))
-        return self._finish(name, CommandStatus.ACCEPTED, "target sent")
+        return self._path.answer(name, CommandStatus.ACCEPTED, "target sent")
 
     def set_yaw(self, degrees: float, relative: bool = False, rate_deg_s: float = 30.0) -> Future:
         if not frames.finite(degrees, rate_deg_s):
-            return self._finish("yaw", CommandStatus.REJECTED, "angle is not a finite number")
-        busy = self._busy("yaw")
+            return self._path.answer("yaw", CommandStatus.REJECTED, "angle is not a finite number")
+        busy = self._path.busy("yaw")
         if busy:
             return busy
         if self.state().mode == "GUIDED" and self._setpoints.setpoint.is_zero:
@@ -539,7 +514,7 @@ class Vehicle(Drone):
             self._post(self._ticker.setpoint_message(Setpoint()))
         direction = (1 if degrees >= 0 else -1) if relative else 0
         angle = abs(degrees) if relative else degrees % 360.0
-        return self._command_long(mavlink.MAV_CMD_CONDITION_YAW,
+        return self._path.long(mavlink.MAV_CMD_CONDITION_YAW,
                                   (angle, abs(rate_deg_s), direction, 1 if relative else 0),
                                   f"yaw {'by' if relative else 'to'} {degrees:g}°")
 
@@ -548,11 +523,11 @@ class Vehicle(Drone):
         alt = self.config.takeoff_altitude if altitude is None else altitude
         problem = takeoff_altitude_problem(alt, self.config.max_altitude)
         if problem:
-            return self._finish("takeoff", CommandStatus.REJECTED, problem)
+            return self._path.answer("takeoff", CommandStatus.REJECTED, problem)
         if self._replay is not None:
-            return self._finish("takeoff", CommandStatus.REJECTED, "replaying a recording: no vehicle to command")
+            return self._path.answer("takeoff", CommandStatus.REJECTED, REPLAYING)
         if self.state().flying:
-            return self._finish("takeoff", CommandStatus.REJECTED, "already flying")
+            return self._path.answer("takeoff", CommandStatus.REJECTED, "already flying")
         return self._run_sequence(TakeoffSequence(self._pilot, alt, self.config, self.clock()))
 
     def _run_sequence(self, seq) -> Future:
@@ -560,7 +535,7 @@ class Vehicle(Drone):
         with self._lock:                              # check and start as one step: never two
             if not self._sequence.start(seq):
                 running = self._sequence.exclusive
-                return self._finish(seq.name, CommandStatus.REJECTED, f"a {running.name} is already running")
+                return self._path.answer(seq.name, CommandStatus.REJECTED, f"a {running.name} is already running")
         self._wake.set()
         return seq.future
 
@@ -578,20 +553,20 @@ class Vehicle(Drone):
         self._missions.cancel(kind)
 
     def start_mission(self) -> Future:
-        problem = ("replaying a recording: no vehicle to command" if self._replay is not None
+        problem = (REPLAYING if self._replay is not None
                    else self._missions.start_problem(self.state()))
         if problem:
-            return self._finish("mission start", CommandStatus.REJECTED, problem)
+            return self._path.answer("mission start", CommandStatus.REJECTED, problem)
         return self._run_sequence(MissionStartSequence(self._pilot, self.config, self.clock()))
 
     def pause_mission(self) -> Future:
-        return self._busy("mission pause") or self._missions.pause()
+        return self._path.busy("mission pause") or self._missions.pause()
 
     def resume_mission(self) -> Future:
-        return self._busy("mission resume") or self._missions.resume()
+        return self._path.busy("mission resume") or self._missions.resume()
 
     def set_mission_item(self, seq: int) -> Future:
-        return self._busy(f"mission item {seq}") or self._missions.go_to_item(seq)
+        return self._path.busy(f"mission item {seq}") or self._missions.go_to_item(seq)
 
     def _end_sequence(self, why: str) -> None:
         """End what runs in the sequence slot (driver.vehicle.sequences), cancelling what it asked."""

@@ -1,7 +1,7 @@
 """Setup › Sensors: gyro, barometer, level, the six-position accelerometer calibration (a drawing of each asked
 position and Next), the compass (progress per compass, fitness, Accept / Cancel) and the compass from a known
 yaw. What the vehicle says (its STATUSTEXT) is shown as it comes, and its verdict is the result; a firmware that
-lacks a calibration says so (driver.setup.availability) instead of failing."""
+lacks a calibration says so (driver.core.firmware) instead of failing."""
 from __future__ import annotations
 
 from PyQt5.QtWidgets import (
@@ -9,7 +9,7 @@ from PyQt5.QtWidgets import (
     QVBoxLayout, QWidget,
 )
 
-from driver.setup.availability import unavailable
+from driver.core.firmware import unavailable
 from driver.setup.model import AccelStep
 
 from .accel_pose import AccelPose

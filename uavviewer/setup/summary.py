@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from driver.setup.availability import unavailable
+from driver.core.firmware import unavailable
 
 from .failsafe_words import failsafes
 from .radio_calibration import throttle_channel
