@@ -34,10 +34,10 @@ def test_driver_never_imports_qt():
 #: The driver's folders from the ground up: a module may import its own folder and any folder on a lower floor, never
 #: one on its own floor or above. The loose modules at the top (options, __main__) stand above everything they start.
 FLOORS = {
-    "driver.core": 0, "driver.version": 0, "driver.ftp": 0,
-    "driver.link": 1, "driver.mission": 1, "driver.params": 1, "driver.payload": 1, "driver.traffic": 1,
-    "driver.logs": 1, "driver.review": 1,
-    "driver.setup": 2,
+    "driver.core": 0, "driver.version": 0,
+    "driver.link": 1, "driver.mission": 1, "driver.payload": 1, "driver.traffic": 1, "driver.review": 1,
+    "driver.ftp": 1,
+    "driver.setup": 2, "driver.params": 2, "driver.logs": 2,
     "driver.vehicle": 3,
     "driver.camera": 4,
     "driver.console": 5, "driver.ice": 5,
@@ -150,6 +150,84 @@ def test_the_vehicle_facade_stays_small():
         lines = sum(1 for _ in f)
     assert lines <= MAX_FACADE_LINES, f"driver/vehicle/vehicle.py has {lines} lines: move a job into its part"
 
+
+
+# -- one round-trip policy ------------------------------------------------------------------------------------------
+#: The one place a round trip is estimated and a timeout made from it (RFC 6298, Karn's rule and backoff).
+ROUND_TRIP_POLICY = "driver/core/roundtrip.py"
+#: Where a RoundTrip may be made: the vehicle's one, and a lone FTP read's own (a read outside a vehicle).
+ROUND_TRIP_MADE_IN = {"driver/vehicle/vehicle.py", "driver/ftp/reader.py", ROUND_TRIP_POLICY}
+#: Modules allowed to keep a round trip of their own, each with why (to be emptied, never grown).
+ROUND_TRIP_ALLOWED = {
+    "driver/logs/control.py": "being split apart (logs on ports): moves onto the vehicle's RoundTrip after that",
+}
+
+
+def _driver_sources(skip_sim: bool = True):
+    """(relative path, parsed module) of every driver module (the simulator aside: it plays the vehicle)."""
+    import ast
+    for folder, _dirs, files in os.walk(os.path.join(ROOT, "driver")):
+        for name in sorted(files):
+            if not name.endswith(".py"):
+                continue
+            rel = os.path.relpath(os.path.join(folder, name), ROOT).replace(os.sep, "/")
+            if skip_sim and rel.startswith("driver/sim/"):
+                continue
+            with open(os.path.join(ROOT, rel), encoding="utf-8") as f:
+                yield rel, ast.parse(f.read())
+
+
+def _named_like_a_round_trip(target) -> bool:
+    import ast
+    name = target.id if isinstance(target, ast.Name) else target.attr if isinstance(target, ast.Attribute) else ""
+    return any(word in name.lower() for word in ("rtt", "round_trip", "roundtrip"))
+
+
+def round_trips_computed(rel: str, tree) -> list[str]:
+    """Where ``tree`` works out a round trip itself: a value computed into a name like one (an average, a
+    difference of times), or a RoundTrip made outside :data:`ROUND_TRIP_MADE_IN`. Handing the vehicle's on (a
+    name, an attribute, None) is no estimate."""
+    import ast
+    found = []
+    for node in ast.walk(tree):
+        if isinstance(node, (ast.Assign, ast.AugAssign, ast.AnnAssign)):
+            targets = node.targets if isinstance(node, ast.Assign) else [node.target]
+            value = node.value
+            handed = value is None or isinstance(value, (ast.Name, ast.Attribute)) or (
+                isinstance(value, ast.Constant) and value.value is None) or (
+                isinstance(value, ast.Call) and getattr(value.func, "id", "") == "RoundTrip")
+            if isinstance(node, ast.AugAssign):
+                handed = False
+            flat = [t for target in targets for t in (target.elts if isinstance(target, ast.Tuple) else [target])]
+            if not handed and any(_named_like_a_round_trip(t) for t in flat):
+                found.append(f"{rel}:{node.lineno}: {ast.unparse(node)[:80]}")
+        if isinstance(node, ast.Call) and getattr(node.func, "id", "") == "RoundTrip" and \
+                rel not in ROUND_TRIP_MADE_IN:
+            found.append(f"{rel}:{node.lineno}: a RoundTrip of its own")
+    return found
+
+
+def test_one_round_trip_policy():
+    """Commands, the mission transfer, the parameter download and MAVLink FTP all wait the vehicle's one
+    RoundTrip's timeout and feed it their clean answers: no module keeps an estimator and gains of its own."""
+    found, allowed = [], []
+    for rel, tree in _driver_sources():
+        if rel == ROUND_TRIP_POLICY:
+            continue
+        (allowed if rel in ROUND_TRIP_ALLOWED else found).extend(round_trips_computed(rel, tree))
+    assert found == [], "\n".join(found)
+    stale = [rel for rel in ROUND_TRIP_ALLOWED if not any(a.startswith(rel + ":") for a in allowed)]
+    assert stale == [], f"remove from ROUND_TRIP_ALLOWED: {stale}"
+
+
+def test_the_round_trip_check_finds_an_estimator_of_its_own():
+    import ast
+    smoothed = ast.parse("class Download:\n    def arrived(self, sent, now):\n"
+                         "        self.rtt = 0.8 * self.rtt + 0.2 * (now - sent)\n")
+    handed = ast.parse("class Download:\n    def __init__(self, roundtrip):\n        self.roundtrip = roundtrip\n")
+    assert round_trips_computed("driver/params/download.py", smoothed)
+    assert not round_trips_computed("driver/params/download.py", handed)
+    assert round_trips_computed("driver/mission/transfer.py", ast.parse("rt = RoundTrip(initial=0.1)"))
 
 # -- the viewer by feature (docs/architecture.md): one folder per thing a pilot does ------------------------------
 VIEWER = os.path.join(ROOT, "uavviewer")

@@ -20,6 +20,7 @@ import param_cells  # noqa: E402
 import transfer_matrix  # noqa: E402
 import verdicts  # noqa: E402
 from driver.core.firmware import FirmwareProfile  # noqa: E402
+from driver.core.roundtrip import RoundTrip  # noqa: E402
 from driver.mission.plan import PlanKind  # noqa: E402
 from driver.mission.transfer import PlanTransfers  # noqa: E402
 
@@ -27,7 +28,7 @@ from driver.mission.transfer import PlanTransfers  # noqa: E402
 def solo_fence_refusal() -> str:
     """What the driver answers a fence transfer on the Solo (ArduCopter 3.3, MAVLink 1)."""
     transfers = PlanTransfers(None, (255, 190), lambda: (1, 1), None, None, lambda: None,
-                              FirmwareProfile(mavlink2=lambda: False))
+                              FirmwareProfile(mavlink2=lambda: False), RoundTrip())
     return transfers.unsupported(PlanKind.FENCE)
 
 

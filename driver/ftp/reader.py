@@ -17,6 +17,9 @@ What ArduCopter 4.6.3 does (tests/data/recordings/README.md, "MAVFTP parameter d
   goes on; to the first open it means a file left open before (a read given up), so ResetSessions closes it and
   the open is sent again; TerminateSession ends every read, given up or not.
 
+How long a request may stay unanswered is the link's, not the reader's: the vehicle's one round-trip estimate
+(:class:`driver.core.roundtrip.RoundTrip`), which the open's ACK and every ReadFile answered once feed.
+
 Any trouble (no progress for ``stall`` seconds, a NAK other than EOF, a chunk asked :data:`READ_TRIES` times) ends
 it with a reason. All methods run with the driver's state lock held and return what to send.
 """
@@ -26,6 +29,8 @@ import struct
 from dataclasses import dataclass, field
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
+
+from ..core.roundtrip import RoundTrip
 
 __all__ = ["FtpRead", "FtpSpanRead", "FtpList", "CHUNK", "HEADER", "STALL_SECONDS", "NAK_TEXT"]
 
@@ -37,13 +42,15 @@ NAK_TEXT = {1: "failed", 2: "failed (errno)", 3: "invalid size", 4: "invalid ses
             6: "end of file", 7: "unknown command", 10: "file not found"}
 STALL_SECONDS = 3.0        # no FTP progress (an answer to the open, a new byte of the file) this long: the list instead
 OPEN_RETRY = 0.25          # s between OpenFileRO tries (a retry after a lost ACK is refused: the file is open)
-BURST_QUIET = 0.3          # s without a packet before a burst counts as over (its end lost): gaps are then read
+BURST_QUIET = 0.3          # s without a packet before a burst counts as over (its end lost): gaps are then read,
+                           # or the link's timeout, whichever is longer
 BURST_GAPS = 8             # ... or this many of its packet intervals (a radio's burst sends one every 140 ms)
 READ_WINDOW = 4            # ReadFiles out at once (ArduPilot queues 5 FTP requests and drops one more) ...
 READ_WINDOW_MAX = 6        # ... up to this many when the link loses requests: of 6 sent through 30 % loss about 4
                            # arrive, and a worker left with an empty queue waits a round trip for the next one
-READ_TIMEOUT_MIN = 0.05    # s before a ReadFile is asked again, or 3 round trips, whichever is longer (0.2 s made
-                           # each lost read of 4 in flight cost 0.2 s: 2 MB at 30 % loss 46 s, now 19 s on the sim)
+READ_TIMEOUT_MIN = 0.05    # s before a ReadFile is asked again, or the link's timeout, whichever is longer (0.2 s
+                           # made each lost read of 4 in flight cost 0.2 s: 2 MB at 30 % loss 46 s, 19 s on the sim)
+FIRST_GUESS = 0.1          # s: the round trip guessed by a reader not handed the vehicle's (a read outside a vehicle)
 READ_TRIES = 20            # ReadFiles for one chunk before FTP is given up
 LIST_RETRY = 0.5           # s before a ListDirectory without its answer is asked again
 BURSTS = 20                # BurstReadFiles at most by default (a 16-byte-packet file of 15 kB needs 2; param.pck: 1)
@@ -57,7 +64,8 @@ def _frame(target: tuple[int, int], seq: int, session: int, opcode: int, size: i
 @dataclass
 class FtpRead:
     """One file read: ``path`` as the vehicle names it; ``bursts``: BurstReadFiles at most (a big file needs one
-    per 500 packets); ``stall``: seconds without progress before it is given up."""
+    per 500 packets); ``stall``: seconds without progress before it is given up; ``roundtrip``: the vehicle's
+    round-trip estimate (None: one of its own)."""
     started: float
     path: bytes = b""
     session: int = 0                     # replies echo it: another engine's (another session's) are not ours
@@ -84,11 +92,13 @@ class FtpRead:
     tries: dict[int, int] = field(default_factory=dict)       # gap offset -> ReadFiles sent
     reads_sent: int = 0
     reads_answered: int = 0              # ReadFiles whose chunk came back while asked
-    rtt: float = 0.1
     frames: int = 0                      # FTP frames received (the cost on the radio)
+    roundtrip: RoundTrip | None = None
 
     def __post_init__(self) -> None:
         self.heard = self.progress = self.started
+        if self.roundtrip is None:
+            self.roundtrip = RoundTrip(initial=FIRST_GUESS)
 
     @property
     def received(self) -> int:
@@ -153,6 +163,8 @@ class FtpRead:
             return None
         if req_opcode == OP_OPEN_RO and self.phase == "open" and size >= 4:
             self.estimate = struct.unpack("<I", data[:4])[0]
+            if self.opens == 1 and self.open_sent >= 0:          # opened once: the ACK answers it (Karn)
+                self.roundtrip.sample(now - self.open_sent)
             self._opened(now)
         elif req_opcode in (OP_READ, OP_BURST) and self.phase == "read" and offset % CHUNK == 0 and data:
             if req_opcode == OP_BURST:
@@ -168,8 +180,8 @@ class FtpRead:
             sent = self.asked.pop(offset, None)
             if sent is not None and req_opcode == OP_READ:
                 self.reads_answered += 1
-            if sent is not None and self.tries.get(offset) == 1:
-                self.rtt = 0.8 * self.rtt + 0.2 * max(0.0, now - sent)
+            if sent is not None and self.tries.get(offset) == 1:     # asked once: the answer is its own (Karn)
+                self.roundtrip.sample(now - sent)
             if req_opcode == OP_READ:
                 self._answered_read((seq - 1) & 0xFFFF)
             elif burst_complete and self.burst is not None:
@@ -267,7 +279,7 @@ class FtpRead:
             self.burst, self.next_burst, self.heard = self.seq, None, now
             return out, None
         if self.burst is not None:
-            if now - self.heard < max(BURST_QUIET, 4 * self.rtt, BURST_GAPS * self.gap):
+            if now - self.heard < max(BURST_QUIET, self.roundtrip.timeout(), BURST_GAPS * self.gap):
                 return [], None
             self.sent.pop(self.burst, None)             # its end was lost, or it stalled
             self.burst = None
@@ -284,10 +296,11 @@ class FtpRead:
         if not missing and self.end is not None:
             self.phase = "done"
             return [self._request(target, OP_TERMINATE, now=now)], None
-        timeout = max(READ_TIMEOUT_MIN, 3 * self.rtt)
+        timeout = max(READ_TIMEOUT_MIN, self.roundtrip.timeout())
         for offset, sent in list(self.asked.items()):
             if now - sent >= timeout:
                 del self.asked[offset]
+                self.roundtrip.expired(now)
         window = self._read_window()
         for offset in missing:
             if len(self.asked) >= window:

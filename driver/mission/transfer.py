@@ -9,8 +9,9 @@ Our side times out and re-asks too: MISSION_COUNT until the first request, MISSI
 count, each missing item of a download, and the item last sent while the vehicle's next request does not come
 (a lost item costs one re-ask time, not the vehicle's own 1 s; if it was the request that was lost, the
 vehicle answers INVALID_SEQUENCE, which does not end an upload and tells us it wants the next item). The re-ask
-time follows the link: three round trips measured on this transfer, between :data:`MIN_RETRY` and
-:data:`MAX_RETRY`. What the firmware speaks (MISSION_ITEM_INT, fences and rally points in the mission
+time follows the link: the timeout of the vehicle's one round-trip estimate (:class:`driver.core.roundtrip.
+RoundTrip`, which every message of a transfer answered after being sent once feeds), between :data:`MIN_RETRY`
+and :data:`MAX_RETRY`. What the firmware speaks (MISSION_ITEM_INT, fences and rally points in the mission
 protocol) is its profile's (:class:`driver.core.firmware.FirmwareProfile`).
 
 MISSION_ACK ERROR proves nothing by itself: ArduPilot sends it for every item that arrives while it is not
@@ -34,6 +35,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from ..core.firmware import FirmwareProfile
 from ..core.results import CommandResult, CommandStatus
+from ..core.roundtrip import RoundTrip
 from .legacy_rally import LegacyRally
 from .readback import READ_PATIENCE, ReadBack
 from .plan import Plan, PlanKind, TransferDirection, TransferOutcome, TransferProgress
@@ -71,11 +73,11 @@ class _Transfer:
     asked: int = -1                           # upload: the item the vehicle wants now (its last request)
     top: int = -1                             # upload: the highest item sent
     waiting: dict = field(default_factory=dict)   # download: item -> [last asked, times asked, first asked], in flight
+    sends: dict = field(default_factory=dict)     # upload: item -> times sent (an item sent once answers cleanly)
     attempts: int = 0
     next_send: float = 0.0
     heard: float = 0.0                        # the last time the vehicle said something about this transfer
     sent_at: float = 0.0
-    rtt: float | None = None
     acked: bool = False                       # upload: MISSION_ACK ACCEPTED arrived
     last_sent_at: float = 0.0                 # upload: when the last item went out
     upload: "_Transfer | None" = None         # a read-back: the upload it checks
@@ -94,7 +96,7 @@ class PlanTransfers(LegacyRally, ReadBack):
 
     def __init__(self, codec, source: tuple[int, int], target: Callable[[], tuple[int, int]],
                  record: Callable[[str, CommandStatus, str], CommandResult], settle, home: Callable[[], object],
-                 firmware: FirmwareProfile):
+                 firmware: FirmwareProfile, roundtrip: RoundTrip):
         self._codec = codec                   # a pymavlink MAVLink used only to build messages
         self._source = source                 # our (system, component): what the vehicle's answers target
         self._target = target
@@ -102,6 +104,7 @@ class PlanTransfers(LegacyRally, ReadBack):
         self._settle = settle                 # (future, value): settles on the notifier
         self._home = home
         self._firmware = firmware             # what the vehicle's mission protocol carries
+        self._roundtrip = roundtrip           # the link's one round trip: every re-ask time
         self._running: dict[PlanKind, _Transfer] = {}
         self._out: list = []
         self.changed = False                  # progress changed since the last look (the driver republishes)
@@ -177,7 +180,7 @@ class PlanTransfers(LegacyRally, ReadBack):
         return out
 
     def _retry(self, t: _Transfer) -> float:
-        return MAX_RETRY if t.rtt is None else min(MAX_RETRY, max(MIN_RETRY, 3.0 * t.rtt))
+        return min(MAX_RETRY, max(MIN_RETRY, self._roundtrip.timeout()))
 
     def _service(self, t: _Transfer, now: float) -> None:
         if t.legacy:
@@ -191,6 +194,7 @@ class PlanTransfers(LegacyRally, ReadBack):
             for seq, entry in list(t.waiting.items()):
                 if now - entry[0] < self._retry(t):
                     continue
+                self._roundtrip.expired(now)                  # asked for a whole timeout, unanswered
                 if entry[1] >= ITEM_ATTEMPTS and now - entry[2] >= ITEM_PATIENCE:
                     why = (f"item {seq} never came ({entry[1]} requests in {now - entry[2]:.0f} s); "
                            f"{len(t.received)} of {t.count} received")
@@ -217,6 +221,8 @@ class PlanTransfers(LegacyRally, ReadBack):
                     return
                 if self._unanswered(t, why, now):
                     return
+            if t.attempts:
+                self._roundtrip.expired(now)
             self._send_start(t, now)
         elif t.stage == "items":                                  # upload: the vehicle leads
             if now - t.heard > SILENCE:
@@ -229,6 +235,7 @@ class PlanTransfers(LegacyRally, ReadBack):
                 self._read_back(t, now)
                 return
             if t.asked >= 0:                                      # the next request is late: the item again
+                self._roundtrip.expired(now)
                 self._send_item(t, t.asked, now, again=True)
                 t.probing = t.asked
 
@@ -272,6 +279,7 @@ class PlanTransfers(LegacyRally, ReadBack):
         item = t.wire[seq]
         self._out.append(to_wire(self._codec, item, seq, t.kind, self._target(), self.integer, self._mavlink2()))
         t.asked = max(t.asked, seq)
+        t.sends[seq] = t.sends.get(seq, 0) + 1
         if seq > t.top:
             t.top = seq
             self.changed = True
@@ -308,10 +316,11 @@ class PlanTransfers(LegacyRally, ReadBack):
         out, self._out = self._out, []
         return out
 
-    def _measure(self, t: _Transfer, now: float) -> None:
-        sample = now - t.sent_at
-        if 0 < sample < MAX_RETRY:
-            t.rtt = sample if t.rtt is None else 0.8 * t.rtt + 0.2 * sample
+    def _measure(self, t: _Transfer, now: float, once: bool) -> None:
+        """The vehicle answered what went out at ``t.sent_at``; ``once``: it went out once, so the answer is its own
+        (Karn's rule) and times the link."""
+        if once:
+            self._roundtrip.sample(now - t.sent_at)
         t.heard = now
 
     def _on_request(self, t: _Transfer, seq: int, now: float) -> None:
@@ -321,8 +330,10 @@ class PlanTransfers(LegacyRally, ReadBack):
             return
         if not 0 <= seq < (t.count or 0):
             return
-        if seq == t.asked + 1 or t.stage == "start":
-            self._measure(t, now)
+        if t.stage == "start":
+            self._measure(t, now, t.attempts == 1)
+        elif seq == t.asked + 1:
+            self._measure(t, now, t.sends.get(t.asked) == 1)
         t.heard = now
         t.stage = "items"
         t.attempts = 0
@@ -348,7 +359,7 @@ class PlanTransfers(LegacyRally, ReadBack):
     def _on_count(self, t: _Transfer, count: int, now: float) -> None:
         if t.direction is not TransferDirection.DOWNLOAD or t.stage != "start":
             return
-        self._measure(t, now)
+        self._measure(t, now, t.attempts == 1)
         t.count = count
         self.changed = True
         if count == 0:
@@ -365,7 +376,7 @@ class PlanTransfers(LegacyRally, ReadBack):
         entry = t.waiting.pop(m.seq, None)
         if entry is not None and entry[1] == 1:               # asked once: a clean round-trip sample
             t.sent_at = entry[0]
-            self._measure(t, now)
+            self._measure(t, now, True)
         t.received[m.seq] = from_wire(m)
         self.changed = True
         if len(t.received) == t.count:

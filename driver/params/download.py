@@ -4,7 +4,9 @@ As QGroundControl's ParameterManager: the list is asked for once; while the vehi
 lost on the radio) are only noted. Once the stream has gone quiet, every index still missing is asked for
 with PARAM_REQUEST_READ, a few at a time (ArduPilot queues only a handful of reads), each asked again when its
 answer does not come: at once when a read sent after it has been answered (the vehicle answers its queue in
-order, so the earlier one or its answer was lost), else after a few round trips. How many are out at once
+order, so the earlier one or its answer was lost), else after the link's timeout (the vehicle's one round-trip
+estimate, :class:`driver.core.roundtrip.RoundTrip`, which the list's first answer and every read answered once
+feed). How many are out at once
 adapts as TCP's window does: one more for each answered, half as many when reads go unanswered altogether (a
 burst of interference, a radio's full buffer), so a link that drops frames when busy is not kept busier. Unlike QGroundControl, which gives up on an index after a few tries, this goes on while
 the link is up: a radio at 30 % loss still ends with every parameter. It ends when the set is complete, or
@@ -19,6 +21,8 @@ from dataclasses import dataclass, field
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
+from ..core.roundtrip import RoundTrip
+
 log = logging.getLogger(__name__)
 
 __all__ = ["Download", "LIST_RETRY", "LIST_TRIES", "READ_WINDOW"]
@@ -29,13 +33,14 @@ QUIET_MIN = 0.4         # s: the stream counts as over after this long without a
 QUIET_MAX = 2.0
 READ_WINDOW = 16        # most PARAM_REQUEST_READs outstanding at once (ArduPilot answers reads from a small queue)
 MIN_WINDOW = 2
-READ_TIMEOUT_MIN = 0.1  # s before an unanswered read is asked again (or 3 round trips, whichever is longer)
+READ_TIMEOUT_MIN = 0.1  # s before an unanswered read is asked again (or the link's timeout, whichever is longer)
 
 
 @dataclass
 class Download:
-    """One download in progress: which indexes have arrived and what is asked for."""
+    """One download in progress: which indexes have arrived and what is asked for; ``roundtrip``: the vehicle's."""
     started: float
+    roundtrip: RoundTrip
     expected: int | None = None
     have: set[int] = field(default_factory=set)
     listing: bool = True                 # waiting for the list's stream; False: re-asking by index
@@ -47,7 +52,6 @@ class Download:
     sequence: int = 0                    # reads sent so far, to order them
     tries: dict[int, int] = field(default_factory=dict)       # index -> reads sent for it
     reads: int = 0                       # PARAM_REQUEST_READs sent
-    rtt: float = 0.1                     # smoothed round trip of a read
     window: float = READ_WINDOW          # reads outstanding at once now
 
     @property
@@ -59,8 +63,9 @@ class Download:
         return self.expected is not None and len(self.have) >= self.expected
 
     def quiet(self) -> float:
-        """How long without a new index before the stream counts as over."""
-        return min(QUIET_MAX, max(QUIET_MIN, 10.0 * self.gap + 2.0 * self.rtt))
+        """How long without a new index before the stream counts as over: ten of its gaps, and a request's timeout
+        (the next value may be a re-asked one's answer)."""
+        return min(QUIET_MAX, max(QUIET_MIN, 10.0 * self.gap + self.roundtrip.timeout()))
 
     def arrived(self, index: int, count: int, now: float) -> bool:
         """A PARAM_VALUE with ``index`` of ``count``; True when it was new."""
@@ -71,12 +76,14 @@ class Download:
             self.expected = count
         if index in self.have or index >= count:
             return False
+        if self.listing and not self.have and self.list_tries == 1:
+            self.roundtrip.sample(now - self.list_sent)   # the list asked once: its first value answers it
         asked = self.asked.pop(index, None)
         if asked is not None:
             sent, order = asked
             self.window = min(READ_WINDOW, self.window + 1.0 / self.window)
-            if self.tries.get(index) == 1:           # a re-asked one cannot say which read it answers
-                self.rtt = 0.8 * self.rtt + 0.2 * max(0.0, now - sent)
+            if self.tries.get(index) == 1:           # a re-asked one cannot say which read it answers (Karn)
+                self.roundtrip.sample(now - sent)
             for earlier in [i for i, (_, o) in self.asked.items() if o < order]:
                 del self.asked[earlier]              # answered in order: those were lost, ask again now
         elif self.listing and self.have:
@@ -100,12 +107,13 @@ class Download:
             if now - self.last_new < self.quiet():
                 return [], None
             self.listing = False                             # the stream is over: ask for the gaps
-        timeout = max(READ_TIMEOUT_MIN, 3.0 * self.rtt)
+        timeout = max(READ_TIMEOUT_MIN, self.roundtrip.timeout())
         timed_out = [index for index, (sent, _) in self.asked.items() if now - sent >= timeout]
         for index in timed_out:
             del self.asked[index]
         if timed_out:
             self.window = max(MIN_WINDOW, self.window / 2.0)
+            self.roundtrip.expired(now)
         out = []
         for index in range(self.expected):
             if len(self.asked) >= int(self.window):

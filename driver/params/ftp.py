@@ -42,8 +42,8 @@ _TYPES = {1: ParamType.INT8, 2: ParamType.INT16, 3: ParamType.INT32, 4: ParamTyp
 class FtpDownload(FtpRead):
     """param.pck read by the shared engine, then decoded."""
 
-    def __init__(self, started: float) -> None:
-        super().__init__(started, PARAM_FILE)
+    def __init__(self, started: float, roundtrip=None) -> None:
+        super().__init__(started, PARAM_FILE, roundtrip=roundtrip)
 
     def parameters(self) -> tuple[dict[str, Parameter], int] | str:
         """The decoded table (name -> Parameter, index = order in the file) and its count, or why not."""

@@ -15,6 +15,7 @@ from typing import Callable
 
 from ..core.firmware import FirmwareProfile
 from ..core.results import CommandStatus, LinkStatus, Severity
+from ..core.roundtrip import RoundTrip
 from .cache import changed_names
 from .download import Download
 from .ftp import FtpDownload
@@ -40,9 +41,10 @@ class ParameterManager:
     """Parameters of one vehicle; every method runs with the driver's state lock held."""
 
     def __init__(self, store, notifier, target: Callable[[], tuple[int, int]], firmware: FirmwareProfile,
-                 give_up_after: float = 7.0, set_retry: float = SET_RETRY) -> None:
+                 roundtrip: RoundTrip, give_up_after: float = 7.0, set_retry: float = SET_RETRY) -> None:
         self._store = store
         self._firmware = firmware                # whether the vehicle reads its table over FTP
+        self._roundtrip = roundtrip              # the link's one round trip: the download's waits
         self._set_retry = set_retry              # s without an echo before a PARAM_SET (or read back) goes again
         self._give_up_after = give_up_after      # s of a lost link before a download ends (it waits until then)
         self._lost_since: float | None = None
@@ -81,7 +83,7 @@ class ParameterManager:
         if not refresh and self._expected is not None and self._complete():
             self._settle(future, CommandStatus.ACCEPTED, f"{len(self._values)} parameters (already complete)")
             return future
-        download = Download(started=now)
+        download = Download(now, self._roundtrip)
         if refresh:
             self._values = {name: p for name, p in self._values.items() if p.index < 0}
             self._expected = None
@@ -93,7 +95,7 @@ class ParameterManager:
         self._detail = "asking for the list" if download.listing else f"asking for {download.missing} missing"
         self._ftp_note = ""
         if download.listing and self.use_ftp and self._firmware.ftp:
-            self._ftp = FtpDownload(now)
+            self._ftp = FtpDownload(now, self._roundtrip)
             self._since_ftp = {}
             self._detail = "reading @PARAM/param.pck over MAVLink FTP"
         if download.listing and cached is not None and cached.complete and self._expected is None:

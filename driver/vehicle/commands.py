@@ -87,7 +87,9 @@ class _Command:
     mode: int | None = None                   # a mode change: the custom_mode the heartbeat must show
     armed: bool | None = None                 # arming (True) or disarming (False): the heartbeat's armed bit
     guard: Callable[[VehicleState], str | None] | None = None
-    retry: float | None = None                # s between attempts (None: the configured command timeout)
+    retry: float | None = None                # s between attempts (None: the configured command timeout), at least
+                                              # the link's timeout as it backs off
+    give_up_at: float | None = None           # a command re-sent that quickly is still given a command's whole time
     attempts: int = 0
     budget: int = 0                           # attempts it may make (more once a lost link is back)
     first_sent: float | None = None
@@ -184,10 +186,12 @@ class CommandSender:
         quickest = (self._roundtrip.lowest or 0.0) if self._roundtrip is not None else 0.0
         return self._heartbeat_at >= c.first_sent + quickest
 
+    def _link_timeout(self) -> float:
+        return self._roundtrip.timeout() if self._roundtrip is not None else 0.0
+
     def _answer_window(self) -> float:
         """How long after it went out a request may still be answered."""
-        rtt = self._roundtrip.timeout() if self._roundtrip is not None else 0.0
-        return max(self._cfg.command_timeout, rtt)
+        return max(self._cfg.command_timeout, self._link_timeout())
 
     def _remember_echo(self, c: _Command, now: float) -> None:
         """``c`` leaves: if it was sent more often than it was answered, ACKs with its id stay ambiguous until an
@@ -217,6 +221,8 @@ class CommandSender:
             if c.deadline is not None and not c.in_progress:
                 c.deadline = max(c.deadline, now + self._cfg.command_timeout * self._cfg.command_attempts)
             c.budget = c.attempts + self._cfg.command_attempts
+            if c.give_up_at is not None:
+                c.give_up_at = max(c.give_up_at, now + self._cfg.command_timeout * self._cfg.command_attempts)
             c.next_send = min(c.next_send, now)
 
     # -- replies (reader thread, under the lock) ----------------------------------------------------------
@@ -303,7 +309,12 @@ class CommandSender:
             if problem:
                 self._resolve(c, CommandStatus.REJECTED, problem, now=now)
                 continue
-            retry = cfg.command_timeout if c.retry is None else c.retry
+            if c.attempts and c.answers == 0 and not c.acked and not c.legacy and self._roundtrip is not None:
+                self._roundtrip.expired(now)      # unanswered for its whole wait: the link may have slowed
+            if c.retry is None:
+                retry = cfg.command_timeout
+            else:           # at the link's pace, backing off with it when unanswered, never slower than a command
+                retry = min(cfg.command_timeout, max(c.retry, self._link_timeout()))
             if c.mode is not None:
                 if not c.legacy and c.attempts >= c.budget:
                     c.legacy = True               # no ACK at all: SET_MODE before giving up
@@ -318,7 +329,7 @@ class CommandSender:
                                                                     min(c.attempts, 255), *c.params))
                     c.next_send = now + (ACKED_MODE_WAIT if c.acked else retry)
             else:
-                if c.attempts >= c.budget:
+                if c.attempts >= c.budget and (c.give_up_at is None or now >= c.give_up_at):
                     self._time_out(c, state, now)
                     continue
                 out.append(mavlink.MAVLink_command_long_message(system, component, c.command,
@@ -326,6 +337,8 @@ class CommandSender:
                 c.next_send = now + (ACKED_MODE_WAIT if c.acked else retry)
             if c.first_sent is None:
                 c.first_sent = now
+                if c.retry is not None:
+                    c.give_up_at = now + cfg.command_timeout * cfg.command_attempts
             c.last_sent = now
             c.attempts += 1
         return out

@@ -60,7 +60,7 @@ class MissionControl:
         self._pilot_mode = pilot_mode
         self.transfers = PlanTransfers(ports.outbox.encoder(), (config.source_system, config.source_component),
                                        ports.outbox.target, ports.state.record_locked, self._settle_later,
-                                       lambda: ports.state.state.home, ports.firmware)
+                                       lambda: ports.state.state.home, ports.firmware, ports.roundtrip)
         self._settling: list = []      # transfers ended, settled once the state shows what they did (_publish)
         self._watches: list[_Watch] = []
         self._currents: collections.deque = collections.deque(maxlen=64)   # (time, item) as the vehicle says

@@ -138,7 +138,7 @@ class Vehicle(Drone):
                                        self._rules, self._roundtrip)
         self._link = LinkSupervisor(cfg, self._transport, self._firmware, self._peer.target, clock)
         self._params = ParameterManager(self._store, self._notifier, self._peer.target, self._firmware,
-                                        2 * cfg.loss_timeout, cfg.param_retry)
+                                        self._roundtrip, 2 * cfg.loss_timeout, cfg.param_retry)
         self._params.use_ftp = cfg.param_ftp
         self._setpoints = SetpointStreamer(cfg.deadman, cfg.setpoint_rate)
         self._sequence = SequenceSlot(self._store, self._commands, self._notifier, clock)   # the flight's sequences
