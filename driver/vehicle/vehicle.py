@@ -3,12 +3,18 @@
 :class:`Vehicle` is the façade of the embedded driver behind the viewer and the Ice server: it holds the
 pilot's calls (the :class:`~driver.vehicle.api.Drone` interface) and hands each job to the part that does it:
 
-* ``reader`` (the reader thread: open, parse, dispatch), ``ticker`` (the ticker thread and the one way out),
+* ``reader`` (the reader thread: open, parse, dispatch to the parts through the ``inbox``), ``ticker`` (the
+  ticker thread and the one way out; runs what each part serves), ``peer`` (who the vehicle is on the link),
   ``telemetry`` (folds telemetry, pure), ``supervision`` (the link), ``store`` (the immutable snapshots);
-* ``safety`` (the flight rules every message passes), ``commands`` (retries, each reply to its own request),
-  ``sequences`` (takeoff, mission start, land, RTL, Stop: state machines), ``setpoints`` (velocity, the deadman);
+* ``safety`` (the flight rules every message passes), ``command_path`` (every command's one way: the rules, then
+  ``commands``: retries, each reply to its own request), ``flight`` (velocity, go-to, yaw, and the ``sequences``:
+  takeoff, mission start, land, RTL, Stop), ``setpoints`` (velocity, the deadman);
 * ``missions``, ``parameters``, ``signing_control``, :mod:`driver.payload`, :mod:`driver.setup`,
   :mod:`driver.logs`: plans, parameters, signing, the payload, setup and the DataFlash logs.
+
+Each part is handed the ports it uses (:mod:`driver.core.ports`: the state, the outbox, the command path, the
+settler, the clock, the firmware profile, the link's round trip), never this vehicle; :meth:`Vehicle._wire`
+registers what each hears and serves.
 
 Two threads do all the link work, so no caller ever waits on the network. Both decide under the state lock and
 write to the link only after releasing it, so a slow serial write never stalls the reader or
@@ -24,7 +30,6 @@ from dataclasses import dataclass, field, replace
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
-from ..core import frames
 from ..core.firmware import FirmwareProfile
 from ..core.roundtrip import RoundTrip
 from ..link.forwarding import Forwarder
@@ -37,24 +42,20 @@ from ..params.setter import SET_RETRY
 from ..payload.control import PAYLOAD_MESSAGES, Payload
 from ..logs.control import LogControl
 from ..setup.control import SETUP_MESSAGES, VehicleSetup
-from .api import CEILING, Drone, Limits
-from .command_path import REPLAYING, CommandPath
+from .api import Drone, Limits
+from .command_path import CommandPath
 from .commands import CommandSender, Notifier, command_name
 from .inbox import Inbox
 from .inspector import MessageInspector
 from .missions import MISSION_MESSAGES, MissionControl
 from .parameters import Parameters
 from .peer import Peer
-from .ports import SequencePilot, vehicle_ports
+from .flight import Flight
+from .ports import vehicle_ports
 from .reader import Reader
-from .rules import (
-    COPTER_MODES, MAX_ALTITUDE, MIN_TAKEOFF_ALTITUDE, go_to_problem, takeoff_altitude_problem,
-)
+from .rules import COPTER_MODES, MAX_ALTITUDE, MIN_TAKEOFF_ALTITUDE, takeoff_altitude_problem
 from .safety import ARM_FORCE_MAGIC, FlightRules
-from .sequences.landing import land_sequence, return_sequence
-from .sequences.mission_start import MissionStartSequence
 from .sequences.slot import SequenceSlot
-from .sequences.stop import StopSequence
 from .setpoints import SetpointStreamer
 from .signing_control import SigningControl
 from .state import (
@@ -62,7 +63,6 @@ from .state import (
 )
 from .store import StateStore
 from .supervision import LinkSupervisor
-from .sequences.takeoff import TakeoffSequence
 from .telemetry import COPTER_MODE_NAMES
 from .ticker import MASK_POSITION, Ticker
 
@@ -142,19 +142,12 @@ class Vehicle(Drone):
         self._params.use_ftp = cfg.param_ftp
         self._setpoints = SetpointStreamer(cfg.deadman, cfg.setpoint_rate)
         self._sequence = SequenceSlot(self._store, self._commands, self._notifier, clock)   # the flight's sequences
-        self._limits = cfg.limits.within(CEILING)
         self._wake = threading.Event()
         self._closing = threading.Event()
         self._threads: list[threading.Thread] = []
         self._started = False
         self._path = CommandPath(self._store, self._rules, self._commands, self._sequence, clock, self._wake,
                                  replaying)           # every command's one way (the flight rules, the sender)
-        self._pilot = SequencePilot(                   # what a sequence is handed (driver.vehicle.sequences.machine)
-            state=self.state, airborne=lambda: self._rules.may_be_airborne(self.state()), mode=self._path.mode,
-            arm=lambda early=False: self._path.arming(True, early=early),
-            disarm=lambda: self._path.long(mavlink.MAV_CMD_COMPONENT_ARM_DISARM, (0, 0), "disarm"),
-            long=self._path.long, retry_interval=lambda: min(cfg.command_timeout, self._roundtrip.timeout()),
-            hold=self._hold, quiet=lambda command: self._commands.settled_by_state(command, self.clock()))
         # the parts that do the work, each one job (see the module's docstring)
         self._ticker = Ticker(                         # the ticker thread and the one way out to the link
             config=cfg, clock=clock, transport=self._transport, signing=self._signing, store=self._store,
@@ -174,6 +167,8 @@ class Vehicle(Drone):
                                     lambda text: self._store.add_message(Severity.WARNING, text), self._closing)
         self._missions = MissionControl(cfg, ports, self.set_mode)   # transfers, mission state, AUTO
         self.setup = VehicleSetup(ports.state, ports.outbox, ports.commands, ports.settler, clock, self._firmware)
+        self._flight = Flight(cfg, ports, self._path, self._sequence, self._setpoints, self._rules,
+                              self._ticker.setpoint_message, self._missions.start_problem)   # velocity, sequences
         self.logs = LogControl(self)                   # the DataFlash logs (driver.logs)
         self.inspector = MessageInspector(clock)       # what the link carries: Drone.inspection()
         self._inbox = Inbox()                          # what the vehicle says, to the parts that asked
@@ -212,11 +207,10 @@ class Vehicle(Drone):
 
     @property
     def limits(self) -> Limits:
-        return self._limits
+        return self._flight.limits
 
     def set_limits(self, limits: Limits) -> Limits:
-        self._limits = limits.within(CEILING)         # one reference swap: safe from any thread
-        return self._limits
+        return self._flight.set_limits(limits)
 
     def set_battery_thresholds(self, thresholds: BatteryThresholds) -> BatteryThresholds:
         problem = thresholds.problem()
@@ -337,11 +331,11 @@ class Vehicle(Drone):
 
     def land(self) -> Future:
         """LAND, always taken: it ends whatever runs (a takeoff, a mission start, a Stop)."""
-        return self._replace_sequence(land_sequence(self._pilot, self.clock()), "landing")
+        return self._flight.land()
 
     def return_to_launch(self) -> Future:
         """RTL, always taken: it ends whatever runs."""
-        return self._replace_sequence(return_sequence(self._pilot, self.clock()), "returning home")
+        return self._flight.return_to_launch()
 
     def cancel_takeoff(self) -> Future:
         """The pilot's Cancel: :meth:`stop`, which before liftoff undoes what the takeoff changed."""
@@ -351,37 +345,7 @@ class Vehicle(Drone):
         """Hold position, or end a takeoff that has not lifted anything as if it never ran: the vehicle always ends
         holding (GUIDED at zero velocity, BRAKE if GUIDED is refused) or on the ground disarmed, never in a mode
         that needs a throttle stick (driver.vehicle.sequences.stop)."""
-        if self._replay is not None:
-            return self._path.answer("stop", CommandStatus.REJECTED, REPLAYING)
-        with self._lock:
-            now = self.clock()
-            ended = self._sequence.end("stop")
-            interrupted = ended if ended is not None and ended.exclusive else None
-            s = self.state()
-            airborne = (self._rules.may_be_airborne(s) or (interrupted is not None and interrupted.lifting_sent))
-            armed = s.armed or not self._commands.settled_by_state(mavlink.MAV_CMD_COMPONENT_ARM_DISARM, now)
-            self._setpoints.stop(now)                 # zeros at once, whatever the mode turns out to be
-            self._store.set(setpoint=self._setpoints.setpoint)
-            seq = StopSequence(self._pilot, now, interrupted, airborne, armed)
-            self._sequence.start(seq)
-        self._wake.set()
-        return seq.future
-
-    def _hold(self) -> None:
-        """Zero velocity from now (lock held): streamed for ArduCopter's GUID_TIMEOUT, then the sticks fly."""
-        self._setpoints.stop(self.clock())
-        self._store.set(setpoint=self._setpoints.setpoint)
-        self._store.publish()
-
-    def _replace_sequence(self, seq, why: str) -> Future:
-        """Start ``seq`` in the slot, ending whatever runs there (Land and RTL win over any sequence)."""
-        if self._replay is not None:
-            return self._path.answer(seq.name, CommandStatus.REJECTED, REPLAYING)
-        with self._lock:
-            self._sequence.end(why)
-            self._sequence.start(seq)
-        self._wake.set()
-        return seq.future
+        return self._flight.stop()
 
     def reboot(self) -> Future:
         return self._path.busy("reboot") or self._path.long(mavlink.MAV_CMD_PREFLIGHT_REBOOT_SHUTDOWN, (1,), "reboot")
@@ -458,86 +422,18 @@ class Vehicle(Drone):
     def remove_signing(self) -> Future:
         return self._signing_control.remove()
 
-    # -- velocity, position and yaw ----------------------------------------------------------------
+    # -- velocity, position and yaw, takeoff (driver.vehicle.flight) -------------------------------
     def set_velocity(self, forward: float, right: float, up: float, yaw_rate: float) -> bool:
-        sp = SetpointStreamer.clamp(forward, right, up, yaw_rate, self._limits)
-        if sp is None:
-            log.warning("velocity refused: not finite (%r, %r, %r, %r)", forward, right, up, yaw_rate)
-            return False
-        if self.state().takeoff.active:
-            return False
-        with self._lock:
-            if self._setpoints.demand(sp, self.clock()):
-                self._store.set(setpoint=sp)
-                self._store.publish()
-                self._wake.set()
-        return True
+        return self._flight.set_velocity(forward, right, up, yaw_rate)
 
     def go_to(self, north: float, east: float, altitude: float) -> Future:
-        if not frames.finite(north, east, altitude):
-            return self._path.answer("go to", CommandStatus.REJECTED, "coordinates are not finite numbers")
-        name = f"go to N{north:.1f} E{east:.1f} alt {altitude:.1f}"
-        cfg = self.config
-        problem = (go_to_problem(north, east, altitude, cfg.max_altitude, cfg.max_distance)
-                   or self.state().fence.destination_problem(north, east, altitude))
-        if problem:
-            return self._path.answer(name, CommandStatus.REJECTED, problem)
-        busy = self._path.busy(name)
-        if busy:
-            return busy
-        s = self.state()
-        if s.mode != "GUIDED" or not s.flying:
-            return self._path.answer(name, CommandStatus.REJECTED, f"needs GUIDED and flying (mode {s.mode or '?'})")
-        if s.home is None:
-            return self._path.answer(name, CommandStatus.REJECTED, "the vehicle has not sent its home position yet")
-        with self._lock:                              # a velocity stream would override the target
-            self._setpoints.silence()
-            self._store.set(setpoint=self._setpoints.setpoint)
-        # latitude/longitude from home, altitude above home: never the EKF origin's frame
-        lat, lon = frames.offset_latlon(s.home.lat, s.home.lon, north, east)
-        system, component = self._target_ids()
-        self._post(mavlink.MAVLink_set_position_target_global_int_message(
-            0, system, component, mavlink.MAV_FRAME_GLOBAL_RELATIVE_ALT_INT,
-            MASK_POSITION, int(round(lat * 1e7)), int(round(lon * 1e7)), float(altitude), 0, 0, 0, 0, 0, 0, 0, 0))
-        return self._path.answer(name, CommandStatus.ACCEPTED, "target sent")
+        return self._flight.go_to(north, east, altitude)
 
     def set_yaw(self, degrees: float, relative: bool = False, rate_deg_s: float = 30.0) -> Future:
-        if not frames.finite(degrees, rate_deg_s):
-            return self._path.answer("yaw", CommandStatus.REJECTED, "angle is not a finite number")
-        busy = self._path.busy("yaw")
-        if busy:
-            return busy
-        if self.state().mode == "GUIDED" and self._setpoints.setpoint.is_zero:
-            with self._lock:                          # zeros carry a yaw rate of 0, which would cancel the turn
-                self._setpoints.silence()
-            # ArduCopter ignores yaw after takeoff until a first movement command
-            self._post(self._ticker.setpoint_message(Setpoint()))
-        direction = (1 if degrees >= 0 else -1) if relative else 0
-        angle = abs(degrees) if relative else degrees % 360.0
-        return self._path.long(mavlink.MAV_CMD_CONDITION_YAW,
-                                  (angle, abs(rate_deg_s), direction, 1 if relative else 0),
-                                  f"yaw {'by' if relative else 'to'} {degrees:g}°")
+        return self._flight.set_yaw(degrees, relative, rate_deg_s)
 
-    # -- takeoff sequence (stepped by the ticker) --------------------------------------------------
     def takeoff(self, altitude: float | None = None) -> Future:
-        alt = self.config.takeoff_altitude if altitude is None else altitude
-        problem = takeoff_altitude_problem(alt, self.config.max_altitude)
-        if problem:
-            return self._path.answer("takeoff", CommandStatus.REJECTED, problem)
-        if self._replay is not None:
-            return self._path.answer("takeoff", CommandStatus.REJECTED, REPLAYING)
-        if self.state().flying:
-            return self._path.answer("takeoff", CommandStatus.REJECTED, "already flying")
-        return self._run_sequence(TakeoffSequence(self._pilot, alt, self.config, self.clock()))
-
-    def _run_sequence(self, seq) -> Future:
-        """Start a takeoff or mission start (exclusive: only Land, Stop and RTL meanwhile, and each ends it)."""
-        with self._lock:                              # check and start as one step: never two
-            if not self._sequence.start(seq):
-                running = self._sequence.exclusive
-                return self._path.answer(seq.name, CommandStatus.REJECTED, f"a {running.name} is already running")
-        self._wake.set()
-        return seq.future
+        return self._flight.takeoff(altitude)
 
     # -- missions, fences, rally points (driver.vehicle.missions does the work) --------------------
     def upload_plan(self, plan: Plan) -> Future:
@@ -553,11 +449,7 @@ class Vehicle(Drone):
         self._missions.cancel(kind)
 
     def start_mission(self) -> Future:
-        problem = (REPLAYING if self._replay is not None
-                   else self._missions.start_problem(self.state()))
-        if problem:
-            return self._path.answer("mission start", CommandStatus.REJECTED, problem)
-        return self._run_sequence(MissionStartSequence(self._pilot, self.config, self.clock()))
+        return self._flight.start_mission()
 
     def pause_mission(self) -> Future:
         return self._path.busy("mission pause") or self._missions.pause()
@@ -568,8 +460,4 @@ class Vehicle(Drone):
     def set_mission_item(self, seq: int) -> Future:
         return self._path.busy(f"mission item {seq}") or self._missions.go_to_item(seq)
 
-    def _end_sequence(self, why: str) -> None:
-        """End what runs in the sequence slot (driver.vehicle.sequences), cancelling what it asked."""
-        with self._lock:
-            self._sequence.end(why)
 
