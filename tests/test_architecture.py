@@ -183,6 +183,17 @@ def _named_like_a_round_trip(target) -> bool:
     return any(word in name.lower() for word in ("rtt", "round_trip", "roundtrip"))
 
 
+def _handed_on(value) -> bool:
+    """A value passed along, not worked out: a name, an attribute, None, a RoundTrip made (or a tuple of those)."""
+    import ast
+    if value is None or isinstance(value, (ast.Name, ast.Attribute)):
+        return True
+    if isinstance(value, ast.Tuple):
+        return all(_handed_on(v) for v in value.elts)
+    return (isinstance(value, ast.Constant) and value.value is None) or (
+        isinstance(value, ast.Call) and getattr(value.func, "id", "") == "RoundTrip")
+
+
 def round_trips_computed(rel: str, tree) -> list[str]:
     """Where ``tree`` works out a round trip itself: a value computed into a name like one (an average, a
     difference of times), or a RoundTrip made outside :data:`ROUND_TRIP_MADE_IN`. Handing the vehicle's on (a
@@ -192,12 +203,7 @@ def round_trips_computed(rel: str, tree) -> list[str]:
     for node in ast.walk(tree):
         if isinstance(node, (ast.Assign, ast.AugAssign, ast.AnnAssign)):
             targets = node.targets if isinstance(node, ast.Assign) else [node.target]
-            value = node.value
-            handed = value is None or isinstance(value, (ast.Name, ast.Attribute)) or (
-                isinstance(value, ast.Constant) and value.value is None) or (
-                isinstance(value, ast.Call) and getattr(value.func, "id", "") == "RoundTrip")
-            if isinstance(node, ast.AugAssign):
-                handed = False
+            handed = not isinstance(node, ast.AugAssign) and _handed_on(node.value)
             flat = [t for target in targets for t in (target.elts if isinstance(target, ast.Tuple) else [target])]
             if not handed and any(_named_like_a_round_trip(t) for t in flat):
                 found.append(f"{rel}:{node.lineno}: {ast.unparse(node)[:80]}")

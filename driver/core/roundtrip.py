@@ -2,15 +2,20 @@
 
 A reply is counted only when it answers exactly one request (Karn's rule: never a request sent twice, whose
 reply could be to either), and the estimate is RFC 6298's: a smoothed round trip and its variation, the
-timeout their sum with four times the variation. A request that goes unanswered for a whole timeout doubles the
+timeout their sum with four times the variation. A command that goes unanswered for a whole timeout doubles the
 timeouts after it until an answer times the link again (RFC 6298 5.5, Karn's backoff): a link that slows down
-all at once (a radio's latency jumping, a vehicle busy writing its logs) is waited for instead of being asked
-faster than it can answer, which would leave no request answered once to measure it by.
+all at once (a radio's latency jumping) is waited for instead of being asked faster than it can answer, which
+would leave no request answered once to measure it by, and a command would give up on answers still on their way.
+A transfer's lost request does not back off: on a radio a loss is chance, not a slower link, and the transfer's
+next request answered once times the link again (measured: backing off there made a mission upload at 30 % loss
+twice as slow).
 
 A satellite-slow radio and a loopback SITL are both measured, not guessed: every part that waits on the vehicle
 (commands, the mission transfer, the parameter download, MAVLink FTP) feeds one estimate per vehicle with the
 answers that can only be to one request of its own, and reads :meth:`RoundTrip.timeout` instead of keeping an
 estimator of its own; a part may bound the timeout by its protocol's own limits (the vehicle's own re-ask time).
+The link supervisor's first requests (AUTOPILOT_VERSION, the parameters it reads by name) time the link as it
+connects, so the first transfer does not wait on the first guess.
 """
 from __future__ import annotations
 
@@ -53,9 +58,9 @@ class RoundTrip:
         return self.initial if self.srtt is None else self.srtt
 
     def expired(self, now: float) -> None:
-        """A request went unanswered for a whole :meth:`timeout` and goes again: the waits double (up to the
+        """A command went unanswered for a whole :meth:`timeout` and goes again: the waits double (up to the
         ceiling) until an answer to a request sent once times the link again. Once per timeout, however many
-        requests were out: they were lost together, or the link slowed for them all."""
+        were out: they were lost together, or the link slowed for them all."""
         if now < self._backed_off_until:
             return
         if self.timeout() < self.ceiling:

@@ -18,7 +18,8 @@ What ArduCopter 4.6.3 does (tests/data/recordings/README.md, "MAVFTP parameter d
   the open is sent again; TerminateSession ends every read, given up or not.
 
 How long a request may stay unanswered is the link's, not the reader's: the vehicle's one round-trip estimate
-(:class:`driver.core.roundtrip.RoundTrip`), which the open's ACK and every ReadFile answered once feed.
+(:class:`driver.core.roundtrip.RoundTrip`), which the open's ACK, each burst's first packet and every ReadFile
+answered once feed.
 
 Any trouble (no progress for ``stall`` seconds, a NAK other than EOF, a chunk asked :data:`READ_TRIES` times) ends
 it with a reason. All methods run with the driver's state lock held and return what to send.
@@ -87,6 +88,7 @@ class FtpRead:
     heard: float = 0.0                   # last FTP frame from the vehicle
     gap: float = 0.0                     # smoothed time between a burst's packets (by their seqs)
     last_packet: tuple[int, float] | None = None              # (seq, when) of the last burst packet heard
+    burst_timed: int | None = None       # the burst whose first packet timed the link
     progress: float = 0.0                # last answer to the open or new byte of the file
     asked: dict[int, float] = field(default_factory=dict)     # gap offset -> when asked
     tries: dict[int, int] = field(default_factory=dict)       # gap offset -> ReadFiles sent
@@ -193,7 +195,12 @@ class FtpRead:
 
     def _burst_packet(self, seq: int, now: float) -> None:
         """Learn the burst's pace; a packet after the burst was judged over says the vehicle is still bursting:
-        the ReadFiles sent meanwhile wait behind it in its queue, so their time starts again."""
+        the ReadFiles sent meanwhile wait behind it in its queue, so their time starts again. The first packet
+        heard of a burst answers its one BurstReadFile: it times the link."""
+        asked = self.sent.get(self.burst) if self.burst is not None else None
+        if asked is not None and self.burst_timed != self.burst:
+            self.burst_timed = self.burst
+            self.roundtrip.sample(now - asked[2])
         if self.last_packet is not None and 0 < (seq - self.last_packet[0]) & 0xFFFF < 50:
             each = (now - self.last_packet[1]) / ((seq - self.last_packet[0]) & 0xFFFF)
             self.gap = each if not self.gap else 0.7 * self.gap + 0.3 * each
@@ -300,7 +307,6 @@ class FtpRead:
         for offset, sent in list(self.asked.items()):
             if now - sent >= timeout:
                 del self.asked[offset]
-                self.roundtrip.expired(now)
         window = self._read_window()
         for offset in missing:
             if len(self.asked) >= window:

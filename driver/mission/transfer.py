@@ -194,7 +194,6 @@ class PlanTransfers(LegacyRally, ReadBack):
             for seq, entry in list(t.waiting.items()):
                 if now - entry[0] < self._retry(t):
                     continue
-                self._roundtrip.expired(now)                  # asked for a whole timeout, unanswered
                 if entry[1] >= ITEM_ATTEMPTS and now - entry[2] >= ITEM_PATIENCE:
                     why = (f"item {seq} never came ({entry[1]} requests in {now - entry[2]:.0f} s); "
                            f"{len(t.received)} of {t.count} received")
@@ -221,8 +220,6 @@ class PlanTransfers(LegacyRally, ReadBack):
                     return
                 if self._unanswered(t, why, now):
                     return
-            if t.attempts:
-                self._roundtrip.expired(now)
             self._send_start(t, now)
         elif t.stage == "items":                                  # upload: the vehicle leads
             if now - t.heard > SILENCE:
@@ -235,7 +232,6 @@ class PlanTransfers(LegacyRally, ReadBack):
                 self._read_back(t, now)
                 return
             if t.asked >= 0:                                      # the next request is late: the item again
-                self._roundtrip.expired(now)
                 self._send_item(t, t.asked, now, again=True)
                 t.probing = t.asked
 

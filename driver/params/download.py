@@ -113,7 +113,6 @@ class Download:
             del self.asked[index]
         if timed_out:
             self.window = max(MIN_WINDOW, self.window / 2.0)
-            self.roundtrip.expired(now)
         out = []
         for index in range(self.expected):
             if len(self.asked) >= int(self.window):

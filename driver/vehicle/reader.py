@@ -310,7 +310,7 @@ class Reader:
         self._wake.set()
 
     def _on_autopilot_version(self, m) -> None:
-        self._link.version_known = True
+        self._link.version_received(self._clock())
         told = self._firmware.heard_version(m)        # what the firmware does differently (driver.core.firmware)
         self._store.set(autopilot=heard_version(self._store.view()["autopilot"], m))
         if self._firmware.firmware:
@@ -328,7 +328,7 @@ class Reader:
             self._store.set(boot=counted)
             if counted.restarts != boot.restarts:
                 self._restarted()
-        self._link.param_received(name)
+        self._link.param_received(name, self._clock())
         if name in FENCE_PARAMS:
             self._store.set(fence=self._store.view()["fence"].with_param(name, m.param_value))
         elif name == "BATT_CAPACITY":                   # the charge left is reckoned from it (battery.time_left)

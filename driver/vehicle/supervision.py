@@ -9,6 +9,9 @@ parameters (FENCE_ENABLE, FENCE_TYPE, FENCE_RADIUS, FENCE_ALT_MAX: where the veh
 a mission plan's times rest on (WPNAV_SPEED and the rest of PLAN_PARAMS: a plan is timed at the vehicle's own
 speeds from the start, not at defaults until the whole table is read). Each is read by name (PARAM_REQUEST_READ)
 into the parameter table, state().parameters.
+AUTOPILOT_VERSION and the first of the parameters read by name, asked once and answered, time the link: the first
+samples of the vehicle's round trip (driver.core.roundtrip), so the first transfer already waits as long as the
+link needs (HOME_POSITION does not: it also streams unasked).
 Runs with the driver's state lock held and returns the MAVLink messages to send; sends nothing itself.
 """
 from __future__ import annotations
@@ -37,12 +40,13 @@ WANTED_PARAMS = ("FS_GCS_ENABLE",) + FENCE_PARAMS + PLAN_PARAMS
 
 
 class LinkSupervisor:
-    def __init__(self, config, transport, firmware: FirmwareProfile, target, clock):
+    def __init__(self, config, transport, firmware: FirmwareProfile, target, clock, roundtrip=None):
         self._cfg = config
         self._transport = transport
         # what ages the heartbeat: the vehicle's clock, or the recording's when replaying one
         self._clock = transport.clock if transport.is_replay else clock
         self._firmware = firmware             # which requests the vehicle's firmware knows
+        self._roundtrip = roundtrip           # the link's round trip: fed by the answers to requests asked once
         self._target = target                 # () -> (system, component)
         self.status = LinkStatus.WAITING
         self.lost_count = 0
@@ -61,6 +65,7 @@ class LinkSupervisor:
         self._home_tries = 0
         self._param_tries = 0
         self._param_asked_at = -1e9
+        self._param_timed = False             # the batch's first answer timed the link
         self.params_known: set[str] = set()
         self.version_known = False
         self._version_tries = 0
@@ -91,6 +96,17 @@ class LinkSupervisor:
 
     def home_received(self) -> None:
         self._home_wanted_since = None
+
+    def version_received(self, now: float) -> None:
+        """AUTOPILOT_VERSION: not asked for again."""
+        if not self.version_known and self._version_tries == 1:
+            self._timed(now - self._version_asked_at)
+        self.version_known = True
+
+    def _timed(self, seconds: float) -> None:
+        """A request of ours asked once is answered after ``seconds`` (Karn's rule: an answer of its own)."""
+        if self._roundtrip is not None:
+            self._roundtrip.sample(seconds)
 
     # -- the ticker (lock held) -----------------------------------------------------------------------------
     def tick(self, now: float) -> tuple[list, str | None, bool]:
@@ -148,8 +164,12 @@ class LinkSupervisor:
             self._param_asked_at = now
         return out
 
-    def param_received(self, name: str) -> None:
-        """A PARAM_VALUE for ``name``: not asked for again."""
+    def param_received(self, name: str, now: float) -> None:
+        """A PARAM_VALUE for ``name``: not asked for again. The first of a batch asked once times the link."""
+        if name in WANTED_PARAMS and name not in self.params_known and self._param_tries == 1 and \
+                not self._param_timed:
+            self._param_timed = True
+            self._timed(now - self._param_asked_at)
         self.params_known.add(name)
 
     def stream_requests(self) -> list:

@@ -136,7 +136,7 @@ class Vehicle(Drone):
             for c in (mavlink.MAV_CMD_COMPONENT_ARM_DISARM, mavlink.MAV_CMD_DO_MOTOR_TEST)))
         self._commands = CommandSender(self._store, cfg, self._notifier, self._peer.target, self._firmware,
                                        self._rules, self._roundtrip)
-        self._link = LinkSupervisor(cfg, self._transport, self._firmware, self._peer.target, clock)
+        self._link = LinkSupervisor(cfg, self._transport, self._firmware, self._peer.target, clock, self._roundtrip)
         self._params = ParameterManager(self._store, self._notifier, self._peer.target, self._firmware,
                                         self._roundtrip, 2 * cfg.loss_timeout, cfg.param_retry)
         self._params.use_ftp = cfg.param_ftp
