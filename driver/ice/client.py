@@ -14,7 +14,6 @@ stopped), so a lost server still shows as LOST.
 """
 from __future__ import annotations
 
-import collections
 import logging
 import threading
 import time
@@ -23,14 +22,13 @@ from concurrent.futures import Future, ThreadPoolExecutor
 import Ice
 
 from ..vehicle.api import CEILING, Drone, Limits
-from ..core.frames import clamp, finite
-from ..vehicle.state import (CommandResult, CommandStatus, Fence, LinkHealth, LinkStatus, Message, Severity, VehicleState,
-                     replace)
-from ..mission.plan import Plan, PlanKind, TransferOutcome
-from ..params.metadata import metadata_for
+from ..vehicle.state import (CommandResult, CommandStatus, Fence, LinkHealth, LinkStatus, Severity, VehicleState,
+                             replace)
+from ..mission.plan import TransferOutcome
 from ..params.model import ParameterTable
 from . import convert, load_slice, plans
-from .params import table_from_ice
+from .calls import FlightCalls, PlanCalls
+from .journal import Journal
 from .payload import PayloadClient
 from ..payload.model import Gimbal, VehicleCamera
 from .server import DEFAULT_PORTS
@@ -38,10 +36,6 @@ from .server import DEFAULT_PORTS
 jderobot, mavlinkserver = load_slice()
 log = logging.getLogger(__name__)
 
-_MAX_MESSAGES = 200
-_MAX_RESULTS = 50
-FENCE_EVERY = 20                       # polls between reads of the fence (2 s at the default 0.1 s poll)
-PARAMS_EVERY = 10                      # polls between looks at the parameters (each poll while they change)
 RESUBSCRIBE_AFTER = 5.0                # s without a publication while the server answers: subscribe again
 PREFIX = "UAVViewer"
 #: KB a reply may have: the largest picture a JdeRobot Camera sends the viewer, 1920x1080 RGB8 (6075 KB),
@@ -77,7 +71,7 @@ def viewer_properties(config: str | None = None, host: str | None = None, args: 
     return props
 
 
-class IceDrone(PayloadClient, Drone):
+class IceDrone(FlightCalls, PlanCalls, PayloadClient, Drone):
     """The remote vehicle; ``start()`` returns at once, the first status arrives in the background."""
 
     def __init__(self, properties: Ice.Properties, prefix: str = PREFIX, poll_interval: float = 0.1,
@@ -104,18 +98,10 @@ class IceDrone(PayloadClient, Drone):
 
         self._lock = threading.Lock()
         self._state = VehicleState(link=LinkHealth(status=LinkStatus.WAITING, address=self._description))
-        self._messages: collections.deque[Message] = collections.deque(maxlen=_MAX_MESSAGES)
-        self._results: collections.deque[CommandResult] = collections.deque(maxlen=_MAX_RESULTS)
-        self._index = 0                        # our own message numbering (server's + our own lines)
-        self._result_offset = 0                # server result index + offset = ours (bumped when it may restart)
-        self._result_high = 0
-        self._server_message = -1              # the server's last message / result index we have
-        self._server_result = -1
-        self._last_message_time = 0.0
+        self._journal = Journal()              # the pilot's messages and results, the server's and our own
         self._last_answer: float | None = None
         self._lost = False
         self._lost_count = 0
-        self._resync = False                   # after a loss: the server may have restarted its numbering
         self._said_unreachable = False
         self._fence = Fence()
         self._payload = (Gimbal(), VehicleCamera())  # the camera on the vehicle (driver.ice.payload)
@@ -201,7 +187,7 @@ class IceDrone(PayloadClient, Drone):
                                             ("Extra", jderobot.ArDroneExtraPrx), ("WP", jderobot.Pose3DPrx))
                          for prx in (proxy(name),) if prx is not None}
             self._limits = self._clamps(Limits())
-            self._note(Severity.NOTICE, "plain JdeRobot server (no mavlinkserver extension): state from "
+            self._journal.note(Severity.NOTICE, "plain JdeRobot server (no mavlinkserver extension): state from "
                                         "Pose3D and Navdata, takeoff and land through Extra")
 
     def close(self) -> None:
@@ -236,12 +222,6 @@ class IceDrone(PayloadClient, Drone):
             self._closing.wait(self._poll / 2)
         return None
 
-    def _note(self, severity: Severity, text: str) -> None:
-        """A line of our own for the pilot (caller holds _lock)."""
-        self._index += 1
-        self._messages.append(Message(self._index, time.time(), severity, text, "driver"))
-        (log.warning if severity <= Severity.WARNING else log.info)("%s", text)
-
     def _run_poller(self) -> None:
         first = True
         next_subscribe = 0.0
@@ -272,7 +252,8 @@ class IceDrone(PayloadClient, Drone):
                     self._read_fence()
                     self._read_parameters()
                     self._read_payload()
-                    self._answered(self._vehicle.getStatus(self._server_message, self._server_result))
+                    journal = self._journal
+                    self._answered(self._vehicle.getStatus(journal.server_message, journal.server_result))
                     if (self._subscription is not None
                             and started - max(self._subscribed_at, published or 0.0) > RESUBSCRIBE_AFTER):
                         self._unsubscribe()         # the server answers but its topic no longer reaches us
@@ -281,41 +262,6 @@ class IceDrone(PayloadClient, Drone):
             except Ice.Exception as exc:
                 self._missed(exc)
             self._closing.wait(max(0.0, self._poll - (time.monotonic() - started)))
-
-    def _read_fence(self) -> None:
-        """Vehicle.getFence now and then (the fence changes only when someone sets its parameters)."""
-        if self._fence_polls is None:
-            return
-        if self._fence_polls > 0:
-            self._fence_polls -= 1
-            return
-        try:
-            self._fence = convert.fence_from_ice(self._vehicle.getFence())
-            self._fence_polls = FENCE_EVERY
-        except Ice.OperationNotExistException:
-            self._fence_polls = None
-            with self._lock:
-                self._note(Severity.NOTICE, "this MAVLinkServer does not serve the fence (an older version)")
-
-    def _read_parameters(self) -> None:
-        """Vehicle.getParameters: the summary only while nothing changed; each poll while the table changes."""
-        if self._param_polls is None:
-            return
-        if self._param_polls > 0:
-            self._param_polls -= 1
-            return
-        try:
-            answer = self._vehicle.getParameters("*", self._param_revision)
-        except Ice.OperationNotExistException:
-            self._param_polls = None
-            return
-        changed = answer.revision != self._param_revision
-        if changed:
-            table = table_from_ice(answer)
-            with self._lock:
-                self._param_revision, self._parameters = answer.revision, table
-                self._state = replace(self._state, parameters=table)
-        self._param_polls = 0 if changed or answer.downloading else PARAMS_EVERY
 
     def _clamps(self, server: Limits) -> Limits:
         """The server's limits, tightened by JdeRobot's optional ``UAVViewer.CMDVel.Xmax/Ymax/Zmax/Yawmax``."""
@@ -333,50 +279,26 @@ class IceDrone(PayloadClient, Drone):
         """The server answered (caller holds _lock)."""
         if self._lost:
             self._lost = False
-            self._note(Severity.NOTICE, f"server {self._description} answering again")
+            self._journal.note(Severity.NOTICE, f"server {self._description} answering again")
         self._last_answer = time.monotonic()
 
     def _answered_jderobot(self, pose, nav) -> None:
         with self._lock:
             self._heard()
-            s = convert.state_from_jderobot(pose, nav, tuple(self._messages), tuple(self._results))
+            s = convert.state_from_jderobot(pose, nav, tuple(self._journal.messages), tuple(self._journal.results))
             self._state = replace(s, link=replace(s.link, address=self._description, lost_count=self._lost_count))
 
     def _answered(self, status) -> None:
         with self._lock:
             self._heard()
-            resync, self._resync = self._resync, False
-            for m in status.messages:
-                if not resync and m.index <= self._server_message:
-                    continue                           # polled, then published as well (or the other way)
-                # after a loss we asked for everything: the clock says which lines are new
-                if not resync or m.time > self._last_message_time:
-                    self._index += 1
-                    self._messages.append(replace(convert.message_from_status(m), index=self._index))
-                    self._last_message_time = max(self._last_message_time, m.time)
-            if status.messages:
-                self._server_message = max(self._server_message, status.messages[-1].index)
-            if resync:                                 # a restarted server numbers from 1 again
-                self._result_offset = self._result_high
-            for r in status.results if not resync else ():
-                if r.index <= self._server_result:
-                    continue
-                result = self._result(r)
-                self._result_high = max(self._result_high, result.index)
-                self._results.append(result)
-            if status.results:
-                self._server_result = max(self._server_result, status.results[-1].index)
-            s = convert.state_from_status(status, tuple(self._messages), tuple(self._results))
+            journal = self._journal
+            journal.take(status)
+            s = convert.state_from_status(status, tuple(journal.messages), tuple(journal.results))
             link = replace(s.link, address=f"{s.link.address} via {self._description}",
                            lost_count=s.link.lost_count + self._lost_count)
             gimbal, camera = self._payload
             self._state = replace(s, link=link, fence=self._fence, gimbal=gimbal, camera=camera,
                                   parameters=self._parameters)
-
-    def _result(self, outcome) -> CommandResult:
-        """The server's outcome, numbered as in our results (the window pairs a Future's answer with it)."""
-        result = convert.result_from_outcome(outcome)
-        return replace(result, index=result.index + self._result_offset) if result.index > 0 else result
 
     def _missed(self, exc: Exception) -> None:
         with self._lock:
@@ -388,18 +310,17 @@ class IceDrone(PayloadClient, Drone):
                 # never reached: stay WAITING, but say why once
                 if not self._said_unreachable:
                     self._said_unreachable = True
-                    self._note(Severity.WARNING, f"server {self._description} not answering: {type(exc).__name__}")
-                    self._state = replace(self._state, messages=tuple(self._messages))
+                    self._journal.note(Severity.WARNING, f"server {self._description} not answering: "
+                                       f"{type(exc).__name__}")
+                    self._state = replace(self._state, messages=tuple(self._journal.messages))
                 return
             self._lost = True
             self._lost_count += 1
-            self._server_message = -1                  # a restarted server numbers from 1 again
-            self._server_result = -1
-            self._resync = True
-            self._note(Severity.CRITICAL, f"lost the server {self._description}: {type(exc).__name__}")
+            self._journal.server_lost()                # it may come back restarted, numbering from 1
+            self._journal.note(Severity.CRITICAL, f"lost the server {self._description}: {type(exc).__name__}")
             link = self._state.link
             age = None if link.heartbeat_age is None else link.heartbeat_age + (now - since)
-            self._state = replace(self._state, messages=tuple(self._messages), link=replace(
+            self._state = replace(self._state, messages=tuple(self._journal.messages), link=replace(
                 link, status=LinkStatus.LOST, heartbeat_age=age, packets_per_s=0.0,
                 lost_count=link.lost_count + 1))
 
@@ -439,46 +360,13 @@ class IceDrone(PayloadClient, Drone):
             log.debug("unsubscribing from %s failed: %s", self.vehicle_name, exc)
         adapter.destroy()
 
-    def _published(self, status) -> None:
-        """A status from IceStorm (an Ice dispatch thread)."""
+    def on_status(self, status) -> None:
+        """A status published on the vehicle's IceStorm topic (an Ice dispatch thread)."""
         if self._closing.is_set():
             return
         self._last_published = time.monotonic()
         self.publications += 1
         self._answered(status)
-
-    # -- velocity over JdeRobot's CMDVel --------------------------------------------------------
-    def set_velocity(self, forward: float, right: float, up: float, yaw_rate: float) -> bool:
-        if not finite(forward, right, up, yaw_rate):
-            log.warning("velocity refused: not finite (%r, %r, %r, %r)", forward, right, up, yaw_rate)
-            return False
-        lim = self.limits
-        command = (clamp(float(forward), lim.horizontal), clamp(float(right), lim.horizontal),
-                   clamp(float(up), lim.vertical), clamp(float(yaw_rate), lim.yaw_rate))
-        with self._velocity_ready:
-            self._velocity = command
-            self._velocity_ready.notify()
-        return True
-
-    def _run_sender(self) -> None:
-        while True:
-            with self._velocity_ready:
-                while self._velocity is None and not self._closing.is_set():
-                    self._velocity_ready.wait()
-                if self._closing.is_set():
-                    return
-                command, self._velocity = self._velocity, None
-            x, y, z, yaw = convert.cmdvel_from_body(*command)
-            try:
-                answer = self._cmdvel.setCMDVelData(jderobot.CMDVelData(x, y, z, 0.0, 0.0, yaw))
-                if answer != 0:
-                    log.warning("server refused velocity %s: %d", command, answer)
-            except Ice.Exception as exc:
-                log.debug("velocity not delivered: %s", exc)
-
-    def _drop_velocity(self) -> None:
-        with self._velocity_ready:
-            self._velocity = None
 
     # -- commands: started on the worker, answered by the vehicle --------------------------------
     def _command(self, name: str, start, transfer: bool = False) -> Future:
@@ -504,10 +392,10 @@ class IceDrone(PayloadClient, Drone):
                 return
             with self._lock:
                 if transfer:
-                    result = TransferOutcome(self._result(outcome.outcome),
+                    result = TransferOutcome(self._journal.result(outcome.outcome),
                                              plans.plan_from_ice(outcome.plan) if outcome.hasPlan else None)
                 else:
-                    result = self._result(outcome)
+                    result = self._journal.result(outcome)
             self._answer_after_status(future, result)
 
         def run() -> None:
@@ -532,45 +420,16 @@ class IceDrone(PayloadClient, Drone):
                 pass
             future.set_result(result)
         try:
-            self._vehicle.getStatusAsync(self._server_message, self._server_result).add_done_callback(read)
+            journal = self._journal
+            self._vehicle.getStatusAsync(journal.server_message, journal.server_result).add_done_callback(read)
         except Exception:
             future.set_result(result)
-
-    def _jderobot_command(self, name: str, role: str, call,
-                          said: str = "JdeRobot servers give no answer") -> Future:
-        """``call(proxy)`` on a JdeRobot interface, which says nothing of the vehicle: ACCEPTED once it returns."""
-        prx = self._cmdvel if role == "CMDVel" else self._extra if role == "Extra" else self._jde.get(role)
-        if prx is None:
-            return self._no_extension(name)
-        future: Future = Future()
-
-        def answered(ice_future) -> None:
-            try:
-                ice_future.result()
-            except Exception as exc:
-                future.set_result(CommandResult(name, CommandStatus.REJECTED,
-                                                f"server unreachable: {type(exc).__name__}"))
-                return
-            future.set_result(self._local_result(name, CommandStatus.ACCEPTED, f"sent through {role}; {said}").result())
-
-        def run() -> None:
-            try:
-                call(prx).add_done_callback(answered)
-            except Exception as exc:
-                future.set_result(CommandResult(name, CommandStatus.REJECTED, f"server unreachable: {exc}"))
-        try:
-            self._worker.submit(run)
-        except RuntimeError as exc:                     # closed
-            future.set_result(CommandResult(name, CommandStatus.REJECTED, f"closed: {exc}"))
-        return future
 
     def _local_result(self, name: str, status: CommandStatus, reason: str) -> Future:
         """A result of our own, numbered in our results so the window shows it once."""
         with self._lock:
-            self._result_high += 1
-            result = CommandResult(name, status, reason, 0, self._result_high)
-            self._results.append(result)
-            self._state = replace(self._state, results=tuple(self._results))
+            result = self._journal.own_result(name, status, reason)
+            self._state = replace(self._state, results=tuple(self._journal.results))
         future: Future = Future()
         future.set_result(result)
         return future
@@ -579,136 +438,6 @@ class IceDrone(PayloadClient, Drone):
         return self._local_result(name, CommandStatus.REJECTED,
                                   "not offered by a plain JdeRobot server (no mavlinkserver extension)")
 
-    def takeoff(self, altitude: float | None = None) -> Future:
-        if self._vehicle is None:
-            return self._jderobot_command("takeoff", "Extra", lambda p: p.takeoffAsync())
-        return self._command("takeoff", lambda p: p.takeoffAsync(0.0 if altitude is None else float(altitude)))
-
-    def land(self) -> Future:
-        self._drop_velocity()
-        if self._vehicle is None:
-            return self._jderobot_command("land", "Extra", lambda p: p.landAsync())
-        return self._command("land", lambda p: p.landAsync())
-
-    def stop(self) -> Future:
-        self._drop_velocity()
-        if self._vehicle is None:                      # zero velocity (an AR.Drone's reset cuts the motors)
-            return self._jderobot_command("stop", "CMDVel", lambda p: p.setCMDVelDataAsync(
-                jderobot.CMDVelData(0.0, 0.0, 0.0, 0.0, 0.0, 0.0)))
-        return self._command("stop", lambda p: p.stopAsync())
-
-    def return_to_launch(self) -> Future:
-        self._drop_velocity()
-        if self._vehicle is None:
-            return self._no_extension("RTL")
-        return self._command("RTL", lambda p: p.returnToLaunchAsync())
-
-    def arm(self, force: bool = False) -> Future:
-        if self._vehicle is None:
-            return self._no_extension("arm")
-        return self._command("arm", lambda p: p.armAsync(bool(force)))
-
-    def disarm(self, force: bool = False, emergency: bool = False) -> Future:
-        if self._vehicle is None:
-            return self._no_extension("disarm")
-        if force and emergency:                        # the server's explicit emergencyStop, if it allows it
-            return self._command("emergency motor stop", lambda p: p.emergencyStopAsync())
-        return self._command("disarm", lambda p: p.disarmAsync(bool(force)))
-
-    def set_mode(self, name: str) -> Future:
-        if self._vehicle is None:
-            return self._no_extension(f"mode {name}")
-        return self._command(f"mode {name}", lambda p: p.setModeAsync(str(name)))
-
-    def go_to(self, north: float, east: float, altitude: float) -> Future:
-        if self._vehicle is None:
-            if not finite(north, east, altitude):
-                return self._local_result("go to", CommandStatus.REJECTED, "coordinates are not finite numbers")
-            return self._jderobot_command("go to", "WP", lambda p: p.setPose3DDataAsync(
-                jderobot.Pose3DData(float(east), float(north), float(altitude), 1.0, 1.0, 0.0, 0.0, 0.0)))
-        return self._command("go to", lambda p: p.goToAsync(float(north), float(east), float(altitude)))
-
-    def set_yaw(self, degrees: float, relative: bool = False, rate_deg_s: float = 30.0) -> Future:
-        if self._vehicle is None:
-            return self._no_extension("yaw")
-        return self._command("yaw", lambda p: p.setYawAsync(float(degrees), bool(relative), float(rate_deg_s)))
-
-    # -- parameters: the server's driver reads and writes them (driver.params) ------------------------
-    def fetch_parameters(self, refresh: bool = False) -> Future:
-        if self._vehicle is None:
-            return self._no_extension("parameters")
-        return self._parameter_command("parameters", lambda p: p.fetchParametersAsync(bool(refresh)))
-
-    def set_parameter(self, name: str, value: float, allow_out_of_bounds: bool = False) -> Future:
-        if self._vehicle is None:
-            return self._no_extension(f"param {name}")
-        if not finite(value):
-            return self._local_result(f"param {name}", CommandStatus.REJECTED, "not a finite number")
-        return self._parameter_command(f"param {name}", lambda p: p.setParameterAsync(
-            str(name), float(value), bool(allow_out_of_bounds)))
-
-    def _parameter_command(self, name: str, start) -> Future:
-        """A command whose answer changes the table: looked at again on the next poll."""
-        self._param_polls = 0 if self._param_polls is not None else None
-        future = self._command(name, start)
-        future.add_done_callback(lambda _: setattr(self, "_param_polls", 0 if self._param_polls is not None else None))
-        return future
-
-    @property
-    def parameter_metadata(self):
-        """ArduPilot's metadata from this machine (the per-user cache's, else the shipped copy)."""
-        return metadata_for()[0]
-
-    # -- missions over the mavlinkserver extension --------------------------------------------------
-    def upload_plan(self, plan: Plan) -> Future:
-        name = f"upload {plan.kind.label}"
-        if self._vehicle is None:
-            return self._no_extension_outcome(name)
-        ice_plan = plans.plan_to_ice(mavlinkserver, plan)
-        return self._command(name, lambda p: p.uploadPlanAsync(ice_plan), transfer=True)
-
-    def download_plan(self, kind: PlanKind) -> Future:
-        name = f"download {kind.label}"
-        if self._vehicle is None:
-            return self._no_extension_outcome(name)
-        return self._command(name, lambda p: p.downloadPlanAsync(int(kind)), transfer=True)
-
-    def clear_plan(self, kind: PlanKind) -> Future:
-        if self._vehicle is None:
-            return self._no_extension(f"clear {kind.label}")
-        return self._command(f"clear {kind.label}", lambda p: p.clearPlanAsync(int(kind)))
-
-    def cancel_transfer(self, kind: PlanKind) -> None:
-        if self._vehicle is not None:
-            self._worker.submit(lambda: self._commands.cancelTransferAsync(int(kind)))
-
-    def start_mission(self) -> Future:
-        return self._mission_command("mission start", lambda p: p.startMissionAsync())
-
-    def pause_mission(self) -> Future:
-        return self._mission_command("mission pause", lambda p: p.pauseMissionAsync())
-
-    def resume_mission(self) -> Future:
-        return self._mission_command("mission resume", lambda p: p.resumeMissionAsync())
-
-    def set_mission_item(self, seq: int) -> Future:
-        return self._mission_command(f"mission item {seq}", lambda p: p.setMissionItemAsync(int(seq)))
-
-    def _mission_command(self, name: str, start) -> Future:
-        return self._no_extension(name) if self._vehicle is None else self._command(name, start)
-
-    def _no_extension_outcome(self, name: str) -> Future:
-        future: Future = Future()
-        future.set_result(TransferOutcome(self._no_extension(name).result()))
-        return future
-
-    def toggle_camera(self) -> Future:
-        """JdeRobot's ``Extra.toggleCam``: the server moves its Camera to its next source."""
-        if self._extra is None:
-            return self._local_result("switch camera", CommandStatus.REJECTED,
-                                      f"no {self._prefix}.Extra.Proxy configured")
-        return self._jderobot_command("switch camera", "Extra", lambda p: p.toggleCamAsync(),
-                                      "the server shows its next camera")
 
 
 class _Subscriber(mavlinkserver.Telemetry):
@@ -719,7 +448,7 @@ class _Subscriber(mavlinkserver.Telemetry):
         self._owner = owner
 
     def status(self, vehicle, status, current=None):
-        self._owner._published(status)
+        self._owner.on_status(status)
 
     def pose(self, vehicle, published, pose, current=None):
         pass
@@ -731,7 +460,7 @@ class _Subscriber(mavlinkserver.Telemetry):
         pass
 
     def payload(self, vehicle, p, current=None):
-        self._owner._published_payload(p)
+        self._owner.on_payload(p)
 
 
 def fleet_properties(registry: str, certs: str | None = None) -> Ice.Properties:

@@ -1,4 +1,4 @@
-"""The camera on the vehicle over Ice (issue 23): ``mavlinkserver.Payload`` both ways, the Vehicle servant's
+"""The camera on the vehicle over Ice: ``mavlinkserver.Payload`` both ways, the Vehicle servant's
 payload operations and the client's (mixins for :class:`~driver.ice.servants.VehicleI` and
 :class:`~driver.ice.client.IceDrone`)."""
 from __future__ import annotations
@@ -122,5 +122,6 @@ class PayloadClient:
         except Ice.OperationNotExistException:
             self._payload_missing = True
 
-    def _published_payload(self, p) -> None:
+    def on_payload(self, p) -> None:
+        """The payload published on the vehicle's IceStorm topic (an Ice dispatch thread)."""
         self._payload = payload_from_ice(p)
