@@ -137,7 +137,7 @@ def test_the_gcs_failsafe_follows_fs_gcs_enable(flying, sim):
     sim.faults.uplink.loss = 0.0
     assert flying.set_parameter("FS_GCS_ENABLE", 1).result(timeout=10).ok
     assert flying.set_parameter("WPNAV_SPEED", 750).result(timeout=10).ok
-    assert sim.autopilot._wp_speed() == 7.5                       # the behaviour reads the table
+    assert sim.autopilot.wp_speed() == 7.5                       # the behaviour reads the table
     sim.faults.uplink.loss = 1.0
     assert wait_until(lambda: sim.truth().mode == "RTL", 10), sim.truth()
     sim.faults.uplink.loss = 0.0

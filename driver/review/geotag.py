@@ -1,5 +1,5 @@
 """Geotag a survey's photos from the flight log: each JPEG gets the position and altitude the autopilot logged
-when it took that photo, written into its EXIF GPS tags (issue 31, Review).
+when it took that photo, written into its EXIF GPS tags (File › Review, docs/review.md).
 
 Where the photos' moments are in a log:
 

@@ -12,7 +12,7 @@ Mixed into :class:`~driver.sim.autopilot.Autopilot`, next to :mod:`.missions` (w
   vehicle stays in AUTO. Armed on the ground, AUTO needs a mission that starts with a takeoff
   ("Auto: Missing Takeoff Cmd"); disarmed in AUTO with no mission, "PreArm: Mode requires mission" (4.x).
 
-Speed is WPNAV_SPEED (``_wp_speed``, the same accessor GUIDED flies with; DO_CHANGE_SPEED overrides it).
+Speed is WPNAV_SPEED (``wp_speed``, the same accessor GUIDED flies with; DO_CHANGE_SPEED overrides it).
 """
 from __future__ import annotations
 
@@ -263,7 +263,7 @@ class Auto:
         if self.auto_stage == "hold" or self.auto_target is None:
             return self._hold()
         speed_up = 1.5 if item.command == mavlink.MAV_CMD_NAV_TAKEOFF else self._speed_up()
-        return self._pos_ctrl(self.auto_target, self._wp_speed(), speed_up, self._speed_dn())
+        return self._pos_ctrl(self.auto_target, self.wp_speed(), speed_up, self._speed_dn())
 
     def _auto_step(self) -> None:
         """Judge the current item: reached, held long enough, landed."""

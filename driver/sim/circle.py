@@ -50,7 +50,7 @@ class CircleNav:
         """The circle an :class:`~driver.sim.autopilot.Autopilot` starts as it switches to CIRCLE."""
         p = ap.params
         return cls(ap.n, ap.e, ap.d, ap.yaw, float(p.get("CIRCLE_RADIUS", 1000.0)), float(p.get("CIRCLE_RATE", 20.0)),
-                   ap._wp_speed(), max(0.5, float(p.get("WPNAV_ACCEL", 250.0)) / 100.0), ap.t)
+                   ap.wp_speed(), max(0.5, float(p.get("WPNAV_ACCEL", 250.0)) / 100.0), ap.t)
 
     def step(self, n: float, e: float, d: float, yaw: float, now: float) -> tuple[float, float, float, float]:
         """(north, east, down velocity wanted, yaw rate wanted) at ``now`` for a vehicle at n, e, d heading ``yaw``."""

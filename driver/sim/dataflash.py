@@ -95,6 +95,10 @@ class LogFolder:
     def path(self, number: int) -> str:
         return os.path.join(self.folder, log_file_name(number))
 
+    def written(self) -> int:
+        """Bytes of the log being written (0 when none is)."""
+        return self._file.tell() if self._file is not None else 0
+
     def numbers(self) -> list[int]:
         out = []
         for name in os.listdir(self.folder):
@@ -191,7 +195,7 @@ def write_flight_log(folder: LogFolder, size: int, params=(("SYSID_THISMAV", 1.0
     folder.write("MODE", 0, 4, 4, 1)
     folder.write("MSG", 0, "ArduCopter V4.6.3 (simulated)")
     i = 0
-    while folder._file.tell() < size:
+    while folder.written() < size:
         us = 1_000_000 + i * 100_000
         phase = (i + seed) * 0.05
         folder.write("ATT", us, 5 * _m.sin(phase), 5 * _m.sin(phase) + 0.1, 3 * _m.cos(phase), 3 * _m.cos(phase),

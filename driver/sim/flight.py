@@ -164,9 +164,10 @@ class Flight:
                 self.hold_point = (self.n, self.e, self.d if keep_down is None else keep_down)
             else:
                 return 0.0, 0.0, 0.0
-        return self._pos_ctrl(self.hold_point, self._wp_speed(), self._speed_up(), self._speed_dn())
+        return self._pos_ctrl(self.hold_point, self.wp_speed(), self._speed_up(), self._speed_dn())
 
-    def _wp_speed(self) -> float:
+    def wp_speed(self) -> float:
+        """m/s the vehicle flies to a waypoint: WPNAV_SPEED, or DO_CHANGE_SPEED's while it holds."""
         if self.speed_override:
             return self.speed_override
         return max(0.5, float(self.params["WPNAV_SPEED"]) / 100.0)
@@ -250,7 +251,7 @@ class Flight:
             self._tau = VEL_TAU
             return self.vel_target
         if self.guided == "position":
-            return self._pos_ctrl(self.pos_target, self._wp_speed(), self._speed_up(), self._speed_dn())
+            return self._pos_ctrl(self.pos_target, self.wp_speed(), self._speed_up(), self._speed_dn())
         return self._hold()
 
     def _fence_check(self) -> None:
@@ -292,9 +293,9 @@ class Flight:
             if -self.d >= self.rtl_alt - 0.2:
                 self.rtl_phase = "return"
                 self.yaw_mode = "look_ahead"
-            return self._pos_ctrl(target, self._wp_speed(), self._speed_up(), self._speed_dn())
+            return self._pos_ctrl(target, self.wp_speed(), self._speed_up(), self._speed_dn())
         if self.rtl_phase == "return":
-            speed = float(self.params["RTL_SPEED"]) / 100.0 or self._wp_speed()
+            speed = float(self.params["RTL_SPEED"]) / 100.0 or self.wp_speed()
             target = (0.0, 0.0, -self.rtl_alt)
             if math.hypot(self.n, self.e) < 0.3 and math.hypot(self.vn, self.ve) < 0.3:
                 self.rtl_phase = "loiter"
@@ -305,7 +306,7 @@ class Flight:
             if self.t >= self.rtl_loiter_until:
                 self.rtl_phase = "land"
                 self.hold_point = None
-            return self._pos_ctrl((0.0, 0.0, -self.rtl_alt), self._wp_speed(), self._speed_up(), self._speed_dn())
+            return self._pos_ctrl((0.0, 0.0, -self.rtl_alt), self.wp_speed(), self._speed_up(), self._speed_dn())
         # final descent
         vn, ve, _ = self._hold(keep_down=self.d)
         return vn, ve, self._land_speed()

@@ -1,4 +1,4 @@
-"""The MAVLink inspector's counts (issue 31): every message type from every system and component the link
+"""The MAVLink inspector's counts: every message type from every system and component the link
 carries, its rate and its newest values, for a pilot or developer to see what the vehicle really says.
 
 The reader calls :meth:`MessageInspector.seen` once per parsed frame (its hot path: a dict lookup and two
