@@ -81,7 +81,7 @@ class TlogColumns:
         # messages above id 255 (ESC_TELEMETRY_1_TO_4 in the 4.7 recording, ...) parse to UNKNOWN_n and were dropped
         conn.mav = mavlink2.MAVLink(conn)
         conn.mav.robust_parsing = True
-        kept: dict[str, _Columns] = {}
+        by_type: dict[str, _Columns] = {}
         self.texts: list[tuple[float, int, str]] = []
         self.params: dict[str, float] = {}
         self.heartbeats: list[tuple[float, int, bool]] = []
@@ -103,18 +103,18 @@ class TlogColumns:
                     self.params[m.param_id] = float(m.param_value)
                 elif mtype == "HEARTBEAT" and m.get_srcComponent() == 1:
                     self.heartbeats.append((t, m.custom_mode, bool(m.base_mode & 128)))
-                columns = kept.get(mtype)
+                columns = by_type.get(mtype)
                 if columns is None:
-                    columns = kept[mtype] = _Columns(m)
+                    columns = by_type[mtype] = _Columns(m)
                 columns.add(t, m)
         finally:
             conn.close()
         self.t0 = t0 or 0.0
-        if not kept:
+        if not by_type:
             raise TlogError("no MAVLink messages from a vehicle in the file: not a telemetry log")
         self.columns: dict[str, dict[str, np.ndarray]] = {}
         self.times: dict[str, np.ndarray] = {}
-        for mtype, columns in kept.items():
+        for mtype, columns in by_type.items():
             self.times[mtype], self.columns[mtype] = columns.numpy()
 
     def series(self, mtype: str, field: str) -> tuple[np.ndarray, np.ndarray]:
