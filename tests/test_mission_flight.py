@@ -172,3 +172,38 @@ def test_stop_during_a_mission_start_holds_an_airborne_copter(sim_factory, vehic
     assert starting.result(5).status is CommandStatus.ABORTED
     assert done.armed and done.altitude > 0.5
     assert not [s for s in seen if s[0] in ("STABILIZE", "ACRO") or not s[1]], seen
+
+
+def test_a_mission_ending_in_a_landing_is_said_complete_though_the_vehicle_rewinds():
+    """ArduCopter 4.6.3 disarms on a mission's last LAND item before it counts it reached, which resets the mission
+    (AP_Mission::reset from the disarm), and AUTO starts it again from item 1, disarmed: "Disarming motors",
+    "Mission: 1 Takeoff", MISSION_CURRENT seq 1 active (SITL, bench/mission_start.py). The vehicle flew its mission
+    to the end: the pilot is told it is complete, not "active, item 1". On the driver's own clock."""
+    from driver.sim.lockstep import Lockstep
+    ls = Lockstep(seed=5)
+    try:
+        v = ls.vehicle
+        ls.run(4.0)
+        five = Plan(PlanKind.MISSION, (MissionItem(mavlink.MAV_CMD_NAV_TAKEOFF, alt=5), waypoint(v, 10, 0, 5),
+                                       waypoint(v, 10, 10, 5), waypoint(v, 0, 10, 5),
+                                       MissionItem(mavlink.MAV_CMD_NAV_LAND)))
+        upload = v.upload_plan(five)
+        ls.run(5.0)
+        assert upload.result(5).result.ok
+        start = v.start_mission()
+        ls.run(6.0)
+        assert start.result(5).ok, start.result()
+        for _ in range(120):                                      # the flight, a second at a time
+            ls.run(1.0)
+            if not ls.autopilot.armed and v.state().mission.flown:
+                break
+        ap = ls.autopilot
+        assert not ap.armed and ap.landed and ap.mode_name == "AUTO"
+        assert ap.mission_current == 1 and ap.mission_run == "running"           # the vehicle rewound, disarmed
+        texts = [m.text for m in v.state().messages if m.source == "vehicle"]
+        assert texts.index("Mission: 1 Takeoff", texts.index("Disarming motors")) > 0, texts
+        ls.run(2.0)                                               # its active MISSION_CURRENT comes after
+        s = v.state()
+        assert s.mission.state is MissionRunState.COMPLETE and s.mission.flown and not s.armed, s.mission
+    finally:
+        ls.close()
