@@ -2,6 +2,8 @@
 lockstep with the driver (driver.sim.chaos), every flight rule and every answer judged against the vehicle's truth.
 
     .venv/bin/python bench/chaos.py [--sequences 1000] [--workers 2] [--seed 1] [--markdown]
+    .venv/bin/python bench/chaos.py --sitl /work/sitl/ardupilot/build/sitl/bin/arducopter \
+        --shim /work/sitl/bind_loopback.so --sequences 20          # the same judge on real SITL (chaos_sitl.py)
 
 Hypothesis draws the sequences (up to 8 actions: arm, takeoff, sticks, Stop, Land, RTL, mission start, pause,
 resume, mode change, motor test, level calibration, log download, link loss, reconnect, wait) and the faults (loss
@@ -9,7 +11,8 @@ resume, mode change, motor test, level calibration, log download, link loss, rec
 shrunk to the smallest that still does, and printed. Each worker runs its own search from its own seed. Exit 0
 when no sequence broke a rule.
 
-For the same judge against real ArduCopter 4.6.3 SITL, through bench/lossy_relay.py, see bench/chaos_sitl.py.
+With ``--sitl PATH`` (or ``--connect``) the sequences fly on real ArduCopter 4.6.3 SITL instead, through
+bench/lossy_relay.py, judged on SERIAL1 (bench/chaos_sitl.py, which this hands the arguments to).
 """
 from __future__ import annotations
 
@@ -67,6 +70,9 @@ def search(args: tuple[int, int]) -> dict:
 
 
 def main() -> int:
+    if "--sitl" in sys.argv or "--connect" in sys.argv:
+        import chaos_sitl
+        return chaos_sitl.main()
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--sequences", type=int, default=1000, help="sequences in all, split between the workers")
     ap.add_argument("--workers", type=int, default=2)

@@ -49,7 +49,7 @@ class Action:
     wait: float = 1.0             # s the flight goes on before the next action
 
     def __str__(self) -> str:
-        return f"{self.kind}({self.value:.2f}) then {self.wait:.1f} s"
+        return f"{self.kind}({self.value!r}) then {self.wait!r} s"     # exact: a failure replays as it flew
 
 
 @dataclass(frozen=True)
