@@ -207,3 +207,39 @@ def test_a_mission_ending_in_a_landing_is_said_complete_though_the_vehicle_rewin
         assert s.mission.state is MissionRunState.COMPLETE and s.mission.flown and not s.armed, s.mission
     finally:
         ls.close()
+
+
+@pytest.mark.parametrize("seed", (1, 2, 3))
+def test_a_mission_starts_through_30_percent_loss_each_way(seed):
+    """GUIDED, arm, MISSION_START at the link's own round trip (as QGroundControl's ArduPilot plugin): through 30 %
+    loss each way the start comes well within DISARM_DELAY (10 s) of arming, and the mission flies. Through the
+    old AUTO-then-MISSION_START, each confirmed by a heartbeat and retried 3 s apart, real 4.6.3 SITL disarmed
+    first in 2 runs of 3. On the driver's own clock, each seed the same flight every run."""
+    from driver.sim.faults import LinkFaults
+    from driver.sim.lockstep import Lockstep
+    ls = Lockstep(seed=seed, uplink=LinkFaults(loss=0.3), downlink=LinkFaults(loss=0.3))
+    try:
+        v, ap = ls.vehicle, ls.autopilot
+        ap.params["DISARM_DELAY"] = 10
+        for _ in range(30):
+            ls.run(1.0)
+            if v.state().home is not None and v.state().readiness.ready_to_arm and v.state().in_air is False:
+                break
+        five = Plan(PlanKind.MISSION, (MissionItem(mavlink.MAV_CMD_NAV_TAKEOFF, alt=5), waypoint(v, 10, 0, 5),
+                                       waypoint(v, 10, 10, 5), waypoint(v, 0, 10, 5),
+                                       MissionItem(mavlink.MAV_CMD_NAV_LAND)))
+        upload = v.upload_plan(five)
+        for _ in range(60):
+            ls.run(1.0)
+            if upload.done():
+                break
+        assert upload.result(5).result.ok, upload.result(5).result
+        start = v.start_mission()
+        for _ in range(40):
+            ls.run(1.0)
+            if start.done() and -ap.d > 3.0:
+                break
+        assert start.result(5).ok, start.result(5)
+        assert ap.armed and ap.mode_name == "AUTO" and -ap.d > 3.0, (ap.mode_name, ap.armed, -ap.d)
+    finally:
+        ls.close()
