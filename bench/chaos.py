@@ -66,6 +66,8 @@ def search(args: tuple[int, int]) -> dict:
         fly()
     except AssertionError as exc:                         # Hypothesis shrank it: the smallest that still breaks
         failures.append(str(exc))
+    except BaseExceptionGroup as group:                   # several distinct ones, each shrunk
+        failures += [str(exc) for exc in group.exceptions]
     return dict(tally=tally, answers=answers, failures=failures, **flown)
 
 
