@@ -52,7 +52,8 @@ def mission() -> Plan:
 
 def fly_one(judge: Judge, serial0: int, loss: float, seed: int, scratch: str) -> dict:
     """One seed; returns the row's cells."""
-    row = dict(seed=seed, told="-", auto="-", airborne="-", reached="-", landed="no", after="-", verdict="fail")
+    row = dict(seed=seed, told="-", armed="-", auto="-", airborne="-", reached="-", landed="no", after="-",
+               verdict="fail")
     judge.command(mavlink.MAV_CMD_DO_SET_MODE, 1, 0)                     # STABILIZE, disarmed: as a pilot finds it
     relay = LossyRelay(serial0, free_udp_port(), loss, seed)
     vehicle = Vehicle(VehicleConfig(connection=f"udpin:127.0.0.1:{relay.udp_port}", tlog_path=os.path.join(
@@ -72,7 +73,9 @@ def fly_one(judge: Judge, serial0: int, loss: float, seed: int, scratch: str) ->
         result = vehicle.start_mission().result(120)
         row["told"] = f"{result.status.value} ({result.reason[:50]})"
         changes = [c for c in judge.changes if c[0] >= started]
-        auto = next((t for t, mode, armed in changes if mode == "AUTO" and armed), None)
+        armed_at = next((t for t, _mode, armed in changes if armed), None)
+        auto = next((t for t, mode, armed in changes if mode == "AUTO" and armed and t >= (armed_at or 0)), None)
+        row["armed"] = "-" if armed_at is None else f"{armed_at - started:.1f}"
         row["auto"] = "-" if auto is None else f"{auto - started:.1f}"
         if judge.wait(lambda: (judge.altitude or 0.0) > 1.0, 30):
             row["airborne"] = f"{time.monotonic() - started:.1f}"
@@ -135,9 +138,10 @@ def main() -> int:
         if sitl:
             sitl.stop()
         shutil.rmtree(scratch, ignore_errors=True)
-    head = ("seed", "start told", "AUTO s", "airborne s", "items reached", "landed", "driver after", "verdict")
-    lines = tables.render(head, [tuple(str(r[k]) for k in ("seed", "told", "auto", "airborne", "reached", "landed",
-                                                          "after", "verdict")) for r in rows], args.markdown)
+    head = ("seed", "start told", "armed s", "AUTO s", "airborne s", "items reached", "landed", "driver after",
+            "verdict")
+    lines = tables.render(head, [tuple(str(r[k]) for k in ("seed", "told", "armed", "auto", "airborne", "reached",
+                                                          "landed", "after", "verdict")) for r in rows], args.markdown)
     passed = sum(r["verdict"] == "pass" for r in rows)
     lines += ["", f"{passed} of {len(rows)} seeds started and flew the mission at {args.loss:.0%} loss each way "
                   f"(DISARM_DELAY 10 s; whole run {time.monotonic() - started:.0f} s)"]
