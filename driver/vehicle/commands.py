@@ -150,10 +150,6 @@ class CommandSender:
             c.armed = params[0] >= 0.5
         return self._add(c, now, tag)
 
-    def pending(self, command: int) -> bool:
-        """A request with this id waits for its answer, or an earlier one may still be answered."""
-        return command in self._pending
-
     def settled_by_state(self, command: int, now: float, pending: bool = True) -> bool:
         """Whether the state now tells the truth about ``command`` (no request of that id could still change it;
         ``pending`` False: leaving out the one pending now, which is being judged)."""
