@@ -310,8 +310,8 @@ def run(opts, paths: list[str], links: list[str], places: list[str]) -> None:
     comparison = compare(medians)
     if comparison:
         print()
-        print("The driver's LOG_DATA against MAVProxy 1.8.75 on the same link (median times; the driver's includes the log "
-              "list it reads first, MAVProxy's starts at its download command):")
+        print("The driver's LOG_DATA against MAVProxy 1.8.75 on the same link (median times; the driver's includes "
+              "the log list it reads first, MAVProxy's starts at its download command):")
         print()
         print("\n".join(tables.render(("log", "link", "loss at", "loss", "driver s", "MAVProxy s",
                                        "MAVProxy / driver", "MAVProxy finished", "both byte-identical"),

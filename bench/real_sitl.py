@@ -1,7 +1,7 @@
 """Check against real firmware: the driver's every answer judged against a real ArduCopter 4.6.3 SITL.
 
     .venv/bin/python bench/real_sitl.py --sitl /work/sitl/ardupilot/build/sitl/bin/arducopter [--loss 0.3]
-                                        [--instance 0] [--seed 1] [--blackout 0] [--markdown] [--keep]
+                                        [--instance 0] [--seed 1] [--blackout 0] [--markdown] [--keep] [--write-docs]
     .venv/bin/python bench/real_sitl.py --connect [--instance 0] ...        # a SITL already running
 
 A bench, not a test: it needs ArduPilot's SITL binary, which CI cannot build (docs: /work/shared/reference/sitl.md
@@ -483,6 +483,7 @@ def main() -> int:
     ap.add_argument("--defaults", help="the SITL's defaults (Tools/autotest/default_params/copter.parm)")
     ap.add_argument("--markdown", action="store_true")
     ap.add_argument("--keep", action="store_true", help="keep the scratch folder (SITL log, driver tlogs)")
+    tables.add_write_docs(ap)
     args = ap.parse_args()
     logging.basicConfig(level=logging.ERROR)
 
@@ -522,7 +523,7 @@ def main() -> int:
             bench.add(Row("bench", f"stopped: {type(exc).__name__}: {exc}", "-", verdict="-"))
         if sitl and not sitl.alive():
             bench.add(Row("SITL", "-", f"exited early: {sitl.tail(3)}", verdict="-"))
-        print(report(bench.rows, relay, args, args.markdown))
+        print(report(bench.rows, relay, args, tables.markdown(args.markdown)))
         print(f"(whole run {time.monotonic() - started:.0f} s)")
         return 1 if any(r.verdict == "wrong" for r in bench.rows) else 0
     finally:
@@ -540,4 +541,5 @@ def main() -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    with tables.publishing(tables.variant("real_sitl", "--loss", "--blackout", "--sim", "--connect")):
+        sys.exit(main())

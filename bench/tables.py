@@ -23,8 +23,8 @@ import time
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 DOCS = os.path.join(ROOT, "docs", "benchmarks.md")
 
-#: (section, title): the order of docs/benchmarks.md. A section "name/variant" (one bench run with other
-#: options, kept apart) follows its "name".
+#: (section, title): the order of docs/benchmarks.md. A section "name/options" not listed (one bench run with other
+#: options, kept apart: :func:`variant`) follows its "name".
 SECTIONS = (
     ("ingest", "Telemetry ingest against raw pymavlink parsing (`bench/bench_ingest.py`)"),
     ("setpoints", "The velocity stream and the deadman at the vehicle (`bench/bench_setpoints.py`)"),
@@ -43,7 +43,10 @@ SECTIONS = (
     ("params_page", "The Parameters page with 1,392 parameters (`bench/bench_params_page.py`)"),
     ("setup", "Calibrations and the motor test (`bench/bench_setup.py`)"),
     ("review", "A 100 MB DataFlash log in the review (`bench/bench_review.py`)"),
-    ("logs", "Log download: the driver against the floor and against MAVProxy (`bench/bench_logs.py`)"),
+    ("logs", "Log download: the driver against the link's floor (`bench/bench_logs.py`)"),
+    ("logs/mavproxy", "Log download: the driver against MAVProxy 1.8.75, on the simulator (`bench/bench_logs.py`)"),
+    ("logs/sitl", "Log download: the driver against MAVProxy 1.8.75, on ArduCopter 4.6.3 SITL "
+                  "(`bench/bench_logs.py --sitl`)"),
     ("hostile", "Hostile inputs against a signed, pinned link (`bench/hostile.py`)"),
     ("transfer_matrix", "Plans through every fault (`bench/transfer_matrix.py`)"),
     ("fault_matrix", "The fault matrix: every answer checked against the vehicle (`bench/fault_matrix.py`)"),
@@ -64,25 +67,44 @@ own docstring (`python bench/NAME.py --help`) and in the docs each section links
 
 _START = "<!-- bench:{} -->"
 _END = "<!-- /bench:{} -->"
-_SECTION = re.compile(r"<!-- bench:(?P<name>[\w/.-]+) -->\n.*?<!-- /bench:(?P=name) -->\n", re.S)
+_SECTION = re.compile(r"<!-- bench:(?P<name>[^>]+?) -->\n.*?<!-- /bench:(?P=name) -->\n", re.S)
 
 _publishing = False
 
 
-def render(head, rows, markdown: bool) -> list[str]:
+def render(head, rows, markdown_asked: bool) -> list[str]:
     """The table's lines: ``head`` and ``rows`` are sequences of strings. Markdown when asked, or while the bench
     publishes to docs/benchmarks.md."""
-    if markdown or _publishing:
+    if markdown(markdown_asked):
         return (["| " + " | ".join(head) + " |", "|" + "---|" * len(head)]
                 + ["| " + " | ".join(r) + " |" for r in rows])
     widths = [max(len(x) for x in col) for col in zip(head, *rows)]
     return ["  ".join(x.ljust(w) for x, w in zip(r, widths)) for r in (head, *rows)]
 
 
+def markdown(asked: bool) -> bool:
+    """Whether a bench prints Markdown: when asked, and whenever it publishes."""
+    return asked or _publishing
+
+
 def add_write_docs(parser) -> None:
     """The one flag every bench takes to publish what it prints."""
     parser.add_argument("--write-docs", action="store_true",
                         help="also replace this bench's section of docs/benchmarks.md with what it prints")
+
+
+def variant(section: str, *options: str) -> str:
+    """``section``, or ``section/a,b=v`` naming those of ``options`` this command gives (with the value of one that
+    takes a value): a bench run with other options keeps a section of its own instead of replacing the other's."""
+    argv, given = sys.argv[1:], []
+    for i, arg in enumerate(argv):
+        name, _, value = arg.partition("=")
+        if name not in options:
+            continue
+        if not value and i + 1 < len(argv) and not argv[i + 1].startswith("-"):
+            value = argv[i + 1]
+        given.append(name.lstrip("-") + (f"={value}" if value else ""))
+    return section + ("/" + ",".join(given) if given else "")
 
 
 @contextlib.contextmanager
@@ -192,9 +214,9 @@ def markdown_of(text: str) -> str:
 
 def section_text(section: str, body: str) -> str:
     base = section.split("/", 1)[0]
-    title = TITLES.get(base, f"`{base}`")
-    if "/" in section:
-        title += f": {section.split('/', 1)[1]}"
+    title = TITLES.get(section) or TITLES.get(base, f"`{base}`")
+    if section not in TITLES and "/" in section:
+        title += ", with " + ", ".join(f"`--{o.replace('=', ' ')}`" for o in section.split("/", 1)[1].split(","))
     return f"{_START.format(section)}\n## {title}\n\n{body}\n{_END.format(section)}\n"
 
 
@@ -227,8 +249,10 @@ def _write(sections: dict[str, str]) -> None:
     order = [name for name, _ in SECTIONS]
 
     def key(name: str) -> tuple:
+        if name in order:
+            return (order.index(name), 0, name)
         base = name.split("/", 1)[0]
-        return (order.index(base) if base in order else len(order), name != base, name)
+        return (order.index(base) if base in order else len(order), 1, name)
     parts = [HEADER] + [sections[name] for name in sorted(sections, key=key)]
     tmp = DOCS + ".tmp"
     with open(tmp, "w", encoding="utf-8") as f:
