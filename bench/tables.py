@@ -226,9 +226,21 @@ def write_section(section: str, body: str, command: str, revision: str, started:
     stamp = time.strftime("%Y-%m-%d %H:%M UTC", started)
     head = (f"Command: `{command}`  \nRun on commit `{revision}`, {stamp}; load average {load:.1f} at the start "
             f"({os.cpu_count()} cores)" + (f"; the bench exited with status {status}" if status else "") + ".")
-    sections = read_sections()
-    sections[section] = section_text(section, f"{head}\n\n{body}")
-    _write(sections)
+    with _locked():                        # two benches ending together must not drop each other's section
+        sections = read_sections()
+        sections[section] = section_text(section, f"{head}\n\n{body}")
+        _write(sections)
+
+
+@contextlib.contextmanager
+def _locked():
+    import fcntl
+    with open(DOCS + ".lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        try:
+            yield
+        finally:
+            fcntl.flock(lock, fcntl.LOCK_UN)
 
 
 def read_sections() -> dict[str, str]:
@@ -268,13 +280,14 @@ def main() -> None:
     p.add_argument("--not-run", metavar="SECTION", action="append", default=[],
                    help="mark SECTION 'not yet run on this commit' (a bench whose figures no longer hold)")
     args = p.parse_args()
-    sections = read_sections()
-    if args.placeholders:
-        for name, _ in SECTIONS:
-            sections.setdefault(name, placeholder(name))
-    for name in args.not_run:
-        sections[name] = placeholder(name)
-    _write(sections)
+    with _locked():
+        sections = read_sections()
+        if args.placeholders:
+            for name, _ in SECTIONS:
+                sections.setdefault(name, placeholder(name))
+        for name in args.not_run:
+            sections[name] = placeholder(name)
+        _write(sections)
 
 
 if __name__ == "__main__":
