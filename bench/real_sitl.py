@@ -5,7 +5,7 @@
     .venv/bin/python bench/real_sitl.py --connect [--instance 0] ...        # a SITL already running
 
 A bench, not a test: it needs ArduPilot's SITL binary, which CI cannot build (docs: /work/shared/reference/sitl.md
-or the README's "Check against real firmware"). With ``--sitl`` it starts the SITL itself, wiped (``-w``), in a
+or docs/real-sitl.md). With ``--sitl`` it starts the SITL itself, wiped (``-w``), in a
 scratch folder, kept on 127.0.0.1 by an LD_PRELOAD shim (``--shim``), and kills it by its PID on any exit.
 
 The driver (``Vehicle``, the viewer's own, through its public API only) reaches the vehicle's SERIAL0 through
@@ -60,7 +60,7 @@ from driver.core.frames import offset_latlon  # noqa: E402
 from driver.mission.plan import MissionItem, MissionRunState, Plan, PlanKind  # noqa: E402
 
 HOME = (-35.363261, 149.165230, 584.0, 353.0)           # ArduPilot's CMAC, as in sitl.md and the recordings
-#: The loopback shim: bench/bind_loopback.c built next to it (the README's gcc line), or $UAV_BIND_SHIM.
+#: The loopback shim: bench/bind_loopback.c built next to it (docs/real-sitl.md's gcc line), or $UAV_BIND_SHIM.
 SHIM = os.environ.get("UAV_BIND_SHIM") or os.path.join(os.path.dirname(os.path.abspath(__file__)), "bind_loopback.so")
 MISSION_ITEMS = 40
 #: (name, value): a float, an int32, two int16, an int8; none of them their default, all harmless to the flight
