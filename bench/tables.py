@@ -259,9 +259,9 @@ def _locked():
             fcntl.flock(lock, fcntl.LOCK_UN)
 
 
-def read_sections(path: str = DOCS) -> dict[str, str]:
+def read_sections(path: str | None = None) -> dict[str, str]:
     try:
-        with open(path, encoding="utf-8") as f:
+        with open(path or DOCS, encoding="utf-8") as f:
             text = f.read()
     except FileNotFoundError:
         return {}
