@@ -307,7 +307,7 @@ def run(opts, paths: list[str], links: list[str], places: list[str]) -> None:
           f"cell limit {CELL_LIMIT:.0f} s)")
     print()
     print("\n".join(tables.render(head, rows, opts.markdown)))
-    comparison = compare(medians)
+    comparison = compare(medians, opts)
     if comparison:
         print()
         print("The driver's LOG_DATA against MAVProxy 1.8.75 on the same link (median times; the driver's includes "
@@ -358,15 +358,19 @@ def row(results: list[dict], size: int, mb: float, link: str, place: str, path: 
     def most(key: str) -> str:
         values = [r[key] for r in results if key in r]
         return f"{max(values):,}" if values else "-"
-    where = "none (TCP)" if opts.sitl and place == "sim" else place
-    return (f"{size / 1e6:.1f} MB", "SITL" if opts.sitl else "sim", link, where,
+    return (f"{size / 1e6:.1f} MB", "SITL" if opts.sitl else "sim", link, where(place, opts),
             "MAVProxy 1.8.75" if path == "mavproxy" else "driver " + {"log_data": "LOG_DATA", "ftp": "FTP"}[path],
             f"{pct:g} %", timed(results), f"{floor:.2f}" if floor else "-", ratio(floor),
             f"{lossy:.2f}" if lossy else "-", ratio(lossy), most("rerequested"), most("received"),
             "yes" if all(r.get("identical") for r in results) else "NO", note.strip())
 
 
-def compare(medians: dict) -> list[tuple]:
+def where(place: str, opts) -> str:
+    """Where the link loses frames, in words: SITL loses none by itself, so "sim" there is its plain TCP port."""
+    return "none (TCP)" if opts.sitl and place == "sim" else place
+
+
+def compare(medians: dict, opts) -> list[tuple]:
     out = []
     for (mb, link, place, pct, path), results in medians.items():
         if path != "log_data" or (mb, link, place, pct, "mavproxy") not in medians:
@@ -378,7 +382,7 @@ def compare(medians: dict) -> list[tuple]:
             ratio = f"> {CELL_LIMIT / ours_s:.0f}" if ours_s else "-"
         else:
             ratio = f"{theirs_s / ours_s:.1f}" if ours_s else "-"
-        out.append((f"{mb:g} MB", link, place, f"{pct:g} %", f"{ours_s:.2f}" if ours_s else "-",
+        out.append((f"{mb:g} MB", link, where(place, opts), f"{pct:g} %", f"{ours_s:.2f}" if ours_s else "-",
                     f"{theirs_s:.2f}" if theirs_s else f"not done in {CELL_LIMIT:.0f}", ratio,
                     f"{finished}/{len(theirs)}",
                     "yes" if all(r.get("identical") for r in results + theirs) else "NO"))
