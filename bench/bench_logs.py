@@ -314,7 +314,7 @@ def run(opts, paths: list[str], links: list[str], places: list[str]) -> None:
               "the log list it reads first, MAVProxy's starts at its download command):")
         print()
         print("\n".join(tables.render(("log", "link", "loss at", "loss", "driver s", "MAVProxy s",
-                                       "MAVProxy / driver", "MAVProxy finished", "both byte-identical"),
+                                       "MAVProxy / driver", "MAVProxy finished", "byte-identical"),
                                       comparison, opts.markdown)))
 
 
@@ -347,8 +347,9 @@ def row(results: list[dict], size: int, mb: float, link: str, place: str, path: 
     modelled = not opts.sitl and place == "sim"
     floor = floor_seconds("ftp" if path == "ftp" else "log_data", size, speedup, link) if modelled else None
     lossy = floor / (1 - pct / 100) if floor else None
-    notes = sorted({r.get("why", "")[:90] for r in results if not r["ok"] or path == "mavproxy"} - {""})
-    note = "; ".join(notes[:2])
+    unfinished = [r["why"] for r in results if not r["ok"]]       # first: why a run did not finish
+    notes = list(dict.fromkeys(unfinished + [r["why"][:90] for r in results if r["ok"] and path == "mavproxy"]))
+    note = "; ".join(n for n in notes[:2] if n)
     if speedup != 1:
         note += f" (x{speedup:g} sim)"
 
@@ -362,7 +363,17 @@ def row(results: list[dict], size: int, mb: float, link: str, place: str, path: 
             "MAVProxy 1.8.75" if path == "mavproxy" else "driver " + {"log_data": "LOG_DATA", "ftp": "FTP"}[path],
             f"{pct:g} %", timed(results), f"{floor:.2f}" if floor else "-", ratio(floor),
             f"{lossy:.2f}" if lossy else "-", ratio(lossy), most("rerequested"), most("received"),
-            "yes" if all(r.get("identical") for r in results) else "NO", note.strip())
+            identical(results), note.strip())
+
+
+def identical(results: list[dict]) -> str:
+    """Whether every download that finished is byte-identical ("-": none finished): one that did not finish is
+    counted in its own column, not as a corrupt file."""
+    done = [r for r in results if r["ok"]]
+    if not done:
+        return "-"
+    return ("yes" if all(r.get("identical") for r in done) else "NO") + \
+        (f" ({len(done)} of {len(results)} finished)" if len(done) < len(results) else "")
 
 
 def where(place: str, opts) -> str:
@@ -385,7 +396,7 @@ def compare(medians: dict, opts) -> list[tuple]:
         out.append((f"{mb:g} MB", link, where(place, opts), f"{pct:g} %", f"{ours_s:.2f}" if ours_s else "-",
                     f"{theirs_s:.2f}" if theirs_s else f"not done in {CELL_LIMIT:.0f}", ratio,
                     f"{finished}/{len(theirs)}",
-                    "yes" if all(r.get("identical") for r in results + theirs) else "NO"))
+                    identical(results + theirs)))
     return out
 
 
