@@ -53,6 +53,7 @@ SECTIONS = (
     ("transfer_matrix", "Plans through every fault (`bench/transfer_matrix.py`)"),
     ("fault_matrix", "The fault matrix: every answer checked against the vehicle (`bench/fault_matrix.py`)"),
     ("real_sitl", "Against real firmware: ArduCopter 4.6.3 SITL (`bench/real_sitl.py`)"),
+    ("real_sitl_setup", "Setup procedures on ArduCopter 4.6.3 SITL's calibration model (`bench/real_sitl_setup.py`)"),
     ("mission_start", "A mission started through a lossy link, on ArduCopter 4.6.3 SITL (`bench/mission_start.py`)"),
     ("chaos_sitl", "Pilot chaos on ArduCopter 4.6.3 SITL (`bench/chaos_sitl.py`, or `bench/chaos.py --sitl`)"),
 )
@@ -72,6 +73,8 @@ COMMANDS = {
                   "--write-docs"],
     "video_latency": ["python bench/bench_video_latency.py --seconds 20 --write-docs"],
     "chaos": ["python bench/chaos.py --write-docs"],
+    "real_sitl_setup": ["python bench/real_sitl_setup.py --sitl /work/sitl/ardupilot/build/sitl/bin/arducopter "
+                        "--write-docs"],
     "mission_start": ["python bench/mission_start.py --sitl /work/sitl/ardupilot/build/sitl/bin/arducopter "
                       "--shim /work/sitl/bind_loopback.so --write-docs"],
     "chaos_sitl": ["python bench/chaos.py --sitl /work/sitl/ardupilot/build/sitl/bin/arducopter "
