@@ -239,12 +239,16 @@ def markdown_of(text: str) -> str:
     return re.sub(r"\n{3,}", "\n\n", body)
 
 
-def section_text(section: str, body: str) -> str:
+def title_of(section: str) -> str:
     base = section.split("/", 1)[0]
     title = TITLES.get(section) or TITLES.get(base, f"`{base}`")
     if section not in TITLES and "/" in section:
         title += ", with " + ", ".join(f"`--{o.replace('=', ' ')}`" for o in section.split("/", 1)[1].split(","))
-    return f"{_START.format(section)}\n## {title}\n\n{body}\n{_END.format(section)}\n"
+    return title
+
+
+def section_text(section: str, body: str) -> str:
+    return f"{_START.format(section)}\n## {title_of(section)}\n\n{body}\n{_END.format(section)}\n"
 
 
 def write_section(section: str, body: str, command: str, revision: str, started: time.struct_time, load: float,
@@ -292,7 +296,11 @@ def _write(sections: dict[str, str]) -> None:
             return (order.index(name), 0, name)
         base = name.split("/", 1)[0]
         return (order.index(base) if base in order else len(order), 1, name)
-    parts = [HEADER] + [sections[name] for name in sorted(sections, key=key)]
+    def titled(name: str) -> str:              # the heading is this file's own: the current title, kept in step
+        start, _, rest = sections[name].partition("\n")
+        heading, _, body = rest.partition("\n")
+        return f"{start}\n## {title_of(name)}\n{body}" if heading.startswith("## ") else sections[name]
+    parts = [HEADER] + [titled(name) for name in sorted(sections, key=key)]
     tmp = DOCS + ".tmp"
     with open(tmp, "w", encoding="utf-8") as f:
         f.write("\n".join(parts))
