@@ -1,7 +1,8 @@
 """How instant the window stays while flying, and what the viewer costs: UI lateness, redraws, CPU.
 
     .venv/bin/python bench/bench_viewer.py [--seconds 30] [--no-camera] [--gamepad] [--dock map|plots] [--tiles]
-    xvfb-run -s "-screen 0 1600x1000x24" .venv/bin/python bench/bench_viewer.py --cpu [--seconds 30]
+                                           [--write-docs]
+    xvfb-run -s "-screen 0 1600x1000x24" .venv/bin/python bench/bench_viewer.py --cpu [--seconds 30] [--write-docs]
 
 Runs the real window (offscreen unless a display is set) on the embedded driver and the simulated vehicle,
 takes off, and holds both sticks as a pilot would, with the simulated camera playing (unless --no-camera).
@@ -43,6 +44,7 @@ from PyQt5.QtWidgets import QApplication  # noqa: E402
 from driver.sim import SimConfig, SimVehicle  # noqa: E402
 from driver.vehicle import Vehicle, VehicleConfig  # noqa: E402
 from uavviewer.main_window import MainWindow, load_style  # noqa: E402
+import tables  # noqa: E402  (bench/tables.py: this script runs from bench/)
 
 FRAME_MS = 1000.0 / 30.0
 
@@ -191,6 +193,7 @@ def main() -> None:
     ap.add_argument("--cpu-case", choices=CASES, help=argparse.SUPPRESS)
     ap.add_argument("--port", type=int, help=argparse.SUPPRESS)
     ap.add_argument("--uri", default="", help=argparse.SUPPRESS)
+    tables.add_write_docs(ap)
     args = ap.parse_args()
     if args.cpu:
         return cpu_main(args.seconds, args.dock)
@@ -326,4 +329,5 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    with tables.publishing(tables.variant("viewer", "--cpu", "--gamepad", "--tiles", "--dock", "--no-camera")):
+        main()

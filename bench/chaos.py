@@ -1,7 +1,7 @@
 """Pilot chaos at scale: thousands of random pilot sequences under random link faults, on the simulated ArduCopter in
 lockstep with the driver (driver.sim.chaos), every flight rule and every answer judged against the vehicle's truth.
 
-    .venv/bin/python bench/chaos.py [--sequences 1000] [--workers 2] [--seed 1] [--markdown]
+    .venv/bin/python bench/chaos.py [--sequences 1000] [--workers 2] [--seed 1] [--markdown] [--write-docs]
     .venv/bin/python bench/chaos.py --sitl /work/sitl/ardupilot/build/sitl/bin/arducopter \
         --shim /work/sitl/bind_loopback.so --sequences 20          # the same judge on real SITL (chaos_sitl.py)
 
@@ -80,6 +80,7 @@ def main() -> int:
     ap.add_argument("--workers", type=int, default=2)
     ap.add_argument("--seed", type=int, default=1)
     ap.add_argument("--markdown", action="store_true")
+    tables.add_write_docs(ap)
     args = ap.parse_args()
     started = time.monotonic()
     share = [(args.seed * 1000 + i, args.sequences // args.workers + (i < args.sequences % args.workers))
@@ -108,4 +109,6 @@ def main() -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    on_sitl = "--sitl" in sys.argv or "--connect" in sys.argv
+    with tables.publishing("chaos_sitl" if on_sitl else "chaos"):
+        sys.exit(main())

@@ -2,7 +2,7 @@
 judged on a second, loss-free link (SITL's SERIAL1) with plain pymavlink.
 
     .venv/bin/python bench/chaos_sitl.py --sitl /work/sitl/ardupilot/build/sitl/bin/arducopter \\
-        --shim /work/sitl/bind_loopback.so [--sequences 20] [--seed 1] [--markdown]
+        --shim /work/sitl/bind_loopback.so [--sequences 20] [--seed 1] [--markdown] [--write-docs]
 
 Each sequence: a fresh driver (the viewer's own ``Vehicle``) through bench/lossy_relay.py with its own faults (loss
 0-40 % each way, latency 0-2 s each way, duplicates), a 5-item mission uploaded through it, then up to 8 of the
@@ -202,6 +202,7 @@ def main() -> int:
     ap.add_argument("--shim", default=SHIM)
     ap.add_argument("--defaults")
     ap.add_argument("--markdown", action="store_true")
+    tables.add_write_docs(ap)
     args = ap.parse_args()
     logging.basicConfig(level=logging.CRITICAL)
     scratch = tempfile.mkdtemp(prefix="chaos-sitl-")
@@ -250,4 +251,5 @@ def main() -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    with tables.publishing("chaos_sitl"):
+        sys.exit(main())

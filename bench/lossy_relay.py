@@ -7,11 +7,19 @@ a run can be repeated; ``latency`` holds every frame that long (in order, as a s
 sends a share twice. ``blackout(seconds)`` drops everything both ways for that long (a radio out of range).
 Every frame the vehicle sends goes to the ground station as one UDP datagram, as a telemetry radio's bridge
 sends it. Only loopback addresses: the vehicle is reached on 127.0.0.1 and datagrams go to 127.0.0.1.
+
+In a process of its own (so that it shares no interpreter lock with the ground station it serves)::
+
+    python bench/lossy_relay.py TCP_PORT UDP_PORT [--loss 0.3] [--seed 1]
+
+it says "relaying" once connected, and the frames each way passed and dropped when terminated.
 """
 from __future__ import annotations
 
+import argparse
 import collections
 import random
+import signal
 import socket
 import threading
 import time
@@ -206,3 +214,25 @@ def free_udp_port() -> int:
     with socket.socket(socket.AF_INET, socket.SOCK_DGRAM) as s:
         s.bind(("127.0.0.1", 0))
         return s.getsockname()[1]
+
+
+def main() -> None:
+    p = argparse.ArgumentParser(description="A frame-losing relay: a vehicle's TCP port to a ground station's udpin")
+    p.add_argument("tcp_port", type=int)
+    p.add_argument("udp_port", type=int)
+    p.add_argument("--loss", type=float, default=0.0, help="share of frames lost each way")
+    p.add_argument("--seed", type=int, default=1)
+    args = p.parse_args()
+    stop = threading.Event()
+    signal.signal(signal.SIGTERM, lambda *_: stop.set())
+    relay = LossyRelay(args.tcp_port, args.udp_port, args.loss, args.seed)
+    print("relaying", flush=True)
+    while not stop.wait(0.5):
+        pass
+    relay.close()
+    for name, way in (("down", relay.down), ("up", relay.up)):
+        print(f"{name}: {way.passed} passed, {way.dropped} dropped", flush=True)
+
+
+if __name__ == "__main__":
+    main()

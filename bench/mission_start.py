@@ -1,7 +1,7 @@
 """Does a mission start through a lossy link, and fly? Real ArduCopter 4.6.3 SITL, one seed of loss after another.
 
     .venv/bin/python bench/mission_start.py --sitl /work/sitl/ardupilot/build/sitl/bin/arducopter \\
-        --shim /work/sitl/bind_loopback.so [--loss 0.3] [--seeds 10] [--markdown]
+        --shim /work/sitl/bind_loopback.so [--loss 0.3] [--seeds 10] [--markdown] [--write-docs]
 
 For each seed the driver (a fresh ``Vehicle``, the viewer's own) reaches the SITL's SERIAL0 through
 bench/lossy_relay.py dropping ``--loss`` of the frames each way, uploads a 5-item mission (takeoff to 5 m, three
@@ -107,6 +107,7 @@ def main() -> int:
     ap.add_argument("--shim", default=SHIM)
     ap.add_argument("--defaults")
     ap.add_argument("--markdown", action="store_true")
+    tables.add_write_docs(ap)
     args = ap.parse_args()
     logging.basicConfig(level=logging.ERROR)
     scratch = tempfile.mkdtemp(prefix="mission-start-")
@@ -150,4 +151,5 @@ def main() -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    with tables.publishing(tables.variant("mission_start", "--loss")):
+        sys.exit(main())
