@@ -13,7 +13,7 @@ from PyQt5.QtCore import QObject, Qt, pyqtSignal
 from PyQt5.QtGui import QKeySequence
 from PyQt5.QtWidgets import QAction, QDockWidget, QMenu, QMessageBox, QScrollArea, QToolButton, QWidget
 
-from driver.mission.plan import MissionRunState, Plan, PlanKind, TransferDirection
+from driver.mission.plan import MissionRunState, Plan, PlanKind, TransferDirection, TransferOutcome
 from driver.mission.wire import difference
 from driver.vehicle.state import CommandResult, LinkStatus, Severity, VehicleState
 
@@ -85,13 +85,11 @@ class PlanController(QObject):
         p.transferRequested.connect(self.transfer)
         p.cancelRequested.connect(lambda: self.adapter.drone.cancel_transfer(KINDS[p.layer]))
         p.startRequested.connect(self.ask_start)
-        p.pauseRequested.connect(lambda: self.adapter.command("pause_mission"))
-        p.resumeRequested.connect(lambda: self.adapter.command("resume_mission"))
+        p.pauseRequested.connect(lambda: self.adapter.send(self.adapter.drone.pause_mission))
+        p.resumeRequested.connect(lambda: self.adapter.send(self.adapter.drone.resume_mission))
         p.skipRequested.connect(self.skip_to)
         self.layer.contextRequested.connect(self._context)
         adapter.stateChanged.connect(self.show_state)
-        adapter.transferFinished.connect(self._transfer_finished)
-        adapter.commandFinished.connect(self.command_finished)
         self.editor.refreshed.connect(self._edited)
         self.files = PlanFiles(window, self)
         self.files.loaded.connect(self._file_loaded)
@@ -330,7 +328,7 @@ class PlanController(QObject):
             self._reread_due = False
             for kind in self._reread:
                 self._outcome[kind] = f"The vehicle restarted: reading its {kind.label} again…"
-                self.adapter.command("download_plan", kind)
+                self._download(kind)
 
     def show_state(self, s: VehicleState) -> None:
         old_home = self.home
@@ -428,8 +426,9 @@ class PlanController(QObject):
         if action == "upload":
             for k in self.to_upload():
                 self._outcome[k] = f"Uploading the {k.label}…"
-                self._sending[k] = self.doc.plan(k)
-                self.adapter.command("upload_plan", self._sending[k])
+                self._sending[k] = plan = self.doc.plan(k)
+                self.adapter.send(self.adapter.drone.upload_plan, plan,
+                                  then=lambda answer, k=k: self._transfer_finished(k, answer, downloaded=False))
             self._say_what_stays()
         elif action == "clear" and confirmed is None:
             self._ask_removal(kind)
@@ -437,10 +436,10 @@ class PlanController(QObject):
         elif action == "download":
             self._reread.discard(kind)          # the pilot's own download: into the list, as always
             self._outcome[kind] = f"Downloading the {kind.label}…"
-            self.adapter.command("download_plan", kind)
+            self._download(kind)
         else:
             self._outcome[kind] = f"Clearing the {kind.label}…"
-            self.adapter.command("clear_plan", kind)
+            self.adapter.send(self.adapter.drone.clear_plan, kind, then=lambda result: self._cleared(kind, result))
         self._shown = None
         self._show_vehicle(self._state)
 
@@ -456,7 +455,7 @@ class PlanController(QObject):
             elif kind not in self._reread:
                 self._left_behind.add(kind)
                 self._reread.add(kind)
-                self.adapter.command("download_plan", kind)
+                self._download(kind)
 
     def to_upload(self) -> list[PlanKind]:
         """The tab shown, and every other plan here that is not the vehicle's (one the vehicle holds but that is
@@ -479,18 +478,24 @@ class PlanController(QObject):
                 self.transfer("clear", confirmed=kind)
         self.remove_question = ask(box, answered)
 
-    def _transfer_finished(self, name: str, outcome) -> None:
+    def _download(self, kind: PlanKind) -> None:
+        """Read the vehicle's plan of ``kind``: into the list here, or, when it is being read again (after a
+        restart, to see what an upload leaves there), into what the vehicle holds only."""
+        self.adapter.send(self.adapter.drone.download_plan, kind,
+                          then=lambda answer: self._transfer_finished(kind, answer, downloaded=True))
+
+    def _transfer_finished(self, kind: PlanKind, answer, downloaded: bool) -> None:
+        """An upload's or a download's end: the driver's verdict and the plan the vehicle holds (read back, or
+        read); ``answer`` is a bare CommandResult when the call itself failed."""
+        outcome = answer if isinstance(answer, TransferOutcome) else TransferOutcome(answer)
         result: CommandResult = outcome.result
-        kind = outcome.plan.kind if outcome.plan is not None else _kind_of(result.command)
-        if kind is None:
-            return
         if result.ok and outcome.plan is not None:
             self.on_vehicle[kind] = outcome.plan
-            if name == "download_plan" and kind in self._reread:
+            if downloaded and kind in self._reread:
                 self._reread.discard(kind)      # what the vehicle holds now; the plan here stays as it is
                 if kind in self._left_behind:
                     self.notices.left_on_vehicle(kind, outcome.plan)
-            elif name == "download_plan":
+            elif downloaded:
                 self.editor.load(outcome.plan)
                 self._synced[kind] = (self.doc.plan(kind), outcome.plan)
             elif kind in self._sending:         # the driver read it back and found it the same in meaning
@@ -503,11 +508,8 @@ class PlanController(QObject):
         self._shown = None
         self._show_vehicle(self._state)
 
-    def command_finished(self, result: CommandResult) -> None:
-        """A clear's answer (a CommandResult of its own): the vehicle holds nothing of that kind any more."""
-        kind = _kind_of(result.command) if result.command.startswith("clear") else None
-        if kind is None:
-            return
+    def _cleared(self, kind: PlanKind, result: CommandResult) -> None:
+        """A removal's answer: once accepted, the vehicle holds nothing of that kind any more."""
         if result.ok:
             self.on_vehicle[kind] = Plan(kind, ())
         self._outcome[kind] = str(result)
@@ -539,7 +541,7 @@ class PlanController(QObject):
     def _start_answered(self, box: QMessageBox) -> None:
         if box.clickedButton() is box.button(QMessageBox.Yes):
             if self._state.link.status is LinkStatus.OK:
-                self.adapter.command("start_mission")
+                self.adapter.send(self.adapter.drone.start_mission)
             else:
                 self._window.log_message("Mission start not sent: no link to the vehicle", Severity.WARNING)
         box.deleteLater()
@@ -547,7 +549,7 @@ class PlanController(QObject):
             self._question = None
 
     def skip_to(self, seq: int) -> None:
-        self.adapter.command("set_mission_item", seq)
+        self.adapter.send(self.adapter.drone.set_mission_item, seq)
 
     def _context(self, hit, actions: list) -> None:
         """Right click on the map: Skip to item N on a mission item; Delete in Plan mode."""
@@ -561,10 +563,6 @@ class PlanController(QObject):
         if self.layer.editing:
             actions.append(("Delete", True, lambda: (self.editor.select(layer, index),
                                                      self.editor.delete_selected())))
-
-
-def _kind_of(command: str) -> PlanKind | None:
-    return next((k for k in PlanKind if command.endswith(k.label)), None)
 
 
 def _rounded(s: VehicleState) -> tuple:
