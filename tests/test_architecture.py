@@ -337,3 +337,17 @@ def test_no_part_of_the_viewer_routes_results_by_their_wording():
             if hit:
                 found.append(f"{path}:{node.lineno} {ast.unparse(node)}")
     assert not found, f"results routed by their wording: {found}"
+
+
+def test_the_viewer_speaks_of_the_product_not_of_issue_numbers():
+    """A docstring or comment says what the window does and why; which issue asked for it is the history's."""
+    import re
+    found = []
+    for folder, _dirs, files in os.walk(VIEWER):
+        for name in sorted(files):
+            if name.endswith(".py"):
+                path = os.path.join(folder, name)
+                for number, line in enumerate(open(path, encoding="utf-8"), 1):
+                    if re.search(r"\bissues? ?#?\d+", line, re.IGNORECASE):
+                        found.append(f"{os.path.relpath(path, ROOT)}:{number}: {line.strip()}")
+    assert not found, found

@@ -114,7 +114,7 @@ class MapController(QObject):
         panel.downloadRequested.connect(self.download_area)
         self.view.flyHereRequested.connect(self.ask_fly_here)
         self.camera = CameraOverlay(self.view, adapter, self)     # footprint, look direction, Look here (ROI)
-        self.traffic = TrafficOverlay(self.view, self)            # ADS-B contacts (issue 32)
+        self.traffic = TrafficOverlay(self.view, self)            # ADS-B contacts and their alert
         self._show_status()
         replay = adapter.replay
         if replay is not None:

@@ -310,8 +310,8 @@ class PlanController(QObject):
     def remove_question(self) -> QMessageBox | None:
         return self.transfers.remove_question
 
-    def sync(self, kind: PlanKind) -> str:
-        return self.transfers.sync(kind)
+    def how_it_differs(self, kind: PlanKind) -> str:
+        return self.transfers.how_it_differs(kind)
 
     def vehicle_plan(self, kind: PlanKind) -> Plan | None:
         return self.transfers.vehicle_plan(kind)
@@ -330,7 +330,7 @@ class PlanController(QObject):
         plan = self.vehicle_plan(PlanKind.MISSION)
         count = s.mission.count if s.mission.count is not None else len(plan or ())
         text = f"Fly the vehicle's mission ({count} items) in AUTO?"
-        if plan is not None and self.sync(PlanKind.MISSION):
+        if plan is not None and self.how_it_differs(PlanKind.MISSION):
             text += "\n\nIt differs from the plan shown here: the vehicle flies the one it holds."
         text += ("\n\nFrom the ground the motors start and it takes off. Keep clear of the propellers."
                  if not s.flying else "\n\nIt leaves what it is doing now and flies the mission.")
@@ -362,7 +362,7 @@ class PlanController(QObject):
         layer, index, _ = hit
         if layer == "mission":
             seq = self.doc.first_seq(index)
-            if seq is not None and not self.sync(PlanKind.MISSION):
+            if seq is not None and not self.how_it_differs(PlanKind.MISSION):
                 actions.append((f"Skip to item {seq}", self.panel.skip_allowed, lambda: self.skip_to(seq)))
         if self.layer.editing:
             actions.append(("Delete", True, lambda: (self.editor.select(layer, index),

@@ -62,7 +62,7 @@ class PlanTransfers(QObject):
             self._here = (version, {k: self.doc.plan(k) for k in PlanKind})
         return self._here[1]
 
-    def sync(self, kind: PlanKind) -> str:
+    def how_it_differs(self, kind: PlanKind) -> str:
         """Why the plan here differs from the vehicle's ("" when it is the same, or neither has one)."""
         return how_it_differs(self.plans_here()[kind], self.vehicle_plan(kind), self._synced.get(kind))
 
@@ -139,7 +139,7 @@ class PlanTransfers(QObject):
         """The tab shown, and every other plan here that is not the vehicle's (one the vehicle holds but that is
         empty here is left there: removing is Remove from vehicle's, asked first)."""
         shown = self._shown()
-        return [k for k in PlanKind if k is shown or (self.sync(k) and self.doc.plan(k).items)]
+        return [k for k in PlanKind if k is shown or (self.how_it_differs(k) and self.doc.plan(k).items)]
 
     def _ask_removal(self, kind: PlanKind) -> None:
         """Remove from vehicle asks first: it cannot be undone here (the list stays, Upload puts it back)."""
