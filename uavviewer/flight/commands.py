@@ -10,7 +10,7 @@ from __future__ import annotations
 from PyQt5.QtCore import QObject
 from PyQt5.QtWidgets import QMessageBox
 
-from driver.vehicle.rules import mode_warning
+from driver.vehicle.rules import mode_refusal, mode_warning
 from driver.vehicle.state import LinkStatus, Severity, VehicleState
 
 from ..widgets.ask import ask
@@ -62,6 +62,8 @@ class FlightCommands(QObject):
             self.takeoff_box.reject()               # the question no longer fits the vehicle: withdraw it
         self.window.modeSelector.set_mode(s.mode)
         self.window.modeSelector.setEnabled(s.connected)
+        self.window.modeSelector.refuse({name: mode_refusal(name, s.may_be_airborne) for name in
+                                         self.window.modeSelector.modes()})
 
     @property
     def arm_box(self) -> QMessageBox | None:
