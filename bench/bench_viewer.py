@@ -146,7 +146,7 @@ def cpu_case(case: str, port: int, seconds: float, uri: str, dock: str) -> None:
         s = drone.state()
         if phase[0] == "takeoff" and s.readiness.ready_to_arm:
             phase[0] = "climbing"
-            w.adapter.command("takeoff", 3.0)
+            w.adapter.send(w.adapter.drone.takeoff, 3.0)
         if s.can_fly_velocity:
             w.rightStick.hold(0.3, 0.8)
             w.leftStick.hold(0.4, 0.1)
@@ -277,7 +277,7 @@ def main() -> None:
         s = w.adapter.state
         if s.readiness.ready_to_arm and not started[0]:
             started[0] = True
-            w.adapter.command("takeoff", 3.0)
+            w.adapter.send(w.adapter.drone.takeoff, 3.0)
         if s.can_fly_velocity:
             if not flying_since:
                 flying_since.append(time.monotonic())
