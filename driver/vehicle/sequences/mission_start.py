@@ -20,6 +20,7 @@ from concurrent.futures import Future
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
+from ..commands import CommandFuture
 from ...mission.plan import MissionRunState
 from ..state import CommandStatus, SequencePhase, VehicleState
 from .machine import Machine, Outcome, Pilot
@@ -41,7 +42,7 @@ class MissionStartSequence:
 
     def __init__(self, pilot: Pilot, config, now: float):
         self.pilot = pilot
-        self.future: Future = Future()
+        self.future: Future = CommandFuture()
         self._cfg = config
         self.phase, self.detail = SequencePhase.WAITING_READY, ""
         before = pilot.state()
