@@ -139,7 +139,7 @@ class LogDownload:
             self.result = (False, part.failure, {})
             return [self._requests.end()]
         if now - self._flushed_at >= FLUSH_INTERVAL:
-            part.flush(self.end)
+            part.flush(self.held, self.end)
             self._flushed_at = now
         if self.end is not None and self.held.whole(self.end):
             return self._complete(now)
@@ -179,7 +179,7 @@ class LogDownload:
     def close(self) -> None:
         """Stop here: what is held goes to the .part (resumable); the worker closes it."""
         if self.phase in ("opening", "downloading"):
-            self.part.close(self.end)
+            self.part.close(self.held, self.end)
             self.phase = "closing"
 
     # -- the steps ---------------------------------------------------------------------------------------------
@@ -205,7 +205,7 @@ class LogDownload:
                             bytes_received=self._received, resumed_from=self._resumed,
                             bytes_requested=filler.bytes_requested if filler else 0,
                             bytes_rerequested=filler.bytes_rerequested if filler else 0)
-        self.part.finish(self.end, self.entry.size)
+        self.part.finish(self.held, self.end, self.entry.size)
         self.phase = "checking"
         done = [self.ftp.terminate(self._outbox.target())] if self.ftp is not None else []
         return done + [self._requests.end()]

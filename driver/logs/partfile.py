@@ -7,8 +7,9 @@ resumed .part, the writes, the fsyncs, the map of tens of thousands of spans a l
 for a 20 MB log at 30 % loss, four times a second) runs on the worker, so a slow disk never holds that lock.
 
 What resume relies on, in the order the worker does it: a batch of bytes written, the .part fsynced, then the map
-saved, naming only what the worker has written (its tmp file fsynced before it replaces the map). So the map never
-claims bytes that are not on disk; a write the disk refuses leaves the last map as it was. Each new PartFile waits
+saved (its tmp file fsynced before it replaces the map). The map it saves is the download's held ranges as they
+were when that batch was handed over: every byte they name was put in that batch or an earlier one, so the map
+never claims bytes that are not on disk. A write the disk refuses leaves the last map as it was. Each new PartFile waits
 for the one before it to close its file (a download resumed at once after a cancel reads a finished .part).
 """
 from __future__ import annotations
@@ -43,8 +44,9 @@ class Resumed:
 
 class PartFile:
     """The files of one download. The caller (any one thread at a time: the driver's, under the state lock) calls
-    :meth:`put`, :meth:`flush`, :meth:`start_afresh`, :meth:`finish`, :meth:`close` and reads :attr:`resumed`,
-    :attr:`failure`, :attr:`saved`, :attr:`checked`; ``wake`` is called when one of those has news."""
+    :meth:`put` for each byte it holds, :meth:`flush` with what it holds, :meth:`start_afresh`, :meth:`finish`,
+    :meth:`close`, and reads :attr:`resumed`, :attr:`failure`, :attr:`saved`, :attr:`checked`; ``wake`` is called
+    when one of those has news."""
 
     def __init__(self, path: str, entry: LogEntry, wake: Callable[[], None], after: "PartFile | None" = None):
         self.path, self._entry, self._wake = path, entry, wake
@@ -58,7 +60,8 @@ class PartFile:
         # the worker's side
         self._file = None
         self._map: PartMap | None = None
-        self._unsynced = 0                      # bytes handed over since the last map saved
+        self._unsynced = 0                      # bytes written since the last map saved
+        self._named: Ranges | None = None       # what the next map names: the held ranges of the last batch
         self._thread = threading.Thread(target=self._run, args=(after,), name="log-part", daemon=True)
         self._thread.start()
 
@@ -66,10 +69,11 @@ class PartFile:
     def put(self, offset: int, data: bytes) -> None:
         self._pending.append((offset, data))
 
-    def flush(self, end: int | None) -> None:
-        """Hand the bytes put so far to the worker, with the log's end as the stream told it (for the map)."""
+    def flush(self, held: Ranges, end: int | None) -> None:
+        """Hand the bytes put so far to the worker, with what the caller holds once they are written (every byte
+        of it put by now) and the log's end as the stream told it: the map it saves next."""
         batch, self._pending = self._pending, []
-        self._commands.put(("write", batch, end))
+        self._commands.put(("write", batch, held.copy(), end))
 
     def start_afresh(self) -> Ranges:
         """The .part was another log's: it is set aside as .part.old and a new one begun. The bytes put since
@@ -77,15 +81,15 @@ class PartFile:
         self._commands.put(("afresh",))
         return Ranges((o, o + len(b)) for o, b in self._pending)
 
-    def finish(self, end: int, announced: int) -> None:
+    def finish(self, held: Ranges, end: int, announced: int) -> None:
         """The log is whole: the last bytes to disk, the file cut at ``end``, then DFReader reads it (it must reach
         ``announced``, the size listed) and it becomes FILE (:attr:`checked` tells)."""
-        self.flush(end)
+        self.flush(held, end)
         self._commands.put(("finish", end, announced))
 
-    def close(self, end: int | None) -> None:
+    def close(self, held: Ranges, end: int | None) -> None:
         """The download stops: the last bytes to disk and the .part closed, resumable."""
-        self.flush(end)
+        self.flush(held, end)
         self._commands.put(("close",))
 
     def closed(self) -> bool:
@@ -110,7 +114,7 @@ class PartFile:
                         break
                 for command in commands:
                     if command[0] == "write":
-                        self._write(command[1], command[2])
+                        self._write(*command[1:])
                         continue
                     self._sync()
                     if command[0] == "afresh":
@@ -158,7 +162,7 @@ class PartFile:
         check = None if fresh else self._recheck(part)
         self._map = part
         self.saved = part.ranges.total()
-        return Resumed(Ranges(part.ranges.spans), end, check)
+        return Resumed(part.ranges.copy(), end, check)
 
     def _recheck(self, part: PartMap) -> tuple[int, bytes]:
         """The .part's last held bytes are fetched again and must come back the same, else it is another log.
@@ -175,12 +179,10 @@ class PartFile:
         part.time_utc, part.listed = self._entry.time_utc, self._entry.size
         return start, expect
 
-    def _write(self, batch: list[tuple[int, bytes]], end: int | None) -> None:
+    def _write(self, batch: list[tuple[int, bytes]], held: Ranges, end: int | None) -> None:
         if self.failure:
             return                              # the disk refused: the map on disk stays what it was
-        self._map.size = end
         self._unsynced += sum(len(data) for _, data in batch)
-        written = self._map.ranges
         i = 0
         try:
             while i < len(batch):               # runs of consecutive chunks, one write each
@@ -193,16 +195,18 @@ class PartFile:
                     i += 1
                 self._file.seek(start)
                 self._file.write(b"".join(run))
-                written.add(start, top)
         except OSError as exc:
             self._refused(exc)
+            return
+        self._named, self._map.size = held, end
 
     def _sync(self) -> None:
         """What was written to the disk, then the map that names it."""
-        if not self._unsynced or self.failure:
+        if self._named is None or self.failure:
             return
         try:
             self._file.flush()
+            self._map.ranges, self._named = self._named, None
             save_part_map(self.path, self._map)     # fsyncs the .part first
             self._unsynced = 0
             self.saved = self._map.ranges.total()
@@ -221,7 +225,7 @@ class PartFile:
         _set_aside(self.path)
         entry = self._entry
         self._map = PartMap(entry.id, entry.time_utc, Ranges(), None, entry.size)
-        self.saved = 0
+        self._named, self.saved = None, 0
         try:
             self._file = open(self.path + ".part", "wb")
             save_part_map(self.path, self._map)     # names nothing yet: the set-aside log's ranges are not this one's
