@@ -71,7 +71,8 @@ FILL_RATE_PERIOD = 0.1
 LOSS_SAMPLE = 50
 # The last few packets of the log: each asked twice, even with no loss seen (a lost one costs a round trip with
 # nothing else in flight: 4759ff1; 32 at most, under load it doubled hundreds: aa49dc0); a lost end this close to
-# the listed size is asked as gaps, further off probed and streamed (74ceab4).
+# the listed size is asked as gaps, further off probed and streamed (74ceab4). (The last 8 three times made no
+# difference in 80 seeded runs at 2, 10 and 30 % loss, on TCP and a radio: the copies below cover a lossy tail.)
 LAST_FEW = 32
 # Each gap request goes at most 6 times, the vehicle's room in the link's own round trip allowing: the last thousand
 # packets at 30 % loss were ten round trips, now three or four (cff542e).
