@@ -223,8 +223,8 @@ class GapFiller:
             self._asks.clear()                  # silence: all of them (or their answers) were lost
         self._measure_answers(now)
         window = self.window()
-        want = wanted = min(window - len(self._asks), self._paced(now))
-        if want <= 0:
+        room = allowed = min(window - len(self._asks), self._paced(now))    # requests that may go now
+        if room <= 0:
             return []
         out: list[tuple[int, int]] = []
         end = self.end
@@ -240,10 +240,10 @@ class GapFiller:
             elif end not in self._asks:
                 self._asks[end] = (CHUNK, now)
                 out += [(end, CHUNK)] * 2       # twice: one packet, whose loss costs a whole round
-                want -= 1
+                room -= 1
         gaps, wrapped = self.held.gaps(self._cursor, end), self._cursor == 0
         longest = max(min(window, STREAM_GAP_MAX), STREAM_GAP_MIN) * CHUNK
-        while want > 0:
+        while room > 0:
             gap = next(gaps, None)
             if gap is None:
                 if wrapped:
@@ -265,11 +265,11 @@ class GapFiller:
                 self.bytes_requested += count
                 out += [(offset, count)] * copies
                 self._cursor = offset + count
-                want -= 1
-                if not want:
+                room -= 1
+                if not room:
                     break
         if self.rate > 0:                       # paced: what went is spent, more may go once the pace allows
-            self._pace_credit -= wanted - want
+            self._pace_credit -= allowed - room
             if self._pace_credit < 1.0 and len(self._asks) < window:
                 self.due = now + PACE_TICK
         if out:
