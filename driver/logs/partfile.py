@@ -9,8 +9,9 @@ for a 20 MB log at 30 % loss, four times a second) runs on the worker, so a slow
 What resume relies on, in the order the worker does it: a batch of bytes written, the .part fsynced, then the map
 saved (its tmp file fsynced before it replaces the map). The map it saves is the download's held ranges as they
 were when that batch was handed over: every byte they name was put in that batch or an earlier one, so the map
-never claims bytes that are not on disk. A write the disk refuses leaves the last map as it was. Each new PartFile waits
-for the one before it to close its file (a download resumed at once after a cancel reads a finished .part).
+never claims bytes that are not on disk. A write the disk refuses leaves the last map as it was. Each new
+PartFile waits for the one before it to close its file (a download resumed at once after a cancel reads a
+finished .part).
 """
 from __future__ import annotations
 
@@ -252,6 +253,9 @@ class PartFile:
             self.checked = checked
         except (LogFileError, OSError) as exc:
             self.checked = str(exc)
+        except Exception as exc:                # noqa: BLE001 - the check itself broke: told, the .part kept
+            log.exception("log %d: checking %s.part", self._entry.id, path)
+            self.checked = f"its check failed ({type(exc).__name__}: {exc}); the file is kept as {path}.part"
 
     def _close_file(self) -> None:
         if self._file is None:
