@@ -8,7 +8,7 @@ import pytest
 from pymavlink.quaternion import QuaternionBase
 
 from driver.ice import convert, load_slice
-from driver.vehicle.state import (Attitude, Battery, CommandResult, CommandStatus, Environment, GlobalPosition, Gps,
+from driver.vehicle.state import (Attitude, Battery, Boot, CommandResult, CommandStatus, Environment, GlobalPosition, Gps,
                           LandedState, LinkHealth, LinkStatus, LocalPosition, Message, Readiness, SequencePhase,
                           SequenceProgress, Setpoint, Severity, VehicleState, Velocity)
 
@@ -122,7 +122,8 @@ def test_status_round_trip_keeps_every_field():
                    velocity=Velocity(1.0, -2.0, 0.5), heading_deg=74.5, airspeed=2.5,
                    battery=Battery(15.2, 9.5, 55.0, True, 4, False),                   # its alarm derived on both sides
                    gps=Gps(3, 12, 0.8),
-                   readiness=Readiness(True, True, True),
+                   readiness=Readiness(False, True, True, reasons=("3D Accel calibration needed",)),
+                   boot=Boot(restarts=2),
                    environment=Environment((1, 2, 3), (0.0, 0.1, -1.0), 1001.0, 21.0, 2.0, 90.0, 45),
                    messages=(Message(4, 99.0, Severity.WARNING, "PreArm: Need 3D Fix", "vehicle"),),
                    results=(CommandResult("arm", CommandStatus.REFUSED, "denied", 1, 7),),

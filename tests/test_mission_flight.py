@@ -9,6 +9,7 @@ from driver.mission.plan import MissionItem, MissionRunState, Plan, PlanKind
 from driver.vehicle.state import CommandStatus
 
 from conftest import LAST_LEG_SPEEDUP
+from test_driver_commands import until
 from test_mission_transfer import place, waypoint
 
 
@@ -142,3 +143,32 @@ def test_a_mission_start_is_refused_when_the_vehicle_disarmed_before_auto(sim_fa
     result = drone.start_mission().result(60)
     assert not sim.truth().armed
     assert result.status is CommandStatus.REFUSED and "disarmed" in result.reason, str(result)
+
+
+def test_stop_during_a_mission_start_holds_an_airborne_copter(sim_factory, vehicle_factory):
+    """A slow radio (1.5 s downlink latency): Start mission from the ground, Stop once the vehicle is 1 m up in AUTO,
+    before its MISSION_CURRENT has reached the ground station. The vehicle ends holding where it is (GUIDED or
+    BRAKE), never disarmed in the air nor given back a mode that takes the throttle from a stick."""
+    sim = sim_factory()
+    drone = vehicle_factory(f"tcp:127.0.0.1:{sim.tcp_port}")
+    assert drone.wait_for(lambda s: s.connected and s.home is not None and s.readiness.ready_to_arm
+                          and s.in_air is False, 30)
+    five = Plan(PlanKind.MISSION, (MissionItem(mavlink.MAV_CMD_NAV_TAKEOFF, alt=6), waypoint(drone, 12, 0, 6),
+                                   waypoint(drone, 12, 12, 6), waypoint(drone, 0, 12, 6),
+                                   MissionItem(mavlink.MAV_CMD_NAV_LAND)))
+    assert drone.upload_plan(five).result(30).result.ok
+    assert drone.set_mode("STABILIZE").result(10).ok           # the mode it was in: a takeoff cancel used to go back
+    sim.faults.downlink.latency = 1.5
+    starting = drone.start_mission()
+    up = until(drone, sim, lambda t: t.mode == "AUTO" and t.altitude >= 1.0, 60)
+    assert up is not None, sim.truth()
+    assert drone.state().mission.state is not MissionRunState.ACTIVE      # MISSION_CURRENT not here yet
+    stopped = drone.stop()
+    seen = []
+    done = until(drone, sim, lambda t: seen.append((t.mode, t.armed, t.altitude)) or (
+        stopped.done() and t.mode in ("GUIDED", "BRAKE") and t.ground_speed < 0.3), 60)
+    assert done is not None, (sim.truth(), stopped.done() and stopped.result())
+    assert stopped.result().ok and "holding" in stopped.result().reason, stopped.result()
+    assert starting.result(5).status is CommandStatus.ABORTED
+    assert done.armed and done.altitude > 0.5
+    assert not [s for s in seen if s[0] in ("STABILIZE", "ACRO") or not s[1]], seen

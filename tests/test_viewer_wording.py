@@ -129,3 +129,15 @@ def test_file_open_logs_folder_and_about(qtbot, vehicle, window_factory, tmp_pat
     qtbot.waitUntil(lambda: box is not None and box.isVisible(), timeout=3000)
     assert f"Flight logs: {tmp_path / 'logs'}" in box.text()
     box.close()
+
+
+def test_file_names_reviewing_a_log_and_replaying_a_flight_apart(qtbot, vehicle, window_factory):
+    """"Open log…" (a review) and "Open flight log…" (a replay) read alike: a pilot picked one for the other."""
+    w = window_factory(vehicle)
+    texts = {a.objectName(): a.text().replace("&", "") for a in w.menuFile.actions()}
+    review, replay = texts["actionReviewLog"], texts["actionReplayFlight"]
+    assert review.startswith("Review") and "plots" in review
+    assert replay.startswith("Replay") and ".tlog" in replay
+    assert not any(t.startswith("Open") and "log…" in t for t in texts.values())    # no two "Open … log…" left
+    actions = [a.objectName() for a in w.menuFile.actions()]
+    assert abs(actions.index("actionReviewLog") - actions.index("actionReplayFlight")) <= 2   # side by side

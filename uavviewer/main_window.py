@@ -42,8 +42,9 @@ from .settings import ViewerSettings, default_qsettings
 from .telemetry.readouts import Readouts
 from .window.about import show_about
 from .window.closing import Closing
-from .window.layout import fit_restored, fit_screen, steady_slots
+from .window.layout import docks_beside, fit_restored, fit_screen, steady_slots
 from .window.pilot_tools import PilotTools
+from .window.secondary import SecondaryWindows
 
 __all__ = ["MainWindow", "load_style"]
 
@@ -64,7 +65,7 @@ class MainWindow(QMainWindow):
 
     Parts: ``preferences``, ``sticks`` (and its ``gamepad``), ``flight`` (the buttons' commands), ``camera``,
     ``gimbal``, ``map``, ``plan``, ``readouts``, ``replay``, ``tools`` (connecting, alerts, preflight, guided),
-    ``params``, ``flight_logs``, ``fleet_dock`` and ``closing``.
+    ``params``, ``flight_logs``, ``fleet_dock``, ``secondary`` (the other windows' places) and ``closing``.
     """
 
     def __init__(self, drone: Drone, qsettings: QSettings | None = None,
@@ -86,6 +87,7 @@ class MainWindow(QMainWindow):
         self.refresh = Refresh(self)        # views redraw at the rate the eye needs and not while minimised
         self.readouts = Readouts(self)
         self.closing = Closing(self)
+        self.secondary = SecondaryWindows(self, self._qsettings)   # other windows fit, and leave the controls in view
 
         self.setWindowTitle(f"UavViewerPy — {self.adapter.description}")
         self.signing_unavailable = signing_unavailable(drone)     # a remote drone is signed on its server
@@ -102,7 +104,6 @@ class MainWindow(QMainWindow):
         self.setCorner(Qt.BottomRightCorner, Qt.RightDockWidgetArea)   # plots run the full height
         self.resizeDocks([self.telemetryDock, self.plotsDock], [390, 560], Qt.Vertical)
         self.resizeDocks([self.telemetryDock], [400], Qt.Horizontal)
-        self.resizeDocks([self.messagesDock], [110], Qt.Vertical)     # the latest line is in the status strip
         self.mapDock.raise_()
         self.instrumentSplitter.setStretchFactor(0, 3)
         self.instrumentSplitter.setStretchFactor(1, 2)
@@ -116,10 +117,11 @@ class MainWindow(QMainWindow):
         self.params = ParamsController(self.adapter, self, say=self.log_message)    # docs/parameters.md
         self.params.add_to_menu(self)                       # Vehicle › Parameters…
         self.params.offer_fixes(self.messages)              # a warning naming a parameter: Fix… opens it
+        self.plan.notices.fenceOnRequested.connect(lambda: self.params.propose({"FENCE_ENABLE": 1}))
         self.setup = SetupController(self.adapter, self, self.params)    # Vehicle › Setup…: calibrations, radio, motors
         self.setup.add_to_menu(self)
         self.fleet_dock = FleetDock(self)
-        self.review = ReviewController(self)                # File › Open log…: docs/review.md
+        self.review = ReviewController(self)                # File › Review a log…: docs/review.md
         self.inspector = InspectorController(self)          # Tools › MAVLink inspector
         self.flight_logs = FlightLogsController(self.adapter, lambda: self.logs.downloads, self.review.open, self,
                                                 say=self.log_message)
@@ -157,6 +159,7 @@ class MainWindow(QMainWindow):
             self.restoreState(state)
             if "preflightDock".encode("utf-16-be") not in bytes(state):   # saved before the dock existed
                 self.tools.tab_preflight()
+        docks_beside(self)                        # none under the flight controls (a layout saved so too)
         if geometry is not None:
             self.restoreGeometry(geometry)
             fit_restored(self)                    # saved on a larger screen: it still fits this one
@@ -173,7 +176,7 @@ class MainWindow(QMainWindow):
         """--takeoff-altitude for this run, else the Preferences' value."""
         return self.preferences.takeoff_altitude
 
-    # -- connecting (File › Connect, Disconnect, Open flight log: uavviewer/window/pilot_tools.py wires them) ----
+    # -- connecting (File › Connect, Disconnect, Replay a flight: uavviewer/window/pilot_tools.py wires them) ----
     def _connected(self, opened) -> None:
         """A connection opened by File › Connect (:class:`uavviewer.connect.opener.Opened`): a vehicle, or a lab's
         fleet with its Fleet panel."""
@@ -196,7 +199,7 @@ class MainWindow(QMainWindow):
             self.camera.set_sources(own)
 
     def use_connection(self, drone: Drone) -> None:
-        """Fly (or watch) ``drone`` from now on: File › Connect, Disconnect, Open flight log. The vehicle left
+        """Fly (or watch) ``drone`` from now on: File › Connect, Disconnect, Replay a flight. The vehicle left
         behind was sent zero velocity first, so it hovers."""
         self.sticks.centre()
         self.map.cancel()
@@ -228,9 +231,10 @@ class MainWindow(QMainWindow):
             self.preferences.remember(last_connection=choice.target)
 
     def show_keys(self) -> None:
+        """Help › Keys, not modal: the flight controls stay in reach while it is read."""
         dialog = KeysDialog(self)
         dialog.setAttribute(Qt.WA_DeleteOnClose)
-        dialog.open()
+        dialog.show()
 
     # -- state in --------------------------------------------------------------------------------
     def show_state(self, s: VehicleState) -> None:
@@ -270,6 +274,7 @@ class MainWindow(QMainWindow):
         self.plan.show_plan(False)                # the docks that stepped out for Plan are saved as they were
         self.preferences.save(self.saveGeometry(), self.saveState())
         self.sticks.close()
+        self.secondary.close()
         self.alerts.close()
         self.review.close()
         self.inspector.close()

@@ -12,7 +12,7 @@ from dataclasses import replace
 
 from .plan import MissionProgress, MissionRunState, Plan, PlanKind, TransferDirection
 
-__all__ = ["fold_mission_current", "fold_item_reached", "fold_text", "fold_transfer_end"]
+__all__ = ["fold_mission_current", "fold_item_reached", "fold_text", "fold_transfer_end", "fold_restart"]
 
 _STARTED = re.compile(r"^Mission: (\d+) (\S+)")
 
@@ -46,12 +46,19 @@ def fold_text(p: MissionProgress, text: str) -> MissionProgress | None:
 def fold_transfer_end(p: MissionProgress, kind: PlanKind, direction: TransferDirection, ok: bool,
                       plan: Plan | None) -> MissionProgress:
     """What is known to be on the vehicle after a transfer: the plan read back, nothing after a clear, and
-    after a failed upload not even the old plan (the vehicle may hold part of the new one)."""
+    after an upload that failed or is not verified not even the old plan (the vehicle may hold part of the new
+    one, or the new one)."""
     others = tuple(x for x in p.on_vehicle if x.kind is not kind)
     if ok and plan is not None:
         known = others + (plan,)
         count = len(plan) if kind is PlanKind.MISSION else p.count
         return replace(p, on_vehicle=known, count=count)
-    if direction is TransferDirection.UPLOAD and not ok:
+    if direction is TransferDirection.UPLOAD:
         return replace(p, on_vehicle=others)
     return p
+
+
+def fold_restart(p: MissionProgress) -> MissionProgress:
+    """The vehicle started again: what it holds and where it was in its mission are not known until it says
+    (a plan held before may have been wiped or replaced meanwhile); transfers under way stay as they are."""
+    return MissionProgress(transfers=p.transfers)

@@ -140,12 +140,26 @@ class Auto:
         return mavlink.MAV_RESULT_ACCEPTED, lambda: self.set_mission_current(seq)
 
     def _cmd_mission_start(self, *_):
-        """GCS_MAVLINK_Copter: AUTO, and the mission started unless it already runs."""
+        """GCS_MAVLINK_Copter::handle_MAV_CMD_MISSION_START: AUTO, auto_armed (the takeoff item may lift off with
+        the throttle at zero), and the mission started unless it already runs."""
         if not self.set_mode(AUTO):
             return mavlink.MAV_RESULT_FAILED, None
+        self.auto_armed = self.armed
         if self.mission_run != "running":
             self._auto_entered()
+        else:
+            self._auto_liftoff()
         return mavlink.MAV_RESULT_ACCEPTED, None
+
+    def _auto_liftoff(self) -> None:
+        """The takeoff item flies once armed *and* auto-armed (ModeAuto::takeoff_run: auto_takeoff.run() holds
+        the motors at ground idle otherwise): AUTO entered armed with the throttle at zero waits on the ground
+        for MISSION_START."""
+        item = self.plans[MISSION][self.mission_current] if self.mission_current else None
+        if (item is not None and item.command == mavlink.MAV_CMD_NAV_TAKEOFF and self.armed and self.auto_armed
+                and self.landed and self.liftoff_at is None):
+            self.liftoff_at = max(self.armed_at + self.profile.arming_delay, self.t) + self.profile.liftoff_after
+            self.touchdown_at = None
 
     # -- walking the items --------------------------------------------------------------------------------
     def _next_nav(self, seq: int) -> int | None:
@@ -199,9 +213,7 @@ class Auto:
         place = self.ned_of(item) or here
         if item.command == mavlink.MAV_CMD_NAV_TAKEOFF:
             self.auto_target = (here[0], here[1], -max(item.z, 1.0))
-            if self.armed and self.landed and self.liftoff_at is None:
-                self.liftoff_at = max(self.armed_at + self.profile.arming_delay, self.t) + self.profile.liftoff_after
-                self.touchdown_at = None
+            self._auto_liftoff()
         elif item.command == mavlink.MAV_CMD_NAV_RETURN_TO_LAUNCH:
             self.auto_target = None
             self.rtl_phase = "climb"
@@ -232,7 +244,8 @@ class Auto:
     # -- flying (the controller asks _auto, the step asks _auto_step) ----------------------------------------
     def _auto_climbing(self) -> bool:
         """Armed on the ground in AUTO with a takeoff item to fly: the controller may lift off."""
-        return (self.armed and self.mode == AUTO and self.mission_run == "running" and self.auto_stage == "fly"
+        return (self.armed and self.auto_armed and self.mode == AUTO and self.mission_run == "running"
+                and self.auto_stage == "fly"
                 and self.plans[MISSION][self.mission_current].command == mavlink.MAV_CMD_NAV_TAKEOFF)
 
     def _auto_acceleration(self) -> float:

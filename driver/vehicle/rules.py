@@ -12,8 +12,7 @@ from ..core import frames
 __all__ = ["COPTER_MODES", "MIN_TAKEOFF_ALTITUDE", "MAX_TAKEOFF_ALTITUDE", "TAKEOFF_ALTITUDE_RANGE", "MAX_ALTITUDE",
            "MIN_GOTO_ALTITUDE", "THROTTLE_MODES", "takeoff_altitude_problem", "go_to_problem", "mode_warning",
            "arming_consequence", "DISARM_DELAY", "unattended", "GCS_FAILSAFE_ACTIONS", "NOT_ARMABLE_MODES",
-           "ARM_IN", "arming_refusal", "gcs_failsafe_setting",
-           "ground_only", "not_in_flight"]
+           "ARM_IN", "arming_refusal", "gcs_failsafe_setting"]
 
 #: ArduCopter custom_mode numbers by name, from pymavlink's own table.
 COPTER_MODES: dict[str, int] = {name: number for number, name in mavutil.mode_mapping_acm.items()}
@@ -130,13 +129,3 @@ def mode_warning(mode: str, flying: bool) -> str | None:
     if not flying or why is None:
         return None
     return f"{mode.upper()} in flight: its {why}. Only with an RC transmitter in hand."
-
-
-def ground_only(s) -> str | None:
-    """Guard for commands that only make sense disarmed on the ground, checked each time one goes out."""
-    return "only when disarmed on the ground" if s.armed or s.flying else None
-
-
-def not_in_flight(s) -> str | None:
-    """Guard for commands that would stop the motors: never while flying."""
-    return "not while flying (the motors would stop in the air)" if s.flying else None

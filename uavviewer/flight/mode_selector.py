@@ -24,6 +24,8 @@ class ModeSelector(QComboBox):
         self.setObjectName("modeSelector")
         self.setFocusPolicy(Qt.NoFocus)     # arrow keys fly; they must not change the mode
         self.setMinimumWidth(130)
+        self.setPlaceholderText("Mode")
+        self.setToolTip("Flight mode: the vehicle's own, as it reports it")
         self.addItems(COPTER_MODES)
         self._mode = ""
         self.setCurrentIndex(-1)

@@ -10,6 +10,7 @@ from PyQt5.QtWidgets import (QLabel, QSplitter, QTableWidget, QTableWidgetItem, 
 
 from driver.vehicle.inspector import Inspection
 
+from ..widgets.dialog_fit import close_buttons, closes_with_esc
 from .field_plot import FieldPlot
 
 __all__ = ["InspectorWindow", "REFRESH_MS"]
@@ -31,6 +32,8 @@ class InspectorWindow(QWidget):
     def __init__(self, inspect, parent: QWidget | None = None) -> None:
         super().__init__(parent, Qt.Window)
         self.setWindowTitle("MAVLink inspector")
+        self.setObjectName("inspectorWindow")
+        self.setAttribute(Qt.WA_QuitOnClose, False)
         self._inspect = inspect
         self.note = QLabel()
         self.note.setWordWrap(True)
@@ -51,7 +54,9 @@ class InspectorWindow(QWidget):
         split.setSizes([380, 520])
         layout = QVBoxLayout(self)
         layout.addWidget(self.note)
-        layout.addWidget(split)
+        layout.addWidget(split, 1)
+        layout.addWidget(close_buttons(self))         # and Esc: a window of its own closes as a dialog does
+        closes_with_esc(self)
         self._components: dict[tuple[int, int], QTreeWidgetItem] = {}
         self._messages: dict[tuple[int, int, str], QTreeWidgetItem] = {}
         self.selected: tuple[int, int, str] | None = None

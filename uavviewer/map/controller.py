@@ -247,7 +247,7 @@ class MapController(QObject):
         return going
 
     def use_connection(self) -> None:
-        """Another connection (File › Connect, Open flight log): its own frame, trail and, for a replay, track."""
+        """Another connection (File › Connect, Replay a flight): its own frame, trail and, for a replay, track."""
         self.cancel()
         self._frame = None
         self._state = None

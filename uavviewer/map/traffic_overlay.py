@@ -11,6 +11,9 @@ from driver.traffic.model import Contact
 __all__ = ["TrafficOverlay", "contact_label"]
 
 AIRCRAFT = QColor("#4fc3f7")
+#: Where a contact's label may go from its mark: upper right, lower right, upper left, lower left, further out.
+LABEL_SPOTS = [QPointF(10, -10), QPointF(10, 18), QPointF(-10, -10), QPointF(-10, 18), QPointF(10, -26),
+               QPointF(10, 34)]
 ALERT = QColor("#e53935")
 
 
@@ -54,7 +57,7 @@ class TrafficOverlay(QObject):
                 _dot(p, at, colour)
             else:
                 view._arrow(p, at, c.heading_deg, colour, 0.7)
-            view._label(p, at + QPointF(10, -10), contact_label(c))
+            view.labels.place(p, at, contact_label(c), LABEL_SPOTS)   # clear of the rings' and each other's
         p.setOpacity(1.0)
 
 

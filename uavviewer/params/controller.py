@@ -21,7 +21,6 @@ from ..widgets.menus import menu_named
 from .compare_dialog import CompareDialog
 from .mentions import named_parameter
 from .page import ParametersPage
-from .placement import place, remember
 from .review_dialog import ReviewDialog
 from .rows import compare_rows, review_rows
 from .table_model import ParameterModel, WriteState
@@ -88,6 +87,8 @@ class ParamsController(QObject):
     def _offer_fix(self, messages, item: QTreeWidgetItem | None) -> None:
         if item is None or item.data(0, Qt.UserRole) is None or item.data(0, Qt.UserRole) > Severity.WARNING:
             return
+        if self.adapter.replay is not None:      # a recording: there is no vehicle to fix
+            return
         table = self.model.table
         known = table.values if table.values else self.model.metadata
         name = named_parameter(item.text(2), known, complete=table.complete)
@@ -120,9 +121,6 @@ class ParamsController(QObject):
             page.compareFileChosen.connect(self.compare_file)
             page.saveFileChosen.connect(self.save_file)
             page.metadataFileChosen.connect(self.load_metadata)
-            settings = getattr(self._parent, "_qsettings", None)     # the window's: where it was left last time
-            page.hidden.connect(lambda: remember(page, settings))
-            place(page, self._parent, settings)                     # beside the flight controls, never over them
             self.page = page
         return self.page
 

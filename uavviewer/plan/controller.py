@@ -8,14 +8,12 @@ mission as started, paused or resumed, only when the driver says the vehicle con
 from __future__ import annotations
 
 import logging
-import math
 
 from PyQt5.QtCore import QObject, Qt, pyqtSignal
 from PyQt5.QtGui import QKeySequence
 from PyQt5.QtWidgets import QAction, QDockWidget, QMenu, QMessageBox, QScrollArea, QToolButton, QWidget
 
-from driver.core.frames import offset_ned
-from driver.mission.plan import MissionItem, MissionRunState, Plan, PlanKind, TransferDirection
+from driver.mission.plan import MissionRunState, Plan, PlanKind, TransferDirection
 from driver.mission.wire import difference
 from driver.vehicle.state import CommandResult, LinkStatus, Severity, VehicleState
 
@@ -24,8 +22,10 @@ from .editor import PlanEditor
 from .files import PlanFiles
 from .layer import PlanLayer
 from .model import Performance, PlanDocument
+from .notices import UploadNotices, fence_off_words
 from .room import make_room_for_plan
 from .panel import PlanPanel
+from .progress import progress_text
 from .survey_file import complex_items, mission_entries
 
 __all__ = ["PlanController"]
@@ -69,6 +69,13 @@ class PlanController(QObject):
         self._synced: dict[PlanKind, tuple[Plan, Plan]] = {}   # (here, there) the driver last found the same
         self._outcome: dict[PlanKind, str] = {}         # each kind's last transfer, in words
         self._failed: dict[PlanKind, bool] = {}         # ... and whether the driver refused or failed it
+        self._restarts: int | None = None               # the vehicle's restarts seen (VehicleState.boot)
+        self._reread: set[PlanKind] = set()             # read again after a restart: into what it holds only
+        self._reread_due = False                        # ... asked once the link is up
+        self._left_behind: set[PlanKind] = set()        # none here: read to see whether the vehicle keeps one
+        self.notices = UploadNotices(window, self)      # the fence off, a fence left from before: asked
+        self.notices.said.connect(window.log_message)
+        self.notices.removeRequested.connect(lambda kind: self.transfer("clear", confirmed=kind))
         self._state = VehicleState()
         self._shown: tuple | None = None                # what the flying part last showed (redrawn on change)
         adapter.droneChanged.connect(self._vehicle_changed)     # a fleet's pick, File › Connect
@@ -134,7 +141,7 @@ class PlanController(QObject):
     def _file_menu(self, window) -> None:
         """File › Open plan… / Save plan…, above Quit."""
         menu = window.menuFile
-        # Ctrl+O is File › Open flight log's (the pilot's tools): the plan's is Ctrl+Shift+O
+        # Ctrl+O is File › Replay a flight's (the pilot's tools): the plan's is Ctrl+Shift+O
         self.new_action = QAction("New plan", window, shortcut=QKeySequence.New, triggered=self.ask_new)
         self.open_action = QAction("Open plan…", window, shortcut=QKeySequence("Ctrl+Shift+O"),
                                    triggered=self.ask_open)
@@ -301,12 +308,34 @@ class PlanController(QObject):
     # -- the vehicle ------------------------------------------------------------------------------------
     def _vehicle_changed(self, _drone) -> None:
         """Another vehicle is flown: nothing is known of its plans yet."""
-        for known in (self.on_vehicle, self._sending, self._synced, self._outcome, self._failed):
+        for known in (self.on_vehicle, self._sending, self._synced, self._outcome, self._failed, self._reread):
             known.clear()
+        self._restarts, self._reread_due = None, False
+
+    def _follow_restarts(self, s: VehicleState) -> None:
+        """A vehicle that started again may hold other plans than before (wiped, or changed by another ground
+        station meanwhile): what was known of them goes, and each is read again, into what the vehicle holds,
+        never into the plan being edited here. A recording is only watched: its restarts are not read."""
+        restarts = s.boot.restarts
+        if self._restarts is None or restarts < self._restarts or self.adapter.replay is not None:
+            self._restarts = restarts
+            return
+        if restarts > self._restarts:
+            self._restarts = restarts
+            for known in (self.on_vehicle, self._sending, self._synced):
+                known.clear()
+            self._reread, self._reread_due = set(PlanKind), True
+            self._shown = None
+        if self._reread_due and s.link.status is LinkStatus.OK:
+            self._reread_due = False
+            for kind in self._reread:
+                self._outcome[kind] = f"The vehicle restarted: reading its {kind.label} again…"
+                self.adapter.command("download_plan", kind)
 
     def show_state(self, s: VehicleState) -> None:
         old_home = self.home
         self._state = s
+        self._follow_restarts(s)
         self.layer.home = self.editor.home = self.home
         perf = Performance.from_parameters(s.parameters)
         if perf != self.editor.perf or self.home != old_home:
@@ -319,7 +348,8 @@ class PlanController(QObject):
     def _show_vehicle(self, s: VehicleState) -> None:
         m = s.mission
         kind = KINDS[self.panel.layer]
-        key = (m, kind, self._doc_version(), s.mode, s.link.status, s.flying, self._outcome.get(kind),
+        key = (m, kind, self._doc_version(), s.mode, s.link.status, s.flying, self._outcome.get(kind), s.fence.enabled,
+               s.camera.photos,
                tuple(self.on_vehicle.items()), _rounded(s))
         if key == self._shown:
             return
@@ -344,8 +374,9 @@ class PlanController(QObject):
             sync = f"Same as the vehicle's {kind.label} ({len(theirs)} items)"
         else:
             sync = f"No {kind.label} here; the vehicle's is not known yet"
-        p.syncLabel.setText(failed + sync)
-        p.syncLabel.setStyleSheet("color: #ffb020;" if why or failed else "")
+        fence_off = fence_off_words(s) if kind is PlanKind.FENCE and (theirs or self.doc.fence) else ""
+        p.syncLabel.setText(failed + sync + (f". {fence_off}" if fence_off else ""))
+        p.syncLabel.setStyleSheet("color: #ffb020;" if why or failed or fence_off else "")
         # the mission's controls and progress: from the vehicle's mode and MISSION_CURRENT
         link_ok = s.link.status is LinkStatus.OK and self.adapter.replay is None     # a recording is only watched
         for button in (p.uploadButton, p.downloadButton, p.clearButton):
@@ -386,34 +417,7 @@ class PlanController(QObject):
 
     def progress_text(self, s: VehicleState, held: bool = False) -> str:
         """"Item N of M · WAYPOINT · 45 m, 9 s to it", from what the vehicle reports."""
-        m = s.mission
-        if m.state is MissionRunState.UNKNOWN and m.count is None:
-            return "Mission: the vehicle has not said yet"
-        if m.state is MissionRunState.NO_MISSION or not m.count:
-            return "No mission on the vehicle"
-        if m.state is MissionRunState.COMPLETE:
-            return f"Mission complete ({m.count} items)"
-        if not m.current or not (s.flying or m.state is MissionRunState.ACTIVE):
-            return f"Mission of {m.count} items on the vehicle, not flying"
-        plan = self.vehicle_plan(PlanKind.MISSION)
-        item = plan.items[m.current - 1] if plan is not None and 1 <= m.current <= len(plan.items) else None
-        name = m.current_name or (item.name if item is not None else "")
-        text = f"Item {m.current} of {m.count}" + (f" · {name}" if name else "")
-        if held:
-            text += f" · paused ({s.mode})"
-        to = self._to_item(s, item)
-        if to is not None:
-            text += f" · {to[0]:.0f} m, {to[1]:.0f} s to it"
-        return text
-
-    def _to_item(self, s: VehicleState, item: MissionItem | None) -> tuple[float, float] | None:
-        pos = s.position
-        if item is None or pos is None or not (item.lat or item.lon) or not item.has_position:
-            return None
-        north, east = offset_ned(pos.lat, pos.lon, item.lat, item.lon)
-        d = math.hypot(north, east)
-        speed = s.velocity.ground_speed if s.velocity.ground_speed > 0.5 else self.editor.perf.cruise
-        return d, d / max(speed, 0.1)
+        return progress_text(s, self.vehicle_plan(PlanKind.MISSION), self.editor.perf.cruise, held)
 
     # -- transfers ----------------------------------------------------------------------------------
     def transfer(self, action: str, confirmed: PlanKind | None = None) -> None:
@@ -426,10 +430,12 @@ class PlanController(QObject):
                 self._outcome[k] = f"Uploading the {k.label}…"
                 self._sending[k] = self.doc.plan(k)
                 self.adapter.command("upload_plan", self._sending[k])
+            self._say_what_stays()
         elif action == "clear" and confirmed is None:
             self._ask_removal(kind)
             return
         elif action == "download":
+            self._reread.discard(kind)          # the pilot's own download: into the list, as always
             self._outcome[kind] = f"Downloading the {kind.label}…"
             self.adapter.command("download_plan", kind)
         else:
@@ -437,6 +443,20 @@ class PlanController(QObject):
             self.adapter.command("clear_plan", kind)
         self._shown = None
         self._show_vehicle(self._state)
+
+    def _say_what_stays(self) -> None:
+        """A fence or rally points the vehicle keeps from before while this plan has none: said now, or once read
+        (into what the vehicle holds only) when nothing is known of them."""
+        for kind in (PlanKind.FENCE, PlanKind.RALLY):
+            if self.doc.plan(kind).items or kind in self.to_upload():
+                continue
+            theirs = self.vehicle_plan(kind)
+            if theirs is not None:
+                self.notices.left_on_vehicle(kind, theirs)
+            elif kind not in self._reread:
+                self._left_behind.add(kind)
+                self._reread.add(kind)
+                self.adapter.command("download_plan", kind)
 
     def to_upload(self) -> list[PlanKind]:
         """The tab shown, and every other plan here that is not the vehicle's (one the vehicle holds but that is
@@ -466,11 +486,18 @@ class PlanController(QObject):
             return
         if result.ok and outcome.plan is not None:
             self.on_vehicle[kind] = outcome.plan
-            if name == "download_plan":
+            if name == "download_plan" and kind in self._reread:
+                self._reread.discard(kind)      # what the vehicle holds now; the plan here stays as it is
+                if kind in self._left_behind:
+                    self.notices.left_on_vehicle(kind, outcome.plan)
+            elif name == "download_plan":
                 self.editor.load(outcome.plan)
                 self._synced[kind] = (self.doc.plan(kind), outcome.plan)
             elif kind in self._sending:         # the driver read it back and found it the same in meaning
                 self._synced[kind] = (self._sending.pop(kind), outcome.plan)
+                if kind is PlanKind.FENCE:
+                    self.notices.fence_uploaded(self._state, outcome.plan)
+        self._left_behind.discard(kind)
         self._outcome[kind] = str(result)
         self._failed[kind] = not result.ok
         self._shown = None

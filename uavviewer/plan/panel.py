@@ -19,7 +19,8 @@ from .survey import CAMERAS
 __all__ = ["PlanPanel", "LAYERS", "TOOLS"]
 
 LAYERS = ("mission", "fence", "rally")
-ROWS_IN_VIEW = 6                   # the list's rows always in view (its dock is made tall enough: plan_controller)
+ROWS_IN_VIEW = 6                   # the list's rows in view where the column allows (its dock is sized for them: room.py)
+ROWS_AT_LEAST = 3                  # and never fewer: at 1024×600 the list showed none, Upload scrolled away
 #: What a click on the map adds, for each tab.
 TOOLS = {
     "mission": ("Waypoint", "ROI", "Land", "Loiter (time)", "Survey area"),
@@ -164,7 +165,7 @@ class PlanPanel(QWidget):
             table.setObjectName(f"{layer}Table")
             table.verticalHeader().setDefaultSectionSize(table.fontMetrics().height() + 2)   # compact rows
             table.setMinimumHeight(table.horizontalHeader().sizeHint().height() + 2 * table.frameWidth()
-                                   + ROWS_IN_VIEW * table.verticalHeader().defaultSectionSize())
+                                   + ROWS_AT_LEAST * table.verticalHeader().defaultSectionSize())
             table.setHorizontalHeaderLabels(COLUMNS[layer])
             table.verticalHeader().hide()
             table.setSelectionBehavior(QAbstractItemView.SelectRows)
@@ -182,9 +183,11 @@ class PlanPanel(QWidget):
             QShortcut(QKeySequence.Delete, table, self.deleteRequested.emit, context=Qt.WidgetShortcut)
             self.tables[layer] = table
             self.tabs.addTab(table, title)
-        # the list asks for no more than its minimum (six rows): the Plan dock is sized to it (plan_room.py)
+        # the list asks for no more than its minimum (three rows); the Plan dock is sized for six where the column
+        # has room (room.py: wanted_rows_height)
         self.tabs.ensurePolished()
         self.tabs.setMinimumHeight(self.tabs.minimumSizeHint().height())
+        self.wanted_rows_height = (ROWS_IN_VIEW - ROWS_AT_LEAST) * table.verticalHeader().defaultSectionSize()
         self.tabs.setSizePolicy(QSizePolicy.Preferred, QSizePolicy.Ignored)
         lay.addWidget(self.tabs, 1)
 
