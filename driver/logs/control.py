@@ -12,7 +12,8 @@ map on a worker thread, partfile.py; DFReader's check, check.py), and the erase 
 
 Threads: requests come from any thread; ``on_message``, ``on_ftp``, ``on_text`` and ``service`` run on the driver's
 reader and ticker threads with the vehicle's state lock held; futures are settled off that lock by the settler.
-This part holds only the ports it is given (driver.core.ports), never the vehicle.
+This part keeps only the ports it uses (driver.core.ports: the state port, the outbox, the settler, the clock),
+never the vehicle.
 """
 from __future__ import annotations
 
@@ -22,7 +23,7 @@ from collections import deque
 from concurrent.futures import Future
 from typing import Callable
 
-from ..core.ports import Clock, Outbox, Settler, StatePort
+from ..core.ports import Ports
 from .download import LogDownload
 from .listing import LogListing
 from .model import LogEntry, LogOutcome, LogProgress
@@ -41,6 +42,7 @@ ERASE_TRIES = 3
 # Closing the driver waits this long (s) for a download's last bytes to reach the .part and its map; a disk slower
 # than that is not waited for (the map on disk still names only bytes that are there).
 CLOSE_WAIT = 5.0
+REPLAYING = "replaying a recording: no vehicle to ask"
 
 
 class _Job:
@@ -55,15 +57,14 @@ class _Job:
 
 
 class LogControl:
-    """The vehicle's DataFlash logs. ``ftp_capable``: does the vehicle offer MAVLink FTP (None: not known yet);
-    ``replaying``: a recording is played, with no vehicle to ask."""
+    """The vehicle's DataFlash logs, over ``ports`` (the vehicle's, :class:`~driver.core.ports.Ports`).
+    ``ftp_capable``: does the vehicle offer MAVLink FTP (None: not known yet)."""
 
-    def __init__(self, state: StatePort, outbox: Outbox, settler: Settler, clock: Clock,
-                 ftp_capable: Callable[[], bool | None], replaying: bool = False) -> None:
-        self._lock = state.lock
-        self._outbox, self._settler, self._clock = outbox, settler, clock
-        self._ftp_capable, self._replaying = ftp_capable, replaying
-        self._requests = LogRequests(outbox.target)
+    def __init__(self, ports: Ports, ftp_capable: Callable[[], bool | None]) -> None:
+        self._state, self._lock = ports.state, ports.state.lock
+        self._outbox, self._settler, self._clock = ports.outbox, ports.settler, ports.clock
+        self._ftp_capable = ftp_capable
+        self._requests = LogRequests(self._outbox.target)
         self._jobs: deque[_Job] = deque()
         self._listing: LogListing | None = None
         self._download: LogDownload | None = None
@@ -127,8 +128,8 @@ class LogControl:
                 self._settle(job, False, "driver closed")
 
     def _queue(self, job: _Job) -> Future:
-        if self._replaying:
-            return self._done(job, "replaying a recording: no vehicle to ask")
+        if self._state.state.link.replay:
+            return self._done(job, REPLAYING)
         with self._lock:
             self._jobs.append(job)
         self._outbox.wake()
@@ -174,6 +175,9 @@ class LogControl:
             if state.armed:                      # the vehicle says why only once: ask, and tell its words
                 self._end(job, False, f"{DISARM_TEXT}: the vehicle ignores log requests while armed")
                 return [self._requests.list(*ALL_IDS)]
+        if state.link.replay:                     # (asked before the link was first told a recording)
+            self._end(job, False, REPLAYING)
+            return []
         link_up = state.connected                 # a lost link pauses: the download goes on when it is back
         if job.kind == "list" or (job.kind == "download" and not job.listed and self._download is None):
             return self._service_list(job, now, link_up)
