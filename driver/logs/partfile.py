@@ -107,26 +107,18 @@ class PartFile:
             self.resumed = self._open()
             self._wake()
             while True:
-                commands = [self._commands.get()]
-                while True:                     # all that is queued: one fsync and one map for its writes
-                    try:
-                        commands.append(self._commands.get_nowait())
-                    except queue.Empty:
-                        break
-                for command in commands:
-                    if command[0] == "write":
-                        self._write(*command[1:])
-                        continue
-                    self._sync()
-                    if command[0] == "afresh":
-                        self._afresh()
-                    elif command[0] == "finish":
-                        self._finish(*command[1:])
-                        return
-                    else:
-                        self._close_file()
-                        return
-                self._sync()
+                command = self._commands.get()
+                if command[0] == "write":       # each batch synced and named on its own: a worker that lags
+                    self._write(*command[1:])   # keeps its map one batch behind, not many (a disk that fills
+                    self._sync()                # meanwhile keeps what came before it)
+                elif command[0] == "afresh":
+                    self._afresh()
+                elif command[0] == "finish":
+                    self._finish(*command[1:])
+                    return
+                else:
+                    self._close_file()
+                    return
         except Exception as exc:                # noqa: BLE001 - told, never a silent dead download
             if not self.failure:
                 log.exception("log %d: %s.part", self._entry.id, self.path)
