@@ -129,3 +129,43 @@ def test_the_map_names_only_bytes_the_part_holds_whenever_it_is_read(bench, tmp_
     b.until(future.done)
     assert future.result().ok, future.result().reason
     assert len(maps) > 5 and maps == sorted(maps) and not wrong, (maps, wrong)
+
+
+def test_a_cancelled_download_is_told_once_its_last_bytes_are_on_disk(bench, tmp_path, monkeypatch):
+    """Whoever is told "cancelled" may read the .part's map at once (the window shows what was kept, Resume opens
+    it): the outcome waits for the last bytes and the map that names them, and the cancel itself never waits on
+    the disk."""
+    b = bench(300_000, radio_baud=1_000_000)
+    out = str(tmp_path / "got.BIN")
+    future = b.vehicle.logs.download(1, out)
+    b.until(lambda: b.vehicle.logs.progress and b.vehicle.logs.progress.held > 50_000)
+    stalled, release = threading.Event(), threading.Event()
+    real_fsync = os.fsync
+
+    def slow_fsync(fd: int) -> None:
+        if os.readlink(f"/proc/self/fd/{fd}") == out + ".part" and not release.is_set():
+            stalled.set()
+            release.wait(60)
+        real_fsync(fd)
+    monkeypatch.setattr(ranges.os, "fsync", slow_fsync)
+    try:
+        held = b.vehicle.logs.progress.held
+        cancel = threading.Thread(target=b.vehicle.logs.cancel, daemon=True)
+        cancel.start()
+        cancel.join(10)
+        assert not cancel.is_alive(), "the cancel waited on the disk"
+        b.until(stalled.is_set)
+        for _ in range(20):
+            b.tick()
+        assert not future.done(), "told before its last bytes were on disk"
+    finally:
+        release.set()
+    b.until(future.done)
+    outcome = future.result()
+    assert not outcome.ok and outcome.reason == "cancelled"
+    with open(out + ".part.json") as f:
+        spans = json.load(f)["ranges"]
+    assert sum(end - start for start, end in spans) >= held          # (the last tick's bytes too)
+    with open(out + ".part", "rb") as got, open(b.folder.path(1), "rb") as own:
+        part, vehicle = got.read(), own.read()
+    assert all(part[start:end] == vehicle[start:end] for start, end in spans)

@@ -69,6 +69,7 @@ class LogControl:
         self._listing: LogListing | None = None
         self._download: LogDownload | None = None
         self._part: PartFile | None = None      # the last download's files (the next one opens after they close)
+        self._closing: list[tuple[PartFile, _Job, dict]] = []   # jobs told once their download's files are closed
         self._refused: str | None = None
         self._round_trip: float | None = None   # s from a LOG_REQUEST_LIST to its first LOG_ENTRY
         self.entries: tuple | None = ()         # the last complete list (None: asked again, after an erase)
@@ -124,6 +125,9 @@ class LogControl:
         if self._part is not None:
             self._part.wait_closed(CLOSE_WAIT)
         with self._lock:
+            for _, job, told in self._closing:
+                self._settle(job, **told)
+            self._closing.clear()
             for job in jobs:
                 self._settle(job, False, "driver closed")
 
@@ -161,6 +165,8 @@ class LogControl:
             self._refused = text
 
     def service(self, now: float, state) -> list:
+        if self._closing:
+            self._tell_closed()
         if not self._jobs:
             return []
         job = self._jobs[0]
@@ -240,12 +246,13 @@ class LogControl:
             self.progress = d.progress(now)
         return out
 
-    def _stop_download(self) -> None:
-        if self._download is not None:
-            self._download.close()
-            self._download = None
-        self._listing = None
-        self.progress = None
+    def _stop_download(self) -> PartFile | None:
+        """Stop what runs; the files of the download stopped, still closing (the worker writes the last bytes)."""
+        d, self._download, self._listing, self.progress = self._download, None, None, None
+        if d is None:
+            return None
+        d.close()
+        return d.part
 
     # -- erasing -----------------------------------------------------------------------------------------------
     def _service_erase(self, job: _Job, now: float, link_up: bool) -> list:
@@ -286,13 +293,25 @@ class LogControl:
 
     # -- the end of a job --------------------------------------------------------------------------------------
     def _end(self, job: _Job, ok: bool, reason: str, **fields) -> None:
-        """``job`` is over (the one running, or one waiting): what runs for it stops, and it is told."""
+        """``job`` is over (the one running, or one waiting): what runs for it stops, and it is told, once its
+        download's files are closed: whoever is told may read the .part and its map at once (the window shows what
+        a cancel kept, a resume opens them)."""
+        part = None
         if self._jobs and self._jobs[0] is job:
             self._jobs.popleft()
-            self._stop_download()
+            part = self._stop_download()
         elif job in self._jobs:
             self._jobs.remove(job)
-        self._settle(job, ok, reason, **fields)
+        told = dict(ok=ok, reason=reason, **fields)
+        if part is not None and not part.closed():
+            self._closing.append((part, job, told))     # the worker wakes the ticker when it has closed them
+        else:
+            self._settle(job, **told)
+
+    def _tell_closed(self) -> None:
+        for item in [c for c in self._closing if c[0].closed()]:
+            self._closing.remove(item)
+            self._settle(item[1], **item[2])
 
     def _settle(self, job: _Job, ok: bool, reason: str, **fields) -> None:
         if not ok:
