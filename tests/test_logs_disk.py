@@ -37,7 +37,7 @@ class Bench:
     def tick(self) -> None:
         """One pass each way; the driver's (its tick, then what the vehicle said) on a thread that must finish."""
         self.clock.advance(STEP)
-        frames = [m.pack(self.ap.factory) for m in self.emitted]
+        frames = [self._frame(m) for m in self.emitted]
         self.emitted.clear()
         sent: list = []
 
@@ -53,6 +53,12 @@ class Bench:
         for m in sent[:-1]:
             self.ap.handle(m)
         self.ap.step(STEP)
+
+    def _frame(self, m) -> bytes:
+        """``m`` as the vehicle sends it: packed, its sequence number counted on (as MAVLink.send does)."""
+        data = m.pack(self.ap.factory)
+        self.ap.factory.seq = (self.ap.factory.seq + 1) % 256
+        return data
 
     def until(self, done, ticks: int = 20_000) -> None:
         for _ in range(ticks):
