@@ -161,7 +161,7 @@ class Vehicle(Drone):
         self._forwarder = Forwarder(cfg.outputs, cfg.baud, self._ticker.forward_to_vehicle,
                                     lambda text: self._store.add_message(Severity.WARNING, text), self._closing)
         self._missions = MissionControl(self)          # transfers, mission state, AUTO (driver.vehicle.missions)
-        self.setup, self.logs = VehicleSetup(self), LogControl(self)     # calibrations, motor test, traffic; logs
+        self.setup, self.logs = VehicleSetup(self), LogControl(self.ports, lambda: self._params.ftp_capable)
         self._reader = Reader(self)                    # the reader thread: parse, fold, dispatch (built last)
 
     # -- lifecycle ---------------------------------------------------------------------------------
