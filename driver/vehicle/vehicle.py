@@ -41,6 +41,7 @@ from ..params.setter import SET_RETRY
 from ..payload.control import Payload
 from ..logs.control import LogControl
 from ..setup.control import VehicleSetup
+from ..shots.control import ShotControl
 from .api import CEILING, Drone, Limits
 from .commands import CommandSender, Notifier, command_name
 from .missions import MissionControl
@@ -153,6 +154,7 @@ class Vehicle(Drone):
                                     lambda text: self._store.add_message(Severity.WARNING, text), self._closing)
         self._missions = MissionControl(self)          # transfers, mission state, AUTO (driver.vehicle.missions)
         self.setup, self.logs = VehicleSetup(self), LogControl(self)     # calibrations, motor test, traffic; logs
+        self.shots = ShotControl(self.ports, self._payload, self._setpoints, cfg, self._parameters.set)   # smart shots
         self._reader = Reader(self)                    # the reader thread: parse, fold, dispatch (built last)
 
     # -- lifecycle ---------------------------------------------------------------------------------
@@ -290,6 +292,7 @@ class Vehicle(Drone):
         return None
 
     def set_mode(self, name: str) -> Future:
+        self.shots.end(f"mode {name}")                # driver.shots: the pilot's mode always wins
         return self._busy(f"mode {name}") or self._set_mode(name)
 
     def _set_mode(self, name: str) -> Future:
@@ -327,6 +330,7 @@ class Vehicle(Drone):
             "disarm (forced)" if force else "disarm", guard=not_in_flight if force else None)
 
     def land(self) -> Future:
+        self.shots.end("Land")                        # driver.shots: Land always wins
         self._abort_takeoff("landing")
         return self._set_mode("LAND")
 
@@ -353,6 +357,7 @@ class Vehicle(Drone):
                             "cancelled before liftoff: " + (", ".join(undone) or "the vehicle was not changed"))
 
     def return_to_launch(self) -> Future:
+        self.shots.end("RTL")                         # driver.shots: RTL always wins
         return self._busy("RTL") or self._set_mode("RTL")
 
     def stop(self) -> Future:
@@ -360,6 +365,7 @@ class Vehicle(Drone):
         flight in another mode (RTL, LOITER, LAND...), GUIDED with zero velocity, where ArduCopter brakes to its
         stopping point and holds it (ModeGuided::init); BRAKE if the vehicle refuses GUIDED (no position).
         During a takeoff that has not left the ground it is :meth:`cancel_takeoff`: the vehicle as it was."""
+        self.shots.end("Stop")                        # driver.shots: Stop always wins
         seq = self._sequence.current
         if seq is not None and seq.nothing_flown:
             return self.cancel_takeoff()
