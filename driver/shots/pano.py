@@ -8,7 +8,7 @@ At each step the nose turns to the step's heading and the gimbal to its pitch; o
 and gimbal report the look within :data:`AIMED` degrees and its turn has settled for :data:`SETTLE` s, a picture
 is taken, and the step counts only when the camera confirms it (driver.payload: CAMERA_FEEDBACK,
 CAMERA_IMAGE_CAPTURED or the GoPro's answer, never the ACK alone). A picture refused or never confirmed is asked
-once more; a second failure ends the shot and says why. Done, the nose turns back to where it began.
+once more; a second failure ends the shot and says why. Done, it holds there.
 """
 from __future__ import annotations
 

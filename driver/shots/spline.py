@@ -221,9 +221,9 @@ class PathRun:
         dv = prof.tangent_accel * dt
         ahead = self.s + self.speed * dt          # the limit where this step ends: a step's rounding stays inside
         if wanted > 0:
-            wanted = min(wanted, prof.limit(ahead, True) - 0.5 * dv)
+            wanted = min(wanted, max(prof.limit(ahead, True) - 0.5 * dv, 0.0) or min(dv, (length - self.s) / dt))
         elif wanted < 0:
-            wanted = max(wanted, -prof.limit(ahead, False) + 0.5 * dv)
+            wanted = max(wanted, -(max(prof.limit(ahead, False) - 0.5 * dv, 0.0) or min(dv, self.s / dt)))
         new = min(max(wanted, self.speed - dv), self.speed + dv)
         new = 0.0 if abs(new) < 1e-9 else new
         self.accel = (new - self.speed) / dt if dt > 0 else 0.0
