@@ -37,7 +37,7 @@ FLOORS = {
     "driver.core": 0, "driver.version": 0, "driver.ftp": 0,
     "driver.link": 1, "driver.mission": 1, "driver.params": 1, "driver.payload": 1, "driver.traffic": 1,
     "driver.logs": 1, "driver.review": 1,
-    "driver.setup": 2,
+    "driver.setup": 2, "driver.shots": 2,
     "driver.vehicle": 3,
     "driver.camera": 4,
     "driver.console": 5, "driver.ice": 5,

@@ -11,7 +11,7 @@ from __future__ import annotations
 from concurrent.futures import Future
 
 from ..core.results import CommandResult, CommandStatus, answered
-from .model import Keyframe, load_cable, save_cable
+from .model import Keyframe, ShotState, load_cable, save_cable
 
 __all__ = ["Shots", "NO_SHOTS"]
 
@@ -20,6 +20,7 @@ class Shots:
     """The pilot's calls for smart shots. This base answers every one REJECTED (no shots on this connection)."""
 
     unavailable = "this vehicle connection runs no smart shots"
+    state = ShotState()                   # what a client that reads it remotely holds (driver.ice.shots)
 
     def _no(self, name: str) -> Future:
         return answered(CommandResult(name, CommandStatus.REJECTED, self.unavailable))
