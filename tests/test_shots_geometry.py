@@ -155,8 +155,8 @@ def test_an_orbit_asked_wider_flies_out_at_the_attach_speed_and_settles_on_the_c
 
 
 def test_the_orbits_top_speed_follows_the_solos_ramp_and_the_pull_toward_the_centre():
-    assert strafe_limit(2.0) == pytest.approx(math.sqrt(1.75 * 2.0))
-    assert strafe_limit(30.0) == pytest.approx(min(8.0, math.sqrt(1.75 * 30)))
+    assert strafe_limit(2.0) == pytest.approx(math.sqrt(1.75 * 0.8 * 2.0))
+    assert strafe_limit(30.0) == pytest.approx(min(8.0, math.sqrt(1.75 * 0.8 * 30)))
     assert strafe_limit(100.0) == 8.0
 
 

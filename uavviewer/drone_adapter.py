@@ -113,11 +113,14 @@ class DroneAdapter(QObject):
 
     # -- commands -------------------------------------------------------------------------------
     def command(self, name: str, *args) -> Future | None:
-        """Call ``drone.<name>(*args)``; the result arrives as ``commandFinished`` (at once from a call that
+        """Call ``drone.<name>(*args)`` (a dotted name reaches a part: ``shots.orbit``); the result arrives as ``commandFinished`` (at once from a call that
         answers at once, such as ``use_signing_key``). Returns the drone's Future (a caller may cancel it), if any."""
         self.commandSent.emit(name)
         try:
-            future = getattr(self.drone, name)(*args)
+            call = self.drone
+            for part in name.split("."):             # "shots.orbit": the drone's smart shots
+                call = getattr(call, part)
+            future = call(*args)
         except Exception as exc:             # noqa: BLE001
             log.exception("command %s failed to start", name)
             self.commandFinished.emit(CommandResult(name, CommandStatus.REJECTED, str(exc)))

@@ -19,6 +19,8 @@ from .setpoint import Target
 __all__ = ["Shot", "stick_speed", "toward", "MAX_SPEED", "CLIMB_RATE"]
 
 MAX_SPEED = 8.0              # m/s: the Solo's shots' top speed (shotManagerConstants.MAX_SPEED)
+FACING = 5.0                 # degrees: the nose this near what the camera should see, a shot sets off
+TURN_WAIT = 8.0              # s it waits for that at most
 CLIMB_RATE = 1.25            # m/s at full throttle stick: PILOT_SPEED_UP 250 cm/s halved, as the Solo's 1.33×0.95
 
 
@@ -51,6 +53,21 @@ class Shot:
         self.paused_cruise: float | None = None
         #: (north, east, up) the vehicle's region of interest is set to at the start (the gimbal points itself)
         self.roi: tuple[float, float, float] | None = None
+        self.faced, self._turning_since = False, None
+
+    def facing(self, now: float, state, bearing: float, what: str) -> bool:
+        """Whether the shot may set off: the vehicle's nose (its own report) within FACING degrees of ``bearing``,
+        or TURN_WAIT s spent turning; until then the shot holds where it began, turning, so the camera is on
+        ``what`` from the first metre."""
+        if self.faced:
+            return True
+        self._turning_since = now if self._turning_since is None else self._turning_since
+        off = abs((state.heading_deg - bearing + 180.0) % 360.0 - 180.0)
+        if off > FACING and now - self._turning_since < TURN_WAIT:
+            self.detail = f"turning to {what}: {off:.0f}° to go"
+            return False
+        self.faced = True
+        return True
 
     def step(self, now: float, dt: float, state, sticks: Sticks) -> Target | None:
         raise NotImplementedError

@@ -60,7 +60,7 @@ class Cable(Shot):
         out = self.approach.profile.spline.sample(step) if self.approach is not None else []
         return out + self.spline.sample(step)
 
-    def drawing(self, step: float = 2.0, look_every: float = 10.0):
+    def drawing(self, step: float = 2.0, look_every: float = 15.0):
         """(points along the cable, looks (north, east, yaw, pitch) every ``look_every`` m and at each keyframe)."""
         sp = self.spline
         marks = sorted(set([round(s, 3) for s in sp.keyframe_s] +

@@ -367,7 +367,9 @@ class ShotControl(Shots):
             self._roi = False
             self._payload.stop_looking()
         self._running = False
-        self._set_state(phase=phase, detail=detail)
+        state = self._store.state
+        fields = shot.report(state) if state.home is not None else {}   # the last word is the telemetry's too
+        self._set_state(phase=phase, detail=detail, **fields)
         self._store.add_message_locked(Severity.INFO if phase is ShotPhase.DONE else Severity.NOTICE,
                                        f"{shot.kind.value.capitalize()} {phase.value}: {detail}")
         self._store.publish()

@@ -25,7 +25,7 @@ from .base import CLIMB_RATE, Shot, toward
 from .model import ShotKind, ShotPhase, Sticks
 from .orbit import MIN_RADIUS, RADIAL_SPEED, strafe_limit
 from .setpoint import Target, aim_error, bearing, camera_look, here, horizontal, look_pitch
-from .spline import ACCEL_LIMIT, TANGENT_ACCEL_LIMIT
+from .spline import ACCEL_LIMIT, PLANNED_TANGENT, PLAN_SHARE
 
 __all__ = ["Follow", "LOST", "PREDICT"]
 
@@ -79,7 +79,7 @@ class Follow(Shot):
                 return None
             return Target(*self.hold, yaw=state.heading_deg)
         target, fix = seen
-        a = ACCEL_LIMIT / math.sqrt(3.0) * dt          # per axis: the vector stays within the limit
+        a = ACCEL_LIMIT * PLAN_SHARE / math.sqrt(3.0) * dt          # per axis: the vector stays within the limit
         want = (fix.vn, fix.ve, -fix.vd)
         self.vel = [toward(v, w, a) for v, w in zip(self.vel, want)]
         self._sticks(dt, sticks)
@@ -104,7 +104,7 @@ class Follow(Shot):
 
     def _sticks(self, dt: float, sticks: Sticks) -> None:
         """GUIDED only: swing round the target, close in or back off, climb; the offset moves with them."""
-        a = TANGENT_ACCEL_LIMIT * dt
+        a = PLANNED_TANGENT * dt
         r = math.hypot(self.offset[0], self.offset[1])
         self.swing = toward(self.swing, -sticks.right * strafe_limit(r), a)
         self.closing = toward(self.closing, -sticks.forward * RADIAL_SPEED, a)

@@ -9,11 +9,13 @@ onto the circle. The start point is kept.
 Sticks (shotmanager's orbitController): right/left flies right/left around the centre (a cruise speed is bent by
 it), forward/back flies in/out (changing the radius), throttle climbs or descends. The speed around is at most
 3 m/s on a 2 m circle up to 8 m/s on 30 m and more, and never so fast that the pull toward the centre (v²/r)
-passes 1.75 m/s²; speeds change by at most the tangential share of the 2 m/s² limit. A positive cruise is
+passes 1.75 m/s²; speeds change by at most the tangential share of the 2 m/s² limit (each planned at 80 %, as
+the cable: driver.shots.spline.PLAN_SHARE). A positive cruise is
 clockwise seen from above (ArduPilot's CIRCLE_RATE sense).
 
 The camera stays on the centre: the vehicle's region of interest is set to it (DO_SET_ROI_LOCATION: the mount
-tilts to it) and the nose is steered to it with each target's yaw and yaw rate.
+tilts to it) and the nose is steered to it with each target's yaw and yaw rate; the orbit sets off only once the
+vehicle has turned to it.
 """
 from __future__ import annotations
 
@@ -22,7 +24,7 @@ import math
 from .base import CLIMB_RATE, MAX_SPEED, Shot, stick_speed, toward
 from .model import ShotKind, ShotPhase, Sticks
 from .setpoint import Target, aim_error, bearing, camera_look, here, horizontal, look_pitch
-from .spline import NORMAL_ACCEL_LIMIT, TANGENT_ACCEL_LIMIT
+from .spline import PLANNED_NORMAL, PLANNED_TANGENT
 
 __all__ = ["Orbit", "MIN_RADIUS", "MAX_RADIUS", "ATTACH_SPEED", "strafe_limit", "spot_under_camera"]
 
@@ -37,7 +39,7 @@ ARRIVED = 0.3                # m from the radius asked for: on the circle
 def strafe_limit(radius: float) -> float:
     """The top speed around a circle of ``radius``: the Solo's ramp, and v²/r within the normal limit."""
     ratio = min(max((radius - SLOW[0]) / (FAST[0] - SLOW[0]), 0.0), 1.0)
-    return min(SLOW[1] + (FAST[1] - SLOW[1]) * ratio, math.sqrt(NORMAL_ACCEL_LIMIT * max(radius, 0.1)))
+    return min(SLOW[1] + (FAST[1] - SLOW[1]) * ratio, math.sqrt(PLANNED_NORMAL * max(radius, 0.1)))
 
 
 def spot_under_camera(state, floor: float = 0.0) -> tuple[float, float, float] | None:
@@ -76,7 +78,7 @@ class Orbit(Shot):
         self.radial = 0.0                        # m/s outward
         self.climb = 0.0
         self.cruise = float(cruise)
-        self.phase = ShotPhase.ATTACHING if abs(wanted - r0) > ARRIVED else ShotPhase.FLYING
+        self.phase = ShotPhase.ATTACHING                  # turning to the centre, then to the radius asked for
         self._pilot_radius = False
 
     def path_points(self, step: float = 5.0) -> list[tuple[float, float, float]]:
@@ -87,7 +89,14 @@ class Orbit(Shot):
                  c[1] + self.radius_wanted * math.sin(2 * math.pi * i / n), self.alt) for i in range(n)]
 
     def step(self, now: float, dt: float, state, sticks: Sticks) -> Target:
-        a = TANGENT_ACCEL_LIMIT * dt
+        c = self.centre
+        if not self.faced:                       # the nose to the centre first: on it from the first metre
+            n, e = c[0] + self.radius * math.cos(self.angle), c[1] + self.radius * math.sin(self.angle)
+            yaw = (math.degrees(self.angle) + 180.0) % 360.0
+            if state is not None and not self.facing(now, state, yaw, "the centre"):
+                return Target(n, e, self.alt, yaw=yaw)
+            self.faced = True
+        a = PLANNED_TANGENT * dt
         # in and out: the pilot's stick, else brake onto the radius asked for
         if sticks.forward:
             radial_wanted = -sticks.forward * RADIAL_SPEED
@@ -97,7 +106,7 @@ class Orbit(Shot):
                 self.radius_wanted, self._pilot_radius = self.radius, False
             error = self.radius_wanted - self.radius
             radial_wanted = math.copysign(min(ATTACH_SPEED if self.phase is ShotPhase.ATTACHING else RADIAL_SPEED,
-                                              math.sqrt(2.0 * TANGENT_ACCEL_LIMIT * abs(error))), error)
+                                              math.sqrt(2.0 * PLANNED_TANGENT * abs(error))), error)
             if abs(error) < 0.02:
                 radial_wanted = 0.0
         self.radial = toward(self.radial, radial_wanted, a)
@@ -108,7 +117,6 @@ class Orbit(Shot):
         radius = min(max(self.radius + self.radial * dt, MIN_RADIUS), MAX_RADIUS)
         angle = self.angle + self.speed / max(radius, MIN_RADIUS) * dt
         alt = self.alt + self.climb * dt
-        c = self.centre
         n, e = c[0] + radius * math.cos(angle), c[1] + radius * math.sin(angle)
         if self.allowed(n, e, alt):
             self.radius, self.angle, self.alt = radius, angle, alt
@@ -136,6 +144,6 @@ class Orbit(Shot):
                "aim_error": aim_error(camera_look(state), look_pitch(pos, c), bearing(c[0] - pos[0], c[1] - pos[1]))}
         if self.phase is ShotPhase.FLYING:
             self.detail = f"orbiting at {radius:.1f} m, {state.velocity.ground_speed:.1f} m/s"
-        elif self.phase is ShotPhase.ATTACHING:
+        elif self.phase is ShotPhase.ATTACHING and self.faced:
             self.detail = f"to the {self.radius_wanted:.0f} m circle: {radius:.1f} m now"
         return out

@@ -20,8 +20,6 @@ from .spline import PathRun, SpeedProfile, Spline
 __all__ = ["Selfie", "MIN_PILOT_DISTANCE"]
 
 MIN_PILOT_DISTANCE = 2.0     # m: nearer than this the line away from the pilot has no direction
-FACING = 5.0                 # degrees: the nose this near the pilot's bearing, the selfie sets off
-TURN_WAIT = 8.0              # s it waits for that at most
 
 
 class Selfie(Shot):
@@ -44,7 +42,6 @@ class Selfie(Shot):
         self.top = speed
         self.roi = pilot
         self.leg = "out"
-        self.facing, self.turning_since = False, None
 
     def path_points(self, step: float = 2.0) -> list[tuple[float, float, float]]:
         return self.line.sample(step)
@@ -57,14 +54,9 @@ class Selfie(Shot):
 
     def step(self, now: float, dt: float, state, sticks: Sticks) -> Target:
         run = self.run
-        if not self.facing:                       # turn to the pilot first, then fly: the shot starts on them
-            self.turning_since = self.turning_since if self.turning_since is not None else now
-            facing = bearing(self.pilot[0] - self.start[0], self.pilot[1] - self.start[1])
-            off = abs((state.heading_deg - facing + 180.0) % 360.0 - 180.0)
-            if off > FACING and now - self.turning_since < TURN_WAIT:
-                self.detail = f"turning to the pilot: {off:.0f}° to go"
-                return Target(*self.start, yaw=facing)
-            self.facing = True
+        facing = bearing(self.pilot[0] - self.start[0], self.pilot[1] - self.start[1])
+        if not self.facing(now, state, facing, "the pilot"):    # the shot starts on them
+            return Target(*self.start, yaw=facing)
         if self.phase is not ShotPhase.DONE:
             stick = sticks.right if abs(sticks.right) > abs(sticks.forward) else sticks.forward
             run.step(dt, stick_speed(self.cruise, stick, self.top))
