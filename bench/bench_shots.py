@@ -229,9 +229,16 @@ class Flight:
             self.wrong.append(f"{shot}: neither completed nor stopped: {state.shot.describe()}")
 
     def hover_at(self, north: float, east: float, up: float) -> None:
-        assert self.v.go_to(north, east, up).result(30).ok
-        self.v.wait_for(lambda s: s.local and math.hypot(s.local.north - north, s.local.east - east) < 0.5
-                        and abs(s.altitude - up) < 0.5 and s.velocity.ground_speed < 0.2, 90)
+        """A go-to (a single message: sent again until the vehicle is on its way, as a lossy link drops it)."""
+        there = lambda s: (s.local is not None and math.hypot(s.local.north - north, s.local.east - east) < 0.5   # noqa: E731
+                           and abs(s.altitude - up) < 0.5 and s.velocity.ground_speed < 0.2)
+        for _ in range(10):
+            if self.v.state().mode != "GUIDED":
+                self.v.set_mode("GUIDED").result(30)
+            self.v.go_to(north, east, up).result(30)
+            if self.v.wait_for(lambda s: there(s) or s.velocity.ground_speed > 0.5, 5) and \
+                    self.v.wait_for(there, 90):
+                return
 
 
 def aim(s: Sample, pitch: float, yaw: float) -> float | None:

@@ -278,3 +278,19 @@ def test_stop_land_rtl_a_mode_or_the_pilots_sticks_end_the_shot_at_once(flight_f
     if how == "stop":
         assert samples[-1][0].ground_speed < 1.0                              # braking to a hold
         assert samples[-1][0].mode == "GUIDED"
+
+
+def test_a_short_silence_of_the_link_is_ridden_out_and_a_long_one_ends_the_shot(flight_factory):
+    f = flight_factory()
+    v = f.vehicle
+    lat, lon = f.latlon(15.0, 0.0)
+    assert v.shots.orbit(lat, lon, radius=15.0, speed=3.0).result(timeout=30).ok
+    f.fly_for(3.0)
+    f.sim.faults.outage(1.5)                       # real seconds: 6 s of the vehicle's, past the 3.5 s loss timeout
+    lost = f.fly_for(20.0, until=lambda t, s: not s.connected)
+    assert not lost[-1][1].connected
+    back = f.fly_for(30.0, until=lambda t, s: s.connected)
+    assert back[-1][1].connected and v.state().shot.phase is ShotPhase.FLYING          # ridden out
+    f.sim.faults.outage(4.0)                       # 16 s of the vehicle's: past the 10 s grace
+    ended = f.fly_for(40.0, until=lambda t, s: s.shot.phase is ShotPhase.ENDED)
+    assert "link is down" in ended[-1][1].shot.detail

@@ -11,7 +11,8 @@ The rules it keeps:
 * it asks for GUIDED (FOLLOW for ArduCopter's own follow) and flies only once the vehicle's heartbeat shows it;
 * Stop, Land, RTL and any mode the pilot picks end it at once (the vehicle's façade tells :meth:`end` first);
   so does any other mode the vehicle reports, a velocity the pilot streams, or the vehicle landing;
-* a lost link ends it and leaves the vehicle to its own failsafe (the guided target stops after GUID_TIMEOUT);
+* a link lost for LINK_GRACE s ends it and leaves the vehicle to its own failsafe (the guided target stops after
+  GUID_TIMEOUT; FS_GCS_ENABLE decides the rest); a shorter silence (a lossy radio) is ridden out;
 * a shot that ends by itself, or that the pilot stops, holds where the vehicle is (zero velocity, streamed
   for 3 s as Stop does) and clears the region of interest it set;
 * its state is the vehicle's telemetry (each shot's ``report``), published in ``VehicleState.shot``.
@@ -43,6 +44,7 @@ GIMBAL_RATE = 5.0            # Hz: gimbal angles, when the shot points it
 REPORT_RATE = 5.0            # Hz: the shot's state from telemetry
 MODE_WAIT = 10.0             # s for the vehicle to show the shot's mode (or its parameters to be set)
 STICK_DEADMAN = 0.5          # s without stick input: centred
+LINK_GRACE = 10.0            # s the link may be down (no heartbeat) before the shot ends
 RETURNING = ("LAND", "RTL", "SMART_RTL", "AUTO")
 
 
@@ -67,6 +69,7 @@ class ShotControl(Shots):
         self._source: TargetSource | None = None    # a stream of fixes, kept open once asked for
         self._mode_asked = False
         self._first_phase = ShotPhase.FLYING
+        self._lost_since: float | None = None
         self._fix_sent: float | None = None
         self._follow_setup: list[tuple[str, float]] = []
 
@@ -258,7 +261,7 @@ class ShotControl(Shots):
         shot = self._shot
         if shot is None or not shot.phase.active:
             return []
-        why = self._gone(state)
+        why = self._gone(state, now)
         if why:
             self._finish(ShotPhase.ENDED, why)
             return []
@@ -279,10 +282,17 @@ class ShotControl(Shots):
             self._set_state(phase=shot.phase, detail=shot.detail, cruise=shot.cruise, **fields)
         return out
 
-    def _gone(self, s) -> str:
-        """Why the shot cannot go on, from the vehicle's own reports ("" when it can)."""
+    def _gone(self, s, now: float) -> str:
+        """Why the shot cannot go on, from the vehicle's own reports ("" when it can). A link silent for a few
+        heartbeats (a lossy radio) is ridden out: the targets go on (those that arrive keep the shot smooth, and
+        without them ArduCopter stops the target after GUID_TIMEOUT); silent for LINK_GRACE s it ends the shot,
+        and the vehicle's own failsafe decides."""
         if not s.connected:
-            return "the link is down: the vehicle's own failsafe decides"
+            self._lost_since = now if self._lost_since is None else self._lost_since
+            if now - self._lost_since > LINK_GRACE:
+                return f"the link is down ({LINK_GRACE:g} s): the vehicle's own failsafe decides"
+        else:
+            self._lost_since = None
         if not s.armed or s.in_air is False:
             return "the vehicle is no longer flying"
         if not s.setpoint.is_zero:
