@@ -1,8 +1,9 @@
 """Selfie: out and up along the line away from the pilot, and back, the camera on the pilot (the Solo's Selfie).
 
-The vehicle first turns to face the pilot where it is; the line starts there and leads away from the pilot (horizontally, from the pilot through the
-vehicle), ``distance`` metres out and ``rise`` metres up. The vehicle cruises out, turns back at the far end
-and stops where it began: the shot is then done, hovering there. The camera stays on the pilot: the vehicle's
+The vehicle first turns to face the pilot where it is; the line starts there and leads away from the pilot
+(horizontally, from the pilot through the vehicle), ``distance`` metres out and ``rise`` metres up. The vehicle
+cruises out, waits at the far end until it is there (3 s at most), comes back and stops where it began: the shot
+is then done, hovering there. The camera stays on the pilot: the vehicle's
 region of interest is the pilot's place (the mount tilts to it) and the nose faces the pilot.
 
 Sticks (the Solo's TwoPointPathHandler): forward/back or right/left, whichever is pushed further, moves along
@@ -20,6 +21,7 @@ from .spline import PathRun, SpeedProfile, Spline
 __all__ = ["Selfie", "MIN_PILOT_DISTANCE"]
 
 MIN_PILOT_DISTANCE = 2.0     # m: nearer than this the line away from the pilot has no direction
+TOP_WAIT = 3.0               # s at most at the far end before coming back
 
 
 class Selfie(Shot):
@@ -42,6 +44,7 @@ class Selfie(Shot):
         self.top = speed
         self.roi = pilot
         self.leg = "out"
+        self._top: float | None = None
 
     def path_points(self, step: float = 2.0) -> list[tuple[float, float, float]]:
         return self.line.sample(step)
@@ -61,7 +64,11 @@ class Selfie(Shot):
             stick = sticks.right if abs(sticks.right) > abs(sticks.forward) else sticks.forward
             run.step(dt, stick_speed(self.cruise, stick, self.top))
             if self.cruise > 0 and run.at_end and run.speed == 0.0:
-                self.cruise, self.leg = -self.cruise, "back"
+                # a moment at the top: back once the vehicle itself is there (it trails its target a little)
+                self._top = now if self._top is None else self._top
+                pos = here(state)
+                if now - self._top >= TOP_WAIT or (pos is not None and math.dist(pos, self.end) < 0.3):
+                    self.cruise, self.leg = -self.cruise, "back"
             elif self.cruise < 0 and run.at_start and run.speed == 0.0:
                 self.cruise, self.phase, self.detail = 0.0, ShotPhase.DONE, "back where it began: done"
         n, e, u = self.line.point(run.s)
