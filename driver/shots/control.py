@@ -242,6 +242,7 @@ class ShotControl(Shots):
 
     def _ask_mode(self, s) -> None:
         self._mode_asked = True
+        self._started_at = self._clock()             # MODE_WAIT counts from here, after the FOLLOW parameters
         if s.mode != self._mode:
             self._waits.append(self._commands.mode(self._mode))
 
@@ -318,7 +319,7 @@ class ShotControl(Shots):
             self._set_state(phase=self._shot.phase, detail=self._shot.detail)
             self._store.publish()
             return True
-        if now - self._started_at > MODE_WAIT:
+        if self._mode_asked and now - self._started_at > MODE_WAIT:
             self._finish(ShotPhase.ENDED, f"the vehicle did not switch to {self._mode} in {MODE_WAIT:g} s",
                          status=CommandStatus.TIMED_OUT)
         return False
