@@ -43,3 +43,7 @@ FAULTS = {
     "outage": ("a 1 s outage both ways mid-flight", lambda f: None),
 }
 PROFILES = ("copter-4", "solo")
+
+#: profile -> {row: (the words of the driver's refusal that say the firmware lacks it, the table's label)}: such a
+#: refusal is right (bench/verdicts.py). ArduCopter 3.3 fences only with FENCE_RADIUS and FENCE_ALT_MAX.
+LACKS = {"solo": {"fence": ("no polygon fence", "refused: no fence on 3.3")}}

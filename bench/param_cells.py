@@ -20,8 +20,9 @@ from driver.sim import SimConfig, SimVehicle
 from driver.vehicle.state import CommandStatus
 from driver.vehicle import Vehicle, VehicleConfig
 
+UNKNOWN = "NO_SUCH_PARAM"    # a name the vehicle does not have: ArduPilot never answers it
 SETS = (("WPNAV_SPEED", 750.0), ("FS_GCS_ENABLE", 1.0), ("RTL_ALT", 2500.0), ("WPNAV_SPEED", 1000.0),
-        ("FS_GCS_ENABLE", 0.0), ("NO_SUCH_PARAM", 1.0))
+        ("FS_GCS_ENABLE", 0.0), (UNKNOWN, 1.0))
 
 
 @dataclass
@@ -40,6 +41,13 @@ class ParamCell:
     @property
     def completed(self) -> bool:
         return not self.error and self.expected > 0 and self.downloaded == self.expected
+
+    @property
+    def sets_confirmed(self) -> bool:
+        """Every set of a name the vehicle has was told accepted (``told``: the download, then each of SETS)."""
+        sets = self.told[1:]
+        return len(sets) == len(SETS) and all(t == "accepted" for (name, _), t in zip(SETS, sets)
+                                              if name != UNKNOWN)
 
 
 def _holds(sim: SimVehicle, name: str, value: float) -> bool:

@@ -1,5 +1,6 @@
 """The fault matrix's transfer rows: upload and download of a 50-item mission and of a fence, per firmware profile
-and link fault (bench/fault_matrix.py runs them after the flights; alone: python bench/transfer_matrix.py).
+and link fault (bench/fault_matrix.py runs them after the flights; alone: python bench/transfer_matrix.py
+[--markdown] [--write-docs]).
 
 Every answer the driver gives is checked against what the simulated vehicle holds at that moment:
 
@@ -9,7 +10,8 @@ Every answer the driver gives is checked against what the simulated vehicle hold
 * a *corrupted plan*: the vehicle holds part of a plan (ArduPilot writes mission items as they arrive) while the
   driver claims it holds something. After a failed upload the driver claims nothing and says so.
 
-The Solo's ArduCopter 3.3 has no polygon fence: the fence row is correct when refused with that reason.
+The Solo's ArduCopter 3.3 has no polygon fence: the fence row is correct when refused with that reason
+(bench/faults.py's LACKS). Each cell's verdict, and the exit code, are bench/verdicts.py's.
 """
 from __future__ import annotations
 
@@ -28,6 +30,8 @@ from driver.sim import SimConfig, SimVehicle  # noqa: E402
 from driver.vehicle.state import CommandStatus  # noqa: E402
 from driver.vehicle import Vehicle, VehicleConfig  # noqa: E402
 import tables  # noqa: E402  (bench/tables.py: this script runs from bench/)
+import verdicts  # noqa: E402
+from faults import LACKS  # noqa: E402
 
 MISSION_ITEMS = 50
 HOME = (40.2839, -3.7940, 664.0, 0.0)
@@ -74,7 +78,8 @@ def same(a: list[tuple], b: list[tuple], tolerance: int) -> bool:
 class TransferCell:
     profile: str
     fault: str
-    told: dict = field(default_factory=dict)       # row -> status told
+    told: dict = field(default_factory=dict)       # row -> status told (as the table shows it)
+    results: dict = field(default_factory=dict)    # row -> (status, reason) as the driver gave them
     times: dict = field(default_factory=dict)      # row -> real seconds
     holds: dict = field(default_factory=dict)      # row -> "new", "old", "part"
     wrong: list = field(default_factory=list)
@@ -135,8 +140,11 @@ def transfer_cell(profile: str, fault: str, speedup: float, faults: dict) -> Tra
                 _judge_download(cell, row, sim, what, outcome)
             status = outcome.result.status
             cell.told[row] = status.value
-            if status is CommandStatus.REJECTED and profile == "solo" and row.startswith("fence"):
-                cell.told[row] = "refused: no fence on 3.3"
+            cell.results[row] = (status.value, outcome.result.reason)
+            lacked = next((label for prefix, (words, label) in LACKS.get(profile, {}).items()
+                           if row.startswith(prefix) and words in outcome.result.reason), None)
+            if status is CommandStatus.REJECTED and lacked:
+                cell.told[row] = lacked
                 cell.times.pop(row, None)
     except Exception as exc:  # noqa: BLE001 - a cell that crashes is reported, not fatal to the table
         cell.error = f"{type(exc).__name__}: {exc}"
@@ -179,11 +187,18 @@ def main() -> int:
     ap.add_argument("--profiles", default=",".join(PROFILES))
     ap.add_argument("--faults", default=",".join(FAULTS))
     ap.add_argument("--markdown", action="store_true")
+    tables.add_write_docs(ap)
     args = ap.parse_args()
     logging.basicConfig(level=logging.ERROR)
     cells = run_transfers(args.profiles.split(","), args.faults.split(","), args.speedup, FAULTS)
     print(transfer_table(cells, args.speedup, args.markdown))
-    return 0 if all(not c.wrong and not c.error and not c.corrupted for c in cells) else 1
+    return verdicts.report([verdict(c) for c in cells])
+
+
+def verdict(cell: TransferCell) -> verdicts.Verdict:
+    """The cell's verdict: every row accepted, or refused for what the profile's firmware lacks."""
+    lacks = {prefix: words for prefix, (words, _) in LACKS.get(cell.profile, {}).items()}
+    return verdicts.transfers(cell, ROWS, lacks)
 
 
 def run_transfers(profiles, faults_names, speedup: float, faults: dict) -> list[TransferCell]:
@@ -198,5 +213,6 @@ def run_transfers(profiles, faults_names, speedup: float, faults: dict) -> list[
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    with tables.publishing("transfer_matrix"):
+        sys.exit(main())
 

@@ -331,3 +331,21 @@ def test_main_window_without_camera_says_how_to_get_one(qtbot, vehicle, window_f
     w = window_factory(vehicle)
     assert w.camera_view.message().startswith("No video: no camera configured")
     assert not w.camera_panel.switch_button.isEnabled()
+
+
+@pytest.mark.parametrize("size", [(156, 117), (220, 165), (448, 336)], ids=["1024x600", "1280x720", "roomy"])
+def test_no_hud_text_overlaps_another_on_a_small_video(qtbot, size):
+    """At 1024×600 the video is 156 px wide: the mode, the heading and the battery overlapped on the top row."""
+    from PyQt5.QtGui import QFont, QFontMetricsF
+    from uavviewer.camera.hud import hud_font, hud_labels
+    rect = QRectF(0, 0, *size)
+    state = VehicleState(local=LocalPosition(0, 0, -3), altitude=123.4, mode="GUIDED_NOGPS", armed=True,
+                         heading_deg=355.0, velocity=Velocity(north=12.5, down=3.2),
+                         battery=Battery(voltage=16.1, remaining=100))
+    font = hud_font(QFont(), rect)
+    fm = QFontMetricsF(font)
+    inked = [(label.text, fm.boundingRect(label.rect, label.flags, label.text)) for label in hud_labels(rect, state, font)]
+    overlaps = [f"{a} {ra} / {b} {rb}" for i, (a, ra) in enumerate(inked) for b, rb in inked[i + 1:]
+                if ra.intersects(rb)]
+    outside = [f"{t} {r}" for t, r in inked if not rect.contains(r)]
+    assert not overlaps and not outside, "\n".join(overlaps + outside)

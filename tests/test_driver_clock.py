@@ -17,12 +17,18 @@ from driver.vehicle.state import CommandStatus, LinkStatus
 GUIDED = 4                                 # ArduCopter's custom mode number
 
 
+_AUTOPILOT = mavlink.MAVLink(None, srcSystem=1, srcComponent=1)
+
+
 def heartbeat(armed: bool = True, mode: int = GUIDED) -> bytes:
-    """The autopilot's heartbeat (system 1, component 1), as ArduCopter sends it."""
-    enc = mavlink.MAVLink(None, srcSystem=1, srcComponent=1)
+    """The autopilot's heartbeat (system 1, component 1), as ArduCopter sends it: each with its own sequence
+    number (a frame repeating the last one's is a duplicate, and dropped)."""
+    enc = _AUTOPILOT
     base = mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED | (mavlink.MAV_MODE_FLAG_SAFETY_ARMED if armed else 0)
-    return enc.heartbeat_encode(mavlink.MAV_TYPE_QUADROTOR, mavlink.MAV_AUTOPILOT_ARDUPILOTMEGA, base, mode,
-                                mavlink.MAV_STATE_ACTIVE).pack(enc)
+    frame = enc.heartbeat_encode(mavlink.MAV_TYPE_QUADROTOR, mavlink.MAV_AUTOPILOT_ARDUPILOTMEGA, base, mode,
+                                 mavlink.MAV_STATE_ACTIVE).pack(enc)
+    enc.seq = (enc.seq + 1) % 256
+    return frame
 
 
 @pytest.fixture

@@ -170,7 +170,7 @@ def test_a_takeoff_whose_reply_was_lost_is_judged_by_the_climb(sim_factory, vehi
 
 
 def test_the_climb_timeout_grows_with_the_altitude():
-    from driver.vehicle.takeoff import climb_timeout
+    from driver.vehicle.sequences.takeoff import climb_timeout
     assert climb_timeout(20.0, 100.0) > climb_timeout(20.0, 3.0) + 150.0
 
 
@@ -203,7 +203,7 @@ def test_a_ground_only_command_is_not_resent_once_the_vehicle_is_armed(vehicle, 
     assert vehicle.set_mode("GUIDED").result(timeout=10).ok
     assert vehicle.arm().result(timeout=10).ok and vehicle.wait_for(lambda s: s.armed, 10)
     result = future.result(timeout=10)
-    assert result.status is CommandStatus.REJECTED and "disarmed" in result.reason, str(result)
+    assert result.status is CommandStatus.REJECTED and "armed" in result.reason, str(result)
     assert list(sim.faults.ignored).count(command) == 1
     assert vehicle.disarm().result(timeout=10).ok
 

@@ -250,7 +250,7 @@ def test_stop_during_takeoff_cancels_what_the_takeoff_asked(vehicle, sim):
 def test_one_takeoff_at_a_time_even_after_an_abort(sim_factory, vehicle_factory):
     sim = sim_factory(ready_after=600.0)                # never ready: the sequence waits
     vehicle = vehicle_factory(f"tcp:127.0.0.1:{sim.tcp_port}", ready_timeout=600.0)
-    assert vehicle.wait_for(lambda s: s.connected, 10)
+    assert vehicle.wait_for(lambda s: s.connected and s.in_air is False, 10)     # it says it is on the ground
     first = vehicle.takeoff()
     assert vehicle.takeoff().result(timeout=2).status is CommandStatus.REJECTED
     assert vehicle.land().result(timeout=10).ok

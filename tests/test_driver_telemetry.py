@@ -93,7 +93,24 @@ def test_the_reducer_is_pure():
     view = ChainMap({}, state.__dict__)
     changes = telemetry.fold(view, ENC.attitude_encode(0, 0.1, 0.2, 0.3, 0, 0, 0))
     assert dataclasses.asdict(state) == before and view.maps[0] == {}
-    assert set(changes) == {"attitude"}
+    assert set(changes) == {"attitude", "boot"}          # the vehicle's clock rides on its time_boot_ms
+
+
+def test_a_clock_going_back_is_a_restart_and_reordering_is_not():
+    state = VehicleState()
+    for time_ms, restarts in ((60_000, 0), (61_000, 0), (60_500, 0), (62_000, 0), (1_500, 1), (2_000, 1)):
+        state = fold(state, ENC.attitude_encode(time_ms, 0.1, 0.2, 0.3, 0, 0, 0))
+        assert state.boot.restarts == restarts, (time_ms, state.boot)
+    assert state.boot.seconds == 2.0
+    state = fold(state, ENC.system_time_encode(0, 900))         # SYSTEM_TIME's clock is the same one
+    assert state.boot.restarts == 1                              # (only 1.1 s back: reordering)
+    state = fold(state, ENC.system_time_encode(0, 100))
+    assert state.boot.restarts == 1
+    state = fold(state, ENC.attitude_encode(6_000, 0.1, 0.2, 0.3, 0, 0, 0))      # a slow stream's, 4.5 s older:
+    state = fold(state, ENC.system_time_encode(0, 1_500))                         # still no restart
+    assert state.boot.restarts == 1
+    assert VehicleState().boot.heard_param_count(1397).heard_param_count(1397).restarts == 0
+    assert VehicleState().boot.heard_param_count(1397).heard_param_count(1401).restarts == 1
 
 
 @pytest.mark.parametrize("volts, cells", [(12.6, 3), (11.1, 3), (10.0, 3), (16.8, 4), (14.8, 4), (13.4, 4),

@@ -330,7 +330,7 @@ def test_console_sets_up_signing_and_shows_it(vehicle, sim):
 def test_console_stops_the_motors_in_flight_only_when_told_it_is_an_emergency(flying, sim):
     console, out = console_for(flying)
     console.onecmd("disarm force")
-    assert "disarm (forced): rejected (not while flying" in out.getvalue()
+    assert "disarm (forced): rejected (the vehicle may be airborne" in out.getvalue()
     console.onecmd("disarm force now")
     assert "error: usage: disarm [force] | disarm force emergency" in out.getvalue()
     assert sim.truth().armed

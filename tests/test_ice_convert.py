@@ -8,9 +8,10 @@ import pytest
 from pymavlink.quaternion import QuaternionBase
 
 from driver.ice import convert, load_slice
-from driver.vehicle.state import (Attitude, Battery, CommandResult, CommandStatus, Environment, GlobalPosition, Gps,
+from driver.mission.plan import MissionProgress, MissionRunState
+from driver.vehicle.state import (Attitude, Battery, Boot, CommandResult, CommandStatus, Environment, GlobalPosition, Gps,
                           LandedState, LinkHealth, LinkStatus, LocalPosition, Message, Readiness, SequencePhase,
-                          SequenceProgress, Setpoint, Severity, VehicleState, Velocity)
+                          SequenceProgress, SequenceState, Setpoint, Severity, VehicleState, Velocity)
 
 NED_TO_ENU = np.array([[0, 1, 0], [1, 0, 0], [0, 0, -1]], dtype=float)
 FRD_TO_FLU = np.diag([1.0, -1.0, -1.0])
@@ -122,11 +123,14 @@ def test_status_round_trip_keeps_every_field():
                    velocity=Velocity(1.0, -2.0, 0.5), heading_deg=74.5, airspeed=2.5,
                    battery=Battery(15.2, 9.5, 55.0, True, 4, False),                   # its alarm derived on both sides
                    gps=Gps(3, 12, 0.8),
-                   readiness=Readiness(True, True, True),
+                   readiness=Readiness(False, True, True, reasons=("3D Accel calibration needed",)),
+                   boot=Boot(restarts=2),
                    environment=Environment((1, 2, 3), (0.0, 0.1, -1.0), 1001.0, 21.0, 2.0, 90.0, 45),
                    messages=(Message(4, 99.0, Severity.WARNING, "PreArm: Need 3D Fix", "vehicle"),),
                    results=(CommandResult("arm", CommandStatus.REFUSED, "denied", 1, 7),),
                    takeoff=SequenceProgress(SequencePhase.DONE, "reached", 3.0),
+                   sequence=SequenceState("stop", "watching", ""), may_be_airborne=False,
+                   mission=MissionProgress(count=5, current=1, state=MissionRunState.COMPLETE, flown=True),
                    setpoint=Setpoint(0.5, -0.5, 0.2, 0.1))
     status = convert.status_from_state(ms, state)
     back = convert.state_from_status(status, state.messages, state.results)

@@ -67,8 +67,8 @@ def test_go_to_yaw_stop_disarm_and_return_to_launch(flying, sim, jde):
     assert later is not None
     assert math.hypot(later.north - stopped.north, later.east - stopped.east) < 0.3, (stopped, later)
 
-    outcome = ext.disarm(False)                                    # in the air: the vehicle says no
-    assert outcome.status == "REFUSED", outcome
+    outcome = ext.disarm(False)                                    # in the air: the flight rules say no
+    assert outcome.status == "REJECTED" and "airborne" in outcome.reason, outcome
     assert sim.truth().armed and sim.truth().altitude > 4.0
 
     outcome = ext.returnToLaunch()

@@ -27,14 +27,15 @@ def test_a_ready_vehicle_is_go_on_every_line():
 
 
 def test_each_problem_says_why():
-    s = replace(READY, readiness=Readiness(prearm_ok=False, ekf_ok=False, gps_ok=False, prearm_reported=True),
+    s = replace(READY, readiness=Readiness(prearm_ok=False, ekf_ok=False, gps_ok=False, prearm_reported=True,
+                                           reasons=("Compass not calibrated",)),
                 gps=Gps(1, 3, 9.9), messages=(Message(1, 0.0, Severity.CRITICAL, "PreArm: Compass not calibrated"),),
                 battery=Battery(14.2, cells=4, remaining=20.0),
                 signing=Signing(SigningStatus.MISMATCH), gcs_failsafe=0,
                 fence=Fence(enabled=True, types=3, radius=150.0, alt_max=60.0, breached=True),
                 link=LinkHealth(status=LinkStatus.OK, packets_per_s=10.0, loss_percent=25.0))
     found = lines(s)
-    assert found["Pre-arm"] == (Verdict.NO_GO, "PreArm: Compass not calibrated")   # the vehicle's own words
+    assert found["Pre-arm"] == (Verdict.NO_GO, "Compass not calibrated")   # the vehicle's own words
     assert found["GPS"] == (Verdict.NO_GO, "No fix, 3 satellites, HDOP 9.9")
     assert found["EKF"][0] is Verdict.NO_GO
     assert found["Battery"] == (Verdict.NO_GO, "below the warning threshold: 14.20 V, 3.55 V a cell, 20 %")
@@ -64,8 +65,10 @@ def test_without_a_link_nothing_is_go():
 
 
 def test_a_refused_arming_is_a_caution_while_the_checks_pass():
-    refused = Message(5, 1000.0, Severity.CRITICAL, "PreArm: Compass not calibrated")
-    found = lines(replace(READY, time=1010.0, messages=(refused,)))
-    assert found["Pre-arm"] == (Verdict.CAUTION, "checks pass, but arming was just refused: PreArm: Compass not "
-                                                 "calibrated")
-    assert lines(replace(READY, time=1100.0, messages=(refused,)))["Pre-arm"][0] is Verdict.GO   # long ago
+    """The vehicle's refusal stands (driver.vehicle.prearm) while its checks pass: a caution, in its words; once it
+    no longer stands by it (the driver forgot it), GO, whatever Messages still holds."""
+    refused = Message(5, 1000.0, Severity.CRITICAL, "Arm: Compass not calibrated")
+    found = lines(replace(READY, messages=(refused,),
+                          readiness=replace(READY.readiness, reasons=("Compass not calibrated",))))
+    assert found["Pre-arm"] == (Verdict.CAUTION, "checks pass, but arming was just refused: Compass not calibrated")
+    assert lines(replace(READY, messages=(refused,)))["Pre-arm"][0] is Verdict.GO

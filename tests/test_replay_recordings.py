@@ -261,6 +261,7 @@ def test_gimbal_commands_answered_as_recorded(replay_factory, connect):
 def test_level_calibration_and_arming_answered_as_recorded(replay_factory, connect):
     replay = replay_factory(SETUP)
     v = connect(replay)
+    assert v.wait_for(lambda s: s.in_air is False, 10)       # no calibration before it says it is on the ground
     assert recorded_result(replay, mavlink.MAV_CMD_PREFLIGHT_CALIBRATION, 0.0, 0.0, 0.0, 0.0, 2.0) == \
         mavlink.MAV_RESULT_ACCEPTED
     result = v.calibrate_level().result(timeout=10)
@@ -271,6 +272,7 @@ def test_level_calibration_and_arming_answered_as_recorded(replay_factory, conne
     # with the vehicle's own reasons; the driver tells them as the vehicle said them
     result = v.arm().result(timeout=10)
     assert result.status is CommandStatus.ACCEPTED, result
+    assert v.wait_for(lambda s: not s.armed, 10)          # disarmed by itself on the ground (DISARM_DELAY)
     result = v.arm().result(timeout=10)
     assert result.status is CommandStatus.REFUSED, result
     assert "Arm: 3D Accel calibration needed" in result.reason and "MAV_RESULT_FAILED" in result.reason, result

@@ -14,15 +14,18 @@ from uavviewer.input.keys_dialog import KeysDialog
 from uavviewer.map.controller import fly_here_question
 from uavviewer.plan.controller import mission_start_question
 from uavviewer.preferences.dialog import signing_setup_question
-from uavviewer.window.layout import FRAME_ALLOWANCE, MIN_SIZE
+from uavviewer.window.layout import FRAME_ALLOWANCE
 from uavviewer.params.compare_dialog import CompareDialog
 from uavviewer.params.review_dialog import ReviewDialog
 from uavviewer.params.rows import FileRow, ReviewRow
 
+from secondary_windows import netbook_screen, netbook_window
 from test_viewer_window import silent_vehicle  # noqa: F401  (fixture)
 from viewer_fixtures import app_style, viewer_settings, window_factory  # noqa: F401  (fixtures)
 
 pytestmark = [pytest.mark.timeout(60), pytest.mark.usefixtures("app_style")]
+
+# The window as on a 1024×600 netbook (secondary_windows.netbook_window); each dialog inside that screen.
 
 
 def buttons(d: QDialog) -> list[QAbstractButton]:
@@ -33,12 +36,13 @@ def buttons(d: QDialog) -> list[QAbstractButton]:
 
 def dialog_problems(d: QDialog) -> list[str]:
     problems = []
-    free = QApplication.primaryScreen().availableGeometry()
-    screen = QRect(0, 0, MIN_SIZE.width(), min(MIN_SIZE.height(), free.height()))
+    parent = d.parentWidget()
+    main = parent.window() if parent is not None else None
+    screen = netbook_screen(main) if main is not None else QApplication.primaryScreen().availableGeometry()
     if d.width() > screen.width() or d.height() + FRAME_ALLOWANCE > screen.height():
         problems.append(f"{d.size()} does not fit {screen.size()} with a title bar")
-    if not free.contains(d.geometry()):
-        problems.append(f"{d.geometry()} is not inside the screen {free}")
+    if not screen.contains(d.geometry()):
+        problems.append(f"{d.geometry()} is not inside the screen {screen}")
     shown = buttons(d)
     if not shown:
         problems.append("no buttons found")
@@ -68,7 +72,7 @@ def _questions(w) -> dict:
 
 
 def test_preferences_fits_with_ok_in_reach(qtbot, silent_vehicle, window_factory):
-    w = window_factory(silent_vehicle)
+    w = netbook_window(qtbot, window_factory, silent_vehicle)
     w.actionPreferences.trigger()
     d = opened(qtbot, w.preferences.dialog)
     problems = dialog_problems(d)
@@ -77,7 +81,7 @@ def test_preferences_fits_with_ok_in_reach(qtbot, silent_vehicle, window_factory
 
 
 def test_help_keys_fits(qtbot, silent_vehicle, window_factory):
-    w = window_factory(silent_vehicle)
+    w = netbook_window(qtbot, window_factory, silent_vehicle)
     w.show_keys()
     d = next(x for x in w.findChildren(KeysDialog) if x.isVisible())
     qtbot.waitExposed(d)
@@ -87,7 +91,7 @@ def test_help_keys_fits(qtbot, silent_vehicle, window_factory):
 
 
 def test_connect_fits(qtbot, silent_vehicle, window_factory):
-    w = window_factory(silent_vehicle)
+    w = netbook_window(qtbot, window_factory, silent_vehicle)
     w.actionConnect.trigger()
     d = opened(qtbot, w.tools.connect_dialog)
     problems = [p for p in dialog_problems(d) if p != "no buttons found"]
@@ -96,7 +100,7 @@ def test_connect_fits(qtbot, silent_vehicle, window_factory):
 
 
 def test_parameter_review_and_compare_fit(qtbot, silent_vehicle, window_factory):
-    w = window_factory(silent_vehicle)
+    w = netbook_window(qtbot, window_factory, silent_vehicle)
     review = opened(qtbot, ReviewDialog([ReviewRow(f"PARAM_{i}", "1", "2", "a note") for i in range(60)], w))
     compare = opened(qtbot, CompareDialog("/tmp/a-long-folder-name/copter.param",
                                           [FileRow(f"PARAM_{i}", "1", "2", 2.0) for i in range(60)], 500, 3, w))
@@ -108,7 +112,7 @@ def test_parameter_review_and_compare_fit(qtbot, silent_vehicle, window_factory)
 
 
 def test_every_question_fits(qtbot, silent_vehicle, window_factory):
-    w = window_factory(silent_vehicle)
+    w = netbook_window(qtbot, window_factory, silent_vehicle)
     problems = []
     for name, make in _questions(w).items():
         box = opened(qtbot, make())
@@ -118,7 +122,7 @@ def test_every_question_fits(qtbot, silent_vehicle, window_factory):
 
 
 def test_the_guided_altitude_question_and_the_folder_chooser_fit(qtbot, silent_vehicle, window_factory):
-    w = window_factory(silent_vehicle)
+    w = netbook_window(qtbot, window_factory, silent_vehicle)
     w.guided.ask_altitude()
     problems = [f"altitude: {p}" for p in dialog_problems(opened(qtbot, w.guided.question))]
     w.guided.question.reject()
@@ -131,7 +135,7 @@ def test_the_guided_altitude_question_and_the_folder_chooser_fit(qtbot, silent_v
 
 
 def test_vehicle_setup_fits_on_every_page(qtbot, silent_vehicle, window_factory):
-    w = window_factory(silent_vehicle)
+    w = netbook_window(qtbot, window_factory, silent_vehicle)
     d = opened(qtbot, w.setup.open())
     for title in d.pages:
         d.turn_to(title)

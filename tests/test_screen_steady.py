@@ -6,6 +6,12 @@ ArduCopter recording.
 """
 from __future__ import annotations
 
+import json
+import os
+import shutil
+import subprocess
+import sys
+
 import pytest
 from PyQt5.QtCore import QPoint, QRect, Qt
 from PyQt5.QtWidgets import QApplication, QMessageBox
@@ -149,7 +155,51 @@ def test_no_control_moves_as_the_state_changes(qtbot, sim_factory, vehicle_facto
     replay = w.adapter.replay
     replay.speed = 8.0
     w.replayBar.seek_to(replay.duration - 3.0)
-    qtbot.waitUntil(lambda: w.replayBar.play_button.text() == "Restart", timeout=20000)   # the end: Restart
+    qtbot.waitUntil(lambda: not w.replayBar.play_button.isEnabled(), timeout=20000)   # the end: Restart beside
     watch.step("replay end")
 
     assert not watch.moves, f"at {size[0]}×{size[1]}:\n" + "\n".join(watch.moves)
+
+
+DOCK_SIZES = [(1366, 768), (1280, 720), (1024, 560)]
+
+
+@pytest.mark.parametrize("size", DOCK_SIZES, ids=[f"{w}x{h}" for w, h in DOCK_SIZES])
+def test_no_control_moves_as_a_dock_is_hidden_or_shown(qtbot, vehicle, window_factory, size):
+    """View › Messages hidden and shown again moved every button and both sticks by 103 px (Messages stood under
+    the controls, as the window lays it out on a 768 px high screen). Each of View › Messages, Plan, Map and
+    Telemetry, hidden and shown again: nothing a pilot aims at moves."""
+    first = window_factory(vehicle)
+    first.addDockWidget(Qt.BottomDockWidgetArea, first.messagesDock)    # as a 1366×768 screen's window had it
+    first.messagesDock.show()
+    first.close()                                                         # its layout saved, as on quitting
+    w = window_factory(vehicle)                                           # the next run, the same settings
+    w.resize(*size)
+    qtbot.waitUntil(lambda: (w.width(), w.height()) == size, timeout=3000)
+    qtbot.waitUntil(lambda: w.adapter.state.connected, timeout=10000)
+    watch = Watch(w)
+    docks = {"Messages": w.messagesDock, "Plan": w.plan.dock, "Map": w.mapDock, "Telemetry": w.telemetryDock}
+    for name, dock in docks.items():
+        action = dock.toggleViewAction()                                  # View › <name>
+        for turn in ("off", "on") if action.isChecked() else ("on", "off"):
+            action.trigger()
+            watch.step(f"View › {name} {turn}")
+    moved = [m for m in watch.moves if ": messages " not in m]          # a dock itself may come and go
+    assert not moved, f"at {size[0]}×{size[1]}:\n" + "\n".join(moved)
+
+
+@pytest.mark.parametrize("screen", ["1366x768", "1280x720"])
+def test_no_control_moves_as_a_dock_is_hidden_or_shown_on_a_laptop_screen(screen):
+    """The same on a real X server of a laptop's size, with a fresh profile: the layout such a screen gets (the
+    offscreen test screen, 600 px high, never had Messages under the controls)."""
+    if shutil.which("xvfb-run") is None:
+        pytest.fail("xvfb-run is missing: scripts/bootstrap installs it (Debian's xvfb)")
+    env = dict(os.environ, QT_QPA_PLATFORM="xcb")
+    run = subprocess.run(["xvfb-run", "-a", "-s", f"-screen 0 {screen}x24", sys.executable,
+                          os.path.join(os.path.dirname(__file__), "xvfb_docks.py")],
+                         capture_output=True, text=True, timeout=90, env=env)
+    lines = [json.loads(line) for line in run.stdout.splitlines() if line.startswith("{")]
+    assert run.returncode == 0 and len(lines) == 9, run.stdout + run.stderr
+    moved = [f"{line['step']}: {line['moved']}" for line in lines[1:] if line["moved"]]
+    assert not moved, f"window {lines[0]['window']} on {screen}:\n" + "\n".join(moved)
+

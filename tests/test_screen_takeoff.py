@@ -33,7 +33,7 @@ def test_takeoff_before_ready_says_it_waits_and_cancel_leaves_the_vehicle_as_it_
     assert b.text() == "Take off when ready" and "Waiting for" in b.toolTip()
     box = open_takeoff_question(qtbot, w)
     assert "not ready yet: waiting for" in box.text() and "Cancel takeoff" in box.text()
-    assert box.button(QMessageBox.Yes).text() == "Take off when ready"
+    assert box.button(QMessageBox.Yes).text().replace("&", "") == "Take off when ready"
     qtbot.mouseClick(box.button(QMessageBox.Yes), Qt.LeftButton)
     qtbot.waitUntil(lambda: b.text() == "Cancel takeoff", timeout=5000)
     qtbot.waitUntil(lambda: "when ready — waiting for" in w.phaseLabel.text(), timeout=3000)
@@ -56,7 +56,7 @@ def test_cancel_after_guided_before_arming_switches_back(qtbot, sim, vehicle_fac
     qtbot.mouseClick(b, Qt.LeftButton)
     qtbot.waitUntil(lambda: sim.truth().mode == before, timeout=10000)          # back where it was
     assert not sim.truth().armed and not vehicle.state().takeoff.active
-    assert any("cancelled before liftoff" in t for t in w.messages.texts())
+    qtbot.waitUntil(lambda: any("cancelled before liftoff" in t for t in w.messages.texts()), timeout=10000)
 
 
 def test_arm_asks_first_and_says_what_happens_without_rc(qtbot, sim, vehicle_factory, window_factory):

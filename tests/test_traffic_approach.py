@@ -77,7 +77,8 @@ def test_a_head_on_aircraft_from_the_simulator_raises_an_alert_and_a_passing_one
     assert state is not None, v.state().traffic
     assert not state.traffic.contact(4343).alert
     assert [c.icao for c in state.traffic.alerts] == [4242]
-    assert v.wait_for(lambda s: any(m.text.startswith("Traffic SIM4242: within 500 m and 150 m") for m in s.messages), T)
+    assert v.wait_for(lambda s: any(m.text.startswith("Traffic SIM4242: ") and "metres above, closest" in m.text
+                                    for m in s.messages), T)
 
 
 def test_a_contacts_age_counts_from_when_the_receiver_last_heard_it():

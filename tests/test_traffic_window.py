@@ -13,10 +13,16 @@ from viewer_fixtures import app_style, viewer_settings, window, window_factory  
 pytestmark = pytest.mark.timeout(90)
 
 
-def test_contacts_on_the_map_and_a_head_on_one_alerted_in_the_banner_and_aloud(qtbot, sim, vehicle, window):
+def alerts_heard(vehicle, window) -> list:
+    """The window's alerts from now on, once the vehicle knows where it is (traffic is judged from there)."""
     assert vehicle.wait_for(lambda s: s.position is not None and s.home is not None and s.readiness.prearm_ok, 30)
     alerts = []
     window.alerts.alerted.connect(alerts.append)
+    return alerts
+
+
+def test_contacts_on_the_map_and_a_head_on_one_alerted_in_the_banner_and_aloud(qtbot, sim, vehicle, window):
+    alerts = alerts_heard(vehicle, window)
     ground = sim.autopilot.home_alt
     sim.autopilot.add_aircraft(4242, north=2500.0, east=0.0, alt=ground + 50.0, heading=180.0, speed=60.0)
     passing = sim.autopilot.add_aircraft(4343, north=-800.0, east=0.0, alt=ground + 50.0, heading=180.0, speed=60.0)
@@ -26,7 +32,7 @@ def test_contacts_on_the_map_and_a_head_on_one_alerted_in_the_banner_and_aloud(q
     assert contact_label(head_on).startswith("SIM4242 +") and contact_label(head_on).endswith(" s")
     qtbot.waitUntil(lambda: any(a.kind is AlertKind.TRAFFIC for a in alerts), timeout=20000)
     said = [a.text for a in alerts if a.kind is AlertKind.TRAFFIC]
-    assert said[0].startswith("Traffic SIM4242, ") and "metres above" in said[0], said
+    assert said[0].startswith("Traffic SIM4242: ") and "metres above" in said[0], said
     assert all("4343" not in text for text in said)
     assert "Traffic SIM4242" in window.alert_banner.text
     sim.autopilot.aircraft.remove(passing)                      # no longer heard: faded on the map, then gone

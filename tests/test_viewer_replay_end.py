@@ -53,7 +53,7 @@ def test_the_end_of_a_replay_is_said_as_such_with_restart(qtbot, replaying):
     qtbot.waitUntil(lambda: w.adapter.state.connected, timeout=15000)
     w.replayBar.seek_to(replay.duration - 2.0)
     qtbot.waitUntil(lambda: replay.finished and w.adapter.state.link.status is LinkStatus.CLOSED, timeout=15000)
-    qtbot.waitUntil(lambda: w.replayBar.play_button.text() == "Restart", timeout=5000)
+    qtbot.waitUntil(lambda: not w.replayBar.play_button.isEnabled(), timeout=5000)   # one Restart: beside it
     qtbot.waitUntil(lambda: w.statusStrip.link.text() == "Replay ended", timeout=5000)
     qtbot.waitUntil(lambda: w.attitude.values["flag"] == "REPLAY ENDED", timeout=5000)
     s = w.adapter.state
@@ -63,6 +63,6 @@ def test_the_end_of_a_replay_is_said_as_such_with_restart(qtbot, replaying):
     assert w.phaseLabel.text().startswith("Replay ended") and "Restart" in w.linkBanner.text()
     assert stale_text(s).startswith("REPLAY ENDED")
     # Restart plays it again from the start
-    qtbot.mouseClick(w.replayBar.play_button, Qt.LeftButton)
+    qtbot.mouseClick(w.replayBar.restart_button, Qt.LeftButton)
     qtbot.waitUntil(lambda: not replay.finished and w.adapter.state.link.status is LinkStatus.OK, timeout=10000)
     qtbot.waitUntil(lambda: w.replayBar.play_button.text() == "Pause", timeout=5000)

@@ -6,7 +6,7 @@ Real simulator (signing as ArduPilot does it), real driver, real window; waits a
 from __future__ import annotations
 
 import pytest
-from PyQt5.QtCore import Qt
+from PyQt5.QtCore import QPoint, QRect, Qt, QTimer
 from PyQt5.QtWidgets import QDialogButtonBox, QLineEdit, QMessageBox
 
 from driver.link.signing import SigningConfig, key_from_passphrase, write_key_file
@@ -255,15 +255,36 @@ def test_foreign_packets_are_counted_and_the_vehicles_address_shown(qtbot, sim_f
 
 
 # -- the emergency motor stop ------------------------------------------------------------------------------------
+def emergency_from_menu(qtbot, w) -> None:
+    """In the air a click on Disarm opens its menu, and only the menu's item (clicked with the mouse) asks."""
+    fc = w.flightControls
+    seen = []
+
+    def pick() -> None:                               # the menu runs its own loop: answer it from inside
+        menu = fc.arm_button.menu()
+        seen.append(menu is not None and menu.isVisible() and w.flight.emergency_box is None)
+        if menu is not None and menu.isVisible():
+            qtbot.mouseClick(menu, Qt.LeftButton, pos=menu.actionGeometry(fc.emergency_action).center())
+    QTimer.singleShot(300, pick)
+    qtbot.mouseClick(fc.arm_button, Qt.LeftButton)
+    qtbot.waitUntil(lambda: bool(seen), timeout=3000)
+    assert seen == [True], "Disarm in the air asked at once instead of opening its menu"
+
+
 def test_disarm_in_the_air_asks_for_an_emergency_motor_stop(qtbot, sim, flying, window_factory):
+    """In the air Disarm is the emergency motor stop: not in Stop's row (it sat one slip from it), behind a menu,
+    and asked."""
     w = window_factory(flying, takeoff_altitude=3.0)
     wait_flying(qtbot, w)
     fc = w.flightControls
     assert fc.arm_button.text() == "Disarm" and fc.arm_button.isEnabled()
     assert fc.arm_button.property("action") == "emergency" and "falls" in fc.arm_button.toolTip()
+    arm = QRect(fc.arm_button.mapTo(w, QPoint(0, 0)), fc.arm_button.size())
+    stop = QRect(fc.stop_button.mapTo(w, QPoint(0, 0)), fc.stop_button.size())
+    assert arm.top() > stop.bottom() and arm.left() > stop.right(), (arm, stop)   # neither beside Stop nor under it
     sent = sent_commands(w)
 
-    qtbot.mouseClick(fc.arm_button, Qt.LeftButton)
+    emergency_from_menu(qtbot, w)
     qtbot.waitUntil(lambda: w.flight.emergency_box is not None and w.flight.emergency_box.isVisible(), timeout=3000)
     box = w.flight.emergency_box
     assert box.text().startswith("Stop the motors now? The drone will fall.")
@@ -276,7 +297,7 @@ def test_disarm_in_the_air_asks_for_an_emergency_motor_stop(qtbot, sim, flying, 
     qtbot.waitUntil(lambda: w.adapter.state.time > answered and w.adapter.state.can_fly_velocity, timeout=5000)
     assert sim.truth().armed and sim.truth().altitude > 2.0
 
-    qtbot.mouseClick(fc.arm_button, Qt.LeftButton)
+    emergency_from_menu(qtbot, w)
     qtbot.waitUntil(lambda: w.flight.emergency_box is not None and w.flight.emergency_box.isVisible(), timeout=3000)
     qtbot.mouseClick(w.flight.emergency_box.button(QMessageBox.Yes), Qt.LeftButton)
     assert sent == ["disarm"]

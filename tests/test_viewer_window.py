@@ -72,6 +72,7 @@ def test_keys_dialog_lists_the_keys(qtbot, silent_vehicle, window_factory):
                      ("PgUp", "Tilt the drone's camera up 5° (or the mouse wheel / drag on the video)"),
                      ("PgDn", "Tilt the drone's camera down 5°"),
                      ("(release)", "Releasing a key centres its axis"),
+                     ("Space T L R", "Also from Setup, Parameters and every other window (not while typing in a field)"),
                      ("Gamepad A", "Stop (hover)"), ("Gamepad B", "Land"), ("Gamepad START", "Take off (asks)"),
                      ("Gamepad BACK", "Return to launch"),
                      ("Gamepad sticks", "As the on-screen sticks (mode and mapping: Preferences › Gamepad)")]

@@ -106,7 +106,7 @@ def test_stop_looking_goes_back_to_the_pitch_before(qtbot, vehicle, window_facto
     home = w.adapter.state.home
     from driver.core.frames import offset_latlon
     lat, lon = offset_latlon(home.lat, home.lon, 30.0, 0.0)
-    w.adapter.command("look_at", lat, lon, 0.0)          # the map's "Look here"
+    w.adapter.send(w.adapter.drone.look_at, lat, lon, 0.0)    # the map's "Look here"
     qtbot.waitUntil(lambda: w.adapter.state.gimbal.roi is not None and w.gimbal_bar.stop_looking_button.isVisible(),
                     timeout=10000)
     qtbot.waitUntil(lambda: abs(w.adapter.state.gimbal.pitch_deg + 40) > 20, timeout=10000)   # it looks there
@@ -129,3 +129,15 @@ def test_file_open_logs_folder_and_about(qtbot, vehicle, window_factory, tmp_pat
     qtbot.waitUntil(lambda: box is not None and box.isVisible(), timeout=3000)
     assert f"Flight logs: {tmp_path / 'logs'}" in box.text()
     box.close()
+
+
+def test_file_names_reviewing_a_log_and_replaying_a_flight_apart(qtbot, vehicle, window_factory):
+    """"Open log…" (a review) and "Open flight log…" (a replay) read alike: a pilot picked one for the other."""
+    w = window_factory(vehicle)
+    texts = {a.objectName(): a.text().replace("&", "") for a in w.menuFile.actions()}
+    review, replay = texts["actionReviewLog"], texts["actionReplayFlight"]
+    assert review.startswith("Review") and "plots" in review
+    assert replay.startswith("Replay") and ".tlog" in replay
+    assert not any(t.startswith("Open") and "log…" in t for t in texts.values())    # no two "Open … log…" left
+    actions = [a.objectName() for a in w.menuFile.actions()]
+    assert abs(actions.index("actionReviewLog") - actions.index("actionReplayFlight")) <= 2   # side by side

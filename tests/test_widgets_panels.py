@@ -273,7 +273,7 @@ def test_replay_bar_says_when_the_log_is_finished(qtbot):
     r = make(ReplayBar, qtbot)
     r.set_progress(129.6, 130.0, paused=False, speed=1.0, finished=True)
     assert r.clock.text() == "02:10 / 02:10"      # the end is said by the banner and Restart, not a longer clock
-    assert r.play_button.text() == "Restart" and r.play_button.isEnabled()
+    assert r.play_button.text() == "Play" and not r.play_button.isEnabled()     # one Restart: the button beside
     with qtbot.waitSignal(r.restartRequested, timeout=1000):
-        r.play_button.click()
+        r.restart_button.click()
     assert r.progress.value() == 1000

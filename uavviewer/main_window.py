@@ -43,8 +43,9 @@ from .settings import ViewerSettings, default_qsettings
 from .telemetry.readouts import Readouts
 from .window.about import show_about
 from .window.closing import Closing
-from .window.layout import fit_restored, fit_screen, steady_slots
+from .window.layout import docks_beside, fit_restored, fit_screen, steady_slots
 from .window.pilot_tools import PilotTools
+from .window.secondary import SecondaryWindows
 
 __all__ = ["MainWindow", "load_style"]
 
@@ -65,7 +66,7 @@ class MainWindow(QMainWindow):
 
     Parts: ``preferences``, ``sticks`` (and its ``gamepad``), ``flight`` (the buttons' commands), ``camera``,
     ``gimbal``, ``map``, ``plan``, ``readouts``, ``replay``, ``tools`` (connecting, alerts, preflight, guided),
-    ``params``, ``flight_logs``, ``fleet_dock`` and ``closing``.
+    ``params``, ``flight_logs``, ``fleet_dock``, ``secondary`` (the other windows' places) and ``closing``.
     """
 
     def __init__(self, drone: Drone, qsettings: QSettings | None = None,
@@ -87,6 +88,7 @@ class MainWindow(QMainWindow):
         self.refresh = Refresh(self)        # views redraw at the rate the eye needs and not while minimised
         self.readouts = Readouts(self)
         self.closing = Closing(self)
+        self.secondary = SecondaryWindows(self, self._qsettings)   # other windows fit, and leave the controls in view
 
         self.setWindowTitle(f"UavViewerPy — {self.adapter.description}")
         self.signing_unavailable = signing_unavailable(drone)     # a remote drone is signed on its server
@@ -96,6 +98,7 @@ class MainWindow(QMainWindow):
         self.menuView.addAction(self.plotsDock.toggleViewAction())
         self.menuView.addAction(self.mapDock.toggleViewAction())
         self.map = MapController(self.mapPanel, self.adapter, self, lambda: self.takeoff_altitude, self)
+        self.map.camera.stopLookingRequested.connect(self.gimbal.stop_looking)    # the tilt comes back as from the bar
         self.tabifyDockWidget(self.plotsDock, self.mapDock)            # Map and Plots share the lower right
         self.plan = PlanController(self.map, self.adapter, self, self)  # Plan mode, transfers, missions: own dock
         self.preferences.keep_map_choices(self.mapPanel)
@@ -103,7 +106,6 @@ class MainWindow(QMainWindow):
         self.setCorner(Qt.BottomRightCorner, Qt.RightDockWidgetArea)   # plots run the full height
         self.resizeDocks([self.telemetryDock, self.plotsDock], [390, 560], Qt.Vertical)
         self.resizeDocks([self.telemetryDock], [400], Qt.Horizontal)
-        self.resizeDocks([self.messagesDock], [110], Qt.Vertical)     # the latest line is in the status strip
         self.mapDock.raise_()
         self.instrumentSplitter.setStretchFactor(0, 3)
         self.instrumentSplitter.setStretchFactor(1, 2)
@@ -118,10 +120,11 @@ class MainWindow(QMainWindow):
         self.params = ParamsController(self.adapter, self, say=self.log_message)    # docs/parameters.md
         self.params.add_to_menu(self)                       # Vehicle › Parameters…
         self.params.offer_fixes(self.messages)              # a warning naming a parameter: Fix… opens it
+        self.plan.notices.fenceOnRequested.connect(lambda: self.params.propose({"FENCE_ENABLE": 1}))
         self.setup = SetupController(self.adapter, self, self.params)    # Vehicle › Setup…: calibrations, radio, motors
         self.setup.add_to_menu(self)
         self.fleet_dock = FleetDock(self)
-        self.review = ReviewController(self)                # File › Open log…: docs/review.md
+        self.review = ReviewController(self)                # File › Review a log…: docs/review.md
         self.inspector = InspectorController(self)          # Tools › MAVLink inspector
         self.flight_logs = FlightLogsController(self.adapter, lambda: self.logs.downloads, self.review.open, self,
                                                 say=self.log_message)
@@ -159,6 +162,7 @@ class MainWindow(QMainWindow):
             self.restoreState(state)
             if "preflightDock".encode("utf-16-be") not in bytes(state):   # saved before the dock existed
                 self.tools.tab_preflight()
+        docks_beside(self)                        # none under the flight controls (a layout saved so too)
         if geometry is not None:
             self.restoreGeometry(geometry)
             fit_restored(self)                    # saved on a larger screen: it still fits this one
@@ -175,7 +179,7 @@ class MainWindow(QMainWindow):
         """--takeoff-altitude for this run, else the Preferences' value."""
         return self.preferences.takeoff_altitude
 
-    # -- connecting (File › Connect, Disconnect, Open flight log: uavviewer/window/pilot_tools.py wires them) ----
+    # -- connecting (File › Connect, Disconnect, Replay a flight: uavviewer/window/pilot_tools.py wires them) ----
     def _connected(self, opened) -> None:
         """A connection opened by File › Connect (:class:`uavviewer.connect.opener.Opened`): a vehicle, or a lab's
         fleet with its Fleet panel."""
@@ -198,7 +202,7 @@ class MainWindow(QMainWindow):
             self.camera.set_sources(own)
 
     def use_connection(self, drone: Drone) -> None:
-        """Fly (or watch) ``drone`` from now on: File › Connect, Disconnect, Open flight log. The vehicle left
+        """Fly (or watch) ``drone`` from now on: File › Connect, Disconnect, Replay a flight. The vehicle left
         behind was sent zero velocity first, so it hovers."""
         self.sticks.centre()
         self.map.cancel()
@@ -230,9 +234,10 @@ class MainWindow(QMainWindow):
             self.preferences.remember(last_connection=choice.target)
 
     def show_keys(self) -> None:
+        """Help › Keys, not modal: the flight controls stay in reach while it is read."""
         dialog = KeysDialog(self)
         dialog.setAttribute(Qt.WA_DeleteOnClose)
-        dialog.open()
+        dialog.show()
 
     # -- state in --------------------------------------------------------------------------------
     def show_state(self, s: VehicleState) -> None:
@@ -272,6 +277,7 @@ class MainWindow(QMainWindow):
         self.plan.show_plan(False)                # the docks that stepped out for Plan are saved as they were
         self.preferences.save(self.saveGeometry(), self.saveState())
         self.sticks.close()
+        self.secondary.close()
         self.alerts.close()
         self.review.close()
         self.inspector.close()

@@ -81,6 +81,10 @@ class CommandPort(Protocol):
     def answer(self, name: str, status: CommandStatus, reason: str = "") -> Future:
         """A result given here and now (refused by the driver, or nothing to do), recorded for the pilot."""
 
+    def settled(self, command: int) -> bool:
+        """No request with this id is pending or may still be answered: the state tells the truth about what it
+        would change (a mode, the armed bit), and may be answered from."""
+
 
 class Settler(Protocol):
     def settle(self, future: Future, result) -> None:

@@ -495,7 +495,8 @@ class IceDrone(PayloadClient, Drone):
             status = CommandStatus.TIMED_OUT if isinstance(exc, Ice.TimeoutException) else CommandStatus.REJECTED
             if isinstance(exc, Ice.OperationNotExistException):
                 future.set_result(wrap(CommandResult(name, CommandStatus.REJECTED,
-                                                     "this MAVLinkServer has no missions (an older version)")))
+                                                     f"this MAVLinkServer has no {exc.operation or name} operation "
+                                                     "(an older version)")))
                 return
             future.set_result(wrap(CommandResult(name, status, f"server unreachable: {type(exc).__name__}")))
 
@@ -511,7 +512,7 @@ class IceDrone(PayloadClient, Drone):
                                              plans.plan_from_ice(outcome.plan) if outcome.hasPlan else None)
                 else:
                     result = self._result(outcome)
-            future.set_result(result)
+            self._answer_after_status(future, result)
 
         def run() -> None:
             try:
@@ -523,6 +524,21 @@ class IceDrone(PayloadClient, Drone):
         except RuntimeError as exc:                     # closed
             failed(exc)
         return future
+
+    def _answer_after_status(self, future: Future, result) -> None:
+        """Settle ``future`` once the server's status has been read after its answer: whoever hears the answer
+        and reads :meth:`state` finds there what the answer said (the plan uploaded, the mode taken), not a
+        poll from before it."""
+        def read(status_future) -> None:
+            try:
+                self._answered(status_future.result())
+            except Exception:                           # the answer stands; the poller catches up
+                pass
+            future.set_result(result)
+        try:
+            self._vehicle.getStatusAsync(self._server_message, self._server_result).add_done_callback(read)
+        except Exception:
+            future.set_result(result)
 
     def _jderobot_command(self, name: str, role: str, call,
                           said: str = "JdeRobot servers give no answer") -> Future:

@@ -12,9 +12,9 @@ import time
 
 from ..core.frames import clamp, enu_quaternion, finite, wrap_pi
 from .plans import mission_from_ice, mission_to_ice, outcome_from_result, result_from_outcome
-from ..vehicle.state import (Attitude, Battery, CommandResult, CommandStatus, Environment, Fence, GlobalPosition, Gps,
+from ..vehicle.state import (Attitude, Battery, Boot, CommandResult, CommandStatus, Environment, Fence, GlobalPosition, Gps,
                      LandedState, LinkHealth, LinkStatus, LocalPosition, Message, Readiness, SequencePhase,
-                     SequenceProgress, Setpoint, Severity, VehicleState, Velocity)
+                     SequenceProgress, SequenceState, Setpoint, Severity, VehicleState, Velocity)
 
 # AR.Drone navdata states, as JdeRobot's Navdata carries them.
 NAV_UNKNOWN, NAV_INITED, NAV_LANDED, NAV_FLYING, NAV_HOVERING, NAV_TEST, NAV_TAKING_OFF, NAV_GOTO, NAV_LANDING, \
@@ -218,7 +218,8 @@ def status_from_state(ms, s: VehicleState, messages_since: int = -1, results_sin
                            low=bat.low),
         gps=ms.Gps(fixType=gps.fix_type, satellites=gps.satellites, hasHdop=has_hdop, hdop=hdop),
         readiness=ms.Readiness(prearmOk=s.readiness.prearm_ok, ekfOk=s.readiness.ekf_ok,
-                               gpsOk=s.readiness.gps_ok),
+                               gpsOk=s.readiness.gps_ok, reasons=list(s.readiness.reasons)),
+        restarts=s.boot.restarts,
         environment=ms.Environment(hasMag=env.mag is not None, magX=int(mag[0]), magY=int(mag[1]),
                                    magZ=int(mag[2]), hasAccel=env.accel_g is not None, accelX=acc[0],
                                    accelY=acc[1], accelZ=acc[2], hasPressure=has_p, pressureHpa=pressure,
@@ -233,6 +234,8 @@ def status_from_state(ms, s: VehicleState, messages_since: int = -1, results_sin
         setpoint=ms.Setpoint(forward=s.setpoint.forward, right=s.setpoint.right, up=s.setpoint.up,
                              yawRate=s.setpoint.yaw_rate),
         mission=mission_to_ice(ms, s.mission),
+        running=ms.SequenceStatus(name=s.sequence.name, state=s.sequence.state, detail=s.sequence.detail),
+        mayBeAirborne=s.may_be_airborne,
     )
 
 
@@ -280,7 +283,9 @@ def state_from_status(st, messages: tuple[Message, ...], results: tuple[CommandR
                         remaining=bat.remaining if bat.hasRemaining else None,
                         remaining_estimated=bat.remainingEstimated, cells=bat.cells, low=bat.low),
         gps=Gps(fix_type=gps.fixType, satellites=gps.satellites, hdop=gps.hdop if gps.hasHdop else None),
-        readiness=Readiness(prearm_ok=st.readiness.prearmOk, ekf_ok=st.readiness.ekfOk, gps_ok=st.readiness.gpsOk),
+        readiness=Readiness(prearm_ok=st.readiness.prearmOk, ekf_ok=st.readiness.ekfOk, gps_ok=st.readiness.gpsOk,
+                            reasons=tuple(st.readiness.reasons)),
+        boot=Boot(restarts=st.restarts),
         environment=Environment(
             mag=(env.magX, env.magY, env.magZ) if env.hasMag else None,
             accel_g=(env.accelX, env.accelY, env.accelZ) if env.hasAccel else None,
@@ -295,4 +300,6 @@ def state_from_status(st, messages: tuple[Message, ...], results: tuple[CommandR
         setpoint=Setpoint(forward=st.setpoint.forward, right=st.setpoint.right, up=st.setpoint.up,
                           yaw_rate=st.setpoint.yawRate),
         mission=mission_from_ice(st.mission),
+        sequence=SequenceState(st.running.name, st.running.state, st.running.detail),
+        may_be_airborne=st.mayBeAirborne,
     )

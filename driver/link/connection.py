@@ -1,16 +1,36 @@
 """A connection string, checked for the user and opened as its transport: a live link or a recorded flight."""
 from __future__ import annotations
 
+import ipaddress
 import os
+import re
 
 from .tlog import TlogReplay
 from .transport import MavutilTransport, Transport, UdpTransport
 
-__all__ = ["connection_problem", "open_transport", "NETWORK_SCHEMES"]
+__all__ = ["connection_problem", "host_problem", "open_transport", "NETWORK_SCHEMES"]
 
 
 NETWORK_SCHEMES = ("udp", "udpin", "udpout", "udpbcast", "tcp", "tcpin")
 OTHER_SCHEMES = ("ws", "wss", "wsserver", "mcast")      # pymavlink takes these too; checked by it
+
+
+_LABEL = re.compile(r"[A-Za-z0-9]([A-Za-z0-9-]{0,61}[A-Za-z0-9])?$")     # RFC 1123: letters, digits, inner hyphens
+
+
+def host_problem(host: str) -> str | None:
+    """Why ``host`` cannot be a network host (a typo, a pasted command), in a line for the user; None for an IP
+    address or a host name made of RFC 1123 labels. Checked before anything is opened or asked: "no such host!!
+    ;rm" used to go to the resolver and fail 15 s later as a silent link."""
+    try:
+        ipaddress.ip_address(host.strip("[]"))
+        return None
+    except ValueError:
+        pass
+    name = host[:-1] if host.endswith(".") else host
+    if name and len(name) <= 253 and all(_LABEL.match(label) for label in name.split(".")):
+        return None
+    return f"{host!r} is not a host name or an IP address (letters, digits, '-' and '.' only)"
 
 
 def connection_problem(connection: str) -> str | None:
@@ -31,7 +51,8 @@ def connection_problem(connection: str) -> str | None:
             return f"{text!r}: {scheme} needs HOST:PORT"
         if not port.isdigit() or not 0 < int(port) < 65536:
             return f"{text!r}: the port must be a number from 1 to 65535"
-        return None
+        problem = host_problem(host)
+        return f"{text!r}: {problem}" if problem else None
     if colon and scheme.lower() in OTHER_SCHEMES:
         return None
     if text.lower().endswith(".tlog"):

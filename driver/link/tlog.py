@@ -140,6 +140,7 @@ class TlogReplay(Transport):
         self._position = 0.0                  # seconds of log time played
         self._anchor = time.monotonic()       # real time at which _position was last set
         self._closed = False
+        self.seeks = 0                        # how many times the pilot moved in it: its clock jumped
 
     # -- controls (any thread) -------------------------------------------------------------
     @property
@@ -184,6 +185,7 @@ class TlogReplay(Transport):
             self._anchor = time.monotonic()
             when = self.start_time + self._position
             self._index = bisect.bisect_left(self._stamps, when) if self._packets else 0
+            self.seeks += 1
             self._cond.notify_all()
 
     def track(self) -> list[tuple[float, float, float]]:

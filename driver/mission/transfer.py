@@ -32,8 +32,9 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from ..core.results import CommandResult, CommandStatus
 from .legacy_rally import LegacyRally
+from .readback import READ_PATIENCE, ReadBack
 from .plan import Plan, PlanKind, TransferDirection, TransferOutcome, TransferProgress
-from .wire import difference, from_wire, home_slot, result_meaning, to_wire
+from .wire import from_wire, home_slot, result_meaning, to_wire
 
 __all__ = ["PlanTransfers", "MIN_RETRY", "MAX_RETRY"]
 
@@ -41,7 +42,8 @@ log = logging.getLogger(__name__)
 
 MIN_RETRY = 0.1              # s: the shortest re-ask time, whatever the link
 MAX_RETRY = 1.5              # s: the longest (QGroundControl's ack timeout)
-START_ATTEMPTS = 8           # MISSION_COUNT / MISSION_REQUEST_LIST / MISSION_CLEAR_ALL sent this often
+START_ATTEMPTS = 8           # MISSION_COUNT / MISSION_REQUEST_LIST / MISSION_CLEAR_ALL sent this often (the list
+                             # for READ_PATIENCE s at the least: readback.py)
 ITEM_ATTEMPTS = 12           # a download's item asked this often before the transfer fails ...
 ITEM_PATIENCE = 8.0          # s ... and for this long since it was first asked (ArduPilot's own item timeout):
                              # on a fast link 12 re-asks take 1.2 s, too short for a loss streak on a radio
@@ -80,9 +82,11 @@ class _Transfer:
                                               # the vehicle has it); None once the vehicle asked anything
     resent: int = 0
     said: str = ""                            # a MISSION_ACK ERROR the vehicle sent, kept until the plan decides
+    first_asked: float | None = None          # when the start message first went out
+    verifying: float | None = None            # a read-back going on after its upload's verdict: since when
 
 
-class PlanTransfers(LegacyRally):
+class PlanTransfers(LegacyRally, ReadBack):
     """The transfers of one vehicle. ``record(name, status, reason)`` stores a result (lock held)."""
 
     def __init__(self, codec, source: tuple[int, int], target: Callable[[], tuple[int, int]],
@@ -119,7 +123,7 @@ class PlanTransfers(LegacyRally):
     # -- starting (any thread, lock held) ----------------------------------------------------------------
     def busy(self, kind: PlanKind) -> str:
         t = self._running.get(kind)
-        return f"a {kind.label} {t.direction.value} is running" if t is not None else ""
+        return f"a {kind.label} {t.direction.value} is running" if t is not None and t.verifying is None else ""
 
     def upload(self, plan: Plan, now: float) -> Future:
         wire = list(plan.items)
@@ -184,25 +188,31 @@ class PlanTransfers(LegacyRally):
                 if now - entry[0] < self._retry(t):
                     continue
                 if entry[1] >= ITEM_ATTEMPTS and now - entry[2] >= ITEM_PATIENCE:
-                    accepted = "the vehicle accepted the upload (MISSION_ACK) but reading it back failed: " \
-                        if t.upload is not None and t.upload.acked else \
-                        f"the vehicle answered {t.upload.said}; reading back failed: " \
-                        if t.upload is not None and t.upload.said else \
-                        f"the vehicle answered {t.said}; " if t.said else ""
-                    self._end(t, CommandStatus.TIMED_OUT, f"{accepted}item {seq} never came ({entry[1]} requests "
-                              f"in {now - entry[2]:.0f} s); {len(t.received)} of {t.count} received")
-                    return
+                    why = (f"item {seq} never came ({entry[1]} requests in {now - entry[2]:.0f} s); "
+                           f"{len(t.received)} of {t.count} received")
+                    if t.upload is None:
+                        self._end(t, CommandStatus.TIMED_OUT, f"the vehicle answered {t.said}; {why}" if t.said
+                                  else why)
+                        return
+                    if self._unanswered(t, why, now):
+                        return
                 self._ask_item(t, seq, now)
             return
         if now < t.next_send:
             return
         if t.stage == "start":
-            if t.attempts >= START_ATTEMPTS:
+            listing = t.direction is TransferDirection.DOWNLOAD
+            if t.attempts >= START_ATTEMPTS and (not listing or now - t.first_asked >= READ_PATIENCE
+                                                 or (t.upload is not None and t.upload.acked)):
                 what = {TransferDirection.UPLOAD: "MISSION_COUNT", TransferDirection.DOWNLOAD: "MISSION_REQUEST_LIST",
                         TransferDirection.CLEAR: "MISSION_CLEAR_ALL"}[t.direction]
                 said = f" (the vehicle answered {t.said})" if t.said else ""
-                self._end(t, CommandStatus.TIMED_OUT, f"no answer to {what} after {t.attempts} attempts{said}")
-                return
+                why = f"no answer to {what} after {t.attempts} attempts in {now - t.first_asked:.0f} s{said}"
+                if t.upload is None:
+                    self._end(t, CommandStatus.TIMED_OUT, why)
+                    return
+                if self._unanswered(t, why, now):
+                    return
             self._send_start(t, now)
         elif t.stage == "items":                                  # upload: the vehicle leads
             if now - t.heard > SILENCE:
@@ -229,6 +239,8 @@ class PlanTransfers(LegacyRally):
             msg = c.mission_request_list_encode(system, component, **args)
         else:
             msg = c.mission_clear_all_encode(system, component, **args)
+        if t.first_asked is None:
+            t.first_asked = now
         t.attempts += 1
         t.sent_at = now
         t.next_send = now + self._retry(t)
@@ -319,7 +331,7 @@ class PlanTransfers(LegacyRally):
     def _resumable(t: _Transfer) -> bool:
         """A read-back begun while its upload was not acknowledged, still waiting for the count."""
         return (t.upload is not None and t.upload.direction is TransferDirection.UPLOAD and not t.upload.acked
-                and t.stage == "start")
+                and t.stage == "start" and t.verifying is None)
 
     def _resume_upload(self, check: _Transfer, now: float) -> _Transfer:
         """Back from a read-back to its upload: the vehicle is still receiving (our last item was lost)."""
@@ -369,6 +381,8 @@ class PlanTransfers(LegacyRally):
             self._on_error(t, result, now)
             return
         if t.direction is TransferDirection.DOWNLOAD:
+            if t.verifying is not None:
+                return                    # the vehicle busy with another upload: the verification asks again
             if t.stage == "start" and result != mavlink.MAV_MISSION_ACCEPTED:
                 self._end(t, CommandStatus.REFUSED, result_meaning(result))
             elif t.stage == "items" and result not in (mavlink.MAV_MISSION_ACCEPTED,
@@ -439,35 +453,17 @@ class PlanTransfers(LegacyRally):
         if t.kind is PlanKind.MISSION and items:
             items = items[1:]                                     # the home slot
         plan = Plan(t.kind, tuple(items))
-        upload = t.upload
-        if upload is None:
+        if t.upload is None:
             self._end(t, CommandStatus.ACCEPTED, f"{len(plan)} items", plan)
-            return
-        why = difference(upload.plan, plan, self.integer)
-        said = f"{upload.said}; " if upload.said else ""
-        if upload.direction is TransferDirection.CLEAR:
-            if why:
-                self._end(t, CommandStatus.REFUSED, f"{said}the vehicle still holds {len(plan)} items", plan)
-            else:
-                self._end(t, CommandStatus.ACCEPTED, f"cleared (read back empty; the vehicle had answered "
-                          f"{upload.said})", plan)
-        elif why:
-            self._end(t, CommandStatus.REFUSED, f"{said}the plan read back differs: {why}", plan)
-        elif upload.said:
-            self._end(t, CommandStatus.ACCEPTED, f"{len(plan)} items read back as sent (the vehicle answered "
-                      f"{upload.said} to an item sent again after it had the plan)", plan)
-        elif upload.acked:
-            self._end(t, CommandStatus.ACCEPTED, f"{len(plan)} items, accepted and read back", plan)
         else:
-            self._end(t, CommandStatus.ACCEPTED, f"{len(plan)} items read back as sent (the vehicle's final "
-                      "MISSION_ACK was lost)", plan)
+            self._checked(t, plan)
 
     def _end(self, t: _Transfer, status: CommandStatus, reason: str, plan: Plan | None = None) -> None:
         if self._running.get(t.kind) is t:
             del self._running[t.kind]
         self.changed = True
         shown = t.upload or t
-        name = f"{shown.direction.value} {shown.kind.label}"
+        name = f"verify {t.kind.label}" if t.verifying is not None else f"{shown.direction.value} {shown.kind.label}"
         result = self._record(name, status, reason)
         if shown.direction is TransferDirection.CLEAR:
             self._settle(t.future, result)

@@ -19,7 +19,7 @@ from .download import Download
 from .ftp import FtpDownload
 from .model import Parameter, ParameterTable, ParameterValues, ParamType
 from .setter import SET_RETRY, PendingSet
-from .values import as_stored, format_value, type_problem
+from .values import as_stored, format_value, type_problem, wire_problem
 
 log = logging.getLogger(__name__)
 
@@ -104,7 +104,9 @@ class ParameterManager:
         """Why ``name`` cannot hold ``value`` in the type the vehicle reported ("" when it can, or is not known)."""
         known = self._values.get(name)
         if known is None:
-            return "" if math.isfinite(value) else "not a finite number"
+            if not math.isfinite(value):
+                return "not a finite number"
+            return wire_problem(value) if value == round(value) else ""
         problem = type_problem(known.type, value)
         return f"{format_value(None, value)}: {problem}" if problem else ""
 
@@ -120,9 +122,11 @@ class ParameterManager:
                 self._settle(future, CommandStatus.REJECTED, f"{format_value(None, value)}: {problem}", command)
                 return future
             value = as_stored(ptype, value)
-        elif not math.isfinite(value):
-            self._settle(future, CommandStatus.REJECTED, "not a finite number", command)
-            return future
+        else:
+            problem = self.value_problem(name, value)
+            if problem:
+                self._settle(future, CommandStatus.REJECTED, problem, command)
+                return future
         old = self._sets.pop(name, None)
         if old is not None:
             self._settle(old.future, CommandStatus.ABORTED, f"superseded by {name}={format_value(ptype, value)}",

@@ -12,7 +12,7 @@ import struct
 
 from .model import ParamType
 
-__all__ = ["RANGES", "as_stored", "same_value", "type_problem", "format_value"]
+__all__ = ["RANGES", "as_stored", "same_value", "type_problem", "wire_problem", "format_value"]
 
 RANGES = {
     ParamType.INT8: (-128, 127), ParamType.UINT8: (0, 255),
@@ -54,9 +54,20 @@ def type_problem(ptype: ParamType, value: float) -> str:
         low, high = RANGES[ptype]
         if not low <= value <= high:
             return f"{ptype.name.lower()} holds {low} to {high}"
-    elif math.isinf(_float32(value)):
+        return wire_problem(value)
+    if math.isinf(_float32(value)):
         return "too large for a 32-bit float"
     return ""
+
+
+def wire_problem(value: float) -> str:
+    """Why a whole number cannot go out exactly in PARAM_SET, whose value is a 32-bit float ("" when it can):
+    above 2^24 not every integer has a float32, and the vehicle would store the rounded one."""
+    sent = _float32(value)
+    if sent == value:
+        return ""
+    return (f"PARAM_SET carries a 32-bit float, which cannot hold {int(value)} exactly: the vehicle would store "
+            f"{int(sent)} (whole numbers are exact only up to 16,777,216 and at some values above)")
 
 
 def format_value(ptype: ParamType | None, value: float) -> str:

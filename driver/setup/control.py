@@ -117,7 +117,7 @@ class VehicleSetup:
         self._test_armed = False               # the vehicle reported armed by the test
         self._traffic = TrafficTracker()
         self._traffic_at = 0.0
-        self._alerted: set[int] = set()
+        self._alerted: dict[int, str] = {}          # each aircraft alerting now: what was said of it
         self._lock = threading.Lock()          # guards the procedure objects between callers
 
     # -- calibrations ------------------------------------------------------------------------------------
@@ -232,13 +232,12 @@ class VehicleSetup:
         problem = _motor_test_problem(motor, throttle_pct, pwm, seconds, count, propellers_removed)
         if problem:
             return self._v._finish(name, CommandStatus.REJECTED, problem)
-        ours = self.motor_test_running          # our own test armed the motors: a new one may replace it
         firmware = self._v.state().firmware
 
-        def problem(s) -> str | None:           # checked now and again as the command goes out
-            if s.in_air:
-                return "the vehicle is flying"
-            if s.armed and not ours:
+        def problem(s) -> str | None:           # checked now and again as the command goes out (the flight rules
+            if s.may_be_airborne:               # check it too: driver.vehicle.safety)
+                return "the vehicle may be airborne (it has not reported itself landed and disarmed)"
+            if s.armed:
                 return "the vehicle is armed: disarm first"
             return None
         refusal = problem(self._v.state())
@@ -436,18 +435,13 @@ class VehicleSetup:
         if now - self._traffic_at >= TRAFFIC_REFRESH:
             self._traffic_at = now
             traffic = self._traffic.snapshot(now, state)
+            fresh = [c for c in traffic.alerts if c.icao not in self._alerted]
+            self._alerted = {c.icao: self._alerted.get(c.icao) or c.threat for c in traffic.alerts}
+            traffic = traffic.said(self._alerted)           # the banner says what Messages says, word for word
             if traffic.contacts or state.traffic.contacts:
                 self._store.set(traffic=traffic)
-            for c in traffic.alerts:
-                if c.icao not in self._alerted:
-                    self._alerted.add(c.icao)
-                    a, limits = c.approach, self._traffic.limits
-                    above = "above" if a.vertical >= 0 else "below"
-                    self._store.add_message_locked(
-                        Severity.WARNING, f"Traffic {c.label}: within {limits.horizontal:.0f} m and "
-                        f"{limits.vertical:.0f} m of us in {a.conflict_in:.0f} s (closest {a.horizontal:.0f} m in "
-                        f"{a.time:.0f} s, {abs(a.vertical):.0f} m {above})")
-            self._alerted &= {c.icao for c in traffic.alerts}
+            for c in fresh:
+                self._store.add_message_locked(Severity.WARNING, self._alerted[c.icao])
         return out
 
 

@@ -161,6 +161,7 @@ class Autopilot(Setup, Telemetry, Commands, ParamProtocol, FtpServer, LogServer,
         self.home_set = False
         self.next_prearm_report = PREARM_REPORT
         self.armed = False
+        self.auto_armed = False           # ap.auto_armed: AUTO may lift off (MISSION_START or a GUIDED takeoff set it)
         self.mode = MODES["STABILIZE"]
         self.landed = True
         self.d = 0.0
@@ -331,6 +332,7 @@ class Autopilot(Setup, Telemetry, Commands, ParamProtocol, FtpServer, LogServer,
         if not self.armed:
             return
         self.armed = False
+        self.auto_armed = False           # Copter::update_auto_armed: disarmed, never auto-armed
         self.armed_at = None
         self.liftoff_at = None
         self.takeoff_alt = None
@@ -338,6 +340,7 @@ class Autopilot(Setup, Telemetry, Commands, ParamProtocol, FtpServer, LogServer,
         if text:
             self._text(mavlink.MAV_SEVERITY_INFO, text)
         log.info("disarmed")
+        self._auto_disarmed()
 
     # -- modes -------------------------------------------------------------------------------------
     def set_mode(self, number: int) -> bool:

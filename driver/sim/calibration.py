@@ -112,6 +112,13 @@ class Calibration:
             for reason in reasons:
                 self._text(mavlink.MAV_SEVERITY_CRITICAL, "PreArm: " + reason.removeprefix("Arm: "))
 
+    def failing_prearm(self) -> list[str]:
+        """The checks that fail now and clear SYS_STATUS's pre-arm health bit (GCS::update_sensor_status_flags:
+        healthy while armed or while AP_Notify's pre_arm_check holds, which each 1 Hz run of the checks sets):
+        a calibration that failed or wants a reboot, the safety switch. Recording (-setup): the bit cleared with
+        "Compass calibration running" and stayed clear through "Arm: 3D Accel calibration needed"."""
+        return self.calibration_arm_reasons() + (["Hardware safety switch"] if self.safety_on else [])
+
     def calibration_arm_reasons(self) -> list[str]:
         """Why arming is refused after a calibration (recording: "Arm: 3D Accel calibration needed")."""
         reasons = []

@@ -130,6 +130,7 @@ class Commands:
         self.yaw_cmds_enabled = False
         self.yaw_mode = "hold"
         self.touchdown_at = None
+        self.auto_armed = True            # Copter::start_takeoff (mode_guided.cpp) sets it
         if self.liftoff_at is None:
             spinning = self.armed_at + self.profile.arming_delay
             self.liftoff_at = max(spinning, self.t) + self.profile.liftoff_after

@@ -97,7 +97,8 @@ class Faults:
     * ``ignore_commands``: MAV_CMD ids never answered nor acted on (True: all); each one lands in ``ignored``.
     * ``lose_replies``: the vehicle ACTS on the command but its COMMAND_ACK is lost: a set of MAV_CMD ids,
       True for all, or a share from 0 to 1; each one lands in ``replies_lost``.
-    * ``refuse_arm``: arming refused with "PreArm: <reason>".
+    * ``refuse_arm``: arming refused with "PreArm: <reason>", at the arming only (as an arming check): the
+      SYS_STATUS pre-arm bit stays as the vehicle's own checks say (``Calibration.failing_prearm``).
     """
 
     def __init__(self, seed: int | None = None, clock: Callable[[], float] = time.monotonic, **settings) -> None:

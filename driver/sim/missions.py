@@ -5,8 +5,14 @@ Mixed into :class:`~driver.sim.autopilot.Autopilot`. Follows ArduPilot's Mission
 
 * an upload asks item by item with MISSION_REQUEST (not _INT), re-asks after 1 s without the item, and gives up
   8 s after the last item with MISSION_ACK OPERATION_CANCELLED and "Mission upload timeout";
-* an item with the wrong seq gets INVALID_SEQUENCE without ending the upload; a download, a clear or another
-  ground station's upload asked meanwhile gets DENIED;
+* the last item is answered MISSION_ACK ACCEPTED once (transfer_is_complete): the upload is then over, and a lost
+  ACK is never sent again;
+* an item with the wrong seq gets INVALID_SEQUENCE without ending the upload; a download (MISSION_REQUEST_LIST,
+  MISSION_REQUEST_INT) or another ground station's upload asked meanwhile gets DENIED, while the float
+  MISSION_REQUEST is answered all the same (handle_mission_request has no such check) with, once an upload,
+  "got MISSION_REQUEST; use MISSION_REQUEST_INT!"; a MISSION_CLEAR_ALL from the uploading ground station ends
+  its upload and clears (cancel_upload), from another one gets DENIED and ERROR; an item beyond the end of the
+  plan (cleared meanwhile) gets ERROR;
 * an item when no upload of its plan runs (the last item sent again after the upload completed, a duplicate)
   gets MISSION_ACK ERROR (GCS_Common.cpp, GCS_MAVLINK::handle_mission_item: ``if (!prot->receiving)``);
 * before "ArduPilot Ready" the storage is not there: NO_SPACE and "Only 0 items are supported";
@@ -14,9 +20,11 @@ Mixed into :class:`~driver.sim.autopilot.Autopilot`. Follows ArduPilot's Mission
 * item 0 of the mission is home (what is uploaded there is replaced); read back, frames and autocontinue are
   ArduPilot's own (GLOBAL_RELATIVE_ALT, DO_ commands frame 0, fence vertices frame 0 autocontinue 0).
 
-The Solo's ArduCopter 3.3 (3drobotics/ardupilot-solo, ArduCopter/GCS_Mavlink.pde) knows only the float
-MISSION_ITEM / MISSION_REQUEST, no mission_type (MAVLink 1), ends a timed-out upload silently, and has no
-polygon fence (AC_Fence: ceiling and circle); its rally points travel as RALLY_POINT with RALLY_TOTAL.
+The Solo's ArduCopter 3.3 (3drobotics/ardupilot-solo, ArduCopter/GCS_Mavlink.pde and GCS_Common.cpp) knows only
+the float MISSION_ITEM / MISSION_REQUEST, no mission_type (MAVLink 1), gives an upload up silently 6 s after its
+last item (wp_recv_time + waypoint_receive_timeout), ends it at once on a MISSION_REQUEST_LIST (answered with the
+count: ``waypoint_receiving = false``), and has no polygon fence (AC_Fence: ceiling and circle); its rally points
+travel as RALLY_POINT with RALLY_TOTAL.
 """
 from __future__ import annotations
 
@@ -36,7 +44,8 @@ log = logging.getLogger("driver.sim.autopilot")
 MISSION, FENCE, RALLY = (mavlink.MAV_MISSION_TYPE_MISSION, mavlink.MAV_MISSION_TYPE_FENCE,
                          mavlink.MAV_MISSION_TYPE_RALLY)
 REQUEST_AGAIN = 1.0          # s without the asked item before it is asked again (1000 ms + stream slowdown)
-UPLOAD_TIMEOUT = 8.0         # s after the last item received before the upload is given up
+UPLOAD_TIMEOUT = 8.0         # s after the last item received before the upload is given up (upload_timeout_ms)
+UPLOAD_TIMEOUT_33 = 6.0      # ArduCopter 3.3: 1 s + waypoint_receive_timeout (5000 ms)
 MAX_ITEMS = {MISSION: 700, FENCE: 84, RALLY: 10}
 _LOCATED_DO = {mavlink.MAV_CMD_DO_SET_HOME, mavlink.MAV_CMD_DO_LAND_START, mavlink.MAV_CMD_DO_SET_ROI,
                mavlink.MAV_CMD_DO_SET_ROI_LOCATION}
@@ -118,6 +127,7 @@ class Missions:
         self.plans: dict[int, list[StoredItem]] = {MISSION: [], FENCE: [], RALLY: []}
         self.uploads: dict[int, _Upload] = {}
         self.warned_float_item = False
+        self.warned_float_request = False   # mission_request_warning_sent: again after each upload's start
         self._fence_shapes = None      # (the fence plan, its FenceShapes): a fence is only ever replaced whole
 
     # -- what the profile speaks -------------------------------------------------------------------
@@ -171,6 +181,7 @@ class Missions:
         if msg.count == 0:
             self._upload_complete(upload, msg)
             return
+        self.warned_float_request = False              # init_send_requests
         self.uploads[kind] = upload
         self._request_item(upload)
 
@@ -227,6 +238,11 @@ class Missions:
             upload.items.append(item)
         else:
             plan = self.plans[kind]
+            if msg.seq > len(plan):          # beyond the end (cleared meanwhile): ERROR, and 4.x stops receiving
+                self._ack(msg, mavlink.MAV_MISSION_ERROR, kind, upload.link)
+                if self.profile.mavlink2:
+                    self.uploads.pop(kind, None)
+                return
             if msg.seq < len(plan):
                 plan[msg.seq] = item
             else:
@@ -254,9 +270,10 @@ class Missions:
             self._text(mavlink.MAV_SEVERITY_DEBUG, "Fence Indexed OK")
 
     def _missions_step(self) -> None:
-        """MissionItemProtocol::update(): re-ask the item every second, give up 8 s after the last one."""
+        """MissionItemProtocol::update(): re-ask the item every second, give up 8 s after the last one (3.3: 6 s)."""
+        timeout = UPLOAD_TIMEOUT if self.profile.mavlink2 else UPLOAD_TIMEOUT_33
         for kind, upload in list(self.uploads.items()):
-            if self.t - upload.last_receive > UPLOAD_TIMEOUT:
+            if self.t - upload.last_receive > timeout:
                 self.uploads.pop(kind, None)
                 if self.profile.mavlink2:           # 3.3 stopped receiving without a word
                     self.emit_to(self.factory.mission_ack_encode(
@@ -281,6 +298,9 @@ class Missions:
         kind = self._readable(msg)
         if kind is None:
             return
+        if kind in self.uploads:            # 3.3 (4.x denied it above): the list asked for ends the upload
+            self.uploads.pop(kind)
+            self._mission_changed()
         self.emit_to(self.factory.mission_count_encode(msg.get_srcSystem(), msg.get_srcComponent(),
                                                        len(self.plans[kind]), kind), self.sender)
 
@@ -290,16 +310,19 @@ class Missions:
         self._send_item(msg, integer=True)
 
     def _on_mission_request(self, msg) -> None:
-        self._send_item(msg, integer=False)
+        if self._send_item(msg, integer=False) and self.profile.mavlink2 and not self.warned_float_request:
+            self.warned_float_request = True
+            self._text(mavlink.MAV_SEVERITY_WARNING, "got MISSION_REQUEST; use MISSION_REQUEST_INT!")
 
-    def _send_item(self, msg, integer: bool) -> None:
-        kind = self._readable(msg)
+    def _send_item(self, msg, integer: bool) -> bool:
+        """The item asked for, or MISSION_ACK why not; True when the item went."""
+        kind = self._readable(msg) if integer else self._kind(msg)   # the float request: answered even then
         if kind is None:
-            return
+            return False
         items = self.plan_items(kind)
         if not 0 <= msg.seq < len(items):
             self._ack(msg, mavlink.MAV_MISSION_INVALID_SEQUENCE, kind)
-            return
+            return False
         item = items[msg.seq]
         sysid, compid = msg.get_srcSystem(), msg.get_srcComponent()
         if integer:
@@ -311,13 +334,21 @@ class Missions:
                                                    item.autocontinue, *item.params, item.x / 1e7, item.y / 1e7,
                                                    item.z, kind)
         self.emit_to(out, self.sender)
+        return True
 
     # -- clear ------------------------------------------------------------------------------------------
     def _on_mission_clear_all(self, msg) -> None:
         kind = self._kind(msg)
         if kind is None:
             return
-        if kind in self.uploads or (kind == MISSION and self.mission_running()):
+        upload = self.uploads.get(kind)
+        if upload is not None and self.profile.mavlink2:     # MissionItemProtocol::cancel_upload
+            if (msg.get_srcSystem(), msg.get_srcComponent()) != (upload.sysid, upload.compid):
+                self._ack(msg, mavlink.MAV_MISSION_DENIED, kind)
+                self._ack(msg, mavlink.MAV_MISSION_ERROR, kind)
+                return
+            del self.uploads[kind]
+        if kind == MISSION and self.mission_running():
             self._ack(msg, mavlink.MAV_MISSION_ERROR, kind)   # AP_Mission::clear() refuses a running mission
             return
         self.plans[kind] = []

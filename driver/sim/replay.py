@@ -210,6 +210,33 @@ class Exchange:
     answers: list = field(default_factory=list)
 
 
+STATE_SHOWN_WITHIN = 3.0        # s after an accepted arm or mode change its heartbeat showed it
+
+
+def _with_state_shown(exchanges: list, telemetry: list) -> None:
+    """An accepted arm, disarm or mode change is answered by its ACK *and* by the autopilot's next heartbeat
+    showing it, as the vehicle sent them: a ground station confirms those by the heartbeat, and the looped
+    telemetry cannot be in step with a live request."""
+    beats = [(t, m, v) for t, m, v in telemetry if m.get_type() == "HEARTBEAT" and m.get_srcComponent() == 1]
+    for ex in exchanges:
+        r = ex.request
+        if r.get_type() != "COMMAND_LONG" or r.command not in (mavlink.MAV_CMD_COMPONENT_ARM_DISARM,
+                                                               mavlink.MAV_CMD_DO_SET_MODE):
+            continue
+        acks = [(dt, m) for dt, m, _ in ex.answers if m.get_type() == "COMMAND_ACK"
+                and m.result == mavlink.MAV_RESULT_ACCEPTED]
+        if not acks:
+            continue
+        after = ex.t + acks[0][0]
+        for t, m, v in beats:
+            if after <= t <= after + STATE_SHOWN_WITHIN and (
+                    (r.command == mavlink.MAV_CMD_DO_SET_MODE and m.custom_mode == int(r.param2)) or
+                    (r.command == mavlink.MAV_CMD_COMPONENT_ARM_DISARM and
+                     bool(m.base_mode & mavlink.MAV_MODE_FLAG_SAFETY_ARMED) == (r.param1 >= 0.5))):
+                ex.answers.append((t - ex.t, m, v))
+                break
+
+
 @dataclass
 class Recording:
     """A .tlog split into telemetry (t, message, version) and exchanges, in recorded order."""
@@ -234,6 +261,7 @@ class Recording:
                 continue
             owner = next((ex for ex in reversed(exchanges[-LOOKBACK:]) if belongs(ex.request, msg)), exchanges[-1])
             owner.answers.append((t - owner.t, msg, version))
+        _with_state_shown(exchanges, telemetry)
         return Recording(path, telemetry, exchanges, frames[-1][0] if frames else 0.0)
 
     def exchanges_of(self, mtype: str) -> list[Exchange]:

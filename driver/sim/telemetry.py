@@ -93,7 +93,7 @@ class Telemetry:
             health |= mavlink.MAV_SYS_STATUS_SENSOR_GPS
         if stage.ahrs_ok:
             health |= mavlink.MAV_SYS_STATUS_AHRS
-        if self.ready:
+        if self.armed or (self.ready and not self.failing_prearm()):
             health |= mavlink.MAV_SYS_STATUS_PREARM_CHECK
         # ArduPilot sets the geofence health bit whenever the fence has not failed, present or not
         # (GCS_MAVLINK::update_sensor_status_flags); without it MAVProxy announces "fence breach".

@@ -57,6 +57,25 @@ class Battery:
     reported_remaining: float | None = None   # the autopilot's own percentage, None when it gives none
     consumed_mah: float | None = None    # BATTERY_STATUS.current_consumed, None when the vehicle does not count it
     thresholds: BatteryThresholds = field(default_factory=BatteryThresholds)   # what ``alarm`` is judged by
+    capacity_mah: float | None = None    # the vehicle's BATT_CAPACITY, None until read (or 0: not set)
+    draw: float | None = None            # A: the current averaged since liftoff, over DRAW_SMOOTHING s at most
+    draw_at: float | None = None         # the vehicle's time (s since boot) of the draw's last sample
+    draw_weight: float = 0.0             # s of flight the average stands for (up to about DRAW_SMOOTHING)
+
+    def drawing(self, current: float | None, at: float | None, airborne: bool) -> dict:
+        """The draw after a current of ``current`` A at the vehicle's time ``at``, as a pilot reads a fuel gauge:
+        the average since the takeoff's climb ended, then over the last DRAW_SMOOTHING s or so (exponentially
+        weighted), so one sample, a gust or a climb, moves it little. Not ``airborne`` (on the ground, taking off,
+        landing) it follows the current; a restart (the clock going back) starts it again."""
+        if current is None or not math.isfinite(current):
+            return {}
+        if not airborne or self.draw is None or at is None or self.draw_at is None or at < self.draw_at:
+            return dict(draw=current, draw_at=at, draw_weight=DRAW_SEED)
+        dt = at - self.draw_at
+        kept = self.draw_weight * math.exp(-dt / DRAW_SMOOTHING)
+        weight = kept + dt
+        return dict(draw=(self.draw * kept + current * dt) / weight if weight > 0 else self.draw, draw_at=at,
+                    draw_weight=weight)
 
     @property
     def cell_voltage(self) -> float | None:
@@ -69,6 +88,8 @@ class Battery:
 
 
 _MIN_DRAW = 0.5            # A: below it (disarmed, on the bench) a time left means nothing
+DRAW_SMOOTHING = 30.0      # s: the draw a time left is reckoned at is the current averaged over about this long
+DRAW_SEED = 0.1            # s the first sample in the air stands for: the next seconds outweigh it
 
 
 def battery_alarm(b: Battery) -> BatteryAlarm:
@@ -91,17 +112,21 @@ def battery_alarm(b: Battery) -> BatteryAlarm:
 
 
 def time_left(b: Battery, reserve_percent: float | None = None) -> float | None:
-    """Seconds until the pack is down to ``reserve_percent`` (default: the critical threshold) at the present
-    current, or None when the vehicle gives no consumed charge, no current or no percentage of its own.
+    """Seconds until the pack is down to ``reserve_percent`` (default: the critical threshold) at the smoothed
+    draw (:attr:`Battery.draw`), or None when the vehicle gives no consumed charge, no current or no percentage.
 
-    ArduPilot's percentage is (capacity - consumed) / capacity, so the charge left is
-    consumed * remaining / (100 - remaining) mAh, whatever BATT_CAPACITY is."""
-    remaining, consumed, current = b.reported_remaining, b.consumed_mah, b.current
-    if remaining is None or consumed is None or current is None or current < _MIN_DRAW:
-        return None
-    if remaining >= 100.0 or consumed <= 0.0:
+    ArduPilot's percentage is (capacity - consumed) / capacity. With BATT_CAPACITY known the charge left is
+    capacity * (1 - reserve) - consumed, which moves smoothly as the vehicle counts its mAh; without it,
+    consumed * remaining / (100 - remaining), whose whole percent steps make it jump early in a flight."""
+    remaining, consumed = b.reported_remaining, b.consumed_mah
+    draw = b.draw if b.draw is not None else b.current
+    if remaining is None or consumed is None or draw is None or draw < _MIN_DRAW:
         return None
     reserve = b.thresholds.critical_percent if reserve_percent is None else reserve_percent
-    usable = max(0.0, remaining - reserve)
-    left_mah = consumed * usable / (100.0 - remaining)
-    return 3.6 * left_mah / current
+    if b.capacity_mah:
+        left_mah = b.capacity_mah * (1.0 - reserve / 100.0) - consumed
+    elif remaining >= 100.0 or consumed <= 0.0:
+        return None
+    else:
+        left_mah = consumed * max(0.0, remaining - reserve) / (100.0 - remaining)
+    return 3.6 * max(0.0, left_mah) / draw

@@ -5,13 +5,19 @@ What a pilot must be able to trust, on a lossy link shared with other systems:
 
 * a COMMAND_ACK settles only a command that was really sent (attempts > 0), from the autopilot, and
   addressed to us (target system *and* component; MAVLink 1 ACKs carry neither and are taken as ours);
+* a reply answers its own request, never a later one with the same id: an ACK carries only the command's id,
+  so while an earlier request with that id (replaced, or answered fewer times than it was sent) may still be
+  answered, an ACK is not taken for the new one, which goes on being re-sent until an answer can only be its
+  own (:attr:`_Command.ambiguous_until`);
 * a mode change is confirmed by the HEARTBEAT, never by the ACK alone: an ACK cannot say which of two
-  DO_SET_MODEs it answers, so a late one for an earlier switch would otherwise confirm a lost packet;
+  DO_SET_MODEs it answers, so a late one for an earlier switch would otherwise confirm a lost packet; arming and
+  disarming likewise, by the heartbeat's armed bit;
 * firmware without MAV_CMD_DO_SET_MODE (the stock Solo) is remembered per vehicle after its first
   UNSUPPORTED: later mode changes go straight to SET_MODE, re-sent about every second until the heartbeat
   shows the mode, within the command's time;
 * MAV_RESULT_IN_PROGRESS waits for the final answer and never re-sends (a re-sent long command restarts);
-* a command with a guard (ground-only commands) is checked each time it is about to go out.
+* a command with a guard (ground-only commands) is checked each time it is about to go out, and every one
+  against the flight rules (:mod:`driver.vehicle.safety`) before each attempt.
 
 :meth:`CommandSender.service` runs on the driver's ticker with the state lock held and only *returns*
 the messages to send: the caller writes them after releasing the lock. Futures are settled by one
@@ -86,11 +92,20 @@ class _Command:
     future: Future
     message_index: int
     mode: int | None = None                   # a mode change: the custom_mode the heartbeat must show
+    armed: bool | None = None                 # arming (True) or disarming (False): the heartbeat's armed bit
     guard: Callable[[VehicleState], str | None] | None = None
+    retry: float | None = None                # s between attempts (None: the configured command timeout)
     attempts: int = 0
+    budget: int = 0                           # attempts it may make (more once a lost link is back)
+    first_sent: float | None = None
+    last_sent: float = 0.0
+    answers: int = 0                          # ACKs taken as its own
+    ambiguous_until: float = -1e18            # before then an ACK with its id may be an earlier request's
     next_send: float = 0.0
     deadline: float | None = None
-    acked: bool = False                       # mode change: ACCEPTED, waiting for the heartbeat
+    acked: bool = False                       # mode change or arming: ACCEPTED, waiting for the heartbeat
+    acked_at: float = 0.0
+    early: bool = False                       # a sequence's step: the vehicle's ACCEPTED settles it already
     in_progress: bool = False
     legacy: bool = False                      # mode change by the SET_MODE message
     refused: str | None = None
@@ -98,29 +113,53 @@ class _Command:
     tags: set = field(default_factory=set)
     settled: bool = False
 
+    def shown(self, armed: bool, custom_mode: int | None) -> bool:
+        """The vehicle's report shows what this command asked (a mode, the armed bit); False for the others."""
+        if self.mode is not None:
+            return custom_mode == self.mode
+        return self.armed is not None and armed == self.armed
+
 
 class CommandSender:
     """Pending commands of one vehicle; all methods run with the driver's state lock held."""
 
-    def __init__(self, store, config, notifier: Notifier, target: Callable[[], tuple[int, int]]):
+    def __init__(self, store, config, notifier: Notifier, target: Callable[[], tuple[int, int]], rules=None,
+                 roundtrip=None):
         self._store = store
         self._cfg = config
         self._notifier = notifier
         self._target = target                 # () -> (system, component) of the autopilot
+        self._rules = rules                   # the flight rules (driver.vehicle.safety): checked before each send
+        self._roundtrip = roundtrip           # the link's round trip (driver.core.roundtrip), fed by clean answers
         self.capabilities = Capabilities()
         self._pending: dict[object, _Command] = {}
+        self._echoes: dict[object, float] = {}     # command id -> until when an earlier request may be answered
+        self._custom_mode: int | None = None       # the mode the heartbeat shows now
+        self._armed = False                        # the armed bit it shows
+        self._heartbeat_at = -1e18                 # when it was heard
 
     # -- submitting (any thread, under the lock) ------------------------------------------------------
-    def submit(self, name: str, command: int, params, now: float, *, guard=None, tag=None) -> Future:
-        """A COMMAND_LONG: sent on the next service, re-sent unanswered, settled by its ACK."""
-        return self._add(_Command(name, command, command, params, Future(), self._store.message_index,
-                                  guard=guard), now, tag)
+    def submit(self, name: str, command: int, params, now: float, *, guard=None, tag=None,
+               retry: float | None = None, early: bool = False) -> Future:
+        """A COMMAND_LONG: sent on the next service, re-sent unanswered, settled by its ACK; arming and disarming
+        by the heartbeat's armed bit once the vehicle accepted (or shows it). ``early``: by the vehicle's
+        ACCEPTED already (a sequence's step, whose next step the heartbeat confirms anyway)."""
+        c = _Command(name, command, command, params, Future(), self._store.message_index, guard=guard, retry=retry,
+                     early=early)
+        if command == mavlink.MAV_CMD_COMPONENT_ARM_DISARM:
+            c.armed = params[0] >= 0.5
+        return self._add(c, now, tag)
 
-    def submit_mode(self, name: str, number: int, now: float, *, tag=None) -> Future:
+    def settled_by_state(self, command: int, now: float, pending: bool = True) -> bool:
+        """Whether the state now tells the truth about ``command`` (no request of that id could still change it;
+        ``pending`` False: leaving out the one pending now, which is being judged)."""
+        return (not pending or command not in self._pending) and self._echoes.get(command, -1e18) <= now
+
+    def submit_mode(self, name: str, number: int, now: float, *, tag=None, early: bool = False) -> Future:
         """A mode change, confirmed by the heartbeat; SET_MODE on firmware known to lack DO_SET_MODE."""
         c = _Command(name, mavlink.MAV_CMD_DO_SET_MODE, mavlink.MAV_CMD_DO_SET_MODE,
                      [mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, number, 0, 0, 0, 0, 0],
-                     Future(), self._store.message_index, mode=number)
+                     Future(), self._store.message_index, mode=number, early=early)
         c.legacy = self.capabilities.set_mode_command is False
         return self._add(c, now, tag)
 
@@ -129,17 +168,43 @@ class CommandSender:
             c.tags.add(tag)
         old = self._pending.pop(c.key, None)
         if old is not None:
-            self._resolve(old, CommandStatus.ABORTED, f"superseded by {c.name}", remove=False)
+            self._resolve(old, CommandStatus.ABORTED, f"superseded by {c.name}", remove=False, now=now)
         c.next_send = now
+        c.budget = self._cfg.command_attempts
+        c.ambiguous_until = self._echoes.get(c.key, -1e18)
         self._pending[c.key] = c
         return c.future
 
+    def _shows(self, c: _Command, now: float) -> bool:
+        """A heartbeat the vehicle sent after it got ``c`` shows what ``c`` asked, and no earlier request of its id
+        could still be what made it so. A link keeps its frames in order, so a heartbeat heard after ``c``'s own
+        ACCEPTED was sent after ``c`` was done; without that answer, only one heard at least the quickest round
+        trip after ``c`` went out can be (an older one may show a state ``c`` was meant to change back)."""
+        if not c.attempts or now < c.ambiguous_until or not c.shown(self._armed, self._custom_mode):
+            return False
+        if c.acked:
+            return self._heartbeat_at >= c.acked_at
+        quickest = (self._roundtrip.lowest or 0.0) if self._roundtrip is not None else 0.0
+        return self._heartbeat_at >= c.first_sent + quickest
+
+    def _answer_window(self) -> float:
+        """How long after it went out a request may still be answered."""
+        rtt = self._roundtrip.timeout() if self._roundtrip is not None else 0.0
+        return max(self._cfg.command_timeout, rtt)
+
+    def _remember_echo(self, c: _Command, now: float) -> None:
+        """``c`` leaves: if it was sent more often than it was answered, ACKs with its id stay ambiguous until an
+        answer to its last attempt can no longer arrive."""
+        if c.attempts > c.answers:
+            until = c.last_sent + self._answer_window()
+            self._echoes[c.key] = max(self._echoes.get(c.key, -1e18), until)
+
     # -- cancelling ----------------------------------------------------------------------------------------
-    def cancel_tagged(self, tag, reason: str) -> list[tuple[int, int]]:
+    def cancel_tagged(self, tag, reason: str, now: float = 0.0) -> list[tuple[int, int]]:
         """Abort every command carrying ``tag``; returns (command, attempts) of those that had gone out."""
         sent = []
         for c in [c for c in self._pending.values() if tag in c.tags]:
-            self._resolve(c, CommandStatus.ABORTED, reason)
+            self._resolve(c, CommandStatus.ABORTED, reason, now=now)
             if c.attempts:
                 sent.append((c.command, c.attempts))
         return sent
@@ -148,15 +213,13 @@ class CommandSender:
         for c in list(self._pending.values()):
             self._resolve(c, CommandStatus.ABORTED, reason)
 
-    def link_lost(self) -> None:
-        """Commands get their full retries once the link is back."""
-        for c in self._pending.values():
-            c.attempts = min(c.attempts, self._cfg.command_attempts - 1)
-
     def link_recovered(self, now: float) -> None:
+        """Every command still pending when the link comes back gets its full retries again, from now (those it
+        spent into the silence may all have been lost)."""
         for c in self._pending.values():
             if c.deadline is not None and not c.in_progress:
                 c.deadline = max(c.deadline, now + self._cfg.command_timeout * self._cfg.command_attempts)
+            c.budget = c.attempts + self._cfg.command_attempts
             c.next_send = min(c.next_send, now)
 
     # -- replies (reader thread, under the lock) ----------------------------------------------------------
@@ -170,22 +233,31 @@ class CommandSender:
         c = self._pending.get(m.command)
         if c is None or c.attempts == 0:
             return                                # nothing of ours is waiting, or ours has not gone out yet
+        if now < c.ambiguous_until:
+            log.debug("%s: an answer that may be an earlier request's, not taken", c.name)
+            return                                # it goes on being re-sent until an answer is surely its own
+        c.answers += 1
+        if c.attempts == 1 and c.answers == 1 and self._roundtrip is not None and c.first_sent is not None:
+            self._roundtrip.sample(now - c.first_sent)      # Karn: one request, one answer
         result = m.result
         if result == mavlink.MAV_RESULT_IN_PROGRESS:
             c.in_progress = True
             c.deadline = now + PROGRESS_TIMEOUT
             return
-        if c.mode is not None:
+        if c.mode is not None or c.armed is not None:
             if result == mavlink.MAV_RESULT_ACCEPTED:
-                c.acked = True                    # the heartbeat settles it
+                if c.early:                       # its answer, and only its own: the vehicle did it
+                    self._resolve(c, CommandStatus.ACCEPTED, "accepted (its heartbeat shows it next)", now=now)
+                    return
+                c.acked, c.acked_at = True, now   # the heartbeat settles it
                 c.next_send = now + ACKED_MODE_WAIT
-            elif result == mavlink.MAV_RESULT_UNSUPPORTED:
+            elif result == mavlink.MAV_RESULT_UNSUPPORTED and c.mode is not None:
                 c.legacy, c.next_send = True, now  # old firmware: SET_MODE now, and from now on
             else:
                 self._refuse(c, result, now)
             return
         if result == mavlink.MAV_RESULT_ACCEPTED:
-            self._resolve(c, CommandStatus.ACCEPTED)
+            self._resolve(c, CommandStatus.ACCEPTED, now=now)
         else:
             self._refuse(c, result, now)
 
@@ -208,11 +280,14 @@ class CommandSender:
         c.refused = entry.name if entry else f"result {result}"
         c.refuse_at = now + STATUSTEXT_GRACE
 
-    def on_mode(self, custom_mode: int) -> None:
-        """The autopilot's heartbeat shows ``custom_mode``: the truth for every mode change."""
+    def on_heartbeat(self, custom_mode: int, armed: bool, now: float) -> None:
+        """The autopilot's heartbeat shows ``custom_mode`` and ``armed``: the truth for every mode change and
+        every arming, once no earlier request could still be what made it so."""
+        self._custom_mode, self._armed, self._heartbeat_at = custom_mode, armed, now
         for c in list(self._pending.values()):
-            if c.mode == custom_mode:
-                self._resolve(c, CommandStatus.ACCEPTED, "" if c.acked or not c.legacy else "shown by the heartbeat")
+            if self._shows(c, now):
+                self._resolve(c, CommandStatus.ACCEPTED, "" if c.acked or not c.legacy else "shown by the heartbeat",
+                              now=now)
 
     # -- the ticker ---------------------------------------------------------------------------------------
     def service(self, now: float, state: VehicleState) -> list:
@@ -220,23 +295,32 @@ class CommandSender:
         out = []
         cfg = self._cfg
         system, component = self._target()
+        for key, until in list(self._echoes.items()):
+            if until <= now:
+                del self._echoes[key]
         for c in list(self._pending.values()):
-            if c.refused is not None:                 # (a heartbeat showing a refused mode settles it: on_mode)
+            if self._shows(c, now):
+                self._resolve(c, CommandStatus.ACCEPTED, "", now=now)     # shown while an answer was ambiguous
+                continue
+            if c.refused is not None:                 # (a heartbeat showing a refused mode settles it above)
                 if now >= c.refuse_at:
-                    self._resolve(c, CommandStatus.REFUSED, self._vehicle_reason(c, c.refused))
+                    self._resolve(c, CommandStatus.REFUSED, self._vehicle_reason(c, c.refused), now=now)
                 continue
             if c.deadline is not None and now >= c.deadline:
-                self._time_out(c, state)
+                self._time_out(c, state, now)
                 continue
             if c.in_progress or now < c.next_send:
                 continue
-            if c.guard is not None:
-                problem = c.guard(state)
-                if problem:
-                    self._resolve(c, CommandStatus.REJECTED, problem)
-                    continue
+            problem = c.guard(state) if c.guard is not None else None
+            if not problem and self._rules is not None:
+                problem = (self._rules.mode_problem(c.mode, state) if c.mode is not None
+                           else self._rules.command_problem(c.command, c.params, state, now))
+            if problem:
+                self._resolve(c, CommandStatus.REJECTED, problem, now=now)
+                continue
+            retry = cfg.command_timeout if c.retry is None else c.retry
             if c.mode is not None:
-                if not c.legacy and c.attempts >= cfg.command_attempts:
+                if not c.legacy and c.attempts >= c.budget:
                     c.legacy = True               # no ACK at all: SET_MODE before giving up
                 if c.legacy:
                     if c.deadline is None:        # SET_MODE has no reply: only the heartbeat, within this time
@@ -247,18 +331,24 @@ class CommandSender:
                 else:
                     out.append(mavlink.MAVLink_command_long_message(system, component, c.command,
                                                                     min(c.attempts, 255), *c.params))
-                    c.next_send = now + (ACKED_MODE_WAIT if c.acked else cfg.command_timeout)
+                    c.next_send = now + (ACKED_MODE_WAIT if c.acked else retry)
             else:
-                if c.attempts >= cfg.command_attempts:
-                    self._resolve(c, CommandStatus.TIMED_OUT, f"no answer from the vehicle after {c.attempts} attempts")
+                patience = cfg.command_timeout * cfg.command_attempts      # a quickly retried command waits as long
+                if c.attempts >= c.budget and (c.retry is None or now - c.first_sent >= patience):
+                    self._time_out(c, state, now)
                     continue
                 out.append(mavlink.MAVLink_command_long_message(system, component, c.command,
                                                                 min(c.attempts, 255), *c.params))
-                c.next_send = now + cfg.command_timeout
+                c.next_send = now + (ACKED_MODE_WAIT if c.acked else retry)
+                if c.retry is not None:                  # each unanswered try waits twice as long (RFC 6298's backoff)
+                    c.retry = min(2 * c.retry, cfg.command_timeout)
+            if c.first_sent is None:
+                c.first_sent = now
+            c.last_sent = now
             c.attempts += 1
         return out
 
-    def _time_out(self, c: _Command, state: VehicleState) -> None:
+    def _time_out(self, c: _Command, state: VehicleState, now: float) -> None:
         if c.in_progress:
             reason = f"the vehicle said IN_PROGRESS and then nothing for {PROGRESS_TIMEOUT:g} s"
         elif c.mode is not None:
@@ -266,9 +356,16 @@ class CommandSender:
             said = "accepted it, but its" if c.acked else "did not confirm it, and its"
             reason = self._vehicle_reason(c, f"the vehicle {said} heartbeat still shows {shown} "
                                              f"after {c.attempts} attempts (the last ones by SET_MODE)")
+        elif c.armed is not None and c.acked:
+            shown = "armed" if state.armed else "disarmed"
+            reason = self._vehicle_reason(c, f"the vehicle accepted it, but its heartbeat still shows {shown} "
+                                             f"after {c.attempts} attempts")
+        elif c.answers == 0 and c.ambiguous_until > (c.first_sent or 0.0):
+            reason = (f"no answer that could only be to this request after {c.attempts} attempts (an earlier "
+                      "one with the same id was still being answered)")
         else:
             reason = f"no answer from the vehicle after {c.attempts} attempts"
-        self._resolve(c, CommandStatus.TIMED_OUT, reason)
+        self._resolve(c, CommandStatus.TIMED_OUT, reason, now=now)
 
     def _vehicle_reason(self, c: _Command, fallback: str) -> str:
         """The vehicle's own words since the command: its warnings first (ArduCopter explains a refusal at
@@ -277,9 +374,12 @@ class CommandSender:
         texts = [m.text for m in said if m.severity <= Severity.NOTICE] or [m.text for m in said]
         return "; ".join(texts[-3:]) + f" ({fallback})" if texts else fallback
 
-    def _resolve(self, c: _Command, status: CommandStatus, reason: str = "", remove: bool = True) -> None:
+    def _resolve(self, c: _Command, status: CommandStatus, reason: str = "", remove: bool = True,
+                 now: float | None = None) -> None:
         if remove and self._pending.get(c.key) is c:
             del self._pending[c.key]
+        if now is not None:
+            self._remember_echo(c, now)
         if not c.settled:
             c.settled = True
             self._notifier.settle(c.future, self._store.record_locked(c.name, status, reason, c.attempts))

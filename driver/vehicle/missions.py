@@ -3,9 +3,8 @@ resume, go to an item), wired into :class:`driver.vehicle.vehicle.Vehicle`, whic
 
 Every command is confirmed by what the vehicle reports, as for every command of the driver: a start by the
 heartbeat showing AUTO *and* MISSION_CURRENT saying the mission runs; a pause by the heartbeat (BRAKE); a
-resume by MISSION_CURRENT running again; a jump by MISSION_CURRENT showing the item. From the ground a start
-goes through the takeoff sequence's readiness, GUIDED and arming path (:class:`MissionStart`), then AUTO and
-MISSION_START, as in the recording (tests/data/recordings/arducopter-4.6-sitl-mission).
+resume by MISSION_CURRENT running again; a jump by MISSION_CURRENT showing the item. The start itself is a
+sequence of its own (driver.vehicle.sequences.mission_start).
 """
 from __future__ import annotations
 
@@ -18,70 +17,18 @@ from typing import Callable
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from ..core.results import chain
-from .state import CommandResult, CommandStatus, SequencePhase, Severity, VehicleState
-from .takeoff import TakeoffSequence
+from .state import CommandResult, CommandStatus, LandedState, Severity, VehicleState
 from ..mission.limits import UNCHECKED, held_mission_problems, plan_problems, unchecked
 from ..mission.plan import MissionRunState, Plan, PlanKind, TransferOutcome
-from ..mission.progress import fold_item_reached, fold_mission_current, fold_text, fold_transfer_end
+from ..mission.progress import fold_arming, fold_item_reached, fold_mission_current, fold_text, fold_transfer_end
 from ..mission.transfer import PlanTransfers
 
-__all__ = ["MissionControl", "MissionStart"]
+__all__ = ["MissionControl"]
 
 log = logging.getLogger(__name__)
 
 CONFIRM_TIME = 5.0           # s the vehicle's report may take to show a mission command done (MISSION_CURRENT
                              # streams at the stream rate; a slow link needs a few)
-
-
-class MissionStart(TakeoffSequence):
-    """Start the mission: the takeoff sequence's wait for the link and readiness, GUIDED and arming (skipped
-    when already armed), then AUTO, MISSION_START, and MISSION_CURRENT saying it runs."""
-
-    name = "mission start"
-
-    def __init__(self, drone, config, now: float):
-        super().__init__(drone, 0.0, config, now)
-
-    def step(self, now: float):
-        s = self.drone.state()
-        if self._stage in ("link", "ready", "guided") and s.armed:
-            return self._start_takeoff(now)          # flying or armed already: straight to AUTO
-        if self._stage not in ("auto", "start", "running"):
-            return super().step(now)
-        if not s.armed:             # ArduCopter starts a mission in AUTO disarmed too, and it then never flies
-            return CommandStatus.REFUSED, f"the vehicle disarmed before the mission flew (in {s.mode}; on the " \
-                "ground it disarms DISARM_DELAY s after arming)", SequencePhase.FAILED
-        elapsed = now - self._since
-        if self._stage == "auto":
-            if self._pending is None:
-                self._pending = self.drone.set_mode("AUTO")
-            r = self._result()
-            if r is not None:
-                if not r.ok:
-                    return r.status, f"AUTO: {r.reason}", SequencePhase.FAILED
-                self._go("start", now, SequencePhase.TAKING_OFF, "MISSION_START")
-        elif self._stage == "start":
-            if self._pending is None:
-                self._pending = self.drone.command_long(mavlink.MAV_CMD_MISSION_START, (0, 0), "MISSION_START")
-            r = self._result()
-            if r is not None:
-                if not r.ok and s.mission.state is not MissionRunState.ACTIVE:
-                    return r.status, f"MISSION_START: {r.reason}", SequencePhase.FAILED
-                self._go("running", now, SequencePhase.CLIMBING, "waiting for MISSION_CURRENT")
-        elif self._stage == "running":
-            if s.mode != "AUTO":
-                return CommandStatus.REFUSED, f"the vehicle left AUTO ({s.mode})", SequencePhase.FAILED
-            if s.mission.state is MissionRunState.ACTIVE or (s.mission.state is MissionRunState.UNKNOWN
-                                                             and s.mission.current):
-                return CommandStatus.ACCEPTED, f"mission running, item {s.mission.current}", SequencePhase.DONE
-            if elapsed > CONFIRM_TIME:
-                return CommandStatus.TIMED_OUT, "AUTO shown, but MISSION_CURRENT never said the mission runs", \
-                    SequencePhase.FAILED
-        return None
-
-    def _start_takeoff(self, now: float):
-        self._go("auto", now, SequencePhase.TAKING_OFF, "switching to AUTO")
-        return None
 
 
 @dataclass(eq=False)
@@ -102,8 +49,10 @@ class MissionControl:
         self._v = vehicle
         cfg = vehicle.config
         self.transfers = PlanTransfers(vehicle._ticker.new_encoder(), (cfg.source_system, cfg.source_component),
-                                       vehicle._target_ids, vehicle._store.record_locked, vehicle._notifier.settle,
+                                       vehicle._target_ids, vehicle._store.record_locked, self._settle_later,
                                        lambda: vehicle._store.state.home, lambda: vehicle._v2)
+        self._settling: list = []      # transfers ended, settled once the state shows what they did (_publish)
+        self._last_in_air: tuple = (None, "")     # (item, name) last current while the vehicle flew
         self._watches: list[_Watch] = []
         self._currents: collections.deque = collections.deque(maxlen=64)   # (time, item) as the vehicle says
         self._limits_of: tuple = (None, None, None)   # (home, mission held, fence) the limits were checked for
@@ -157,17 +106,12 @@ class MissionControl:
                 self._publish()
 
     # -- flying it (any thread) ------------------------------------------------------------------------------
-    def start(self) -> Future:
-        v = self._v
-        s = v.state()
-        limits = held_mission_problems(s, v.config)
-        problem = ("replaying a recording: no vehicle to command" if v._replay is not None else
-                   "no mission on the vehicle: upload one first" if s.mission.count == 0 else
-                   f"the mission is not started: {UNCHECKED}" if limits == (UNCHECKED,) else
-                   f"the mission is not started: {_joined(limits)}" if limits else "")
-        if problem:
-            return v._finish("mission start", CommandStatus.REJECTED, problem)
-        return v._run_sequence(MissionStart(v, v.config, self._v.clock()), "mission start")
+    def start_problem(self, s: VehicleState) -> str:
+        """Why the mission the vehicle holds is not to be started now ("" when it may be)."""
+        limits = held_mission_problems(s, self._v.config)
+        return ("no mission on the vehicle: upload one first" if s.mission.count == 0 else
+                f"the mission is not started: {UNCHECKED}" if limits == (UNCHECKED,) else
+                f"the mission is not started: {_joined(limits)}" if limits else "")
 
     def pause(self) -> Future:
         s = self._v.state()
@@ -178,7 +122,8 @@ class MissionControl:
     def resume(self) -> Future:
         v = self._v
         s = v.state()
-        if s.mode == "AUTO" and s.mission.state is MissionRunState.ACTIVE:
+        if s.mode == "AUTO" and s.mission.state is MissionRunState.ACTIVE and v.ports.commands.settled(
+                mavlink.MAV_CMD_DO_SET_MODE):               # (a mode change on its way may make it otherwise)
             return v._finish("mission resume", CommandStatus.ACCEPTED, "the mission is running")
         if not s.flying:
             return v._finish("mission resume", CommandStatus.REJECTED, "on the ground: start the mission instead")
@@ -228,6 +173,7 @@ class MissionControl:
         if mtype == "MISSION_CURRENT":
             self._currents.append((self._v.clock(), int(m.seq)))
             store.set(mission=fold_mission_current(store.view()["mission"], m))
+            self._note_in_air()
             return
         if mtype == "MISSION_ITEM_REACHED":
             store.set(mission=fold_item_reached(store.view()["mission"], m))
@@ -253,6 +199,20 @@ class MissionControl:
         if folded is not None:
             self._currents.append((self._v.clock(), folded.current))
             store.set(mission=folded)
+            self._note_in_air()
+
+    def _note_in_air(self) -> None:
+        view = self._v._store.view()
+        if view["armed"] and view["landed_state"] is not LandedState.ON_GROUND and view["system_status"] != 3:
+            p = view["mission"]
+            self._last_in_air = (p.current, p.current_name)
+
+    def on_arming(self, armed: bool, mode: str) -> None:
+        """The heartbeat shows the vehicle armed or disarmed (reader, lock held)."""
+        store = self._v._store
+        store.set(mission=fold_arming(store.view()["mission"], armed, mode, self._last_in_air))
+        if armed:
+            self._last_in_air = (None, "")
 
     def on_autopilot_version(self, m) -> None:
         self.transfers.mission_int = bool(m.capabilities & mavlink.MAV_PROTOCOL_CAPABILITY_MISSION_INT)
@@ -305,8 +265,14 @@ class MissionControl:
     def close(self) -> None:
         with self._v._lock:
             self.transfers.abort_all("driver closed")
+            self._publish()
             for w in list(self._watches):
                 self._settle(w, CommandResult(w.name, CommandStatus.ABORTED, "driver closed"))
+
+    def _settle_later(self, future: Future, result) -> None:
+        """A transfer's answer waits until the state it leaves is published: whoever hears "uploaded" and reads
+        the state (a window, an Ice client) finds the plan there."""
+        self._settling.append((future, result))
 
     def _publish(self) -> None:
         store = self._v._store
@@ -318,6 +284,9 @@ class MissionControl:
         t.changed = False
         store.set(mission=replace(p, transfers=t.progress()))
         store.publish()
+        settling, self._settling = self._settling, []
+        for future, result in settling:
+            self._v._notifier.settle(future, result)
 
 
 def _joined(problems) -> str:

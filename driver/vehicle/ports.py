@@ -10,7 +10,7 @@ from concurrent.futures import Future
 from ..core.ports import Ports
 from ..core.results import CommandStatus
 
-__all__ = ["LinkOutbox", "VehicleCommands", "vehicle_ports"]
+__all__ = ["LinkOutbox", "VehicleCommands", "SequencePilot", "vehicle_ports"]
 
 
 class LinkOutbox:
@@ -42,8 +42,8 @@ class LinkOutbox:
 class VehicleCommands:
     """:class:`~driver.core.ports.CommandPort` over the vehicle's one command path (the gate, the sender)."""
 
-    def __init__(self, long, mode, answer) -> None:
-        self._long, self._mode, self._answer = long, mode, answer
+    def __init__(self, long, mode, answer, settled) -> None:
+        self._long, self._mode, self._answer, self._settled = long, mode, answer, settled
 
     def long(self, command: int, params=(), name: str | None = None, *, guard=None) -> Future:
         return self._long(command, params, name, guard=guard)
@@ -54,7 +54,32 @@ class VehicleCommands:
     def answer(self, name: str, status: CommandStatus, reason: str = "") -> Future:
         return self._answer(name, status, reason)
 
+    def settled(self, command: int) -> bool:
+        return self._settled(command)
 
-def vehicle_ports(clock, store, ticker, wake, target, mavlink2, long, mode, answer, settler) -> Ports:
-    return Ports(clock, store, LinkOutbox(ticker, wake, target, mavlink2), VehicleCommands(long, mode, answer),
-                 settler)
+
+def vehicle_ports(clock, store, ticker, wake, target, mavlink2, long, mode, answer, settled, settler) -> Ports:
+    return Ports(clock, store, LinkOutbox(ticker, wake, target, mavlink2),
+                 VehicleCommands(long, mode, answer, settled), settler)
+
+
+class SequencePilot:
+    """:class:`~driver.vehicle.sequences.machine.Pilot` over the vehicle: what a takeoff, a mission start, a Land or
+    a Stop may do, each through the one command path and its flight rules."""
+
+    def __init__(self, *, state, airborne, mode, arm, disarm, long, retry_interval, hold, quiet) -> None:
+        self.state, self.may_be_airborne, self.retry_interval = state, airborne, retry_interval
+        self._mode, self._arm, self._disarm, self._long = mode, arm, disarm, long
+        self.hold, self.quiet = hold, quiet
+
+    def mode(self, name: str, *, early: bool = False) -> Future:
+        return self._mode(name, early=early)
+
+    def arm(self, *, early: bool = False) -> Future:
+        return self._arm(early=early)
+
+    def disarm(self) -> Future:
+        return self._disarm()
+
+    def long(self, command: int, params=(), name: str | None = None, *, retry: float | None = None) -> Future:
+        return self._long(command, params, name, retry=retry)

@@ -15,11 +15,13 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from ..core import frames
 from ..link.transport import LinkError
+from ..mission.progress import fold_restart
 from ..params.manager import param_name
 from ..payload.control import PAYLOAD_MESSAGES
 from ..setup.banner import heard_text, heard_version
 from ..setup.control import SETUP_MESSAGES
 from .inspector import MessageInspector
+from .prearm import PreArmReasons
 from .state import FENCE_PARAMS, Severity
 from .telemetry import TELEMETRY, fold_heartbeat
 
@@ -47,6 +49,8 @@ class Reader:
         self.reopen = False                # the supervisor found a half-open link: reopen it
         self._open_error = ""
         self._gcs_failsafe_warned = False
+        self._last_frame: dict[int, bytes] = {}   # each component's last frame: a repeat of it is dropped
+        self._prearm = PreArmReasons()     # the vehicle's own reasons for refusing to arm (Readiness.reasons)
         self.inspector = vehicle.inspector = MessageInspector(vehicle.clock)   # what the link carries: Drone.inspection()
 
     def _new_parser(self, carry=None):
@@ -104,8 +108,10 @@ class Reader:
                 with self._lock:                              # traffic paused: publish what is held back
                     self._fold_and_publish()
 
-    def ingest(self, data: bytes) -> int:
-        """Parse raw bytes as if read from the link and fold them into the state; returns messages parsed."""
+    def ingest(self, data: bytes, publish: bool = False) -> int:
+        """Parse raw bytes as if read from the link and fold them into the state; returns messages parsed.
+        ``publish``: fold and publish everything now (a caller feeding the reader itself, on its own clock), not
+        at most every PUBLISH_INTERVAL as the reader thread does."""
         if self._parser_generation != self._signing.generation:     # the key changed: check with the new one
             self.codec = self._new_parser(self.codec)
         try:
@@ -125,7 +131,7 @@ class Reader:
                     n += self._handle(msg)
                 except Exception:                     # a malformed field must not stop the reader
                     log.exception("error handling %s", msg.get_type())
-            if n and time.monotonic() - self._store.published_at >= PUBLISH_INTERVAL:
+            if n and (publish or time.monotonic() - self._store.published_at >= PUBLISH_INTERVAL):
                 self._fold_and_publish()
         return n
 
@@ -154,11 +160,35 @@ class Reader:
                 self._link.home_received()
             if mtype in self._link.last_heard:
                 self._link.last_heard[mtype] = self._v.clock()
+        self._follow_boot_and_readiness("SYS_STATUS" in latest)
         store.fields["link"] = self._link.health(self._v._version)   # packet counts as current as the telemetry
         if store.state.rejected_values == 0 and store.fields.get("rejected_values", 0) > 0:   # the first one
             store.add_message_locked(Severity.WARNING, "The vehicle sent impossible telemetry values (NaN, "
                                      "infinity or out of range): ignored, the last good values stay")
         store.publish()
+
+    def _follow_boot_and_readiness(self, sys_status: bool) -> None:
+        """After a fold (lock held): a restart seen in the vehicle's clock, and the pre-arm reasons it no longer
+        stands by (``sys_status``: a SYS_STATUS came in this fold, its pre-arm bit is news)."""
+        store = self._store
+        view = store.view()
+        if view["boot"].restarts != store.state.boot.restarts and not self._transport.is_replay:
+            self._restarted()             # (a replay's clock goes back when the pilot seeks back: no restart)
+            view = store.view()
+        r = view["readiness"]
+        healthy = (r.prearm_ok if r.prearm_reported else None) if sys_status else None
+        if self._prearm.checked(healthy, view["armed"], self._v.clock()):
+            store.set(readiness=replace(r, reasons=self._prearm.reasons))
+
+    def _restarted(self) -> None:
+        """The vehicle started again (lock held): what it held is of its last boot. Its plans are not known any
+        more (the viewer reads them again), nor its refusals; said once in Messages."""
+        store = self._store
+        view = store.view()
+        self._prearm.forget()
+        store.set(readiness=replace(view["readiness"], reasons=()), mission=fold_restart(view["mission"]))
+        store.add_message_locked(Severity.NOTICE, "The vehicle restarted: what it held before (plans, pre-arm "
+                                 "reasons) is read again")
 
     def _handle(self, msg) -> int:
         """One parsed frame (reader thread, _lock held); the hot path of telemetry ingest."""
@@ -186,10 +216,14 @@ class Reader:
         component, seq = header.srcComponent, header.seq
         last = link.last_seq.get(component)           # sequence gaps: packet loss per component (inline: hot)
         if last is not None:
+            if seq == last and msg.get_msgbuf() == self._last_frame.get(component):
+                link.duplicates += 1                  # the same frame twice (a radio or router repeating it):
+                return 0                              # one answer is never taken for two
             gap = (seq - last - 1) & 0xFF
             if gap < 128:                             # larger jumps are a restart, not loss
                 link.rx_lost += gap
         link.last_seq[component] = seq
+        self._last_frame[component] = msg.get_msgbuf()
         link.rx_count += 1
         if mtype in PAYLOAD_MESSAGES:                 # the gimbal and camera speak from any component
             self._payload.on_message(msg, component)
@@ -220,9 +254,10 @@ class Reader:
         was_armed = view["armed"]
         changes = fold_heartbeat(view, m)
         store.fields.update(changes)
-        self._commands.on_mode(m.custom_mode)
+        self._commands.on_heartbeat(m.custom_mode, changes["armed"], now)
         if changes["armed"] != was_armed:
             self._link.armed_changed(changes["armed"], now)
+            self._missions.on_arming(changes["armed"], changes["mode"])
         event = self._link.heartbeat(now)
         if event is None:
             return
@@ -243,6 +278,8 @@ class Reader:
             except ValueError:
                 sev = Severity.INFO
             self._store.add_message_locked(sev, text, "vehicle")
+            if self._prearm.heard(text, self._v.clock()):
+                self._store.set(readiness=replace(self._store.view()["readiness"], reasons=self._prearm.reasons))
             self._v._signing_control.settle(self._signing.statustext(text))
             self._missions.on_text(text)
             self._v.logs.on_text(text)                  # 'Disarm for log download'
@@ -273,6 +310,12 @@ class Reader:
         if not frames.finite(m.param_value):
             return
         name = param_name(m)
+        boot = self._store.view()["boot"]
+        counted = boot.heard_param_count(m.param_count)
+        if counted is not boot:
+            self._store.set(boot=counted)
+            if counted.restarts != boot.restarts:
+                self._restarted()
         self._params.on_param_value(m, name, self._v.clock())
         if self._params.reasking:
             self._wake.set()                          # the next read goes out now, not on the next tick
@@ -280,6 +323,8 @@ class Reader:
         self._missions.on_param(name, m.param_value)
         if name in FENCE_PARAMS:
             self._store.set(fence=self._store.view()["fence"].with_param(name, m.param_value))
+        elif name == "BATT_CAPACITY":                   # the charge left is reckoned from it (battery.time_left)
+            self._store.set(battery=replace(self._store.view()["battery"], capacity_mah=m.param_value or None))
         elif name == "FS_GCS_ENABLE":
             self._store.set(gcs_failsafe=int(m.param_value))
             if int(m.param_value) == 0 and not self._gcs_failsafe_warned:

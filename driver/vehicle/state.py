@@ -27,8 +27,10 @@ from ..traffic.model import Traffic
 
 __all__ = [
     "LandedState", "LinkStatus", "Severity", "CommandStatus", "Attitude", "GlobalPosition",
-    "LocalPosition", "Velocity", "BatteryAlarm", "BatteryThresholds", "Battery", "Gps", "Readiness", "LinkHealth", "SigningStatus", "Signing", "Message",
-    "CommandResult", "Setpoint", "SequencePhase", "SequenceProgress", "Environment", "Fence", "FENCE_PARAMS",
+    "LocalPosition", "Velocity", "BatteryAlarm", "BatteryThresholds", "Battery", "Gps", "Readiness", "Boot",
+    "LinkHealth", "SigningStatus", "Signing", "Message",
+    "CommandResult", "Setpoint", "SequencePhase", "SequenceProgress", "SequenceState", "Environment", "Fence",
+    "FENCE_PARAMS",
     "VehicleState", "replace",
 ]
 
@@ -126,16 +128,53 @@ class Readiness:
     ekf_ok: bool = False                 # EKF_STATUS_REPORT attitude+velocity+position flags
     gps_ok: bool = False                 # GPS_RAW_INT fix_type >= 3
     prearm_reported: bool = False        # the autopilot reports its pre-arm check in SYS_STATUS
+    reasons: tuple[str, ...] = ()        # the vehicle's own words for why it will not arm, as its latest
+                                         # "PreArm: ..." / "Arm: ..." texts said them (driver.vehicle.prearm)
 
     @property
     def ready_to_arm(self) -> bool:
-        return self.prearm_ok and self.ekf_ok and self.gps_ok
+        """The vehicle says it may arm: its pre-arm checks pass and no refusal of its own still stands."""
+        return self.prearm_ok and self.ekf_ok and self.gps_ok and not self.reasons
 
     @property
     def missing(self) -> tuple[str, ...]:
-        """What the autopilot still lacks before it can arm, in the order it usually arrives."""
+        """What the autopilot still lacks before it can arm, in the order it usually arrives; the pre-arm
+        checks in the vehicle's own words when it said them ("pre-arm checks: 3D Accel calibration needed")."""
+        checks = "pre-arm checks" + (": " + "; ".join(self.reasons) if self.reasons else "")
         return tuple(what for ok, what in ((self.gps_ok, "GPS fix"), (self.ekf_ok, "EKF"),
-                                           (self.prearm_ok, "pre-arm checks")) if not ok)
+                                           (self.prearm_ok and not self.reasons, checks)) if not ok)
+
+
+@dataclass(frozen=True)
+class Boot:
+    """The vehicle's own clock since it started, and how often it was seen to start again while we listened.
+
+    A restart is the vehicle's clock going back more than 5 s (any ``time_boot_ms``: ATTITUDE,
+    GLOBAL_POSITION_INT, SYSTEM_TIME) or its parameter count changing: whatever was known of its plans, its refusals, its
+    parameters is then of a vehicle that is no more, and is read again (driver.vehicle.reader)."""
+    restarts: int = 0                    # restarts seen since the link opened (0: the boot first heard)
+    time_ms: int | None = None           # the newest time_boot_ms heard
+    param_count: int | None = None       # PARAM_VALUE.param_count, as last heard
+
+    BACKWARDS_MS = 5000                  # a clock going back further than this is a restart: not the newest of
+                                         # two messages folded in one read, one a slow stream's, under loss
+
+    @property
+    def seconds(self) -> float | None:
+        """The vehicle's time since its boot, in seconds (its own clock: a replay's, a sim's at its speed)."""
+        return None if self.time_ms is None else self.time_ms / 1000.0
+
+    def heard_time(self, time_ms: int) -> "Boot":
+        """This boot after a message stamped ``time_ms``: a restart when the clock went back."""
+        if self.time_ms is not None and time_ms + self.BACKWARDS_MS < self.time_ms:
+            return Boot(self.restarts + 1, time_ms, None)
+        return self if time_ms == self.time_ms else replace(self, time_ms=max(time_ms, self.time_ms or 0))
+
+    def heard_param_count(self, count: int) -> "Boot":
+        """This boot after a PARAM_VALUE counting ``count`` parameters: a restart when the count changed."""
+        if self.param_count is not None and count != self.param_count:
+            return Boot(self.restarts + 1, None, count)
+        return self if count == self.param_count else replace(self, param_count=count)
 
 
 @dataclass(frozen=True)
@@ -153,6 +192,7 @@ class LinkHealth:
     foreign_packets: int = 0             # UDP datagrams dropped because they did not come from the vehicle
     pinned_to: str = ""                  # UDP: the vehicle's "ip:port", the only address we send to
     replay_ended: bool = False           # a replayed recording has played to its end: CLOSED, nothing was lost
+    replay: bool = False                 # the link is a recording played back: nothing on it is live
 
     @property
     def ended_words(self) -> str:
@@ -206,6 +246,15 @@ class SequenceProgress:
     def active(self) -> bool:
         return self.phase in (SequencePhase.WAITING_READY, SequencePhase.SETTING_GUIDED,
                               SequencePhase.ARMING, SequencePhase.TAKING_OFF, SequencePhase.CLIMBING)
+
+
+@dataclass(frozen=True)
+class SequenceState:
+    """The sequence the driver runs now (takeoff, mission start, land, RTL, stop) and the state it is in, or the
+    last one's end ("done", "failed", "ended"); docs/driver.md draws them."""
+    name: str = ""
+    state: str = ""
+    detail: str = ""
 
 
 @dataclass(frozen=True)
@@ -290,10 +339,13 @@ class VehicleState:
     battery: Battery = field(default_factory=Battery)
     gps: Gps = field(default_factory=Gps)
     readiness: Readiness = field(default_factory=Readiness)
+    boot: Boot = field(default_factory=Boot)         # the vehicle's clock and its restarts (reboots) heard
     environment: Environment = field(default_factory=Environment)
     messages: tuple[Message, ...] = ()               # the most recent, oldest first
     results: tuple[CommandResult, ...] = ()          # the most recent command results, oldest first
     takeoff: SequenceProgress = field(default_factory=SequenceProgress)
+    sequence: SequenceState = field(default_factory=SequenceState)
+    may_be_airborne: bool = True                     # the flight rules' cautious view (driver.vehicle.safety)
     setpoint: Setpoint = field(default_factory=Setpoint)
     rejected_values: int = 0                         # telemetry messages dropped for impossible values
     gcs_failsafe: int | None = None                  # the vehicle's FS_GCS_ENABLE, None until read

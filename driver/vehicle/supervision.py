@@ -52,6 +52,7 @@ class LinkSupervisor:
         self.rx_count = 0
         self.rx_lost = 0
         self.bad_crc = 0
+        self.duplicates = 0                   # frames received twice (dropped: an answer counts once)
         self.last_seq: dict[int, int] = {}
         self._window: collections.deque[tuple[float, int, int]] = collections.deque(maxlen=6)
         self._streams_at: float | None = None
@@ -64,6 +65,7 @@ class LinkSupervisor:
         self.version_known = False
         self._version_tries = 0
         self._version_asked_at = -1e9
+        self._seeks = 0                       # a replay's seeks seen: its clock jumps, no heartbeat was missed
 
     # -- frames (reader thread; the driver counts rx_count, rx_lost and last_seq inline, the hot path) ------
     def reset_sequences(self) -> None:
@@ -99,6 +101,10 @@ class LinkSupervisor:
         reopen = False
         cfg = self._cfg
         clock = self._clock()
+        if self._transport.is_replay and self._transport.seeks != self._seeks:
+            self._seeks = self._transport.seeks   # the pilot moved in the recording: its heartbeats count from there
+            if self.last_heartbeat is not None:
+                self.last_heartbeat = clock
         if (self.status is LinkStatus.LOST and self._transport.reconnectable and self.last_heartbeat is not None
                 and clock - self.last_heartbeat > cfg.loss_timeout + REOPEN_AFTER and now - self.lost_at > REOPEN_AFTER):
             self.lost_at = now
@@ -194,4 +200,4 @@ class LinkSupervisor:
         ended = status is LinkStatus.CLOSED and self._transport.is_replay and self._transport.finished
         return LinkHealth(status, self._transport.description, age, rate, loss, self.rx_count,
                           self.rx_lost, self.bad_crc, mavlink_version, self.lost_count, self._transport.foreign,
-                          f"{pinned[0]}:{pinned[1]}" if pinned else "", ended)
+                          f"{pinned[0]}:{pinned[1]}" if pinned else "", ended, self._transport.is_replay)

@@ -13,13 +13,14 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
+from dataclasses import replace
 
 from pymavlink import mavutil
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from ..core import frames
 from .state import (
-    Attitude, Battery, Environment, GlobalPosition, Gps, LandedState, LocalPosition, Readiness, Velocity,
+    Attitude, Battery, Boot, Environment, GlobalPosition, Gps, LandedState, LocalPosition, Readiness, Velocity,
 )
 
 __all__ = ["TELEMETRY", "fold", "infer_cells", "COPTER_MODE_NAMES"]
@@ -48,6 +49,12 @@ def _rejected(view: Mapping) -> dict:
     return {"rejected_values": view["rejected_values"] + 1}
 
 
+def _airborne(view: Mapping) -> bool:
+    """Armed and in the air between its takeoff and its landing (EXTENDED_SYS_STATE IN_AIR, or armed on a firmware
+    that does not say): the draw a time left is reckoned at is averaged only then, a climb out being no cruise."""
+    return bool(view["armed"]) and view["landed_state"] in (LandedState.IN_AIR, LandedState.UNDEFINED)
+
+
 def infer_cells(voltage: float) -> int:
     """The fewest LiPo cells that can give ``voltage``: a 12.6 V pack is 3S, 16.8 V 4S, 14.0 V 4S."""
     return max(1, math.ceil(voltage / LIPO_CELL_MAX - 1e-9))
@@ -69,8 +76,9 @@ def fold_sys_status(view: Mapping, m) -> dict:
     current = None if m.current_battery < 0 else m.current_battery / 100.0
     remaining = None if not 0 <= m.battery_remaining <= 100 else float(m.battery_remaining)
     b: Battery = view["battery"]
-    return dict(readiness=Readiness(prearm, r.ekf_ok, r.gps_ok, reported),
-                battery=_battery(b, voltage, current, remaining, b.charge_state, None))
+    return dict(readiness=replace(r, prearm_ok=prearm, prearm_reported=reported),
+                battery=_battery(b, voltage, current, remaining, b.charge_state, None, at=view["boot"].seconds,
+                                 airborne=_airborne(view)))
 
 
 def fold_battery_status(view: Mapping, m) -> dict:
@@ -86,18 +94,20 @@ def fold_battery_status(view: Mapping, m) -> dict:
     consumed = float(m.current_consumed) if m.current_consumed >= 0 else None
     return dict(battery=_battery(b, voltage, current if current is not None else b.current,
                                  remaining if remaining is not None else b.reported_remaining,
-                                 charge_state, per_cell, consumed))
+                                 charge_state, per_cell, consumed, at=view["boot"].seconds,
+                                 airborne=_airborne(view)))
 
 
 def _battery(b: Battery, voltage, current, remaining, charge_state: int, cells_reported: int | None,
-             consumed_mah: float | None = None) -> Battery:
+             consumed_mah: float | None = None, at: float | None = None, airborne: bool = False) -> Battery:
     """The pack as the autopilot reports it; percent estimated from the cell voltage only when it gives none.
 
     The cell count comes from the vehicle (per-cell voltages) or, failing that, from the first voltage heard
     (a pack is not always a Solo's 4S: ArduPilot SITL's is 3S). "Low" is the autopilot's own battery
     failsafe state when it sends one (BATTERY_STATUS.charge_state), else 20 % or 3.7 V a cell (MAVProxy).
     ``alarm`` (derived) is the pilot's own thresholds (``b.thresholds``), whatever the vehicle's failsafe says;
-    ``consumed_mah`` stays what it was unless BATTERY_STATUS says.
+    ``consumed_mah`` stays what it was unless BATTERY_STATUS says; the averaged draw follows the current at the
+    vehicle's time ``at`` (its time_boot_ms, :class:`~driver.vehicle.state.Boot`) while ``airborne``.
     """
     cells, source = b.cells, b.cells_source
     if cells_reported and source != "configured":
@@ -110,8 +120,11 @@ def _battery(b: Battery, voltage, current, remaining, charge_state: int, cells_r
         low = charge_state >= mavlink.MAV_BATTERY_CHARGE_STATE_LOW
     else:
         low = (shown is not None and shown < 20.0) or (voltage is not None and cells > 0 and voltage / cells < 3.7)
+    drawing = dict(draw=b.draw, draw_at=b.draw_at, draw_weight=b.draw_weight)
+    drawing.update(b.drawing(current, at, airborne))
     return Battery(voltage, current, shown, estimated, cells, low, source, charge_state, remaining,
-                   consumed_mah=b.consumed_mah if consumed_mah is None else consumed_mah, thresholds=b.thresholds)
+                   consumed_mah=b.consumed_mah if consumed_mah is None else consumed_mah, thresholds=b.thresholds,
+                   capacity_mah=b.capacity_mah, **drawing)
 
 
 def fold_attitude(view: Mapping, m) -> dict:
@@ -119,18 +132,19 @@ def fold_attitude(view: Mapping, m) -> dict:
             and _within(m.yaw, -2 * math.pi, 2 * math.pi)
             and all(_within(r, -_MAX_RATE, _MAX_RATE) for r in (m.rollspeed, m.pitchspeed, m.yawspeed))):
         return _rejected(view)
-    return dict(attitude=Attitude(m.roll, m.pitch, m.yaw, m.rollspeed, m.pitchspeed, m.yawspeed))
+    return dict(attitude=Attitude(m.roll, m.pitch, m.yaw, m.rollspeed, m.pitchspeed, m.yawspeed),
+                **_clock(view, m))
 
 
 def fold_global_position(view: Mapping, m) -> dict:
     lat, lon, alt, rel = m.lat * 1e-7, m.lon * 1e-7, m.alt * 1e-3, m.relative_alt * 1e-3
     if m.lat == 0 and m.lon == 0:                 # ArduPilot's "no position yet" (QGroundControl ignores it too)
-        return {}
+        return _clock(view, m)
     if not (-90.0 <= lat <= 90.0 and -180.0 <= lon <= 180.0 and _MIN_ALT <= alt <= _MAX_ALT
             and _MIN_ALT <= rel <= _MAX_ALT):
         return _rejected(view)
     changes = dict(position=GlobalPosition(lat, lon, alt), altitude=rel,
-                   velocity=Velocity(m.vx / 100.0, m.vy / 100.0, m.vz / 100.0))
+                   velocity=Velocity(m.vx / 100.0, m.vy / 100.0, m.vz / 100.0), **_clock(view, m))
     if 0 <= m.hdg < 36000:
         changes["heading_deg"] = m.hdg / 100.0
     home: GlobalPosition | None = view["home"]
@@ -138,6 +152,20 @@ def fold_global_position(view: Mapping, m) -> dict:
         north, east = frames.offset_ned(home.lat, home.lon, lat, lon)
         changes["local"] = LocalPosition(north, east, -rel)
     return changes
+
+
+def fold_system_time(view: Mapping, m) -> dict:
+    return _clock(view, m)
+
+
+def _clock(view: Mapping, m) -> dict:
+    """The vehicle's own clock from a message's ``time_boot_ms``: a restart when it went back (:class:`Boot`)."""
+    boot: Boot = view["boot"]
+    time_ms = m.time_boot_ms
+    if not isinstance(time_ms, int) or time_ms < 0:
+        return {}
+    heard = boot.heard_time(time_ms)
+    return {} if heard is boot else dict(boot=heard)
 
 
 def fold_home_position(view: Mapping, m) -> dict:
@@ -166,13 +194,13 @@ def fold_gps_raw(view: Mapping, m) -> dict:
     hdop = None if m.eph == 0xFFFF else m.eph / 100.0
     satellites = m.satellites_visible if m.satellites_visible != 255 else 0
     return dict(gps=Gps(m.fix_type, satellites, hdop),
-                readiness=Readiness(r.prearm_ok, r.ekf_ok, m.fix_type >= 3, r.prearm_reported))
+                readiness=replace(r, gps_ok=m.fix_type >= 3))
 
 
 def fold_ekf_status(view: Mapping, m) -> dict:
     r: Readiness = view["readiness"]
     ok = (m.flags & _EKF_NEEDED) == _EKF_NEEDED and not (m.flags & mavlink.EKF_UNINITIALIZED)
-    return dict(readiness=Readiness(r.prearm_ok, ok, r.gps_ok, r.prearm_reported))
+    return dict(readiness=replace(r, ekf_ok=ok))
 
 
 def fold_extended_sys_state(view: Mapping, m) -> dict:
@@ -223,6 +251,7 @@ TELEMETRY = {
     "SCALED_IMU": fold_imu,
     "SCALED_IMU2": fold_imu,
     "WIND": fold_wind,
+    "SYSTEM_TIME": fold_system_time,
 }
 
 

@@ -38,6 +38,7 @@ class Ticker:
         self._transport, self._signing, self._store = vehicle._transport, vehicle._signing, vehicle._store
         self._lock, self._link, self._commands = vehicle._lock, vehicle._link, vehicle._commands
         self._params, self._setpoints, self._sequence = vehicle._params, vehicle._setpoints, vehicle._sequence
+        self._rules = vehicle._rules
         self._closing, self._wake = vehicle._closing, vehicle._wake
         self._codec_out = self.new_encoder()
         self._sender_generation = -1          # the encoder is (re)configured for signing on the next send
@@ -77,6 +78,11 @@ class Ticker:
                 group.append(buf)
                 size += len(buf)
             self._write_group(group)
+
+    def pack(self, msg) -> bytes:
+        """One frame as it would go out now (a harness writing it itself)."""
+        with self._tx_lock:
+            return self._pack(msg)
 
     def _pack(self, msg) -> bytes:
         """One frame, signed as configured now (caller holds _tx_lock); ``bytes`` are packed already."""
@@ -175,8 +181,26 @@ class Ticker:
                     frames_out, settled = self._signing.service(now, self._v._target_ids(), self.new_encoder)
                     out += frames_out
                     self._v._signing_control.settle(settled)
+                out = self._screen(out, now)
         except Exception:                             # heartbeat, setpoints and deadman must outlive any bug
             log.exception("ticker step failed")
+            with self._lock:                          # what was gathered still passes the rules, or only the heartbeat
+                try:
+                    out = self._rules.screen(out, self._store.state, now)
+                except Exception:
+                    log.exception("flight rules failed: only the heartbeat goes out")
+                    out = [m for m in out if not isinstance(m, bytes) and m.get_type() == "HEARTBEAT"]
+        return out
+
+    def _screen(self, out: list, now: float) -> list:
+        """Every message of the tick through the flight rules (lock held), and the rules' view of the vehicle
+        published: nothing leaves the driver without passing here (driver.vehicle.safety)."""
+        state = self._store.state
+        out = self._rules.screen(out, state, now)
+        airborne = self._rules.may_be_airborne(state)
+        if airborne != state.may_be_airborne:
+            self._store.set(may_be_airborne=airborne)
+            self._store.publish()
         return out
 
     def tick_within(self, seconds: float) -> None:
@@ -215,7 +239,6 @@ class Ticker:
         if event == "lost":
             age = self._link.health(self._v._version).heartbeat_age or 0.0
             store.add_message_locked(Severity.CRITICAL, f"Link lost: no heartbeat for {age:.1f} s")
-            self._commands.link_lost()
             self._params.link_lost()
         elif event == "finished":
             store.add_message_locked(Severity.NOTICE, "Replay ended: the whole recording has been played")

@@ -3,17 +3,12 @@
 :class:`Vehicle` is the façade of the embedded driver behind the viewer and the Ice server: it holds the
 pilot's calls (the :class:`~driver.vehicle.api.Drone` interface) and hands each job to the part that does it:
 
-* :mod:`driver.vehicle.reader`: the reader thread, opening the link, parsing and dispatching what comes in;
-* :mod:`driver.vehicle.ticker`: the ticker thread and the one way out (heartbeat, setpoints, every part's sends);
-* :mod:`driver.vehicle.telemetry` folds telemetry into the state (pure, no I/O);
-* :mod:`driver.vehicle.supervision` keeps the link supervised and asks the vehicle for streams, home, parameters;
-* :mod:`driver.vehicle.commands` sends commands with retries and matches each reply to what it answers;
-* :mod:`driver.vehicle.setpoints` streams the velocity setpoint, with the deadman;
-* :mod:`driver.vehicle.takeoff` runs the takeoff sequence against the public :class:`~driver.vehicle.api.Drone` interface;
-* :mod:`driver.vehicle.missions`, :mod:`driver.vehicle.parameters`, :mod:`driver.vehicle.signing_control`,
-  :mod:`driver.payload.control`, :mod:`driver.setup.control` and :mod:`driver.logs.control`: plans, parameters,
-  signing, the payload, setup and the DataFlash logs, wired to this vehicle;
-* :mod:`driver.vehicle.store` publishes immutable :class:`~driver.vehicle.state.VehicleState` snapshots.
+* ``reader`` (the reader thread: open, parse, dispatch), ``ticker`` (the ticker thread and the one way out),
+  ``telemetry`` (folds telemetry, pure), ``supervision`` (the link), ``store`` (the immutable snapshots);
+* ``safety`` (the flight rules every message passes), ``commands`` (retries, each reply to its own request),
+  ``sequences`` (takeoff, mission start, land, RTL, Stop: state machines), ``setpoints`` (velocity, the deadman);
+* ``missions``, ``parameters``, ``signing_control``, :mod:`driver.payload`, :mod:`driver.setup`,
+  :mod:`driver.logs`: plans, parameters, signing, the payload, setup and the DataFlash logs.
 
 Two threads do all the link work, so no caller ever waits on the network. Both decide under the state lock and
 write to the link only after releasing it, so a slow serial write never stalls the reader or
@@ -30,7 +25,7 @@ from dataclasses import dataclass, field, replace
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from ..core import frames
-from ..core.results import chain
+from ..core.roundtrip import RoundTrip
 from ..link.forwarding import Forwarder
 from ..link.signing import LinkSigning, SigningConfig
 from ..link.connection import open_transport
@@ -46,12 +41,16 @@ from .api import CEILING, Drone, Limits
 from .commands import CommandSender, Notifier, command_name
 from .missions import MissionControl
 from .parameters import Parameters
-from .ports import vehicle_ports
+from .ports import SequencePilot, vehicle_ports
 from .reader import Reader
 from .rules import (
-    COPTER_MODES, MAX_ALTITUDE, MIN_TAKEOFF_ALTITUDE, go_to_problem, ground_only, not_in_flight, takeoff_altitude_problem,
+    COPTER_MODES, MAX_ALTITUDE, MIN_TAKEOFF_ALTITUDE, go_to_problem, takeoff_altitude_problem,
 )
-from .sequence import SequenceSlot
+from .safety import ARM_FORCE_MAGIC, FlightRules
+from .sequences.landing import land_sequence, return_sequence
+from .sequences.mission_start import MissionStartSequence
+from .sequences.slot import SequenceSlot
+from .sequences.stop import StopSequence
 from .setpoints import SetpointStreamer
 from .signing_control import SigningControl
 from .state import (
@@ -59,7 +58,7 @@ from .state import (
 )
 from .store import StateStore
 from .supervision import LinkSupervisor
-from .takeoff import TakeoffSequence
+from .sequences.takeoff import TakeoffSequence
 from .telemetry import COPTER_MODE_NAMES
 from .ticker import MASK_POSITION, Ticker
 
@@ -67,8 +66,6 @@ log = logging.getLogger("driver.vehicle")       # the façade and its parts log 
 
 __all__ = ["Vehicle", "VehicleConfig", "ReplayControl", "COPTER_MODES", "COPTER_MODE_NAMES",
            "MIN_TAKEOFF_ALTITUDE", "MAX_ALTITUDE", "takeoff_altitude_problem", "MASK_POSITION"]
-
-ARM_FORCE_MAGIC = 21196
 
 
 @dataclass(frozen=True)
@@ -129,14 +126,25 @@ class Vehicle(Drone):
         self._target = cfg.target_system
         self._autopilot = cfg.target_component       # 0: any component speaks for the vehicle
         self._notifier = Notifier()
-        self._commands = CommandSender(self._store, cfg, self._notifier, self._target_ids)
+        self._rules = FlightRules(lambda now, judged: not all(  # the flight rules every message passes (safety)
+            self._commands.settled_by_state(c, now, pending=c != judged)
+            for c in (mavlink.MAV_CMD_COMPONENT_ARM_DISARM, mavlink.MAV_CMD_DO_MOTOR_TEST)))
+        self._roundtrip = RoundTrip(initial=cfg.command_timeout / 3)    # the link's round trip, one estimate for all
+        self._commands = CommandSender(self._store, cfg, self._notifier, self._target_ids, self._rules,
+                                       self._roundtrip)
         self._link = LinkSupervisor(cfg, self._transport, self._commands.capabilities, self._target_ids, clock)
         self._params = ParameterManager(self._store, self._notifier, self._target_ids, 2 * cfg.loss_timeout,
                                         cfg.param_retry)
         self._params.use_ftp = cfg.param_ftp
         self._setpoints = SetpointStreamer(cfg.deadman, cfg.setpoint_rate)
         self._payload = Payload(self)         # gimbal, region of interest, camera (driver.payload)
-        self._sequence = SequenceSlot(self._store, self._commands, self._notifier)   # takeoff or mission start
+        self._sequence = SequenceSlot(self._store, self._commands, self._notifier, clock)   # the flight's sequences
+        self._pilot = SequencePilot(                   # what a sequence is handed (driver.vehicle.sequences.machine)
+            state=self.state, airborne=lambda: self._rules.may_be_airborne(self.state()), mode=self._set_mode,
+            arm=lambda early=False: self._arming(True, early=early),
+            disarm=lambda: self._command_long(mavlink.MAV_CMD_COMPONENT_ARM_DISARM, (0, 0), "disarm"),
+            long=self._command_long, retry_interval=lambda: min(cfg.command_timeout, self._roundtrip.timeout()),
+            hold=self._hold, quiet=lambda command: self._commands.settled_by_state(command, self.clock()))
         self._limits = cfg.limits.within(CEILING)
         self._wake = threading.Event()
         self._closing = threading.Event()
@@ -147,7 +155,8 @@ class Vehicle(Drone):
         self._ticker = Ticker(self)                    # the ticker thread and the one way out to the link
         #: the narrow services the parts are handed (driver.core.ports), instead of this vehicle
         self.ports = vehicle_ports(clock, self._store, self._ticker, self._wake, self._target_ids, lambda: self._v2,
-                                   self._command_long, self._set_mode, self._finish, self._notifier)
+                                   self._command_long, self._set_mode, self._finish,
+                                   lambda command: self._commands.settled_by_state(command, clock()), self._notifier)
         self._parameters = Parameters(self)            # parameter table, cache, checked writes, metadata
         self._signing_control = SigningControl(self)   # keys and SETUP_SIGNING
         self._forwarder = Forwarder(cfg.outputs, cfg.baud, self._ticker.forward_to_vehicle,
@@ -203,7 +212,7 @@ class Vehicle(Drone):
         if self._closing.is_set():
             return
         with self._lock:
-            self._sequence.abort("driver closed")
+            self._sequence.end("driver closed")
             moving = not self._setpoints.setpoint.is_zero
         if self._started and moving:
             self._ticker.send(self._ticker.setpoint_message(Setpoint()))   # leave it hovering, not drifting
@@ -225,10 +234,12 @@ class Vehicle(Drone):
         if self._tlog:
             self._tlog.close()
 
-    def step(self) -> list:
-        """One pass of the ticker at ``clock()`` on a vehicle not started: what it would send (unsent), for tests."""
+    def step(self, frames: bool = False) -> list:
+        """One pass of the ticker at ``clock()`` on a vehicle not started: what it would send (unsent), for tests
+        and a lockstep harness (driver.sim.lockstep); ``frames``: packed as they would go out, signing included."""
         assert not self._started, "a started vehicle's ticker thread steps it"
-        return self._ticker.step(self.clock())
+        out = self._ticker.step(self.clock())
+        return [self._ticker.pack(m) for m in out] if frames else out
 
     def __enter__(self):
         return self.start()
@@ -252,21 +263,24 @@ class Vehicle(Drone):
         return self._target or 1, self.config.target_component
 
     # -- the link, both ways (driver.vehicle.reader, driver.vehicle.ticker) ------------------------
-    def ingest(self, data: bytes) -> int:
+    def ingest(self, data: bytes, publish: bool = False) -> int:
         """Parse raw bytes as if read from the link and fold them into the state; returns messages parsed."""
-        return self._reader.ingest(data)
+        return self._reader.ingest(data, publish)
 
     def _post(self, msg) -> None:
         """Send from the ticker thread: callers (the UI among them) never touch the link themselves."""
         self._ticker.post(msg)
 
     # -- commands ----------------------------------------------------------------------------------
+    # Every command goes through one path (_command_long, _set_mode: the command sender, which checks the flight
+    # rules before each attempt) and every message out through the ticker's screen (driver.vehicle.safety).
     def command_long(self, command: int, params=(), name: str | None = None, *, guard=None) -> Future:
-        """Send any MAV_CMD as COMMAND_LONG with ACK handling and retries."""
+        """Send any MAV_CMD as COMMAND_LONG with ACK handling and retries, within the flight rules."""
         name = name or command_name(command)
         return self._busy(name) or self._command_long(command, params, name, guard=guard)
 
-    def _command_long(self, command: int, params=(), name: str | None = None, *, guard=None) -> Future:
+    def _command_long(self, command: int, params=(), name: str | None = None, *, guard=None,
+                      retry: float | None = None, early: bool = False) -> Future:
         name = name or command_name(command)
         params = [float(p) for p in (list(params) + [0.0] * 7)[:7]]
         if not frames.finite(*params):
@@ -274,8 +288,11 @@ class Vehicle(Drone):
         if self._replay is not None:
             return self._finish(name, CommandStatus.REJECTED, "replaying a recording: no vehicle to command")
         with self._lock:
+            problem = self._rules.command_problem(command, params, self.state(), self.clock())
+            if problem:
+                return self._finish(name, CommandStatus.REJECTED, problem)
             future = self._commands.submit(name, command, params, self.clock(), guard=guard,
-                                           tag=self._sequence.tag)
+                                           tag=self._sequence.tag, retry=retry, early=early)
         self._wake.set()
         return future
 
@@ -285,17 +302,23 @@ class Vehicle(Drone):
         return f
 
     def _busy(self, command: str) -> Future | None:
-        if self._sequence.stepping and threading.current_thread() is self._ticker_thread:
-            return None                               # the sequence's own commands
-        if self.state().takeoff.active:
-            return self._finish(command, CommandStatus.REJECTED, "takeoff in progress: only Land and Stop")
+        """While a takeoff or mission start runs, only Land, Stop and RTL (each of which ends it)."""
+        seq = self._sequence.exclusive
+        if seq is not None:
+            return self._finish(command, CommandStatus.REJECTED, f"{seq.name} in progress: only Land, Stop and RTL")
         return None
 
     def set_mode(self, name: str) -> Future:
         self.shots.end(f"mode {name}")                # driver.shots: the pilot's mode always wins
-        return self._busy(f"mode {name}") or self._set_mode(name)
+        busy = self._busy(f"mode {name}")
+        if busy:
+            return busy
+        with self._lock:
+            self._sequence.end(f"mode {name.upper()} asked")
+        return self._set_mode(name)
 
-    def _set_mode(self, name: str) -> Future:
+    def _set_mode(self, name: str, *, early: bool = False) -> Future:
+        """A mode change through the flight rules, confirmed by the heartbeat."""
         number = COPTER_MODES.get(name.upper())
         if number is None:
             return self._finish(f"mode {name}", CommandStatus.REJECTED,
@@ -303,116 +326,95 @@ class Vehicle(Drone):
         if self._replay is not None:
             return self._finish(f"mode {name.upper()}", CommandStatus.REJECTED,
                                 "replaying a recording: no vehicle to command")
-        if self.state().mode == name.upper() and self.state().connected:
-            return self._finish(f"mode {name.upper()}", CommandStatus.ACCEPTED, "already in that mode")
-        with self._lock:
+        with self._lock:                              # sent even when the state shows it: the vehicle may have left
+            s = self.state()                          # it since (a failsafe, its mission's end), the state be older
+            problem = self._rules.mode_problem(number, s)
+            if problem:
+                return self._finish(f"mode {name.upper()}", CommandStatus.REJECTED, problem)
             future = self._commands.submit_mode(f"mode {name.upper()}", number, self.clock(),
-                                                tag=self._sequence.tag)
+                                                tag=self._sequence.tag, early=early)
         self._wake.set()
         return future
 
     def arm(self, force: bool = False) -> Future:
-        return self._busy("arm") or self._command_long(
-            mavlink.MAV_CMD_COMPONENT_ARM_DISARM, (1, ARM_FORCE_MAGIC if force else 0),
-            "arm (forced)" if force else "arm")
+        return self._busy("arm") or self._arming(True, force)
+
+    def _arming(self, armed: bool, force: bool = False, early: bool = False) -> Future:
+        """Sent even when the state shows it done: the vehicle disarms by itself (DISARM_DELAY, a motor test's
+        end), and the state may be older than that; ArduCopter accepts an arm of an armed vehicle."""
+        name = ("arm" if armed else "disarm") + (" (forced)" if force else "")
+        return self._command_long(mavlink.MAV_CMD_COMPONENT_ARM_DISARM, (1 if armed else 0,
+                                  ARM_FORCE_MAGIC if force else 0), name, early=early)
 
     def disarm(self, force: bool = False, emergency: bool = False) -> Future:
+        """A disarm on the ground; in the air (or maybe in the air) only the emergency motor stop, which the pilot
+        confirmed (``force`` and ``emergency``): the flight rules refuse any other."""
         if emergency and force:                       # the pilot confirmed it: the motors stop, even in the air
-            self._abort_takeoff("emergency motor stop")
+            with self._lock:
+                self._sequence.end("emergency motor stop")
+                self._rules.allow_emergency_stop(self.clock())
             return self._command_long(mavlink.MAV_CMD_COMPONENT_ARM_DISARM, (0, ARM_FORCE_MAGIC),
                                       "emergency motor stop")
-        if force:                                     # forced disarm in the air stops the motors: a crash
-            problem = not_in_flight(self.state())
-            if problem:
-                return self._finish("disarm (forced)", CommandStatus.REJECTED, problem)
-        return self._busy("disarm") or self._command_long(
-            mavlink.MAV_CMD_COMPONENT_ARM_DISARM, (0, ARM_FORCE_MAGIC if force else 0),
-            "disarm (forced)" if force else "disarm", guard=not_in_flight if force else None)
+        return self._busy("disarm") or self._arming(False, force)
 
     def land(self) -> Future:
+        """LAND, always taken: it ends whatever runs (a takeoff, a mission start, a Stop)."""
         self.shots.end("Land")                        # driver.shots: Land always wins
-        self._abort_takeoff("landing")
-        return self._set_mode("LAND")
-
-    def cancel_takeoff(self) -> Future:
-        """The pilot's Cancel before liftoff: the sequence ends, and what it changed is undone (disarm if it
-        armed, back to the mode it left); once NAV_TAKEOFF went out it is Stop (hold where it is). Never LAND."""
-        seq = self._sequence.current
-        if seq is None or not seq.nothing_flown:
-            return self.stop()
-        self._abort_takeoff("cancelled before liftoff")
-        if seq.takeoff_sent:                          # NAV_TAKEOFF went out meanwhile: hold, never disarm
-            return self.stop()
-        s = self.state()
-        undone = []
-        if s.armed and not seq.armed_before:
-            self._command_long(mavlink.MAV_CMD_COMPONENT_ARM_DISARM, (0, 0), "disarm (takeoff cancelled)",
-                               guard=not_in_flight)
-            undone.append("disarming")
-        # GUIDED asked: the vehicle may be in it before its heartbeat says so; asking for the mode it is in is harmless
-        if seq.mode_before and (s.mode != seq.mode_before or (seq.guided_sent and seq.mode_before != "GUIDED")):
-            self._set_mode(seq.mode_before)
-            undone.append(f"back to {seq.mode_before}")
-        return self._finish("cancel takeoff", CommandStatus.ACCEPTED,
-                            "cancelled before liftoff: " + (", ".join(undone) or "the vehicle was not changed"))
+        return self._replace_sequence(land_sequence(self._pilot, self.clock()), "landing")
 
     def return_to_launch(self) -> Future:
+        """RTL, always taken: it ends whatever runs."""
         self.shots.end("RTL")                         # driver.shots: RTL always wins
-        return self._busy("RTL") or self._set_mode("RTL")
+        return self._replace_sequence(return_sequence(self._pilot, self.clock()), "returning home")
+
+    def cancel_takeoff(self) -> Future:
+        """The pilot's Cancel: :meth:`stop`, which before liftoff undoes what the takeoff changed."""
+        return self.stop()
 
     def stop(self) -> Future:
-        """Hold position, and the sticks fly again: zero velocity in GUIDED (which also cancels a go-to); in
-        flight in another mode (RTL, LOITER, LAND...), GUIDED with zero velocity, where ArduCopter brakes to its
-        stopping point and holds it (ModeGuided::init); BRAKE if the vehicle refuses GUIDED (no position).
-        During a takeoff that has not left the ground it is :meth:`cancel_takeoff`: the vehicle as it was."""
+        """Hold position, or end a takeoff that has not lifted anything as if it never ran: the vehicle always ends
+        holding (GUIDED at zero velocity, BRAKE if GUIDED is refused) or on the ground disarmed, never in a mode
+        that needs a throttle stick (driver.vehicle.sequences.stop)."""
         self.shots.end("Stop")                        # driver.shots: Stop always wins
-        seq = self._sequence.current
-        if seq is not None and seq.nothing_flown:
-            return self.cancel_takeoff()
-        taking_off = self.state().takeoff.active
-        self._abort_takeoff("stop")
-        s = self.state()
-        if not s.flying and not s.armed:
-            return self._finish("stop", CommandStatus.ACCEPTED,
-                                "takeoff aborted" if taking_off else "on the ground: nothing to stop")
-        if s.mode == "GUIDED":
-            with self._lock:
-                self._setpoints.stop(self.clock())
-                self._store.set(setpoint=self._setpoints.setpoint)
-                self._store.publish()
-            self._wake.set()
-            return self._finish("stop", CommandStatus.ACCEPTED, "holding position (zero velocity in GUIDED)")
-        return self._hold_in_guided(s.mode)
-
-    def _hold_in_guided(self, was: str) -> Future:
-        """Stop outside GUIDED: zeros wait to stream, GUIDED is asked; if refused, BRAKE (the sticks then stay
-        inert until GUIDED is possible, and the result says why)."""
+        if self._replay is not None:
+            return self._finish("stop", CommandStatus.REJECTED, "replaying a recording: no vehicle to command")
         with self._lock:
-            self._setpoints.stop(self.clock())
+            now = self.clock()
+            ended = self._sequence.end("stop")
+            interrupted = ended if ended is not None and ended.exclusive else None
+            s = self.state()
+            airborne = (self._rules.may_be_airborne(s) or (interrupted is not None and interrupted.lifting_sent))
+            armed = s.armed or not self._commands.settled_by_state(mavlink.MAV_CMD_COMPONENT_ARM_DISARM, now)
+            self._setpoints.stop(now)                 # zeros at once, whatever the mode turns out to be
             self._store.set(setpoint=self._setpoints.setpoint)
+            seq = StopSequence(self._pilot, now, interrupted, airborne, armed)
+            self._sequence.start(seq)
+        self._wake.set()
+        return seq.future
 
-        def guided_answered(r: CommandResult):
-            if r.ok:
-                return self._store.record("stop", CommandStatus.ACCEPTED,
-                                          f"holding position in GUIDED (was {was}): the sticks fly")
-            return chain(self._set_mode("BRAKE"), lambda b: self._store.record(
-                "stop", b.status, f"GUIDED refused ({r.reason}): BRAKE, {b.reason}"), "stop")
-        return chain(self._set_mode("GUIDED"), guided_answered, "stop")
+    def _hold(self) -> None:
+        """Zero velocity from now (lock held): streamed for ArduCopter's GUID_TIMEOUT, then the sticks fly."""
+        self._setpoints.stop(self.clock())
+        self._store.set(setpoint=self._setpoints.setpoint)
+        self._store.publish()
+
+    def _replace_sequence(self, seq, why: str) -> Future:
+        """Start ``seq`` in the slot, ending whatever runs there (Land and RTL win over any sequence)."""
+        if self._replay is not None:
+            return self._finish(seq.name, CommandStatus.REJECTED, "replaying a recording: no vehicle to command")
+        with self._lock:
+            self._sequence.end(why)
+            self._sequence.start(seq)
+        self._wake.set()
+        return seq.future
 
     def reboot(self) -> Future:
-        problem = ground_only(self.state())
-        if problem:
-            return self._finish("reboot", CommandStatus.REJECTED, problem)
-        return self._busy("reboot") or self._command_long(mavlink.MAV_CMD_PREFLIGHT_REBOOT_SHUTDOWN, (1,), "reboot",
-                                                          guard=ground_only)
+        return self._busy("reboot") or self._command_long(mavlink.MAV_CMD_PREFLIGHT_REBOOT_SHUTDOWN, (1,), "reboot")
 
     def calibrate_level(self) -> Future:
         """Level (accelerometer trim) calibration; only sensible disarmed on the ground."""
-        problem = ground_only(self.state())
-        if problem:
-            return self._finish("level calibration", CommandStatus.REJECTED, problem)
         return self._busy("level calibration") or self._command_long(
-            mavlink.MAV_CMD_PREFLIGHT_CALIBRATION, (0, 0, 0, 0, 2, 0, 0), "level calibration", guard=ground_only)
+            mavlink.MAV_CMD_PREFLIGHT_CALIBRATION, (0, 0, 0, 0, 2, 0, 0), "level calibration")
 
     def parachute(self, action: str) -> Future:
         actions = {"disable": mavlink.PARACHUTE_DISABLE, "enable": mavlink.PARACHUTE_ENABLE,
@@ -549,22 +551,16 @@ class Vehicle(Drone):
             return self._finish("takeoff", CommandStatus.REJECTED, problem)
         if self._replay is not None:
             return self._finish("takeoff", CommandStatus.REJECTED, "replaying a recording: no vehicle to command")
-        with self._lock:                              # check and start as one step: never two sequences
-            if self._sequence.current is not None:
-                return self._finish("takeoff", CommandStatus.REJECTED, "a takeoff is already running")
-            if self.state().flying:
-                return self._finish("takeoff", CommandStatus.REJECTED, "already flying")
-            seq = TakeoffSequence(self, alt, self.config, self.clock())
-            self._sequence.start(seq)
-        self._wake.set()
-        return seq.future
+        if self.state().flying:
+            return self._finish("takeoff", CommandStatus.REJECTED, "already flying")
+        return self._run_sequence(TakeoffSequence(self._pilot, alt, self.config, self.clock()))
 
-    def _run_sequence(self, seq: TakeoffSequence, name: str) -> Future:
-        """Step ``seq`` (a takeoff-like sequence: driver.mission's MissionStart) in the takeoff's place: only
-        Land and Stop meanwhile, and Land aborts it."""
-        with self._lock:
+    def _run_sequence(self, seq) -> Future:
+        """Start a takeoff or mission start (exclusive: only Land, Stop and RTL meanwhile, and each ends it)."""
+        with self._lock:                              # check and start as one step: never two
             if not self._sequence.start(seq):
-                return self._finish(name, CommandStatus.REJECTED, "a takeoff or mission start is already running")
+                running = self._sequence.exclusive
+                return self._finish(seq.name, CommandStatus.REJECTED, f"a {running.name} is already running")
         self._wake.set()
         return seq.future
 
@@ -582,7 +578,11 @@ class Vehicle(Drone):
         self._missions.cancel(kind)
 
     def start_mission(self) -> Future:
-        return self._busy("mission start") or self._missions.start()
+        problem = ("replaying a recording: no vehicle to command" if self._replay is not None
+                   else self._missions.start_problem(self.state()))
+        if problem:
+            return self._finish("mission start", CommandStatus.REJECTED, problem)
+        return self._run_sequence(MissionStartSequence(self._pilot, self.config, self.clock()))
 
     def pause_mission(self) -> Future:
         return self._busy("mission pause") or self._missions.pause()
@@ -593,8 +593,8 @@ class Vehicle(Drone):
     def set_mission_item(self, seq: int) -> Future:
         return self._busy(f"mission item {seq}") or self._missions.go_to_item(seq)
 
-    def _abort_takeoff(self, why: str) -> None:
-        """End a takeoff or mission start in progress (driver.vehicle.sequence), cancelling what it asked."""
+    def _end_sequence(self, why: str) -> None:
+        """End what runs in the sequence slot (driver.vehicle.sequences), cancelling what it asked."""
         with self._lock:
-            self._sequence.abort(why)
+            self._sequence.end(why)
 

@@ -16,7 +16,7 @@ from dataclasses import dataclass, replace
 from driver.vehicle.rules import gcs_failsafe_setting
 from driver.vehicle.state import BatteryAlarm, LinkStatus, SequencePhase, Severity, VehicleState
 
-__all__ = ["Alert", "AlertKind", "AlertModel", "MAV_STATE_CRITICAL", "MAV_STATE_EMERGENCY"]
+__all__ = ["Alert", "AlertKind", "AlertModel", "LIVE_ONLY", "MAV_STATE_CRITICAL", "MAV_STATE_EMERGENCY"]
 
 MAV_STATE_CRITICAL = 5       # HEARTBEAT.system_status: ArduCopter's failsafe state
 MAV_STATE_EMERGENCY = 6
@@ -39,6 +39,9 @@ class AlertKind(enum.Enum):
     TRAFFIC = "traffic"
 
 
+#: Kinds about the link and the airspace now, or advice to act on the vehicle: never raised while a recording plays
+#: (its traffic passed long ago, its link is not ours, and there is nothing to fix on it)
+LIVE_ONLY = {AlertKind.LINK_LOST, AlertKind.LINK_RECOVERED, AlertKind.NO_GCS_FAILSAFE, AlertKind.TRAFFIC}
 #: Kinds that also go to the banner in the pilot's eye line (the rest are spoken only)
 CRITICAL_KINDS = {AlertKind.LINK_LOST, AlertKind.BATTERY_WARNING, AlertKind.BATTERY_CRITICAL, AlertKind.FAILSAFE,
                   AlertKind.FENCE, AlertKind.MESSAGE, AlertKind.NO_GCS_FAILSAFE, AlertKind.TRAFFIC}
@@ -66,7 +69,7 @@ class AlertModel:
     """Feed it every snapshot (:meth:`update`); it returns the alerts that snapshot raises, most urgent first."""
 
     def __init__(self) -> None:
-        self._last: VehicleState | None = None
+        self._previous: VehicleState | None = None
         self._last_message = -1
         self._battery = BatteryAlarm.UNKNOWN
 
@@ -75,7 +78,7 @@ class AlertModel:
         self.__init__()
 
     def update(self, s: VehicleState) -> list[Alert]:
-        prev, self._last = self._last, s
+        prev, self._previous = self._previous, s
         out: list[Alert] = []
         if prev is None or not _has_vehicle(prev):
             if _has_vehicle(s):                        # the baseline: what the vehicle is now is not news
@@ -83,7 +86,7 @@ class AlertModel:
                 self._battery = s.battery.alarm
                 out.append(Alert(AlertKind.CONNECTED, f"Connected. {_mode_words(s.mode)}, "
                                  f"{'armed' if s.armed else 'disarmed'}", Severity.INFO))
-                out += _no_gcs_failsafe(None, s)
+                out += [] if s.link.replay else _no_gcs_failsafe(None, s)
             return out
         link_was, link = prev.link.status, s.link.status
         if link_was is LinkStatus.OK and link is LinkStatus.LOST:
@@ -110,6 +113,8 @@ class AlertModel:
         out += _traffic(prev, s)
         if s.takeoff.phase is SequencePhase.DONE and prev.takeoff.phase is not SequencePhase.DONE:
             out.append(Alert(AlertKind.TAKEOFF_COMPLETE, f"Takeoff complete, {s.altitude:.0f} metres", Severity.INFO))
+        if s.link.replay:
+            out = [a for a in out if a.kind not in LIVE_ONLY]
         return sorted((a if a.time else replace(a, time=s.time) for a in out), key=lambda a: a.severity)
 
     def _battery_alerts(self, s: VehicleState) -> list[Alert]:
@@ -138,20 +143,11 @@ def _no_gcs_failsafe(prev: VehicleState | None, s: VehicleState) -> list[Alert]:
 
 
 def _traffic(prev: VehicleState, s: VehicleState) -> list[Alert]:
-    """An aircraft whose closest approach (driver.traffic) newly comes within the alert limits: said once, short
-    ("Traffic SIM42, 900 metres, 50 metres above, closest in 20 seconds"); the driver's Messages line has it all."""
+    """An aircraft whose closest approach (driver.traffic) newly comes within the alert limits: said once, in the
+    one text the driver's Messages line has too (``Contact.threat``), so the banner never disagrees with it."""
     before = {c.icao for c in prev.traffic.alerts}
-    out = []
-    for c in s.traffic.alerts:
-        if c.icao in before:
-            continue
-        a = c.approach
-        where = "" if c.distance is None else f", {c.distance:.0f} metres"
-        height = "" if c.relative_alt is None else \
-            f", {abs(c.relative_alt):.0f} metres {'above' if c.relative_alt >= 0 else 'below'}"
-        out.append(Alert(AlertKind.TRAFFIC, f"Traffic {c.label}{where}{height}, closest in {a.time:.0f} seconds",
-                         Severity.WARNING))
-    return out
+    return [Alert(AlertKind.TRAFFIC, c.said or c.threat, Severity.WARNING) for c in s.traffic.alerts
+            if c.icao not in before]
 
 
 def _has_vehicle(s: VehicleState) -> bool:

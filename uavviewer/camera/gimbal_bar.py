@@ -69,7 +69,8 @@ class GimbalBar(QWidget):
         c = s.camera
         if self.record_button.isChecked() != bool(c.recording):     # a click the camera did not follow is undone
             self.record_button.setChecked(bool(c.recording))
-        shown = (s.gimbal, c, s.connected)
+        live = s.connected and not s.link.replay       # a recording's camera cannot be asked for anything
+        shown = (s.gimbal, c, live)
         if shown == self._shown:
             return
         self._shown = shown
@@ -77,7 +78,8 @@ class GimbalBar(QWidget):
         self.pitch_label.setText("Drone cam " + ("?°" if pitch is None else f"{pitch:.0f}°"))
         self.pitch_label.setToolTip(f"The vehicle's camera: gimbal {s.gimbal.describe()}, the pitch as the vehicle reports it "
                                     "(0 level, -90 straight down)")
-        self.photo_button.setText("Photo")     # the count is in its tooltip: the row fits 1024 px and never moves
+        self.photo_button.setText("Photo")     # the count is in its tooltip (the row fits 1024 px and never moves)
+                                               # and in the mission's progress line (plan/progress.py)
         self.record_button.setText("Video ●" if c.recording else "Video")
         recording = "unknown" if c.recording is None else "yes" if c.recording else "no"
         self.photo_button.setToolTip(f"A picture with the vehicle's camera ({c.name or c.kind.value}), counted only "
@@ -87,4 +89,4 @@ class GimbalBar(QWidget):
         self.stop_looking_button.setVisible(s.gimbal.roi is not None)
         for b in (self.level_button, self.down_button, self.photo_button, self.record_button,
                   self.stop_looking_button):
-            b.setEnabled(s.connected)
+            b.setEnabled(live)

@@ -5,20 +5,26 @@ sits exactly on the picture. A right roll turns the horizon line counter-clockwi
 and nose up moves it down, as the pilot sees the world from the camera. The text
 (:func:`text_rows`) stays readable: the roll scale stays below the heading tape, the
 horizon line stops short of the side readouts, and a pitch rung that would cross any
-text is not drawn.
+text is not drawn. On a small video (1024×600: 156 px wide) the top row could not hold
+the mode, the heading and the battery side by side, and they overlapped: there the
+heading tape is left out, the heading goes under the battery, and the battery drops its
+volts if it must (:func:`hud_labels` lays every text out; none overlaps another).
 """
 from __future__ import annotations
 
 import math
 
+from typing import NamedTuple
+
 from PyQt5.QtCore import QPointF, QRectF, Qt
-from PyQt5.QtGui import QColor, QFont, QPainter, QPen, QRegion
+from PyQt5.QtGui import QColor, QFont, QFontMetricsF, QPainter, QPen, QRegion
 
 from driver.vehicle.state import BatteryAlarm, LinkStatus, VehicleState
 from ..flight.phase import no_vehicle_words
 from ..units import fmt as _num
 
-__all__ = ["paint_hud", "text_rows", "HUD_COLOUR", "STALE_COLOUR", "hud_colour", "stale_text"]
+__all__ = ["arming_text", "paint_hud", "text_rows", "hud_labels", "hud_font", "Label", "HUD_COLOUR", "STALE_COLOUR",
+           "hud_colour", "stale_text"]
 
 HUD_COLOUR = QColor(120, 255, 140)
 SHADOW = QColor(0, 0, 0, 160)
@@ -37,8 +43,30 @@ def _text(p: QPainter, rect: QRectF, flags, text: str, colour: QColor = HUD_COLO
     p.drawText(rect, flags, text)
 
 
+class Label(NamedTuple):
+    rect: QRectF
+    flags: int
+    text: str
+    colour: QColor
+
+
 def _text_size(rect: QRectF) -> int:
-    return max(10, int(min(rect.width(), rect.height()) / 22))
+    return max(9, int(min(rect.width(), rect.height()) / 22))
+
+
+def hud_font(base: QFont, rect: QRectF) -> QFont:
+    font = QFont(base)
+    font.setPixelSize(_text_size(rect))
+    font.setBold(True)
+    return font
+
+
+def _compact(rect: QRectF, font: QFont) -> bool:
+    """Too narrow for the mode, the heading tape and the battery side by side (the longest of each)."""
+    fm = QFontMetricsF(font)
+    need = fm.horizontalAdvance("GUIDED_NOGPS") + fm.horizontalAdvance("000°") * 2.2 + \
+        fm.horizontalAdvance("BAT 100% 16.8 V") + 4 * MARGIN
+    return need > rect.width()
 
 
 def _top_band(rect: QRectF, size: int) -> QRectF:
@@ -71,6 +99,14 @@ def stale_text(state: VehicleState) -> str:
     return "LINK LOST · values " + (f"{age:.0f} s old" if age is not None else "stale")
 
 
+def arming_text(state: VehicleState) -> str:
+    """"ARMED" or "DISARMED" as the vehicle last said it; "ARMING UNKNOWN" while no vehicle is heard (nothing
+    heard yet, or after leaving one, which may well still be flying)."""
+    if state.link.status is LinkStatus.WAITING or not state.mode:
+        return "ARMING UNKNOWN"
+    return "ARMED" if state.armed else "DISARMED"
+
+
 def hud_colour(state: VehicleState) -> QColor:
     """Green while live; grey once the link is lost (the values are the last heard)."""
     return STALE_COLOUR if stale_text(state) else HUD_COLOUR
@@ -81,14 +117,21 @@ def paint_hud(p: QPainter, rect: QRectF, state: VehicleState) -> None:
     p.save()
     p.setRenderHint(QPainter.Antialiasing)
     p.setClipRect(rect)
-    size = _text_size(rect)
-    font = QFont(p.font())
-    font.setPixelSize(size)
-    font.setBold(True)
+    font = hud_font(p.font(), rect)
+    size = font.pixelSize()
     p.setFont(font)
+    compact = _compact(rect, font)
     _horizon(p, rect, state, size)
-    _heading(p, rect, state, size)
-    _readouts(p, rect, state, size)
+    if not compact:
+        _heading(p, rect, state, size)
+    for label in hud_labels(rect, state, font):
+        _text(p, label.rect, label.flags, label.text, label.colour)
+    stale = stale_text(state)
+    if stale:                                   # along the bottom, clear of the scales, on a dark band
+        line = size * 1.4
+        band = QRectF(rect.left(), rect.bottom() - line - MARGIN, rect.width(), line + MARGIN)
+        p.fillRect(band, SHADOW)
+        _text(p, band, Qt.AlignHCenter | Qt.AlignVCenter, stale, WARN)
     p.restore()
 
 
@@ -166,41 +209,56 @@ def _heading(p: QPainter, rect: QRectF, state: VehicleState, size: int) -> None:
         p.drawLine(QPointF(x, top + size * 1.3), QPointF(x, top + size * (1.8 if d % 30 == 0 else 1.55)))
         if d % 30 == 0:
             _text(p, QRectF(x - 20, top + size * 1.8, 40, size * 1.3), Qt.AlignCenter, names.get(d, str(d)), colour)
-    _text(p, QRectF(rect.center().x() - 40, top, 80, size * 1.3), Qt.AlignCenter, f"{heading:03.0f}°", colour)
+    # the heading itself: one of hud_labels
 
 
-def _readouts(p: QPainter, rect: QRectF, state: VehicleState, size: int) -> None:
+def hud_labels(rect: QRectF, state: VehicleState, font: QFont) -> list[Label]:
+    """Every text of the HUD over ``rect`` in ``font`` (:func:`hud_font`), where it is written: speeds and the
+    camera's tilt left, altitude and home right, mode and arming top left, battery top right, and the heading at
+    the top (under the battery on a small video, where the tape is left out)."""
     colour = hud_colour(state)
     stale = stale_text(state)
+    size = font.pixelSize()
+    fm = QFontMetricsF(font)
+    compact = _compact(rect, font)
     line = size * 1.4
-    margin = MARGIN
     left, right = (QRectF(r.left(), r.top(), r.width(), line) for r in _side_rows(rect, size))
-    _text(p, left, Qt.AlignLeft | Qt.AlignVCenter, f"GS {_num(state.velocity.ground_speed)} m/s", colour)
-    _text(p, left.translated(0, line), Qt.AlignLeft | Qt.AlignVCenter, f"VS {_num(state.velocity.climb)} m/s",
-          colour)
-    _text(p, right, Qt.AlignRight | Qt.AlignVCenter, f"ALT {_num(state.altitude)} m", colour)
+    L, R = Qt.AlignLeft | Qt.AlignVCenter, Qt.AlignRight | Qt.AlignVCenter
     dist = state.distance_from_home
-    _text(p, right.translated(0, line), Qt.AlignRight | Qt.AlignVCenter, f"HOME {_num(dist, 0)} m", colour)
-    gimbal = state.gimbal.pitch_deg                  # the vehicle's camera tilt, as it reports it
-    _text(p, left.translated(0, 2 * line), Qt.AlignLeft | Qt.AlignVCenter, f"CAM {_num(gimbal, 0)}°", colour)
+    labels = [Label(left, L, f"GS {_num(state.velocity.ground_speed)} m/s", colour),
+              Label(left.translated(0, line), L, f"VS {_num(state.velocity.climb)} m/s", colour),
+              Label(right, R, f"ALT {_num(state.altitude)} m", colour),
+              Label(right.translated(0, line), R, f"HOME {_num(dist, 0)} m", colour),
+              # the vehicle's camera tilt, as it reports it
+              Label(left.translated(0, 2 * line), L, f"CAM {_num(state.gimbal.pitch_deg, 0)}°", colour)]
     # mode and arming top-left, battery top-right
-    top = QRectF(rect.left() + margin, rect.top() + 4, rect.width() * 0.3, line)
-    armed = "ARMED" if state.armed else "DISARMED"
-    _text(p, top, Qt.AlignLeft | Qt.AlignVCenter, state.mode or no_vehicle_words(state),
-          colour if stale else (HUD_COLOUR if state.connected else WARN))
-    _text(p, top.translated(0, line), Qt.AlignLeft | Qt.AlignVCenter, armed,
-          colour if stale else (WARN if state.armed else HUD_COLOUR))
+    half = rect.width() / 2 - MARGIN
+    top = QRectF(rect.left() + MARGIN, rect.top() + 4, half if compact else rect.width() * 0.3, line)
+    armed = arming_text(state)
+    labels.append(Label(top, L, state.mode or no_vehicle_words(state),
+                        colour if stale else (HUD_COLOUR if state.connected else WARN)))
+    labels.append(Label(top.translated(0, line), L, armed,
+                        colour if stale else (WARN if state.armed or armed == "ARMING UNKNOWN" else HUD_COLOUR)))
     b = state.battery
     parts = []
     if b.remaining is not None:
         parts.append(f"{b.remaining:.0f}%")
     if b.voltage is not None:
         parts.append(f"{b.voltage:.1f} V")
-    top_right = QRectF(rect.right() - margin - rect.width() * 0.3, rect.top() + 4, rect.width() * 0.3, line)
+    battery = "BAT " + (" ".join(parts) or "--")
+    width = half if compact else rect.width() * 0.3
+    beside = rect.width() - 3 * MARGIN - fm.horizontalAdvance(labels[-2].text)     # what the mode leaves
+    if compact and fm.horizontalAdvance(battery) > beside:
+        battery = "BAT " + (parts[0] if parts else "--")                           # the percentage only
+    width = max(width, fm.horizontalAdvance(battery)) if compact else width
+    top_right = QRectF(rect.right() - MARGIN - width, rect.top() + 4, width, line)
     alarm = ALARM.get(b.alarm, WARN if b.low and b.alarm is BatteryAlarm.UNKNOWN else HUD_COLOUR)
-    _text(p, top_right, Qt.AlignRight | Qt.AlignVCenter, "BAT " + (" ".join(parts) or "--"),
-          colour if stale else alarm)
-    if stale:                                   # along the bottom, clear of the scales, on a dark band
-        band = QRectF(rect.left(), rect.bottom() - line - MARGIN, rect.width(), line + MARGIN)
-        p.fillRect(band, SHADOW)
-        _text(p, band, Qt.AlignHCenter | Qt.AlignVCenter, stale, WARN)
+    labels.append(Label(top_right, R, battery, colour if stale else alarm))
+    heading = state.heading_deg if math.isfinite(state.heading_deg) else 0.0
+    if compact:
+        if armed != "ARMING UNKNOWN":             # no vehicle heard: no heading to give, and the words need the row
+            labels.append(Label(top_right.translated(0, line), R, f"HDG {heading:03.0f}°", colour))
+    else:
+        labels.append(Label(QRectF(rect.center().x() - 40, rect.top() + 4, 80, size * 1.3), Qt.AlignCenter,
+                            f"{heading:03.0f}°", colour))
+    return labels

@@ -11,7 +11,7 @@ import enum
 import os
 from dataclasses import dataclass, field
 
-from driver.link.connection import connection_problem
+from driver.link.connection import connection_problem, host_problem
 
 __all__ = ["Kind", "Choice", "parse_key", "from_command_line", "serial_ports", "sim_name", "SITL_TCP", "SOLO_UDP",
            "waiting_words"]
@@ -96,9 +96,9 @@ class Choice:
             return {Kind.ICE: "name the Ice server's host or config file", Kind.REPLAY: "pick a flight log",
                     Kind.REGISTRY: "name the registry's HOST:PORT"}.get(self.kind, "enter a connection")
         if self.kind is Kind.ICE:
-            if self.key.startswith("ice-config:") and not os.path.isfile(self.target):
-                return f"no such Ice config: {self.target}"
-            return None
+            if self.key.startswith("ice-config:"):
+                return None if os.path.isfile(self.target) else f"no such Ice config: {self.target}"
+            return host_problem(self.target)
         if self.kind is Kind.REPLAY:
             return None if os.path.isfile(self.target) else f"no such flight log: {self.target}"
         if self.kind is Kind.REGISTRY:

@@ -1,15 +1,18 @@
-"""File › Connect, Disconnect, Open flight log: switch the window's vehicle without a restart.
+"""File › Connect, Disconnect, Replay a flight: switch the window's vehicle without a restart.
 
 The new drone is opened on a worker thread (an Ice server answers when it answers; a .tlog is read whole) BESIDE
 the one flown now, and handed to the window on the UI thread only once a heartbeat came in on it; only then is the
 one left behind closed, also off the UI thread. The window keeps flying the old vehicle until the new one has
 answered, and never waits. A new link that stays silent for :data:`ANSWER_TIMEOUT` s is closed with a clear
-error; the old vehicle was never let go of (a dead address used to drop a flying vehicle at once). The last few
-connections that reached a vehicle are kept in the settings, newest first.
+error; the old vehicle was never let go of (a dead address used to drop a flying vehicle at once). Why the new link
+does not open (the system's own words: "Connection refused", "Name or service not known") is said the moment the
+driver meets it, and again in the final error: it used to wait out the 15 s and then blame the heartbeat. The last
+few connections that reached a vehicle are kept in the settings, newest first.
 """
 from __future__ import annotations
 
 import logging
+import re
 import threading
 import time
 
@@ -20,7 +23,7 @@ from driver.vehicle import VehicleConfig
 from .choice import Choice, parse_key
 from .opener import Disconnected, Opened, close_quietly, open_choice
 
-__all__ = ["ConnectionController", "RECENT_KEY", "MAX_RECENT", "ANSWER_TIMEOUT"]
+__all__ = ["ConnectionController", "RECENT_KEY", "MAX_RECENT", "ANSWER_TIMEOUT", "open_error"]
 
 log = logging.getLogger(__name__)
 
@@ -38,7 +41,9 @@ class ConnectionController(QObject):
     busyChanged = pyqtSignal(bool)           # opening one now
     recentChanged = pyqtSignal()
     answered = pyqtSignal(object)            # Choice: a vehicle answered on it (it joined the recent ones)
+    trouble = pyqtSignal(str)                # why the link being tried does not open, as soon as the driver knows
     _arrived = pyqtSignal(object, object)    # (Opened or None, error text): from the worker to the UI thread
+    _troubled = pyqtSignal(object, str)      # (Choice, the system's words): from the worker to the UI thread
 
     def __init__(self, qsettings: QSettings, base: VehicleConfig | None = None, log_dir: str | None = None,
                  certs: str | None = None, speedup: float = 1.0, parent: QObject | None = None) -> None:
@@ -54,6 +59,7 @@ class ConnectionController(QObject):
         self._closers: list[threading.Thread] = []
         self.answer_timeout = ANSWER_TIMEOUT
         self._arrived.connect(self._on_arrived)
+        self._troubled.connect(self._on_trouble)
 
     # -- what is flown now ------------------------------------------------------------------------------
     def adopt(self, drone, choice: Choice | None = None, sim=None, fleet=None, first: str = "") -> None:
@@ -103,9 +109,11 @@ class ConnectionController(QObject):
                 log.info("cannot open %s", choice.label, exc_info=True)
                 self._hand_over(None, f"{choice.label}: {' '.join(str(exc).split()) or type(exc).__name__}{still}")
                 return
-            if not _answers(opened, wait):
+            answered, why = _answers(opened, wait, lambda reason: self._say_trouble(choice, reason))
+            if not answered:
                 close_quietly(opened)
-                self._hand_over(None, f"{choice.label}: no heartbeat in {wait:g} s, link closed{still}")
+                because = f" ({why})" if why else ""
+                self._hand_over(None, f"{choice.label}: no heartbeat in {wait:g} s{because}, link closed{still}")
             elif not self._hand_over(opened, ""):
                 close_quietly(opened)               # the window closed meanwhile: nobody flies it
         threading.Thread(target=work, name="connect", daemon=True).start()
@@ -118,6 +126,16 @@ class ConnectionController(QObject):
         except RuntimeError:                         # the wrapped QObject was deleted
             return False
         return True
+
+    def _say_trouble(self, choice: Choice, reason: str) -> None:
+        try:
+            self._troubled.emit(choice, reason)
+        except RuntimeError:                         # the window closed meanwhile
+            pass
+
+    def _on_trouble(self, choice: Choice, reason: str) -> None:
+        if choice == self._opening:                  # not a link given up since
+            self.trouble.emit(f"{choice.label}: {reason}; trying again for up to {self.answer_timeout:g} s")
 
     def _on_arrived(self, opened: Opened | None, error: str) -> None:
         """On the UI thread: the new link answered (switch to it) or did not (say why; nothing else changes)."""
@@ -160,11 +178,34 @@ class ConnectionController(QObject):
         self._closers.clear()
 
 
-def _answers(opened: Opened, wait: float) -> bool:
-    """On the worker thread: whether a heartbeat comes in on the new link within ``wait`` s."""
+_OPEN_ERROR = re.compile(r"^cannot open .*?: (?:\[Errno -?\d+\] )?(?P<why>.+?)(?:; retrying)?$")
+
+
+def open_error(text: str, connection: str = "") -> str:
+    """The system's reason in a driver line about a link that does not open ("cannot open tcp:h:1: [Errno 111]
+    Connection refused; retrying" -> "Connection refused"); "" for any other line."""
+    if connection and text.startswith(f"cannot open {connection}: "):
+        text = "cannot open x: " + text[len(f"cannot open {connection}: "):]
+    found = _OPEN_ERROR.match(text)
+    return found.group("why") if found else ""
+
+
+def _answers(opened: Opened, wait: float, trouble) -> tuple[bool, str]:
+    """On the worker thread: whether a heartbeat comes in on the new link within ``wait`` s, and the latest reason
+    the driver gave for not opening it (``trouble(reason)`` is called at once for each new one)."""
     deadline = time.monotonic() + wait
-    while not opened.drone.state().connected:
+    seen, why = 0, ""
+    connection = opened.choice.target if opened.choice is not None else ""
+    while True:
+        s = opened.drone.state()
+        if s.connected:
+            return True, why
+        for m in s.messages_since(seen):
+            seen = m.index
+            reason = open_error(m.text, connection) if m.source == "driver" else ""
+            if reason and reason != why:
+                why = reason
+                trouble(reason)
         if time.monotonic() > deadline:
-            return False
+            return False, why
         time.sleep(POLL)
-    return True

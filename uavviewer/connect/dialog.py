@@ -24,7 +24,9 @@ def _port_box(value: int) -> QSpinBox:
 
 
 class ConnectDialog(QDialog):
-    """Not modal: the window flies on behind it. ``chosenConnection`` carries the pilot's :class:`Choice`."""
+    """Not modal: the window flies on behind it. ``chosenConnection`` carries the pilot's :class:`Choice`; the
+    dialog stays open while the link is tried (:meth:`set_busy`), says why it failed (:meth:`show_problem`) where
+    the pilot asked, and is closed by its owner once a vehicle answers."""
 
     chosenConnection = pyqtSignal(object)
 
@@ -95,6 +97,10 @@ class ConnectDialog(QDialog):
         self.problem.setObjectName("connectProblem")
         self.problem.setStyleSheet("color: #ff8a80;")
         self.problem.setWordWrap(True)
+        self.progress = QLabel()
+        self.progress.setObjectName("connectProgress")
+        self.progress.setWordWrap(True)
+        self.progress.setVisible(False)
         self.buttons = QDialogButtonBox(QDialogButtonBox.Cancel)
         self.connect_button = self.buttons.addButton("Connect", QDialogButtonBox.AcceptRole)
         self.connect_button.setObjectName("connectButton")
@@ -108,6 +114,7 @@ class ConnectDialog(QDialog):
         form.addRow("Type", self.kind)
         box.addLayout(form)
         box.addWidget(self.pages)
+        box.addWidget(self.progress)
         box.addWidget(self.problem)
         box.addWidget(self.buttons)
         self.recent_list.itemClicked.connect(lambda item: self.show_choice(item.data(Qt.UserRole)))
@@ -196,7 +203,16 @@ class ConnectDialog(QDialog):
         choice = self.chosen()
         problem = choice.problem()
         if problem:
-            self.problem.setText(problem)
+            self.show_problem(problem)
             return
+        self.show_problem("")
         self.chosenConnection.emit(choice)
-        self.accept()
+
+    def show_problem(self, text: str) -> None:
+        self.problem.setText(text)
+
+    def set_busy(self, busy: bool, text: str = "") -> None:
+        """A link is being tried (``text`` says which, and for how long): Connect waits until it is decided."""
+        self.connect_button.setEnabled(not busy)
+        self.progress.setText(text)
+        self.progress.setVisible(busy and bool(text))

@@ -1,14 +1,21 @@
-"""Take off / Land, Stop, RTL and Arm/Disarm buttons; they show the vehicle's state, not a guess."""
+"""Take off / Land, Stop, RTL and Arm/Disarm buttons; they show the vehicle's state, not a guess.
+
+In the air Disarm is the emergency motor stop: the drone falls. It is no longer a button beside Stop, the one a
+pilot hits most under stress (one slip away, it only asked); the window places it in the mode's row, and in the air
+it opens a menu whose one item, "Emergency motor stop…", asks first (as QGroundControl hides it behind a slider).
+"""
 from __future__ import annotations
 
 from PyQt5.QtCore import QSize, Qt, pyqtSignal
 from PyQt5.QtGui import QFontMetrics, QIcon
-from PyQt5.QtWidgets import QGridLayout, QProgressBar, QPushButton, QSizePolicy, QWidget
+from PyQt5.QtWidgets import QAction, QGridLayout, QMenu, QProgressBar, QPushButton, QSizePolicy, QWidget
 
 from ..widgets.icons import icon
 from .phase import FlightPhase
 
 __all__ = ["FlightControls"]
+
+MENU_ARROW = 14                         # px the menu's arrow takes on Disarm in the air
 
 
 def _icon(name: str) -> QIcon:
@@ -43,19 +50,25 @@ class FlightControls(QWidget):
         self.progress.setVisible(False)
         self.stop_button = self._button("stopButton", "Stop", "stop")
         self.rtl_button = self._button("rtlButton", "RTL", "rtl")
-        self.arm_button = self._button("armButton", "Arm", "arm")
+        self.arm_button = self._button("armButton", "Arm", "arm")       # laid out by the window, away from Stop
+        self.arm_button.setSizePolicy(QSizePolicy.Fixed, QSizePolicy.Fixed)
+        self.emergency_menu = QMenu(self.arm_button)                    # in the air: Disarm opens this, not a question
+        self.emergency_menu.setObjectName("emergencyMenu")
+        self.emergency_action = QAction(_icon("disarm"), "Emergency motor stop (the drone falls)…", self.emergency_menu)
+        self.emergency_action.triggered.connect(self.disarmRequested)
+        self.emergency_menu.addAction(self.emergency_action)
         for button, longest in ((self.stop_button, "Stop"), (self.rtl_button, "RTL"), (self.arm_button, "Disarm")):
             button.setMinimumWidth(self._width_for(button, longest))   # "Disarm" fits whatever the font
+        self.arm_button.setMinimumWidth(self.arm_button.minimumWidth() + MENU_ARROW)
         self.stop_button.setToolTip("Hold position (Space)")
-        self.rtl_button.setToolTip("Return to launch and land")
+        self.rtl_button.setToolTip("Return to launch and land (R)")
         grid = QGridLayout(self)
         grid.setContentsMargins(0, 0, 0, 0)
         grid.setSpacing(6)
-        grid.addWidget(self.main_button, 0, 0, 1, 3)
-        grid.addWidget(self.progress, 0, 0, 1, 3, Qt.AlignBottom)   # over the button: it never pushes the row
+        grid.addWidget(self.main_button, 0, 0, 1, 2)
+        grid.addWidget(self.progress, 0, 0, 1, 2, Qt.AlignBottom)   # over the button: it never pushes the row
         grid.addWidget(self.stop_button, 1, 0)
         grid.addWidget(self.rtl_button, 1, 1)
-        grid.addWidget(self.arm_button, 1, 2)
         self.main_button.clicked.connect(self._main_clicked)
         self.stop_button.clicked.connect(self.stopRequested)
         self.rtl_button.clicked.connect(self.rtlRequested)
@@ -134,7 +147,8 @@ class FlightControls(QWidget):
         emergency = armed and phase.airborne
         if a.property("action") != ("emergency" if emergency else ""):
             a.setProperty("action", "emergency" if emergency else "")
-            a.setToolTip("Emergency motor stop: the drone falls (asks first). To come down, use Land."
+            a.setMenu(self.emergency_menu if emergency else None)     # in the air: a menu first, then a question
+            a.setToolTip("Emergency motor stop, in this menu: the drone falls (asks first). To come down, use Land."
                          if emergency else "")
             a.style().unpolish(a)
             a.style().polish(a)

@@ -24,6 +24,8 @@ class ModeSelector(QComboBox):
         self.setObjectName("modeSelector")
         self.setFocusPolicy(Qt.NoFocus)     # arrow keys fly; they must not change the mode
         self.setMinimumWidth(130)
+        self.setPlaceholderText("Mode")
+        self.setToolTip("Flight mode: the vehicle's own, as it reports it")
         self.addItems(COPTER_MODES)
         self._mode = ""
         self.setCurrentIndex(-1)
@@ -32,6 +34,21 @@ class ModeSelector(QComboBox):
     @property
     def mode(self) -> str:
         return self._mode
+
+    def modes(self) -> list[str]:
+        return [self.itemText(i) for i in range(self.count())]
+
+    def refuse(self, reasons: dict[str, str | None]) -> None:
+        """Grey out the modes the driver will not command now, each with why in its tooltip (the vehicle's
+        current mode stays shown)."""
+        model = self.model()
+        for i in range(self.count()):
+            reason = reasons.get(self.itemText(i))
+            item = model.item(i)
+            enabled = reason is None or self.itemText(i) == self._mode
+            if item.isEnabled() != enabled:
+                item.setEnabled(enabled)
+            self.setItemData(i, reason, Qt.ToolTipRole)
 
     def set_mode(self, name: str) -> None:
         if name == self._mode or self.view().isVisible():

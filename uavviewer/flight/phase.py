@@ -98,8 +98,12 @@ def stick_hint(s: VehicleState) -> str:
 
 
 def readiness_text(s: VehicleState) -> str:
-    """On the ground: what the autopilot still waits for before it can arm, the mode to switch to when this one
-    cannot be armed (RTL, LAND, ...), or "ready to arm"."""
+    """On the ground: why the vehicle says it will not arm (its own pre-arm reasons, until it says they pass),
+    what the autopilot still waits for before it can arm, the mode to switch to when this one cannot be armed
+    (RTL, LAND, ...), or "ready to arm"."""
+    reasons = s.readiness.reasons
+    if reasons:                             # the first in the phase line's two lines; all of them in Preflight
+        return "not ready to arm: " + reasons[0] + (f" (+{len(reasons) - 1} more)" if len(reasons) > 1 else "")
     missing = s.readiness.missing
     if missing:
         return "waiting for " + ", ".join(missing)

@@ -1,7 +1,8 @@
 """The flight buttons' confirmations: takeoff, arm, a mode that needs an RC transmitter, the emergency motor stop.
 
 All are window-modal and opened without waiting (:func:`uavviewer.widgets.ask.ask`); Cancel is the focused
-default, so Space (Stop) or Enter never starts or stops the motors: only a click does.
+default, so Space (Stop) or Enter never starts or stops the motors: a click does, or for takeoff and arming their
+own key (T, as Help › Keys says, and A). The emergency stop and a throttle mode in flight take a click.
 """
 from __future__ import annotations
 
@@ -19,20 +20,21 @@ def takeoff_question(parent: QWidget, altitude: float, waiting_for: tuple[str, .
     if not waiting_for:
         return cautious_question(parent, "Take off", f"Take off and climb to {altitude:.1f} m above home?\n\n"
                                  "The motors will start. Keep clear of the propellers.", "Take off",
-                                 "takeoffQuestion")
+                                 "takeoffQuestion", key="T")
     return cautious_question(
         parent, "Take off when ready",
         f"The vehicle is not ready yet: waiting for {', '.join(waiting_for)}.\n\n"
         f"Take off as soon as it is (up to {wait_limit:.0f} s), and climb to {altitude:.1f} m above home?\n\n"
         "Until then nothing starts; \"Cancel takeoff\" on the main button ends the wait and leaves the vehicle as "
-        "it is. Then the motors will start: keep clear of the propellers.", "Take off when ready", "takeoffQuestion")
+        "it is. Then the motors will start: keep clear of the propellers.", "Take off when ready", "takeoffQuestion",
+        key="T")
 
 
 def arm_question(parent: QWidget, mode: str, consequence: str) -> QMessageBox:
     """Before Arm: the motors start; say what happens next in this mode (the driver's words)."""
     return cautious_question(parent, "Arm the motors", f"Arm the motors in {mode or 'the current mode'}?\n\n"
                              f"{consequence}\n\nKeep clear of the propellers.", "Arm", "armQuestion",
-                             QMessageBox.Warning)
+                             QMessageBox.Warning, key="A")
 
 
 def mode_question(parent: QWidget, mode: str, warning: str) -> QMessageBox:

@@ -3,8 +3,10 @@
 The demand is the pads and keys combined, or the gamepad, whichever the pilot moved last
 (:class:`~uavviewer.input.selector.InputSelector`), scaled by the maximum speeds the drone has in force, and zero
 while the vehicle cannot fly by velocity. Keys fly only when aimed at the window; a menu, popup or dialog opening,
-focus lost or the window minimised centres everything (the key's release would go elsewhere). Space, T and L
-(and the gamepad's buttons) do what their button does, and only while it is enabled.
+focus lost or the window minimised centres everything (the key's release would go elsewhere). Space, T, L and R
+(and the gamepad's buttons) do what their button does, and only while it is enabled; they do it from any other
+window of the program too (Setup, Parameters, a review...), unless a text field there has the focus: with Setup
+focused in flight, R did nothing.
 """
 from __future__ import annotations
 
@@ -12,16 +14,16 @@ import logging
 import math
 
 from PyQt5.QtCore import QEvent, QObject, Qt
-from PyQt5.QtWidgets import QApplication, QDialog, QWidget
+from PyQt5.QtWidgets import (QAbstractSpinBox, QApplication, QComboBox, QDialog, QLineEdit, QPlainTextEdit,
+                             QTextEdit, QWidget)
 
 from driver.vehicle.api import Limits
 from driver.vehicle.state import Severity, VehicleState
 
 from ..camera.gimbal import KEY_STEP
 from ..flight.phase import FlightPhase, stick_hint
-from ..widgets.dialog_fit import fit_dialog
 from .gamepad_input import GamepadInput
-from .keyboard import ACTION_KEYS, AXIS_KEYS, KeyboardSticks
+from .keyboard import ACTION_KEYS, AXIS_KEYS, EVERYWHERE_KEYS, KeyboardSticks
 from .selector import Input, InputSelector
 from .sticks import Axes, MaxSpeeds, axes_from_pads, combine, pad_labels, pads_from_axes, velocity_from_axes
 
@@ -182,14 +184,15 @@ class PilotSticks(QObject):
             if self.keyboard.release(event.key()):
                 self.fly()
         elif kind == QEvent.Show and self._interrupts(watched):
-            if isinstance(watched, QDialog):
-                fit_dialog(watched)                 # every dialog fits the screen, its buttons in reach
             self.centre()
             return False
-        if kind in (QEvent.KeyPress, QEvent.KeyRelease) and self._owns(watched) \
-                and self.window.adapter.replay is None:
+        if kind in (QEvent.KeyPress, QEvent.KeyRelease) and self.window.adapter.replay is None \
+                and (self._owns(watched) or self._beside(watched, event)):
             if QApplication.activeModalWidget() is not None or QApplication.activePopupWidget() is not None:
                 return False
+            if not self._owns(watched):                              # another window: the buttons' keys only
+                return kind == QEvent.KeyPress and not event.isAutoRepeat() and \
+                    self._key_pressed(event.key(), event.modifiers())
             if event.isAutoRepeat():
                 return event.key() in ACTION_KEYS or event.key() in AXIS_KEYS   # held: already acted
             if kind == QEvent.KeyPress:
@@ -205,6 +208,17 @@ class PilotSticks(QObject):
 
     def _owns(self, watched: QObject) -> bool:
         return isinstance(watched, QWidget) and watched.window() is self.window
+
+    def _beside(self, watched: QObject, event) -> bool:
+        """A key for a flight button (Space, T, L, R), pressed in another window of the program that is not a
+        question, and not into a field that takes text."""
+        if not isinstance(watched, QWidget) or event.key() not in EVERYWHERE_KEYS:
+            return False
+        other = watched.window()
+        if other is self.window or other.windowType() not in (Qt.Window, Qt.Dialog) \
+                or other.windowModality() != Qt.NonModal:
+            return False
+        return not _typing(watched)                     # the key's receiver: the widget with the focus
 
     def _key_pressed(self, key: int, modifiers) -> bool:
         if modifiers & (Qt.ControlModifier | Qt.AltModifier | Qt.MetaModifier):
@@ -231,3 +245,10 @@ class PilotSticks(QObject):
             fc.main_button.click()
         elif action in ("tilt_up", "tilt_down"):      # the vehicle's camera (uavviewer/camera/gimbal.py)
             self.window.gimbal.tilt_by(KEY_STEP if action == "tilt_up" else -KEY_STEP)
+
+
+def _typing(focus: QWidget | None) -> bool:
+    """A field that takes text has the focus (a search box, a value being edited): letters and Space are its."""
+    if isinstance(focus, (QLineEdit, QTextEdit, QPlainTextEdit)):
+        return not focus.isReadOnly()
+    return isinstance(focus, QAbstractSpinBox) or isinstance(focus, QComboBox) and focus.isEditable()

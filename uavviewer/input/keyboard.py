@@ -9,7 +9,7 @@ from PyQt5.QtCore import Qt
 
 from .sticks import Axes
 
-__all__ = ["AXIS_KEYS", "ACTION_KEYS", "KeyboardSticks", "key_help"]
+__all__ = ["AXIS_KEYS", "ACTION_KEYS", "EVERYWHERE_KEYS", "KeyboardSticks", "key_help"]
 
 # key -> (axis, sign, what the pilot reads)
 AXIS_KEYS: dict[int, tuple[str, float, str]] = {
@@ -33,6 +33,10 @@ ACTION_KEYS: dict[int, tuple[str, str]] = {
     Qt.Key_PageUp: ("tilt_up", "Tilt the drone's camera up 5° (or the mouse wheel / drag on the video)"),
     Qt.Key_PageDown: ("tilt_down", "Tilt the drone's camera down 5°"),
 }
+
+#: The flight buttons' keys that work from every window of the program, whichever has the focus (not in a text
+#: field): Stop, Take off, Land, RTL. Esc closes the other windows; the sticks' keys fly from the main window only.
+EVERYWHERE_KEYS = (Qt.Key_Space, Qt.Key_T, Qt.Key_L, Qt.Key_R)
 
 _KEY_NAMES = {Qt.Key_Up: "↑", Qt.Key_Down: "↓", Qt.Key_Left: "←", Qt.Key_Right: "→", Qt.Key_Space: "Space",
               Qt.Key_Escape: "Esc", Qt.Key_PageUp: "PgUp", Qt.Key_PageDown: "PgDn"}
@@ -83,4 +87,5 @@ def key_help() -> list[tuple[str, str]]:
     rows = [(name(k), text) for k, (_, _, text) in AXIS_KEYS.items()]
     rows += [(name(k), text) for k, (_, text) in ACTION_KEYS.items()]
     rows.append(("(release)", "Releasing a key centres its axis"))
+    rows.append(("Space T L R", "Also from Setup, Parameters and every other window (not while typing in a field)"))
     return rows

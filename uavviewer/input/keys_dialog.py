@@ -18,6 +18,7 @@ class KeysDialog(QDialog):
     def __init__(self, parent: QWidget | None = None) -> None:
         super().__init__(parent)
         uic.loadUi(str(RESOURCES / "ui" / "keys_dialog.ui"), self)
+        self.setObjectName("keysDialog")
         rows = key_help() + [(f"Gamepad {button.upper()}", ACTIONS[action])
                              for action, button in CONTROLLER_BUTTONS.items()]
         rows.append(("Gamepad sticks", "As the on-screen sticks (mode and mapping: Preferences › Gamepad)"))
@@ -46,3 +47,4 @@ class KeysDialog(QDialog):
         self.adjustSize()                       # (Qt caps this at 2/3 of the screen: grow to what the rows need)
         if screen is not None:
             self.resize(self.sizeHint().boundedTo(screen.availableGeometry().size()))
+        t.setMinimumSize(120, 120)              # that is its size, not its least: beside the flight controls it scrolls

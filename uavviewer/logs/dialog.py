@@ -36,17 +36,19 @@ class FlightLogsDialog(QDialog):
         self.download_all_button = self._button("Download all", "Every log not saved here yet", c.download_all)
         self.erase_button = self._button("Erase all…", "Erase every log on the vehicle (asks first)", self.ask_erase)
         close = self._button("Close", "The downloads go on with this window closed", self.close)
-        buttons = QHBoxLayout()
+        buttons, ends = QHBoxLayout(), QHBoxLayout()        # two rows: it fits beside the flight controls
         for b in (self.refresh_button, self.download_button, self.download_all_button):
             buttons.addWidget(b)
         buttons.addStretch(1)
-        buttons.addWidget(self.erase_button)
-        buttons.addWidget(close)
+        ends.addWidget(self.erase_button)
+        ends.addStretch(1)
+        ends.addWidget(close)
         layout = QVBoxLayout(self)
         layout.addWidget(self.status)
         layout.addWidget(self.table, 1)
         layout.addWidget(self.folder)
         layout.addLayout(buttons)
+        layout.addLayout(ends)
         self.resize(860, 420)
         self.table.actionClicked.connect(self._row_action)
         self.table.cellDoubleClicked.connect(lambda index, _column: c.open(self.table.ids[index]))  # a saved one

@@ -15,6 +15,7 @@ from PyQt5.QtGui import QColor, QFont, QFontMetricsF, QPainter, QPainterPath, QP
 from PyQt5.QtWidgets import QMenu, QSizePolicy, QWidget
 
 from .geometry import MAX_ZOOM, MapFrame, nice_scale, tile_zoom_for, tiles_covering
+from .labels import LABEL_BOX, LABEL_TEXT, Labels
 from ..units import fmt
 
 __all__ = ["MapView", "VehicleMark", "TRAIL_BANDS"]
@@ -25,7 +26,6 @@ BACKGROUND = QColor("#1b222b")
 GRID = QColor(255, 255, 255, 28)
 RING = QColor(255, 255, 255, 90)
 RING_ON_TILES = QColor(0, 0, 0, 140)
-LABEL_BOX = QColor(20, 26, 34, 170)
 TRAIL = QColor("#38b6ff")
 FENCE = QColor("#ff4d4d")
 TARGET = QColor("#ffb020")
@@ -35,7 +35,6 @@ PICKED = QColor("#ffe14d")                   # the ring around the vehicle the s
 PICKED_HALO = QColor(255, 225, 77, 70)
 OTHER = QColor("#b48cff")                    # the fleet's other vehicles
 STALE = QColor("#7f8791")                    # a vehicle whose state may be old: as the Fleet panel greys it
-LABEL_TEXT = QColor("#e6ebf0")
 HIT_PX = 16                                  # a click this near another vehicle's icon picks it
 
 
@@ -59,7 +58,7 @@ class MapView(QWidget):
     def __init__(self, parent: QWidget | None = None) -> None:
         super().__init__(parent)
         self.setSizePolicy(QSizePolicy.Expanding, QSizePolicy.Expanding)
-        self.setMinimumSize(200, 160)
+        self.setMinimumSize(200, 136)             # beside the Plan list at 1024×600: room to aim a click
         self.setMouseTracking(False)
         self.setFocusPolicy(Qt.ClickFocus)
         self.frame: MapFrame | None = None           # None: no home with a latitude yet (metres only)
@@ -91,6 +90,7 @@ class MapView(QWidget):
         self.drawn_tiles = 0                         # tiles drawn in the last paint
         self.overlays: list = []                     # parts drawing over the map: f(painter, view) (camera_overlay)
         self.menu_parts: list = []                   # parts adding to the right-click menu: f(menu, north, east)
+        self.labels = Labels()                       # the paint's labels, none over another (traffic_overlay)
 
     # -- what to show ---------------------------------------------------------------------------
     def set_vehicle(self, where: tuple[float, float, float] | None) -> None:
@@ -234,6 +234,7 @@ class MapView(QWidget):
         p = QPainter(self)
         p.setRenderHint(QPainter.Antialiasing)
         p.fillRect(self.rect(), BACKGROUND)
+        self.labels.clear()
         self.drawn_tiles = self._paint_tiles(p)
         if not self.drawn_tiles:
             self._paint_grid(p)
@@ -427,11 +428,7 @@ class MapView(QWidget):
         self._label(p, QPointF(x - 4, y + 18), "N")
 
     def _label(self, p: QPainter, at: QPointF, text: str) -> None:
-        """Light text on a dark box: readable on the grid and on any tile."""
-        box = QRectF(p.fontMetrics().boundingRect(text)).translated(at).adjusted(-2, -1, 2, 1)
-        p.fillRect(box, LABEL_BOX)
-        p.setPen(LABEL_TEXT)
-        p.drawText(at, text)
+        self.labels.draw(p, at, text)
 
     def _paint_attribution(self, p: QPainter) -> None:
         p.setFont(QFont(self.font().family(), 7))

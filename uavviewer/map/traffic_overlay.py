@@ -1,6 +1,7 @@
-"""ADS-B traffic on the map (issue 32): each contact the vehicle forwards, where it was last heard, turned to its
-heading (a round mark when its heading is unknown: never an arrow pointing a guess), with its callsign, height relative to us and how long ago it was heard; faded once stale, gone when the
-driver drops it (driver.traffic); red while its closest approach comes within the alert limits."""
+"""ADS-B traffic on the map: each contact the vehicle forwards, where it was last heard, turned to its heading (a
+round mark when its heading is unknown: never an arrow pointing a guess), with its callsign, height relative to us
+and how long ago it was heard; faded once stale, gone when the driver drops it (driver.traffic); red while its
+closest approach comes within the alert limits."""
 from __future__ import annotations
 
 from PyQt5.QtCore import QObject, QPointF, Qt
@@ -11,6 +12,9 @@ from driver.traffic.model import Contact
 __all__ = ["TrafficOverlay", "contact_label"]
 
 AIRCRAFT = QColor("#4fc3f7")
+#: Where a contact's label may go from its mark: upper right, lower right, upper left, lower left, further out.
+LABEL_SPOTS = [QPointF(10, -10), QPointF(10, 18), QPointF(-10, -10), QPointF(-10, 18), QPointF(10, -26),
+               QPointF(10, 34)]
 ALERT = QColor("#e53935")
 
 
@@ -54,7 +58,7 @@ class TrafficOverlay(QObject):
                 _dot(p, at, colour)
             else:
                 view._arrow(p, at, c.heading_deg, colour, 0.7)
-            view._label(p, at + QPointF(10, -10), contact_label(c))
+            view.labels.place(p, at, contact_label(c), LABEL_SPOTS)   # clear of the rings' and each other's
         p.setOpacity(1.0)
 
 

@@ -2,7 +2,7 @@
 in one go through the adapter (never waiting), compares .param files and opens a parameter from a message.
 
 The table comes from each snapshot (``VehicleState.parameters``); a write is ``Drone.set_parameter``, whose
-result (confirmed only by the vehicle's PARAM_VALUE echo) comes back as the adapter's ``commandFinished``.
+result (confirmed only by the vehicle's PARAM_VALUE echo) comes back to the write that asked for it.
 """
 from __future__ import annotations
 
@@ -21,7 +21,6 @@ from ..widgets.menus import menu_named
 from .compare_dialog import CompareDialog
 from .mentions import named_parameter
 from .page import ParametersPage
-from .placement import place, remember
 from .review_dialog import ReviewDialog
 from .rows import compare_rows, review_rows
 from .table_model import ParameterModel, WriteState
@@ -62,7 +61,6 @@ class ParamsController(QObject):
         if say is not None:
             self.said.connect(say)
         adapter.stateChanged.connect(self.show_state)
-        adapter.commandFinished.connect(self._result)
         adapter.droneChanged.connect(lambda _drone: self._vehicle_changed())   # a fleet's pick, File › Connect
         self._read_metadata(lambda drone: drone.parameter_metadata)
 
@@ -87,6 +85,8 @@ class ParamsController(QObject):
 
     def _offer_fix(self, messages, item: QTreeWidgetItem | None) -> None:
         if item is None or item.data(0, Qt.UserRole) is None or item.data(0, Qt.UserRole) > Severity.WARNING:
+            return
+        if self.adapter.replay is not None:      # a recording: there is no vehicle to fix
             return
         table = self.model.table
         known = table.values if table.values else self.model.metadata
@@ -120,9 +120,6 @@ class ParamsController(QObject):
             page.compareFileChosen.connect(self.compare_file)
             page.saveFileChosen.connect(self.save_file)
             page.metadataFileChosen.connect(self.load_metadata)
-            settings = getattr(self._parent, "_qsettings", None)     # the window's: where it was left last time
-            page.hidden.connect(lambda: remember(page, settings))
-            place(page, self._parent, settings)                     # beside the flight controls, never over them
             self.page = page
         return self.page
 
@@ -164,7 +161,7 @@ class ParamsController(QObject):
         """Ask the driver for every parameter (``refresh``: even those it holds already)."""
         self._asked = True
         self._fetch_problem = ""
-        self.adapter.command("fetch_parameters", refresh)
+        self.adapter.send(self.adapter.drone.fetch_parameters, refresh, then=self._fetched)
 
     def fetch_if_needed(self) -> None:
         table = self.model.table
@@ -270,25 +267,26 @@ class ParamsController(QObject):
             self._writing[name] = value
             self._show_write(name, WriteState.WRITING)
             # outside the bounds only as the pilot confirmed exactly this value (the driver refuses it otherwise)
-            self.adapter.command("set_parameter", name, value, (name, value) in self._confirmed_outside)
+            confirmed = (name, value) in self._confirmed_outside
+            self.adapter.send(self.adapter.drone.set_parameter, name, value, confirmed,
+                              then=lambda result, n=name, v=value: self._written(n, v, result))
 
     def _show_write(self, name: str, state: WriteState, reason: str = "", written: float | None = None) -> None:
         self.model.set_write_state(name, state, reason, written)
         if self.review is not None:
             self.review.show_write(name, state, reason)
 
-    def _result(self, result: CommandResult) -> None:
-        if result.command == "parameters":
-            self._fetch_problem = "" if result.ok else f"download: {result.status.value}" + (
-                f" ({result.reason})" if result.reason else "")
-            self._show_download()
+    def _fetched(self, result: CommandResult) -> None:
+        self._fetch_problem = "" if result.ok else f"download: {result.status.value}" + (
+            f" ({result.reason})" if result.reason else "")
+        self._show_download()
+
+    def _written(self, name: str, written: float, result: CommandResult) -> None:
+        """The vehicle's answer to one write: shown unless another value of ``name`` went since (its own answer
+        will say)."""
+        if self._writing.get(name) != written:
             return
-        if not result.command.startswith("param "):
-            return
-        name = result.command[len("param "):].split("=", 1)[0].strip()
-        if name not in self._writing:
-            return
-        written = self._writing.pop(name)
+        del self._writing[name]
         if result.ok:
             self._show_write(name, WriteState.CONFIRMED, written=written)
             if meta_attr(self.model.meta(name), "reboot_required", False):

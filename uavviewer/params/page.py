@@ -13,6 +13,7 @@ from PyQt5.QtWidgets import (
 
 from driver.params.model import ParameterTable
 
+from ..widgets.dialog_fit import closes_with_esc, scrollable, stack_when_narrow
 from .editor import ParamEditor
 from .filter_model import ParameterFilter
 from .table_model import Column, NAME_ROLE, ParameterModel
@@ -50,7 +51,6 @@ class ParametersPage(QWidget):
     discardRequested = pyqtSignal()              # drop every pending change
     stageRequested = pyqtSignal(str, str)        # name, value as typed
     revertRequested = pyqtSignal(str)
-    hidden = pyqtSignal()                        # closed (Close, Esc, its title bar): its place is remembered
 
     def __init__(self, model: ParameterModel, parent: QWidget | None = None) -> None:
         super().__init__(parent, Qt.Window)
@@ -133,21 +133,29 @@ class ParametersPage(QWidget):
         self.discard_button = QPushButton("Discard all")
         self.review_button = QPushButton("Review and write…")
         self.review_button.setObjectName("reviewButton")
+        # the pending line wraps on a row of its own: one write's "1 change(s) pending…" widened the page to 827 px
+        self.pending_label.setWordWrap(True)
         bottom = QHBoxLayout()
-        bottom.addWidget(self.pending_label, 1)
         bottom.addWidget(self.discard_button)
         bottom.addWidget(self.review_button)
+        bottom.addStretch(1)
         self.close_button = QPushButton("Close")
         self.close_button.setObjectName("paramClose")
         self.close_button.setToolTip("Close Parameters (Esc); pending changes stay pending")
         bottom.addWidget(self.close_button)
 
+        body = QWidget()                          # it scrolls in the room beside the flight controls; the buttons stay
+        inner = QVBoxLayout(body)
+        inner.setContentsMargins(0, 0, 0, 0)
+        inner.addLayout(top)
+        inner.addLayout(status_row)
+        inner.addWidget(splitter, 1)
         layout = QVBoxLayout(self)
         layout.setContentsMargins(8, 8, 8, 8)
-        layout.addLayout(top)
-        layout.addLayout(status_row)
-        layout.addWidget(splitter, 1)
+        layout.addWidget(scrollable(body, horizontal=True), 1)
+        layout.addWidget(self.pending_label)
         layout.addLayout(bottom)
+        closes_with_esc(self)
         self.resize(1300, 700)
 
         self.search.textChanged.connect(self.proxy.set_search)
@@ -176,6 +184,12 @@ class ParametersPage(QWidget):
         self._update_groups()
         self._pending_changed()
         self._show_metadata_columns()
+
+    def resizeEvent(self, event) -> None:  # noqa: N802 (Qt's name)
+        """Beside the flight controls (430 px at 1024×600) the groups, the table and the editor stand one above the
+        other."""
+        super().resizeEvent(event)
+        stack_when_narrow(self.splitter, event.size().width(), [140, 640, 300], [90, 300, 200])
 
     # -- shown state -------------------------------------------------------------------------------
     def show_download(self, table: ParameterTable, connected: bool) -> None:
@@ -217,18 +231,6 @@ class ParametersPage(QWidget):
             text += " · no metadata: bounds and meanings unknown (Metadata…)"
         self.status.setText(text)
         self.refresh_button.setEnabled(connected and not table.downloading)
-
-    def keyPressEvent(self, event) -> None:  # noqa: N802 (Qt's name)
-        """Esc closes, as any dialog does (a field that uses Esc itself takes it first)."""
-        if event.key() == Qt.Key_Escape:
-            self.close()
-            return
-        super().keyPressEvent(event)
-
-    def hideEvent(self, event) -> None:  # noqa: N802 (Qt's name)
-        super().hideEvent(event)
-        if not event.spontaneous():
-            self.hidden.emit()
 
     def show_current(self) -> None:
         """The editor follows the current row (and its parameter's newest value)."""

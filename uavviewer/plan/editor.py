@@ -13,7 +13,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from driver.mission.plan import MissionItem, Plan, PlanKind
 
-from .checks import unreachable
+from .checks import outside_fence, unreachable
 from .history import PlanHistory
 from .model import ITEM_KINDS, FenceShape, Performance, PlanDocument, is_nav, new_item
 from .survey import SurveySpec, camera_named
@@ -314,8 +314,12 @@ class PlanEditor(QObject):
             editable.append((False, False, alt_ok, speed is not None, hold is not None))
         sel = self.selected
         current_entry = self.layer.current_entry
+        warnings = unreachable(doc.entries, seqs)
+        self.layer.breaches = fenced = outside_fence(doc, seqs, self.home)   # marked on the map too
+        for i, why in fenced.rows.items():
+            warnings[i] = f"{warnings[i]}; {why}" if i in warnings else why
         p.set_rows("mission", rows, editable, sel[1] if sel and sel[0] == "mission" else None, current_entry,
-                   unreachable(doc.entries, seqs))
+                   warnings)
         p.set_rows("fence", [(s.label, len(s.vertices) if not s.circle else "", f"{s.radius:g}" if s.circle else "")
                              for s in doc.fence], [(False, False, s.circle) for s in doc.fence],
                    sel[1] if sel and sel[0] == "fence" else None)

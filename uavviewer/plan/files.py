@@ -6,18 +6,22 @@ The type chosen in the chooser is the type written (a name typed without its end
 a WPL file is always the mission, whichever tab is shown: the format holds one plan, and Mission Planner and
 MAVProxy read it as a mission. What it cannot hold (a fence, rally points, a survey's settings) is said.
 
-The choosers are Qt's own, opened without waiting on them: the window keeps flying while one is open.
+The choosers are Qt's own, opened without waiting on them: the window keeps flying while one is open. A file that
+cannot be read or written is said in a warning over the window, where the pilot chose it (in Messages alone it
+went unseen at 1024×600, Messages behind the map), and that the plan shown is as it was.
 """
 from __future__ import annotations
 
 import os
 
 from PyQt5.QtCore import QObject, pyqtSignal
-from PyQt5.QtWidgets import QComboBox, QFileDialog, QWidget
+from PyQt5.QtWidgets import QComboBox, QFileDialog, QMessageBox, QWidget
 
 from driver.mission.files import PlanFile, PlanFileError, load_plan_file, save_plan_file
 from driver.mission.plan import Plan, PlanKind
 from driver.vehicle.state import Severity
+
+from ..widgets.ask import ask
 
 __all__ = ["PlanFiles", "FILTERS"]
 
@@ -36,6 +40,7 @@ class PlanFiles(QObject):
         self._window = parent_window
         self.folder = os.path.expanduser("~")
         self.dialog: QFileDialog | None = None  # the chooser while open (tests answer it)
+        self.error_box: QMessageBox | None = None   # why a file was not opened or saved, while shown
 
     def ask_open(self) -> QFileDialog:
         dialog = self._dialog("Open plan", QFileDialog.AcceptOpen)
@@ -69,7 +74,8 @@ class PlanFiles(QObject):
         try:
             got = load_plan_file(path)
         except (OSError, UnicodeDecodeError, PlanFileError) as exc:
-            self.said.emit(f"Plan not opened: {os.path.basename(path)}: {exc}", Severity.WARNING)
+            self._failed("Plan not opened", f"{os.path.basename(path)}: {exc}",
+                         "The plan on the map is as it was, its edits too: nothing was discarded.")
             return None
         self.folder = os.path.dirname(path)
         self.loaded.emit(got)
@@ -77,6 +83,15 @@ class PlanFiles(QObject):
                            for p in got.plans)
         self.said.emit(f"Plan opened from {path}: {counts}", Severity.INFO)
         return got
+
+    def _failed(self, what: str, why: str, kept: str) -> None:
+        """In Messages, and in a warning over the window (not waited on: the window flies on)."""
+        self.said.emit(f"{what}: {why}", Severity.WARNING)
+        if self.error_box is not None:
+            self.error_box.reject()
+        box = QMessageBox(QMessageBox.Warning, what, f"{what}: {why}\n\n{kept}", QMessageBox.Close, self._window)
+        box.setObjectName("planFileError")
+        self.error_box = ask(box, lambda b: setattr(self, "error_box", None) if self.error_box is b else None)
 
     def save(self, path: str, plans, home, complex_items=()) -> bool:
         wpl = not path.lower().endswith(".plan")
@@ -88,7 +103,7 @@ class PlanFiles(QObject):
             else:
                 save_plan_file(path, plans, home, complex_items)
         except (OSError, PlanFileError) as exc:
-            self.said.emit(f"Plan not saved: {exc}", Severity.WARNING)
+            self._failed("Plan not saved", str(exc), "Its edits are still here, not saved to a file.")
             return False
         self.folder = os.path.dirname(path)
         if wpl:

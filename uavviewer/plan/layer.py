@@ -10,6 +10,7 @@ import math
 from PyQt5.QtCore import QLineF, QObject, QPointF, QRectF, Qt, pyqtSignal
 from PyQt5.QtGui import QColor, QFont, QPainter, QPen, QPixmap, QPolygonF
 
+from .checks import FenceCheck
 from .model import PlanDocument, is_nav
 from .survey import SurveySpec
 
@@ -33,6 +34,7 @@ RALLY = QColor("#b48cff")
 DRAFT = QColor("#ffffff")
 TEXT = QColor("#101418")
 LABEL_BOX = QColor(20, 26, 34, 200)
+BREACH = QColor("#ff2d2d")                   # what of the mission leaves the plan's own fence
 
 
 class PlanLayer(QObject):
@@ -53,6 +55,7 @@ class PlanLayer(QObject):
         self.home: tuple[float, float] | None = None       # the path starts and RTL ends here
         self.draft: list[tuple[float, float]] = []         # a polygon being drawn
         self.progress = ""                                 # "Item 3 of 7 · 45 m, 9 s to it" while one flies
+        self.breaches = FenceCheck()                       # waypoints and survey legs outside the plan's fence
         self._grab: tuple[str, int, int] | None = None     # what a press took: layer, index, vertex
         self._press: QPointF | None = None
         self._view = None
@@ -166,6 +169,7 @@ class PlanLayer(QObject):
             if isinstance(entry, SurveySpec):
                 self._paint_survey(p, view, i, entry)
         self._paint_path(p, view)
+        self._paint_breaches(p, view)
         self._paint_items(p, view)
         for i, item in enumerate(self.doc.rally):
             self._marker(p, self._at(view, item.lat, item.lon), RALLY, "R", self.selected == ("rally", i))
@@ -206,6 +210,16 @@ class PlanLayer(QObject):
                 lines.append(line)
         p.setPen(QPen(PATH, 2))
         p.drawLines(lines)
+
+    def _paint_breaches(self, p, view) -> None:
+        """Survey legs that leave the fence in red over the passes; a red ring under each waypoint outside it."""
+        if not (self.breaches.legs or self.breaches.points):
+            return
+        p.setPen(QPen(BREACH, 3))
+        p.drawLines([QLineF(self._at(view, *a), self._at(view, *b)) for a, b in self.breaches.legs])
+        p.setBrush(Qt.NoBrush)
+        for lat, lon in self.breaches.points:
+            p.drawEllipse(self._at(view, lat, lon), 14, 14)
 
     def _paint_items(self, p, view) -> None:
         seq = 0

@@ -14,12 +14,14 @@ from PyQt5.QtWidgets import (
 )
 
 from .table import PlanTable
+from .vehicle_view import VehicleView
 from .survey import CAMERAS
 
 __all__ = ["PlanPanel", "LAYERS", "TOOLS"]
 
 LAYERS = ("mission", "fence", "rally")
-ROWS_IN_VIEW = 6                   # the list's rows always in view (its dock is made tall enough: plan_controller)
+ROWS_IN_VIEW = 6                   # the list's rows in view where the column allows (its dock is sized for them: room.py)
+ROWS_AT_LEAST = 3                  # and never fewer: at 1024×600 the list showed none, Upload scrolled away
 #: What a click on the map adds, for each tab.
 TOOLS = {
     "mission": ("Waypoint", "ROI", "Land", "Loiter (time)", "Survey area"),
@@ -61,6 +63,7 @@ class PlanPanel(QWidget):
         self.setObjectName("planPanel")
         self._filling = False
         self.skip_allowed = False                # the controller says when Skip to item makes sense
+        self._tips: dict[QWidget, str] = {}      # each vehicle button's own tooltip; why it is disabled follows
         self.row_seq: list[int | None] = []      # the vehicle's item number of each mission row
         lay = QVBoxLayout(self)
         lay.setContentsMargins(4, 4, 4, 4)
@@ -164,7 +167,7 @@ class PlanPanel(QWidget):
             table.setObjectName(f"{layer}Table")
             table.verticalHeader().setDefaultSectionSize(table.fontMetrics().height() + 2)   # compact rows
             table.setMinimumHeight(table.horizontalHeader().sizeHint().height() + 2 * table.frameWidth()
-                                   + ROWS_IN_VIEW * table.verticalHeader().defaultSectionSize())
+                                   + ROWS_AT_LEAST * table.verticalHeader().defaultSectionSize())
             table.setHorizontalHeaderLabels(COLUMNS[layer])
             table.verticalHeader().hide()
             table.setSelectionBehavior(QAbstractItemView.SelectRows)
@@ -182,9 +185,11 @@ class PlanPanel(QWidget):
             QShortcut(QKeySequence.Delete, table, self.deleteRequested.emit, context=Qt.WidgetShortcut)
             self.tables[layer] = table
             self.tabs.addTab(table, title)
-        # the list asks for no more than its minimum (six rows): the Plan dock is sized to it (plan_room.py)
+        # the list asks for no more than its minimum (three rows); the Plan dock is sized for six where the column
+        # has room (room.py: wanted_rows_height)
         self.tabs.ensurePolished()
         self.tabs.setMinimumHeight(self.tabs.minimumSizeHint().height())
+        self.wanted_rows_height = (ROWS_IN_VIEW - ROWS_AT_LEAST) * table.verticalHeader().defaultSectionSize()
         self.tabs.setSizePolicy(QSizePolicy.Preferred, QSizePolicy.Ignored)
         lay.addWidget(self.tabs, 1)
 
@@ -381,14 +386,36 @@ class PlanPanel(QWidget):
             self._filling = False
         self.surveyLabel.setText(summary)
 
-    def set_transfer(self, text: str, done: int, total: int, active: bool) -> None:
-        self.progressBar.setRange(0, max(1, total))
-        self.progressBar.setValue(min(done, max(1, total)) if total else 0)
-        self.progressBar.setFormat(text.split(" (")[0])     # "upload mission: accepted"; the whole in its tip
-        self.progressBar.setToolTip(text)
-        self.cancelButton.setEnabled(active)
-        for w in (self.uploadButton, self.downloadButton, self.clearButton):
-            w.setEnabled(not active)
+    def show_vehicle(self, view: VehicleView) -> None:
+        """The vehicle's side of the panel as the plan controller worked it out (plan/vehicle_view.py), all at once:
+        the transfer, the tabs' dots, the comparison, every button, the mission's progress."""
+        t = view.transfer
+        self.progressBar.setRange(0, max(1, t.total))
+        self.progressBar.setValue(min(t.done, max(1, t.total)) if t.total else 0)
+        self.progressBar.setFormat(t.text.split(" (")[0])   # "upload mission: accepted"; the whole in its tip
+        self.progressBar.setToolTip(t.text)
+        for index, title in enumerate(view.tab_titles):
+            self.tabs.setTabText(index, title)
+        self.syncLabel.setText(view.comparison)
+        self.syncLabel.setStyleSheet("color: #ffb020;" if view.warning else "")
+        for button, state in ((self.uploadButton, view.upload), (self.downloadButton, view.download),
+                              (self.clearButton, view.remove), (self.cancelButton, view.cancel),
+                              (self.startButton, view.start), (self.pauseButton, view.pause),
+                              (self.resumeButton, view.resume)):
+            button.setEnabled(state.enabled)
+            what = self._tips.setdefault(button, button.toolTip())     # what it does, as built
+            button.setToolTip("\n".join(w for w in (what, state.why_not) if w))
+        self.skip_allowed = view.skip.enabled
+        self.progressLabel.setText(view.progress)
+
+    def show_current_row(self, current: int | None) -> None:
+        """The mission's row the vehicle flies now, highlighted (None: none)."""
+        table = self.tables["mission"]
+        for r in range(table.rowCount()):
+            for c in range(table.columnCount()):
+                item = table.item(r, c)
+                if item is not None:
+                    item.setBackground(Qt.darkGreen if r == current else Qt.transparent)
 
 
 def _fixed_lines(label: QLabel, lines: int) -> None:

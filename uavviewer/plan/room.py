@@ -1,13 +1,16 @@
-"""Room for the Plan list beside the map (issue 29: the list showed 1 row at 1366×768 and 0 at 1280×720).
+"""Room for the Plan list beside the map: without it the list showed 1 row at 1366×768 and none at 1280×720.
 
-While Plan is shown, the tabs behind it and behind the map (Preflight, Plots: not in view anyway) step out, so no
-tab bar takes height, and the Plan dock gets the height its panel needs with its list showing
-:data:`~uavviewer.plan.panel.ROWS_IN_VIEW` rows; the map has the rest of the column. Never wider: the flight
+While Plan is shown, the tabs behind it and behind the map (Preflight, Plots, Messages: not in view anyway; the latest
+autopilot message is in the status strip) step out, so no tab bar takes height, and the Plan dock gets the height its panel needs with its list showing
+:data:`~uavviewer.plan.panel.ROWS_IN_VIEW` rows; the map has the rest of the column. Where the column is short
+(1024×600) the map's title bar and status line step out too and the list keeps at least
+:data:`~uavviewer.plan.panel.ROWS_AT_LEAST` rows, Upload above them in view. Never wider: the flight
 controls beside it stay where they are. Plan closed: the tabs come back as they were.
 """
 from __future__ import annotations
 
 from PyQt5.QtCore import Qt
+from PyQt5.QtWidgets import QWidget
 
 __all__ = ["make_room_for_plan"]
 
@@ -16,11 +19,15 @@ _STEPPED_OUT = "_plan_stepped_out"       # the window's docks that stepped out f
 
 def make_room_for_plan(window, dock, on: bool) -> None:
     if on:
-        behind = [d for d in (getattr(window, "preflightDock", None), window.plotsDock)
-                  if d is not None and d.isVisible() and not d.isFloating()]
+        behind = [d for d in (getattr(window, "preflightDock", None), window.plotsDock, window.messagesDock)
+                  if d is not None and d.isVisible() and not d.isFloating()
+                  and window.tabifiedDockWidgets(d)]                  # a tab, not a dock of its own
         for d in behind:
             d.hide()
         setattr(window, _STEPPED_OUT, behind)
+        window.mapDock.setTitleBarWidget(QWidget())     # "Map" over the map: its height goes to the list,
+        window.mapPanel.statusLabel.hide()              # and the map's status line's
+        window.mapPanel.layout().activate()
         window.mapDock.raise_()
         dock.raise_()
         window.layout().activate()               # the docks' heights as they are now, without the tab bars
@@ -29,12 +36,14 @@ def make_room_for_plan(window, dock, on: bool) -> None:
         width = scroll.width() - scroll.verticalScrollBar().sizeHint().width()   # and the list's own minimum
         above = panel.heightForWidth(width) if panel.hasHeightForWidth() else 0  # (the list asks for no more)
         need = max(panel.minimumSizeHint().height(), above + panel.tabs.minimumHeight()) \
-            + dock.height() - scroll.height()
+            + getattr(panel, "wanted_rows_height", 0) + dock.height() - scroll.height()
         total = dock.height() + window.mapDock.height()
         window.resizeDocks([dock, window.mapDock], [need, max(1, total - need)], Qt.Vertical)
     else:
         for d in getattr(window, _STEPPED_OUT, []):
             d.show()
         setattr(window, _STEPPED_OUT, [])
+        window.mapDock.setTitleBarWidget(None)
+        window.mapPanel.statusLabel.show()
         window.mapDock.raise_()
         window.telemetryDock.raise_()

@@ -43,10 +43,13 @@ class SettingsDialog(QDialog):
                  signing_unavailable: str = "") -> None:
         super().__init__(parent)
         uic.loadUi(str(RESOURCES / "ui" / "settings_dialog.ui"), self)
+        self.setObjectName("preferencesDialog")
+        self.setMinimumWidth(0)                   # 520 px is its first width, not its least: the pages scroll
+        self.resize(max(self.width(), 520), self.height())
         form = QDialog.layout(self)               # the pages scroll on a short screen; OK and Cancel stay in view
         at = form.indexOf(self.pages)
         form.removeWidget(self.pages)
-        form.insertWidget(at, scrollable(self.pages), 1)
+        form.insertWidget(at, scrollable(self.pages, horizontal=True), 1)
         self._settings = settings
         for mode in StickMode:
             self.stickMode.addItem(mode.title, mode.value)

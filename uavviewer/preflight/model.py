@@ -16,7 +16,6 @@ __all__ = ["Verdict", "Check", "preflight", "overall", "LOSS_CAUTION", "LOSS_NO_
 
 LOSS_CAUTION = 5.0       # % of frames lost: the link flies, but watch it
 LOSS_NO_GO = 20.0        # %: commands and telemetry go missing
-RECENT_PREARM = 60.0     # s: a "PreArm:" refusal this recent still matters while SYS_STATUS says the checks pass
 
 
 class Verdict(enum.IntEnum):
@@ -68,12 +67,12 @@ def _prearm(s: VehicleState) -> Check:
         return Check("Pre-arm", Verdict.GO, "armed")
     if not s.readiness.prearm_reported:
         return Check("Pre-arm", Verdict.UNKNOWN, "the vehicle does not report its pre-arm checks")
-    said = next((m for m in reversed(s.messages) if m.text.lower().startswith("prearm")), None)
+    reasons = "; ".join(s.readiness.reasons)          # the vehicle's own words, while it stands by them
     if s.readiness.prearm_ok:
-        if said is not None and s.time - said.time < RECENT_PREARM:     # it passes now, yet refused an arming
-            return Check("Pre-arm", Verdict.CAUTION, f"checks pass, but arming was just refused: {said.text}")
+        if reasons:                                    # it passes its checks, yet refused an arming just now
+            return Check("Pre-arm", Verdict.CAUTION, f"checks pass, but arming was just refused: {reasons}")
         return Check("Pre-arm", Verdict.GO, "the vehicle's pre-arm checks pass")
-    return Check("Pre-arm", Verdict.NO_GO, said.text if said is not None else "the vehicle's pre-arm checks fail")
+    return Check("Pre-arm", Verdict.NO_GO, reasons or "the vehicle's pre-arm checks fail")
 
 
 def _gps(s: VehicleState) -> Check:

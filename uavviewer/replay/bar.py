@@ -53,7 +53,7 @@ class ReplayBar(QWidget):
         self._finished = False
         self.play_button.clicked.connect(self._play_clicked)
         # as wide as their longest texts from the start: Pause/Play/Restart and the clock never move the seek bar
-        self.play_button.setMinimumWidth(max(width_for(self.play_button, t) for t in ("Pause", "Play", "Restart")))
+        self.play_button.setMinimumWidth(max(width_for(self.play_button, t) for t in ("Pause", "Play")))
         self.clock.setMinimumWidth(width_for(self.clock, "8:88:88 / 8:88:88"))
         self.speed.activated.connect(lambda i: self.speedRequested.emit(float(self.speed.itemData(i))))
         self.restart_button.clicked.connect(self.restartRequested)
@@ -62,10 +62,8 @@ class ReplayBar(QWidget):
         self.speed.setCurrentIndex(self.speed.findData(1.0))
 
     def _play_clicked(self) -> None:
-        """Pause / Play; once the recording has ended, Restart."""
-        if self._finished:
-            self.restartRequested.emit()
-        else:
+        """Pause / Play (nothing once the recording has ended: Restart beside it plays it again)."""
+        if not self._finished:
             self.pauseRequested.emit(not self._paused)
 
     def _clicked(self, action: int) -> None:
@@ -88,7 +86,8 @@ class ReplayBar(QWidget):
                      speed: float | None = None, finished: bool = False) -> None:
         """``finished``: the whole log has been played; nothing more will come."""
         self._paused, self._finished = paused, finished
-        self.play_button.setText("Restart" if finished else ("Play" if paused else "Pause"))
+        self.play_button.setText("Play" if paused or finished else "Pause")
+        self.play_button.setEnabled(not finished)   # one Restart only: the button beside it
         self._duration = duration or 0.0
         if duration and not self.progress.isSliderDown():
             fraction = 1.0 if finished else (position or 0.0) / duration

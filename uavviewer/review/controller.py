@@ -1,4 +1,4 @@
-"""File › Open log…: a .BIN or .tlog opened off the window's thread (a 100 MB log indexes in about 1.5 s) and
+"""File › Review a log…: a .BIN or .tlog opened off the window's thread (a 100 MB log indexes in about 1.5 s) and
 shown in a :class:`ReviewWindow`; a log that cannot be read says why and breaks nothing."""
 from __future__ import annotations
 
@@ -32,11 +32,14 @@ class ReviewController(QObject):
         self.views: list[ReviewWindow] = []
         self._pool = ThreadPoolExecutor(1, thread_name_prefix="review")
         self._done.connect(self._show)
-        self.action = QAction("Open log…", window)
-        self.action.setToolTip("Review a flight log: a DataFlash .BIN or a telemetry .tlog")
+        self.action = QAction("Re&view a log (plots)…", window)
+        self.action.setObjectName("actionReviewLog")
+        self.action.setToolTip("Plots, events, the path and the parameters of a DataFlash .BIN or a telemetry .tlog, "
+                               "in a window of its own; the vehicle flown now stays flown")
         self.action.triggered.connect(self.ask_open)
-        window.menuFile.insertAction(window.menuFile.actions()[0] if window.menuFile.actions() else None,
-                                     self.action)
+        actions = window.menuFile.actions()
+        beside = getattr(getattr(window, "logs", None), "action", None)     # under Replay a flight, its neighbour
+        window.menuFile.insertAction(beside if beside in actions else actions[0] if actions else None, self.action)
 
     def current_params(self) -> dict[str, float]:
         values = self.window.adapter.state.parameters.values

@@ -13,6 +13,7 @@ from PyQt5.QtWidgets import (QCheckBox, QComboBox, QDialog, QDoubleSpinBox, QFil
 from driver.review.geotag import DEFAULT_TOLERANCE, OUTPUT_FOLDER, GeotagError, GeotagReport, geotag
 from driver.review.log import LogError
 
+from ..widgets.dialog_fit import close_buttons, scrollable
 log = logging.getLogger(__name__)
 
 __all__ = ["GeotagDialog"]
@@ -30,6 +31,7 @@ class GeotagDialog(QDialog):
         super().__init__(parent)
         self.log_path = log_path
         self.setWindowTitle(f"Geotag photos — {os.path.basename(log_path)}")
+        self.setObjectName("geotagDialog")
         self._pool = ThreadPoolExecutor(1, thread_name_prefix="geotag")
         self.future: Future | None = None
         self.folder = QLineEdit()
@@ -73,13 +75,18 @@ class GeotagDialog(QDialog):
         form.addRow("Time tolerance", self.tolerance)
         form.addRow("Match", self.match)
         form.addRow("Altitude", self.altitude)
-        layout = QVBoxLayout(self)
-        layout.addLayout(form)
+        body = QWidget()                           # it scrolls where the room is narrow; Close stays in view
+        inner = QVBoxLayout(body)
+        inner.setContentsMargins(0, 0, 0, 0)
+        inner.addLayout(form)
         buttons = QHBoxLayout()
         buttons.addWidget(self.status, 1)
         buttons.addWidget(self.run_button)
-        layout.addLayout(buttons)
-        layout.addWidget(self.report, 1)
+        inner.addLayout(buttons)
+        inner.addWidget(self.report, 1)
+        layout = QVBoxLayout(self)
+        layout.addWidget(scrollable(body, horizontal=True), 1)
+        layout.addWidget(close_buttons(self))
         self._progress.connect(lambda done, total: self.status.setText(f"writing {done} of {total}…"))
         self._done.connect(self._show)
         self.resize(640, 480)

@@ -1,4 +1,4 @@
-"""One reviewed log in one view (issue 31): the searchable field tree, the plots with their events and cursor,
+"""One reviewed log in one view (docs/review.md): the searchable field tree, the plots with their events and cursor,
 the flight path on the map coloured by mode with the cursor's marker, the events, the parameters as flown and
 their difference from the vehicle's, presets and CSV export, and geotagging the flight's photos."""
 from __future__ import annotations
@@ -15,6 +15,7 @@ from driver.review.log import PRESETS, FlightLog
 
 from ..map.log_path import LogPathOverlay, mode_colour
 from ..map.map_view import MapView
+from ..widgets.dialog_fit import close_buttons, closes_with_esc, scrollable, stack_when_narrow
 from .events_list import EventsList
 from .field_tree import FieldTree
 from .geotag_dialog import GeotagDialog
@@ -43,6 +44,7 @@ class ReviewWindow(QMainWindow):
         self.export_future: Future | None = None
         self._export_done.connect(self._show_export, Qt.QueuedConnection)     # after export() returns, always
         self.setWindowTitle(f"Review — {os.path.basename(flight.path)}")
+        self.setObjectName("reviewWindow")
         self.tree = FieldTree()
         self.plots = ReviewPlots()
         self.map = MapView()
@@ -63,6 +65,11 @@ class ReviewWindow(QMainWindow):
         self.geotag_button.clicked.connect(self.open_geotag)
         self.geotag_dialog: GeotagDialog | None = None
         self.status = QLabel()
+        self.warning = QLabel()                     # a damaged or cut-short log says so above everything
+        self.warning.setObjectName("reviewWarning")
+        self.warning.setWordWrap(True)
+        self.warning.setStyleSheet("background: #4a3a1c; color: #ffd27a; padding: 4px; font-weight: bold")
+        self.warning.hide()
         bar = QHBoxLayout()
         for w in (self.preset, clear, self.export_button, self.geotag_button):
             bar.addWidget(w)
@@ -83,7 +90,9 @@ class ReviewWindow(QMainWindow):
         main.addWidget(self.tree)
         main.addWidget(right)
         main.setSizes([260, 1100])
-        self.setCentralWidget(main)
+        self.main_splitter = main
+        self.setCentralWidget(_column(self.warning, scrollable(main, horizontal=True), close_buttons(self), stretch=1))
+        closes_with_esc(self)                       # a window of its own closes as a dialog does
 
         self.tree.fieldChosen.connect(self.add_field)
         self.plots.cursorMoved.connect(self.path_overlay.set_time)
@@ -93,6 +102,11 @@ class ReviewWindow(QMainWindow):
         self.flown_params = self.log.params()
         side.currentChanged.connect(lambda index: index == side.indexOf(self.params) and self.compare_params())
         self._fill()
+
+    def resizeEvent(self, event) -> None:  # noqa: N802 (Qt's name)
+        """Beside the flight controls the field tree stands above the plots and the path."""
+        super().resizeEvent(event)
+        stack_when_narrow(self.main_splitter, event.size().width(), [260, 1100], [140, 600])
 
     def compare_params(self) -> None:
         """The parameters as flown beside the vehicle's now (read again each time the tab is shown: the vehicle
@@ -122,6 +136,10 @@ class ReviewWindow(QMainWindow):
         skipped = self.log.skipped_bytes
         self.status.setText(f"{sum(self.log.count(t) for t in tree):,} records, {len(tree)} types"
                             + (f"; {skipped:,} unreadable bytes skipped" if skipped else ""))
+        if skipped:                                 # a truncated .BIN opened as if whole, its status line unread
+            self.warning.setText(f"This log is damaged or cut short: {skipped:,} bytes could not be read and were "
+                                 "skipped. The flight may end early or miss records; what is shown is what was read.")
+        self.warning.setVisible(bool(skipped))
 
     # -- fields --------------------------------------------------------------------------------------------------
     def add_field(self, mtype: str, field: str, axis: int = 0) -> None:
@@ -192,11 +210,14 @@ class ReviewWindow(QMainWindow):
         super().closeEvent(event)
 
 
-def _column(*parts) -> QWidget:
-    """Widgets and layouts stacked without margins."""
+def _column(*parts, stretch: int = -1) -> QWidget:
+    """Widgets and layouts stacked without margins; the part at index ``stretch`` takes the room left."""
     box = QWidget()
     layout = QVBoxLayout(box)
     layout.setContentsMargins(0, 0, 0, 0)
-    for part in parts:
-        (layout.addLayout if isinstance(part, QHBoxLayout) else layout.addWidget)(part)
+    for i, part in enumerate(parts):
+        if isinstance(part, QHBoxLayout):
+            layout.addLayout(part)
+        else:
+            layout.addWidget(part, 1 if i == stretch else 0)
     return box

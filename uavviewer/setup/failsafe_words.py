@@ -1,8 +1,12 @@
-"""What the vehicle will do on each failsafe, in plain words, from its parameters (ArduCopter 4.x's values), and
-the combinations that leave it with none. No Qt."""
+"""What the vehicle will do on each failsafe, in plain words, from its parameters (ArduCopter 4.x's values), the
+combinations that leave it with none, and each failsafe that does nothing: the one model the Failsafes page and
+the Summary both read. No Qt."""
 from __future__ import annotations
 
-__all__ = ["failsafe_lines", "BATTERY_ACTIONS"]
+import re
+from dataclasses import dataclass
+
+__all__ = ["Failsafes", "failsafes", "BATTERY_ACTIONS"]
 
 BATTERY_ACTIONS = {0: "nothing (a warning only)", 1: "lands", 2: "returns home (RTL)",
                    3: "SmartRTL, else RTL", 4: "SmartRTL, else lands", 5: "stops the motors (terminate)",
@@ -23,10 +27,29 @@ def _v(s, name: str) -> float | None:
     return None if p is None else p.value
 
 
-def failsafe_lines(s) -> tuple[list[tuple[str, str, str]], list[str]]:
-    """(area, what the vehicle does, the parameter that decides it) per failsafe, and warnings; unread parameters
-    say so."""
+@dataclass(frozen=True)
+class Failsafes:
+    """What the vehicle will do on each failsafe, as its parameters say: the Failsafes page shows it whole, the
+    Summary its verdict (one model, so the two never disagree)."""
+    lines: tuple[tuple[str, str, str], ...]  # (area, what the vehicle does, the parameter that decides it)
+    warnings: tuple[str, ...]                # combinations that leave it with no failsafe
+    missing: tuple[str, ...]                 # each failsafe that does nothing: "no battery failsafe action", ...
+    unread: tuple[str, ...]                  # the parameters not read yet
+
+    @property
+    def summary(self) -> str:
+        """What is not set, then what is, in one line: "no battery failsafe action; GCS failsafe off; fence off;
+        radio lost: returns home (RTL)" (the Failsafes page names each parameter)."""
+        set_ = [f"{area.lower()}: {re.sub(rf' [(]{name} .*$', '', words)}" for area, words, name in self.lines
+                if name not in self.unread and not words.startswith(("nothing", "off"))]
+        return "; ".join(list(self.missing) + set_)
+
+
+def failsafes(s) -> Failsafes:
+    """The failsafes of the vehicle state ``s``; unread parameters say so."""
     lines: list[tuple[str, str, str]] = []
+    unread = [n for n in ("BATT_FS_LOW_ACT", "BATT_FS_CRT_ACT", "FS_THR_ENABLE", "FS_GCS_ENABLE", "FS_EKF_ACTION",
+                          "FENCE_ENABLE") if _v(s, n) is None]
 
     def say(area: str, name: str, words: dict, extra: str = "") -> float | None:
         value = _v(s, name)
@@ -46,11 +69,15 @@ def failsafe_lines(s) -> tuple[list[tuple[str, str, str]], list[str]]:
         lines.append(("Fence", "off (FENCE_ENABLE 0): nothing keeps it inside", "FENCE_ENABLE"))
     else:
         say("Fence breached", "FENCE_ACTION", _FENCE)
-    warnings = []
+    warnings, missing = [], []
     battery = [_v(s, n) for n in ("BATT_FS_LOW_ACT", "BATT_FS_CRT_ACT")]
     if radio == 0 and gcs == 0:
         warnings.append("Neither the radio nor the ground-station failsafe is on: if both links are lost it keeps "
                         "flying as it was until its battery runs out.")
     if all(b == 0 for b in battery):
         warnings.append("No battery failsafe action: a low battery is only reported, the vehicle does not come back.")
-    return lines, warnings
+        missing.append("no battery failsafe action")
+    for value, words in ((radio, "radio failsafe off"), (gcs, "GCS failsafe off"), (fence, "fence off")):
+        if value == 0:
+            missing.append(words)
+    return Failsafes(tuple(lines), tuple(warnings), tuple(missing), tuple(unread))

@@ -6,7 +6,7 @@ from __future__ import annotations
 from PyQt5.QtCore import Qt
 from PyQt5.QtWidgets import QLabel, QPushButton, QTreeWidget, QTreeWidgetItem, QVBoxLayout, QWidget
 
-from .failsafe_words import failsafe_lines
+from .failsafe_words import failsafes
 
 __all__ = ["FailsafesPage"]
 
@@ -38,7 +38,8 @@ class FailsafesPage(QWidget):
         self._runner.open_parameter(name or "FS_THR_ENABLE")
 
     def show_state(self, s) -> None:
-        lines, warnings = failsafe_lines(s)
+        got = failsafes(s)
+        lines, warnings = got.lines, got.warnings
         if (lines, warnings) == self._shown:
             return
         self._shown = (lines, warnings)

@@ -6,6 +6,7 @@ from dataclasses import dataclass
 
 from driver.setup.availability import unavailable
 
+from .failsafe_words import failsafes
 from .radio_calibration import throttle_channel
 
 __all__ = ["Line", "summary", "DONE", "ATTENTION", "NOT_APPLICABLE", "UNKNOWN"]
@@ -53,10 +54,9 @@ def summary(s, no_setup: str = "") -> list[Line]:
                                               "receiver)" if rc.updated else "RC channels not received yet"))
     else:
         lines.append(Line("Radio", DONE, f"{len([v for v in rc.values if v])} channels received"))
-    fs = _param(s, "FS_THR_ENABLE")
-    lines.append(Line("Failsafes", UNKNOWN, "parameters not read yet") if fs is None else
-                 Line("Failsafes", ATTENTION, "radio failsafe off (FS_THR_ENABLE 0)") if fs == 0 else
-                 Line("Failsafes", DONE, f"radio failsafe on (FS_THR_ENABLE {fs:g})"))
+    fs = failsafes(s)                        # the Failsafes page's own model: the two never disagree
+    lines.append(Line("Failsafes", UNKNOWN, f"not read yet: {', '.join(fs.unread)}") if fs.unread else
+                 Line("Failsafes", ATTENTION if fs.missing else DONE, fs.summary))
     batt = _param(s, "BATT_MONITOR")
     lines.append(Line("Power", UNKNOWN, "parameters not read yet") if batt is None else
                  Line("Power", ATTENTION, "no battery monitor (BATT_MONITOR 0)") if batt == 0 else

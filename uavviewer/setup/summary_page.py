@@ -37,7 +37,9 @@ class SummaryPage(QWidget):
         self._shown = lines
         self.lines.clear()
         for line in lines:
-            self.lines.addTopLevelItem(QTreeWidgetItem([line.area, _MARK.get(line.verdict, line.verdict), line.why]))
+            item = QTreeWidgetItem([line.area, _MARK.get(line.verdict, line.verdict), line.why])
+            item.setToolTip(2, line.why)                # the whole of it where the column cuts it
+            self.lines.addTopLevelItem(item)
         for column in range(2):
             self.lines.resizeColumnToContents(column)
 

@@ -48,18 +48,20 @@ class ShotsController(QObject):
         self._refresh.setInterval(STICK_REFRESH_MS)
         self._refresh.timeout.connect(self._send_sticks)
         p = self.panel
+        a = self.adapter                             # its drone: the vehicle flown now (a fleet's pick changes it)
         p.orbitAsked.connect(self.orbit)
-        p.recordAsked.connect(lambda: self._ask("record_keyframe"))
-        p.clearAsked.connect(lambda: self._ask("set_keyframes", ()))
+        p.recordAsked.connect(lambda: a.send(a.drone.shots.record_keyframe))
+        p.clearAsked.connect(lambda: a.send(a.drone.shots.set_keyframes, ()))
         p.saveAsked.connect(self.save)
         p.loadAsked.connect(self.load)
-        p.cableAsked.connect(lambda speed: self._start("cable", speed))
-        p.selfieAsked.connect(lambda d, r, s: self._start("selfie", d, r, s))
-        p.followAsked.connect(lambda source, engine: self._start("follow", source, engine))
-        p.panoAsked.connect(lambda shape, fov, lens, pitch: self._start("pano", shape, fov, lens, pitch))
-        p.buttonAsked.connect(lambda key: self._ask(key))
-        self.overlay.orbitHere.connect(lambda lat, lon: self._start("orbit", lat, lon, 0.0, None,
-                                                                    self.panel.orbit_speed.value()))
+        p.cableAsked.connect(lambda speed: self._centred() and a.send(a.drone.shots.cable, speed))
+        p.selfieAsked.connect(lambda d, r, s: self._centred() and a.send(a.drone.shots.selfie, d, r, s))
+        p.followAsked.connect(lambda source, engine: self._centred() and a.send(a.drone.shots.follow, source, engine))
+        p.panoAsked.connect(lambda shape, fov, lens, pitch: self._centred()
+                            and a.send(a.drone.shots.pano, shape, fov, lens, pitch))
+        p.buttonAsked.connect(self.button)
+        self.overlay.orbitHere.connect(lambda lat, lon: self._centred() and a.send(
+            a.drone.shots.orbit, lat, lon, 0.0, None, self.panel.orbit_speed.value()))
         self.adapter.stateChanged.connect(self.show_state)
 
     # -- state in ------------------------------------------------------------------------------------------
@@ -73,26 +75,35 @@ class ShotsController(QObject):
             self._refresh.stop()
 
     # -- the pilot's asks -----------------------------------------------------------------------------------
-    def _ask(self, name: str, *args):
-        return self.adapter.command(f"shots.{name}", *args)
-
-    def _start(self, name: str, *args) -> None:
+    def _centred(self) -> bool:
         """A shot starts from a hover: the sticks are centred first (a held stick's velocity would end it)."""
         self.window.sticks.centre()
-        self._ask(name, *args)
+        return True
 
     def orbit(self, radius: float, speed: float, centre: str) -> None:
-        self._start("orbit", None, None, 0.0, radius or None, speed, centre == "roi")
+        self._centred()
+        self.adapter.send(self.adapter.drone.shots.orbit, None, None, 0.0, radius or None, speed, centre == "roi")
+
+    def button(self, key: str) -> None:
+        a = self.adapter
+        if key == "pause":
+            a.send(a.drone.shots.pause)
+        elif key == "resume":
+            a.send(a.drone.shots.resume)
+        elif key == "reverse":
+            a.send(a.drone.shots.reverse)
+        else:
+            a.send(a.drone.shots.stop)
 
     def save(self) -> None:
         path, _ = QFileDialog.getSaveFileName(self.window, "Save the cable", "cable.json", "Cables (*.json)")
         if path:
-            self._ask("save_cable", path)
+            self.adapter.send(self.adapter.drone.shots.save_cable, path)
 
     def load(self) -> None:
         path, _ = QFileDialog.getOpenFileName(self.window, "Load a cable", "", "Cables (*.json)")
         if path:
-            self._ask("load_cable", path)
+            self.adapter.send(self.adapter.drone.shots.load_cable, path)
 
     # -- the sticks ------------------------------------------------------------------------------------------
     def steer(self, axes) -> bool:

@@ -36,6 +36,9 @@ def phase_text(s: VehicleState, phase: FlightPhase) -> str:
                 + (readiness_text(s) if s.connected and s.readiness.missing else "waiting for the vehicle"))
     if phase is FlightPhase.TAKING_OFF and s.takeoff.active:
         return f"Taking off to {s.takeoff.target_altitude:.1f} m — {s.takeoff.phase.value}"
+    if phase is FlightPhase.ON_GROUND and s.readiness.reasons and not s.armed:
+        text = readiness_text(s)                         # "Not ready to arm: ...": on the ground, said shorter
+        return text[:1].upper() + text[1:]
     if phase is FlightPhase.ON_GROUND:
         return "On the ground · " + ("armed" if s.armed else readiness_text(s))
     return {FlightPhase.TAKING_OFF: "Taking off", FlightPhase.FLYING: f"Flying · {s.mode}",

@@ -126,7 +126,9 @@ class StatusStrip(QFrame):
             self._put(self.battery, "Battery " + battery_text(s) + stale,
                       DIM if lost else ALARM_COLOURS[s.battery.alarm])
         self._put(self.flight_time, f"Flight {clock_text(flight_seconds)}", DIM if lost or not s.armed else NORMAL)
-        if s.link.status is LinkStatus.OK:
+        if s.link.replay and not s.link.replay_ended:      # a recording: nothing here is live
+            self._put(self.link, "Replay · recorded, not live", NORMAL)
+        elif s.link.status is LinkStatus.OK:
             self._put(self.link, f"Link OK · {s.link.packets_per_s:.0f} pkt/s", GOOD)
         elif lost and not s.mode:
             self._put(self.link, no_vehicle_words(s), DIM)

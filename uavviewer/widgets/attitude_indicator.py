@@ -230,16 +230,21 @@ class AttitudeIndicator(QWidget):
         p.setFont(big)
         p.drawText(rect.adjusted(6, 0, -6, 0), Qt.AlignCenter, value)
 
-    def _draw_readouts(self, p: QPainter, area: QRectF) -> None:
+    def readout_rects(self) -> dict[str, QRectF]:
+        """Where the SPEED, ALT and CLIMB boxes stand (what sits over the instrument keeps clear of them)."""
+        area = QRectF(self.horizon_rect())
         bw = max(70.0, area.width() * 0.15)
         bh = max(36.0, area.height() * 0.12)
         cy = area.center().y()
-        left = QRectF(area.left() + 8, cy - bh / 2, bw, bh)
         right = QRectF(area.right() - 8 - bw, cy - bh / 2, bw, bh)
-        self._readout_box(p, left, "SPEED", _fmt(self._ground_speed), "m/s")
-        self._readout_box(p, right, "ALT", _fmt(self._altitude), "m")
-        climb = QRectF(right.left(), right.bottom() + 6, bw, bh * 0.8)
-        self._readout_box(p, climb, "CLIMB", _fmt(self._climb), "m/s")
+        return {"SPEED": QRectF(area.left() + 8, cy - bh / 2, bw, bh), "ALT": right,
+                "CLIMB": QRectF(right.left(), right.bottom() + 6, bw, bh * 0.8)}
+
+    def _draw_readouts(self, p: QPainter, area: QRectF) -> None:
+        boxes = self.readout_rects()
+        self._readout_box(p, boxes["SPEED"], "SPEED", _fmt(self._ground_speed), "m/s")
+        self._readout_box(p, boxes["ALT"], "ALT", _fmt(self._altitude), "m")
+        self._readout_box(p, boxes["CLIMB"], "CLIMB", _fmt(self._climb), "m/s")
 
     def _draw_failure_flag(self, p: QPainter, area: QRectF) -> None:
         """No attitude known: no horizon at all (a level one would lie), but the avionics red X."""

@@ -1,7 +1,9 @@
 """Where home is, seen from the cockpit: an arrow turned relative to the nose, and the distance.
 
 It sits in a corner of the instrument it is given (the attitude indicator), over it but transparent to the mouse,
-and follows that instrument's size; it never needs a place of its own in the layout.
+and follows that instrument's size; it never needs a place of its own in the layout. It keeps clear of the
+instrument's readout boxes: on a short indicator (1024×600) "home 0.0 m" covered the ALT box's label, so there the
+distance stands left of a smaller dial instead of under it.
 """
 from __future__ import annotations
 
@@ -15,8 +17,11 @@ from driver.vehicle.state import LinkStatus, VehicleState
 
 __all__ = ["HomeArrow", "home_direction"]
 
-SIZE = 84                    # the dial's diameter on a roomy indicator; smaller on a small one, never under MIN
-MIN = 52
+SIZE = 84                    # the dial's diameter on a roomy indicator; smaller on a small one
+MIN = 52                     # under this, the distance goes beside the dial
+LEAST = 30                   # the smallest dial, beside its distance
+TEXT_H = 18                  # px: the distance's line
+TEXT_W = 74                  # px: "home 120 m" beside the dial
 
 
 def home_direction(s: VehicleState) -> tuple[float, float] | None:
@@ -35,6 +40,7 @@ class HomeArrow(QWidget):
         self.setObjectName("homeArrow")
         self.setAttribute(Qt.WA_TransparentForMouseEvents)
         self._dial = SIZE
+        self._beside = False                       # the distance left of the dial, not under it
         self.relative: float | None = None         # degrees, positive: home is to the right of the nose
         self.distance: float | None = None
         self.stale = False
@@ -49,8 +55,17 @@ class HomeArrow(QWidget):
 
     def _place(self) -> None:
         parent = self.parentWidget()
-        self._dial = int(max(MIN, min(SIZE, 0.26 * min(parent.width(), parent.height()))))
-        self.setFixedSize(SIZE, self._dial + 18)           # as wide as the distance needs, the dial centred
+        dial = int(max(MIN, min(SIZE, 0.26 * min(parent.width(), parent.height()))))
+        boxes = parent.readout_rects() if hasattr(parent, "readout_rects") else {}
+        below = [r.top() for r in boxes.values() if r.right() >= parent.width() - SIZE - TEXT_W]
+        room = int(min(below)) - 6 - 4 if below else dial + TEXT_H      # above the ALT box, 4 px apart
+        self._beside = dial + TEXT_H > room
+        if self._beside:
+            self._dial = max(LEAST, min(dial, room))
+            self.setFixedSize(TEXT_W + self._dial, self._dial)
+        else:
+            self._dial = dial
+            self.setFixedSize(SIZE, self._dial + TEXT_H)       # as wide as the distance needs, the dial centred
         self.move(max(0, parent.width() - self.width() - 6), 6)
         self.raise_()
 
@@ -75,7 +90,8 @@ class HomeArrow(QWidget):
         p.setRenderHint(QPainter.Antialiasing)
         colour = QColor("#8a8f98") if self.stale or self.relative is None else QColor("#ffd54f")
         size = self._dial
-        dial = QRectF((SIZE - size) / 2 + 4, 4, size - 8, size - 8)
+        left = TEXT_W if self._beside else (SIZE - size) / 2
+        dial = QRectF(left + 4, 4, size - 8, size - 8)
         p.setPen(QPen(QColor(255, 255, 255, 90), 1.5))
         p.setBrush(QColor(0, 0, 0, 110))
         p.drawEllipse(dial)
@@ -101,5 +117,8 @@ class HomeArrow(QWidget):
         font.setBold(True)
         font.setPixelSize(11)                              # "home 120 m" fits the corner on any screen
         p.setFont(font)
-        p.drawText(QRectF(0, size - 2, SIZE, 18), Qt.AlignCenter, self.text)
+        if self._beside:
+            p.drawText(QRectF(0, 0, TEXT_W, size), Qt.AlignRight | Qt.AlignVCenter, self.text)
+        else:
+            p.drawText(QRectF(0, size - 2, SIZE, TEXT_H), Qt.AlignCenter, self.text)
         p.end()

@@ -58,6 +58,13 @@ class MessagesView(QTreeWidget):
         header.setSectionResizeMode(1, QHeaderView.ResizeToContents)
         header.setStretchLastSection(True)
         self._fix_column = 3                   # Fix… buttons, added with the first one
+        # the newest line in view, also for lines added while hidden (a tab behind Map): scrolled to the bottom
+        # while hidden, it opened at the top; scrolled up by the pilot, it stays where it was put
+        self._newest = True
+        bar = self.verticalScrollBar()
+        bar.rangeChanged.connect(lambda _low, high: self._newest and bar.setValue(high))
+        bar.valueChanged.connect(lambda value: self.isVisible() and setattr(self, "_newest",
+                                                                             value >= bar.maximum()))
 
     def add_message(self, when: float, severity: Severity, text: str, source: str = "vehicle",
                     gesture: str = "") -> QTreeWidgetItem:
@@ -79,8 +86,14 @@ class MessagesView(QTreeWidget):
         self.addTopLevelItem(item)
         while self.topLevelItemCount() > self._limit:
             self.takeTopLevelItem(0)
-        self.scrollToBottom()
+        if self._newest:
+            self.scrollToBottom()
         return item
+
+    def showEvent(self, event) -> None:  # noqa: N802 (Qt's name)
+        super().showEvent(event)
+        if self._newest:
+            self.scrollToBottom()
 
     @staticmethod
     def _put(item: QTreeWidgetItem, when: float, severity: Severity, text: str, count: int) -> None:

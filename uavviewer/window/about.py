@@ -18,7 +18,7 @@ def show_about(window) -> QMessageBox:
                       f"Vehicle: {window.window_name()}" + (f", ArduCopter {firmware}" if firmware else "") +
                       f"\nPyQt {PYQT_VERSION_STR}, Qt {QT_VERSION_STR}, pymavlink {pymavlink_version}"
                       f"\n\n{window.logs.about_line()}",
-                      QMessageBox.Ok, window)
+                      QMessageBox.Close, window)
     box.setObjectName("aboutBox")
     box.setWindowModality(Qt.NonModal)
     box.setAttribute(Qt.WA_DeleteOnClose)

@@ -3,17 +3,18 @@ needs in flight stays in view down to :data:`MIN_SIZE` (tests/test_screen_layout
 
 Nothing moves under the cursor as the state changes (tests/test_screen_steady.py): what comes and goes has a slot
 of its own that is always there, sized for its largest content: the banners (link, alerts) one row above the
-instruments, the stick line or the replay bar one row under the controls.
+instruments, the stick line or the replay bar one row under the controls. No dock stands under or above the flight
+controls (:func:`docks_beside`): View › Messages hidden and shown again moved every button and both sticks by 103 px.
 """
 from __future__ import annotations
 
 from PyQt5.QtCore import QSize, Qt
-from PyQt5.QtWidgets import QApplication, QSizePolicy, QWidget
+from PyQt5.QtWidgets import QApplication, QDockWidget, QSizePolicy, QWidget
 
 from ..widgets.dialog_fit import FRAME_ALLOWANCE
 
 __all__ = ["FIRST_SIZE", "MIN_SIZE", "fit_screen", "fit_restored", "essential_widgets", "steady_slots",
-           "BANNER_HEIGHT"]
+           "BANNER_HEIGHT", "docks_beside"]
 
 FIRST_SIZE = QSize(1366, 768)      # at most: a laptop's screen
 MIN_SIZE = QSize(1024, 600)        # a netbook's: still flyable
@@ -34,6 +35,10 @@ def steady_slots(window) -> None:
     # the buttons' column keeps its width whatever the phase says (a long phase wrapped wider and moved every
     # button and both sticks): the phase wraps inside it
     window.phaseLabel.setSizePolicy(QSizePolicy.Ignored, QSizePolicy.Preferred)
+    # Arm (in the air Disarm, the emergency motor stop behind a menu) in the mode's row, away from Stop; the mode
+    # list says "Mode" itself while empty, and its tooltip: the row's label gave its width to Arm
+    window.modeLabel.hide()
+    window.modeRow.addWidget(window.flightControls.arm_button)
     frame = window.controlsFrame
     frame.setFixedWidth(max(frame.minimumSizeHint().width(), CONTROLS_WIDTH))
     # two lines, always: a long phase ("waiting for GPS fix, EKF, pre-arm checks") wraps without pushing the
@@ -43,16 +48,29 @@ def steady_slots(window) -> None:
     window.phaseLabel.setFixedHeight(2 * window.phaseLabel.fontMetrics().lineSpacing() + 2)   # a third is cut
 
 
+def docks_beside(window) -> None:
+    """Every dock beside the flight area, never under or above it: one shown or hidden there (View › Messages)
+    changed the central column's height and moved every flight control. Messages is a tab beside Map and Plots (the
+    latest autopilot message is in the status strip anyway); a layout saved with it at the bottom is set right."""
+    for dock in window.findChildren(QDockWidget):
+        dock.setAllowedAreas(Qt.LeftDockWidgetArea | Qt.RightDockWidgetArea)
+    messages = window.messagesDock
+    if window.dockWidgetArea(messages) not in (Qt.LeftDockWidgetArea, Qt.RightDockWidgetArea) \
+            and not messages.isFloating():
+        shown = not messages.isHidden()
+        window.tabifyDockWidget(window.mapDock, messages)
+        messages.setVisible(shown)
+        window.mapDock.raise_()
+        window.layout().activate()                # the smaller minimum now: the first size is chosen from it
+
+
 def fit_screen(window: QWidget) -> None:
-    """A first size (no saved geometry) that fits the available screen, title bar included. On a screen too short
-    for Messages under the controls (a 1024×600 netbook) Messages joins Map and Plots as a tab on the right: the
-    latest autopilot message is in the status strip anyway. A fresh profile on a 1024×600 screen opened at
-    1024×629 before, its bottom cut; now at 1024×560."""
+    """A first size (no saved geometry) that fits the available screen, title bar included. A fresh profile on a
+    1024×600 screen opened at 1024×629 before, its bottom cut; now at 1024×560."""
     free = _free(window)
     if free is None:
         return
     room = free.height() - FRAME_ALLOWANCE
-    _make_room(window, room)
     width = max(MIN_SIZE.width(), min(FIRST_SIZE.width(), free.width()))
     height = max(window.minimumSizeHint().height(), min(FIRST_SIZE.height(), room))
     window.resize(width, height)
@@ -65,7 +83,6 @@ def fit_restored(window: QWidget) -> None:
     free = _free(window)
     if free is None or window.isMaximized() or window.isFullScreen():
         return
-    _make_room(window, free.height() - FRAME_ALLOWANCE)
     least = window.minimumSizeHint()
     width = max(least.width(), min(window.width(), free.width()))
     height = max(least.height(), min(window.height(), free.height() - FRAME_ALLOWANCE))
@@ -75,14 +92,6 @@ def fit_restored(window: QWidget) -> None:
     y = min(max(window.y(), free.top()), max(free.top(), free.bottom() + 1 - height - FRAME_ALLOWANCE))
     if (x, y) != (window.x(), window.y()):
         window.move(x, y)
-
-
-def _make_room(window, room: int) -> None:
-    """A screen too short for Messages under the controls: Messages joins Map and Plots as a tab on the right."""
-    if window.minimumSizeHint().height() > room and window.dockWidgetArea(window.messagesDock) != Qt.RightDockWidgetArea:
-        window.tabifyDockWidget(window.mapDock, window.messagesDock)
-        window.mapDock.raise_()
-        window.layout().activate()                # the smaller minimum now, not after the next event loop
 
 
 def _free(window: QWidget):

@@ -1,5 +1,5 @@
 """What a pilot reaches for besides the sticks, wired into the window: connecting (File › Connect, Recent,
-Disconnect, Open flight log), spoken alerts and the critical banner, the preflight dock, the Fly menu's guided
+Disconnect, Replay a flight), spoken alerts and the critical banner, the preflight dock, the Fly menu's guided
 actions, and the home arrow.
 
 Each feature is its own part (``connect/``, ``alerts/``, ``preflight/``, ``flight/guided.py``, their widgets); this only
@@ -93,15 +93,20 @@ class PilotTools(QObject):
         w.connections = ConnectionController(w._qsettings, parent=w)
         w.connections.opened.connect(w._connected)
         w.connections.failed.connect(self._failed)
+        w.connections.trouble.connect(self._trouble)
         w.connections.busyChanged.connect(self._opening)
+        w.connections.opened.connect(lambda _opened: self.connect_dialog is not None and self.connect_dialog.accept())
         w.adapter.stateChanged.connect(w.connections.confirm)
         w.connections.answered.connect(w.remember_last_connection)
         w.actionConnect = QAction("&Connect…", w)
         w.actionConnect.setShortcut("Ctrl+K")
         w.actionConnect.triggered.connect(self.show_connect)
         w.actionDisconnect = QAction("&Disconnect", w)
-        w.actionDisconnect.triggered.connect(lambda: self.leave_then(w.connections.disconnect))
-        w.actionOpenLog = QAction("&Open flight log…", w)
+        w.actionDisconnect.triggered.connect(lambda: self.leave_then(w.connections.disconnect, disconnecting=True))
+        w.actionOpenLog = QAction("Re&play a flight (.tlog)…", w)     # beside Review a log: the verb says which
+        w.actionOpenLog.setObjectName("actionReplayFlight")
+        w.actionOpenLog.setToolTip("Play a recorded .tlog in this window as if it were live, with seek and speed; "
+                                   "the vehicle flown now is left (asked first in the air)")
         w.actionOpenLog.setShortcut("Ctrl+O")
         w.actionOpenLog.triggered.connect(lambda: self.open_flight_log())
         w.menuRecent = QMenu("&Recent connections", w)
@@ -130,22 +135,43 @@ class PilotTools(QObject):
 
     # -- connecting -------------------------------------------------------------------------------------------
     def _failed(self, why: str) -> None:
+        """Said where the pilot asked (File › Connect, while open), in the status bar and in Messages."""
         self.window.log_message(f"Not connected: {why}", Severity.WARNING)
         self.window.statusbar.showMessage(f"Not connected: {why}", 8000)
+        if self.connect_dialog is not None:
+            self.connect_dialog.show_problem(f"Not connected: {why}")
+
+    def _trouble(self, why: str) -> None:
+        """The system's reason the new link does not open, the moment the driver meets it."""
+        self.window.log_message(why, Severity.WARNING)
+        self.window.statusbar.showMessage(why)
+        if self.connect_dialog is not None:
+            self.connect_dialog.show_problem(why)
 
     def _opening(self, busy: bool) -> None:
-        """While a new link is tried beside the old one, the status bar says both."""
+        """While a new link is tried beside the old one, the status bar (and File › Connect) say both, and how long
+        it is given."""
         c = self.window.connections
         if busy and c._opening is not None:
-            still = f" (still flying {c.current.drone.description})" if c.connected else ""
-            self.window.statusbar.showMessage(f"Connecting to {c._opening.label}…{still}")
+            still = f"; still flying {c.current.drone.description}" if c.connected else ""
+            text = f"Connecting to {c._opening.label}: waiting up to {c.answer_timeout:g} s for a heartbeat{still}"
+            self.window.statusbar.showMessage(text)
         else:
+            text = ""
             self.window.statusbar.clearMessage()
+        if self.connect_dialog is not None:
+            self.connect_dialog.set_busy(busy, text)
 
     def connect_to(self, choice: Choice) -> None:
+        """The address is checked first: a typo is said at once, and never after the question about leaving the
+        vehicle in the air."""
+        problem = choice.problem()
+        if problem:
+            self._failed(problem)
+            return
         self.leave_then(lambda: self.window.connections.connect_to(choice))
 
-    def leave_then(self, act) -> None:
+    def leave_then(self, act, disconnecting: bool = False) -> None:
         """Connect elsewhere or disconnect: ``act()`` at once on the ground, after the pilot's yes in the air."""
         w = self.window
         s = w.adapter.state
@@ -154,7 +180,8 @@ class PilotTools(QObject):
             return
         if self.leave_box is not None:
             self.leave_box.reject()
-        box = QMessageBox(QMessageBox.Warning, "Leave the flying vehicle?", leaving_words(s), QMessageBox.NoButton, w)
+        box = QMessageBox(QMessageBox.Warning, "Leave the flying vehicle?", leaving_words(s, disconnecting),
+                          QMessageBox.NoButton, w)
         box.setObjectName("leaveQuestion")
         leave = box.addButton("Leave it flying", QMessageBox.DestructiveRole)
         box.addButton(QMessageBox.Cancel)
@@ -193,11 +220,11 @@ class PilotTools(QObject):
         dialog.show()
 
     def open_flight_log(self, path: str | None = None) -> None:
-        """File › Open flight log: replay a .tlog in this window (``path``: chosen already, else asked)."""
+        """File › Replay a flight: a .tlog played in this window (``path``: chosen already, else asked)."""
         settings = self.window._qsettings
         if not path:
             folder = str(settings.value("connect/log_folder", "") or "")
-            path, _ = QFileDialog.getOpenFileName(self.window, "Open flight log", folder,
+            path, _ = QFileDialog.getOpenFileName(self.window, "Replay a flight", folder,
                                                   "Flight logs (*.tlog);;All files (*)")
         if path:
             settings.setValue("connect/log_folder", os.path.dirname(path))

@@ -1,0 +1,48 @@
+"""Pilot chaos: random sequences of what a pilot does under random link faults, against the simulated ArduCopter, on
+the driver's own clock (driver.sim.lockstep), every answer and every flight rule judged against the vehicle's truth
+after every tick (driver.sim.chaos).
+
+Hypothesis draws the sequences and, when one breaks a rule, shrinks it to the smallest that still does. This is the
+fast profile CI runs, derandomized (the same sequences every run: a suite that never needs a second try);
+``bench/chaos.py`` flies thousands.
+"""
+from __future__ import annotations
+
+import pytest
+from hypothesis import HealthCheck, given, seed, settings, strategies as st
+
+from driver.sim.chaos import ACTIONS, Action, FaultSet, Flight
+
+#: The faults of the issue: latency up to 2 s, loss up to 40 %, duplicates; outages are an action ("link loss").
+faults = st.builds(FaultSet, loss=st.sampled_from((0.0, 0.1, 0.3, 0.4)),
+                   latency=st.sampled_from((0.0, 0.2, 1.0, 2.0)), duplicate=st.sampled_from((0.0, 0.1)))
+actions = st.lists(st.builds(Action, st.sampled_from(ACTIONS), st.floats(0.0, 1.0), st.floats(0.2, 6.0)),
+                   min_size=1, max_size=8)
+
+FAST = settings(max_examples=6, deadline=None, database=None, print_blob=True,
+                suppress_health_check=[HealthCheck.too_slow, HealthCheck.data_too_large])
+
+
+def fly(seed: int, fault: FaultSet, sequence: list[Action]) -> None:
+    flight = Flight(seed, fault)
+    violations = flight.fly(sequence)
+    told = "\n".join(f"  {a} -> {r}" for a, r in flight.answers)
+    assert not violations, (f"{fault}, seed {seed}: {Flight.describe(sequence)}\n{told}\n" +
+                            "\n".join(str(v) for v in violations[:10]))
+
+
+@pytest.mark.parametrize("part", (0, 1))
+def test_pilot_chaos_breaks_no_flight_rule_and_every_answer_is_true(part):
+    """Two parts of the search, each with a fixed seed of its own (the same sequences every run), run side by side
+    by the suite's workers."""
+    @seed(20261208 + part)
+    @FAST
+    @given(vehicle_seed=st.integers(0, 10_000), fault=faults, sequence=actions)
+    def check(vehicle_seed, fault, sequence):
+        fly(vehicle_seed, fault, sequence)
+    check()
+
+
+def test_stop_during_a_mission_start_on_a_slow_radio_holds_on_the_drivers_clock():
+    """The case that once left an airborne copter in STABILIZE, replayed exactly in lockstep."""
+    fly(11, FaultSet(latency=1.5), [Action("mode", 0.0, 1.0), Action("mission", 0.0, 3.2), Action("stop", 0.0, 8.0)])
