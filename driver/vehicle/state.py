@@ -22,6 +22,7 @@ from ..payload.model import Gimbal, VehicleCamera
 from .battery import Battery, BatteryAlarm, BatteryThresholds
 from ..setup.banner import Autopilot
 from ..setup.model import SetupState
+from ..shots.model import ShotState
 from ..traffic.model import Traffic
 
 __all__ = [
@@ -358,6 +359,7 @@ class VehicleState:
     camera: VehicleCamera = field(default_factory=VehicleCamera)   # the vehicle's camera (not the window's video)
     setup: SetupState = field(default_factory=SetupState)          # driver.setup: radio, outputs, calibrations
     traffic: Traffic = field(default_factory=Traffic)              # driver.traffic: ADS-B contacts, alerts
+    shot: ShotState = field(default_factory=ShotState)             # driver.shots: the smart shot, from telemetry
 
     # -- derived views -----------------------------------------------------------------------
     @property

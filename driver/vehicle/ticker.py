@@ -174,6 +174,7 @@ class Ticker:
                 out += self._v._missions.service(now, self._store.state)
                 out += self._v.setup.service(now, self._store.state)
                 out += self._v.logs.service(now, self._store.state)
+                out += self._v.shots.service(now, self._store.state)       # driver.shots: the smart shot flying
                 if now >= self._next_health:
                     self._next_health = now + 0.1
                     out += self._supervise(now)
