@@ -112,6 +112,7 @@ class _Command:
     message_index: int
     mode: int | None = None                   # a mode change: the custom_mode the heartbeat must show
     armed: bool | None = None                 # arming (True) or disarming (False): the heartbeat's armed bit
+    shows_mode: int | None = None             # a command that switches mode (MISSION_START: AUTO), shown the same way
     guard: Callable[[VehicleState], str | None] | None = None
     retry: float | None = None                # s between attempts (None: the configured command timeout)
     attempts: int = 0
@@ -135,8 +136,8 @@ class _Command:
 
     def shown(self, armed: bool, custom_mode: int | None) -> bool:
         """The vehicle's report shows what this command asked (a mode, the armed bit); False for the others."""
-        if self.mode is not None:
-            return custom_mode == self.mode
+        if self.mode is not None or self.shows_mode is not None:
+            return custom_mode == (self.mode if self.mode is not None else self.shows_mode)
         return self.armed is not None and armed == self.armed
 
 
@@ -160,7 +161,7 @@ class CommandSender:
 
     # -- submitting (any thread, under the lock) ------------------------------------------------------
     def submit(self, name: str, command: int, params, now: float, *, guard=None, tag=None,
-               retry: float | None = None, early: bool = False) -> Future:
+               retry: float | None = None, early: bool = False, shows_mode: int | None = None) -> Future:
         """A COMMAND_LONG: sent on the next service, re-sent unanswered, settled by its ACK; arming and disarming
         by the heartbeat's armed bit once the vehicle accepted (or shows it). ``early``: by the vehicle's
         ACCEPTED already (a sequence's step, whose next step the heartbeat confirms anyway)."""
@@ -168,6 +169,7 @@ class CommandSender:
                      retry=retry, early=early)
         if command == mavlink.MAV_CMD_COMPONENT_ARM_DISARM:
             c.armed = params[0] >= 0.5
+        c.shows_mode = shows_mode
         return self._add(c, now, tag)
 
     def settled_by_state(self, command: int, now: float, pending: bool = True) -> bool:
@@ -274,7 +276,7 @@ class CommandSender:
             c.in_progress = True
             c.deadline = now + PROGRESS_TIMEOUT
             return
-        if c.mode is not None or c.armed is not None:
+        if c.mode is not None or c.armed is not None or c.shows_mode is not None:
             if result == mavlink.MAV_RESULT_ACCEPTED:
                 if c.early:                       # its answer, and only its own: the vehicle did it
                     self._resolve(c, CommandStatus.ACCEPTED, "accepted (its heartbeat shows it next)", now=now)

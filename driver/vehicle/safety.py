@@ -71,13 +71,19 @@ class AirborneLatch:
     def __init__(self) -> None:
         self.lifted_at: float | None = None       # when the last message that can lift it went out
 
+    @property
+    def lifted(self) -> bool:
+        return self.lifted_at is not None
+
     def may_be_airborne(self, s: VehicleState) -> bool:
         """Not known to be on the ground (the vehicle's own landed state, unknown counting as airborne), armed in
         AUTO (its mission lifts it at the first MISSION_START, from anyone), or lifted and not seen landed and
-        disarmed since. Armed on the ground before anything lifted it is not airborne."""
-        return self.lifted_at is not None or s.in_air is not False or (s.armed and s.mode == "AUTO")
+        disarmed since. Armed on the ground before anything lifted it is not airborne. (VehicleState's own
+        ``may_be_airborne`` says the same from the published ``lifted``.)"""
+        return self.lifted or s.in_air is not False or (s.armed and s.mode == "AUTO")
 
-    def lifted(self, now: float) -> None:
+    def lift(self, now: float) -> None:
+        """A message that can lift the vehicle goes out now."""
         self.lifted_at = now
 
     def observe(self, s: VehicleState, now: float) -> None:
@@ -155,7 +161,7 @@ class FlightRules:
                 log.error("held back %s: %s", msg.get_type() if not isinstance(msg, bytes) else "frame", problem)
                 continue
             if self._lifts(msg, s):
-                self.airborne.lifted(now)
+                self.airborne.lift(now)
             out.append(msg)
         return out
 

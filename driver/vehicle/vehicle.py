@@ -280,7 +280,7 @@ class Vehicle(Drone):
         return self._busy(name) or self._command_long(command, params, name, guard=guard)
 
     def _command_long(self, command: int, params=(), name: str | None = None, *, guard=None,
-                      retry: float | None = None, early: bool = False) -> Future:
+                      retry: float | None = None, early: bool = False, shows_mode: str | None = None) -> Future:
         name = name or command_name(command)
         params = [float(p) for p in (list(params) + [0.0] * 7)[:7]]
         if not frames.finite(*params):
@@ -291,8 +291,8 @@ class Vehicle(Drone):
             problem = self._rules.command_problem(command, params, self.state(), self.clock())
             if problem:
                 return self._finish(name, CommandStatus.REJECTED, problem)
-            future = self._commands.submit(name, command, params, self.clock(), guard=guard,
-                                           tag=self._sequence.tag, retry=retry, early=early)
+            future = self._commands.submit(name, command, params, self.clock(), guard=guard, tag=self._sequence.tag,
+                                           retry=retry, early=early, shows_mode=COPTER_MODES.get(shows_mode or ""))
         self._wake.set()
         return future
 

@@ -39,7 +39,10 @@ class Pilot(Protocol):
     def quiet(self, command: int) -> bool:
         """No request with this id is pending, and none sent earlier can still reach the vehicle."""
 
-    def long(self, command: int, params=(), name: str | None = None, *, retry: float | None = None) -> Future: ...
+    def long(self, command: int, params=(), name: str | None = None, *, retry: float | None = None,
+             shows_mode: str | None = None) -> Future:
+        """A COMMAND_LONG; ``shows_mode``: one that switches the mode (MISSION_START), confirmed by the heartbeat
+        showing it, as a mode change is."""
 
     def retry_interval(self) -> float:
         """How soon an idempotent request goes again when unanswered (the link's own round trip)."""
