@@ -12,6 +12,9 @@ os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
 from driver.sim import SimConfig, SimVehicle  # noqa: E402
 from driver.sim.replay import ReplayVehicle  # noqa: E402
 from driver.vehicle import Vehicle, VehicleConfig  # noqa: E402
+from patience import stretch_qtbot_waits  # noqa: E402
+
+stretch_qtbot_waits()
 
 #: Simulated seconds per real second in tests: fast, yet slow enough for 20 Hz setpoints to matter.
 SPEEDUP = 4.0

@@ -14,13 +14,16 @@ from driver.__main__ import parser
 from driver.ice.server import DEFAULT_PORTS
 
 from ice_fixtures import eventually, free_port
+from patience import patient
 from test_ice_console import Output
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 
 def run(module: str, *args: str, cwd, timeout: float = 30) -> subprocess.CompletedProcess:
-    """The program in a scratch directory (a log it might write stays there); killed if it outlives timeout."""
+    """The program in a scratch directory (a log it might write stays there); killed if it outlives ``timeout``
+    stretched by PATIENCE (a program started on a loaded machine takes seconds to import)."""
+    timeout = patient(timeout)
     proc = subprocess.Popen([sys.executable, "-m", module, *args], cwd=cwd, stdin=subprocess.DEVNULL,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                             env={**os.environ, "PYTHONPATH": ROOT})
@@ -116,7 +119,7 @@ def test_sigterm_stops_the_interactive_server_cleanly(tmp_path):
         assert eventually(lambda: output.line("serving Vehicle") or proc.poll() is not None, 30), output
         assert proc.poll() is None, output
         proc.send_signal(signal.SIGTERM)                 # stdin stays open: the console is waiting in input()
-        proc.wait(timeout=20)
+        proc.wait(timeout=patient(20))
     finally:
         if proc.poll() is None:
             proc.kill()

@@ -29,6 +29,12 @@ def _within(child: QWidget | None, widget: QWidget) -> bool:
 
 
 def layout_problems(w) -> list[str]:
+    """What a pilot could not see or reach, measured on the window held still: no new state is shown meanwhile
+    (a text that grew with a new value, a battery's mAh, is laid out on the next pass of the event loop, and a
+    measurement between the two saw a label narrower than its text), and its layout requests are done."""
+    w.adapter.stop()
+    for _ in range(2):
+        QApplication.processEvents()
     problems = []
     inside = w.rect()
     for name, widget in essential_widgets(w).items():
