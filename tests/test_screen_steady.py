@@ -106,8 +106,8 @@ def test_no_control_moves_as_the_state_changes(qtbot, sim_factory, vehicle_facto
     watch.step("banner hidden")
 
     qtbot.mouseClick(w.gimbal_bar.record_button, Qt.LeftButton)               # the vehicle's camera records
-    qtbot.waitUntil(lambda: w.adapter.state.camera.recording and "●" in w.gimbal_bar.record_button.text(),
-                    timeout=10000)
+    qtbot.waitUntil(lambda: w.adapter.state.camera.recording and "●" in w.gimbal_bar.record_button.text()
+                    and w.gimbal_bar.record_button.isChecked(), timeout=10000)   # the next click is a stop
     watch.step("record")
     qtbot.mouseClick(w.gimbal_bar.record_button, Qt.LeftButton)
     qtbot.waitUntil(lambda: w.adapter.state.camera.recording is False, timeout=10000)
