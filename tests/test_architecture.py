@@ -264,3 +264,90 @@ def test_widgets_know_no_feature():
         if feature(module) == "widgets":
             other = {t for t in targets if feature(t) not in NEUTRAL}
             assert not other, f"{module} imports {other}: it belongs in that feature's folder"
+
+
+# -- the viewer and the drone: typed calls, answers bound to who asked ---------------------------------------------
+def _viewer_trees():
+    import ast
+    for folder, _dirs, files in os.walk(VIEWER):
+        for name in sorted(files):
+            if name.endswith(".py"):
+                path = os.path.join(folder, name)
+                yield os.path.relpath(path, ROOT), ast.parse(open(path, encoding="utf-8").read())
+
+
+def _is_drone(node) -> bool:
+    """``drone``, ``self.drone``, ``self.adapter.drone``, ``w.flight.drone``: the drone flown."""
+    import ast
+    return (isinstance(node, ast.Name) and node.id == "drone") or (isinstance(node, ast.Attribute)
+                                                                    and node.attr == "drone")
+
+
+def test_the_viewer_calls_only_what_the_drone_offers():
+    """A command is the drone's own method, written in the code: a method the driver renames or drops fails here,
+    not when a pilot presses the button. Never a method looked up by its name in a string."""
+    import ast
+    from driver.vehicle.api import Drone
+    unknown, by_name, untyped = [], [], []
+    for path, tree in _viewer_trees():
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Attribute) and _is_drone(node.value) and not hasattr(Drone, node.attr):
+                unknown.append(f"{path}:{node.lineno} {ast.unparse(node)}")
+            if isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id == "getattr" \
+                    and node.args and _is_drone(node.args[0]):
+                by_name.append(f"{path}:{node.lineno} {ast.unparse(node)}")
+            if isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and node.func.attr == "send" \
+                    and ast.unparse(node.func.value).endswith("adapter"):
+                call = node.args[0] if node.args else None
+                if not (isinstance(call, ast.Attribute) and _is_drone(call.value)):
+                    untyped.append(f"{path}:{node.lineno} {ast.unparse(node)}")
+    assert not unknown, f"not in driver.vehicle.api.Drone: {unknown}"
+    assert not by_name, f"the drone's parts looked up by a name in a string: {by_name}"
+    assert not untyped, f"adapter.send takes one of the drone's methods (adapter.send(adapter.drone.land)): {untyped}"
+
+
+_TEXT_TESTS = {"startswith", "endswith", "replace", "partition", "rpartition", "find", "index", "count", "lower"}
+
+
+def test_no_part_of_the_viewer_routes_results_by_their_wording():
+    """A command's answer goes back to the caller that asked (``adapter.send(..., then=...)``); a result's
+    ``command`` is words for the pilot, and rewording it must not change what the window does."""
+    import ast
+
+    def command_text(node) -> bool:
+        return isinstance(node, ast.Attribute) and node.attr == "command"
+
+    found = []
+    for path, tree in _viewer_trees():
+        for node in ast.walk(tree):
+            hit = False
+            if isinstance(node, ast.Call) and isinstance(node.func, ast.Attribute) and node.func.attr in _TEXT_TESTS:
+                inner = node.func.value
+                while isinstance(inner, ast.Call) and isinstance(inner.func, ast.Attribute):
+                    inner = inner.func.value             # result.command.replace(...).startswith(...)
+                hit = command_text(inner)
+            elif isinstance(node, ast.Subscript):
+                hit = command_text(node.value)           # result.command[len("param "):]
+            elif isinstance(node, ast.Compare):
+                sides = [node.left, *node.comparators]
+                words = any(isinstance(s, ast.Constant) and isinstance(s.value, str) for s in sides)
+                inside = any(isinstance(op, (ast.In, ast.NotIn)) and command_text(right)
+                             for op, right in zip(node.ops, node.comparators))
+                hit = inside or (words and any(command_text(s) for s in sides))
+            if hit:
+                found.append(f"{path}:{node.lineno} {ast.unparse(node)}")
+    assert not found, f"results routed by their wording: {found}"
+
+
+def test_the_viewer_speaks_of_the_product_not_of_issue_numbers():
+    """A docstring or comment says what the window does and why; which issue asked for it is the history's."""
+    import re
+    found = []
+    for folder, _dirs, files in os.walk(VIEWER):
+        for name in sorted(files):
+            if name.endswith(".py"):
+                path = os.path.join(folder, name)
+                for number, line in enumerate(open(path, encoding="utf-8"), 1):
+                    if re.search(r"\bissues? ?#?\d+", line, re.IGNORECASE):
+                        found.append(f"{os.path.relpath(path, ROOT)}:{number}: {line.strip()}")
+    assert not found, found

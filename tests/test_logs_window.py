@@ -96,7 +96,7 @@ def test_cancel_keeps_a_part_that_resume_finishes(qtbot, sim_factory, vehicle_fa
     dialog.table.selectRow(0)
     qtbot.mouseClick(dialog.download_button, Qt.LeftButton)
     qtbot.waitUntil(lambda: row(dialog, 1).held > 60_000, timeout=30000)
-    w.adapter.command("set_mode", "LOITER")                 # commands and their answers go on meanwhile
+    w.adapter.send(w.adapter.drone.set_mode, "LOITER")    # commands and their answers go on meanwhile
     qtbot.waitUntil(lambda: w.adapter.state.mode == "LOITER", timeout=10000)
     assert row(dialog, 1).state is RowState.DOWNLOADING
     qtbot.mouseClick(table.button(1), Qt.LeftButton)         # Cancel

@@ -323,7 +323,7 @@ def test_fix_on_a_go_to_refused_by_the_fence_opens_its_parameter(qtbot, sim_fact
     vehicle = vehicle_factory(f"tcp:127.0.0.1:{sim.tcp_port}")
     assert vehicle.wait_for(lambda s: s.fence.ceiling == 50, 15)
     w = window_factory(vehicle)
-    w.adapter.command("go_to", 10.0, 0.0, 60.0)                     # what the map's Fly here sends
+    w.adapter.send(w.adapter.drone.go_to, 10.0, 0.0, 60.0)    # what the map's Fly here sends
     messages = w.messages
     qtbot.waitUntil(lambda: any("FENCE_ALT_MAX" in t for t in messages.texts()), timeout=5000)
     row = next(i for i, t in enumerate(messages.texts()) if "FENCE_ALT_MAX" in t)

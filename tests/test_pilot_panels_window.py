@@ -90,7 +90,7 @@ def test_home_arrow_points_home_from_the_nose(qtbot, sim, vehicle_factory, windo
     w = window_factory(v)
     arrow = w.home_arrow
     assert arrow.parentWidget() is w.attitude and arrow.isVisible()
-    assert w.adapter.command("go_to", 12.0, 0.0, 3.0) is not None       # 12 m north, nose to the north
+    assert w.adapter.send(w.adapter.drone.go_to, 12.0, 0.0, 3.0) is not None       # 12 m north, nose to the north
     qtbot.waitUntil(lambda: math.hypot(sim.truth().north - 12.0, sim.truth().east) < 0.5, timeout=30000)
     qtbot.waitUntil(lambda: arrow.text == "home 12 m", timeout=5000)
     nose = math.degrees(sim.truth().yaw)

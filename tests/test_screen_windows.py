@@ -137,7 +137,7 @@ def test_a_window_over_the_controls_steps_aside_when_the_vehicle_takes_off(qtbot
     setup.setGeometry(QRect(20, 60, 700, 480))                  # the pilot put it there on the ground
     qtbot.waitUntil(lambda: setup.frameGeometry().intersects(flight_area(w)), timeout=3000)
     qtbot.waitUntil(lambda: w.adapter.state.readiness.ready_to_arm, timeout=20000)
-    w.adapter.command("takeoff", 3.0)
+    w.adapter.send(w.adapter.drone.takeoff, 3.0)
     qtbot.waitUntil(lambda: w.adapter.state.armed, timeout=20000)
     qtbot.waitUntil(lambda: not setup.frameGeometry().intersects(flight_area(w)), timeout=3000)
     assert not fit_problems(setup, w)

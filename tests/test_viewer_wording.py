@@ -110,7 +110,7 @@ def test_stop_looking_goes_back_to_the_pitch_before(qtbot, lockstep_window):
     home = w.adapter.state.home
     from driver.core.frames import offset_latlon
     lat, lon = offset_latlon(home.lat, home.lon, 30.0, 0.0)
-    w.adapter.command("look_at", lat, lon, 0.0)          # the map's "Look here"
+    w.adapter.send(w.adapter.drone.look_at, lat, lon, 0.0)    # the map's "Look here"
     steps.until(lambda: w.adapter.state.gimbal.roi is not None and w.gimbal_bar.stop_looking_button.isVisible(),
                 10, "looking at the point")
     steps.until(lambda: abs(w.adapter.state.gimbal.pitch_deg + 40) > 20, 10, "turned to it")   # it looks there

@@ -97,6 +97,7 @@ class MainWindow(QMainWindow):
         self.menuView.addAction(self.plotsDock.toggleViewAction())
         self.menuView.addAction(self.mapDock.toggleViewAction())
         self.map = MapController(self.mapPanel, self.adapter, self, lambda: self.takeoff_altitude, self)
+        self.map.camera.stopLookingRequested.connect(self.gimbal.stop_looking)    # the tilt comes back as from the bar
         self.tabifyDockWidget(self.plotsDock, self.mapDock)            # Map and Plots share the lower right
         self.plan = PlanController(self.map, self.adapter, self, self)  # Plan mode, transfers, missions: own dock
         self.preferences.keep_map_choices(self.mapPanel)

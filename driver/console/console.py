@@ -21,7 +21,7 @@ from ..vehicle.battery import time_left
 from .plans import PlanCommands
 from .words import number, result_line
 from ..vehicle.state import BatteryAlarm, CommandResult, CommandStatus, SequencePhase, VehicleState
-from ..vehicle.rules import COPTER_MODES, mode_warning
+from ..vehicle.rules import COPTER_MODES, mode_refusal, mode_warning
 from .payload import PayloadCommands
 from .setup import SetupCommands
 from .logs import LogCommands
@@ -245,6 +245,10 @@ class Console(PlanCommands, PayloadCommands, SetupCommands, LogCommands, cmd.Cmd
         if len(words) > 2 or words[1:] not in ([], ["confirm"]):
             raise ValueError("usage: mode [NAME [confirm]]")
         name = words[0].upper()
+        refusal = mode_refusal(name, self.vehicle.state().may_be_airborne)
+        if refusal:
+            self.say(refusal)
+            return
         warning = mode_warning(name, self.vehicle.state().flying)
         if warning and len(words) == 1:
             self.say(f"{warning} Type 'mode {name} confirm' to switch anyway.")

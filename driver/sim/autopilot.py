@@ -334,6 +334,7 @@ class Autopilot(Setup, Telemetry, Commands, ParamProtocol, FtpServer, LogServer,
         if text:
             self._text(mavlink.MAV_SEVERITY_INFO, text)
         log.info("disarmed")
+        self._auto_disarmed()
 
     # -- modes -------------------------------------------------------------------------------------
     def set_mode(self, number: int) -> bool:

@@ -75,6 +75,13 @@ class Drone(abc.ABC):
     #: drone that reads the link itself (the Vehicle's reader); None: this drone does not see the link
     inspector = None
 
+    #: what only a drone holding the link itself has (the embedded Vehicle), None on one whose server holds it (the
+    #: Ice client): its settings (driver.vehicle.vehicle.VehicleConfig), the vehicle's setup (calibrations, motor
+    #: test, radio: driver.setup.control.VehicleSetup) and its DataFlash logs (driver.logs.control.LogControl)
+    config = None
+    setup = None
+    logs = None
+
     def inspection(self) -> Inspection:
         """Every message type from every component with its rate and newest fields; ``available`` False (and
         why) for a drone that does not see the raw link (the Ice client: its server reads it)."""
@@ -146,6 +153,11 @@ class Drone(abc.ABC):
     def circle(self, north: float, east: float, radius: float) -> Future[CommandResult]:
         """Circle the point (north, east) m from home at ``radius`` m, the way ArduCopter's CIRCLE mode can."""
         return guided.circle_point(self, north, east, radius)
+
+    def reboot(self) -> Future[CommandResult]:
+        """Restart the autopilot (MAV_CMD_PREFLIGHT_REBOOT_SHUTDOWN), e.g. after a new frame; a drone whose server
+        holds the link refuses at once."""
+        return answered(CommandResult("reboot", CommandStatus.REJECTED, _NO_REBOOT))
 
     # -- payload --------------------------------------------------------------------------
     def toggle_camera(self) -> Future[CommandResult]:
@@ -301,4 +313,5 @@ class Fleet(abc.ABC):
 _NO_MISSIONS = "this vehicle connection cannot transfer or fly plans"
 _NO_PARAMETERS = "this vehicle connection cannot read or write parameters"
 _NO_PAYLOAD = "this vehicle connection cannot point a gimbal or trigger a camera"
+_NO_REBOOT = "this vehicle connection cannot restart the autopilot: its server holds the link"
 _NO_SIGNING = "the MAVLink link is signed where it is held: set signing up on the MAVLinkServer"

@@ -150,10 +150,6 @@ class CommandSender:
             c.armed = params[0] >= 0.5
         return self._add(c, now, tag)
 
-    def pending(self, command: int) -> bool:
-        """A request with this id waits for its answer, or an earlier one may still be answered."""
-        return command in self._pending
-
     def settled_by_state(self, command: int, now: float, pending: bool = True) -> bool:
         """Whether the state now tells the truth about ``command`` (no request of that id could still change it;
         ``pending`` False: leaving out the one pending now, which is being judged)."""
@@ -337,12 +333,15 @@ class CommandSender:
                                                                     min(c.attempts, 255), *c.params))
                     c.next_send = now + (ACKED_MODE_WAIT if c.acked else retry)
             else:
-                if c.attempts >= c.budget:
+                patience = cfg.command_timeout * cfg.command_attempts      # a quickly retried command waits as long
+                if c.attempts >= c.budget and (c.retry is None or now - c.first_sent >= patience):
                     self._time_out(c, state, now)
                     continue
                 out.append(mavlink.MAVLink_command_long_message(system, component, c.command,
                                                                 min(c.attempts, 255), *c.params))
                 c.next_send = now + (ACKED_MODE_WAIT if c.acked else retry)
+                if c.retry is not None:                  # each unanswered try waits twice as long (RFC 6298's backoff)
+                    c.retry = min(2 * c.retry, cfg.command_timeout)
             if c.first_sent is None:
                 c.first_sent = now
             c.last_sent = now

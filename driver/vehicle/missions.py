@@ -17,10 +17,10 @@ from typing import Callable
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from ..core.results import chain
-from .state import CommandResult, CommandStatus, Severity, VehicleState
+from .state import CommandResult, CommandStatus, LandedState, Severity, VehicleState
 from ..mission.limits import UNCHECKED, held_mission_problems, plan_problems, unchecked
 from ..mission.plan import MissionRunState, Plan, PlanKind, TransferOutcome
-from ..mission.progress import fold_item_reached, fold_mission_current, fold_text, fold_transfer_end
+from ..mission.progress import fold_arming, fold_item_reached, fold_mission_current, fold_text, fold_transfer_end
 from ..mission.transfer import PlanTransfers
 
 __all__ = ["MissionControl"]
@@ -52,6 +52,7 @@ class MissionControl:
                                        vehicle._target_ids, vehicle._store.record_locked, self._settle_later,
                                        lambda: vehicle._store.state.home, lambda: vehicle._v2)
         self._settling: list = []      # transfers ended, settled once the state shows what they did (_publish)
+        self._last_in_air: tuple = (None, "")     # (item, name) last current while the vehicle flew
         self._watches: list[_Watch] = []
         self._currents: collections.deque = collections.deque(maxlen=64)   # (time, item) as the vehicle says
         self._limits_of: tuple = (None, None, None)   # (home, mission held, fence) the limits were checked for
@@ -172,6 +173,7 @@ class MissionControl:
         if mtype == "MISSION_CURRENT":
             self._currents.append((self._v.clock(), int(m.seq)))
             store.set(mission=fold_mission_current(store.view()["mission"], m))
+            self._note_in_air()
             return
         if mtype == "MISSION_ITEM_REACHED":
             store.set(mission=fold_item_reached(store.view()["mission"], m))
@@ -197,6 +199,20 @@ class MissionControl:
         if folded is not None:
             self._currents.append((self._v.clock(), folded.current))
             store.set(mission=folded)
+            self._note_in_air()
+
+    def _note_in_air(self) -> None:
+        view = self._v._store.view()
+        if view["armed"] and view["landed_state"] is not LandedState.ON_GROUND and view["system_status"] != 3:
+            p = view["mission"]
+            self._last_in_air = (p.current, p.current_name)
+
+    def on_arming(self, armed: bool, mode: str) -> None:
+        """The heartbeat shows the vehicle armed or disarmed (reader, lock held)."""
+        store = self._v._store
+        store.set(mission=fold_arming(store.view()["mission"], armed, mode, self._last_in_air))
+        if armed:
+            self._last_in_air = (None, "")
 
     def on_autopilot_version(self, m) -> None:
         self.transfers.mission_int = bool(m.capabilities & mavlink.MAV_PROTOCOL_CAPABILITY_MISSION_INT)

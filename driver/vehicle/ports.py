@@ -72,8 +72,8 @@ class SequencePilot:
         self._mode, self._arm, self._disarm, self._long = mode, arm, disarm, long
         self.hold, self.quiet = hold, quiet
 
-    def mode(self, name: str, *, early: bool = False, ask: bool = False) -> Future:
-        return self._mode(name, early=early, ask=ask)
+    def mode(self, name: str, *, early: bool = False) -> Future:
+        return self._mode(name, early=early)
 
     def arm(self, *, early: bool = False) -> Future:
         return self._arm(early=early)

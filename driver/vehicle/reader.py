@@ -257,6 +257,7 @@ class Reader:
         self._commands.on_heartbeat(m.custom_mode, changes["armed"], now)
         if changes["armed"] != was_armed:
             self._link.armed_changed(changes["armed"], now)
+            self._missions.on_arming(changes["armed"], changes["mode"])
         event = self._link.heartbeat(now)
         if event is None:
             return

@@ -314,9 +314,8 @@ class Vehicle(Drone):
             self._sequence.end(f"mode {name.upper()} asked")
         return self._set_mode(name)
 
-    def _set_mode(self, name: str, *, early: bool = False, ask: bool = False) -> Future:
-        """A mode change through the flight rules; ``ask``: sent even if the state shows the mode already (it may
-        be stale: a command on its way, a MISSION_START, may have changed it)."""
+    def _set_mode(self, name: str, *, early: bool = False) -> Future:
+        """A mode change through the flight rules, confirmed by the heartbeat."""
         number = COPTER_MODES.get(name.upper())
         if number is None:
             return self._finish(f"mode {name}", CommandStatus.REJECTED,
@@ -324,14 +323,11 @@ class Vehicle(Drone):
         if self._replay is not None:
             return self._finish(f"mode {name.upper()}", CommandStatus.REJECTED,
                                 "replaying a recording: no vehicle to command")
-        with self._lock:
-            s = self.state()
+        with self._lock:                              # sent even when the state shows it: the vehicle may have left
+            s = self.state()                          # it since (a failsafe, its mission's end), the state be older
             problem = self._rules.mode_problem(number, s)
             if problem:
                 return self._finish(f"mode {name.upper()}", CommandStatus.REJECTED, problem)
-            if not ask and s.mode == name.upper() and s.connected and self._commands.settled_by_state(
-                    mavlink.MAV_CMD_DO_SET_MODE, self.clock()):
-                return self._finish(f"mode {name.upper()}", CommandStatus.ACCEPTED, "already in that mode")
             future = self._commands.submit_mode(f"mode {name.upper()}", number, self.clock(),
                                                 tag=self._sequence.tag, early=early)
         self._wake.set()
@@ -341,11 +337,9 @@ class Vehicle(Drone):
         return self._busy("arm") or self._arming(True, force)
 
     def _arming(self, armed: bool, force: bool = False, early: bool = False) -> Future:
+        """Sent even when the state shows it done: the vehicle disarms by itself (DISARM_DELAY, a motor test's
+        end), and the state may be older than that; ArduCopter accepts an arm of an armed vehicle."""
         name = ("arm" if armed else "disarm") + (" (forced)" if force else "")
-        with self._lock:
-            if self.state().armed == armed and self._commands.settled_by_state(mavlink.MAV_CMD_COMPONENT_ARM_DISARM,
-                                                                                self.clock()):
-                return self._finish(name, CommandStatus.ACCEPTED, f"already {'armed' if armed else 'disarmed'}")
         return self._command_long(mavlink.MAV_CMD_COMPONENT_ARM_DISARM, (1 if armed else 0,
                                   ARM_FORCE_MAGIC if force else 0), name, early=early)
 

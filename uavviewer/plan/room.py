@@ -1,4 +1,4 @@
-"""Room for the Plan list beside the map (issue 29: the list showed 1 row at 1366×768 and 0 at 1280×720).
+"""Room for the Plan list beside the map: without it the list showed 1 row at 1366×768 and none at 1280×720.
 
 While Plan is shown, the tabs behind it and behind the map (Preflight, Plots, Messages: not in view anyway; the latest
 autopilot message is in the status strip) step out, so no tab bar takes height, and the Plan dock gets the height its panel needs with its list showing

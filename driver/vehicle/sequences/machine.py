@@ -24,9 +24,8 @@ class Pilot(Protocol):
 
     def may_be_airborne(self) -> bool: ...
 
-    def mode(self, name: str, *, early: bool = False, ask: bool = False) -> Future:
-        """A mode change; ``early``: settled by the vehicle's ACCEPTED already, not only by its heartbeat;
-        ``ask``: sent even when the state shows the mode already (it may be stale)."""
+    def mode(self, name: str, *, early: bool = False) -> Future:
+        """A mode change; ``early``: settled by the vehicle's ACCEPTED already, not only by its heartbeat."""
 
     def arm(self, *, early: bool = False) -> Future: ...
 

@@ -113,7 +113,7 @@ class StopSequence:
         return ", ".join(done) or "the vehicle was not changed"
 
     def _guided(self, s: VehicleState, now: float):
-        r = self.machine.ask(lambda: self.pilot.mode("GUIDED", ask=True))
+        r = self.machine.ask(lambda: self.pilot.mode("GUIDED"))
         if r is None:
             return None
         if r.ok:
@@ -124,7 +124,7 @@ class StopSequence:
         return None
 
     def _brake(self, s: VehicleState, now: float):
-        r = self.machine.ask(lambda: self.pilot.mode("BRAKE", ask=True))
+        r = self.machine.ask(lambda: self.pilot.mode("BRAKE"))
         if r is None:
             return None
         if not r.ok:
