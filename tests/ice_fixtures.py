@@ -14,7 +14,7 @@ import pytest
 from driver.ice import load_slice
 from driver.ice.client import IceDrone, viewer_properties
 from driver.ice.server import IceServer, default_properties
-from patience import patient
+from patience import patient, patient_waits
 
 jderobot, mavlinkserver = load_slice()
 
@@ -113,7 +113,7 @@ def drone_factory():
         if server is not None:
             for key, value in server.client_properties().items():
                 props.setProperty(key, value)
-        drone = IceDrone(props, **kwargs).start()
+        drone = patient_waits(IceDrone(props, **kwargs).start())
         drones.append(drone)
         return drone
 

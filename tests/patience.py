@@ -39,3 +39,16 @@ def stretch_qtbot_waits() -> None:
             call = stretched(wait)
             call._stretched = True
             setattr(QtBot, name, call)
+
+
+def patient_waits(drone):
+    """``drone.wait_for(predicate, timeout)`` stretched by PATIENCE for this drone (a test's safety net), set on
+    the instance: the driver's own callers of its class's method are not touched. Returns the drone."""
+    wait_for = drone.wait_for
+
+    @functools.wraps(wait_for)
+    def call(predicate, timeout):
+        return wait_for(predicate, patient(timeout))
+
+    drone.wait_for = call
+    return drone
