@@ -43,6 +43,12 @@ class Steps:
         for _ in range(max(1, round(seconds / 0.02))):
             self.tick()
 
+    def take_off(self, altitude: float = 3.0) -> None:
+        """What the ``flying`` fixture does over a socket: hovering at ``altitude`` in GUIDED."""
+        done = self.vehicle.takeoff(altitude)
+        self.until(done.done, 60, "the takeoff")
+        assert done.result().ok, str(done.result())
+
     def until(self, predicate, seconds: float, what: str = "") -> None:
         """Advance until ``predicate()`` holds, at most ``seconds`` of the vehicle's time."""
         for _ in range(max(1, round(seconds / 0.02))):
@@ -59,13 +65,14 @@ def lockstep_window(window_factory, tmp_path):  # noqa: F811
     made = []
 
     def make(seed: int = 1, window: dict | None = None, driver: dict | None = None, ready_after: float = 1.0,
-             **options) -> Steps:
+             build=None, **options) -> Steps:
+        """``build(vehicle)``: the window, if not window_factory's with ``window``'s options."""
         lockstep = Lockstep(seed, driver={"param_cache": str(tmp_path / "params"), **(driver or {})},
                             ready_after=ready_after, **options)
         made.append(lockstep)
         steps = Steps(lockstep, None)
         lockstep.run(0.2)
-        steps.window = window_factory(lockstep.vehicle, **(window or {}))
+        steps.window = build(lockstep.vehicle) if build else window_factory(lockstep.vehicle, **(window or {}))
         steps.window.adapter.stop()           # polled by the steps, not by a real-time timer
         steps.until(lambda: steps.vehicle.state().connected, 10, "the first heartbeat")
         return steps
