@@ -118,6 +118,8 @@ def test_in_flight_no_window_covers_the_controls_and_the_flight_keys_work_from_e
         if isinstance(focus, (QLineEdit, QAbstractSpinBox)):      # a field there takes the letters: not on it
             focus = close_button(window)
             focus.setFocus()
+        button = w.flightControls.rtl_button if key == Qt.Key_R else w.flightControls.stop_button
+        qtbot.waitUntil(button.isEnabled, timeout=10000)       # the key does what its button does, when it can
         qtbot.keyClick(focus or window, key)
         qtbot.waitUntil(lambda: sim.truth().mode == mode, timeout=10000)
         window.close()
