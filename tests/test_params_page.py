@@ -54,25 +54,29 @@ def review_and_write(qtbot, w, page):
     return review
 
 
-def test_download_shows_progress_then_every_parameter(qtbot, sim, window):
-    sim.faults.downlink = LinkFaults(loss=0.1)          # a real radio: the list takes more than one snapshot
-    sim.config.radio_baud = 460800    # and its rate: at TCP speed (0.4 s) a loaded machine showed no snapshot between
+def test_download_shows_progress_then_every_parameter(qtbot, lockstep_window):
+    """In lockstep the window is shown each state of the download: over a socket a loaded machine's window
+    polled once the list was in, and never showed it going."""
+    steps = lockstep_window(downlink=LinkFaults(loss=0.1), radio_baud=460800)     # a real radio, lossy
+    window = steps.window
     seen: list[str] = []
     window.adapter.stateChanged.connect(lambda _s: window.params.page is not None
                                         and seen.append(window.params.page.status.text()))
-    page = open_page(qtbot, window)
+    page = open_page_in_lockstep(steps)
+    steps.until(lambda: window.params.model.table.complete and not window.params.model.table.downloading, 60,
+                "every parameter read")
     table = window.params.model.table
-    assert table.expected == len(sim.autopilot.params.names) == window.params.model.rowCount() == 1392
+    assert table.expected == len(steps.autopilot.params.names) == window.params.model.rowCount() == 1392
     assert any(text.startswith("Downloading parameters") for text in seen), sorted(set(seen))
-    qtbot.waitUntil(lambda: page.status.text().startswith("1,392 parameters, all read"), timeout=3000)
+    assert page.status.text().startswith("1,392 parameters, all read"), page.status.text()
     assert not page.progress.isVisible()
     assert page.groups.item(0).text() == "All (1,392)"
 
     assert page.select("WPNAV_SPEED")
     seen.clear()
     qtbot.mouseClick(page.refresh_button, Qt.LeftButton)                   # everything again
-    qtbot.waitUntil(lambda: any(t.startswith("Downloading") for t in seen), timeout=5000)
-    qtbot.waitUntil(lambda: page.status.text().startswith("1,392 parameters, all read"), timeout=DOWNLOAD_MS)
+    steps.until(lambda: any(t.startswith("Downloading") for t in seen), 5, "the download again")
+    steps.until(lambda: page.status.text().startswith("1,392 parameters, all read"), 60, "every parameter again")
     assert page.current_name() == "WPNAV_SPEED"                          # the rows were not reset under the pilot
 
 
