@@ -338,21 +338,20 @@ def test_fix_on_a_go_to_refused_by_the_fence_opens_its_parameter(qtbot, sim_fact
     assert page.editor.value.text() == "50"
 
 
-def test_an_ftp_read_that_stalls_says_why_the_list_is_read_instead(qtbot, sim, vehicle_factory, window_factory):
+def test_an_ftp_read_that_stalls_says_why_the_list_is_read_instead(qtbot, lockstep_window):
     """The vehicle offers MAVLink FTP, then goes silent on it after ten packets: the page's progress says FTP
-    stalled and the list is read instead, the messages say so too, and the table still ends complete."""
-    autopilot = sim.autopilot
-    send, sent = autopilot._ftp_send, []
+    stalled and the list is read instead, the messages say so too, and the table still ends complete. In
+    lockstep: the window is shown each state of it, however quick the list is read."""
+    sent = []
+    steps = lockstep_window(driver={"param_ftp": True})
+    autopilot = steps.autopilot
+    send = autopilot._ftp_send
     autopilot._ftp_send = lambda reply: sent.append(reply) or len(sent) > 10 or send(reply)
-    vehicle = vehicle_factory(f"tcp:127.0.0.1:{sim.tcp_port}")
-    assert vehicle.wait_for(lambda s: s.connected and s.firmware, 10)     # AUTOPILOT_VERSION offers FTP
-    w = window_factory(vehicle)
+    w = steps.window
     seen: list[str] = []
     w.adapter.stateChanged.connect(lambda _s: w.params.page is not None and seen.append(w.params.page.status.text()))
-    action = w.findChild(type(w.menuBar().actions()[0]), "actionParameters")
-    action.trigger()
-    page = w.params.page
-    qtbot.waitUntil(lambda: page.status.text().startswith("1,392 parameters, all read"), timeout=2 * DOWNLOAD_MS)
+    page = open_page_in_lockstep(steps)
+    steps.until(lambda: page.status.text().startswith("1,392 parameters, all read"), 60, "every parameter read")
     assert len(sent) > 10
     assert any("MAVLink FTP stalled at byte" in t and "reading the list instead" in t for t in seen), sorted(set(seen))
-    qtbot.waitUntil(lambda: any("Parameters: MAVLink FTP stalled" in t for t in w.messages.texts()), timeout=3000)
+    steps.until(lambda: any("Parameters: MAVLink FTP stalled" in t for t in w.messages.texts()), 3, "the message")
