@@ -129,7 +129,7 @@ def test_status_round_trip_keeps_every_field():
                    messages=(Message(4, 99.0, Severity.WARNING, "PreArm: Need 3D Fix", "vehicle"),),
                    results=(CommandResult("arm", CommandStatus.REFUSED, "denied", 1, 7),),
                    takeoff=SequenceProgress(SequencePhase.DONE, "reached", 3.0),
-                   sequence=SequenceState("stop", "watching", ""), may_be_airborne=False,
+                   sequence=SequenceState("stop", "watching", ""), lifted=True,
                    mission=MissionProgress(count=5, current=1, state=MissionRunState.COMPLETE, flown=True),
                    setpoint=Setpoint(0.5, -0.5, 0.2, 0.1))
     status = convert.status_from_state(ms, state)

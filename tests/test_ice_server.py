@@ -74,7 +74,7 @@ def test_each_interface_on_its_own_port(vehicle, server_factory, communicator):
                                                    for n, p in ports.items()})
     type_ids = {"Camera": "::jderobot::Camera", "Pose3D": "::jderobot::Pose3D", "CMDVel": "::jderobot::CMDVel",
                 "Navdata": "::jderobot::Navdata", "Extra": "::jderobot::ArDroneExtra", "WP": "::jderobot::Pose3D",
-                "Vehicle": "::mavlinkserver::Vehicle"}
+                "Vehicle": "::mavlinkserver::Vehicle", "Shots": "::mavlinkserver::Shots"}
     for name, port in ports.items():
         prx = communicator.stringToProxy(f"{name}:tcp -h 127.0.0.1 -p {port}")
         assert prx.ice_isA(type_ids[name]), name

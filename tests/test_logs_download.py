@@ -1,4 +1,4 @@
-"""DataFlash logs over LOG_* (issue 31): the simulator writes and serves real .BIN logs as ArduCopter 4.6.3 does
+"""DataFlash logs over LOG_*: the simulator writes and serves real .BIN logs as ArduCopter 4.6.3 does
 (tests/data/recordings/arducopter-4.6-sitl-logs.*), and the driver lists and downloads them complete and
 byte-identical through loss, resuming from its partial file after a dropped link or an app restart."""
 from __future__ import annotations

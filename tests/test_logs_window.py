@@ -1,4 +1,4 @@
-"""Logs › Flight logs (issue 31): the window lists the simulated vehicle's DataFlash logs, downloads one with its
+"""Logs › Flight logs: the window lists the simulated vehicle's DataFlash logs, downloads one with its
 progress, rate and time left shown and Open once saved (byte-identical to the vehicle's file), Cancel keeps a
 .part that Resume finishes, armed the vehicle's own "Disarm for log download" is shown while Land stays at hand,
 Erase all asks first, and a connection without logs says why. Real simulator, real sockets, real widgets."""

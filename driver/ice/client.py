@@ -32,6 +32,7 @@ from ..params.model import ParameterTable
 from . import convert, load_slice, plans
 from .params import table_from_ice
 from .payload import PayloadClient
+from .shots import ShotsClient
 from ..payload.model import Gimbal, VehicleCamera
 from .server import DEFAULT_PORTS
 
@@ -195,6 +196,7 @@ class IceDrone(PayloadClient, Drone):
             self._vehicle = mavlinkserver.VehiclePrx.uncheckedCast(vehicle.ice_invocationTimeout(self._call_ms))
             self._commands = mavlinkserver.VehiclePrx.uncheckedCast(
                 vehicle.ice_invocationTimeout(self._command_ms))
+            self.shots = ShotsClient(proxy("Shots"), self._call_ms, self._command_ms, self._result)   # driver.ice.shots
         else:                                  # JdeRobot's interfaces only: Pose3D, Navdata, Extra, WP
             self._jde = {name: cast.uncheckedCast(prx.ice_invocationTimeout(self._call_ms))
                          for name, cast in (("Pose3D", jderobot.Pose3DPrx), ("Navdata", jderobot.NavdataPrx),
@@ -215,6 +217,7 @@ class IceDrone(PayloadClient, Drone):
             t.join(timeout=3.0)
         self._unsubscribe()                    # after the poller, which may be subscribing
         self._worker.shutdown(wait=False, cancel_futures=True)
+        getattr(self.shots, "close", lambda: None)()
         if self._com is not None:
             self._com.destroy()
         with self._lock:
@@ -272,6 +275,7 @@ class IceDrone(PayloadClient, Drone):
                     self._read_fence()
                     self._read_parameters()
                     self._read_payload()
+                    self.shots.poll()
                     self._answered(self._vehicle.getStatus(self._server_message, self._server_result))
                     if (self._subscription is not None
                             and started - max(self._subscribed_at, published or 0.0) > RESUBSCRIBE_AFTER):
@@ -371,7 +375,7 @@ class IceDrone(PayloadClient, Drone):
                            lost_count=s.link.lost_count + self._lost_count)
             gimbal, camera = self._payload
             self._state = replace(s, link=link, fence=self._fence, gimbal=gimbal, camera=camera,
-                                  parameters=self._parameters)
+                                  parameters=self._parameters, shot=self.shots.state)
 
     def _result(self, outcome) -> CommandResult:
         """The server's outcome, numbered as in our results (the window pairs a Future's answer with it)."""

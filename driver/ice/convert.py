@@ -301,5 +301,5 @@ def state_from_status(st, messages: tuple[Message, ...], results: tuple[CommandR
                           yaw_rate=st.setpoint.yawRate),
         mission=mission_from_ice(st.mission),
         sequence=SequenceState(st.running.name, st.running.state, st.running.detail),
-        may_be_airborne=st.mayBeAirborne,
+        lifted=st.mayBeAirborne,         # the server's whole view: this side's own derivation can only add to it
     )

@@ -24,6 +24,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from ..core.frames import offset_latlon
 from ..mission.plan import MissionItem, Plan, PlanKind
+from ..vehicle.commands import decided
 from ..vehicle.safety import MANUAL_THROTTLE_MODES
 from ..vehicle.state import CommandStatus
 from .faults import LinkFaults
@@ -109,9 +110,9 @@ class Flight:
                 self._do(action)
                 self._run(action.wait, sticks=action if action.kind == "sticks" else None)
             self.ls.faults.end_outage()
-            self._run(SETTLE, until=lambda: all(a.judged for a in self._asked))
+            self._run(SETTLE, until=lambda: all(a.judged for a in self._asked if a.action.kind != "log download"))
             for asked in self._asked:
-                if not asked.judged:
+                if not asked.judged and asked.action.kind != "log download":   # a log may take minutes
                     self._violate("no answer", f"{asked.name}: nothing said {SETTLE:g} s after the last action")
         finally:
             self.seconds = self.ls.autopilot.t
@@ -198,7 +199,7 @@ class Flight:
             self._violate("airborne unseen", f"the vehicle is {-ap.d:.1f} m up in {ap.mode_name} and the driver heard "
                           "it so, or sent what lifted it, yet says it is surely on the ground")
         for asked in self._asked:
-            if not asked.judged and asked.future.done():
+            if not asked.judged and decided(asked.future) is not None:   # as the driver decided it, this tick
                 asked.judged = True
                 self._judge(asked)
 
@@ -233,7 +234,7 @@ class Flight:
 
     # -- the answers --------------------------------------------------------------------------------------------
     def _judge(self, asked: _Asked) -> None:
-        result = asked.future.result()
+        result = decided(asked.future)
         result = getattr(result, "result", result)          # a transfer's outcome carries its result
         self.answers.append((asked.action, result))
         wrong = wrong_answer(asked.action.kind, asked.name, result, self._truth[asked.since:])

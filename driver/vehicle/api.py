@@ -15,6 +15,7 @@ from dataclasses import dataclass
 from . import guided
 from ..mission.plan import Plan, PlanKind, TransferOutcome
 from ..core.results import answered
+from ..shots.api import NO_SHOTS, Shots
 from .inspector import Inspection
 from .state import BatteryThresholds, CommandResult, CommandStatus, VehicleState
 
@@ -70,6 +71,9 @@ class Drone(abc.ABC):
     def replay(self):
         """Play/pause/speed control when the 'vehicle' is a recorded flight, else None."""
         return None
+
+    #: the smart shots (driver.shots): orbit, cable cam, selfie, follow, pano; state in ``state().shot``
+    shots: Shots = NO_SHOTS
 
     #: the link's counts by system, component and message (driver.vehicle.inspector.MessageInspector), set by a
     #: drone that reads the link itself (the Vehicle's reader); None: this drone does not see the link

@@ -17,6 +17,7 @@ from typing import Callable
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from ..core.results import chain
+from .commands import decided
 from .state import CommandResult, CommandStatus, LandedState, Severity, VehicleState
 from ..mission.limits import UNCHECKED, held_mission_problems, plan_problems, unchecked
 from ..mission.plan import MissionRunState, Plan, PlanKind, TransferOutcome
@@ -223,9 +224,9 @@ class MissionControl:
         if self.transfers.changed:
             self._publish()
         for w in list(self._watches):
-            if not w.inner.done():
+            r = decided(w.inner)
+            if r is None:
                 continue
-            r = w.inner.result()
             if not r.ok:
                 self._settle(w, r)
             elif w.done(state):

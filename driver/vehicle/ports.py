@@ -81,5 +81,6 @@ class SequencePilot:
     def disarm(self) -> Future:
         return self._disarm()
 
-    def long(self, command: int, params=(), name: str | None = None, *, retry: float | None = None) -> Future:
-        return self._long(command, params, name, retry=retry)
+    def long(self, command: int, params=(), name: str | None = None, *, retry: float | None = None,
+             shows_mode: str | None = None) -> Future:
+        return self._long(command, params, name, retry=retry, shows_mode=shows_mode)

@@ -174,6 +174,7 @@ class Ticker:
                 out += self._v._missions.service(now, self._store.state)
                 out += self._v.setup.service(now, self._store.state)
                 out += self._v.logs.service(now, self._store.state)
+                out += self._v.shots.service(now, self._store.state)       # driver.shots: the smart shot flying
                 if now >= self._next_health:
                     self._next_health = now + 0.1
                     out += self._supervise(now)
@@ -196,9 +197,8 @@ class Ticker:
         published: nothing leaves the driver without passing here (driver.vehicle.safety)."""
         state = self._store.state
         out = self._rules.screen(out, state, now)
-        airborne = self._rules.may_be_airborne(state)
-        if airborne != state.may_be_airborne:
-            self._store.set(may_be_airborne=airborne)
+        if self._rules.airborne.lifted != state.lifted:
+            self._store.set(lifted=self._rules.airborne.lifted)
             self._store.publish()
         return out
 

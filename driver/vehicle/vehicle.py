@@ -36,6 +36,7 @@ from ..params.setter import SET_RETRY
 from ..payload.control import Payload
 from ..logs.control import LogControl
 from ..setup.control import VehicleSetup
+from ..shots.control import ShotControl
 from .api import CEILING, Drone, Limits
 from .commands import CommandSender, Notifier, command_name
 from .missions import MissionControl
@@ -161,7 +162,8 @@ class Vehicle(Drone):
         self._forwarder = Forwarder(cfg.outputs, cfg.baud, self._ticker.forward_to_vehicle,
                                     lambda text: self._store.add_message(Severity.WARNING, text), self._closing)
         self._missions = MissionControl(self)          # transfers, mission state, AUTO (driver.vehicle.missions)
-        self.setup, self.logs = VehicleSetup(self), LogControl(self)     # calibrations, motor test, traffic; logs
+        self.setup, self.logs = VehicleSetup(self), LogControl(self.ports, lambda: self._params.ftp_capable)
+        self.shots = ShotControl(self.ports, self._payload, self._setpoints, cfg, self._parameters.set)   # smart shots
         self._reader = Reader(self)                    # the reader thread: parse, fold, dispatch (built last)
 
     # -- lifecycle ---------------------------------------------------------------------------------
@@ -278,7 +280,7 @@ class Vehicle(Drone):
         return self._busy(name) or self._command_long(command, params, name, guard=guard)
 
     def _command_long(self, command: int, params=(), name: str | None = None, *, guard=None,
-                      retry: float | None = None, early: bool = False) -> Future:
+                      retry: float | None = None, early: bool = False, shows_mode: str | None = None) -> Future:
         name = name or command_name(command)
         params = [float(p) for p in (list(params) + [0.0] * 7)[:7]]
         if not frames.finite(*params):
@@ -289,8 +291,8 @@ class Vehicle(Drone):
             problem = self._rules.command_problem(command, params, self.state(), self.clock())
             if problem:
                 return self._finish(name, CommandStatus.REJECTED, problem)
-            future = self._commands.submit(name, command, params, self.clock(), guard=guard,
-                                           tag=self._sequence.tag, retry=retry, early=early)
+            future = self._commands.submit(name, command, params, self.clock(), guard=guard, tag=self._sequence.tag,
+                                           retry=retry, early=early, shows_mode=COPTER_MODES.get(shows_mode or ""))
         self._wake.set()
         return future
 
@@ -307,6 +309,7 @@ class Vehicle(Drone):
         return None
 
     def set_mode(self, name: str) -> Future:
+        self.shots.end(f"mode {name}")                # driver.shots: the pilot's mode always wins
         busy = self._busy(f"mode {name}")
         if busy:
             return busy
@@ -356,10 +359,12 @@ class Vehicle(Drone):
 
     def land(self) -> Future:
         """LAND, always taken: it ends whatever runs (a takeoff, a mission start, a Stop)."""
+        self.shots.end("Land")                        # driver.shots: Land always wins
         return self._replace_sequence(land_sequence(self._pilot, self.clock()), "landing")
 
     def return_to_launch(self) -> Future:
         """RTL, always taken: it ends whatever runs."""
+        self.shots.end("RTL")                         # driver.shots: RTL always wins
         return self._replace_sequence(return_sequence(self._pilot, self.clock()), "returning home")
 
     def cancel_takeoff(self) -> Future:
@@ -370,6 +375,7 @@ class Vehicle(Drone):
         """Hold position, or end a takeoff that has not lifted anything as if it never ran: the vehicle always ends
         holding (GUIDED at zero velocity, BRAKE if GUIDED is refused) or on the ground disarmed, never in a mode
         that needs a throttle stick (driver.vehicle.sequences.stop)."""
+        self.shots.end("Stop")                        # driver.shots: Stop always wins
         if self._replay is not None:
             return self._finish("stop", CommandStatus.REJECTED, "replaying a recording: no vehicle to command")
         with self._lock:

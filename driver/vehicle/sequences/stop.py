@@ -19,6 +19,7 @@ from concurrent.futures import Future
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
+from ..commands import CommandFuture
 from ..state import CommandStatus, SequencePhase, VehicleState
 from .machine import Machine, Outcome, Pilot
 
@@ -38,7 +39,7 @@ class StopSequence:
 
     def __init__(self, pilot: Pilot, now: float, interrupted=None, airborne: bool = True, armed: bool = True) -> None:
         self.pilot = pilot
-        self.future: Future = Future()
+        self.future: Future = CommandFuture()
         self.answer: Outcome | None = None
         self.phase, self.detail = SequencePhase.IDLE, ""
         self._interrupted = interrupted
