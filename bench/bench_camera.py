@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Camera figures: 1280×720 at 30 frames/s from a file through the viewer, and Ice getImageData at 640×480.
 
-    QT_QPA_PLATFORM=offscreen python bench/bench_camera.py [--seconds 10]
+    QT_QPA_PLATFORM=offscreen python bench/bench_camera.py [--seconds 10] [--write-docs]
 
 Viewer: frames painted per second, decode-to-paint latency (median, 95th percentile)
 and process CPU time per painted frame (capture + decode + colour conversion + paint,
@@ -17,6 +17,7 @@ import subprocess
 import sys
 import tempfile
 import time
+import tables  # bench/tables.py: this script runs from bench/
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, ROOT)
@@ -150,6 +151,7 @@ def main() -> None:
     p = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--seconds", type=float, default=10.0)
     p.add_argument("--serve", nargs=2, type=int, help=argparse.SUPPRESS)
+    tables.add_write_docs(p)
     args = p.parse_args()
     if args.serve:
         serve(*args.serve)
@@ -160,4 +162,5 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    with tables.publishing("camera"):
+        main()

@@ -1,6 +1,6 @@
 """What many observers cost a MAVLinkServer: polling it against subscribing to its IceStorm topic.
 
-    .venv/bin/python bench/bench_fleet.py [--observers 1,10,50] [--seconds 8] [--lookups 300]
+    .venv/bin/python bench/bench_fleet.py [--observers 1,10,50] [--seconds 8] [--lookups 300] [--write-docs]
 
 Starts a lab (Debian's icegridregistry and IceStorm in IceBox, :mod:`driver.ice.lab`) on a free loopback port
 and one server as ``python -m driver --sim --daemon --registry ... --name bench-1`` in its own process (the
@@ -26,6 +26,7 @@ import subprocess
 import sys
 import threading
 import time
+import tables  # bench/tables.py: this script runs from bench/
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, ROOT)
@@ -202,6 +203,7 @@ def main() -> None:
     p.add_argument("--observers", default="1,10,50")
     p.add_argument("--seconds", type=float, default=8.0)
     p.add_argument("--lookups", type=int, default=300)
+    tables.add_write_docs(p)
     opts = p.parse_args()
     counts = [int(n) for n in opts.observers.split(",")]
 
@@ -255,4 +257,5 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    with tables.publishing("fleet"):
+        main()

@@ -2,7 +2,7 @@
 """What showing the fleet costs the map on the UI thread: placing the other vehicles (``fleet_marks``, done at the
 Fleet panel's 4 Hz) and one paint of the map with 0, 3 and 10 other vehicles.
 
-    QT_QPA_PLATFORM=offscreen .venv/bin/python bench/bench_fleet_map.py [--paints 300]
+    QT_QPA_PLATFORM=offscreen .venv/bin/python bench/bench_fleet_map.py [--paints 300] [--write-docs]
 
 Prints microseconds per placement and milliseconds per paint (median of the runs), the paint's extra cost per
 vehicle, and both against the 33 ms of a 30 fps frame.
@@ -14,6 +14,7 @@ import os
 import statistics
 import sys
 import time
+import tables  # bench/tables.py: this script runs from bench/
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, ROOT)
@@ -35,6 +36,7 @@ def fleet(count: int):
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--paints", type=int, default=300, help="paints timed for each fleet size")
+    tables.add_write_docs(ap)
     args = ap.parse_args()
     from PyQt5.QtWidgets import QApplication
     app = QApplication(sys.argv[:1])  # noqa: F841 - the widgets need it
@@ -71,4 +73,5 @@ def main() -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    with tables.publishing("fleet_map"):
+        sys.exit(main())

@@ -3,7 +3,7 @@
 vehicle's ACK (the Future), and to the attitude the vehicle reports within 1° of the target (the state), for
 the gimbal manager (copter-4) and the Solo's MOUNT_CONTROL; and a picture from take_photo to its confirmation.
 
-    python bench/bench_gimbal.py [--rounds 10]
+    python bench/bench_gimbal.py [--rounds 10] [--write-docs]
 
 The recording shows ArduCopter 4.6 reaching a commanded angle within 0.2 s (5 Hz reports); the simulator is
 built to match, so the state figure is mostly the report interval.
@@ -15,6 +15,7 @@ import os
 import statistics
 import sys
 import time
+import tables  # bench/tables.py: this script runs from bench/
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, ROOT)
@@ -52,10 +53,12 @@ def run(profile: str, rounds: int) -> None:
 def main() -> None:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--rounds", type=int, default=10)
+    tables.add_write_docs(p)
     args = p.parse_args()
     for profile in ("copter-4", "solo"):
         run(profile, args.rounds)
 
 
 if __name__ == "__main__":
-    main()
+    with tables.publishing("gimbal"):
+        main()

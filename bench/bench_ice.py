@@ -2,7 +2,7 @@
 """Ice figures: every JdeRobot call beside an empty Ice call, and stick-to-wire latency through Ice, the
 embedded driver, and the window (on-screen stick, gamepad).
 
-    python bench/bench_ice.py [--calls 2000] [--sticks 200] [--no-ice]
+    python bench/bench_ice.py [--calls 2000] [--sticks 200] [--no-ice] [--write-docs]
 
 The server runs as its own process (``python -m driver --camera sim``), connected to a small
 MAVLink probe here that plays a GUIDED, armed vehicle and timestamps every
@@ -39,6 +39,7 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, ROOT)
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink  # noqa: E402
+import tables  # noqa: E402  (bench/tables.py: this script runs from bench/)
 
 
 class WireProbe:
@@ -265,6 +266,7 @@ def main() -> int:
     ap.add_argument("--sticks", type=int, default=200)
     ap.add_argument("--no-ice", action="store_true", help="only the embedded driver and the window")
     ap.add_argument("--serve-floor", action="store_true", help=argparse.SUPPRESS)
+    tables.add_write_docs(ap)
     opts = ap.parse_args()
     if opts.serve_floor:
         return serve_floor()
@@ -379,4 +381,5 @@ def embedded_and_window(sticks: int) -> float:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    with tables.publishing(tables.variant("ice", "--no-ice")):
+        sys.exit(main())

@@ -1,6 +1,6 @@
 """Can Ice clients that flood the server starve the driver's flight threads?
 
-    .venv/bin/python bench/bench_ice_flood.py [--clients 4] [--inflight 4] [--seconds 10] [--pool 2,8]
+    .venv/bin/python bench/bench_ice_flood.py [--clients 4] [--inflight 4] [--seconds 10] [--pool 2,8] [--write-docs]
 
 The simulated vehicle runs in a process of its own (as the autopilot is a machine of its own) and stamps,
 with the system's monotonic clock, every HEARTBEAT and SET_POSITION_TARGET_LOCAL_NED it receives from the
@@ -20,6 +20,7 @@ import statistics
 import sys
 import threading
 import time
+import tables  # bench/tables.py: this script runs from bench/
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, ROOT)
@@ -150,6 +151,7 @@ def main() -> None:
     ap.add_argument("--switch-interval", type=float, help="sys.setswitchinterval for the server's process (s)")
     ap.add_argument("--ice", action="append", default=[], metavar="KEY=VALUE",
                     help="more server properties, e.g. --ice MAVLinkServer.CallRate=200")
+    tables.add_write_docs(ap)
     args = ap.parse_args()
     import Ice  # noqa: F401  (the server's process: import before the driver's threads start)
     if args.switch_interval:
@@ -237,4 +239,5 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    with tables.publishing("ice_flood"):
+        main()

@@ -1,6 +1,6 @@
 """Mission upload over a slow, lossy link: the driver against the protocol floor and a MAVProxy-style uploader.
 
-    .venv/bin/python bench/bench_mission.py [--items 100] [--latency 0.025] [--loss 0,0.3] [--runs 1]
+    .venv/bin/python bench/bench_mission.py [--items 100] [--latency 0.025] [--loss 0,0.3] [--runs 1] [--write-docs]
 
 On the simulated vehicle at real speed (1 ms physics steps, so the link and not the simulator sets the pace),
 with ``--latency`` seconds each way (a telemetry radio's 50 ms round trip by default) and ``--loss`` each way:
@@ -40,6 +40,7 @@ from driver.mission.wire import home_slot, to_wire  # noqa: E402
 from driver.sim import SimConfig, SimVehicle  # noqa: E402
 from driver.vehicle import Vehicle, VehicleConfig  # noqa: E402
 from transfer_matrix import HOME, as_held, held, mission, same  # noqa: E402
+import tables  # noqa: E402  (bench/tables.py: this script runs from bench/)
 
 MAVPROXY_TIMEOUT = 10.0      # s without a request before MAVProxy's wp module gives a load up
 
@@ -130,6 +131,7 @@ def main() -> int:
     ap.add_argument("--latency", type=float, default=0.025, help="s each way")
     ap.add_argument("--loss", default="0,0.3", help="shares lost each way, one run set per value")
     ap.add_argument("--runs", type=int, default=1)
+    tables.add_write_docs(ap)
     args = ap.parse_args()
     wire = args.items + 1
     rtt = 2 * args.latency
@@ -155,4 +157,5 @@ def main() -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    with tables.publishing("mission"):
+        sys.exit(main())

@@ -1,7 +1,7 @@
 """Time to the complete parameter list: clean and at 10 % and 30 % loss each way, against the link's floor.
 
     .venv/bin/python bench/bench_params.py [--links tcp,radio] [--losses 0,0.1,0.3] [--methods list,ftp]
-                                           [--runs 1] [--markdown]
+                                           [--runs 1] [--markdown] [--write-docs]
 
 Each cell starts the simulated ArduCopter (real time; its 1,392 parameters of ArduCopter 4.6.3) and the
 embedded driver, sets the loss on both directions, calls ``fetch_parameters(refresh=True)`` and times it to the
@@ -86,6 +86,7 @@ def main() -> int:
     ap.add_argument("--methods", default="list,ftp")
     ap.add_argument("--runs", type=int, default=1)
     ap.add_argument("--markdown", action="store_true")
+    tables.add_write_docs(ap)
     args = ap.parse_args()
     logging.basicConfig(level=logging.ERROR)
     os.environ.setdefault("XDG_CACHE_HOME", tempfile.mkdtemp(prefix="bench-params-"))
@@ -112,4 +113,5 @@ def main() -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    with tables.publishing("params"):
+        sys.exit(main())

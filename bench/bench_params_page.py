@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """How the Parameters page copes with ArduCopter's 1,392 parameters (the recorded list, real names and types).
 
-    QT_QPA_PLATFORM=offscreen python bench/bench_params_page.py
+    QT_QPA_PLATFORM=offscreen python bench/bench_params_page.py [--write-docs]
 
 With ArduCopter's metadata (the shipped apm.pdef.xml). Prints, in milliseconds of UI-thread time: the list arriving in 28 steps of ~50 (as a download grows it, each
 step a new ParameterTable), one value changing (the echo of a write), each keystroke of a search
@@ -9,10 +9,12 @@ step a new ParameterTable), one value changing (the echo of a write), each keyst
 """
 from __future__ import annotations
 
+import argparse
 import os
 import statistics
 import sys
 import time
+import tables  # bench/tables.py: this script runs from bench/
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, ROOT)
@@ -40,6 +42,9 @@ def ms(f) -> float:
 
 
 def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    tables.add_write_docs(parser)
+    parser.parse_args()
     from dataclasses import replace
     import types
 
@@ -50,7 +55,7 @@ def main() -> None:
     from uavviewer.params.page import ParametersPage
     from uavviewer.params.table_model import ParameterModel
 
-    app = QApplication(sys.argv)
+    app = QApplication(sys.argv[:1])
     app.setStyleSheet(load_style())
     from driver.params.metadata import load_metadata
     params = recorded_parameters()
@@ -89,4 +94,5 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    with tables.publishing("params_page"):
+        main()

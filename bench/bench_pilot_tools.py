@@ -1,6 +1,6 @@
 """What the pilot's tools cost and whether switching connections ever stalls the window.
 
-    .venv/bin/python bench/bench_pilot_tools.py [--switches 6]
+    .venv/bin/python bench/bench_pilot_tools.py [--switches 6] [--write-docs]
 
 Runs the real window (offscreen) on the embedded driver and two simulated vehicles. A 10 ms timer measures how
 late the UI thread answers while File › Connect switches back and forth between them (each switch opens the new
@@ -22,12 +22,14 @@ os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
 
 from PyQt5.QtCore import QSettings, QTimer  # noqa: E402
 from PyQt5.QtWidgets import QApplication  # noqa: E402
+import tables  # noqa: E402  (bench/tables.py: this script runs from bench/)
 
 
 def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--switches", type=int, default=6)
     parser.add_argument("--mute", action="store_true", help="no spoken alerts (to see what speech costs)")
+    tables.add_write_docs(parser)
     args = parser.parse_args()
     import tempfile
 
@@ -133,4 +135,5 @@ def main() -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    with tables.publishing(tables.variant("pilot_tools", "--mute")):
+        sys.exit(main())

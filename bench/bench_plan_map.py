@@ -3,7 +3,7 @@
 200-waypoint one, and a 20-waypoint mission with a 1 ha survey at 30 m (the Solo's GoPro) and a fence; and the
 survey generator's time for that survey and for a 25 ha one.
 
-    QT_QPA_PLATFORM=offscreen .venv/bin/python bench/bench_plan_map.py [--paints 300]
+    QT_QPA_PLATFORM=offscreen .venv/bin/python bench/bench_plan_map.py [--paints 300] [--write-docs]
 
 Prints milliseconds per paint (median of five runs), the plan's extra cost, and both against the 33 ms of a
 30 fps frame; the survey's passes, items and milliseconds to generate.
@@ -16,6 +16,7 @@ import os
 import statistics
 import sys
 import time
+import tables  # bench/tables.py: this script runs from bench/
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, ROOT)
@@ -55,6 +56,7 @@ def timed_paints(view, paints: int) -> float:
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--paints", type=int, default=300, help="paints timed for each plan")
+    tables.add_write_docs(ap)
     args = ap.parse_args()
     from PyQt5.QtWidgets import QApplication
     app = QApplication(sys.argv[:1])  # noqa: F841 - the widgets need it
@@ -100,4 +102,5 @@ def main() -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    with tables.publishing("plan_map"):
+        sys.exit(main())

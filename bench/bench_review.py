@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Review figures (issue 31): a large DataFlash .BIN opened to its tree, and one field plotted.
 
-    QT_QPA_PLATFORM=offscreen python bench/bench_review.py [--mb 100] [--keep FILE]
+    QT_QPA_PLATFORM=offscreen python bench/bench_review.py [--mb 100] [--keep FILE] [--write-docs]
 
 The log is made here with driver.review.writer (FMT + records in ArduCopter's layouts: ATT, CTUN, BAT, VIBE, GPS,
 MODE, EV, ERR, MSG, PARM), grown to the size asked. Printed: its size and records, the time to open it to its tree
@@ -17,6 +17,7 @@ import os
 import sys
 import tempfile
 import time
+import tables  # bench/tables.py: this script runs from bench/
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, ROOT)
@@ -37,6 +38,7 @@ def main() -> None:
     ap.add_argument("--mb", type=float, default=100.0)
     ap.add_argument("--keep", default="")
     ap.add_argument("--dfreader-mb", type=float, default=30.0)
+    tables.add_write_docs(ap)
     args = ap.parse_args()
     path = args.keep or os.path.join(tempfile.mkdtemp(), "large.BIN")
     if not os.path.exists(path):
@@ -99,4 +101,5 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    with tables.publishing("review"):
+        main()

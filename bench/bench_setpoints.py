@@ -1,6 +1,6 @@
 """The velocity stream as the vehicle receives it: rate, jitter, and the deadman's reaction.
 
-    .venv/bin/python bench/bench_setpoints.py [--seconds 5]
+    .venv/bin/python bench/bench_setpoints.py [--seconds 5] [--write-docs]
 
 Flies the simulated vehicle (real time, TCP) with the embedded driver, holds a stick the way the viewer
 does (a set_velocity call every 100 ms), and reads the SET_POSITION_TARGET_LOCAL_NED arrival times the
@@ -19,11 +19,13 @@ sys.path.insert(0, os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 
 from driver.sim import SimConfig, SimVehicle  # noqa: E402
 from driver.vehicle import Vehicle, VehicleConfig  # noqa: E402
+import tables  # noqa: E402  (bench/tables.py: this script runs from bench/)
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--seconds", type=float, default=5.0)
+    tables.add_write_docs(ap)
     args = ap.parse_args()
     sim = SimVehicle(SimConfig(tcp_port=0, speedup=1.0, ready_after=1.0, rate_hz=1000))
     sim.start()
@@ -64,4 +66,5 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    with tables.publishing("setpoints"):
+        main()

@@ -2,7 +2,7 @@
 """Setup figures on the simulated ArduCopter at its real pace (speedup 1): the time from Start to the vehicle's
 verdict for each calibration, and how soon the motor test's first output change reaches the driver.
 
-    python bench/bench_setup.py [--repeat 10] [--speedup 1]
+    python bench/bench_setup.py [--repeat 10] [--speedup 1] [--write-docs]
 
 Calibrations: gyro, barometer, level (one COMMAND_LONG each, the verdict is the final COMMAND_ACK), the six-position
 accelerometer calibration on the calibration model (each position confirmed as soon as it is asked), the onboard
@@ -24,6 +24,7 @@ sys.path.insert(0, ROOT)
 from driver.setup.model import AccelStep  # noqa: E402
 from driver.sim import SimConfig, SimVehicle  # noqa: E402
 from driver.vehicle import Vehicle, VehicleConfig  # noqa: E402
+import tables  # noqa: E402  (bench/tables.py: this script runs from bench/)
 
 T = 120.0
 
@@ -51,6 +52,7 @@ def main() -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--repeat", type=int, default=10, help="motor tests to time")
     parser.add_argument("--speedup", type=float, default=1.0)
+    tables.add_write_docs(parser)
     args = parser.parse_args()
     sim = SimVehicle(SimConfig(tcp_port=0, speedup=args.speedup, ready_after=5.0, seed=1,
                                calibration_model=True)).start()
@@ -94,4 +96,5 @@ def main() -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    with tables.publishing("setup"):
+        sys.exit(main())

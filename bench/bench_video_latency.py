@@ -2,7 +2,7 @@
 """Glass-to-glass video latency: a real H.264 sender on 127.0.0.1, the viewer's own capture and paint path.
 
     python bench/bench_video_latency.py [--seconds 20] [--transports rtp,mpegts,rtsp] [--no-low-latency]
-                                        [--markdown]
+                                        [--markdown] [--write-docs]
 
 The sender is ``ffmpeg`` (Debian's; installed here with apt-get when missing, with ``rtsp-server-perl`` for
 RTSP) encoding a 1280×720 30 fps test picture as a drone does (libx264 baseline, ``-tune zerolatency``, no
@@ -41,6 +41,7 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, ROOT)
 
 import numpy as np  # noqa: E402
+import tables  # noqa: E402  (bench/tables.py: this script runs from bench/)
 
 WIDTH, HEIGHT, FPS = 1280, 720, 30
 BITS = 16
@@ -338,6 +339,7 @@ def main() -> int:
     ap.add_argument("--no-low-latency", action="store_true", help="open without the low-latency capture options")
     ap.add_argument("--markdown", action="store_true", help="print a Markdown table")
     ap.add_argument("--viewer", metavar="URI", help=argparse.SUPPRESS)
+    tables.add_write_docs(ap)
     opts = ap.parse_args()
     if opts.viewer:
         return run_viewer(opts.viewer, opts.warmup, opts.seconds, not opts.no_low_latency)
@@ -359,7 +361,7 @@ def main() -> int:
               f"  shown {r['shown']}/{r['sent']}  out of order {r['out_of_order']}  unreadable {r['unreadable']}"
               f"  trend {r['trend']:+.0f} ms  viewer CPU {r['cpu']:.0f} %  (glass to decoded p50 {r['to_decoded']:.0f} ms)",
               flush=True)
-    if opts.markdown and rows:
+    if tables.markdown(opts.markdown) and rows:
         print("\n| transport | p50 ms | p95 ms | max ms | shown / sent | out of order | trend ms | viewer CPU |")
         print("|---|---|---|---|---|---|---|---|")
         for r in rows:
@@ -369,4 +371,5 @@ def main() -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    with tables.publishing(tables.variant("video_latency", "--no-low-latency", "--transports")):
+        sys.exit(main())

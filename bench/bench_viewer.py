@@ -1,7 +1,8 @@
 """How instant the window stays while flying, and what the viewer costs: UI lateness, redraws, CPU.
 
     .venv/bin/python bench/bench_viewer.py [--seconds 30] [--no-camera] [--gamepad] [--dock map|plots] [--tiles]
-    xvfb-run -s "-screen 0 1600x1000x24" .venv/bin/python bench/bench_viewer.py --cpu [--seconds 30]
+                                           [--write-docs]
+    xvfb-run -s "-screen 0 1600x1000x24" .venv/bin/python bench/bench_viewer.py --cpu [--seconds 30] [--write-docs]
 
 Runs the real window (offscreen unless a display is set) on the embedded driver and the simulated vehicle,
 takes off, and holds both sticks as a pilot would, with the simulated camera playing (unless --no-camera).
@@ -43,6 +44,7 @@ from PyQt5.QtWidgets import QApplication  # noqa: E402
 from driver.sim import SimConfig, SimVehicle  # noqa: E402
 from driver.vehicle import Vehicle, VehicleConfig  # noqa: E402
 from uavviewer.main_window import MainWindow, load_style  # noqa: E402
+import tables  # noqa: E402  (bench/tables.py: this script runs from bench/)
 
 FRAME_MS = 1000.0 / 30.0
 
@@ -144,7 +146,7 @@ def cpu_case(case: str, port: int, seconds: float, uri: str, dock: str) -> None:
         s = drone.state()
         if phase[0] == "takeoff" and s.readiness.ready_to_arm:
             phase[0] = "climbing"
-            w.adapter.command("takeoff", 3.0)
+            w.adapter.send(w.adapter.drone.takeoff, 3.0)
         if s.can_fly_velocity:
             w.rightStick.hold(0.3, 0.8)
             w.leftStick.hold(0.4, 0.1)
@@ -191,6 +193,7 @@ def main() -> None:
     ap.add_argument("--cpu-case", choices=CASES, help=argparse.SUPPRESS)
     ap.add_argument("--port", type=int, help=argparse.SUPPRESS)
     ap.add_argument("--uri", default="", help=argparse.SUPPRESS)
+    tables.add_write_docs(ap)
     args = ap.parse_args()
     if args.cpu:
         return cpu_main(args.seconds, args.dock)
@@ -274,7 +277,7 @@ def main() -> None:
         s = w.adapter.state
         if s.readiness.ready_to_arm and not started[0]:
             started[0] = True
-            w.adapter.command("takeoff", 3.0)
+            w.adapter.send(w.adapter.drone.takeoff, 3.0)
         if s.can_fly_velocity:
             if not flying_since:
                 flying_since.append(time.monotonic())
@@ -326,4 +329,5 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    with tables.publishing(tables.variant("viewer", "--cpu", "--gamepad", "--tiles", "--dock", "--no-camera")):
+        main()

@@ -238,6 +238,7 @@ def main() -> int:
     ap.add_argument("--rows", default="flights,transfers,params,logs",
                     help="flights (takeoff, forward, stop, land), transfers (bench/transfer_matrix.py), params "
                          "(bench/param_cells.py) and/or logs (bench/log_cells.py)")
+    tables.add_write_docs(ap)
     args = ap.parse_args()
     logging.basicConfig(level=logging.ERROR)        # the table says what happened
     rows = args.rows.split(",")
@@ -308,4 +309,5 @@ def run_logs(profiles, faults, speedup: float, markdown: bool) -> list:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    with tables.publishing(tables.variant("fault_matrix", "--rows", "--profiles", "--faults")):
+        sys.exit(main())

@@ -1,6 +1,6 @@
 """Hostile inputs against a protected link: how many of each kind were tried, and whether any changed anything.
 
-    .venv/bin/python bench/hostile.py [--tries 50] [--speedup 4] [--markdown]
+    .venv/bin/python bench/hostile.py [--tries 50] [--speedup 4] [--markdown] [--write-docs]
 
 The simulated ArduCopter holds a signing key (ArduPilot's rules, driver/sim/signing.py) and pushes its
 telemetry over UDP to the embedded driver, which listens with ``udpin`` pinned to it and signs with the key.
@@ -222,14 +222,16 @@ def run(tries: int = 50, speedup: float = 4.0) -> list[Row]:
 
 
 def main(argv=None) -> int:
+    import tables          # here, not at the top: the tests import this file as bench.hostile, bench/ not on the path
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--tries", type=int, default=50)
     p.add_argument("--speedup", type=float, default=4.0)
     p.add_argument("--markdown", action="store_true")
+    tables.add_write_docs(p)
     opts = p.parse_args(argv)
     logging.basicConfig(level=logging.ERROR)
     rows = run(opts.tries, opts.speedup)
-    if opts.markdown:
+    if tables.markdown(opts.markdown):
         print("| hostile input | tried | dropped | counted by | changed |\n|---|---|---|---|---|")
         for r in rows:
             print(f"| {r.kind} | {r.tried} | {r.dropped} | {r.where} | {', '.join(r.changed) or 'nothing'} |")
@@ -244,4 +246,6 @@ def main(argv=None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    import tables
+    with tables.publishing("hostile"):
+        sys.exit(main())

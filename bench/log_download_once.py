@@ -1,5 +1,5 @@
 """One DataFlash log downloaded by the driver from any vehicle, timed, and compared with a file if given: the
-driver's side of the comparison with MAVProxy on ArduPilot's SITL in the README (Flight logs).
+driver's side of the comparison with MAVProxy on ArduPilot's SITL in docs/flight-logs.md.
 
     .venv/bin/python bench/log_download_once.py tcp:127.0.0.1:5820 [--id 1] [--out FILE] [--compare SITL/logs/00000001.BIN]
                                                 [--via auto|log_data|ftp] [--loss 0.3 [--seed 1]]

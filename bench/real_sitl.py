@@ -1,11 +1,11 @@
 """Check against real firmware: the driver's every answer judged against a real ArduCopter 4.6.3 SITL.
 
     .venv/bin/python bench/real_sitl.py --sitl /work/sitl/ardupilot/build/sitl/bin/arducopter [--loss 0.3]
-                                        [--instance 0] [--seed 1] [--blackout 0] [--markdown] [--keep]
+                                        [--instance 0] [--seed 1] [--blackout 0] [--markdown] [--keep] [--write-docs]
     .venv/bin/python bench/real_sitl.py --connect [--instance 0] ...        # a SITL already running
 
 A bench, not a test: it needs ArduPilot's SITL binary, which CI cannot build (docs: /work/shared/reference/sitl.md
-or the README's "Check against real firmware"). With ``--sitl`` it starts the SITL itself, wiped (``-w``), in a
+or docs/real-sitl.md). With ``--sitl`` it starts the SITL itself, wiped (``-w``), in a
 scratch folder, kept on 127.0.0.1 by an LD_PRELOAD shim (``--shim``), and kills it by its PID on any exit.
 
 The driver (``Vehicle``, the viewer's own, through its public API only) reaches the vehicle's SERIAL0 through
@@ -60,7 +60,7 @@ from driver.core.frames import offset_latlon  # noqa: E402
 from driver.mission.plan import MissionItem, MissionRunState, Plan, PlanKind  # noqa: E402
 
 HOME = (-35.363261, 149.165230, 584.0, 353.0)           # ArduPilot's CMAC, as in sitl.md and the recordings
-#: The loopback shim: bench/bind_loopback.c built next to it (the README's gcc line), or $UAV_BIND_SHIM.
+#: The loopback shim: bench/bind_loopback.c built next to it (docs/real-sitl.md's gcc line), or $UAV_BIND_SHIM.
 SHIM = os.environ.get("UAV_BIND_SHIM") or os.path.join(os.path.dirname(os.path.abspath(__file__)), "bind_loopback.so")
 MISSION_ITEMS = 40
 #: (name, value): a float, an int32, two int16, an int8; none of them their default, all harmless to the flight
@@ -483,6 +483,7 @@ def main() -> int:
     ap.add_argument("--defaults", help="the SITL's defaults (Tools/autotest/default_params/copter.parm)")
     ap.add_argument("--markdown", action="store_true")
     ap.add_argument("--keep", action="store_true", help="keep the scratch folder (SITL log, driver tlogs)")
+    tables.add_write_docs(ap)
     args = ap.parse_args()
     logging.basicConfig(level=logging.ERROR)
 
@@ -522,7 +523,7 @@ def main() -> int:
             bench.add(Row("bench", f"stopped: {type(exc).__name__}: {exc}", "-", verdict="-"))
         if sitl and not sitl.alive():
             bench.add(Row("SITL", "-", f"exited early: {sitl.tail(3)}", verdict="-"))
-        print(report(bench.rows, relay, args, args.markdown))
+        print(report(bench.rows, relay, args, tables.markdown(args.markdown)))
         print(f"(whole run {time.monotonic() - started:.0f} s)")
         return 1 if any(r.verdict == "wrong" for r in bench.rows) else 0
     finally:
@@ -540,4 +541,5 @@ def main() -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    with tables.publishing(tables.variant("real_sitl", "--loss", "--blackout", "--sim", "--connect")):
+        sys.exit(main())

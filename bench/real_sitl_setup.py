@@ -1,7 +1,7 @@
 """The Setup procedures against ArduCopter's own firmware (issue 32): a real SITL on ArduPilot's ``calibration``
 model, whose airframe is turned by servo outputs 5-8 (SIM_Calibration.cpp), the way the calib recording was made.
 
-    .venv/bin/python bench/real_sitl_setup.py --sitl PATH/TO/arducopter [--instance 4]
+    .venv/bin/python bench/real_sitl_setup.py --sitl PATH/TO/arducopter [--instance 4] [--write-docs]
     .venv/bin/python bench/real_sitl_setup.py --connect --instance N    # a SITL already running, calibration model
 
 The driver (``Vehicle`` on SERIAL0, through the same ``vehicle.setup`` API the Setup pages use) runs: gyro, barometer
@@ -26,6 +26,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink  # noqa: E402
 from driver.vehicle import Vehicle, VehicleConfig  # noqa: E402
 from real_sitl import SHIM, Sitl  # noqa: E402
 from sitl_judge import Judge  # noqa: E402
+import tables  # noqa: E402
 
 # the airframe's pose for each position ArduPilot asks (ACCELCAL_VEHICLE_POS 1..6): servo 6 roll, servo 7 pitch
 # (1000..2000 = -180..180 degrees), as the calib recording turned it
@@ -125,6 +126,7 @@ def main() -> None:
     p.add_argument("--sitl", help="the arducopter binary (started here on the calibration model, wiped)")
     p.add_argument("--connect", action="store_true", help="use a SITL already running for --instance")
     p.add_argument("--instance", type=int, default=4)
+    tables.add_write_docs(p)
     args = p.parse_args()
     port0, port1 = 5760 + 10 * args.instance, 5762 + 10 * args.instance
     sitl = None
@@ -142,4 +144,5 @@ def main() -> None:
 
 
 if __name__ == "__main__":
-    main()
+    with tables.publishing("real_sitl_setup"):
+        main()

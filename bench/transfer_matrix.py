@@ -1,5 +1,6 @@
 """The fault matrix's transfer rows: upload and download of a 50-item mission and of a fence, per firmware profile
-and link fault (bench/fault_matrix.py runs them after the flights; alone: python bench/transfer_matrix.py).
+and link fault (bench/fault_matrix.py runs them after the flights; alone: python bench/transfer_matrix.py
+[--markdown] [--write-docs]).
 
 Every answer the driver gives is checked against what the simulated vehicle holds at that moment:
 
@@ -186,6 +187,7 @@ def main() -> int:
     ap.add_argument("--profiles", default=",".join(PROFILES))
     ap.add_argument("--faults", default=",".join(FAULTS))
     ap.add_argument("--markdown", action="store_true")
+    tables.add_write_docs(ap)
     args = ap.parse_args()
     logging.basicConfig(level=logging.ERROR)
     cells = run_transfers(args.profiles.split(","), args.faults.split(","), args.speedup, FAULTS)
@@ -211,5 +213,6 @@ def run_transfers(profiles, faults_names, speedup: float, faults: dict) -> list[
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    with tables.publishing("transfer_matrix"):
+        sys.exit(main())
 

@@ -12,6 +12,9 @@ os.environ.setdefault("QT_QPA_PLATFORM", "offscreen")
 from driver.sim import SimConfig, SimVehicle  # noqa: E402
 from driver.sim.replay import ReplayVehicle  # noqa: E402
 from driver.vehicle import Vehicle, VehicleConfig  # noqa: E402
+from patience import patient_waits, stretch_qtbot_waits  # noqa: E402
+
+stretch_qtbot_waits()
 
 #: Simulated seconds per real second in tests: fast, yet slow enough for 20 Hz setpoints to matter.
 SPEEDUP = 4.0
@@ -84,7 +87,7 @@ def vehicle_factory(tmp_path):
         opts = dict(connection=connection, tlog_path=str(tmp_path / f"flight{len(vehicles)}.tlog"),
                     command_timeout=1.0, param_retry=DRIVER_PARAM_RETRY)
         opts.update(overrides)
-        v = Vehicle(VehicleConfig(**opts)).start()
+        v = patient_waits(Vehicle(VehicleConfig(**opts)).start())
         vehicles.append(v)
         return v
 

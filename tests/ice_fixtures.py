@@ -14,6 +14,7 @@ import pytest
 from driver.ice import load_slice
 from driver.ice.client import IceDrone, viewer_properties
 from driver.ice.server import IceServer, default_properties
+from patience import patient, patient_waits
 
 jderobot, mavlinkserver = load_slice()
 
@@ -47,8 +48,9 @@ def free_port() -> int:
 
 
 def eventually(condition, timeout: float, interval: float = 0.05):
-    """Poll ``condition()`` until it returns something truthy; that value, or None at the deadline."""
-    deadline = time.monotonic() + timeout
+    """Poll ``condition()`` until it returns something truthy; that value, or None at the deadline (``timeout``
+    stretched by PATIENCE: tests/patience.py)."""
+    deadline = time.monotonic() + patient(timeout)
     while True:
         value = condition()
         if value:
@@ -111,7 +113,7 @@ def drone_factory():
         if server is not None:
             for key, value in server.client_properties().items():
                 props.setProperty(key, value)
-        drone = IceDrone(props, **kwargs).start()
+        drone = patient_waits(IceDrone(props, **kwargs).start())
         drones.append(drone)
         return drone
 

@@ -4,11 +4,7 @@ from __future__ import annotations
 
 import re
 
-import pytest
-
-from driver.vehicle import Vehicle, VehicleConfig
-
-from recordings import GIMBAL  # noqa: E402
+from recordings import GIMBAL, played  # noqa: E402
 from test_driver_recordings import not_finite
 
 
@@ -23,22 +19,14 @@ def test_gimbal_recording_through_the_telemetry_path():
     timeline = recorded_attitudes()
     assert timeline[0] == (-90.0, -0.0, 44) and timeline[-1] == (0.0, 0.0, 45)
     assert (-90.0, 180.0, 44) in timeline            # Euler angles' gimbal lock, straight down
-    replay = Vehicle(VehicleConfig(connection=GIMBAL + ".tlog", replay_speed=16, tlog_path=None))
     seen: list[tuple[float, float | None, bool]] = []
-
-    def watch(s) -> bool:                             # every snapshot the pilot could have seen
+    final = None
+    for _t, _vehicle, s in played(GIMBAL + ".tlog"):     # every snapshot the pilot could have seen
         g = s.gimbal
+        assert g.known or g.pitch_deg is None                              # unknown until the vehicle says
         if g.known and (not seen or seen[-1] != (g.pitch_deg, g.yaw_deg, g.retracted)):
             seen.append((g.pitch_deg, g.yaw_deg, g.retracted))
-        return replay.replay.finished and bool(seen) and seen[-1][2] is True
-
-    try:
-        assert replay.state().gimbal.pitch_deg is None                 # unknown until the vehicle says
-        replay.start()
-        s = replay.wait_for(watch, 30)
-        assert s is not None, (replay.state().gimbal, seen[-5:])
-    finally:
-        replay.close()
+        final = s
     pitches = [p for p, _, _ in seen]
     # every plateau of the timeline, in order: RC -90, DO_MOUNT_CONTROL -45, the manager's -90, the rate up,
     # level, back to RC's -90 after DO_SET_ROI_NONE, retracted at 0
@@ -53,7 +41,7 @@ def test_gimbal_recording_through_the_telemetry_path():
     assert all(yaw is None or abs(yaw) < 7.5 for _, yaw, _ in seen), seen
     assert any(yaw is not None and abs(yaw - 6.9) < 0.1 for _, yaw, _ in seen), seen
     assert [r for _, _, r in seen].count(True) >= 1 and seen[-1] == (0.0, 0.0, True)
-    final = replay.state()
+    assert final is not None
     assert final.gimbal.source == "GIMBAL_DEVICE_ATTITUDE_STATUS" and final.gimbal.component == 1
     assert list(not_finite(final)) == []                              # NaN angular velocities stayed out
     assert final.camera.photos == 0          # DO_DIGICAM_CONTROL was ACCEPTED, but no camera said a thing

@@ -10,6 +10,7 @@ from PyQt5.QtCore import Qt
 from driver.mission.plan import Plan, PlanKind
 from driver.vehicle.rules import unattended
 from driver.vehicle.state import LinkStatus
+from driver.sim.clock import ManualClock
 from recordings import FLIGHT
 from uavviewer.alerts.model import AlertKind
 from uavviewer.connect.choice import Choice, Kind, parse_key, sim_name
@@ -243,6 +244,8 @@ def test_a_dead_address_keeps_the_flying_vehicle_flown_and_ends_in_a_clear_error
     w = connecting(flying)
     qtbot.waitUntil(lambda: w.adapter.state.flying and w.adapter.state.gcs_failsafe is not None, timeout=10000)
     w.connections.answer_timeout = 2.0                  # ANSWER_TIMEOUT (15 s), shortened for the test
+    clock = ManualClock()                               # and counted on the test's clock: it runs out when the
+    w.connections.clock = clock.now                     # test has flown beside it, however slow the machine
     failures = []
     w.connections.failed.connect(failures.append)
     dead = _dead_tcp_address()
@@ -258,6 +261,7 @@ def test_a_dead_address_keeps_the_flying_vehicle_flown_and_ends_in_a_clear_error
     qtbot.waitUntil(lambda: sim.truth().mode == "LOITER", timeout=10000)
     assert w.connections.busy and w.adapter.drone is flying
 
+    clock.advance(2.1)
     qtbot.waitUntil(lambda: bool(failures), timeout=20000)                 # a clear error after the stated time
     assert dead in failures[0] and "no heartbeat in 2 s" in failures[0] and "still connected to" in failures[0]
     assert w.adapter.drone is flying and w.connections.current.drone is flying and not w.connections.busy

@@ -14,13 +14,16 @@ from driver.__main__ import parser
 from driver.ice.server import DEFAULT_PORTS
 
 from ice_fixtures import eventually, free_port
+from patience import patient
 from test_ice_console import Output
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 
 def run(module: str, *args: str, cwd, timeout: float = 30) -> subprocess.CompletedProcess:
-    """The program in a scratch directory (a log it might write stays there); killed if it outlives timeout."""
+    """The program in a scratch directory (a log it might write stays there); killed if it outlives ``timeout``
+    stretched by PATIENCE (a program started on a loaded machine takes seconds to import)."""
+    timeout = patient(timeout)
     proc = subprocess.Popen([sys.executable, "-m", module, *args], cwd=cwd, stdin=subprocess.DEVNULL,
                             stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                             env={**os.environ, "PYTHONPATH": ROOT})
@@ -31,6 +34,19 @@ def run(module: str, *args: str, cwd, timeout: float = 30) -> subprocess.Complet
         out, err = proc.communicate()
         pytest.fail(f"still running after {timeout} s:\n{out}\n{err}")
     return subprocess.CompletedProcess(proc.args, proc.returncode, out, err)
+
+
+def run_here(main, args, cwd, capsys, monkeypatch) -> subprocess.CompletedProcess:
+    """The program's ``main(args)`` in this process, for the cases that end before anything starts: what a fresh
+    process would print and exit with, without its second of start-up (a traceback fails the test). The first
+    case of each list runs as a fresh user runs it, in a process of its own."""
+    monkeypatch.chdir(cwd)
+    try:
+        code = main(list(args))
+    except SystemExit as exc:
+        code = exc.code
+    out, err = capsys.readouterr()
+    return subprocess.CompletedProcess(args, code, out, err)
 
 
 @pytest.mark.parametrize("args, reason", [
@@ -54,14 +70,18 @@ def run(module: str, *args: str, cwd, timeout: float = 30) -> subprocess.Complet
     (["--sim", "--count", "2"], "--count needs --registry (the vehicles are told apart by name: "
      "python -m driver registry)"),
 ])
-def test_bad_options_are_one_usage_error(args, reason, tmp_path):
+def test_bad_options_are_one_usage_error(args, reason, tmp_path, capsys, monkeypatch):
     if "OPEN" in args:                                    # a key file every user of the machine can read
         key = tmp_path / "open.key"
         key.write_text("a passphrase\n")
         os.chmod(key, 0o644)
         args = [str(key) if a == "OPEN" else a for a in args]
         reason = reason.replace("OPEN", str(key))
-    done = run("driver", *args, "--daemon", cwd=tmp_path)
+    if reason.startswith("argument --sim-speedup"):
+        done = run("driver", *args, "--daemon", cwd=tmp_path)
+    else:
+        from driver.__main__ import main
+        done = run_here(main, [*args, "--daemon"], tmp_path, capsys, monkeypatch)
     assert done.returncode == 2, done.stderr
     assert "Traceback" not in done.stderr and "exception ::Ice" not in done.stderr, done.stderr
     assert done.stderr.splitlines()[-1] == f"python -m driver: error: {reason}", done.stderr
@@ -72,8 +92,12 @@ def test_bad_options_are_one_usage_error(args, reason, tmp_path):
     (["--ready-after", "-2"], "argument --ready-after: '-2': zero or a positive number is needed"),
     (["--tcp", "127.0.0.1:99999"], "argument --tcp: '127.0.0.1:99999': the port must be a number from 0 to 65535"),
 ])
-def test_simulator_bad_options_are_one_usage_error(args, reason, tmp_path):
-    done = run("driver.sim", *args, cwd=tmp_path)
+def test_simulator_bad_options_are_one_usage_error(args, reason, tmp_path, capsys, monkeypatch):
+    if args[0] == "--speedup":
+        done = run("driver.sim", *args, cwd=tmp_path)
+    else:
+        from driver.sim.__main__ import main
+        done = run_here(main, args, tmp_path, capsys, monkeypatch)
     assert done.returncode == 2 and "Traceback" not in done.stderr, done.stderr
     assert done.stderr.splitlines()[-1] == f"python -m driver.sim: error: {reason}", done.stderr
 
@@ -116,7 +140,7 @@ def test_sigterm_stops_the_interactive_server_cleanly(tmp_path):
         assert eventually(lambda: output.line("serving Vehicle") or proc.poll() is not None, 30), output
         assert proc.poll() is None, output
         proc.send_signal(signal.SIGTERM)                 # stdin stays open: the console is waiting in input()
-        proc.wait(timeout=20)
+        proc.wait(timeout=patient(20))
     finally:
         if proc.poll() is None:
             proc.kill()

@@ -156,14 +156,17 @@ def test_tlog_reads_back_with_pymavlink_and_replays(flying, sim, vehicle_factory
     path = flying.config.tlog_path
     flying.close()
     log = mavutil.mavlink_connection(path)
-    types, stamps = {}, []
+    types, stamps, ours = {}, [], []
     while (m := log.recv_match()) is not None:
         types[m.get_type()] = types.get(m.get_type(), 0) + 1
         stamps.append(m._timestamp)
+        if m.get_srcSystem() == 255 and m.get_type() == "COMMAND_LONG":
+            ours.append((m.command, round(m.param2)))
     assert "BAD_DATA" not in types, types
     assert stamps == sorted(stamps)
     assert types.get("HEARTBEAT", 0) > 5 and types.get("ATTITUDE", 0) > 5 and types.get("COMMAND_ACK", 0) > 2
-    assert types.get("SET_POSITION_TARGET_LOCAL_NED", 0) > 0 or types.get("COMMAND_LONG", 0) > 0
+    # both ways: the flight's own commands as they went out (takeoff, then LAND), not only what came in
+    assert (mavlink.MAV_CMD_NAV_TAKEOFF, 0) in ours and (mavlink.MAV_CMD_DO_SET_MODE, 9) in ours, ours
     dump = subprocess.run([sys.executable, "-m", "pymavlink.tools.mavlogdump", "--types", "HEARTBEAT", path],
                           capture_output=True, text=True, timeout=60)
     assert dump.returncode == 0 and dump.stdout.count("HEARTBEAT") > 5

@@ -2,12 +2,16 @@
 shows the report; a log without camera events says why."""
 from __future__ import annotations
 
+import threading
+
 import pytest
 from PyQt5.QtCore import Qt
 
 from driver.review import open_log
-from driver.review.geotag import GeotagReport
+from driver.review.geotag import GeotagReport, geotag
+from patience import patient
 from test_geotag import CAMERA_AHEAD, assert_tagged, cam_rows, shoot, write_log
+from uavviewer.review import geotag_dialog
 from uavviewer.review.view import ReviewWindow
 
 
@@ -19,7 +23,16 @@ def review(qtbot, path) -> ReviewWindow:
     return view
 
 
-def test_geotag_from_the_review_view(qtbot, tmp_path):
+def test_geotag_from_the_review_view(qtbot, tmp_path, monkeypatch):
+    # the real geotag, held on its worker until the window has been looked at: on a loaded machine it was done
+    # before the click returned, and the button was already back
+    release = threading.Event()
+
+    def held(*args, **kwargs):
+        release.wait(patient(30))
+        return geotag(*args, **kwargs)
+
+    monkeypatch.setattr(geotag_dialog, "geotag", held)
     rows = cam_rows(5)
     view = review(qtbot, write_log(tmp_path, rows))
     photos = tmp_path / "photos"
@@ -33,6 +46,7 @@ def test_geotag_from_the_review_view(qtbot, tmp_path):
     with qtbot.waitSignal(dialog.finished_run, timeout=30_000) as done:
         qtbot.mouseClick(dialog.run_button, Qt.LeftButton)
         assert not dialog.run_button.isEnabled()          # the run is on the worker: the window is not held
+        release.set()
     report = done.args[0]
     assert isinstance(report, GeotagReport) and len(report.tagged) == 4
     assert dialog.run_button.isEnabled()

@@ -101,21 +101,20 @@ def test_a_circle_the_vehicle_took_is_drawn_from_the_ui_thread(qtbot):
     from PyQt5.QtCore import QThread
     from PyQt5.QtWidgets import QWidget
 
-    from driver.vehicle.state import CommandResult, CommandStatus, VehicleState
+    from driver.vehicle import Vehicle, VehicleConfig
+    from driver.vehicle.state import CommandResult, CommandStatus
+    from uavviewer.drone_adapter import DroneAdapter
     from uavviewer.flight.guided import GuidedController
 
     future = Future()
+    vehicle = Vehicle(VehicleConfig())                   # never started: its circle is the one answered below
 
-    class Adapter:
-        state = VehicleState()
-        replay = None
-
-        def command(self, *args):
-            return future
-
+    def circle(north: float, east: float, radius: float) -> Future:
+        return future
+    vehicle.circle = circle
     parent = QWidget()
     qtbot.addWidget(parent)
-    guided = GuidedController(Adapter(), parent)
+    guided = GuidedController(DroneAdapter(vehicle, parent=parent), parent)
     threads = []
     guided.view_changed.connect(lambda: threads.append(QThread.currentThread()))
     guided.circle((10.0, 0.0), 5.0)
@@ -125,3 +124,4 @@ def test_a_circle_the_vehicle_took_is_drawn_from_the_ui_thread(qtbot):
     assert guided.circling is None                       # not set from the driver's thread
     qtbot.waitUntil(lambda: guided.circling == (10.0, 0.0, 5.0), timeout=2000)
     assert threads == [QApplication.instance().thread()]
+    vehicle.close()

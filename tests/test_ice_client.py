@@ -167,3 +167,21 @@ def test_viewer_clamps_from_jderobot_keys(vehicle, ice_server):
         assert vehicle.state().setpoint.yaw_rate == pytest.approx(-0.2)
     finally:
         drone.close()
+
+
+def test_an_operation_the_server_lacks_is_named_in_the_refusal(vehicle, server_factory):
+    """A MAVLinkServer from before an operation existed answers OperationNotExist: the pilot reads which operation
+    it lacks ("startMission"), not a guess ("has no missions") that is wrong for arm or takeoff."""
+    server = server_factory(vehicle)
+    props = viewer_properties()
+    for key, value in server.client_properties().items():
+        props.setProperty(key, value)
+    # the Vehicle interface's calls reach an object that has none of them, as an older server's would
+    props.setProperty("UAVViewer.Vehicle.Proxy", server.client_properties()["UAVViewer.Pose3D.Proxy"])
+    drone = IceDrone(props).start()
+    try:
+        result = drone.start_mission().result(timeout=10)
+        assert result.status is CommandStatus.REJECTED and "startMission" in result.reason, result
+        assert "missions" not in result.reason, result
+    finally:
+        drone.close()

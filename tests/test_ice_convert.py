@@ -8,9 +8,10 @@ import pytest
 from pymavlink.quaternion import QuaternionBase
 
 from driver.ice import convert, load_slice
+from driver.mission.plan import MissionProgress, MissionRunState
 from driver.vehicle.state import (Attitude, Battery, Boot, CommandResult, CommandStatus, Environment, GlobalPosition, Gps,
                           LandedState, LinkHealth, LinkStatus, LocalPosition, Message, Readiness, SequencePhase,
-                          SequenceProgress, Setpoint, Severity, VehicleState, Velocity)
+                          SequenceProgress, SequenceState, Setpoint, Severity, VehicleState, Velocity)
 
 NED_TO_ENU = np.array([[0, 1, 0], [1, 0, 0], [0, 0, -1]], dtype=float)
 FRD_TO_FLU = np.diag([1.0, -1.0, -1.0])
@@ -128,6 +129,8 @@ def test_status_round_trip_keeps_every_field():
                    messages=(Message(4, 99.0, Severity.WARNING, "PreArm: Need 3D Fix", "vehicle"),),
                    results=(CommandResult("arm", CommandStatus.REFUSED, "denied", 1, 7),),
                    takeoff=SequenceProgress(SequencePhase.DONE, "reached", 3.0),
+                   sequence=SequenceState("stop", "watching", ""), lifted=True,
+                   mission=MissionProgress(count=5, current=1, state=MissionRunState.COMPLETE, flown=True),
                    setpoint=Setpoint(0.5, -0.5, 0.2, 0.1))
     status = convert.status_from_state(ms, state)
     back = convert.state_from_status(status, state.messages, state.results)

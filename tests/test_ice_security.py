@@ -232,7 +232,7 @@ def test_plain_ice_off_loopback_is_refused_unless_insecure(tmp_path, caplog, cer
                           env={**os.environ, "PYTHONPATH": ROOT})
     assert done.returncode == 1, done.stderr
     assert done.stderr.splitlines() == [
-        f"refusing to serve Camera (and 6 more interfaces) on {address}:9999 over plain tcp: anyone on that network "
+        f"refusing to serve Camera (and 7 more interfaces) on {address}:9999 over plain tcp: anyone on that network "
         f"could fly the drone; serve it over TLS with --certs DIR (python -m driver certs DIR --host {address}), or "
         "pass --insecure"], done.stderr
 

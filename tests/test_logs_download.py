@@ -1,4 +1,4 @@
-"""DataFlash logs over LOG_* (issue 31): the simulator writes and serves real .BIN logs as ArduCopter 4.6.3 does
+"""DataFlash logs over LOG_*: the simulator writes and serves real .BIN logs as ArduCopter 4.6.3 does
 (tests/data/recordings/arducopter-4.6-sitl-logs.*), and the driver lists and downloads them complete and
 byte-identical through loss, resuming from its partial file after a dropped link or an app restart."""
 from __future__ import annotations
@@ -262,7 +262,9 @@ def test_a_full_disk_keeps_the_partial_file_and_resumes_once_there_is_room(sim_f
     import sys
     if disk == "tmpfs" and not tmpfs_available():
         pytest.skip("no unprivileged mount namespace here for a small tmpfs")
-    sim, folder = logs_sim(sim_factory, tmp_path, [400_000], radio_baud=1_000_000)   # ~25 kB a .part flush
+    sim, folder = logs_sim(sim_factory, tmp_path, [400_000], radio_baud=250_000)
+    # ~6 kB a .part flush (one each 0.25 real s, at 4x): the room fills over some twenty of them; at 1 Mbaud a
+    # ticker starved for a third of a second wrote its first .part past the room, and nothing was kept
     mount = tmp_path / "disk"
     mount.mkdir()
     room = 128 * 1024

@@ -1,4 +1,4 @@
-"""Logs › Flight logs (issue 31): the window lists the simulated vehicle's DataFlash logs, downloads one with its
+"""Logs › Flight logs: the window lists the simulated vehicle's DataFlash logs, downloads one with its
 progress, rate and time left shown and Open once saved (byte-identical to the vehicle's file), Cancel keeps a
 .part that Resume finishes, armed the vehicle's own "Disarm for log download" is shown while Land stays at hand,
 Erase all asks first, and a connection without logs says why. Real simulator, real sockets, real widgets."""
@@ -96,7 +96,7 @@ def test_cancel_keeps_a_part_that_resume_finishes(qtbot, sim_factory, vehicle_fa
     dialog.table.selectRow(0)
     qtbot.mouseClick(dialog.download_button, Qt.LeftButton)
     qtbot.waitUntil(lambda: row(dialog, 1).held > 60_000, timeout=30000)
-    w.adapter.command("set_mode", "LOITER")                 # commands and their answers go on meanwhile
+    w.adapter.send(w.adapter.drone.set_mode, "LOITER")    # commands and their answers go on meanwhile
     qtbot.waitUntil(lambda: w.adapter.state.mode == "LOITER", timeout=10000)
     assert row(dialog, 1).state is RowState.DOWNLOADING
     qtbot.mouseClick(table.button(1), Qt.LeftButton)         # Cancel

@@ -172,3 +172,74 @@ def test_stop_during_a_mission_start_holds_an_airborne_copter(sim_factory, vehic
     assert starting.result(5).status is CommandStatus.ABORTED
     assert done.armed and done.altitude > 0.5
     assert not [s for s in seen if s[0] in ("STABILIZE", "ACRO") or not s[1]], seen
+
+
+def test_a_mission_ending_in_a_landing_is_said_complete_though_the_vehicle_rewinds():
+    """ArduCopter 4.6.3 disarms on a mission's last LAND item before it counts it reached, which resets the mission
+    (AP_Mission::reset from the disarm), and AUTO starts it again from item 1, disarmed: "Disarming motors",
+    "Mission: 1 Takeoff", MISSION_CURRENT seq 1 active (SITL, bench/mission_start.py). The vehicle flew its mission
+    to the end: the pilot is told it is complete, not "active, item 1". On the driver's own clock."""
+    from driver.sim.lockstep import Lockstep
+    ls = Lockstep(seed=5)
+    try:
+        v = ls.vehicle
+        ls.run(4.0)
+        five = Plan(PlanKind.MISSION, (MissionItem(mavlink.MAV_CMD_NAV_TAKEOFF, alt=5), waypoint(v, 10, 0, 5),
+                                       waypoint(v, 10, 10, 5), waypoint(v, 0, 10, 5),
+                                       MissionItem(mavlink.MAV_CMD_NAV_LAND)))
+        upload = v.upload_plan(five)
+        ls.run(5.0)
+        assert upload.result(5).result.ok
+        start = v.start_mission()
+        ls.run(6.0)
+        assert start.result(5).ok, start.result()
+        for _ in range(120):                                      # the flight, a second at a time
+            ls.run(1.0)
+            if not ls.autopilot.armed and v.state().mission.flown:
+                break
+        ap = ls.autopilot
+        assert not ap.armed and ap.landed and ap.mode_name == "AUTO"
+        assert ap.mission_current == 1 and ap.mission_run == "running"           # the vehicle rewound, disarmed
+        texts = [m.text for m in v.state().messages if m.source == "vehicle"]
+        assert texts.index("Mission: 1 Takeoff", texts.index("Disarming motors")) > 0, texts
+        ls.run(2.0)                                               # its active MISSION_CURRENT comes after
+        s = v.state()
+        assert s.mission.state is MissionRunState.COMPLETE and s.mission.flown and not s.armed, s.mission
+    finally:
+        ls.close()
+
+
+@pytest.mark.parametrize("seed", (1, 2, 3))
+def test_a_mission_starts_through_30_percent_loss_each_way(seed):
+    """GUIDED, arm, MISSION_START at the link's own round trip (as QGroundControl's ArduPilot plugin): through 30 %
+    loss each way the start comes well within DISARM_DELAY (10 s) of arming, and the mission flies. Through the
+    old AUTO-then-MISSION_START, each confirmed by a heartbeat and retried 3 s apart, real 4.6.3 SITL disarmed
+    first in 2 runs of 3. On the driver's own clock, each seed the same flight every run."""
+    from driver.sim.faults import LinkFaults
+    from driver.sim.lockstep import Lockstep
+    ls = Lockstep(seed=seed, uplink=LinkFaults(loss=0.3), downlink=LinkFaults(loss=0.3))
+    try:
+        v, ap = ls.vehicle, ls.autopilot
+        ap.params["DISARM_DELAY"] = 10
+        for _ in range(30):
+            ls.run(1.0)
+            if v.state().home is not None and v.state().readiness.ready_to_arm and v.state().in_air is False:
+                break
+        five = Plan(PlanKind.MISSION, (MissionItem(mavlink.MAV_CMD_NAV_TAKEOFF, alt=5), waypoint(v, 10, 0, 5),
+                                       waypoint(v, 10, 10, 5), waypoint(v, 0, 10, 5),
+                                       MissionItem(mavlink.MAV_CMD_NAV_LAND)))
+        upload = v.upload_plan(five)
+        for _ in range(60):
+            ls.run(1.0)
+            if upload.done():
+                break
+        assert upload.result(5).result.ok, upload.result(5).result
+        start = v.start_mission()
+        for _ in range(40):
+            ls.run(1.0)
+            if start.done() and -ap.d > 3.0:
+                break
+        assert start.result(5).ok, start.result(5)
+        assert ap.armed and ap.mode_name == "AUTO" and -ap.d > 3.0, (ap.mode_name, ap.armed, -ap.d)
+    finally:
+        ls.close()

@@ -28,7 +28,7 @@ def test_a_mission_through_ice(sim_factory, vehicle_factory, server_factory, dro
     assert drone.clear_plan(PlanKind.FENCE).result(10).status is CommandStatus.ACCEPTED
     assert sim.autopilot.plans[PlanKind.FENCE] == []
 
-    texts = fly(drone, sim, last_leg=None)     # at 32x it failed once (then passed) in two loaded suites: unexplained
+    texts = fly(drone, sim)
     assert "Mission: 6 RTL" in texts and "Disarming motors" in texts
     assert drone.clear_plan(PlanKind.MISSION).result(10).ok
     assert drone.download_plan(PlanKind.MISSION).result(30).plan == Plan(PlanKind.MISSION)

@@ -14,6 +14,7 @@ from driver.sim.faults import LinkFaults
 from uavviewer.params.mentions import named_parameter
 from uavviewer.params.table_model import Column, WriteState
 from ice_fixtures import drone_factory, server_factory  # noqa: F401  (fixtures)
+from lockstep_fixtures import lockstep_window  # noqa: F401  (fixtures)
 from viewer_fixtures import viewer_settings, window, window_factory  # noqa: F401  (fixtures)
 
 pytestmark = pytest.mark.timeout(120)
@@ -53,25 +54,29 @@ def review_and_write(qtbot, w, page):
     return review
 
 
-def test_download_shows_progress_then_every_parameter(qtbot, sim, window):
-    sim.faults.downlink = LinkFaults(loss=0.1)          # a real radio: the list takes more than one snapshot
-    sim.config.radio_baud = 460800    # and its rate: at TCP speed (0.4 s) a loaded machine showed no snapshot between
+def test_download_shows_progress_then_every_parameter(qtbot, lockstep_window):
+    """In lockstep the window is shown each state of the download: over a socket a loaded machine's window
+    polled once the list was in, and never showed it going."""
+    steps = lockstep_window(downlink=LinkFaults(loss=0.1), radio_baud=460800)     # a real radio, lossy
+    window = steps.window
     seen: list[str] = []
     window.adapter.stateChanged.connect(lambda _s: window.params.page is not None
                                         and seen.append(window.params.page.status.text()))
-    page = open_page(qtbot, window)
+    page = open_page_in_lockstep(steps)
+    steps.until(lambda: window.params.model.table.complete and not window.params.model.table.downloading, 60,
+                "every parameter read")
     table = window.params.model.table
-    assert table.expected == len(sim.autopilot.params.names) == window.params.model.rowCount() == 1392
+    assert table.expected == len(steps.autopilot.params.names) == window.params.model.rowCount() == 1392
     assert any(text.startswith("Downloading parameters") for text in seen), sorted(set(seen))
-    qtbot.waitUntil(lambda: page.status.text().startswith("1,392 parameters, all read"), timeout=3000)
+    assert page.status.text().startswith("1,392 parameters, all read"), page.status.text()
     assert not page.progress.isVisible()
     assert page.groups.item(0).text() == "All (1,392)"
 
     assert page.select("WPNAV_SPEED")
     seen.clear()
     qtbot.mouseClick(page.refresh_button, Qt.LeftButton)                   # everything again
-    qtbot.waitUntil(lambda: any(t.startswith("Downloading") for t in seen), timeout=5000)
-    qtbot.waitUntil(lambda: page.status.text().startswith("1,392 parameters, all read"), timeout=DOWNLOAD_MS)
+    steps.until(lambda: any(t.startswith("Downloading") for t in seen), 5, "the download again")
+    steps.until(lambda: page.status.text().startswith("1,392 parameters, all read"), 60, "every parameter again")
     assert page.current_name() == "WPNAV_SPEED"                          # the rows were not reset under the pilot
 
 
@@ -256,40 +261,50 @@ def test_another_vehicle_gets_none_of_the_changes_staged_for_the_first(qtbot, si
     assert page.select("WPNAV_SPEED") and page.editor.value.text() == "1000"
 
 
-def test_download_over_a_lossy_radio_shows_how_far_it_is_and_ends_complete(qtbot, sim_factory, vehicle_factory, window_factory):
-    sim = sim_factory(seed=7)
-    sim.faults.downlink = LinkFaults(loss=0.3)
-    vehicle = vehicle_factory(f"tcp:127.0.0.1:{sim.tcp_port}")
-    assert vehicle.wait_for(lambda s: s.connected, 15)
-    w = window_factory(vehicle)
+def open_page_in_lockstep(steps):
+    """Vehicle › Parameters… on a window in lockstep; the page, before the download has gone anywhere."""
+    w = steps.window
+    w.findChild(type(w.menuBar().actions()[0]), "actionParameters").trigger()
+    steps.until(lambda: w.params.page is not None and w.params.page.isVisible(), 1, "the page shown")
+    return w.params.page
+
+
+def test_download_over_a_lossy_radio_shows_how_far_it_is_and_ends_complete(lockstep_window):
+    """In lockstep the window is shown every state the driver publishes: on a loaded machine too it sees the
+    download going, which over a socket it only did when it happened to poll in time."""
+    steps = lockstep_window(seed=7, downlink=LinkFaults(loss=0.3))
+    w = steps.window
     seen: list[str] = []
     w.adapter.stateChanged.connect(lambda _s: w.params.page is not None and seen.append(w.params.page.status.text()))
-    page = open_page(qtbot, w)
+    page = open_page_in_lockstep(steps)
+    steps.until(lambda: w.params.model.table.complete and not w.params.model.table.downloading, 60,
+                "every parameter read")
     assert w.params.model.rowCount() == 1392
     # the driver's own progress (the list's count and re-asks, or MAVLink FTP's bytes read again), as it goes
     assert any(text.startswith("Downloading parameters") and " of " in text for text in seen), sorted(set(seen))
-    qtbot.waitUntil(lambda: page.status.text().startswith("1,392 parameters, all read"), timeout=3000)
+    assert page.status.text().startswith("1,392 parameters, all read"), page.status.text()
 
 
-def test_a_reconnect_shows_the_kept_table_at_once_then_reads_it_again(qtbot, sim, vehicle, vehicle_factory,
-                                                                        window_factory):
-    first = window_factory(vehicle)
-    open_page(qtbot, first)
-    first.quit_without_asking()
-    vehicle.close()
-    sim.autopilot.params["WPNAV_SPEED"] = 1100                      # changed while we were away
-    sim.faults.downlink = LinkFaults(loss=0.2)                      # reading them again takes a while
-    again = vehicle_factory(f"tcp:127.0.0.1:{sim.tcp_port}")
-    assert again.wait_for(lambda s: s.connected and s.firmware, 10)   # the cache is per system id and firmware
-    w = window_factory(again)
+def test_a_reconnect_shows_the_kept_table_at_once_then_reads_it_again(lockstep_window, window_factory):
+    steps = lockstep_window(downlink=LinkFaults(loss=0.2))
+    open_page_in_lockstep(steps)
+    steps.until(lambda: steps.window.params.model.table.complete and not steps.vehicle.state().parameters.downloading,
+                60, "every parameter read")
+    steps.window.quit_without_asking()
+    steps.autopilot.params["WPNAV_SPEED"] = 1100                  # changed while we were away
+    again = steps.lockstep.reconnect()
+    steps.until(lambda: again.state().connected and again.state().firmware, 10, "the firmware heard")
+    w = steps.window = window_factory(again)                        # the cache is per system id and firmware
+    w.adapter.stop()
     seen: list[str] = []
     w.adapter.stateChanged.connect(lambda _s: w.params.page is not None and seen.append(w.params.page.status.text()))
-    page = open_page(qtbot, w)
-    qtbot.waitUntil(lambda: not w.params.model.table.downloading, timeout=DOWNLOAD_MS)
+    page = open_page_in_lockstep(steps)
+    steps.until(lambda: w.params.model.table.complete and not w.params.model.table.downloading, 60,
+                "the list read again")
     assert any(t.startswith("1,392 parameters shown, reading them again") for t in seen), sorted(set(seen))
     assert page.select("WPNAV_SPEED") and page.editor.value.text() == "1100"
-    qtbot.waitUntil(lambda: any("changed since" in t and "WPNAV_SPEED" in t for t in w.messages.texts()),
-                    timeout=3000)                                 # the driver names it once the list is read
+    steps.until(lambda: any("changed since" in t and "WPNAV_SPEED" in t for t in w.messages.texts()), 3,
+                "the change named")                               # the driver names it once the list is read
 
 
 def test_the_page_over_ice(qtbot, sim, vehicle, window_factory, server_factory, drone_factory):
@@ -312,7 +327,7 @@ def test_fix_on_a_go_to_refused_by_the_fence_opens_its_parameter(qtbot, sim_fact
     vehicle = vehicle_factory(f"tcp:127.0.0.1:{sim.tcp_port}")
     assert vehicle.wait_for(lambda s: s.fence.ceiling == 50, 15)
     w = window_factory(vehicle)
-    w.adapter.command("go_to", 10.0, 0.0, 60.0)                     # what the map's Fly here sends
+    w.adapter.send(w.adapter.drone.go_to, 10.0, 0.0, 60.0)    # what the map's Fly here sends
     messages = w.messages
     qtbot.waitUntil(lambda: any("FENCE_ALT_MAX" in t for t in messages.texts()), timeout=5000)
     row = next(i for i, t in enumerate(messages.texts()) if "FENCE_ALT_MAX" in t)
@@ -323,21 +338,20 @@ def test_fix_on_a_go_to_refused_by_the_fence_opens_its_parameter(qtbot, sim_fact
     assert page.editor.value.text() == "50"
 
 
-def test_an_ftp_read_that_stalls_says_why_the_list_is_read_instead(qtbot, sim, vehicle_factory, window_factory):
+def test_an_ftp_read_that_stalls_says_why_the_list_is_read_instead(qtbot, lockstep_window):
     """The vehicle offers MAVLink FTP, then goes silent on it after ten packets: the page's progress says FTP
-    stalled and the list is read instead, the messages say so too, and the table still ends complete."""
-    autopilot = sim.autopilot
-    send, sent = autopilot._ftp_send, []
+    stalled and the list is read instead, the messages say so too, and the table still ends complete. In
+    lockstep: the window is shown each state of it, however quick the list is read."""
+    sent = []
+    steps = lockstep_window(driver={"param_ftp": True})
+    autopilot = steps.autopilot
+    send = autopilot._ftp_send
     autopilot._ftp_send = lambda reply: sent.append(reply) or len(sent) > 10 or send(reply)
-    vehicle = vehicle_factory(f"tcp:127.0.0.1:{sim.tcp_port}")
-    assert vehicle.wait_for(lambda s: s.connected and s.firmware, 10)     # AUTOPILOT_VERSION offers FTP
-    w = window_factory(vehicle)
+    w = steps.window
     seen: list[str] = []
     w.adapter.stateChanged.connect(lambda _s: w.params.page is not None and seen.append(w.params.page.status.text()))
-    action = w.findChild(type(w.menuBar().actions()[0]), "actionParameters")
-    action.trigger()
-    page = w.params.page
-    qtbot.waitUntil(lambda: page.status.text().startswith("1,392 parameters, all read"), timeout=2 * DOWNLOAD_MS)
+    page = open_page_in_lockstep(steps)
+    steps.until(lambda: page.status.text().startswith("1,392 parameters, all read"), 60, "every parameter read")
     assert len(sent) > 10
     assert any("MAVLink FTP stalled at byte" in t and "reading the list instead" in t for t in seen), sorted(set(seen))
-    qtbot.waitUntil(lambda: any("Parameters: MAVLink FTP stalled" in t for t in w.messages.texts()), timeout=3000)
+    steps.until(lambda: any("Parameters: MAVLink FTP stalled" in t for t in w.messages.texts()), 3, "the message")

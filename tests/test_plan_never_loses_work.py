@@ -218,7 +218,8 @@ def test_upload_sends_every_plan_that_changed(qtbot, vehicle, window_factory):
     qtbot.waitUntil(lambda: all(plan.vehicle_plan(k) is not None for k in (PlanKind.MISSION, PlanKind.FENCE)),
                     timeout=30000)
     assert plan.vehicle_plan(PlanKind.FENCE).items[0].param1 == 200
-    qtbot.waitUntil(lambda: not plan.sync(PlanKind.MISSION) and not plan.sync(PlanKind.FENCE), timeout=10000)
+    qtbot.waitUntil(lambda: not plan.how_it_differs(PlanKind.MISSION) and not plan.how_it_differs(PlanKind.FENCE),
+                    timeout=10000)
     rally = plan.vehicle_plan(PlanKind.RALLY)     # nothing here, nothing sent (read, to say whether it keeps some)
     assert rally is None or not rally.items
 

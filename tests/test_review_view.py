@@ -64,7 +64,7 @@ def test_two_gps_and_imus_show_apart_and_presets_take_the_first(qtbot, tmp_path)
     assert v.apply_preset("Vibration") == 3 and {k[0] for k in v.plots.curves} == {"VIBE[0]"}
     v.add_field("GPS[1]", "Lat")
     assert ("GPS[1]", "Lat") in v.plots.curves
-    assert len(v.path_overlay._t) == v.log.count("GPS[0]")           # the path: one receiver's fixes
+    assert len(v.path_overlay._times) == v.log.count("GPS[0]")           # the path: one receiver's fixes
 
 
 def test_the_cursor_moves_the_marker_along_the_path_and_back(qtbot, view):
@@ -84,7 +84,7 @@ def test_the_cursor_moves_the_marker_along_the_path_and_back(qtbot, view):
     index = len(overlay._points) * 3 // 4                  # a click on the path puts the cursor at its time
     qtbot.mouseClick(view.map, Qt.LeftButton, pos=view.map.to_screen(*overlay._points[index]).toPoint())
     assert overlay.marker == index
-    assert view.plots.cursor.value() == pytest.approx(overlay._t[index])
+    assert view.plots.cursor.value() == pytest.approx(overlay._times[index])
 
 
 def test_events_and_parameters_as_flown(qtbot, view):

@@ -106,8 +106,11 @@ def test_no_control_moves_as_the_state_changes(qtbot, sim_factory, vehicle_facto
     watch.step("banner hidden")
 
     qtbot.mouseClick(w.gimbal_bar.record_button, Qt.LeftButton)               # the vehicle's camera records
-    qtbot.waitUntil(lambda: w.adapter.state.camera.recording and "●" in w.gimbal_bar.record_button.text(),
-                    timeout=10000)
+    # the start answered (the next click is a stop, not a second start superseding a start still pending)
+    qtbot.waitUntil(lambda: w.adapter.state.camera.recording and "●" in w.gimbal_bar.record_button.text()
+                    and any(r.command == "record on" and r.ok for r in w.adapter.state.results), timeout=10000)
+    QApplication.processEvents()
+    assert w.gimbal_bar.record_button.isChecked()
     watch.step("record")
     qtbot.mouseClick(w.gimbal_bar.record_button, Qt.LeftButton)
     qtbot.waitUntil(lambda: w.adapter.state.camera.recording is False, timeout=10000)

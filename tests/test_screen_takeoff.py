@@ -12,6 +12,7 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from driver.vehicle.state import SequencePhase
 
+from lockstep_fixtures import lockstep_window  # noqa: F401  (fixtures)
 from viewer_fixtures import viewer_settings, window_factory  # noqa: F401  (fixtures)
 
 pytestmark = pytest.mark.timeout(90)
@@ -74,18 +75,19 @@ def test_arm_asks_first_and_says_what_happens_without_rc(qtbot, sim, vehicle_fac
     assert not sim.truth().armed and not vehicle.state().armed
 
 
-def test_launch_to_airborne_is_one_click_and_its_confirmation(qtbot, sim_factory, vehicle_factory, window_factory):
+def test_launch_to_airborne_is_one_click_and_its_confirmation(qtbot, lockstep_window):
     """As a new user on --sim: the window opens before the vehicle is ready; one click on the main button, one on
-    the question's "Take off when ready", and it flies (the sticks live) once the vehicle is ready."""
-    sim = sim_factory(ready_after=6.0)
-    vehicle = vehicle_factory(f"tcp:127.0.0.1:{sim.tcp_port}")
-    w = window_factory(vehicle, takeoff_altitude=3.0)
+    the question's "Take off when ready", and it flies (the sticks live) once the vehicle is ready. In lockstep:
+    the vehicle's 6 s of start-up wait for the window, however slow it is to build."""
+    steps = lockstep_window(ready_after=6.0, window={"takeoff_altitude": 3.0})
+    w, vehicle = steps.window, steps.vehicle
     b = w.flightControls.main_button
     clicks = 0
-    qtbot.waitUntil(lambda: b.isEnabled() and b.text() == "Take off when ready", timeout=10000)
+    steps.until(lambda: b.isEnabled() and b.text() == "Take off when ready", 5, "Take off when ready")
+    assert not steps.autopilot.ready
     qtbot.mouseClick(b, Qt.LeftButton)
     clicks += 1
-    qtbot.waitUntil(lambda: w.flight.takeoff_box is not None and w.flight.takeoff_box.isVisible(), timeout=3000)
+    steps.until(lambda: w.flight.takeoff_box is not None and w.flight.takeoff_box.isVisible(), 1, "the question")
     qtbot.mouseClick(w.flight.takeoff_box.button(QMessageBox.Yes), Qt.LeftButton)      # its confirmation
-    qtbot.waitUntil(lambda: w.leftStick.isEnabled() and vehicle.state().can_fly_velocity, timeout=60000)
-    assert clicks == 1 and sim.truth().altitude > 2.5
+    steps.until(lambda: w.leftStick.isEnabled() and vehicle.state().can_fly_velocity, 60, "flying")
+    assert clicks == 1 and steps.autopilot.truth().altitude > 2.5

@@ -12,8 +12,9 @@ from __future__ import annotations
 
 import pytest
 from PyQt5.QtCore import QPoint, QRect, Qt
-from PyQt5.QtWidgets import (QAbstractButton, QAbstractSpinBox, QApplication, QDialogButtonBox, QLineEdit, QMessageBox,
-                             QWidget)
+from PyQt5.QtWidgets import (QAbstractButton, QAbstractSpinBox, QApplication, QComboBox, QDialogButtonBox, QLineEdit,
+                             QMessageBox, QPlainTextEdit, QTextEdit, QWidget)
+from pytestqt.exceptions import TimeoutError as WaitTimedOut
 
 from secondary_windows import OPENERS, netbook_screen, netbook_window, open_secondary
 from viewer_fixtures import app_style, viewer_settings, window_factory  # noqa: F401  (fixtures)
@@ -115,11 +116,19 @@ def test_in_flight_no_window_covers_the_controls_and_the_flight_keys_work_from_e
         key, mode = keys[i % 2]
         QApplication.setActiveWindow(window)
         focus = window.focusWidget()
-        if isinstance(focus, (QLineEdit, QAbstractSpinBox)):      # a field there takes the letters: not on it
+        if isinstance(focus, (QLineEdit, QAbstractSpinBox, QTextEdit, QPlainTextEdit)) or (
+                isinstance(focus, QComboBox) and focus.isEditable()):   # a field there takes the letters: not on it
             focus = close_button(window)
             focus.setFocus()
-        qtbot.keyClick(focus or window, key)
-        qtbot.waitUntil(lambda: sim.truth().mode == mode, timeout=10000)
+        button = w.flightControls.rtl_button if key == Qt.Key_R else w.flightControls.stop_button
+        qtbot.waitUntil(button.isEnabled, timeout=10000)       # the key does what its button does, when it can
+        target = focus or window
+        qtbot.keyClick(target, key)
+        try:
+            qtbot.waitUntil(lambda: sim.truth().mode == mode, timeout=10000)
+        except WaitTimedOut:
+            raise AssertionError(f"{name}: the key pressed in {type(target).__name__} '{target.objectName()}' "
+                                 f"(active: {QApplication.activeWindow()}) did not make {mode}") from None
         window.close()
         qtbot.waitUntil(lambda: not window.isVisible(), timeout=3000)
 
@@ -137,7 +146,7 @@ def test_a_window_over_the_controls_steps_aside_when_the_vehicle_takes_off(qtbot
     setup.setGeometry(QRect(20, 60, 700, 480))                  # the pilot put it there on the ground
     qtbot.waitUntil(lambda: setup.frameGeometry().intersects(flight_area(w)), timeout=3000)
     qtbot.waitUntil(lambda: w.adapter.state.readiness.ready_to_arm, timeout=20000)
-    w.adapter.command("takeoff", 3.0)
+    w.adapter.send(w.adapter.drone.takeoff, 3.0)
     qtbot.waitUntil(lambda: w.adapter.state.armed, timeout=20000)
     qtbot.waitUntil(lambda: not setup.frameGeometry().intersects(flight_area(w)), timeout=3000)
     assert not fit_problems(setup, w)

@@ -7,6 +7,7 @@ import pytest
 from PyQt5.QtCore import Qt
 from PyQt5.QtWidgets import QMenu
 
+from lockstep_fixtures import lockstep_window  # noqa: F401  (fixtures)
 from viewer_fixtures import app_style, viewer_settings, window_factory  # noqa: F401  (fixtures)
 
 pytestmark = pytest.mark.timeout(120)
@@ -238,21 +239,25 @@ def test_the_solos_33_says_what_it_lacks(qtbot, sim_factory, vehicle_factory, wi
     qtbot.waitUntil(lambda: summary.verdict("Traffic (ADS-B)") == "not applicable", timeout=5000)
 
 
-def test_all_motors_in_sequence_each_output_spins(qtbot, bench_window):
-    _sim, vehicle, w = bench_window()
+def test_all_motors_in_sequence_each_output_spins(qtbot, lockstep_window):
+    """In lockstep the window is shown every SERVO_OUTPUT_RAW the driver reads: each motor's turn is seen however
+    loaded the machine is (over a socket, a starved window could poll past a motor's two seconds)."""
+    steps = lockstep_window()
+    vehicle, w = steps.vehicle, steps.window
     page = open_setup(w, "Motors")
-    assert vehicle.wait_for(lambda s: read(s) and len(s.setup.outputs.values) >= 4, 30)
+    steps.until(lambda: read(vehicle.state()) and len(vehicle.state().setup.outputs.values) >= 4
+                and vehicle.state().readiness.prearm_ok, 30, "parameters, outputs and readiness")
     idle = vehicle.state().setup.outputs.values[:4]
     raised: set[int] = set()
     w.adapter.stateChanged.connect(lambda s: raised.update(
         i + 1 for i, us in enumerate(s.setup.outputs.values[:4]) if us > idle[i]))
     page.props_off.setChecked(True)
     page.all.setChecked(True)
-    page.seconds.setValue(2.0)             # several SERVO_OUTPUT_RAW (10 Hz) per motor even at the sim speed-up
-    qtbot.waitUntil(page.test.isEnabled, timeout=5000)
+    page.seconds.setValue(2.0)             # several SERVO_OUTPUT_RAW (10 Hz) per motor
+    steps.until(page.test.isEnabled, 5, "the Test button")
     qtbot.mouseClick(page.test, Qt.LeftButton)
-    qtbot.waitUntil(lambda: raised == {1, 2, 3, 4}, timeout=20000)
-    assert page.result.text().startswith("motor test 1: accepted")
+    steps.until(lambda: raised == {1, 2, 3, 4}, 20, "each motor spun")
+    steps.until(lambda: page.result.text().startswith("motor test 1: accepted"), 2, "the answer shown")
 
 
 def test_compass_accept_waits_until_no_compass_is_still_in_progress(qtbot, bench_window):

@@ -9,6 +9,7 @@ from PyQt5.QtWidgets import QApplication
 
 from driver.vehicle.state import LinkStatus, Severity
 
+from lockstep_fixtures import lockstep_window  # noqa: F401  (fixtures)
 from viewer_fixtures import viewer_settings, window_factory  # noqa: F401  (fixtures)
 
 pytestmark = pytest.mark.timeout(120)
@@ -92,27 +93,30 @@ def test_the_flight_timer_goes_on_over_a_reconnection_in_the_air(qtbot, sim, veh
     assert w.flight_timer.seconds >= flown               # the flight it left, not a new one from zero
 
 
-def test_stop_looking_goes_back_to_the_pitch_before(qtbot, vehicle, window_factory):
-    w = window_factory(vehicle)
-    qtbot.waitUntil(lambda: w.adapter.state.gimbal.pitch_deg is not None and w.adapter.state.home is not None,
-                    timeout=10000)
+def test_stop_looking_goes_back_to_the_pitch_before(qtbot, lockstep_window):
+    """In lockstep the window is shown each state: the pitch it remembers is the one before the point was looked
+    at (over a socket, a starved window first saw the vehicle already turning, with no point reported yet)."""
+    steps = lockstep_window()
+    w = steps.window
+    steps.until(lambda: w.adapter.state.gimbal.pitch_deg is not None and w.adapter.state.home is not None, 10,
+                "the gimbal and home")
     w.gimbal_bar.level_button.click()
-    qtbot.waitUntil(lambda: abs(w.adapter.state.gimbal.pitch_deg) < 0.6, timeout=10000)
-    qtbot.waitUntil(lambda: w.gimbal._target is None, timeout=5000)
+    steps.until(lambda: abs(w.adapter.state.gimbal.pitch_deg) < 0.6, 10, "level")
+    steps.until(lambda: w.gimbal._target is None, 5, "level reached")
     for _ in range(8):                                   # the wheel: 40° down
         wheel_notch(w.camera_view, -1)
-    qtbot.waitUntil(lambda: abs(w.adapter.state.gimbal.pitch_deg + 40) < 0.6, timeout=10000)
-    qtbot.waitUntil(lambda: w.gimbal._target is None, timeout=5000)
+    steps.until(lambda: abs(w.adapter.state.gimbal.pitch_deg + 40) < 0.6, 10, "40° down")
+    steps.until(lambda: w.gimbal._target is None, 5, "40° down reached")
     home = w.adapter.state.home
     from driver.core.frames import offset_latlon
     lat, lon = offset_latlon(home.lat, home.lon, 30.0, 0.0)
-    w.adapter.command("look_at", lat, lon, 0.0)          # the map's "Look here"
-    qtbot.waitUntil(lambda: w.adapter.state.gimbal.roi is not None and w.gimbal_bar.stop_looking_button.isVisible(),
-                    timeout=10000)
-    qtbot.waitUntil(lambda: abs(w.adapter.state.gimbal.pitch_deg + 40) > 20, timeout=10000)   # it looks there
+    w.adapter.send(w.adapter.drone.look_at, lat, lon, 0.0)    # the map's "Look here"
+    steps.until(lambda: w.adapter.state.gimbal.roi is not None and w.gimbal_bar.stop_looking_button.isVisible(),
+                10, "looking at the point")
+    steps.until(lambda: abs(w.adapter.state.gimbal.pitch_deg + 40) > 20, 10, "turned to it")   # it looks there
     qtbot.mouseClick(w.gimbal_bar.stop_looking_button, Qt.LeftButton)
-    qtbot.waitUntil(lambda: w.adapter.state.gimbal.roi is None, timeout=10000)
-    qtbot.waitUntil(lambda: abs(w.adapter.state.gimbal.pitch_deg + 40) < 0.6, timeout=10000)  # back, not -90
+    steps.until(lambda: w.adapter.state.gimbal.roi is None, 10, "no point")
+    steps.until(lambda: abs(w.adapter.state.gimbal.pitch_deg + 40) < 0.6, 10, "back at 40° down")   # not -90
 
 
 def test_file_open_logs_folder_and_about(qtbot, vehicle, window_factory, tmp_path):

@@ -308,7 +308,7 @@ def _schedule_screenshot(window, path: Path, after: float, fly: bool) -> None:
     def takeoff_when_ready():
         s = window.adapter.state
         if s.readiness.ready_to_arm:
-            window.adapter.command("takeoff", window.takeoff_altitude)
+            window.adapter.send(window.adapter.drone.takeoff, window.takeoff_altitude)
         else:
             QTimer.singleShot(500, takeoff_when_ready)
     QTimer.singleShot(1000, takeoff_when_ready)

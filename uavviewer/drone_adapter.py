@@ -1,22 +1,25 @@
 """The window's only door to the vehicle: snapshots in, commands out, never waiting.
 
-:class:`DroneAdapter` wraps any :class:`driver.api.Drone` (the embedded
-driver today, the Ice client later). A ~30 Hz timer reads ``drone.state()``
-(cheap, non-blocking) and emits it; commands are called on the drone, which
-hands back a Future at once; its result comes back to the UI thread through a
-queued signal. The velocity setpoint is re-sent at 10 Hz while the pilot holds
-a stick off-centre, so the driver's deadman only fires when the UI stalls.
+:class:`DroneAdapter` wraps any :class:`driver.api.Drone` (the embedded driver or the Ice client). A ~30 Hz timer
+reads ``drone.state()`` (cheap, non-blocking) and emits it. A command is one of the drone's own methods, written in
+the code (``adapter.send(adapter.drone.land)``): a method the driver renames fails where it is called, and
+tests/test_architecture.py checks every one the viewer names against :class:`~driver.api.Drone`. The drone hands
+back a Future at once; its answer comes back to the UI thread through a queued signal, to Messages
+(``commandFinished``) and to the caller's own continuation (``then``), so no part routes answers by their wording.
+The velocity setpoint is re-sent at 10 Hz while the pilot holds a stick off-centre, so the driver's deadman only
+fires when the UI stalls.
 """
 from __future__ import annotations
 
 import logging
 from concurrent.futures import Future
+from typing import Any, Callable
 
-from PyQt5.QtCore import QObject, QTimer, pyqtSignal
+from PyQt5.QtCore import QObject, Qt, QTimer, pyqtSignal
 
 from driver.vehicle.api import Drone
-from driver.vehicle.inspector import Inspection
 from driver.mission.plan import TransferOutcome
+from driver.vehicle.inspector import Inspection
 from driver.vehicle.state import CommandResult, CommandStatus, VehicleState
 
 from .input.sticks import VelocityCommand
@@ -33,13 +36,17 @@ class _FutureRelay(QObject):
     its adapter) was deleted emits into a living object, and the queued connection to the deleted adapter
     is simply gone. Emitting on the adapter itself could race with its deletion on the UI thread.
     """
-    done = pyqtSignal(str, object)           # command name, its Future
+    done = pyqtSignal(str, object, object, int)    # the method's name, its Future, ``then`` or None, the drone's turn
+
+
+#: what the caller is given back: the drone's answer (a CommandResult; a plan transfer's TransferOutcome), or a
+#: CommandResult saying why there is none
+Then = Callable[[Any], None]
 
 
 class DroneAdapter(QObject):
     stateChanged = pyqtSignal(object)        # VehicleState
-    transferFinished = pyqtSignal(str, object)   # a plan transfer's name and TransferOutcome (then commandFinished)
-    commandFinished = pyqtSignal(object)     # CommandResult, on the UI thread
+    commandFinished = pyqtSignal(object)     # every command's CommandResult, on the UI thread (for Messages)
     commandSent = pyqtSignal(str)            # a command handed to the drone (its name)
     droneChanged = pyqtSignal(object)        # another drone is flown from now on (a fleet's pick, File › Connect)
 
@@ -56,7 +63,8 @@ class DroneAdapter(QObject):
         self._refresh.setInterval(max(1, int(1000 / refresh_hz)))
         self._refresh.timeout.connect(self._resend)
         self._relay = _FutureRelay()
-        self._relay.done.connect(self._on_future_done)
+        self._relay.done.connect(self._answered, Qt.QueuedConnection)     # never inside send(), even when at once
+        self._turn = 0                       # one more for every drone flown: answers of the ones before are theirs
         self.sent_setpoints = 0              # set_velocity calls made (for tests and the status bar)
 
     # -- state ----------------------------------------------------------------------------------
@@ -93,6 +101,7 @@ class DroneAdapter(QObject):
         self._refresh.stop()
         self._setpoint = VelocityCommand()
         self.drone = drone
+        self._turn += 1
         self._state = None
         self.droneChanged.emit(drone)
         self.poll()
@@ -112,40 +121,47 @@ class DroneAdapter(QObject):
             self.stateChanged.emit(s)
 
     # -- commands -------------------------------------------------------------------------------
-    def command(self, name: str, *args) -> Future | None:
-        """Call ``drone.<name>(*args)``; the result arrives as ``commandFinished`` (at once from a call that
-        answers at once, such as ``use_signing_key``). Returns the drone's Future (a caller may cancel it), if any."""
+    def send(self, call: Callable[..., Future | CommandResult | None], *args, then: Then | None = None
+             ) -> Future | None:
+        """``call(*args)``, where ``call`` is one of :attr:`drone`'s methods (``adapter.send(adapter.drone.land)``).
+
+        The answer arrives as ``commandFinished`` and, with it, ``then(answer)`` on the UI thread, after this call
+        returned (inside it only from a method that answers without a Future, such as ``use_signing_key``). An
+        answer from a drone no longer flown (a fleet's pick, File › Connect) still reaches Messages, but not
+        ``then``: what it would update now belongs to another vehicle. Returns the drone's Future (a caller may
+        cancel it), if any."""
+        name = call.__name__
         self.commandSent.emit(name)
         try:
-            future = getattr(self.drone, name)(*args)
+            answer = call(*args)
         except Exception as exc:             # noqa: BLE001
             log.exception("command %s failed to start", name)
-            self.commandFinished.emit(CommandResult(name, CommandStatus.REJECTED, str(exc)))
-            return None
-        if isinstance(future, CommandResult):
-            self.commandFinished.emit(future)
-        elif isinstance(future, Future):
-            relay = self._relay              # the callback holds the relay, not this adapter (see _FutureRelay)
-            future.add_done_callback(lambda f, n=name: relay.done.emit(n, f))
-            return future
+            answer = CommandResult(name, CommandStatus.REJECTED, str(exc))
+        if isinstance(answer, Future):
+            relay, turn = self._relay, self._turn      # the callback holds the relay, not this adapter (_FutureRelay)
+            answer.add_done_callback(lambda f: relay.done.emit(name, f, then, turn))
+            return answer
+        if isinstance(answer, CommandResult):
+            self._deliver(answer, answer, then)
         return None
 
-    def _on_future_done(self, name: str, future: Future) -> None:
+    def _answered(self, name: str, future: Future, then: Then | None, turn: int) -> None:
         if future.cancelled():
-            self.commandFinished.emit(CommandResult(name, CommandStatus.ABORTED, "cancelled by the pilot"))
-            return
-        try:
-            result = future.result(timeout=0)
-        except Exception as exc:             # noqa: BLE001
-            result = CommandResult(name, CommandStatus.REJECTED, f"{type(exc).__name__}: {exc}")
-            if name in ("upload_plan", "download_plan"):
-                self.transferFinished.emit(name, TransferOutcome(result))
-        if isinstance(result, TransferOutcome):          # a plan transfer: the plan read back goes with it
-            self.transferFinished.emit(name, result)
-            result = result.result
+            answer = CommandResult(name, CommandStatus.ABORTED, "cancelled by the pilot")
+        else:
+            try:
+                answer = future.result(timeout=0)
+            except Exception as exc:         # noqa: BLE001
+                answer = CommandResult(name, CommandStatus.REJECTED, f"{type(exc).__name__}: {exc}")
+        result = answer.result if isinstance(answer, TransferOutcome) else answer
         if not isinstance(result, CommandResult):
-            result = CommandResult(name, CommandStatus.ACCEPTED, str(result))
+            answer = result = CommandResult(name, CommandStatus.ACCEPTED, str(result))
+        self._deliver(result, answer, then if turn == self._turn else None)
+
+    def _deliver(self, result: CommandResult, answer: Any, then: Then | None) -> None:
         self.commandFinished.emit(result)
+        if then is not None:
+            then(answer)
 
     # -- velocity -------------------------------------------------------------------------------
     @property

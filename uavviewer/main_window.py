@@ -33,6 +33,7 @@ from .input.keys_dialog import KeysDialog
 from .map.controller import MapController
 from .params import ParamsController
 from .setup.controller import SetupController
+from .shots.controller import ShotsController
 from .plan.controller import PlanController
 from .preferences.controller import Preferences
 from .refresh import Refresh
@@ -97,6 +98,7 @@ class MainWindow(QMainWindow):
         self.menuView.addAction(self.plotsDock.toggleViewAction())
         self.menuView.addAction(self.mapDock.toggleViewAction())
         self.map = MapController(self.mapPanel, self.adapter, self, lambda: self.takeoff_altitude, self)
+        self.map.camera.stopLookingRequested.connect(self.gimbal.stop_looking)    # the tilt comes back as from the bar
         self.tabifyDockWidget(self.plotsDock, self.mapDock)            # Map and Plots share the lower right
         self.plan = PlanController(self.map, self.adapter, self, self)  # Plan mode, transfers, missions: own dock
         self.preferences.keep_map_choices(self.mapPanel)
@@ -114,6 +116,7 @@ class MainWindow(QMainWindow):
         self.actionAbout.triggered.connect(lambda: show_about(self))
         self.adapter.stateChanged.connect(self.show_state)
         self.tools = PilotTools(self)                 # connecting, alerts, preflight, guided actions, home arrow
+        self.shots = ShotsController(self)            # smart shots: the panel, the map, the sticks during a shot
         self.params = ParamsController(self.adapter, self, say=self.log_message)    # docs/parameters.md
         self.params.add_to_menu(self)                       # Vehicle › Parameters…
         self.params.offer_fixes(self.messages)              # a warning naming a parameter: Fix… opens it

@@ -34,8 +34,8 @@ class Channel(QObject):
         self._refresh = refresh
         self._callback = callback
         self.period = 1.0 / hz
-        self._dirty = False
-        self._last = float("-inf")
+        self._marked = False
+        self._ran_at = float("-inf")
         self.runs = 0                            # how often the callback ran (for tests and benches)
         self._timer = QTimer(self)
         self._timer.setSingleShot(True)
@@ -44,26 +44,26 @@ class Channel(QObject):
     @property
     def pending(self) -> bool:
         """Marked and not yet redrawn."""
-        return self._dirty
+        return self._marked
 
     def mark(self) -> None:
         """There is something new to show: redraw within one period (or when the window comes back)."""
-        self._dirty = True
+        self._marked = True
         self._schedule()
 
     def _schedule(self) -> None:
-        if self._dirty and self._refresh.shown and not self._timer.isActive():
-            wait = self._last + self.period - time.monotonic()
+        if self._marked and self._refresh.shown and not self._timer.isActive():
+            wait = self._ran_at + self.period - time.monotonic()
             self._timer.start(int(max(0.0, wait) * 1000))
 
     def _stop(self) -> None:
         self._timer.stop()
 
     def _run(self) -> None:
-        if not self._dirty or not self._refresh.shown:
+        if not self._marked or not self._refresh.shown:
             return
-        self._dirty = False
-        self._last = time.monotonic()
+        self._marked = False
+        self._ran_at = time.monotonic()
         self.runs += 1
         self._callback()
 

@@ -21,10 +21,11 @@ from ..vehicle.battery import time_left
 from .plans import PlanCommands
 from .words import number, result_line
 from ..vehicle.state import BatteryAlarm, CommandResult, CommandStatus, SequencePhase, VehicleState
-from ..vehicle.rules import COPTER_MODES, mode_warning
+from ..vehicle.rules import COPTER_MODES, mode_refusal, mode_warning
 from .payload import PayloadCommands
 from .setup import SetupCommands
 from .logs import LogCommands
+from .shots import ShotCommands
 
 ARM_USAGE = ("arm [throttle] [force] | arm check [all|none|MASK] | arm safetyon | arm safetyoff | arm list")
 VELOCITY_HOLD = 3.0          # s a typed velocity lasts (ArduCopter's GUID_TIMEOUT)
@@ -36,9 +37,10 @@ TELEMETRY_WAIT = 5.0         # s more for the requested telemetry (battery, posi
 NOTEWORTHY = ("driver.ice.servants", "driver.ice.camera", "driver.camera.uri")
 
 
-class Console(PlanCommands, PayloadCommands, SetupCommands, LogCommands, cmd.Cmd):
+class Console(PlanCommands, PayloadCommands, SetupCommands, LogCommands, ShotCommands, cmd.Cmd):
     """``reboot, arm, disarm, takeoff, land, mode, velocity, parachute, bat, alt, param, status, help``; ``wp``,
-    ``fence``, ``rally`` (console_plans.py); ``gimbal``, ``roi``, ``camera`` (payload/console.py)."""
+    ``fence``, ``rally`` (console_plans.py); ``gimbal``, ``roi``, ``camera`` (payload/console.py); ``shot``
+    (shots.py)."""
 
     intro = "MAVLinkServer console. Type help for commands, exit to quit."
 
@@ -245,6 +247,10 @@ class Console(PlanCommands, PayloadCommands, SetupCommands, LogCommands, cmd.Cmd
         if len(words) > 2 or words[1:] not in ([], ["confirm"]):
             raise ValueError("usage: mode [NAME [confirm]]")
         name = words[0].upper()
+        refusal = mode_refusal(name, self.vehicle.state().may_be_airborne)
+        if refusal:
+            self.say(refusal)
+            return
         warning = mode_warning(name, self.vehicle.state().flying)
         if warning and len(words) == 1:
             self.say(f"{warning} Type 'mode {name} confirm' to switch anyway.")

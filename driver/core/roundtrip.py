@@ -53,6 +53,11 @@ class RoundTrip:
         self.srtt = (1 - ALPHA) * self.srtt + ALPHA * seconds
 
     @property
+    def measured(self) -> bool:
+        """An answer has timed the link (else :attr:`estimate` is the first guess)."""
+        return self.srtt is not None
+
+    @property
     def estimate(self) -> float:
         """The smoothed round trip, or the initial guess before any answer."""
         return self.initial if self.srtt is None else self.srtt

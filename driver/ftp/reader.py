@@ -353,6 +353,12 @@ class FtpSpanRead(FtpRead):
     held: object = None
     taken: tuple | None = None           # (offset, data) of the chunk the last reply brought, if new
 
+    def __post_init__(self) -> None:
+        super().__post_init__()
+        if self.held is not None:        # a resumed read's first burst begins at the first chunk not held
+            first = self.missing(1)
+            self.next_burst = first[0] if first else self._top()
+
     @property
     def received(self) -> int:
         return self.held.total()

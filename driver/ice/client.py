@@ -30,6 +30,7 @@ from . import convert, load_slice, plans
 from .calls import FlightCalls, PlanCalls
 from .journal import Journal
 from .payload import PayloadClient
+from .shots import ShotsClient
 from ..payload.model import Gimbal, VehicleCamera
 from .server import DEFAULT_PORTS
 
@@ -181,6 +182,8 @@ class IceDrone(FlightCalls, PlanCalls, PayloadClient, Drone):
             self._vehicle = mavlinkserver.VehiclePrx.uncheckedCast(vehicle.ice_invocationTimeout(self._call_ms))
             self._commands = mavlinkserver.VehiclePrx.uncheckedCast(
                 vehicle.ice_invocationTimeout(self._command_ms))
+            self.shots = ShotsClient(proxy("Shots"), self._call_ms, self._command_ms,   # driver.ice.shots
+                                     self._journal.result)
         else:                                  # JdeRobot's interfaces only: Pose3D, Navdata, Extra, WP
             self._jde = {name: cast.uncheckedCast(prx.ice_invocationTimeout(self._call_ms))
                          for name, cast in (("Pose3D", jderobot.Pose3DPrx), ("Navdata", jderobot.NavdataPrx),
@@ -201,6 +204,7 @@ class IceDrone(FlightCalls, PlanCalls, PayloadClient, Drone):
             t.join(timeout=3.0)
         self._unsubscribe()                    # after the poller, which may be subscribing
         self._worker.shutdown(wait=False, cancel_futures=True)
+        getattr(self.shots, "close", lambda: None)()
         if self._com is not None:
             self._com.destroy()
         with self._lock:
@@ -252,6 +256,7 @@ class IceDrone(FlightCalls, PlanCalls, PayloadClient, Drone):
                     self._read_fence()
                     self._read_parameters()
                     self._read_payload()
+                    self.shots.poll()
                     journal = self._journal
                     self._answered(self._vehicle.getStatus(journal.server_message, journal.server_result))
                     if (self._subscription is not None
@@ -298,7 +303,7 @@ class IceDrone(FlightCalls, PlanCalls, PayloadClient, Drone):
                            lost_count=s.link.lost_count + self._lost_count)
             gimbal, camera = self._payload
             self._state = replace(s, link=link, fence=self._fence, gimbal=gimbal, camera=camera,
-                                  parameters=self._parameters)
+                                  parameters=self._parameters, shot=self.shots.state)
 
     def _missed(self, exc: Exception) -> None:
         with self._lock:

@@ -14,7 +14,7 @@ from ..core.frames import clamp, enu_quaternion, finite, wrap_pi
 from .plans import mission_from_ice, mission_to_ice, outcome_from_result, result_from_outcome
 from ..vehicle.state import (Attitude, Battery, Boot, CommandResult, CommandStatus, Environment, Fence, GlobalPosition, Gps,
                      LandedState, LinkHealth, LinkStatus, LocalPosition, Message, Readiness, SequencePhase,
-                     SequenceProgress, Setpoint, Severity, VehicleState, Velocity)
+                     SequenceProgress, SequenceState, Setpoint, Severity, VehicleState, Velocity)
 
 # AR.Drone navdata states, as JdeRobot's Navdata carries them.
 NAV_UNKNOWN, NAV_INITED, NAV_LANDED, NAV_FLYING, NAV_HOVERING, NAV_TEST, NAV_TAKING_OFF, NAV_GOTO, NAV_LANDING, \
@@ -234,6 +234,8 @@ def status_from_state(ms, s: VehicleState, messages_since: int = -1, results_sin
         setpoint=ms.Setpoint(forward=s.setpoint.forward, right=s.setpoint.right, up=s.setpoint.up,
                              yawRate=s.setpoint.yaw_rate),
         mission=mission_to_ice(ms, s.mission),
+        running=ms.SequenceStatus(name=s.sequence.name, state=s.sequence.state, detail=s.sequence.detail),
+        mayBeAirborne=s.may_be_airborne,
     )
 
 
@@ -298,4 +300,6 @@ def state_from_status(st, messages: tuple[Message, ...], results: tuple[CommandR
         setpoint=Setpoint(forward=st.setpoint.forward, right=st.setpoint.right, up=st.setpoint.up,
                           yaw_rate=st.setpoint.yawRate),
         mission=mission_from_ice(st.mission),
+        sequence=SequenceState(st.running.name, st.running.state, st.running.detail),
+        lifted=st.mayBeAirborne,         # the server's whole view: this side's own derivation can only add to it
     )

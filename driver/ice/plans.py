@@ -62,7 +62,7 @@ def mission_to_ice(ms, p: MissionProgress):
         currentName=p.current_name,
         transfers=[ms.TransferProgress(kind=int(t.kind), direction=t.direction.value, done=t.done, total=t.total,
                                        detail=t.detail) for t in p.transfers],
-        onVehicle=[plan_to_ice(ms, plan) for plan in p.on_vehicle])
+        onVehicle=[plan_to_ice(ms, plan) for plan in p.on_vehicle], flown=p.flown)
 
 
 def mission_from_ice(m) -> MissionProgress:
@@ -77,4 +77,5 @@ def mission_from_ice(m) -> MissionProgress:
     return MissionProgress(count=m.count if m.hasCount else None, current=m.current if m.hasCurrent else None,
                            state=state, last_reached=m.lastReached if m.hasLastReached else None,
                            current_name=m.currentName, transfers=transfers,
-                           on_vehicle=tuple(plan_from_ice(p) for p in m.onVehicle if kind_of(p.kind) is not None))
+                           on_vehicle=tuple(plan_from_ice(p) for p in m.onVehicle if kind_of(p.kind) is not None),
+                           flown=m.flown)

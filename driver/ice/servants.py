@@ -283,16 +283,13 @@ class NoCameraI(jderobot.Camera):
         pass
 
 
-class VehicleI(PayloadServant, mavlinkserver.Vehicle):
-    """Our extension: status and commands with the vehicle's own answer."""
+class Answering:
+    """AMD answers: each command's Ice future resolved with the driver's CommandResult once the vehicle answered
+    (our extension's servants: Vehicle, Shots)."""
 
-    def __init__(self, vehicle: Drone, settings: ServerSettings):
-        self._vehicle = vehicle
-        self._settings = settings
+    def __init__(self) -> None:
         self._lock = threading.Lock()
         self._pending: dict[Ice.Future, str] = {}     # answers still waiting for the vehicle
-        self.status_calls = 0                         # getStatus dispatches: what polling observers cost
-        self._revisions = Revisions()                 # of the parameter tables served
 
     def _reply(self, answer: Ice.Future, result: CommandResult) -> None:
         with self._lock:
@@ -329,6 +326,17 @@ class VehicleI(PayloadServant, mavlinkserver.Vehicle):
             pending = list(self._pending.items())
         for answer, command in pending:
             self._reply(answer, CommandResult(command, CommandStatus.ABORTED, reason))
+
+
+class VehicleI(PayloadServant, Answering, mavlinkserver.Vehicle):
+    """Our extension: status and commands with the vehicle's own answer."""
+
+    def __init__(self, vehicle: Drone, settings: ServerSettings):
+        super().__init__()
+        self._vehicle = vehicle
+        self._settings = settings
+        self.status_calls = 0                         # getStatus dispatches: what polling observers cost
+        self._revisions = Revisions()                 # of the parameter tables served
 
     def getStatus(self, messagesSince, resultsSince, current=None):
         self.status_calls += 1

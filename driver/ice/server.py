@@ -43,12 +43,13 @@ from ..core.files import default_record_dir
 from . import certs, servants
 from .problems import ice_problem
 from .servants import ICE_MODES, ServerSettings
+from .shots import ShotsI
 
 log = logging.getLogger(__name__)
 
 PREFIX = "MAVLinkServer."
 DEFAULT_PORTS = {"Camera": 9999, "Pose3D": 9998, "CMDVel": 9997, "Navdata": 9996, "Extra": 9995, "WP": 9994,
-                 "Vehicle": 9993}
+                 "Vehicle": 9993, "Shots": 9992}
 ONE_PORT = 9000                                         # JdeRobot's Gazebo drone served everything here
 SECURE_TRANSPORTS = ("ssl", "wss")
 WILDCARDS = ("", "*", "0.0.0.0", "::", "[::]")
@@ -344,7 +345,7 @@ class IceServer:
         return {"Camera": self.camera, "Pose3D": servants.Pose3DI(v, "Pose3D", s, shared),
                 "CMDVel": servants.CMDVelI(v, s), "Navdata": servants.NavdataI(v, s, shared),
                 "Extra": servants.ArDroneExtraI(v, s, self.camera), "WP": servants.Pose3DI(v, "WP", s, shared),
-                "Vehicle": servants.VehicleI(v, s)}
+                "Vehicle": servants.VehicleI(v, s), "Shots": ShotsI(v)}
 
     def start(self) -> "IceServer":
         check_exposure(self.properties)
@@ -447,9 +448,9 @@ class IceServer:
             from .registry import withdraw
             withdraw(self.communicator, self.name)      # the adapter's endpoints go with destroy()
             self._announced = False
-        extension = self._table.get("Vehicle") if self._table else None
-        if extension is not None:
-            extension.abort_pending("server shutting down")   # AMD answers would hold destroy() back
+        for extension in (self._table.get(name) for name in ("Vehicle", "Shots")) if self._table else ():
+            if extension is not None:
+                extension.abort_pending("server shutting down")   # AMD answers would hold destroy() back
         com, self.communicator = self.communicator, None
         if com is not None:
             com.destroy()

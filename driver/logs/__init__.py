@@ -1,1 +1,1 @@
-"""The vehicle's DataFlash logs: list, download (resumable, byte-exact, through loss), erase (issue 31)."""
+"""The vehicle's DataFlash logs: list, download (resumable, byte-exact, through loss), erase."""

@@ -140,6 +140,8 @@ class MissionProgress:
     on_vehicle: tuple[Plan, ...] = ()            # the last plans known to be on the vehicle (read back/downloaded)
     limit_problems: tuple[str, ...] = ()         # the driver's limits on the mission the vehicle holds: each item
                                                  # beyond them, or not checked (no home yet); it is not started then
+    flown: bool = False                          # flown to its end: the vehicle landed on its last item and
+                                                 # disarmed (it then rewinds to item 1 and calls that active)
 
     def transfer(self, kind: PlanKind) -> TransferProgress | None:
         return next((t for t in self.transfers if t.kind is kind), None)

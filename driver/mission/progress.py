@@ -12,7 +12,8 @@ from dataclasses import replace
 
 from .plan import MissionProgress, MissionRunState, Plan, PlanKind, TransferDirection
 
-__all__ = ["fold_mission_current", "fold_item_reached", "fold_text", "fold_transfer_end", "fold_restart"]
+__all__ = ["fold_mission_current", "fold_item_reached", "fold_text", "fold_transfer_end", "fold_restart",
+           "fold_arming"]
 
 _STARTED = re.compile(r"^Mission: (\d+) (\S+)")
 
@@ -27,8 +28,10 @@ def fold_mission_current(p: MissionProgress, m) -> MissionProgress:
     except ValueError:
         run = MissionRunState.UNKNOWN
     name = p.current_name if p.current == m.seq else ""
+    if p.flown and run is MissionRunState.ACTIVE:    # rewound after the landing that ended it, and disarmed:
+        run = MissionRunState.COMPLETE               # it flew to the end, it is not flying
     return replace(p, current=int(m.seq), count=int(total) if total is not None else p.count, state=run,
-                   current_name=name)
+                   current_name=name, flown=p.flown or run is MissionRunState.COMPLETE)
 
 
 def fold_item_reached(p: MissionProgress, m) -> MissionProgress:
@@ -62,3 +65,21 @@ def fold_restart(p: MissionProgress) -> MissionProgress:
     """The vehicle started again: what it holds and where it was in its mission are not known until it says
     (a plan held before may have been wiped or replaced meanwhile); transfers under way stay as they are."""
     return MissionProgress(transfers=p.transfers)
+
+
+#: What ArduCopter names the last item of a mission that ends on the ground ("Mission: 5 Land").
+_LANDING_ITEMS = ("Land", "RTL")
+
+
+def fold_arming(p: MissionProgress, armed: bool, mode: str, last_in_air: tuple[int | None, str]) -> MissionProgress:
+    """The vehicle armed or disarmed; ``last_in_air``: (item, name) of the last item current while it flew.
+    Disarmed in AUTO after its mission's last item, a landing, the mission was flown to its end: ArduCopter then
+    resets it (AP_Mission::reset, from the disarm) and restarts it at item 1 disarmed, saying "Mission: 1 Takeoff"
+    and MISSION_CURRENT active (4.6.3 SITL); the pilot is told it is complete. Armed again, it may fly again."""
+    if armed:
+        return replace(p, flown=False) if p.flown else p
+    item, name = last_in_air
+    last = item is not None and p.count is not None and item == p.count
+    if mode == "AUTO" and p.state is not MissionRunState.NOT_STARTED and (last or name in _LANDING_ITEMS):
+        return replace(p, flown=True, state=MissionRunState.COMPLETE)
+    return p

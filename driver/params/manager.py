@@ -154,11 +154,6 @@ class ParameterManager:
             pending.reads = 0
 
     @property
-    def ftp_capable(self) -> bool | None:
-        """Whether the vehicle's table (and its logs) may be read over FTP (the firmware profile's answer)."""
-        return self._firmware.ftp
-
-    @property
     def reasking(self) -> bool:
         """Reads by index are out: each answer frees a place for the next (the ticker is woken for it)."""
         return self._download is not None and not self._download.listing

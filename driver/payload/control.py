@@ -287,17 +287,20 @@ class Payload:
         pitch = min(max(pitch, GIMBAL_PITCH_RANGE[0]), GIMBAL_PITCH_RANGE[1])
         yaw = frames.wrap_180(self._rate_target[1] + self._rate[1] * dt)
         self._rate_target = (pitch, yaw)
+        return [self.angle_message(pitch, yaw, state)]
+
+    def angle_message(self, pitch: float, yaw: float, state):
+        """One angle for the gimbal, unacknowledged, in the protocol this vehicle's mount speaks: for what streams
+        angles (a stepped rate, a smart shot's camera), never a retried command each."""
         system, component = self._outbox.target()
         protocol = self.protocol(state)
         if protocol == MOUNT_MSG:
-            return [self._mount_control(pitch, yaw)]
+            return self._mount_control(pitch, yaw)
         if protocol == MANAGER:                 # an angle, never the protocol's NaN "not used" for a rate
-            return [mavlink.MAVLink_command_long_message(system, component,
-                                                         mavlink.MAV_CMD_DO_GIMBAL_MANAGER_PITCHYAW, 0,
-                                                         pitch, yaw, 0, 0, 0, 0, 0)]
-        return [mavlink.MAVLink_command_long_message(system, component, mavlink.MAV_CMD_DO_MOUNT_CONTROL, 0,
-                                                     pitch, 0, yaw, 0, 0, 0,
-                                                     mavlink.MAV_MOUNT_MODE_MAVLINK_TARGETING)]
+            return mavlink.MAVLink_command_long_message(system, component, mavlink.MAV_CMD_DO_GIMBAL_MANAGER_PITCHYAW,
+                                                        0, pitch, yaw, 0, 0, 0, 0, 0)
+        return mavlink.MAVLink_command_long_message(system, component, mavlink.MAV_CMD_DO_MOUNT_CONTROL, 0,
+                                                    pitch, 0, yaw, 0, 0, 0, mavlink.MAV_MOUNT_MODE_MAVLINK_TARGETING)
 
     # -- region of interest ------------------------------------------------------------------------------
     def look_at(self, lat: float, lon: float, alt: float = 0.0) -> Future:

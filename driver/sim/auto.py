@@ -9,7 +9,8 @@ Mixed into :class:`~driver.sim.autopilot.Autopilot`, next to :mod:`.missions` (w
   navigation items run when the first is done; DO_JUMP jumps (param2 times; -1 for ever).
 * MISSION_SET_CURRENT (message) and DO_SET_MISSION_CURRENT (command; 4.x only) jump at once.
 * The RTL item climbs, returns, lands and disarms; the mission is then complete (mission_state 5) and the
-  vehicle stays in AUTO. Armed on the ground, AUTO needs a mission that starts with a takeoff
+  vehicle stays in AUTO. A LAND item is never reached: the vehicle disarms on the ground first, which resets the
+  mission, and AUTO starts it again from item 1, disarmed ("Mission: 1 Takeoff", MISSION_CURRENT active). Armed on the ground, AUTO needs a mission that starts with a takeoff
   ("Auto: Missing Takeoff Cmd"); disarmed in AUTO with no mission, "PreArm: Mode requires mission" (4.x).
 
 Speed is WPNAV_SPEED (``wp_speed``, the same accessor GUIDED flies with; DO_CHANGE_SPEED overrides it).
@@ -227,6 +228,14 @@ class Auto:
         self._text(mavlink.MAV_SEVERITY_INFO, f"Mission: {seq} {COMMAND_NAMES.get(item.command, '?')}")
         log.info("AUTO: item %d %s", seq, COMMAND_NAMES.get(item.command, item.command))
 
+    def _auto_disarmed(self) -> None:
+        """AP_Arming_Copter::disarm resets the mission (AP_Mission::reset), and ModeAuto::run, still in AUTO,
+        starts a running one again from item 1, disarmed: after a mission that ends with a LAND item, 4.6.3 SITL says
+        "Disarming motors", "Mission: 1 Takeoff" and MISSION_CURRENT seq 1 active."""
+        if self.mode == AUTO and self.mission_run == "running":
+            self.jumps_done = {}
+            self._auto_walk(1)
+
     def _auto_finish(self) -> None:
         self.mission_run = "complete"
         self.auto_stage = "done"
@@ -278,8 +287,10 @@ class Auto:
         if command in _LANDING:
             if self.auto_stage == "fly" and command == mavlink.MAV_CMD_NAV_LAND and self._at_target(vertical=False):
                 self.auto_stage, self.rtl_phase, self.hold_point = "land", "land", None
-            if self.armed and self.landed and self.touchdown_at is not None \
-                    and self.t - self.touchdown_at >= LAND_DISARM_DELAY - 1e-9:
+            # RTL's verify sees it landed before the disarm: reached, and the mission complete; a LAND item is
+            # never reached: the disarm comes first (_timers), and resets the mission (_auto_disarmed)
+            if command == mavlink.MAV_CMD_NAV_RETURN_TO_LAUNCH and self.armed and self.landed \
+                    and self.touchdown_at is not None and self.t - self.touchdown_at >= LAND_DISARM_DELAY - 1e-9:
                 self.emit(self.factory.mission_item_reached_encode(self.mission_current))
                 self._auto_finish()              # _timers disarms next: "Disarming motors"
             return

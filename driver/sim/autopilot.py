@@ -30,6 +30,7 @@ from .common import (DEFAULT_PARAMS, MODE_NAMES, MODES, NOT_ARMABLE, POSITION_MO
                      wrap_pi)
 from .faults import Faults
 from .flight import LAND_DISARM_DELAY, Flight
+from .follow import FollowMode
 from .gimbal import Payload
 from .messages import Messages
 from .failsafe import GcsFailsafe
@@ -73,6 +74,8 @@ class SimTruth:
     battery_remaining: float
     ready: bool
     last_command: str
+    mount_pitch: float = 0.0         # degrees, the gimbal's pitch as it is (0 level, -90 down)
+    follow_target: tuple | None = None   # FOLLOW: (north, east, up) of the lead as AP_Follow last heard it
 
     @property
     def altitude(self) -> float:
@@ -88,7 +91,7 @@ class SimTruth:
 
 
 class Autopilot(Setup, Telemetry, Commands, ParamProtocol, FtpServer, LogServer, GcsFailsafe, Missions, Auto, Messages,
-                Flight,
+                Flight, FollowMode,
                 Payload):
     """One ArduCopter: state, flight modes, command handling and telemetry streams."""
 
@@ -144,6 +147,7 @@ class Autopilot(Setup, Telemetry, Commands, ParamProtocol, FtpServer, LogServer,
         self._missions_init()             # missions.py: the plans outlive a reboot
         self._auto_init()                 # auto.py
         self._setup_init()                # setup.py: calibrations, motor test, radio, traffic
+        self._follow_init()               # follow.py: the lead AP_Follow hears
         self._boot()
 
     # -- lifecycle -------------------------------------------------------------------------------
@@ -174,6 +178,8 @@ class Autopilot(Setup, Telemetry, Commands, ParamProtocol, FtpServer, LogServer,
         self.yaw_mode = "hold"            # hold | rate | fixed | look_ahead
         self.yaw_rate_cmd = 0.0
         self.yaw_remaining = 0.0
+        self.yaw_target = 0.0             # angle_rate: the heading AutoYaw moves on with the rate
+        self.posvel_time = 0.0            # posvel: when the target was last moved on
         self.yaw_slew = math.radians(60.0)
         self.yaw_cmds_enabled = True
         self.rtl_phase = None
@@ -334,6 +340,7 @@ class Autopilot(Setup, Telemetry, Commands, ParamProtocol, FtpServer, LogServer,
         if text:
             self._text(mavlink.MAV_SEVERITY_INFO, text)
         log.info("disarmed")
+        self._auto_disarmed()
 
     # -- modes -------------------------------------------------------------------------------------
     def set_mode(self, number: int) -> bool:
@@ -350,8 +357,12 @@ class Autopilot(Setup, Telemetry, Commands, ParamProtocol, FtpServer, LogServer,
             if refusal:
                 self._text(mavlink.MAV_SEVERITY_WARNING, refusal)
             return False
+        if number == MODES["FOLLOW"] and not self._follow_entered():
+            return False
         if self.mode == MODES["AUTO"]:
             self._auto_left()
+        if self.mode == MODES["FOLLOW"]:
+            self._follow_left()
         self.mode = number
         self.mode_changed = True
         self.hold_point = None
@@ -360,7 +371,7 @@ class Autopilot(Setup, Telemetry, Commands, ParamProtocol, FtpServer, LogServer,
         self.rtl_phase = None
         if self.guided == "takeoff":
             self.guided = "hold"
-        if number == MODES["GUIDED"]:
+        if number in (MODES["GUIDED"], MODES["FOLLOW"]):
             self.guided = "hold"
             self.yaw_cmds_enabled = True
             self.yaw_mode = "hold"
@@ -438,4 +449,5 @@ class Autopilot(Setup, Telemetry, Commands, ParamProtocol, FtpServer, LogServer,
             landed_state=self.landed_state(), north=self.n, east=self.e, down=self.d,
             vn=self.vn, ve=self.ve, vd=self.vd, roll=self.roll, pitch=self.pitch, yaw=self.yaw,
             yaw_rate=self.yaw_rate, battery_voltage=self.voltage, battery_remaining=self.remaining,
-            ready=self.ready, last_command=self.last_command)
+            ready=self.ready, last_command=self.last_command, mount_pitch=self.mount_pitch,
+            follow_target=self.follow_truth())

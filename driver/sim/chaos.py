@@ -24,12 +24,13 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from ..core.frames import offset_latlon
 from ..mission.plan import MissionItem, Plan, PlanKind
+from ..vehicle.commands import decided
 from ..vehicle.safety import MANUAL_THROTTLE_MODES
 from ..vehicle.state import CommandStatus
 from .faults import LinkFaults
 from .lockstep import Lockstep
 
-__all__ = ["Action", "Flight", "ACTIONS", "MODES", "FaultSet", "Violation"]
+__all__ = ["Action", "Flight", "ACTIONS", "MODES", "FaultSet", "Violation", "wrong_answer"]
 
 #: What a pilot may do, by name; each :class:`Action` carries one and how long the flight then goes on.
 ACTIONS = ("arm", "takeoff", "sticks", "stop", "land", "rtl", "mission", "pause", "resume", "mode", "motor test",
@@ -49,7 +50,7 @@ class Action:
     wait: float = 1.0             # s the flight goes on before the next action
 
     def __str__(self) -> str:
-        return f"{self.kind}({self.value:.2f}) then {self.wait:.1f} s"
+        return f"{self.kind}({self.value!r}) then {self.wait!r} s"     # exact: a failure replays as it flew
 
 
 @dataclass(frozen=True)
@@ -89,6 +90,7 @@ class Flight:
     faults: FaultSet = field(default_factory=FaultSet)
     violations: list = field(default_factory=list)
     answers: list = field(default_factory=list)           # (action, result) as told
+    seconds: float = 0.0                                   # of the vehicle's time flown
     log_dir: str = ""
 
     def fly(self, actions: list[Action]) -> list[Violation]:
@@ -108,11 +110,12 @@ class Flight:
                 self._do(action)
                 self._run(action.wait, sticks=action if action.kind == "sticks" else None)
             self.ls.faults.end_outage()
-            self._run(SETTLE, until=lambda: all(a.judged for a in self._asked))
+            self._run(SETTLE, until=lambda: all(a.judged for a in self._asked if a.action.kind != "log download"))
             for asked in self._asked:
-                if not asked.judged:
+                if not asked.judged and asked.action.kind != "log download":   # a log may take minutes
                     self._violate("no answer", f"{asked.name}: nothing said {SETTLE:g} s after the last action")
         finally:
+            self.seconds = self.ls.autopilot.t
             self.ls.close()
             self._dir.cleanup()
         return self.violations
@@ -175,7 +178,7 @@ class Flight:
     # -- the truth and the rules ------------------------------------------------------------------------------
     def _record(self) -> None:
         ap = self.ls.autopilot
-        self._truth.append((ap.t, ap.mode_name, ap.armed, ap.landed, -ap.d, ap.mission_run))
+        self._truth.append((ap.t, ap.mode_name, ap.armed, ap.landed, -ap.d, ap.mission_run == "running"))
 
     def _violate(self, rule: str, detail: str) -> None:
         self.violations.append(Violation(self.ls.autopilot.t, rule, detail))
@@ -196,7 +199,7 @@ class Flight:
             self._violate("airborne unseen", f"the vehicle is {-ap.d:.1f} m up in {ap.mode_name} and the driver heard "
                           "it so, or sent what lifted it, yet says it is surely on the ground")
         for asked in self._asked:
-            if not asked.judged and asked.future.done():
+            if not asked.judged and decided(asked.future) is not None:   # as the driver decided it, this tick
                 asked.judged = True
                 self._judge(asked)
 
@@ -231,46 +234,45 @@ class Flight:
 
     # -- the answers --------------------------------------------------------------------------------------------
     def _judge(self, asked: _Asked) -> None:
-        result = asked.future.result()
+        result = decided(asked.future)
         result = getattr(result, "result", result)          # a transfer's outcome carries its result
         self.answers.append((asked.action, result))
-        if not hasattr(result, "status"):                   # a log download: judged by the rules alone
-            return
-        status, kind = result.status, asked.action.kind
-        window = self._truth[asked.since:]
-        if not window:
-            return
-        modes = {t[1] for t in window}
-        now = window[-1]
-        wrong = None
-        if status is CommandStatus.ACCEPTED:
-            if kind == "arm" and not any(t[2] for t in window):
-                wrong = "said armed, never armed"
-            elif kind == "takeoff" and max(t[4] for t in window) < 1.5:
-                wrong = f"said taken off, highest {max(t[4] for t in window):.1f} m"
-            elif kind == "mode" and asked.name[5:] not in modes:
-                wrong = f"said {asked.name[5:]}, the vehicle showed {sorted(modes)}"
-            elif kind == "land" and "LAND" not in modes:
-                wrong = f"said landing, modes {sorted(modes)}"
-            elif kind == "rtl" and "RTL" not in modes:
-                wrong = f"said returning, modes {sorted(modes)}"
-            elif kind == "mission" and not any(t[1] == "AUTO" and t[5] == "running" for t in window):
-                wrong = "said the mission runs, never AUTO with the mission running"
-            elif kind == "pause" and "BRAKE" not in modes:
-                wrong = f"said paused, modes {sorted(modes)}"
-            elif kind == "resume" and "AUTO" not in modes:
-                wrong = f"said resumed, modes {sorted(modes)}"
-            elif kind == "stop" and not (now[1] in HOLD_MODES or (now[3] and not now[2])):
-                wrong = f"said {result.reason!r}, the vehicle in {now[1]}, {'armed' if now[2] else 'disarmed'}, " \
-                        f"{'landed' if now[3] else f'{now[4]:.1f} m up'}"
-        elif status is CommandStatus.REFUSED:
-            if kind == "arm" and all(t[2] for t in window[-5:]) and not window[0][2]:
-                wrong = "said refused, the vehicle armed"
-            elif kind == "mode" and now[1] == asked.name[5:] and window[0][1] != now[1]:
-                wrong = f"said refused, the vehicle in {now[1]}"
+        wrong = wrong_answer(asked.action.kind, asked.name, result, self._truth[asked.since:])
         if wrong:
             self._violate("wrong answer", f"{asked.name}: {result.status.value} ({result.reason}): {wrong}")
 
     @staticmethod
     def describe(actions: list[Action]) -> str:
         return "; ".join(str(a) for a in actions)
+
+
+def wrong_answer(kind: str, name: str, result, window: list) -> str | None:
+    """What is false in ``result`` (the answer to the pilot's ``kind`` action, ``name`` as told) given ``window``,
+    the vehicle's truth from the request to the answer: (time, mode, armed, landed, altitude, mission running)
+    tuples. None when it agrees with the vehicle. A log download is judged by the flight rules alone."""
+    if not hasattr(result, "status") or not window:
+        return None
+    modes = {t[1] for t in window}
+    now = window[-1]
+    if result.status is CommandStatus.ACCEPTED:
+        if kind == "arm" and not any(t[2] for t in window):
+            return "said armed, never armed"
+        if kind == "takeoff" and max(t[4] for t in window) < 1.5:
+            return f"said taken off, highest {max(t[4] for t in window):.1f} m"
+        if kind == "mode" and name[5:] not in modes:
+            return f"said {name[5:]}, the vehicle showed {sorted(modes)}"
+        if kind in ("land", "rtl", "pause", "resume"):
+            shown = {"land": "LAND", "rtl": "RTL", "pause": "BRAKE", "resume": "AUTO"}[kind]
+            if shown not in modes:
+                return f"said {shown}, modes {sorted(modes)}"
+        if kind == "mission" and not any(t[1] == "AUTO" and t[5] for t in window):
+            return "said the mission runs, never AUTO with the mission running"
+        if kind == "stop" and not (now[1] in HOLD_MODES or (now[3] and not now[2])):
+            return (f"said {result.reason!r}, the vehicle in {now[1]}, {'armed' if now[2] else 'disarmed'}, "
+                    f"{'landed' if now[3] else f'{now[4]:.1f} m up'}")
+    elif result.status is CommandStatus.REFUSED:
+        if kind == "arm" and all(t[2] for t in window[-5:]) and not window[0][2]:
+            return "said refused, the vehicle armed"
+        if kind == "mode" and now[1] == name[5:] and window[0][1] != now[1]:
+            return f"said refused, the vehicle in {now[1]}"
+    return None

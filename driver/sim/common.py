@@ -86,6 +86,19 @@ DEFAULT_PARAMS = {
     "RALLY_TOTAL": (0, mavlink.MAV_PARAM_TYPE_INT8),     # AP_Rally: how many rally points (3.3: set by the GCS)
     "CHUTE_ENABLED": (0, mavlink.MAV_PARAM_TYPE_INT8),  # off, as recorded; CHUTE_ALT_MIN is then hidden
     "CHUTE_ALT_MIN": (10, mavlink.MAV_PARAM_TYPE_INT16),
+    # AP_Follow (libraries/AP_Follow): FOLL_ENABLE is listed; the rest hidden until it is set, as the firmware's
+    # enable flag does (AP_PARAM_FLAG_ENABLE), and read or set by name
+    "FOLL_ENABLE": (0, mavlink.MAV_PARAM_TYPE_INT8),
+    "FOLL_SYSID": (0, mavlink.MAV_PARAM_TYPE_INT16),
+    "FOLL_DIST_MAX": (100.0, mavlink.MAV_PARAM_TYPE_REAL32),
+    "FOLL_OFS_TYPE": (0, mavlink.MAV_PARAM_TYPE_INT8),
+    "FOLL_OFS_X": (0.0, mavlink.MAV_PARAM_TYPE_REAL32),
+    "FOLL_OFS_Y": (0.0, mavlink.MAV_PARAM_TYPE_REAL32),
+    "FOLL_OFS_Z": (0.0, mavlink.MAV_PARAM_TYPE_REAL32),
+    "FOLL_YAW_BEHAVE": (1, mavlink.MAV_PARAM_TYPE_INT8),
+    "FOLL_POS_P": (0.1, mavlink.MAV_PARAM_TYPE_REAL32),
+    "FOLL_ALT_TYPE": (1, mavlink.MAV_PARAM_TYPE_INT8),
+    "FOLL_OPTIONS": (0, mavlink.MAV_PARAM_TYPE_INT16),
     "SERIAL0_PROTOCOL": (2, mavlink.MAV_PARAM_TYPE_INT8),
     "SR0_EXT_STAT": (0, mavlink.MAV_PARAM_TYPE_INT16),    # SITL's defaults file streams at once; the sim
     # streams only what a ground station asks for (REQUEST_DATA_STREAM writes these, as ArduPilot does)

@@ -129,6 +129,9 @@ class Flight:
         elif fixed:
             rem = self.yaw_remaining
             target = math.copysign(min(self.yaw_slew, abs(rem) * 3.0), rem) if abs(rem) > 1e-4 else 0.0
+        elif self.yaw_mode == "angle_rate":
+            self.yaw_target = wrap_pi(self.yaw_target + self.yaw_rate_cmd * dt)
+            target = self.yaw_rate_cmd + _clamp(3.0 * wrap_pi(self.yaw_target - self.yaw), -AUTO_YAW_SLEW, AUTO_YAW_SLEW)
         elif self.yaw_mode == "look_ahead" and math.hypot(self.vn, self.ve) > LOOK_AHEAD_SPEED:
             error = wrap_pi(math.atan2(self.ve, self.vn) - self.yaw)
             target = _clamp(error * 3.0, -AUTO_YAW_SLEW, AUTO_YAW_SLEW)
@@ -210,6 +213,9 @@ class Flight:
             return vn, ve, vd, ACC_XY
         if mode == MODES["AUTO"]:
             return (*self._auto(), self._auto_acceleration())
+        if mode == MODES["FOLLOW"]:                  # follow.py: Guided's velocity controller
+            self._tau = VEL_TAU
+            return (*self._follow(), ACC_XY)
         # LOITER, POSHOLD, ALT_HOLD and the rest: hold, nudged by MANUAL_CONTROL sticks.
         manual = self._manual()
         if manual is not None and any(abs(v) > 1e-3 for v in manual):
@@ -252,7 +258,26 @@ class Flight:
             return self.vel_target
         if self.guided == "position":
             return self._pos_ctrl(self.pos_target, self.wp_speed(), self._speed_up(), self._speed_dn())
+        if self.guided == "posvel":
+            return self._posvel()
         return self._hold()
+
+    def _posvel(self) -> tuple[float, float, float]:
+        """ModeGuided::posvelaccel_control_run: the target moves on with its velocity (AC_PosControl's
+        input_pos_vel_accel_xy/z integrate it each loop), the velocity is fed forward and the position error
+        corrected (sqrt-shaped far off); GUID_TIMEOUT without a new target zeroes the velocity (the target stops
+        where it got to) and a turning yaw holds."""
+        dt = self.t - self.posvel_time
+        self.posvel_time = self.t
+        if self.t - self.vel_time > float(self.params["GUID_TIMEOUT"]):
+            self.vel_target = (0.0, 0.0, 0.0)
+            if self.yaw_mode in ("rate", "angle_rate"):
+                self.yaw_mode, self.yaw_rate_cmd = "hold", 0.0
+        vn, ve, vd = self.vel_target
+        tn, te, td = self.pos_target
+        self.pos_target = (tn + vn * dt, te + ve * dt, min(td + vd * dt, 0.0))
+        cn, ce, cd = self._pos_ctrl(self.pos_target, 20.0, 20.0, 20.0, DECEL_XY)
+        return vn + cn, ve + ce, vd + cd
 
     def _fence_check(self) -> None:
         """Copter::fence_check with AC_Fence::check: a new breach of the ceiling, of the circle around home or

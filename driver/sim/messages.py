@@ -113,6 +113,9 @@ class Messages:
         c, s = math.cos(self.yaw), math.sin(self.yaw)
         use_pos = not (mask & POS_IGNORE)
         use_vel = not (mask & VEL_IGNORE)
+        vx, vy, vz = msg.vx, msg.vy, msg.vz
+        if body:
+            vx, vy = c * vx - s * vy, s * vx + c * vy
         if use_pos:
             x, y, z = msg.x, msg.y, msg.z
             if body:
@@ -123,12 +126,9 @@ class Messages:
                 z = z if profile.local_z_from_home else z + od
             else:
                 x, y, z = x + self.n, y + self.e, z + self.d
-            if not self._go_to(x, y, z):
+            if not self._target_position(x, y, z, (vx, vy, vz) if use_vel else None, mask):
                 return
         elif use_vel:
-            vx, vy, vz = msg.vx, msg.vy, msg.vz
-            if body:
-                vx, vy = c * vx - s * vy, s * vx + c * vy
             self._fly_velocity(vx, vy, vz)
         else:
             return
@@ -146,7 +146,8 @@ class Messages:
                 down = -(msg.alt - self.home_alt)
             else:
                 down = -msg.alt
-            if not self._go_to(north, east, down):
+            velocity = None if mask & VEL_IGNORE else (msg.vx, msg.vy, msg.vz)
+            if not self._target_position(north, east, down, velocity, mask):
                 return
         elif not (mask & VEL_IGNORE):
             self._fly_velocity(msg.vx, msg.vy, msg.vz)
@@ -159,6 +160,24 @@ class Messages:
         self.vel_time = self.t
         self.guided = "velocity"
         self.hold_point = None
+
+    def _target_position(self, north: float, east: float, down: float, velocity, mask: int) -> bool:
+        """GCS_MAVLINK_Copter's choice: position with velocity is the PosVelAccel target (set_destination_posvel);
+        a position alone the destination; a position with an acceleration and no velocity is refused by stopping
+        (mode_guided.init)."""
+        if velocity is not None:
+            if not self._within_fence(north, east, -down):
+                return False                 # set_destination_posvelaccel: outside the fence, ignored
+            self.pos_target = (_clamp(north, -1e5, 1e5), _clamp(east, -1e5, 1e5), _clamp(down, -1000.0, 0.0))
+            self.vel_target = tuple(_clamp(v, -20.0, 20.0) for v in velocity)
+            self.vel_time = self.posvel_time = self.t
+            self.guided = "posvel"
+            self.hold_point = None
+            return True
+        if mask & ACC_IGNORE != ACC_IGNORE:
+            self.guided, self.hold_point = "hold", None
+            return False
+        return self._go_to(north, east, down)
 
     def _go_to(self, north: float, east: float, down: float) -> bool:
         if not self._within_fence(north, east, -down):
@@ -187,7 +206,11 @@ class Messages:
             if self.yaw_mode in ("hold", "rate"):
                 self.yaw_mode = "look_ahead"
             return
-        if not (mask & YAW_IGNORE):
+        self.roi_yaw = False                 # auto_yaw leaves ROI for the target's yaw (or its default)
+        if not (mask & YAW_IGNORE) and not (mask & YAW_RATE_IGNORE) and not relative:
+            self.yaw_mode = "angle_rate"     # AutoYaw::set_yaw_angle_rate: the heading moves on with the rate
+            self.yaw_target, self.yaw_rate_cmd = wrap_pi(yaw), _clamp(yaw_rate, -3.5, 3.5)
+        elif not (mask & YAW_IGNORE):
             target = yaw + (self.yaw if relative else 0.0)
             self.yaw_mode = "fixed"
             self.yaw_remaining = wrap_pi(target - self.yaw)

@@ -15,6 +15,7 @@ from dataclasses import dataclass
 from . import guided
 from ..mission.plan import Plan, PlanKind, TransferOutcome
 from ..core.results import answered
+from ..shots.api import NO_SHOTS, Shots
 from .inspector import Inspection
 from .state import BatteryThresholds, CommandResult, CommandStatus, VehicleState
 
@@ -71,9 +72,19 @@ class Drone(abc.ABC):
         """Play/pause/speed control when the 'vehicle' is a recorded flight, else None."""
         return None
 
+    #: the smart shots (driver.shots): orbit, cable cam, selfie, follow, pano; state in ``state().shot``
+    shots: Shots = NO_SHOTS
+
     #: the link's counts by system, component and message (driver.vehicle.inspector.MessageInspector), set by a
     #: drone that reads the link itself (the Vehicle's reader); None: this drone does not see the link
     inspector = None
+
+    #: what only a drone holding the link itself has (the embedded Vehicle), None on one whose server holds it (the
+    #: Ice client): its settings (driver.vehicle.vehicle.VehicleConfig), the vehicle's setup (calibrations, motor
+    #: test, radio: driver.setup.control.VehicleSetup) and its DataFlash logs (driver.logs.control.LogControl)
+    config = None
+    setup = None
+    logs = None
 
     def inspection(self) -> Inspection:
         """Every message type from every component with its rate and newest fields; ``available`` False (and
@@ -146,6 +157,11 @@ class Drone(abc.ABC):
     def circle(self, north: float, east: float, radius: float) -> Future[CommandResult]:
         """Circle the point (north, east) m from home at ``radius`` m, the way ArduCopter's CIRCLE mode can."""
         return guided.circle_point(self, north, east, radius)
+
+    def reboot(self) -> Future[CommandResult]:
+        """Restart the autopilot (MAV_CMD_PREFLIGHT_REBOOT_SHUTDOWN), e.g. after a new frame; a drone whose server
+        holds the link refuses at once."""
+        return answered(CommandResult("reboot", CommandStatus.REJECTED, _NO_REBOOT))
 
     # -- payload --------------------------------------------------------------------------
     def toggle_camera(self) -> Future[CommandResult]:
@@ -301,4 +317,5 @@ class Fleet(abc.ABC):
 _NO_MISSIONS = "this vehicle connection cannot transfer or fly plans"
 _NO_PARAMETERS = "this vehicle connection cannot read or write parameters"
 _NO_PAYLOAD = "this vehicle connection cannot point a gimbal or trigger a camera"
+_NO_REBOOT = "this vehicle connection cannot restart the autopilot: its server holds the link"
 _NO_SIGNING = "the MAVLink link is signed where it is held: set signing up on the MAVLinkServer"

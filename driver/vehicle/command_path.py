@@ -31,9 +31,10 @@ class CommandPath:
         self._clock, self._wake, self._replaying = clock, wake, replaying
 
     def long(self, command: int, params=(), name: str | None = None, *, guard=None, retry: float | None = None,
-             early: bool = False) -> Future:
+             early: bool = False, shows_mode: str | None = None) -> Future:
         """A COMMAND_LONG within the flight rules, retried, settled by its own ACK (and, for arming, the
-        heartbeat); ``retry``: s between attempts; ``early``: settled by the vehicle's ACCEPTED already."""
+        heartbeat); ``retry``: s between attempts; ``early``: settled by the vehicle's ACCEPTED already;
+        ``shows_mode``: the mode the heartbeat shows once it is done (MISSION_START: AUTO)."""
         name = name or command_name(command)
         params = [float(p) for p in (list(params) + [0.0] * 7)[:7]]
         if not frames.finite(*params):
@@ -44,38 +45,34 @@ class CommandPath:
             problem = self._rules.command_problem(command, params, self._store.state, self._clock())
             if problem:
                 return self.answer(name, CommandStatus.REJECTED, problem)
-            future = self._sender.submit(name, command, params, self._clock(), guard=guard,
-                                         tag=self._sequence.tag, retry=retry, early=early)
+            future = self._sender.submit(name, command, params, self._clock(), guard=guard, tag=self._sequence.tag,
+                                         retry=retry, early=early, shows_mode=COPTER_MODES.get(shows_mode or ""))
         self._wake.set()
         return future
 
-    def mode(self, name: str, *, early: bool = False, ask: bool = False) -> Future:
-        """A mode change through the flight rules, confirmed by the heartbeat; ``ask``: sent even if the state shows
-        the mode already (it may be stale: a command on its way, a MISSION_START, may have changed it)."""
+    def mode(self, name: str, *, early: bool = False) -> Future:
+        """A mode change through the flight rules, confirmed by the heartbeat."""
         number = COPTER_MODES.get(name.upper())
         if number is None:
             return self.answer(f"mode {name}", CommandStatus.REJECTED,
                                f"unknown mode; known: {', '.join(sorted(COPTER_MODES))}")
         if self._replaying:
             return self.answer(f"mode {name.upper()}", CommandStatus.REJECTED, REPLAYING)
-        with self._store.lock:
-            s = self._store.state
+        with self._store.lock:                        # sent even when the state shows it: the vehicle may have left
+            s = self._store.state                     # it since (a failsafe, its mission's end), the state be older
             problem = self._rules.mode_problem(number, s)
             if problem:
                 return self.answer(f"mode {name.upper()}", CommandStatus.REJECTED, problem)
-            if not ask and s.mode == name.upper() and s.connected and self.settled(mavlink.MAV_CMD_DO_SET_MODE):
-                return self.answer(f"mode {name.upper()}", CommandStatus.ACCEPTED, "already in that mode")
             future = self._sender.submit_mode(f"mode {name.upper()}", number, self._clock(),
                                               tag=self._sequence.tag, early=early)
         self._wake.set()
         return future
 
     def arming(self, armed: bool, force: bool = False, early: bool = False) -> Future:
-        """Arm or disarm; ``force``: past the vehicle's own checks (ArduPilot's magic number)."""
+        """Arm or disarm; ``force``: past the vehicle's own checks (ArduPilot's magic number). Sent even when the
+        state shows it done: the vehicle disarms by itself (DISARM_DELAY, a motor test's end), and the state may be
+        older than that; ArduCopter accepts an arm of an armed vehicle."""
         name = ("arm" if armed else "disarm") + (" (forced)" if force else "")
-        with self._store.lock:
-            if self._store.state.armed == armed and self.settled(mavlink.MAV_CMD_COMPONENT_ARM_DISARM):
-                return self.answer(name, CommandStatus.ACCEPTED, f"already {'armed' if armed else 'disarmed'}")
         return self.long(mavlink.MAV_CMD_COMPONENT_ARM_DISARM, (1 if armed else 0, ARM_FORCE_MAGIC if force else 0), name,
                          early=early)
 

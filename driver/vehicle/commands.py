@@ -38,12 +38,31 @@ from .state import CommandResult, CommandStatus, Severity, VehicleState
 
 log = logging.getLogger(__name__)
 
-__all__ = ["CommandSender", "Notifier", "command_name"]
+__all__ = ["CommandSender", "CommandFuture", "Notifier", "command_name", "decided"]
 
 MODE_RESEND = 1.0            # s between SET_MODE messages on firmware that answers none (one heartbeat)
 ACKED_MODE_WAIT = 1.5        # s an accepted mode change waits for a heartbeat showing it before re-sending
 STATUSTEXT_GRACE = 0.3       # s: the STATUSTEXT explaining a refusal may trail the ACK
+SHOWN_FOR = 2.5              # s the heartbeat must go on showing what an unanswered arm or mode change asked (three
+                             # heartbeats) before it counts as done: a state the vehicle passed through on its own (a
+                             # motor test arms it for a second) is not the request's doing
 PROGRESS_TIMEOUT = 30.0      # s an IN_PROGRESS command may stay silent before it counts as lost
+
+
+class CommandFuture(Future):
+    """A command's answer. The driver's own parts (the sequences, the mission watch) read it the moment it is
+    decided, under the state lock (:func:`decided`); everyone else once the notifier has settled it, so no caller's
+    callback ever runs under the lock. On a hand-driven clock the driver then behaves the same however slowly the
+    notifier's threads run."""
+    decision = None
+
+
+def decided(future: Future):
+    """``future``'s result if it is decided, else None: at once for a :class:`CommandFuture`."""
+    decision = getattr(future, "decision", None)
+    if decision is not None:
+        return decision
+    return future.result() if future.done() else None
 
 
 def command_name(command: int) -> str:
@@ -86,9 +105,10 @@ class _Command:
     message_index: int
     mode: int | None = None                   # a mode change: the custom_mode the heartbeat must show
     armed: bool | None = None                 # arming (True) or disarming (False): the heartbeat's armed bit
+    shows_mode: int | None = None             # a command that switches mode (MISSION_START: AUTO), shown the same way
     guard: Callable[[VehicleState], str | None] | None = None
     retry: float | None = None                # s between attempts (None: the configured command timeout), at least
-                                              # the link's timeout as it backs off
+                                              # the link's timeout; doubled after each unanswered try
     give_up_at: float | None = None           # a command re-sent that quickly is still given a command's whole time
     attempts: int = 0
     budget: int = 0                           # attempts it may make (more once a lost link is back)
@@ -100,6 +120,7 @@ class _Command:
     deadline: float | None = None
     acked: bool = False                       # mode change or arming: ACCEPTED, waiting for the heartbeat
     acked_at: float = 0.0
+    shown_since: float | None = None          # unanswered: since when the heartbeat has shown what it asked
     early: bool = False                       # a sequence's step: the vehicle's ACCEPTED settles it already
     in_progress: bool = False
     legacy: bool = False                      # mode change by the SET_MODE message
@@ -110,8 +131,8 @@ class _Command:
 
     def shown(self, armed: bool, custom_mode: int | None) -> bool:
         """The vehicle's report shows what this command asked (a mode, the armed bit); False for the others."""
-        if self.mode is not None:
-            return custom_mode == self.mode
+        if self.mode is not None or self.shows_mode is not None:
+            return custom_mode == (self.mode if self.mode is not None else self.shows_mode)
         return self.armed is not None and armed == self.armed
 
 
@@ -135,19 +156,16 @@ class CommandSender:
 
     # -- submitting (any thread, under the lock) ------------------------------------------------------
     def submit(self, name: str, command: int, params, now: float, *, guard=None, tag=None,
-               retry: float | None = None, early: bool = False) -> Future:
+               retry: float | None = None, early: bool = False, shows_mode: int | None = None) -> Future:
         """A COMMAND_LONG: sent on the next service, re-sent unanswered, settled by its ACK; arming and disarming
         by the heartbeat's armed bit once the vehicle accepted (or shows it). ``early``: by the vehicle's
         ACCEPTED already (a sequence's step, whose next step the heartbeat confirms anyway)."""
-        c = _Command(name, command, command, params, Future(), self._store.message_index, guard=guard, retry=retry,
-                     early=early)
+        c = _Command(name, command, command, params, CommandFuture(), self._store.message_index, guard=guard,
+                     retry=retry, early=early)
         if command == mavlink.MAV_CMD_COMPONENT_ARM_DISARM:
             c.armed = params[0] >= 0.5
+        c.shows_mode = shows_mode
         return self._add(c, now, tag)
-
-    def pending(self, command: int) -> bool:
-        """A request with this id waits for its answer, or an earlier one may still be answered."""
-        return command in self._pending
 
     def settled_by_state(self, command: int, now: float, pending: bool = True) -> bool:
         """Whether the state now tells the truth about ``command`` (no request of that id could still change it;
@@ -158,7 +176,7 @@ class CommandSender:
         """A mode change, confirmed by the heartbeat; SET_MODE on firmware known to lack DO_SET_MODE."""
         c = _Command(name, mavlink.MAV_CMD_DO_SET_MODE, mavlink.MAV_CMD_DO_SET_MODE,
                      [mavlink.MAV_MODE_FLAG_CUSTOM_MODE_ENABLED, number, 0, 0, 0, 0, 0],
-                     Future(), self._store.message_index, mode=number, early=early)
+                     CommandFuture(), self._store.message_index, mode=number, early=early)
         c.legacy = self._firmware.mode_by_message
         return self._add(c, now, tag)
 
@@ -177,14 +195,24 @@ class CommandSender:
     def _shows(self, c: _Command, now: float) -> bool:
         """A heartbeat the vehicle sent after it got ``c`` shows what ``c`` asked, and no earlier request of its id
         could still be what made it so. A link keeps its frames in order, so a heartbeat heard after ``c``'s own
-        ACCEPTED was sent after ``c`` was done; without that answer, only one heard at least the quickest round
-        trip after ``c`` went out can be (an older one may show a state ``c`` was meant to change back)."""
-        if not c.attempts or now < c.ambiguous_until or not c.shown(self._armed, self._custom_mode):
+        ACCEPTED was sent after ``c`` was done. Without that answer (lost), only heartbeats heard at least the
+        quickest round trip after ``c`` went out can be, and they must go on showing it for SHOWN_FOR: an older one
+        may show a state the vehicle only passed through, or that ``c`` was meant to change back."""
+        if not c.attempts or not c.shown(self._armed, self._custom_mode):
+            c.shown_since = None
+            return False
+        if now < c.ambiguous_until:
             return False
         if c.acked:
             return self._heartbeat_at >= c.acked_at
         quickest = (self._roundtrip.lowest or 0.0) if self._roundtrip is not None else 0.0
-        return self._heartbeat_at >= c.first_sent + quickest
+        if self._heartbeat_at < c.first_sent + quickest:
+            return False
+        if c.shown_since is None:
+            c.shown_since = self._heartbeat_at
+            if c.deadline is not None:                # the vehicle shows it: no time out while that is confirmed
+                c.deadline = max(c.deadline, c.shown_since + SHOWN_FOR + self._cfg.heartbeat_interval)
+        return self._heartbeat_at - c.shown_since >= SHOWN_FOR
 
     def _link_timeout(self) -> float:
         return self._roundtrip.timeout() if self._roundtrip is not None else 0.0
@@ -249,7 +277,7 @@ class CommandSender:
             c.in_progress = True
             c.deadline = now + PROGRESS_TIMEOUT
             return
-        if c.mode is not None or c.armed is not None:
+        if c.mode is not None or c.armed is not None or c.shows_mode is not None:
             if result == mavlink.MAV_RESULT_ACCEPTED:
                 if c.early:                       # its answer, and only its own: the vehicle did it
                     self._resolve(c, CommandStatus.ACCEPTED, "accepted (its heartbeat shows it next)", now=now)
@@ -330,11 +358,15 @@ class CommandSender:
                     c.next_send = now + (ACKED_MODE_WAIT if c.acked else retry)
             else:
                 if c.attempts >= c.budget and (c.give_up_at is None or now >= c.give_up_at):
+                    if c.shown_since is not None and now - c.shown_since < SHOWN_FOR + cfg.heartbeat_interval:
+                        continue                          # the vehicle shows it: being confirmed, not lost
                     self._time_out(c, state, now)
                     continue
                 out.append(mavlink.MAVLink_command_long_message(system, component, c.command,
                                                                 min(c.attempts, 255), *c.params))
                 c.next_send = now + (ACKED_MODE_WAIT if c.acked else retry)
+                if c.retry is not None:                  # each unanswered try waits twice as long (RFC 6298's backoff)
+                    c.retry = min(2 * c.retry, cfg.command_timeout)
             if c.first_sent is None:
                 c.first_sent = now
                 if c.retry is not None:
@@ -377,5 +409,7 @@ class CommandSender:
             self._remember_echo(c, now)
         if not c.settled:
             c.settled = True
-            self._notifier.settle(c.future, self._store.record_locked(c.name, status, reason, c.attempts))
+            result = self._store.record_locked(c.name, status, reason, c.attempts)
+            c.future.decision = result                # the driver's own parts know it now; callers once settled
+            self._notifier.settle(c.future, result)
 

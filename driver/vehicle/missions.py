@@ -18,10 +18,11 @@ from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from ..core.ports import Ports
 from ..core.results import chain
-from .state import CommandResult, CommandStatus, Severity, VehicleState
+from .commands import decided
+from .state import CommandResult, CommandStatus, LandedState, Severity, VehicleState
 from ..mission.limits import UNCHECKED, held_mission_problems, plan_problems, unchecked
 from ..mission.plan import MissionRunState, Plan, PlanKind, TransferOutcome
-from ..mission.progress import fold_item_reached, fold_mission_current, fold_text, fold_transfer_end
+from ..mission.progress import fold_arming, fold_item_reached, fold_mission_current, fold_text, fold_transfer_end
 from ..mission.transfer import PlanTransfers
 from ..params.manager import param_name
 
@@ -62,6 +63,8 @@ class MissionControl:
                                        ports.outbox.target, ports.state.record_locked, self._settle_later,
                                        lambda: ports.state.state.home, ports.firmware, ports.roundtrip)
         self._settling: list = []      # transfers ended, settled once the state shows what they did (_publish)
+        self._last_in_air: tuple = (None, "")     # (item, name) last current while the vehicle flew
+        self._armed = ports.state.state.armed     # as the last heartbeat showed it
         self._watches: list[_Watch] = []
         self._currents: collections.deque = collections.deque(maxlen=64)   # (time, item) as the vehicle says
         self._limits_of: tuple = (None, None, None)   # (home, mission held, fence) the limits were checked for
@@ -181,6 +184,7 @@ class MissionControl:
         if mtype == "MISSION_CURRENT":
             self._currents.append((self._clock(), int(m.seq)))
             store.set(mission=fold_mission_current(store.view()["mission"], m))
+            self._note_in_air()
             return
         if mtype == "MISSION_ITEM_REACHED":
             store.set(mission=fold_item_reached(store.view()["mission"], m))
@@ -206,6 +210,27 @@ class MissionControl:
         if folded is not None:
             self._currents.append((self._clock(), folded.current))
             store.set(mission=folded)
+            self._note_in_air()
+
+    def _note_in_air(self) -> None:
+        view = self._state.view()
+        if view["armed"] and view["landed_state"] is not LandedState.ON_GROUND and view["system_status"] != 3:
+            p = view["mission"]
+            self._last_in_air = (p.current, p.current_name)
+
+    def on_heartbeat(self, m) -> None:
+        """The autopilot's heartbeat, folded (reader, lock held): arming or disarming changes the mission's story."""
+        view = self._state.view()
+        if view["armed"] != self._armed:
+            self._armed = view["armed"]
+            self._on_arming(view["armed"], view["mode"])
+
+    def _on_arming(self, armed: bool, mode: str) -> None:
+        """The heartbeat shows the vehicle armed or disarmed."""
+        store = self._state
+        store.set(mission=fold_arming(store.view()["mission"], armed, mode, self._last_in_air))
+        if armed:
+            self._last_in_air = (None, "")
 
     def service(self, now: float, state: VehicleState) -> list:
         out = self.transfers.service(now)
@@ -213,9 +238,9 @@ class MissionControl:
         if self.transfers.changed:
             self._publish()
         for w in list(self._watches):
-            if not w.inner.done():
+            r = decided(w.inner)
+            if r is None:
                 continue
-            r = w.inner.result()
             if not r.ok:
                 self._settle(w, r)
             elif w.done(state):

@@ -51,8 +51,8 @@ class SequencePilot:
         self._mode, self._arm, self._disarm, self._long = mode, arm, disarm, long
         self.hold, self.quiet = hold, quiet
 
-    def mode(self, name: str, *, early: bool = False, ask: bool = False) -> Future:
-        return self._mode(name, early=early, ask=ask)
+    def mode(self, name: str, *, early: bool = False) -> Future:
+        return self._mode(name, early=early)
 
     def arm(self, *, early: bool = False) -> Future:
         return self._arm(early=early)
@@ -60,5 +60,6 @@ class SequencePilot:
     def disarm(self) -> Future:
         return self._disarm()
 
-    def long(self, command: int, params=(), name: str | None = None, *, retry: float | None = None) -> Future:
-        return self._long(command, params, name, retry=retry)
+    def long(self, command: int, params=(), name: str | None = None, *, retry: float | None = None,
+             shows_mode: str | None = None) -> Future:
+        return self._long(command, params, name, retry=retry, shows_mode=shows_mode)

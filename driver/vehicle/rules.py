@@ -11,6 +11,7 @@ from ..core import frames
 
 __all__ = ["COPTER_MODES", "MIN_TAKEOFF_ALTITUDE", "MAX_TAKEOFF_ALTITUDE", "TAKEOFF_ALTITUDE_RANGE", "MAX_ALTITUDE",
            "MIN_GOTO_ALTITUDE", "THROTTLE_MODES", "takeoff_altitude_problem", "go_to_problem", "mode_warning",
+           "mode_refusal",
            "arming_consequence", "DISARM_DELAY", "unattended", "GCS_FAILSAFE_ACTIONS", "NOT_ARMABLE_MODES",
            "ARM_IN", "arming_refusal", "gcs_failsafe_setting"]
 
@@ -24,15 +25,21 @@ MAX_ALTITUDE = 120.0               # m above home: no go-to target above it (EU 
 TAKEOFF_ALTITUDE_RANGE = (MIN_TAKEOFF_ALTITUDE, MAX_TAKEOFF_ALTITUDE)
 MIN_GOTO_ALTITUDE = 1.0            # m above home
 
-#: Modes in which ArduCopter takes the throttle (and so the altitude) from the RC transmitter: a pilot
-#: flying from a laptop has none, so the vehicle descends (ALT_HOLD, SPORT hold at mid-stick only with sticks)
-#: or falls (STABILIZE, ACRO, DRIFT at zero throttle).
+#: Modes in which ArduCopter takes the throttle from the RC transmitter's stick: the flight rules never command
+#: the first ones while the vehicle may be airborne (driver.vehicle.safety: has_manual_throttle() in mode.h; with no
+#: transmitter the throttle is zero and it falls); the others hold their altitude without one
+#: (get_pilot_desired_climb_rate is zero when no RC was ever seen) but not their position, and ask first.
 THROTTLE_MODES = {
     "STABILIZE": "throttle comes straight from the RC transmitter: without one the motors go to idle and it falls",
     "ACRO": "throttle comes straight from the RC transmitter: without one the motors go to idle and it falls",
-    "DRIFT": "throttle comes straight from the RC transmitter: without one the motors go to idle and it falls",
-    "ALT_HOLD": "climb and descent come from the RC transmitter's throttle stick: without one it descends",
-    "SPORT": "climb and descent come from the RC transmitter's throttle stick: without one it descends",
+    "SYSTEMID": "throttle comes straight from the RC transmitter: without one the motors go to idle and it falls",
+    "TURTLE": "throttle comes straight from the RC transmitter: without one the motors go to idle and it falls",
+    "DRIFT": "climb and descent come from the RC transmitter's throttle stick and steering from its sticks: without "
+             "one it holds its altitude but drifts with the wind",
+    "ALT_HOLD": "climb and descent come from the RC transmitter's throttle stick: without one it holds its altitude "
+                "but not its position, and drifts with the wind",
+    "SPORT": "climb and descent come from the RC transmitter's throttle stick: without one it holds its altitude "
+             "but not its position, and drifts with the wind",
 }
 
 
@@ -123,8 +130,19 @@ def unattended(mode: str, gcs_failsafe: int | None) -> str:
     return f"it {now} {then}"
 
 
+def mode_refusal(mode: str, may_be_airborne: bool) -> str | None:
+    """Why the driver will not command ``mode`` now (its flight rules, driver.vehicle.safety), or None: said
+    before anyone asks, so a front end can grey the mode out."""
+    from .safety import MANUAL_THROTTLE_MODES
+    if not may_be_airborne or mode.upper() not in MANUAL_THROTTLE_MODES:
+        return None
+    return (f"{mode.upper()} takes its throttle from an RC transmitter: not commanded while the vehicle may be "
+            "airborne (switch on the transmitter itself)")
+
+
 def mode_warning(mode: str, flying: bool) -> str | None:
-    """Why switching to ``mode`` now needs the pilot's confirmation, or None when it does not."""
+    """Why switching to ``mode`` now needs the pilot's confirmation, or None when it does not (the modes the
+    flight rules refuse outright: :func:`mode_refusal`)."""
     why = THROTTLE_MODES.get(mode.upper())
     if not flying or why is None:
         return None

@@ -48,6 +48,8 @@ ARM_FORCE_MAGIC = 21196               # param2 of COMPONENT_ARM_DISARM: skip the
 LIFT_SETTLE = 5.0
 #: s the pilot's confirmed emergency stop may take to go out (its retries included).
 EMERGENCY_WINDOW = 15.0
+#: s beyond its own run a motor test may keep the vehicle armed: the request on its way, a loop to end it.
+MOTOR_TEST_MARGIN = 2.0
 
 #: Commands that only make sense disarmed on the ground: motor test, calibrations, reboot, log erase.
 GROUND_ONLY_COMMANDS = {
@@ -71,13 +73,19 @@ class AirborneLatch:
     def __init__(self) -> None:
         self.lifted_at: float | None = None       # when the last message that can lift it went out
 
+    @property
+    def lifted(self) -> bool:
+        return self.lifted_at is not None
+
     def may_be_airborne(self, s: VehicleState) -> bool:
         """Not known to be on the ground (the vehicle's own landed state, unknown counting as airborne), armed in
         AUTO (its mission lifts it at the first MISSION_START, from anyone), or lifted and not seen landed and
-        disarmed since. Armed on the ground before anything lifted it is not airborne."""
-        return self.lifted_at is not None or s.in_air is not False or (s.armed and s.mode == "AUTO")
+        disarmed since. Armed on the ground before anything lifted it is not airborne. (VehicleState's own
+        ``may_be_airborne`` says the same from the published ``lifted``.)"""
+        return self.lifted or s.in_air is not False or (s.armed and s.mode == "AUTO")
 
-    def lifted(self, now: float) -> None:
+    def lift(self, now: float) -> None:
+        """A message that can lift the vehicle goes out now."""
         self.lifted_at = now
 
     def observe(self, s: VehicleState, now: float) -> None:
@@ -94,6 +102,7 @@ class FlightRules:
         self._emergency_until = -math.inf
         self._arming_in_doubt = arming_in_doubt    # (now, the command judged) -> another arm, disarm or motor test
                                                    # of ours may still change the armed bit (a motor test arms)
+        self._motor_test_until = -math.inf         # a motor test that went out may run (armed) until then
         self.blocked = 0                           # messages held back at the wire (a part that did not ask)
 
     # -- what the pilot and the parts ask --------------------------------------------------------------
@@ -136,7 +145,8 @@ class FlightRules:
     def ground_problem(self, what: str, s: VehicleState, now: float, command: int = 0) -> str | None:
         if s.armed:
             return f"no {what} while the vehicle is armed: disarm first"
-        if s.setup.motor_test_running or self._arming_in_doubt(now, command):
+        running = now < self._motor_test_until and command != mavlink.MAV_CMD_DO_MOTOR_TEST   # (its own retries)
+        if s.setup.motor_test_running or running or self._arming_in_doubt(now, command):
             return f"no {what} while an arm, a disarm or a motor test is on its way: the vehicle may be armed"
         if self.may_be_airborne(s):
             return f"no {what} while the vehicle may be airborne (it has not reported itself landed and disarmed)"
@@ -155,7 +165,8 @@ class FlightRules:
                 log.error("held back %s: %s", msg.get_type() if not isinstance(msg, bytes) else "frame", problem)
                 continue
             if self._lifts(msg, s):
-                self.airborne.lifted(now)
+                self.airborne.lift(now)
+            self._note_motor_test(msg, now)
             out.append(msg)
         return out
 
@@ -175,6 +186,14 @@ class FlightRules:
         if kind == "FILE_TRANSFER_PROTOCOL" and _opens_a_log(msg.payload):
             return self.ground_problem("log download", s, now)
         return None
+
+    def _note_motor_test(self, msg, now: float) -> None:
+        """A motor test going out arms the vehicle for its whole run (motor_test.cpp: each motor ``timeout`` s,
+        then half that at rest); one with timeout 0 ends it at the vehicle's next loop."""
+        if isinstance(msg, bytes) or msg.get_type() != "COMMAND_LONG" or msg.command != mavlink.MAV_CMD_DO_MOTOR_TEST:
+            return
+        seconds, count = max(0.0, msg.param4), max(1, int(msg.param5))
+        self._motor_test_until = now + (1.5 * seconds * count if seconds else 0.0) + MOTOR_TEST_MARGIN
 
     @staticmethod
     def _lifts(msg, s: VehicleState) -> bool:

@@ -22,6 +22,7 @@ from ..payload.model import Gimbal, VehicleCamera
 from .battery import Battery, BatteryAlarm, BatteryThresholds
 from ..setup.banner import Autopilot
 from ..setup.model import SetupState
+from ..shots.model import ShotState
 from ..traffic.model import Traffic
 
 __all__ = [
@@ -344,7 +345,8 @@ class VehicleState:
     results: tuple[CommandResult, ...] = ()          # the most recent command results, oldest first
     takeoff: SequenceProgress = field(default_factory=SequenceProgress)
     sequence: SequenceState = field(default_factory=SequenceState)
-    may_be_airborne: bool = True                     # the flight rules' cautious view (driver.vehicle.safety)
+    lifted: bool = False                             # a message that can lift it went out, and it has not been
+                                                     # seen landed and disarmed since (driver.vehicle.safety)
     setpoint: Setpoint = field(default_factory=Setpoint)
     rejected_values: int = 0                         # telemetry messages dropped for impossible values
     gcs_failsafe: int | None = None                  # the vehicle's FS_GCS_ENABLE, None until read
@@ -358,6 +360,7 @@ class VehicleState:
     camera: VehicleCamera = field(default_factory=VehicleCamera)   # the vehicle's camera (not the window's video)
     setup: SetupState = field(default_factory=SetupState)          # driver.setup: radio, outputs, calibrations
     traffic: Traffic = field(default_factory=Traffic)              # driver.traffic: ADS-B contacts, alerts
+    shot: ShotState = field(default_factory=ShotState)             # driver.shots: the smart shot, from telemetry
 
     # -- derived views -----------------------------------------------------------------------
     @property
@@ -368,17 +371,23 @@ class VehicleState:
     def in_air(self) -> bool | None:
         """Whether the autopilot says it is off the ground; None when it does not say.
 
-        EXTENDED_SYS_STATE when the firmware sends it; otherwise the HEARTBEAT's system status, which
-        ArduCopter sets to STANDBY exactly while it counts as landed (GCS_MAVLINK_Copter::vehicle_system_status)
-        and to CRITICAL in a failsafe (then it does not tell). Never a guess from the barometer.
+        EXTENDED_SYS_STATE when the firmware sends it, and the HEARTBEAT's system status, which ArduCopter sets
+        to STANDBY exactly while it counts as landed (GCS_MAVLINK_Copter::vehicle_system_status) and to CRITICAL in
+        a failsafe (then it does not tell). Both say the same flag (land_complete) at their own rates: when they
+        disagree, one of them is older, and the cautious one wins (in the air). Never a guess from the barometer.
         """
+        heartbeat = (False if self.system_status == MAV_STATE_STANDBY else
+                     self.armed if self.system_status == MAV_STATE_ACTIVE else None)
         if self.landed_state is not LandedState.UNDEFINED:
-            return self.landed_state is not LandedState.ON_GROUND
-        if self.system_status == MAV_STATE_STANDBY:
-            return False
-        if self.system_status == MAV_STATE_ACTIVE:
-            return self.armed
-        return None
+            return self.landed_state is not LandedState.ON_GROUND or heartbeat is True
+        return heartbeat
+
+    @property
+    def may_be_airborne(self) -> bool:
+        """The flight rules' cautious view (driver.vehicle.safety): not known to be on the ground (unknown counts
+        as airborne), armed in AUTO (the first MISSION_START lifts it), or lifted by a message of ours and not seen
+        landed and disarmed since. What the driver will not command in the air follows it."""
+        return self.lifted or self.in_air is not False or (self.armed and self.mode == "AUTO")
 
     @property
     def flying(self) -> bool:

@@ -198,9 +198,8 @@ class Ticker:
         published: nothing leaves the driver without passing here (driver.vehicle.safety)."""
         state = self._store.state
         out = self._rules.screen(out, state, now)
-        airborne = self._rules.may_be_airborne(state)
-        if airborne != state.may_be_airborne:
-            self._store.set(may_be_airborne=airborne)
+        if self._rules.airborne.lifted != state.lifted:
+            self._store.set(lifted=self._rules.airborne.lifted)
             self._store.publish()
         return out
 

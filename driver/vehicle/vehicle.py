@@ -42,6 +42,7 @@ from ..params.setter import SET_RETRY
 from ..payload.control import PAYLOAD_MESSAGES, Payload
 from ..logs.control import LogControl
 from ..setup.control import SETUP_MESSAGES, VehicleSetup
+from ..shots.control import ShotControl
 from .api import Drone, Limits
 from .command_path import CommandPath
 from .commands import CommandSender, Notifier, command_name
@@ -169,7 +170,8 @@ class Vehicle(Drone):
         self.setup = VehicleSetup(ports.state, ports.outbox, ports.commands, ports.settler, clock, self._firmware)
         self._flight = Flight(cfg, ports, self._path, self._sequence, self._setpoints, self._rules,
                               self._ticker.setpoint_message, self._missions.start_problem)   # velocity, sequences
-        self.logs = LogControl(self)                   # the DataFlash logs (driver.logs)
+        self.logs = LogControl(ports)                  # the DataFlash logs (driver.logs)
+        self.shots = ShotControl(ports, self._payload, self._setpoints, cfg, self._parameters.set)   # smart shots
         self.inspector = MessageInspector(clock)       # what the link carries: Drone.inspection()
         self._inbox = Inbox()                          # what the vehicle says, to the parts that asked
         self._reader = Reader(                         # the reader thread: parse, fold, dispatch
@@ -183,6 +185,7 @@ class Vehicle(Drone):
         """Each part hears its messages and does its periodic work, in this order (the reader's and the ticker's)."""
         inbox, serve = self._inbox, self._ticker.serve
         inbox.on(PAYLOAD_MESSAGES, self._payload.on_message, any_component=True)
+        inbox.on("HEARTBEAT", self._missions.on_heartbeat)       # arming or disarming: the mission's story
         inbox.on("HEARTBEAT", self._signing_control.on_heartbeat)
         inbox.on_text(self._signing_control.on_text)
         inbox.on_text(self._missions.on_text)
@@ -197,7 +200,7 @@ class Vehicle(Drone):
         link = self._link
         serve(self._commands.service)
         serve(lambda now, state: self._params.service(now, link.status, link.lost_count))
-        for part in (self._payload, self._missions, self.setup, self.logs, self._signing_control):
+        for part in (self._payload, self._missions, self.setup, self.logs, self.shots, self._signing_control):
             serve(part.service)
 
     # -- lifecycle ---------------------------------------------------------------------------------
@@ -308,6 +311,7 @@ class Vehicle(Drone):
         return self._path.busy(name) or self._path.long(command, params, name, guard=guard)
 
     def set_mode(self, name: str) -> Future:
+        self.shots.end(f"mode {name}")                # driver.shots: the pilot's mode always wins
         busy = self._path.busy(f"mode {name}")
         if busy:
             return busy
@@ -330,11 +334,13 @@ class Vehicle(Drone):
         return self._path.busy("disarm") or self._path.arming(False, force)
 
     def land(self) -> Future:
-        """LAND, always taken: it ends whatever runs (a takeoff, a mission start, a Stop)."""
+        """LAND, always taken: it ends whatever runs (a takeoff, a mission start, a Stop, a smart shot)."""
+        self.shots.end("Land")
         return self._flight.land()
 
     def return_to_launch(self) -> Future:
         """RTL, always taken: it ends whatever runs."""
+        self.shots.end("RTL")
         return self._flight.return_to_launch()
 
     def cancel_takeoff(self) -> Future:
@@ -344,7 +350,8 @@ class Vehicle(Drone):
     def stop(self) -> Future:
         """Hold position, or end a takeoff that has not lifted anything as if it never ran: the vehicle always ends
         holding (GUIDED at zero velocity, BRAKE if GUIDED is refused) or on the ground disarmed, never in a mode
-        that needs a throttle stick (driver.vehicle.sequences.stop)."""
+        that needs a throttle stick (driver.vehicle.sequences.stop). It ends a smart shot too."""
+        self.shots.end("Stop")
         return self._flight.stop()
 
     def reboot(self) -> Future:

@@ -69,7 +69,7 @@ class AlertModel:
     """Feed it every snapshot (:meth:`update`); it returns the alerts that snapshot raises, most urgent first."""
 
     def __init__(self) -> None:
-        self._last: VehicleState | None = None
+        self._previous: VehicleState | None = None
         self._last_message = -1
         self._battery = BatteryAlarm.UNKNOWN
 
@@ -78,7 +78,7 @@ class AlertModel:
         self.__init__()
 
     def update(self, s: VehicleState) -> list[Alert]:
-        prev, self._last = self._last, s
+        prev, self._previous = self._previous, s
         out: list[Alert] = []
         if prev is None or not _has_vehicle(prev):
             if _has_vehicle(s):                        # the baseline: what the vehicle is now is not news

@@ -1,5 +1,5 @@
-"""Tilting the vehicle's camera from the window: wheel and drag on the video, keys, Level/Down, and its own
-Photo and Record (issue 23; docs/camera.md). Owns no widget logic beyond wiring; the drone does the work."""
+"""Tilting the vehicle's camera from the window: wheel and drag on the video, keys, Level/Down, its own Photo and
+Record, and Stop looking (docs/camera.md). Owns no widget logic beyond wiring; the drone does the work."""
 from __future__ import annotations
 
 import time
@@ -38,11 +38,10 @@ class GimbalController(QObject):
         view.installEventFilter(self)
         bar.levelRequested.connect(lambda: self.point(0.0))
         bar.downRequested.connect(lambda: self.point(-90.0))
-        bar.photoRequested.connect(lambda: adapter.command("take_photo"))
-        bar.recordRequested.connect(lambda on: adapter.command("record_video", on))
-        bar.stopLookingRequested.connect(lambda: adapter.command("stop_looking"))
+        bar.photoRequested.connect(lambda: adapter.send(adapter.drone.take_photo))
+        bar.recordRequested.connect(lambda on: adapter.send(adapter.drone.record_video, on))
+        bar.stopLookingRequested.connect(self.stop_looking)
         adapter.droneChanged.connect(self._vehicle_changed)
-        adapter.commandFinished.connect(self._command_finished)
 
     def show_state(self, s: VehicleState) -> None:
         reported = s.gimbal.pitch_deg
@@ -59,10 +58,14 @@ class GimbalController(QObject):
         """Another vehicle is flown: the angle asked of the previous one is not this one's."""
         self._target = self._before_roi = self._restore = None
 
-    def _command_finished(self, result) -> None:
-        """Stop looking done (the bar's button or the map's): the mount fell back to its default (straight down
-        on ArduCopter's RC targeting); the camera goes back to the pitch it had before it looked at the point."""
-        if result.command.startswith("stop looking") and result.ok and self._restore is not None:
+    def stop_looking(self) -> None:
+        """End the region of interest (the bar's button, the map's menu)."""
+        self._adapter.send(self._adapter.drone.stop_looking, then=self._stopped_looking)
+
+    def _stopped_looking(self, result) -> None:
+        """The mount fell back to its default (straight down on ArduCopter's RC targeting): the camera goes back to
+        the pitch it had before it looked at the point."""
+        if result.ok and self._restore is not None:
             pitch, self._restore = self._restore, None
             self.point(pitch)
 
@@ -76,7 +79,7 @@ class GimbalController(QObject):
         pitch = _clamped(pitch)
         self._target = pitch
         self._sent_at = time.monotonic()
-        self._adapter.command("point_gimbal", pitch)
+        self._adapter.send(self._adapter.drone.point_gimbal, pitch)
 
     def tilt_by(self, degrees: float) -> None:
         """Up (positive) or down from where it points (or was last asked to)."""

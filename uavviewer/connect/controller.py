@@ -58,6 +58,7 @@ class ConnectionController(QObject):
         self._unconfirmed: Choice | None = None
         self._closers: list[threading.Thread] = []
         self.answer_timeout = ANSWER_TIMEOUT
+        self.clock = time.monotonic          # what answer_timeout is counted on (a test hands in its own)
         self._arrived.connect(self._on_arrived)
         self._troubled.connect(self._on_trouble)
 
@@ -99,7 +100,7 @@ class ConnectionController(QObject):
             return False
         self._opening = choice
         self.busyChanged.emit(True)
-        config, wait = self.base, self.answer_timeout
+        config, wait, clock = self.base, self.answer_timeout, self.clock
         still = (f"; still connected to {self.current.drone.description}" if self.connected else "")
 
         def work() -> None:
@@ -109,7 +110,7 @@ class ConnectionController(QObject):
                 log.info("cannot open %s", choice.label, exc_info=True)
                 self._hand_over(None, f"{choice.label}: {' '.join(str(exc).split()) or type(exc).__name__}{still}")
                 return
-            answered, why = _answers(opened, wait, lambda reason: self._say_trouble(choice, reason))
+            answered, why = _answers(opened, wait, lambda reason: self._say_trouble(choice, reason), clock)
             if not answered:
                 close_quietly(opened)
                 because = f" ({why})" if why else ""
@@ -190,10 +191,10 @@ def open_error(text: str, connection: str = "") -> str:
     return found.group("why") if found else ""
 
 
-def _answers(opened: Opened, wait: float, trouble) -> tuple[bool, str]:
-    """On the worker thread: whether a heartbeat comes in on the new link within ``wait`` s, and the latest reason
-    the driver gave for not opening it (``trouble(reason)`` is called at once for each new one)."""
-    deadline = time.monotonic() + wait
+def _answers(opened: Opened, wait: float, trouble, clock=time.monotonic) -> tuple[bool, str]:
+    """On the worker thread: whether a heartbeat comes in on the new link within ``wait`` s of ``clock``, and the
+    latest reason the driver gave for not opening it (``trouble(reason)`` is called at once for each new one)."""
+    deadline = clock() + wait
     seen, why = 0, ""
     connection = opened.choice.target if opened.choice is not None else ""
     while True:
@@ -206,6 +207,6 @@ def _answers(opened: Opened, wait: float, trouble) -> tuple[bool, str]:
             if reason and reason != why:
                 why = reason
                 trouble(reason)
-        if time.monotonic() > deadline:
+        if clock() > deadline:
             return False, why
         time.sleep(POLL)

@@ -10,6 +10,7 @@ from __future__ import annotations
 import logging
 from concurrent.futures import Future
 from dataclasses import dataclass, replace
+from typing import Callable
 
 from PyQt5.QtCore import QObject, QTimer, pyqtSignal
 
@@ -24,7 +25,12 @@ log = logging.getLogger(__name__)
 
 #: a vehicle whose link has said nothing for this long is shown stale, whatever its server last said
 STALE_AFTER_S = 3.0
-ALL_COMMANDS = ("takeoff", "land", "stop")
+#: what every vehicle may be asked at once, each the drone's own call
+ALL_COMMANDS: dict[str, Callable[..., Future]] = {
+    "takeoff": lambda drone, altitude: drone.takeoff(altitude),
+    "land": lambda drone: drone.land(),
+    "stop": lambda drone: drone.stop(),
+}
 
 
 @dataclass(frozen=True)
@@ -161,8 +167,8 @@ class FleetController(QObject):
         self.refresh()
 
     def command_all(self, command: str, *args, skip: str = "") -> list[str]:
-        """``drone.<command>(*args)`` on every known vehicle but ``skip`` (the window sends that one itself, so its
-        answer is shown once); each answer arrives as ``resultArrived``. Returns the names sent to."""
+        """``command`` (one of :data:`ALL_COMMANDS`) on every known vehicle but ``skip`` (the window sends that one
+        itself, so its answer is shown once); each answer arrives as ``resultArrived``. Returns the names sent to."""
         if command not in ALL_COMMANDS:
             raise ValueError(f"{command} is not a command for all vehicles")
         sent = []
@@ -171,7 +177,7 @@ class FleetController(QObject):
                 continue
             try:
                 drone: Drone = self.fleet.drone(name)
-                future = getattr(drone, command)(*args)
+                future = ALL_COMMANDS[command](drone, *args)
             except Exception as exc:           # noqa: BLE001
                 self.resultArrived.emit(CommandResult(f"{name}: {command}", CommandStatus.REJECTED, str(exc)))
                 continue

@@ -90,7 +90,7 @@ class FleetDock(QObject):
         w = self.window
         w.sticks.centre()                       # the vehicle left behind gets zero velocity: it hovers
         if w.map.use_vehicle(name):             # ... and a Fly here on its way ends where it is, as Stop does
-            w.flight.command("stop")            # (still the previous vehicle: adapter.use comes below)
+            w.adapter.send(w.adapter.drone.stop)          # (still the previous vehicle: adapter.use comes below)
         w.readouts.follow(drone.state())        # its log starts from now: older lines were another vehicle's
         w.adapter.use(drone)
         w.setWindowTitle(f"UavViewerPy — {name} · {w.fleet.fleet.description}")

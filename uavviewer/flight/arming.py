@@ -57,7 +57,7 @@ class Arming:
         if box.clickedButton() is box.button(QMessageBox.Yes):
             s = self.window.adapter.state
             if s.connected and not s.armed and not flight_phase(s).airborne:
-                self.window.flight.command("arm")
+                self.window.adapter.send(self.window.adapter.drone.arm)
         self._done(box)
 
     def _done(self, box: QMessageBox) -> None:

@@ -10,7 +10,7 @@ from __future__ import annotations
 from PyQt5.QtCore import QObject
 from PyQt5.QtWidgets import QMessageBox
 
-from driver.vehicle.rules import mode_warning
+from driver.vehicle.rules import mode_refusal, mode_warning
 from driver.vehicle.state import LinkStatus, Severity, VehicleState
 
 from ..widgets.ask import ask
@@ -32,6 +32,7 @@ class FlightCommands(QObject):
     def __init__(self, window) -> None:
         super().__init__(window)
         self.window = w = window
+        self.adapter = w.adapter                    # the buttons send the drone's own methods through it
         self.arming = Arming(window)
         self.takeoff_box: QMessageBox | None = None
         self.mode_box: QMessageBox | None = None
@@ -46,8 +47,6 @@ class FlightCommands(QObject):
         fc.disarmRequested.connect(self.request_disarm)
         w.modeSelector.modeRequested.connect(self.request_mode)
 
-    def command(self, name: str, *args) -> None:
-        self.window.adapter.command(name, *args)
 
     def show_state(self, s: VehicleState) -> None:
         """The buttons and the mode list follow the vehicle; questions that no longer fit it are withdrawn."""
@@ -63,6 +62,8 @@ class FlightCommands(QObject):
             self.takeoff_box.reject()               # the question no longer fits the vehicle: withdraw it
         self.window.modeSelector.set_mode(s.mode)
         self.window.modeSelector.setEnabled(s.connected)
+        self.window.modeSelector.refuse({name: mode_refusal(name, s.may_be_airborne) for name in
+                                         self.window.modeSelector.modes()})
 
     @property
     def arm_box(self) -> QMessageBox | None:
@@ -73,13 +74,13 @@ class FlightCommands(QObject):
         """Switch at once, or ask first when the driver says the mode needs an RC transmitter in flight."""
         warning = mode_warning(name, self.window.adapter.state.flying)
         if warning is None:
-            self.command("set_mode", name)
+            self.adapter.send(self.adapter.drone.set_mode, name)
             return
         self.mode_box = ask(mode_question(self.window, name, warning), lambda box: self._mode_answered(box, name))
 
     def _mode_answered(self, box: QMessageBox, name: str) -> None:
         if box.clickedButton() is box.button(QMessageBox.Yes):
-            self.command("set_mode", name)
+            self.adapter.send(self.adapter.drone.set_mode, name)
         box.deleteLater()
         if self.mode_box is box:
             self.mode_box = None
@@ -91,7 +92,8 @@ class FlightCommands(QObject):
         w = self.window
         altitude = w.takeoff_altitude
         waiting = w.adapter.state.readiness.missing
-        wait_limit = getattr(getattr(w.adapter.drone, "config", None), "ready_timeout", 60.0)   # embedded: its own
+        config = self.adapter.drone.config             # the embedded driver's own wait; a remote one's is not known
+        wait_limit = config.ready_timeout if config is not None else 60.0
         self.takeoff_box = ask(takeoff_question(w, altitude, waiting, wait_limit),
                                lambda box: self._takeoff_answered(box, altitude))
 
@@ -105,7 +107,7 @@ class FlightCommands(QObject):
     def take_off_if_still_fits(self, altitude: float) -> None:
         """A takeoff the pilot confirmed, sent only if the vehicle is still on the ground with a link."""
         if may_take_off(self.window.adapter.state):
-            self.command("takeoff", altitude)
+            self.adapter.send(self.adapter.drone.takeoff, altitude)
         else:
             self.window.log_message("Takeoff not sent: the vehicle is no longer on the ground with a link",
                                     Severity.WARNING)
@@ -113,13 +115,13 @@ class FlightCommands(QObject):
     def request_cancel_takeoff(self) -> None:
         """Cancel a takeoff that has not left the ground: the driver gives the vehicle back as it was."""
         self.window.sticks.centre()
-        self.command("cancel_takeoff")
+        self.adapter.send(self.adapter.drone.cancel_takeoff)
 
     def request_disarm(self) -> None:
         """On the ground, a disarm. In the air, disarming stops the motors and the drone falls: the pilot is
         asked every time, and only a confirmed emergency stop is sent."""
         if not self.window.adapter.state.flying:
-            self.command("disarm")
+            self.adapter.send(self.adapter.drone.disarm)
             return
         if self.emergency_box is not None and self.emergency_box.isVisible():
             return
@@ -128,7 +130,7 @@ class FlightCommands(QObject):
     def _emergency_answered(self, box: QMessageBox) -> None:
         if box.clickedButton() is box.button(QMessageBox.Yes):
             self.window.sticks.centre()
-            self.command("disarm", True, True)          # force and emergency: the motors stop, even in the air
+            self.adapter.send(self.adapter.drone.disarm, True, True)   # force, emergency: the motors stop, even aloft
         box.deleteLater()
         if self.emergency_box is box:
             self.emergency_box = None
@@ -136,14 +138,14 @@ class FlightCommands(QObject):
     def request_land(self) -> None:
         self.window.sticks.centre()
         self.window.map.cancel()
-        self.command("land")
+        self.adapter.send(self.adapter.drone.land)
 
     def request_stop(self) -> None:
         """Stop (button, Space, Escape): hover where it is; a go-to in progress ends there."""
         self.window.sticks.centre()
         self.window.map.cancel()
-        self.command("stop")
+        self.adapter.send(self.adapter.drone.stop)
 
     def request_rtl(self) -> None:
         self.window.map.cancel()
-        self.command("return_to_launch")
+        self.adapter.send(self.adapter.drone.return_to_launch)

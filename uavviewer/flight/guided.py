@@ -21,12 +21,6 @@ __all__ = ["GuidedController"]
 CIRCLE_COLOUR = QColor("#4fc3f7")
 
 
-class _CircleRelay(QObject):
-    """Carries the circle command's finished Future from the driver's thread to the UI thread (a queued signal);
-    parentless, as the adapter's _FutureRelay, so a late answer never emits on a deleted controller."""
-    done = pyqtSignal(object, object)        # the Future, the circle asked (north, east, radius)
-
-
 class GuidedController(QObject):
     asked = pyqtSignal(object)               # the question just opened (a QInputDialog): tests answer it
     view_changed = pyqtSignal()              # the circle drawn on the map came or went
@@ -36,11 +30,10 @@ class GuidedController(QObject):
         self.adapter = adapter
         self._window = window
         self._circle = None                  # the circle's Future while it is on its way
+        self._circle_wanted: tuple[float, float, float] | None = None   # ... and the circle it asked
         self.circling: tuple[float, float, float] | None = None   # north, east, radius of the circle being flown
         self._circle_seen = False                                  # the vehicle has reported CIRCLE since
         self.question: QInputDialog | None = None
-        self._relay = _CircleRelay()
-        self._relay.done.connect(self._circle_answered)
         self.change_altitude_action = QAction("Change &altitude…", window)
         self.change_altitude_action.setObjectName("actionChangeAltitude")
         self.change_altitude_action.triggered.connect(lambda: self.ask_altitude())
@@ -141,7 +134,7 @@ class GuidedController(QObject):
 
     # -- commands -------------------------------------------------------------------------------------------
     def change_altitude(self, altitude: float) -> None:
-        self.adapter.command("change_altitude", float(altitude))
+        self.adapter.send(self.adapter.drone.change_altitude, float(altitude))
 
     def circle(self, centre: tuple[float, float] | None, radius: float) -> None:
         s = self.adapter.state
@@ -149,17 +142,16 @@ class GuidedController(QObject):
             here = (s.local.north, s.local.east) if s.local is not None else (0.0, 0.0)
             yaw = math.radians(s.heading_deg)
             centre = (here[0] + radius * math.cos(yaw), here[1] + radius * math.sin(yaw))
-        self._circle = future = self.adapter.command("circle", centre[0], centre[1], float(radius))
+        wanted = (centre[0], centre[1], float(radius))
         self.circling = None
         self._circle_seen = False
-        if future is not None:
-            wanted = (centre[0], centre[1], float(radius))
-            relay = self._relay                          # not self: the callback runs on a driver thread
-            future.add_done_callback(lambda f: relay.done.emit(f, wanted))
+        self._circle_wanted = wanted
+        self._circle = self.adapter.send(self.adapter.drone.circle, *wanted,
+                                         then=lambda result: self._circle_answered(result, wanted))
 
-    def _circle_answered(self, future, wanted: tuple[float, float, float]) -> None:
-        """On the UI thread: the vehicle took the circle (and it is still the one asked), so the map draws it."""
-        if future is self._circle and not future.cancelled() and future.exception() is None and future.result().ok:
+    def _circle_answered(self, result, wanted: tuple[float, float, float]) -> None:
+        """The vehicle took the circle (and it is still the one asked), so the map draws it."""
+        if result.ok and self._circle is not None and wanted == self._circle_wanted:
             self.circling = wanted
             self.view_changed.emit()
 

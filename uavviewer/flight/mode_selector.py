@@ -35,6 +35,21 @@ class ModeSelector(QComboBox):
     def mode(self) -> str:
         return self._mode
 
+    def modes(self) -> list[str]:
+        return [self.itemText(i) for i in range(self.count())]
+
+    def refuse(self, reasons: dict[str, str | None]) -> None:
+        """Grey out the modes the driver will not command now, each with why in its tooltip (the vehicle's
+        current mode stays shown)."""
+        model = self.model()
+        for i in range(self.count()):
+            reason = reasons.get(self.itemText(i))
+            item = model.item(i)
+            enabled = reason is None or self.itemText(i) == self._mode
+            if item.isEnabled() != enabled:
+                item.setEnabled(enabled)
+            self.setItemData(i, reason, Qt.ToolTipRole)
+
     def set_mode(self, name: str) -> None:
         if name == self._mode or self.view().isVisible():
             return

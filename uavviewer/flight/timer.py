@@ -26,7 +26,7 @@ class FlightTimer:
     def __init__(self, clock=time.monotonic) -> None:
         self._clock = clock
         self._since: float | None = None       # the clock when the vehicle armed, None while disarmed
-        self._last = 0.0                        # the previous flight's seconds, shown while disarmed
+        self._previous_flight = 0.0                        # the previous flight's seconds, shown while disarmed
         self.started = False                    # armed at least once
         self._vehicle: tuple = ()               # (link address, system id) of the vehicle timed
         self._left: tuple | None = None         # (vehicle, since) of a flight under way when the window left it
@@ -49,15 +49,15 @@ class FlightTimer:
         elif not s.armed:
             self._testing = False
             if self._since is not None:
-                self._last, self._since = now - self._since, None
+                self._previous_flight, self._since = now - self._since, None
         return self.seconds
 
     def reset(self) -> None:
         """Another connection: its time starts anew at its arm, unless it is the same vehicle still flying."""
         if self._since is not None:
             self._left = (self._vehicle, self._since)
-        self._since, self._last, self.started = None, 0.0, False
+        self._since, self._previous_flight, self.started = None, 0.0, False
 
     @property
     def seconds(self) -> float:
-        return self._clock() - self._since if self._since is not None else self._last
+        return self._clock() - self._since if self._since is not None else self._previous_flight

@@ -106,7 +106,13 @@ class PilotSticks(QObject):
 
     def fly(self) -> None:
         w = self.window
-        command = velocity_from_axes(self.demand(), self.speeds)
+        axes = self.demand()
+        shots = getattr(w, "shots", None)
+        if shots is not None and shots.steer(axes):     # a smart shot runs: the sticks fly it, as on the Solo
+            self._echo_on_pads()
+            w.setpointLabel.setText("Setpoint: the shot" if axes.is_zero else "Sticks: steering the shot")
+            return
+        command = velocity_from_axes(axes, self.speeds)
         w.adapter.fly(command)
         self._echo_on_pads()
         w.inputLabel.setText(self._input_text())

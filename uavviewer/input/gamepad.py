@@ -108,47 +108,49 @@ class _Open:
     def __init__(self, index: int) -> None:
         self.controller = bool(sdl2.SDL_IsGameController(index))
         if self.controller:
-            self.gc = sdl2.SDL_GameControllerOpen(index)
-            if not self.gc:
+            self.game_controller = sdl2.SDL_GameControllerOpen(index)
+            if not self.game_controller:
                 raise OSError(sdl2.SDL_GetError().decode(errors="replace"))
-            self.js = sdl2.SDL_GameControllerGetJoystick(self.gc)
-            axes = [a for a in range(sdl2.SDL_CONTROLLER_AXIS_MAX) if sdl2.SDL_GameControllerHasAxis(self.gc, a)]
+            self.joystick = sdl2.SDL_GameControllerGetJoystick(self.game_controller)
+            axes = [a for a in range(sdl2.SDL_CONTROLLER_AXIS_MAX)
+                    if sdl2.SDL_GameControllerHasAxis(self.game_controller, a)]
             buttons = [b for b in range(sdl2.SDL_CONTROLLER_BUTTON_MAX)
-                       if sdl2.SDL_GameControllerHasButton(self.gc, b)]
+                       if sdl2.SDL_GameControllerHasButton(self.game_controller, b)]
             self._axes = axes
             self._buttons = buttons
             axis_names = tuple(sdl2.SDL_GameControllerGetStringForAxis(a).decode() for a in axes)
             button_names = tuple(sdl2.SDL_GameControllerGetStringForButton(b).decode() for b in buttons)
-            name = sdl2.SDL_GameControllerName(self.gc)
+            name = sdl2.SDL_GameControllerName(self.game_controller)
         else:
-            self.gc = None
-            self.js = sdl2.SDL_JoystickOpen(index)
-            if not self.js:
+            self.game_controller = None
+            self.joystick = sdl2.SDL_JoystickOpen(index)
+            if not self.joystick:
                 raise OSError(sdl2.SDL_GetError().decode(errors="replace"))
-            self._axes = list(range(sdl2.SDL_JoystickNumAxes(self.js)))
-            self._buttons = list(range(sdl2.SDL_JoystickNumButtons(self.js)))
-            self._hats = sdl2.SDL_JoystickNumHats(self.js)
+            self._axes = list(range(sdl2.SDL_JoystickNumAxes(self.joystick)))
+            self._buttons = list(range(sdl2.SDL_JoystickNumButtons(self.joystick)))
+            self._hats = sdl2.SDL_JoystickNumHats(self.joystick)
             axis_names = tuple(f"axis{a}" for a in self._axes)
             button_names = tuple(f"button{b}" for b in self._buttons) + tuple(
                 f"hat{h}{d}" for h in range(self._hats) for d in ("up", "down", "left", "right"))
-            name = sdl2.SDL_JoystickName(self.js)
+            name = sdl2.SDL_JoystickName(self.joystick)
         self._flip = tuple(n in ("lefty", "righty") for n in axis_names)     # up = +
-        self.pad = Pad(guid=_guid_text(sdl2.SDL_JoystickGetGUID(self.js)),
+        self.pad = Pad(guid=_guid_text(sdl2.SDL_JoystickGetGUID(self.joystick)),
                        name=(name or b"").decode(errors="replace") or "Gamepad",
-                       instance=sdl2.SDL_JoystickInstanceID(self.js), controller=self.controller,
+                       instance=sdl2.SDL_JoystickInstanceID(self.joystick), controller=self.controller,
                        axes=axis_names, buttons=button_names)
         self.pressed: list[str] = []
         self.last: tuple | None = None           # (axes, held) last published
 
     def read(self) -> tuple[tuple[float, ...], frozenset]:
         if self.controller:
-            raw = [sdl2.SDL_GameControllerGetAxis(self.gc, a) for a in self._axes]
-            held = {n for b, n in zip(self._buttons, self.pad.buttons) if sdl2.SDL_GameControllerGetButton(self.gc, b)}
+            raw = [sdl2.SDL_GameControllerGetAxis(self.game_controller, a) for a in self._axes]
+            held = {n for b, n in zip(self._buttons, self.pad.buttons)
+                    if sdl2.SDL_GameControllerGetButton(self.game_controller, b)}
         else:
-            raw = [sdl2.SDL_JoystickGetAxis(self.js, a) for a in self._axes]
-            held = {f"button{b}" for b in self._buttons if sdl2.SDL_JoystickGetButton(self.js, b)}
+            raw = [sdl2.SDL_JoystickGetAxis(self.joystick, a) for a in self._axes]
+            held = {f"button{b}" for b in self._buttons if sdl2.SDL_JoystickGetButton(self.joystick, b)}
             for h in range(self._hats):
-                held |= {f"hat{h}{d}" for d in _hat_directions(sdl2.SDL_JoystickGetHat(self.js, h))}
+                held |= {f"hat{h}{d}" for d in _hat_directions(sdl2.SDL_JoystickGetHat(self.joystick, h))}
         axes = tuple(max(-1.0, min(1.0, (-v if flip else v) / 32767.0)) for v, flip in zip(raw, self._flip))
         return axes, frozenset(held)
 
@@ -158,11 +160,11 @@ class _Open:
         return f"button{button}"
 
     def close(self) -> None:
-        if self.gc:
-            sdl2.SDL_GameControllerClose(self.gc)
-        elif self.js:
-            sdl2.SDL_JoystickClose(self.js)
-        self.gc = self.js = None
+        if self.game_controller:
+            sdl2.SDL_GameControllerClose(self.game_controller)
+        elif self.joystick:
+            sdl2.SDL_JoystickClose(self.joystick)
+        self.game_controller = self.joystick = None
 
 
 def _hat_directions(value: int) -> list[str]:
@@ -365,10 +367,10 @@ class VirtualPad:
             sdl2.SDL_QuitSubSystem(_SUBSYSTEMS)
             raise RuntimeError(sdl2.SDL_GetError().decode(errors="replace"))
         self.controller = controller
-        self._js = sdl2.SDL_JoystickOpen(index)
+        self._joystick = sdl2.SDL_JoystickOpen(index)
         self.centre()
-        self.instance = sdl2.SDL_JoystickInstanceID(self._js)
-        self.guid = _guid_text(sdl2.SDL_JoystickGetGUID(self._js))
+        self.instance = sdl2.SDL_JoystickInstanceID(self._joystick)
+        self.guid = _guid_text(sdl2.SDL_JoystickGetGUID(self._joystick))
         self.name = name
         self.attached = True
 
@@ -386,18 +388,18 @@ class VirtualPad:
         if self.controller and axis in (self._AXES["lefttrigger"], self._AXES["righttrigger"]):
             value = 2.0 * value - 1.0          # a trigger's 0..1 is the device's whole range
         raw = int(round(max(-1.0, min(1.0, value)) * 32767))
-        sdl2.SDL_JoystickSetVirtualAxis(self._js, axis, raw)
+        sdl2.SDL_JoystickSetVirtualAxis(self._joystick, axis, raw)
 
     def set_button(self, button: str | int, down: bool) -> None:
         if isinstance(button, str):
             button = self._BUTTONS[button] if button in self._BUTTONS else int(button.removeprefix("button"))
-        sdl2.SDL_JoystickSetVirtualButton(self._js, button, 1 if down else 0)
+        sdl2.SDL_JoystickSetVirtualButton(self._joystick, button, 1 if down else 0)
 
     def centre(self) -> None:
         """Sticks to the centre, triggers released."""
-        for axis in range(sdl2.SDL_JoystickNumAxes(self._js)):
+        for axis in range(sdl2.SDL_JoystickNumAxes(self._joystick)):
             trigger = self.controller and axis in (self._AXES["lefttrigger"], self._AXES["righttrigger"])
-            sdl2.SDL_JoystickSetVirtualAxis(self._js, axis, -32768 if trigger else 0)
+            sdl2.SDL_JoystickSetVirtualAxis(self._joystick, axis, -32768 if trigger else 0)
 
     def detach(self) -> None:
         """Unplug it (the reader sees it removed)."""
@@ -406,7 +408,7 @@ class VirtualPad:
         self.attached = False
         for index in range(sdl2.SDL_NumJoysticks()):
             if sdl2.SDL_JoystickGetDeviceInstanceID(index) == self.instance:
-                sdl2.SDL_JoystickClose(self._js)
+                sdl2.SDL_JoystickClose(self._joystick)
                 sdl2.SDL_JoystickDetachVirtual(index)
                 break
         sdl2.SDL_QuitSubSystem(_SUBSYSTEMS)

@@ -1,4 +1,4 @@
-"""Tools › MAVLink inspector (issue 31): every message type from every system and component with its rate and
+"""Tools › MAVLink inspector: every message type from every system and component with its rate and
 count, the selected message's fields updating in place, and a double-click to plot a field."""
 from __future__ import annotations
 
@@ -60,7 +60,7 @@ class InspectorWindow(QWidget):
         self._components: dict[tuple[int, int], QTreeWidgetItem] = {}
         self._messages: dict[tuple[int, int, str], QTreeWidgetItem] = {}
         self.selected: tuple[int, int, str] | None = None
-        self.last: Inspection | None = None
+        self.inspection: Inspection | None = None
         self._plotted_count = -1
         self.tree.currentItemChanged.connect(self._pick)
         self.fields.cellDoubleClicked.connect(self._plot_field)
@@ -81,7 +81,7 @@ class InspectorWindow(QWidget):
     # -- the tree, updated in place -----------------------------------------------------------------------------
     def refresh(self) -> None:
         seen = self._inspect()
-        self.last = seen
+        self.inspection = seen
         if not seen.available:
             self.note.setText(f"No inspector for this connection: {seen.why}.")
             return
@@ -112,8 +112,8 @@ class InspectorWindow(QWidget):
     def _pick(self, item, _previous=None) -> None:
         self.selected = item.data(0, Qt.UserRole) if item is not None else None
         self.fields.setRowCount(0)
-        if self.selected and self.last is not None:
-            for m in self.last.messages:
+        if self.selected and self.inspection is not None:
+            for m in self.inspection.messages:
                 if (m.system, m.component, m.name) == self.selected:
                     self._show_fields(m)
 

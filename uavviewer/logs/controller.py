@@ -116,9 +116,9 @@ class FlightLogsController(QObject):
     def unavailable(self) -> str:
         """Why this connection has no logs to download, or ""."""
         drone = self.adapter.drone
-        if getattr(drone, "replay", None) is not None:
+        if drone.replay is not None:
             return REPLAYED
-        if getattr(drone, "logs", None) is None:
+        if drone.logs is None:
             return NOT_CONNECTED if drone.state().link.status is LinkStatus.CLOSED else NO_LOGS
         return ""
 

@@ -54,7 +54,7 @@ class LogRow:
 
 
 def size_text(size: int) -> str:
-    """Bytes in decimal units, as the README's kB/s and MB figures."""
+    """Bytes in decimal units, as docs/flight-logs.md's kB/s and MB figures."""
     if size >= 1_000_000:
         return f"{size / 1e6:.2f} MB"
     if size >= 1_000:

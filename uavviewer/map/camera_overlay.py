@@ -1,8 +1,8 @@
 """The vehicle's camera on the map: its footprint and look direction, where it was asked to look (ROI), and
-"Look here" / "Stop looking" in the map's right-click menu (issue 23; issue 21's "Look at a point")."""
+"Look here" / "Stop looking" in the map's right-click menu."""
 from __future__ import annotations
 
-from PyQt5.QtCore import QObject, QPointF, Qt
+from PyQt5.QtCore import QObject, QPointF, Qt, pyqtSignal
 from PyQt5.QtGui import QColor, QFont, QPen, QPolygonF
 
 from driver.payload import GimbalControl
@@ -19,7 +19,9 @@ ROI = QColor("#ff6ad5")
 
 class CameraOverlay(QObject):
     """Draws on a :class:`~uavviewer.map.map_view.MapView` (its ``overlays``) and adds to its menu
-    (``menu_parts``); asks the drone through the window's adapter."""
+    (``menu_parts``); asks the drone through the window's adapter. Stop looking is the gimbal's to send (it then
+    tilts the camera back as it was), as from its bar."""
+    stopLookingRequested = pyqtSignal()
 
     def __init__(self, view, adapter, parent: QObject | None = None) -> None:
         super().__init__(parent)
@@ -97,8 +99,8 @@ class CameraOverlay(QObject):
         look.setEnabled(frame is not None and s.connected)
         if frame is not None:
             lat, lon = frame.to_latlon(east, north)
-            look.triggered.connect(lambda: self.adapter.command("look_at", lat, lon, 0.0))
+            look.triggered.connect(lambda: self.adapter.send(self.adapter.drone.look_at, lat, lon, 0.0))
         if s.gimbal.roi is not None or s.gimbal.control is GimbalControl.ROI:
             stop = menu.addAction("Stop looking (camera back to the pilot)")
             stop.setEnabled(s.connected)
-            stop.triggered.connect(lambda: self.adapter.command("stop_looking"))
+            stop.triggered.connect(self.stopLookingRequested.emit)

@@ -114,8 +114,7 @@ class MapController(QObject):
         panel.downloadRequested.connect(self.download_area)
         self.view.flyHereRequested.connect(self.ask_fly_here)
         self.camera = CameraOverlay(self.view, adapter, self)     # footprint, look direction, Look here (ROI)
-        self.traffic = TrafficOverlay(self.view, self)            # ADS-B contacts (issue 32)
-        adapter.commandFinished.connect(self._command_finished)
+        self.traffic = TrafficOverlay(self.view, self)            # ADS-B contacts and their alert
         self._show_status()
         replay = adapter.replay
         if replay is not None:
@@ -350,14 +349,16 @@ class MapController(QObject):
     def _answered(self, box: QMessageBox, target: tuple[float, float, float]) -> None:
         if box.clickedButton() is box.button(QMessageBox.Yes):
             self._sent = target
-            self.adapter.command("go_to", *target)
+            self.adapter.send(self.adapter.drone.go_to, *target, then=lambda result: self._went(result, target))
         box.deleteLater()
         if self._question is box:
             self._question = None
 
-    def _command_finished(self, result: CommandResult) -> None:
-        if result.command.replace("_", " ").startswith("go to") and self._sent is not None:
-            self.target, self._sent = (self._sent if result.ok else None), None
+    def _went(self, result: CommandResult, target: tuple[float, float, float]) -> None:
+        """The vehicle's answer to Fly here: the target is drawn while it flies there (unless ended meanwhile:
+        Stop, a stick, another Fly here)."""
+        if self._sent == target:
+            self.target, self._sent = (target if result.ok else None), None
             self._show_target()
 
     def cancel(self) -> None:

@@ -1,5 +1,5 @@
 """A reviewed flight's path on a :class:`~uavviewer.map.map_view.MapView` (one of its ``overlays``): the track
-coloured by flight mode, and a marker where the review's time cursor is (issue 31)."""
+coloured by flight mode, and a marker where the review's time cursor is."""
 from __future__ import annotations
 
 import bisect
@@ -33,7 +33,7 @@ class LogPathOverlay(QObject):
     def __init__(self, view, parent: QObject | None = None) -> None:
         super().__init__(parent)
         self.view = view
-        self._t: list[float] = []
+        self._times: list[float] = []
         self._points: list[tuple[float, float]] = []
         self._modes: list[str] = []
         self.marker: int | None = None              # index of the fix under the cursor
@@ -47,7 +47,7 @@ class LogPathOverlay(QObject):
             return
         frame = MapFrame(float(lat[0]), float(lon[0]))
         self.view.frame = frame
-        self._t = [float(x) for x in t]
+        self._times = [float(x) for x in t]
         self._points = [frame.to_view(float(a), float(b)) for a, b in zip(lat, lon)]
         self._modes = list(modes)
         self.marker = 0
@@ -69,9 +69,9 @@ class LogPathOverlay(QObject):
         self.view.update()                          # the map under the path is drawn again at this scale
 
     def set_time(self, t: float) -> None:
-        if not self._t:
+        if not self._times:
             return
-        i = max(0, bisect.bisect_right(self._t, t) - 1)
+        i = max(0, bisect.bisect_right(self._times, t) - 1)
         if i != self.marker:
             self.marker = i
             self.view.update()
@@ -97,7 +97,7 @@ class LogPathOverlay(QObject):
             return False
         self.marker = index
         view.update()
-        self.timePicked.emit(self._t[index])
+        self.timePicked.emit(self._times[index])
         return True
 
     def marker_place(self) -> tuple[float, float] | None:

@@ -1,6 +1,7 @@
-"""ADS-B traffic on the map (issue 32): each contact the vehicle forwards, where it was last heard, turned to its
-heading (a round mark when its heading is unknown: never an arrow pointing a guess), with its callsign, height relative to us and how long ago it was heard; faded once stale, gone when the
-driver drops it (driver.traffic); red while its closest approach comes within the alert limits."""
+"""ADS-B traffic on the map: each contact the vehicle forwards, where it was last heard, turned to its heading (a
+round mark when its heading is unknown: never an arrow pointing a guess), with its callsign, height relative to us
+and how long ago it was heard; faded once stale, gone when the driver drops it (driver.traffic); red while its
+closest approach comes within the alert limits."""
 from __future__ import annotations
 
 from PyQt5.QtCore import QObject, QPointF, Qt

@@ -2,7 +2,7 @@
 in one go through the adapter (never waiting), compares .param files and opens a parameter from a message.
 
 The table comes from each snapshot (``VehicleState.parameters``); a write is ``Drone.set_parameter``, whose
-result (confirmed only by the vehicle's PARAM_VALUE echo) comes back as the adapter's ``commandFinished``.
+result (confirmed only by the vehicle's PARAM_VALUE echo) comes back to the write that asked for it.
 """
 from __future__ import annotations
 
@@ -61,7 +61,6 @@ class ParamsController(QObject):
         if say is not None:
             self.said.connect(say)
         adapter.stateChanged.connect(self.show_state)
-        adapter.commandFinished.connect(self._result)
         adapter.droneChanged.connect(lambda _drone: self._vehicle_changed())   # a fleet's pick, File › Connect
         self._read_metadata(lambda drone: drone.parameter_metadata)
 
@@ -162,7 +161,7 @@ class ParamsController(QObject):
         """Ask the driver for every parameter (``refresh``: even those it holds already)."""
         self._asked = True
         self._fetch_problem = ""
-        self.adapter.command("fetch_parameters", refresh)
+        self.adapter.send(self.adapter.drone.fetch_parameters, refresh, then=self._fetched)
 
     def fetch_if_needed(self) -> None:
         table = self.model.table
@@ -268,25 +267,26 @@ class ParamsController(QObject):
             self._writing[name] = value
             self._show_write(name, WriteState.WRITING)
             # outside the bounds only as the pilot confirmed exactly this value (the driver refuses it otherwise)
-            self.adapter.command("set_parameter", name, value, (name, value) in self._confirmed_outside)
+            confirmed = (name, value) in self._confirmed_outside
+            self.adapter.send(self.adapter.drone.set_parameter, name, value, confirmed,
+                              then=lambda result, n=name, v=value: self._written(n, v, result))
 
     def _show_write(self, name: str, state: WriteState, reason: str = "", written: float | None = None) -> None:
         self.model.set_write_state(name, state, reason, written)
         if self.review is not None:
             self.review.show_write(name, state, reason)
 
-    def _result(self, result: CommandResult) -> None:
-        if result.command == "parameters":
-            self._fetch_problem = "" if result.ok else f"download: {result.status.value}" + (
-                f" ({result.reason})" if result.reason else "")
-            self._show_download()
+    def _fetched(self, result: CommandResult) -> None:
+        self._fetch_problem = "" if result.ok else f"download: {result.status.value}" + (
+            f" ({result.reason})" if result.reason else "")
+        self._show_download()
+
+    def _written(self, name: str, written: float, result: CommandResult) -> None:
+        """The vehicle's answer to one write: shown unless another value of ``name`` went since (its own answer
+        will say)."""
+        if self._writing.get(name) != written:
             return
-        if not result.command.startswith("param "):
-            return
-        name = result.command[len("param "):].split("=", 1)[0].strip()
-        if name not in self._writing:
-            return
-        written = self._writing.pop(name)
+        del self._writing[name]
         if result.ok:
             self._show_write(name, WriteState.CONFIRMED, written=written)
             if meta_attr(self.model.meta(name), "reboot_required", False):

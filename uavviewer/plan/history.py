@@ -50,20 +50,20 @@ class PlanHistory(QObject):
         super().__init__(parent)
         self.doc = doc
         self.stack = QUndoStack(self)
-        self._last = _snapshot(doc)
+        self._recorded = _snapshot(doc)
 
     def record(self, text: str, merge=None) -> None:
         """The document changed (or not): a step from the last state to this one. Steps with the same ``merge``
         key in a row become one (a drag)."""
         now = _snapshot(self.doc)
-        if now != self._last:
-            before, self._last = self._last, now
+        if now != self._recorded:
+            before, self._recorded = self._recorded, now
             self.stack.push(_Step(self, before, now, text, merge))
 
     def restore(self, snapshot: tuple) -> None:
         d = self.doc
         d.entries, d.fence, d.fence_extra, d.rally = (list(part) for part in snapshot)
-        self._last = snapshot
+        self._recorded = snapshot
         self.restored.emit()
 
     @property

@@ -299,7 +299,7 @@ class PlanDocument:
 def _fly(w: _Walk, item: MissionItem, home: tuple[float, float], perf: Performance) -> None:
     cmd = item.command
 
-    def go(north: float, east: float, alt: float, speed: float) -> None:
+    def fly_to(north: float, east: float, alt: float, speed: float) -> None:
         d = math.hypot(north - w.north, east - w.east)
         climb = alt - w.alt
         dt = max(d / max(speed, 0.1), climb / perf.climb if climb > 0 else -climb / perf.descent)
@@ -326,20 +326,20 @@ def _fly(w: _Walk, item: MissionItem, home: tuple[float, float], perf: Performan
         if item.param2 > 0:
             w.speed = item.param2
     elif cmd == C.MAV_CMD_NAV_TAKEOFF:
-        go(w.north, w.east, max(w.alt, item.alt), w.speed)
+        fly_to(w.north, w.east, max(w.alt, item.alt), w.speed)
     elif cmd in _AT_PLACE:
-        go(*place(), item.alt, w.speed)
+        fly_to(*place(), item.alt, w.speed)
         if cmd in (C.MAV_CMD_NAV_WAYPOINT, C.MAV_CMD_NAV_LOITER_TIME):
             wait(max(0.0, item.param1))
         elif cmd == C.MAV_CMD_NAV_LOITER_UNLIM:
             w.totals = replace(w.totals, open_ended=True)
     elif cmd == C.MAV_CMD_NAV_LAND:
-        go(*place(), w.alt, w.speed)
+        fly_to(*place(), w.alt, w.speed)
         land()
     elif cmd == C.MAV_CMD_NAV_RETURN_TO_LAUNCH:
         up = max(w.alt, perf.rtl_alt)
-        go(w.north, w.east, up, w.speed)
-        go(0.0, 0.0, up, w.speed)
+        fly_to(w.north, w.east, up, w.speed)
+        fly_to(0.0, 0.0, up, w.speed)
         land()
 
 

@@ -16,13 +16,9 @@ from driver.mission.plan import Plan, PlanKind
 from driver.vehicle.state import Severity, VehicleState
 
 from ..widgets.ask import ask, cautious_question
+from .vehicle_view import fence_off_words
 
-__all__ = ["UploadNotices", "fence_off_words"]
-
-
-def fence_off_words(s: VehicleState) -> str:
-    """"The vehicle's fence is off (FENCE_ENABLE 0)" while the vehicle says so, else ""."""
-    return "The vehicle's fence is off (FENCE_ENABLE 0)" if s.fence.enabled is False else ""
+__all__ = ["UploadNotices"]
 
 
 class UploadNotices(QObject):

@@ -14,6 +14,7 @@ from PyQt5.QtWidgets import (
 )
 
 from .table import PlanTable
+from .vehicle_view import VehicleView
 from .survey import CAMERAS
 
 __all__ = ["PlanPanel", "LAYERS", "TOOLS"]
@@ -62,6 +63,7 @@ class PlanPanel(QWidget):
         self.setObjectName("planPanel")
         self._filling = False
         self.skip_allowed = False                # the controller says when Skip to item makes sense
+        self._tips: dict[QWidget, str] = {}      # each vehicle button's own tooltip; why it is disabled follows
         self.row_seq: list[int | None] = []      # the vehicle's item number of each mission row
         lay = QVBoxLayout(self)
         lay.setContentsMargins(4, 4, 4, 4)
@@ -384,14 +386,36 @@ class PlanPanel(QWidget):
             self._filling = False
         self.surveyLabel.setText(summary)
 
-    def set_transfer(self, text: str, done: int, total: int, active: bool) -> None:
-        self.progressBar.setRange(0, max(1, total))
-        self.progressBar.setValue(min(done, max(1, total)) if total else 0)
-        self.progressBar.setFormat(text.split(" (")[0])     # "upload mission: accepted"; the whole in its tip
-        self.progressBar.setToolTip(text)
-        self.cancelButton.setEnabled(active)
-        for w in (self.uploadButton, self.downloadButton, self.clearButton):
-            w.setEnabled(not active)
+    def show_vehicle(self, view: VehicleView) -> None:
+        """The vehicle's side of the panel as the plan controller worked it out (plan/vehicle_view.py), all at once:
+        the transfer, the tabs' dots, the comparison, every button, the mission's progress."""
+        t = view.transfer
+        self.progressBar.setRange(0, max(1, t.total))
+        self.progressBar.setValue(min(t.done, max(1, t.total)) if t.total else 0)
+        self.progressBar.setFormat(t.text.split(" (")[0])   # "upload mission: accepted"; the whole in its tip
+        self.progressBar.setToolTip(t.text)
+        for index, title in enumerate(view.tab_titles):
+            self.tabs.setTabText(index, title)
+        self.syncLabel.setText(view.comparison)
+        self.syncLabel.setStyleSheet("color: #ffb020;" if view.warning else "")
+        for button, state in ((self.uploadButton, view.upload), (self.downloadButton, view.download),
+                              (self.clearButton, view.remove), (self.cancelButton, view.cancel),
+                              (self.startButton, view.start), (self.pauseButton, view.pause),
+                              (self.resumeButton, view.resume)):
+            button.setEnabled(state.enabled)
+            what = self._tips.setdefault(button, button.toolTip())     # what it does, as built
+            button.setToolTip("\n".join(w for w in (what, state.why_not) if w))
+        self.skip_allowed = view.skip.enabled
+        self.progressLabel.setText(view.progress)
+
+    def show_current_row(self, current: int | None) -> None:
+        """The mission's row the vehicle flies now, highlighted (None: none)."""
+        table = self.tables["mission"]
+        for r in range(table.rowCount()):
+            for c in range(table.columnCount()):
+                item = table.item(r, c)
+                if item is not None:
+                    item.setBackground(Qt.darkGreen if r == current else Qt.transparent)
 
 
 def _fixed_lines(label: QLabel, lines: int) -> None:

@@ -1,7 +1,7 @@
-"""Room for the Plan list beside the map (issue 29: the list showed 1 row at 1366×768 and 0 at 1280×720).
+"""Room for the Plan list beside the map: without it the list showed 1 row at 1366×768 and none at 1280×720.
 
-While Plan is shown, the tabs behind it and behind the map (Preflight, Plots, Messages: not in view anyway; the latest
-autopilot message is in the status strip) step out, so no tab bar takes height, and the Plan dock gets the height its panel needs with its list showing
+While Plan is shown, the tabs behind it and behind the map (Preflight, Shots, Plots, Messages: not in view anyway; the
+latest autopilot message is in the status strip) step out, so no tab bar takes height, and the Plan dock gets the height its panel needs with its list showing
 :data:`~uavviewer.plan.panel.ROWS_IN_VIEW` rows; the map has the rest of the column. Where the column is short
 (1024×600) the map's title bar and status line step out too and the list keeps at least
 :data:`~uavviewer.plan.panel.ROWS_AT_LEAST` rows, Upload above them in view. Never wider: the flight
@@ -10,7 +10,7 @@ controls beside it stay where they are. Plan closed: the tabs come back as they 
 from __future__ import annotations
 
 from PyQt5.QtCore import Qt
-from PyQt5.QtWidgets import QWidget
+from PyQt5.QtWidgets import QDockWidget, QWidget
 
 __all__ = ["make_room_for_plan"]
 
@@ -19,8 +19,10 @@ _STEPPED_OUT = "_plan_stepped_out"       # the window's docks that stepped out f
 
 def make_room_for_plan(window, dock, on: bool) -> None:
     if on:
-        behind = [d for d in (getattr(window, "preflightDock", None), window.plotsDock, window.messagesDock)
-                  if d is not None and d.isVisible() and not d.isFloating()
+        keep = (dock, window.mapDock, window.telemetryDock)
+        behind = [d for d in window.findChildren(QDockWidget)       # every feature's tab, whoever added it
+                  if d not in keep and d.isVisible() and not d.isFloating()
+                  and window.dockWidgetArea(d) == window.dockWidgetArea(dock)
                   and window.tabifiedDockWidgets(d)]                  # a tab, not a dock of its own
         for d in behind:
             d.hide()

@@ -22,8 +22,9 @@ class PlanTable(QTableWidget):
 
     def __init__(self, rows: int, columns: int, parent=None) -> None:
         super().__init__(rows, columns, parent)
-        self._grab: tuple[QPoint, int] | None = None     # where the left button went down, on which row
-        self._kept = False                   # pressed on a selected row: the selection waits for the release
+        self._pressed: tuple[QPoint, int] | None = None     # where the left button went down, on which row
+        self._selection_held = False         # pressed on one of several selected rows: they stay selected until
+                                             # the release (a drag takes them all; a click, that one alone)
         self.before: int | None = None       # while dragging: the row the dragged ones go before
 
     def selected(self) -> list[int]:
@@ -39,29 +40,29 @@ class PlanTable(QTableWidget):
 
     def mousePressEvent(self, event) -> None:  # noqa: N802 (Qt's name)
         row = self.rowAt(event.pos().y())
-        self._grab, self._kept, self.before = None, False, None
+        self._pressed, self._selection_held, self.before = None, False, None
         if event.button() == Qt.LeftButton and not event.modifiers() and row >= 0:
-            self._grab = (event.pos(), row)
+            self._pressed = (event.pos(), row)
             if row in self.selected() and len(self.selected()) > 1:   # several to drag: keep them selected
-                self._kept = True
+                self._selection_held = True
                 event.accept()
                 return
         super().mousePressEvent(event)
 
     def mouseMoveEvent(self, event) -> None:  # noqa: N802 (Qt's name)
-        if self._grab is not None and event.buttons() & Qt.LeftButton:
+        if self._pressed is not None and event.buttons() & Qt.LeftButton:
             if self.before is not None or \
-                    (event.pos() - self._grab[0]).manhattanLength() >= QApplication.startDragDistance():
+                    (event.pos() - self._pressed[0]).manhattanLength() >= QApplication.startDragDistance():
                 self.before = self.row_before(event.pos())      # a drag, not a stretched selection
                 self.viewport().update()
                 event.accept()
                 return
-        if not self._kept:
+        if not self._selection_held:
             super().mouseMoveEvent(event)
 
     def mouseReleaseEvent(self, event) -> None:  # noqa: N802 (Qt's name)
-        grab, kept, before = self._grab, self._kept, self.before
-        self._grab, self._kept, self.before = None, False, None
+        pressed, held, before = self._pressed, self._selection_held, self.before
+        self._pressed, self._selection_held, self.before = None, False, None
         if before is not None:
             self.viewport().update()
             self.setState(QAbstractItemView.NoState)
@@ -70,8 +71,8 @@ class PlanTable(QTableWidget):
             if rows and not (rows == list(range(rows[0], rows[-1] + 1)) and rows[0] <= before <= rows[-1] + 1):
                 self.rowsDropped.emit(rows, before)          # (dropped where they are: nothing moves)
             return
-        if kept and grab is not None:                        # a click on one of several: that one alone
-            self.selectRow(grab[1])
+        if held and pressed is not None:                        # a click on one of several: that one alone
+            self.selectRow(pressed[1])
             event.accept()
             return
         super().mouseReleaseEvent(event)

@@ -38,7 +38,6 @@ class Preferences(QObject):
         w.actionPreferences.triggered.connect(self.edit)
         # every vehicle flown (a fleet's pick, File › Connect) is judged by the pilot's battery thresholds
         w.adapter.droneChanged.connect(lambda _drone: self.set_battery_thresholds())
-        w.adapter.commandFinished.connect(self._show_result)
 
     @property
     def takeoff_altitude(self) -> float:
@@ -85,11 +84,11 @@ class Preferences(QObject):
         dialog = SettingsDialog(replace(self.settings, takeoff_altitude=shown), w,
                                 signing_unavailable=w.signing_unavailable)
         dialog.setAttribute(Qt.WA_DeleteOnClose)
-        command = w.adapter.command
-        dialog.signingKeyRequested.connect(lambda key: command("use_signing_key", key))
-        dialog.signingSetupRequested.connect(lambda key: command("setup_signing", key))
-        dialog.signingRemoveRequested.connect(lambda: command("remove_signing"))
-        dialog.allowUnsignedRequested.connect(lambda on: command("allow_unsigned", on))
+        a, said = w.adapter, self._show_signing_result
+        dialog.signingKeyRequested.connect(lambda key: a.send(a.drone.use_signing_key, key, then=said))
+        dialog.signingSetupRequested.connect(lambda key: a.send(a.drone.setup_signing, key, then=said))
+        dialog.signingRemoveRequested.connect(lambda: a.send(a.drone.remove_signing, then=said))
+        dialog.allowUnsignedRequested.connect(lambda on: a.send(a.drone.allow_unsigned, on, then=said))
         dialog.set_signing(w.adapter.state.signing)
         gamepad = GamepadPage(w.sticks.gamepad, self.settings)
         dialog.add_page(gamepad, "Gamepad")
@@ -104,8 +103,8 @@ class Preferences(QObject):
         if self.dialog is not None:
             self.dialog.set_signing(s.signing)
 
-    def _show_result(self, result: CommandResult) -> None:
-        if result.command.startswith("signing") and self.dialog is not None:
+    def _show_signing_result(self, result: CommandResult) -> None:
+        if self.dialog is not None:
             self.dialog.show_signing_result(result)
 
     def _chosen(self, settings: ViewerSettings, shown_altitude: float) -> None:

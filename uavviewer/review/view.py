@@ -1,4 +1,4 @@
-"""One reviewed log in one view (issue 31): the searchable field tree, the plots with their events and cursor,
+"""One reviewed log in one view (docs/review.md): the searchable field tree, the plots with their events and cursor,
 the flight path on the map coloured by mode with the cursor's marker, the events, the parameters as flown and
 their difference from the vehicle's, presets and CSV export, and geotagging the flight's photos."""
 from __future__ import annotations

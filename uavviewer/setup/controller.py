@@ -96,7 +96,7 @@ class SetupController(QObject):
     def _watch(self, closed: bool = False) -> None:
         """RC_CHANNELS and SERVO_OUTPUT_RAW while a page shows them, asked off otherwise (not during a motor test:
         its outputs are what the pilot watches, wherever the window is)."""
-        setup = getattr(self.adapter.drone, "setup", None)
+        setup = self.adapter.drone.setup
         if setup is None or self.dialog is None:
             return
         self._ask_banner(setup, self.adapter.state)
@@ -116,12 +116,12 @@ class SetupController(QObject):
 
     def no_setup(self) -> str:
         """Why this connection has no vehicle setup ("" when it has one): every page says it."""
-        return "" if getattr(self.adapter.drone, "setup", None) is not None else NO_SETUP
+        return "" if self.adapter.drone.setup is not None else NO_SETUP
 
     def show_state(self, s) -> None:
         if self.dialog is None or not self.dialog.isVisible():
             return
-        setup = getattr(self.adapter.drone, "setup", None)
+        setup = self.adapter.drone.setup
         if setup is not None:
             self._ask_banner(setup, s)
         why = self.no_setup()
@@ -154,11 +154,11 @@ class SetupController(QObject):
 
     def reboot(self) -> None:
         """The vehicle restarts (a new frame); the answer goes to Messages as every command's."""
-        self.adapter.command("reboot")
+        self.adapter.send(self.adapter.drone.reboot)
 
     def run(self, name: str, call: Callable, done: Callable[[CommandResult], None]) -> None:
         """``call(drone.setup)`` returns a Future of a CommandResult; ``done(result)`` runs on the UI thread."""
-        setup = getattr(self.adapter.drone, "setup", None)
+        setup = self.adapter.drone.setup
         if setup is None:
             done(CommandResult(name, CommandStatus.REJECTED, NO_SETUP))
             return

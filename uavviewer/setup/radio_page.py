@@ -21,7 +21,7 @@ class RadioPage(QWidget):
         self._runner = runner
         self._calibration: RadioCalibration | None = None
         self._values: dict[str, float] = {}
-        self._rc = ()
+        self._channels = ()
         self._throttle = THROTTLE                    # RCMAP_THROTTLE as the vehicle reported it
         layout = QVBoxLayout(self)
         self.status = QLabel("Waiting for the vehicle's RC channels…")
@@ -64,7 +64,7 @@ class RadioPage(QWidget):
     def finish_calibration(self) -> None:
         if self._calibration is None:
             return
-        ranges = self._calibration.ranges(self._rc, self._throttle)
+        ranges = self._calibration.ranges(self._channels, self._throttle)
         self._calibration = None
         self.finish.setEnabled(False)
         self._values = parameters(ranges)
@@ -79,7 +79,7 @@ class RadioPage(QWidget):
 
     def show_state(self, s) -> None:
         rc = s.setup.rc
-        self._rc = rc.values
+        self._channels = rc.values
         self._throttle = throttle_channel(s)
         self.channels.show_values(rc.values[:16])
         if self._calibration is not None:

@@ -41,10 +41,11 @@ class SensorsPage(QWidget):
         self.baro = _button("Barometer", "setupBaro")
         self.level = _button("Level", "setupLevel")
         self.simple = _button("Simple accel", "setupSimpleAccel")
-        for b, name, call in ((self.gyro, "gyro", "calibrate_gyro"), (self.baro, "baro", "calibrate_baro"),
-                              (self.level, "level", "calibrate_level"),
-                              (self.simple, "accel_simple", "calibrate_accel_simple")):
-            b.clicked.connect(lambda _c=False, n=name, c=call: self._calibrate(n, c))
+        for b, name, call in ((self.gyro, "gyro", lambda setup: setup.calibrate_gyro()),
+                              (self.baro, "baro", lambda setup: setup.calibrate_baro()),
+                              (self.level, "level", lambda setup: setup.calibrate_level()),
+                              (self.simple, "accel_simple", lambda setup: setup.calibrate_accel_simple())):
+            b.clicked.connect(lambda _c=False, n=name, c=call: self._run(n, c))
             row.addWidget(b)
         layout.addLayout(row)
         columns = QHBoxLayout()
@@ -67,9 +68,9 @@ class SensorsPage(QWidget):
         self.compass_start = _button("Start", "setupCompassStart")
         self.compass_accept = _button("Accept", "setupCompassAccept")
         self.compass_cancel = _button("Cancel", "setupCompassCancel")
-        self.compass_start.clicked.connect(lambda: self._compass("compass_calibration"))
-        self.compass_accept.clicked.connect(lambda: self._compass("accept_compass"))
-        self.compass_cancel.clicked.connect(lambda: self._compass("cancel_compass"))
+        self.compass_start.clicked.connect(lambda: self._run("compass", lambda s: s.compass_calibration().finished))
+        self.compass_accept.clicked.connect(lambda: self._run("accept_compass", lambda s: s.accept_compass()))
+        self.compass_cancel.clicked.connect(lambda: self._run("cancel_compass", lambda s: s.cancel_compass()))
         for b in (self.compass_start, self.compass_accept, self.compass_cancel):
             buttons.addWidget(b)
         c.addLayout(buttons)
@@ -107,9 +108,6 @@ class SensorsPage(QWidget):
     def _done(self, result) -> None:
         self.result.setText(str(result))          # the vehicle's verdict, in its own words
 
-    def _calibrate(self, name: str, call: str) -> None:
-        self._run(name, lambda s: getattr(s, call)())
-
     def start_accel(self) -> None:
         self._texts_from = self._runner.now()
         self.result.setText("accel calibration: starting…")
@@ -130,12 +128,6 @@ class SensorsPage(QWidget):
         if not result.ok:                           # not confirmed (lost, refused): Next again for the same one
             self._confirming = None
             self._done(result)
-
-    def _compass(self, call: str) -> None:
-        if call == "compass_calibration":
-            self._run("compass", lambda s: s.compass_calibration().finished)
-        else:
-            self._run(call, lambda s: getattr(s, call)())
 
     # -- the vehicle's state ------------------------------------------------------------------------
     def show_state(self, s) -> None:

@@ -12,7 +12,7 @@ from collections.abc import Callable
 from PyQt5.QtCore import QEvent, QObject, Qt
 from PyQt5.QtWidgets import QMessageBox, QWidget
 
-__all__ = ["ask", "cautious_question"]
+__all__ = ["ask", "cautious_question", "warning_question"]
 
 
 def ask(box: QMessageBox, answered: Callable[[QMessageBox], None]) -> QMessageBox:
@@ -49,3 +49,15 @@ def cautious_question(parent: QWidget, title: str, text: str, yes: str, name: st
     box.setEscapeButton(QMessageBox.Cancel)
     box.installEventFilter(_NoRepeats(box))
     return box
+
+
+def warning_question(parent: QWidget, name: str, title: str, text: str, *buttons) -> tuple[QMessageBox, list]:
+    """A warning with ``buttons`` ((label, role) each, returned as made) and Cancel, the default for Enter and
+    Escape: nothing is lost by a key pressed too soon."""
+    box = QMessageBox(QMessageBox.Warning, title, text, QMessageBox.NoButton, parent)
+    box.setObjectName(name)
+    added = [box.addButton(label, role) for label, role in buttons]
+    box.addButton(QMessageBox.Cancel)
+    box.setDefaultButton(QMessageBox.Cancel)
+    box.setEscapeButton(QMessageBox.Cancel)
+    return box, added

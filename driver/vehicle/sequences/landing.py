@@ -12,6 +12,8 @@ from __future__ import annotations
 
 from concurrent.futures import Future
 
+from ..commands import CommandFuture
+
 from ..state import CommandStatus, LandedState, SequencePhase, VehicleState
 from .machine import Machine, Outcome, Pilot
 
@@ -30,7 +32,7 @@ class Descent:
         self.mode = mode
         self.name = name
         self.stages = stages
-        self.future: Future = Future()
+        self.future: Future = CommandFuture()
         self.answer: Outcome | None = None      # settled now, while the sequence goes on following the vehicle
         self.phase, self.detail = SequencePhase.IDLE, ""
         handlers = {"asked": self._asked, "on the ground": self._on_ground}

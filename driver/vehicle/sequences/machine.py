@@ -12,6 +12,7 @@ from concurrent.futures import Future
 from dataclasses import dataclass
 from typing import Callable, Protocol
 
+from ..commands import decided
 from ..state import CommandResult, CommandStatus, SequencePhase, VehicleState
 
 __all__ = ["Machine", "Outcome", "Pilot"]
@@ -24,9 +25,8 @@ class Pilot(Protocol):
 
     def may_be_airborne(self) -> bool: ...
 
-    def mode(self, name: str, *, early: bool = False, ask: bool = False) -> Future:
-        """A mode change; ``early``: settled by the vehicle's ACCEPTED already, not only by its heartbeat;
-        ``ask``: sent even when the state shows the mode already (it may be stale)."""
+    def mode(self, name: str, *, early: bool = False) -> Future:
+        """A mode change; ``early``: settled by the vehicle's ACCEPTED already, not only by its heartbeat."""
 
     def arm(self, *, early: bool = False) -> Future: ...
 
@@ -39,7 +39,10 @@ class Pilot(Protocol):
     def quiet(self, command: int) -> bool:
         """No request with this id is pending, and none sent earlier can still reach the vehicle."""
 
-    def long(self, command: int, params=(), name: str | None = None, *, retry: float | None = None) -> Future: ...
+    def long(self, command: int, params=(), name: str | None = None, *, retry: float | None = None,
+             shows_mode: str | None = None) -> Future:
+        """A COMMAND_LONG; ``shows_mode``: one that switches the mode (MISSION_START), confirmed by the heartbeat
+        showing it, as a mode change is."""
 
     def retry_interval(self) -> float:
         """How soon an idempotent request goes again when unanswered (the link's own round trip)."""
@@ -86,8 +89,7 @@ class Machine:
         """Send ``request`` once in this state; its answer once there is one (None while it is awaited)."""
         if self.pending is None:
             self.pending = request()
-        f = self.pending
-        return f.result() if f.done() else None
+        return decided(self.pending)
 
     def step(self, state: VehicleState, now: float) -> Outcome | None:
         """Run the current state's handler; a state just entered runs at once too (no tick lost between steps)."""

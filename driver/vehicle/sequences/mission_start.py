@@ -9,7 +9,8 @@ handle_MAV_CMD_MISSION_START) switches to AUTO itself, lets the takeoff item lif
 resumes the mission, so no separate AUTO step waits between arming and the start: an armed copter on the ground
 disarms itself after DISARM_DELAY, and every step a lossy link must confirm eats into it. MISSION_START is
 harmless to repeat (a running mission is not restarted), so it goes again at the link's own round trip, not
-every 3 s, until the vehicle answers or shows AUTO.
+every 3 s, until a heartbeat the vehicle sent after it shows AUTO (never one from before: the vehicle may have
+left AUTO since, for a LAND on its way).
 
 The mission runs when the vehicle says so: its heartbeat in AUTO, and MISSION_CURRENT active (or, from firmware
 without the mission state, an item current, or the vehicle climbing).
@@ -20,6 +21,7 @@ from concurrent.futures import Future
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
+from ..commands import CommandFuture
 from ...mission.plan import MissionRunState
 from ..state import CommandStatus, SequencePhase, VehicleState
 from .machine import Machine, Outcome, Pilot
@@ -41,7 +43,7 @@ class MissionStartSequence:
 
     def __init__(self, pilot: Pilot, config, now: float):
         self.pilot = pilot
-        self.future: Future = Future()
+        self.future: Future = CommandFuture()
         self._cfg = config
         self.phase, self.detail = SequencePhase.WAITING_READY, ""
         before = pilot.state()
@@ -77,13 +79,9 @@ class MissionStartSequence:
         m = self.machine
         if self._auto_fallback:
             r = m.ask(lambda: self.pilot.mode("AUTO", early=True))
-        else:
+        else:                                          # confirmed when a heartbeat sent after it shows AUTO
             r = m.ask(lambda: self.pilot.long(mavlink.MAV_CMD_MISSION_START, (0, 0), "MISSION_START",
-                                              retry=self.pilot.retry_interval()))
-        if s.mode == "AUTO" and (r is None or not r.ok):   # the vehicle shows it: its answer was lost
-            m.go("running", now)
-            self.report(SequencePhase.CLIMBING, "waiting for MISSION_CURRENT")
-            return None
+                                              retry=self.pilot.retry_interval(), shows_mode="AUTO"))
         if r is None:
             return None
         if r.ok:

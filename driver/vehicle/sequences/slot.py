@@ -83,6 +83,7 @@ class SequenceSlot:
             return
         self._answered.add(seq)
         result = outcome.result or self._store.record_locked(seq.name, outcome.status, outcome.reason)
+        seq.future.decision = result               # known to the driver now (a CommandFuture), to callers once settled
         self._settler.settle(seq.future, result)
 
     def progress(self, seq) -> None:

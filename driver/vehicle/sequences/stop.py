@@ -19,6 +19,7 @@ from concurrent.futures import Future
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
+from ..commands import CommandFuture
 from ..state import CommandStatus, SequencePhase, VehicleState
 from .machine import Machine, Outcome, Pilot
 
@@ -38,7 +39,7 @@ class StopSequence:
 
     def __init__(self, pilot: Pilot, now: float, interrupted=None, airborne: bool = True, armed: bool = True) -> None:
         self.pilot = pilot
-        self.future: Future = Future()
+        self.future: Future = CommandFuture()
         self.answer: Outcome | None = None
         self.phase, self.detail = SequencePhase.IDLE, ""
         self._interrupted = interrupted
@@ -113,7 +114,7 @@ class StopSequence:
         return ", ".join(done) or "the vehicle was not changed"
 
     def _guided(self, s: VehicleState, now: float):
-        r = self.machine.ask(lambda: self.pilot.mode("GUIDED", ask=True))
+        r = self.machine.ask(lambda: self.pilot.mode("GUIDED"))
         if r is None:
             return None
         if r.ok:
@@ -124,7 +125,7 @@ class StopSequence:
         return None
 
     def _brake(self, s: VehicleState, now: float):
-        r = self.machine.ask(lambda: self.pilot.mode("BRAKE", ask=True))
+        r = self.machine.ask(lambda: self.pilot.mode("BRAKE"))
         if r is None:
             return None
         if not r.ok:

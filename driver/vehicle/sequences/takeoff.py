@@ -14,6 +14,7 @@ from concurrent.futures import Future
 
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
+from ..commands import CommandFuture
 from ..state import CommandStatus, LandedState, SequencePhase, VehicleState
 from .machine import Machine, Outcome, Pilot
 from .preparation import GroundStart
@@ -46,7 +47,7 @@ class TakeoffSequence:
     def __init__(self, pilot: Pilot, altitude: float, config, now: float):
         self.pilot = pilot
         self.altitude = altitude
-        self.future: Future = Future()
+        self.future: Future = CommandFuture()
         self._cfg = config
         self.phase, self.detail = SequencePhase.WAITING_READY, ""
         before = pilot.state()                      # what a cancel before liftoff gives back
