@@ -7,6 +7,7 @@ from __future__ import annotations
 from pymavlink.dialects.v20 import ardupilotmega as mavlink
 
 from driver.core.roundtrip import RoundTrip
+from driver.vehicle.commands import decided
 from driver.vehicle.state import CommandStatus
 from test_driver_clock import _AUTOPILOT, at, clock, heartbeat, kinds, vehicle  # noqa: F401 (fixtures)
 
@@ -61,3 +62,31 @@ def test_a_command_resent_at_the_links_pace_is_waited_for_when_the_link_slows(cl
     at(clock, vehicle, 2.5)
     result = future.result(timeout=5)
     assert result.status is CommandStatus.ACCEPTED, str(result)
+
+
+def test_a_quickly_retried_command_doubles_its_own_wait_and_waits_a_commands_whole_time(clock, vehicle):
+    """MISSION_START re-sent every 0.25 s on a link timed at 0.05 s: each unanswered try waits twice as long as the
+    last, by the command's own backoff and not only the link's (which stays below it), up to the command timeout;
+    and it gives up no sooner than a command re-sent every command timeout would (3 s x 3 attempts): at the first
+    try due after that."""
+    vehicle.ingest(heartbeat(armed=True))
+    quick = vehicle.command_long(mavlink.MAV_CMD_DO_SET_SERVO, (9, 1500))
+    at(clock, vehicle, 0.0)
+    clock.advance(0.01)
+    vehicle.ingest(ack(mavlink.MAV_CMD_DO_SET_SERVO))
+    assert quick.result(timeout=5).ok and vehicle.ports.roundtrip.timeout() == 0.05
+    at(clock, vehicle, 0.95)
+    future = vehicle.ports.commands.long(mavlink.MAV_CMD_MISSION_START, (0, 0), "MISSION_START", retry=0.25)
+    sent = []
+    for step in range(20, 215):                         # 1.0 s to 10.7 s, a tick every 0.05 s
+        t = round(step * 0.05, 2)
+        if step % 20 == 0:
+            vehicle.ingest(heartbeat(armed=True))       # the link stays up: only this command goes unanswered
+        sent += [t for m in kinds(at(clock, vehicle, t), "COMMAND_LONG")
+                 if m.command == mavlink.MAV_CMD_MISSION_START]
+        assert decided(future) is None, (t, decided(future))
+    assert sent == [1.0, 1.25, 1.75, 2.75, 4.75, 7.75], sent   # 0.25, 0.5, 1, 2 s, then the command timeout
+    last = [m for m in kinds(at(clock, vehicle, 10.75), "COMMAND_LONG")   # due again, 9.75 s after the first
+            if m.command == mavlink.MAV_CMD_MISSION_START]
+    assert last == []
+    assert decided(future).status is CommandStatus.TIMED_OUT, str(decided(future))
