@@ -375,6 +375,42 @@ def test_the_driver_speaks_of_the_product_not_of_issue_numbers():
                               if re.search(r"\bissues? #?\d", line, re.IGNORECASE)]
     assert found == [], found
 
+
+#: Names a reader had to look up to follow the log download and the Ice client's journal: each was renamed for
+#: what it holds in flight terms (the bytes the .part keeps, the tail asked twice, the results before a restart).
+UNCLEAR_NAMES = {"tokens", "kept", "verify", "tail_full", "short_asks", "TAIL_TWICE", "ANSWERED_MIN",
+                 "_result_offset", "_result_high", "_resync"}
+
+
+def names_defined(tree) -> list[tuple[int, str]]:
+    """(line, name) of every name ``tree`` binds: variables, attributes assigned, arguments, functions, classes."""
+    import ast
+    found = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Name) and isinstance(node.ctx, ast.Store):
+            found.append((node.lineno, node.id))
+        elif isinstance(node, ast.Attribute) and isinstance(node.ctx, ast.Store):
+            found.append((node.lineno, node.attr))
+        elif isinstance(node, ast.arg):
+            found.append((node.lineno, node.arg))
+        elif isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+            found.append((node.lineno, node.name))
+    return found
+
+
+def test_the_driver_names_what_it_holds():
+    """A name says what it holds (a log's ``saved`` bytes, the journal's ``_results_before_restart``), never a
+    plumbing word a reader must trace back to its assignments."""
+    found = [f"{rel}:{line}: {name}" for rel, tree in _sources("driver")
+             for line, name in names_defined(tree) if name in UNCLEAR_NAMES]
+    assert found == [], "\n".join(found)
+
+
+def test_the_names_check_finds_a_plumbing_word():
+    import ast
+    found = names_defined(ast.parse("self.tail_full = set()\ndef f(tokens): pass\n"))
+    assert sorted(found) == [(1, "tail_full"), (2, "f"), (2, "tokens")]
+
 # -- sizes ----------------------------------------------------------------------------------------------------------
 MAX_MODULE_LINES = 600
 MAX_CLASS_LINES = 400

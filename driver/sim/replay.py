@@ -404,10 +404,10 @@ class ReplayVehicle:
         """A mission request from the ground station: the vehicle's pending re-asks of that plan are not sent.
         ArduPilot asks for an item again only while it does not come (1 s); the recorded ground station let one
         wait, the live one may answer at once (caller holds the lock)."""
-        kept = [entry for entry in self._queue if entry[2].get_type() not in REASKS
-                or getattr(entry[2], "mission_type", 0) != mission_type]
-        if len(kept) != len(self._queue):
-            self._queue = kept
+        still_due = [entry for entry in self._queue if entry[2].get_type() not in REASKS
+                     or getattr(entry[2], "mission_type", 0) != mission_type]
+        if len(still_due) != len(self._queue):
+            self._queue = still_due
             heapq.heapify(self._queue)
 
     def _match(self, key: tuple) -> tuple[Exchange | None, object, str]:

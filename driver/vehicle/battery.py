@@ -72,9 +72,9 @@ class Battery:
         if not airborne or self.draw is None or at is None or self.draw_at is None or at < self.draw_at:
             return dict(draw=current, draw_at=at, draw_weight=DRAW_SEED)
         dt = at - self.draw_at
-        kept = self.draw_weight * math.exp(-dt / DRAW_SMOOTHING)
-        weight = kept + dt
-        return dict(draw=(self.draw * kept + current * dt) / weight if weight > 0 else self.draw, draw_at=at,
+        past_weight = self.draw_weight * math.exp(-dt / DRAW_SMOOTHING)   # what the earlier draw still counts
+        weight = past_weight + dt
+        return dict(draw=(self.draw * past_weight + current * dt) / weight if weight > 0 else self.draw, draw_at=at,
                     draw_weight=weight)
 
     @property
