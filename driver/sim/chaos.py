@@ -237,7 +237,12 @@ class Flight:
         result = decided(asked.future)
         result = getattr(result, "result", result)          # a transfer's outcome carries its result
         self.answers.append((asked.action, result))
-        wrong = wrong_answer(asked.action.kind, asked.name, result, self._truth[asked.since:])
+        stale = self.faults.latency * 1.1 + 0.1        # how old the freshest report at the answer can be
+        first, at = asked.since, self._truth[-1][0] if self._truth else 0.0     # the autopilot's time
+        while first > 0 and self._truth[first - 1][0] >= at - stale:
+            first -= 1
+        wrong = wrong_answer(asked.action.kind, asked.name, result, self._truth[asked.since:],
+                             self._truth[first:])
         if wrong:
             self._violate("wrong answer", f"{asked.name}: {result.status.value} ({result.reason}): {wrong}")
 
@@ -246,10 +251,13 @@ class Flight:
         return "; ".join(str(a) for a in actions)
 
 
-def wrong_answer(kind: str, name: str, result, window: list) -> str | None:
+def wrong_answer(kind: str, name: str, result, window: list, known: list | None = None) -> str | None:
     """What is false in ``result`` (the answer to the pilot's ``kind`` action, ``name`` as told) given ``window``,
     the vehicle's truth from the request to the answer: (time, mode, armed, landed, altitude, mission running)
-    tuples. None when it agrees with the vehicle. A log download is judged by the flight rules alone."""
+    tuples. None when it agrees with the vehicle. A log download is judged by the flight rules alone.
+    ``known``: the truth over the last downlink latency before the answer (default: the answer's instant), what a
+    report heard at the answer may show: a Stop's "holding" or "on the ground" is right if the vehicle was so in
+    it (a ground station started after another one's arm, over a slow radio, cannot know of it sooner)."""
     if not hasattr(result, "status") or not window:
         return None
     modes = {t[1] for t in window}
@@ -267,7 +275,7 @@ def wrong_answer(kind: str, name: str, result, window: list) -> str | None:
                 return f"said {shown}, modes {sorted(modes)}"
         if kind == "mission" and not any(t[1] == "AUTO" and t[5] for t in window):
             return "said the mission runs, never AUTO with the mission running"
-        if kind == "stop" and not (now[1] in HOLD_MODES or (now[3] and not now[2])):
+        if kind == "stop" and not any(t[1] in HOLD_MODES or (t[3] and not t[2]) for t in (known or [now])):
             return (f"said {result.reason!r}, the vehicle in {now[1]}, {'armed' if now[2] else 'disarmed'}, "
                     f"{'landed' if now[3] else f'{now[4]:.1f} m up'}")
     elif result.status is CommandStatus.REFUSED:
