@@ -46,3 +46,15 @@ def test_pilot_chaos_breaks_no_flight_rule_and_every_answer_is_true(part):
 def test_stop_during_a_mission_start_on_a_slow_radio_holds_on_the_drivers_clock():
     """The case that once left an airborne copter in STABILIZE, replayed exactly in lockstep."""
     fly(11, FaultSet(latency=1.5), [Action("mode", 0.0, 1.0), Action("mission", 0.0, 3.2), Action("stop", 0.0, 8.0)])
+
+
+@pytest.mark.parametrize("seed_, fault, sequence", [
+    # the radio slows to 2 s after its round trip was learnt: the first Land's late ACKs are counted as its own,
+    # never taken for the second Land (which once answered "LAND" while the vehicle sat in GUIDED)
+    (0, FaultSet(latency=2.0), [Action("land", 0.0, 1.0), Action("takeoff", 0.0, 2.0), Action("land", 0.0, 1.0)]),
+    # a ground station started again after an arm, over the same slow radio: Stop answers from what it can know
+    (0, FaultSet(latency=2.0), [Action("arm", 0.0, 1.0), Action("reconnect", 0.0, 2.0), Action("stop", 0.0, 1.0)]),
+], ids=["late-acks-of-a-replaced-land", "stop-after-a-restart"])
+def test_sequences_the_big_search_found_stay_right(seed_, fault, sequence):
+    """Sequences ``bench/chaos.py`` shrank from thousands, kept as they flew."""
+    fly(seed_, fault, sequence)

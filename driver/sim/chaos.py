@@ -103,6 +103,7 @@ class Flight:
         self._airborne_since: float | None = None
         self._lifted = False
         self._armed_by_us = False                 # this driver's last ARM_DISARM was an arm
+        self._last_frame = b""                    # the last frame the vehicle heard
         try:
             self._prepare()
             self.ls.faults.uplink, self.ls.faults.downlink = self.faults.link(), self.faults.link()
@@ -205,6 +206,10 @@ class Flight:
 
     def _check_heard(self, h) -> None:
         msg, kind = h.msg, h.msg.get_type()
+        frame = bytes(msg.get_msgbuf())
+        if frame == self._last_frame:           # the link's duplicate (same sequence number): not the driver's act,
+            return                              # and a motor test it repeats finds the vehicle armed by itself
+        self._last_frame = frame
         if kind == "COMMAND_LONG" and msg.command in (mavlink.MAV_CMD_NAV_TAKEOFF, mavlink.MAV_CMD_MISSION_START) \
                 and msg.get_srcComponent() == self.ls.vehicle.config.source_component:
             self._lifted = True                 # this driver sent what lifts the vehicle: it knows from then on

@@ -8,7 +8,8 @@ What a pilot must be able to trust, on a lossy link shared with other systems:
 * a reply answers its own request, never a later one with the same id: an ACK carries only the command's id,
   so while an earlier request with that id (replaced, or answered fewer times than it was sent) may still be
   answered, an ACK is not taken for the new one, which goes on being re-sent until an answer can only be its
-  own (:attr:`_Command.ambiguous_until`);
+  own (:meth:`CommandSender._ambiguous`: the earlier request's last send plus the answer window *as the link's
+  round trip is known when the ACK arrives*, so a slow radio measured later still counts);
 * a mode change is confirmed by the HEARTBEAT, never by the ACK alone: an ACK cannot say which of two
   DO_SET_MODEs it answers, so a late one for an earlier switch would otherwise confirm a lost packet; arming and
   disarming likewise, by the heartbeat's armed bit;
@@ -95,6 +96,13 @@ class Notifier:
         self._pool.shutdown(wait=False)
 
 
+@dataclass
+class _Echo:
+    """Earlier requests with one id, replaced or given up before every send was answered."""
+    sent: float = -1e18                       # the last of them went out then
+    owed: int = 0                             # answers they may still get
+
+
 @dataclass(eq=False)
 class _Command:
     name: str
@@ -115,7 +123,6 @@ class _Command:
     first_sent: float | None = None
     last_sent: float = 0.0
     answers: int = 0                          # ACKs taken as its own
-    ambiguous_until: float = -1e18            # before then an ACK with its id may be an earlier request's
     next_send: float = 0.0
     deadline: float | None = None
     acked: bool = False                       # mode change or arming: ACCEPTED, waiting for the heartbeat
@@ -124,6 +131,7 @@ class _Command:
     early: bool = False                       # a sequence's step: the vehicle's ACCEPTED settles it already
     in_progress: bool = False
     legacy: bool = False                      # mode change by the SET_MODE message
+    asked: int = 0                            # attempts sent as COMMAND_LONG (SET_MODE has no answer to owe)
     refused: str | None = None
     refuse_at: float = 0.0
     tags: set = field(default_factory=set)
@@ -149,7 +157,7 @@ class CommandSender:
         self._roundtrip = roundtrip           # the link's round trip (driver.core.roundtrip), fed by clean answers
         self._firmware = firmware             # learns what the vehicle calls UNSUPPORTED
         self._pending: dict[object, _Command] = {}
-        self._echoes: dict[object, float] = {}     # command id -> until when an earlier request may be answered
+        self._echoes: dict[object, _Echo] = {}     # command id -> earlier requests not all answered
         self._custom_mode: int | None = None       # the mode the heartbeat shows now
         self._armed = False                        # the armed bit it shows
         self._heartbeat_at = -1e18                 # when it was heard
@@ -170,7 +178,7 @@ class CommandSender:
     def settled_by_state(self, command: int, now: float, pending: bool = True) -> bool:
         """Whether the state now tells the truth about ``command`` (no request of that id could still change it;
         ``pending`` False: leaving out the one pending now, which is being judged)."""
-        return (not pending or command not in self._pending) and self._echoes.get(command, -1e18) <= now
+        return (not pending or command not in self._pending) and not self._echo_due(command, now)
 
     def submit_mode(self, name: str, number: int, now: float, *, tag=None, early: bool = False) -> Future:
         """A mode change, confirmed by the heartbeat; SET_MODE on firmware known to lack DO_SET_MODE."""
@@ -188,7 +196,6 @@ class CommandSender:
             self._resolve(old, CommandStatus.ABORTED, f"superseded by {c.name}", remove=False, now=now)
         c.next_send = now
         c.budget = self._cfg.command_attempts
-        c.ambiguous_until = self._echoes.get(c.key, -1e18)
         self._pending[c.key] = c
         return c.future
 
@@ -201,7 +208,7 @@ class CommandSender:
         if not c.attempts or not c.shown(self._armed, self._custom_mode):
             c.shown_since = None
             return False
-        if now < c.ambiguous_until:
+        if self._echo_due(c.key, now):
             return False
         if c.acked:
             return self._heartbeat_at >= c.acked_at
@@ -221,12 +228,25 @@ class CommandSender:
         """How long after it went out a request may still be answered."""
         return max(self._cfg.command_timeout, self._link_timeout())
 
+    def _echo_due(self, key, now: float) -> bool:
+        """An answer to an earlier request with this id may still arrive: within the answer window of its last
+        send, judged with the round trip known now; and, while the answers it is owed have not all come, within
+        a command's whole time (a radio that slowed down after its round trip was learnt answers later than the
+        window says: an answer counted as the earlier one's, in order, is never taken for the new one); the longest
+        of a command's whole time and the slowest round trip the link may have (the estimate's ceiling)."""
+        e = self._echoes.get(key)
+        if e is None:
+            return False
+        longest = max(self._cfg.command_timeout * self._cfg.command_attempts,
+                      self._roundtrip.ceiling if self._roundtrip is not None else 0.0)
+        return now < e.sent + self._answer_window() or (e.owed > 0 and now < e.sent + longest)
+
     def _remember_echo(self, c: _Command, now: float) -> None:
         """``c`` leaves: if it was sent more often than it was answered, ACKs with its id stay ambiguous until an
         answer to its last attempt can no longer arrive."""
         if c.attempts > c.answers:
-            until = c.last_sent + self._answer_window()
-            self._echoes[c.key] = max(self._echoes.get(c.key, -1e18), until)
+            e = self._echoes.setdefault(c.key, _Echo())
+            e.sent, e.owed = max(e.sent, c.last_sent), e.owed + max(0, c.asked - c.answers)
 
     # -- cancelling ----------------------------------------------------------------------------------------
     def cancel_tagged(self, tag, reason: str, now: float = 0.0) -> list[tuple[int, int]]:
@@ -266,7 +286,8 @@ class CommandSender:
         c = self._pending.get(m.command)
         if c is None or c.attempts == 0:
             return                                # nothing of ours is waiting, or ours has not gone out yet
-        if now < c.ambiguous_until:
+        if self._echo_due(c.key, now):
+            self._echoes[c.key].owed -= 1         # counted as the earlier request's, the oldest first
             log.debug("%s: an answer that may be an earlier request's, not taken", c.name)
             return                                # it goes on being re-sent until an answer is surely its own
         c.answers += 1
@@ -314,8 +335,8 @@ class CommandSender:
         out = []
         cfg = self._cfg
         system, component = self._target()
-        for key, until in list(self._echoes.items()):
-            if until <= now:
+        for key in list(self._echoes):
+            if not self._echo_due(key, now):
                 del self._echoes[key]
         for c in list(self._pending.values()):
             if self._shows(c, now):
@@ -373,6 +394,7 @@ class CommandSender:
                     c.give_up_at = now + cfg.command_timeout * cfg.command_attempts
             c.last_sent = now
             c.attempts += 1
+            c.asked += not (c.mode is not None and c.legacy)
         return out
 
     def _time_out(self, c: _Command, state: VehicleState, now: float) -> None:
@@ -387,7 +409,7 @@ class CommandSender:
             shown = "armed" if state.armed else "disarmed"
             reason = self._vehicle_reason(c, f"the vehicle accepted it, but its heartbeat still shows {shown} "
                                              f"after {c.attempts} attempts")
-        elif c.answers == 0 and c.ambiguous_until > (c.first_sent or 0.0):
+        elif c.answers == 0 and c.key in self._echoes:
             reason = (f"no answer that could only be to this request after {c.attempts} attempts (an earlier "
                       "one with the same id was still being answered)")
         else:
