@@ -208,7 +208,7 @@ class CommandSender:
         if not c.attempts or not c.shown(self._armed, self._custom_mode):
             c.shown_since = None
             return False
-        if self._echo_due(c.key, now):
+        if self._echo_due(c.key, now, counting=False):
             return False
         if c.acked:
             return self._heartbeat_at >= c.acked_at
@@ -228,18 +228,20 @@ class CommandSender:
         """How long after it went out a request may still be answered."""
         return max(self._cfg.command_timeout, self._link_timeout())
 
-    def _echo_due(self, key, now: float) -> bool:
+    def _echo_due(self, key, now: float, counting: bool = True) -> bool:
         """An answer to an earlier request with this id may still arrive: within the answer window of its last
-        send, judged with the round trip known now; and, while the answers it is owed have not all come, within
-        a command's whole time (a radio that slowed down after its round trip was learnt answers later than the
-        window says: an answer counted as the earlier one's, in order, is never taken for the new one); the longest
-        of a command's whole time and the slowest round trip the link may have (the estimate's ceiling)."""
+        send, judged with the round trip known now; and, ``counting``, while the answers it is owed have not all
+        come, within the longest of a command's whole time and the slowest round trip the link may have (the
+        estimate's ceiling): a radio that slowed down after its round trip was learnt answers later than the
+        window says, and an ACK counted as the earlier one's, in order, is never taken for the new one. The
+        heartbeat's confirmation waits the window only: it needs no ACK, and SHOWN_FOR already asks the vehicle
+        to go on showing it (a request the vehicle ignores owes its answers for ever)."""
         e = self._echoes.get(key)
         if e is None:
             return False
         longest = max(self._cfg.command_timeout * self._cfg.command_attempts,
                       self._roundtrip.ceiling if self._roundtrip is not None else 0.0)
-        return now < e.sent + self._answer_window() or (e.owed > 0 and now < e.sent + longest)
+        return now < e.sent + self._answer_window() or (counting and e.owed > 0 and now < e.sent + longest)
 
     def _remember_echo(self, c: _Command, now: float) -> None:
         """``c`` leaves: if it was sent more often than it was answered, ACKs with its id stay ambiguous until an
