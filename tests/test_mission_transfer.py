@@ -169,3 +169,12 @@ def test_a_land_item_is_held_as_arducopter_reads_it_back(homed, sim):
     outcome = homed.upload_plan(plan).result(30)
     assert sim.autopilot.plan_items(PlanKind.MISSION)[-1].params[3] == 1.0
     assert outcome.result.status is CommandStatus.ACCEPTED, str(outcome.result)
+
+
+def test_an_upload_rides_out_a_second_of_silence_at_its_start(homed, sim):
+    """A fast link's round trip makes MISSION_COUNT go again within 0.1 s; unanswered, each try waits twice as long,
+    so a 1 s outage (a radio fading as Upload is pressed) costs a few tries, not the upload."""
+    sim.faults.outage(1.0)
+    outcome = homed.upload_plan(survey_mission(homed, 6)).result(60)
+    assert outcome.result.status is CommandStatus.ACCEPTED, str(outcome.result)
+    assert len(sim.autopilot.plan_items(PlanKind.MISSION)) == 7

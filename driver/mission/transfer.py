@@ -48,7 +48,9 @@ log = logging.getLogger(__name__)
 MIN_RETRY = 0.1              # s: the shortest re-ask time, whatever the link
 MAX_RETRY = 1.5              # s: the longest (QGroundControl's ack timeout)
 START_ATTEMPTS = 8           # MISSION_COUNT / MISSION_REQUEST_LIST / MISSION_CLEAR_ALL sent this often (the list
-                             # for READ_PATIENCE s at the least: readback.py)
+                             # for READ_PATIENCE s at the least: readback.py) ...
+START_PATIENCE = START_ATTEMPTS * MAX_RETRY   # s ... and for this long: unanswered, each waits twice as long as
+                             # the one before (RFC 6298's backoff), so a fast link's 0.1 s re-ask rides out an outage
 ITEM_ATTEMPTS = 12           # a download's item asked this often before the transfer fails ...
 ITEM_PATIENCE = 8.0          # s ... and for this long since it was first asked (ArduPilot's own item timeout):
                              # on a fast link 12 re-asks take 1.2 s, too short for a loss streak on a radio
@@ -209,8 +211,8 @@ class PlanTransfers(LegacyRally, ReadBack):
             return
         if t.stage == "start":
             listing = t.direction is TransferDirection.DOWNLOAD
-            if t.attempts >= START_ATTEMPTS and (not listing or now - t.first_asked >= READ_PATIENCE
-                                                 or (t.upload is not None and t.upload.acked)):
+            patience = READ_PATIENCE if listing and not (t.upload is not None and t.upload.acked) else START_PATIENCE
+            if t.attempts >= START_ATTEMPTS and now - t.first_asked >= patience:
                 what = {TransferDirection.UPLOAD: "MISSION_COUNT", TransferDirection.DOWNLOAD: "MISSION_REQUEST_LIST",
                         TransferDirection.CLEAR: "MISSION_CLEAR_ALL"}[t.direction]
                 said = f" (the vehicle answered {t.said})" if t.said else ""
@@ -250,7 +252,7 @@ class PlanTransfers(LegacyRally, ReadBack):
             t.first_asked = now
         t.attempts += 1
         t.sent_at = now
-        t.next_send = now + self._retry(t)
+        t.next_send = now + min(MAX_RETRY, self._retry(t) * 2 ** min(t.attempts - 1, 8))   # backing off unanswered
         self._out.append(msg)
 
     def _ask_item(self, t: _Transfer, seq: int, now: float) -> None:
