@@ -49,6 +49,9 @@ from driver.vehicle.safety import MANUAL_THROTTLE_MODES  # noqa: E402
 
 SETTLE = 45.0                   # s after the last action for the answers still awaited
 SEEN_AIRBORNE = 4.0             # s in the air beyond the latency before the driver must know it
+#: s the judge's link may hear the vehicle later than the driver's: ArduCopter sends each link's 1 Hz HEARTBEAT
+#: from its own timer, so the judge's (SERIAL1) can show a new mode up to a heartbeat after the driver's (SERIAL0)
+HEARTBEAT_LAG = 1.2
 
 
 class SitlFlight:
@@ -59,6 +62,7 @@ class SitlFlight:
         self.truth: list = []
         self._stop = threading.Event()
         self._asked: list = []
+        self._answered_at: dict = {}          # id(future) -> when the judge first saw it answered
         self._airborne_since: float | None = None
         self._started = time.monotonic()
 
@@ -81,6 +85,7 @@ class SitlFlight:
                 self._do(action)
                 self._run(action.wait, sticks=action if action.kind == "sticks" else None)
             self._run(SETTLE, until=lambda: all(a[2].done() for a in self._asked if a[0].kind != "log download"))
+            self._run(HEARTBEAT_LAG + 0.3)             # the last answers judged once the judge's link caught up
             for action, name, future, _ in self._asked:
                 if not future.done() and action.kind != "log download":    # a log may take minutes: not a command
                     self._violate("no answer", f"{name}: nothing said {SETTLE:g} s after the last action")
@@ -161,10 +166,13 @@ class SitlFlight:
         for asked in list(self._asked):
             action, name, future, since = asked
             if future.done() and asked not in [a for a, _ in self.answers]:
+                answered = self._answered_at.setdefault(id(future), now)
+                if now < answered + HEARTBEAT_LAG:
+                    continue                    # what the judge's link shows of that moment is still coming
                 result = future.result()
                 result = getattr(result, "result", result)
                 self.answers.append((asked, result))
-                window = self.truth[since:]
+                window = [t for t in self.truth[since:] if t[0] <= answered + HEARTBEAT_LAG]
                 wrong = wrong_answer(action.kind, name, result, window)
                 if not wrong and action.kind in ("motor test", "calibrate") and getattr(result, "ok", False) and \
                         window and (window[0][2] or not window[0][3]):     # as asked: a motor test arms it itself

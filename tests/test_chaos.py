@@ -54,7 +54,10 @@ def test_stop_during_a_mission_start_on_a_slow_radio_holds_on_the_drivers_clock(
     (0, FaultSet(latency=2.0), [Action("land", 0.0, 1.0), Action("takeoff", 0.0, 2.0), Action("land", 0.0, 1.0)]),
     # a ground station started again after an arm, over the same slow radio: Stop answers from what it can know
     (0, FaultSet(latency=2.0), [Action("arm", 0.0, 1.0), Action("reconnect", 0.0, 2.0), Action("stop", 0.0, 1.0)]),
-], ids=["late-acks-of-a-replaced-land", "stop-after-a-restart"])
+    # Stop pressed while the motors spin in a test the heartbeat does not show yet: the test is ended
+    (0, FaultSet(), [Action("motor test", 0.0, 3.8), Action("motor test", 0.0, 5.1), Action("pause", 0.0, 1.1),
+                     Action("stop", 0.0, 0.2), Action("motor test", 0.0, 0.2), Action("stop", 0.0, 3.0)]),
+], ids=["late-acks-of-a-replaced-land", "stop-after-a-restart", "stop-during-a-motor-test"])
 def test_sequences_the_big_search_found_stay_right(seed_, fault, sequence):
     """Sequences ``bench/chaos.py`` shrank from thousands, kept as they flew."""
     fly(seed_, fault, sequence)

@@ -133,10 +133,12 @@ def test_in_flight_no_window_covers_the_controls_and_the_flight_keys_work_from_e
         qtbot.waitUntil(lambda: not window.isVisible(), timeout=3000)
 
     page = open_secondary("parameters", w, qtbot, tmp_path)      # typing in a field is typing
-    mode = sim.truth().mode
+    qtbot.waitUntil(lambda: w.adapter.state.mode == sim.truth().mode, timeout=10000)   # the last key's mode shown
+    sent = []
+    w.adapter.commandSent.connect(sent.append)
     page.search.setFocus()
     qtbot.keyClick(page.search, Qt.Key_R)
-    assert page.search.text() == "r" and w.adapter.state.mode == mode
+    assert page.search.text() == "r" and sent == [], sent                # a letter typed, nothing flown
 
 
 def test_a_window_over_the_controls_steps_aside_when_the_vehicle_takes_off(qtbot, sim, vehicle, window_factory,

@@ -63,12 +63,11 @@ def test_orbit_here_from_the_map_and_the_sticks_steer_it_instead_of_ending_it(qt
     assert shot.centre is not None and abs(shot.radius_wanted - 12.0) < 0.5
     velocity_frames = sum(1 for _, kind, _ in list(f.sim.received_messages) if kind == "SET_POSITION_TARGET_LOCAL_NED")
     w.rightStick.hold(0.0, -1.0)                                   # full stick back: out, as on the Solo
-    start = f.sim.truth().time
-    qtbot.waitUntil(lambda: f.sim.truth().time - start > 4.0, timeout=20000)
+    # it backs out from the centre (however fast this machine refreshes the stick), and the shot goes on
+    qtbot.waitUntil(lambda: math.hypot(f.sim.truth().north - 12.0, f.sim.truth().east) > 15.0
+                    or not w.adapter.state.shot.active, timeout=30000)
     w.rightStick.hold(0.0, 0.0)
     assert w.adapter.state.shot.active                             # steered, not ended
-    t = f.sim.truth()
-    assert math.hypot(t.north - 12.0, t.east) > 15.0               # it backed out from the centre
     assert sum(1 for _, kind, _ in list(f.sim.received_messages)
                if kind == "SET_POSITION_TARGET_LOCAL_NED") == velocity_frames    # no velocity went out
     qtbot.mouseClick(w.shots.panel.running_buttons["stop"], Qt.LeftButton)

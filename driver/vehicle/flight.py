@@ -157,9 +157,10 @@ class Flight:
             s = self._store.state
             airborne = (self._rules.may_be_airborne(s) or (interrupted is not None and interrupted.lifting_sent))
             armed = s.armed or not self._path.settled(mavlink.MAV_CMD_COMPONENT_ARM_DISARM)
+            testing = self._rules.motor_test_may_run(s, now)      # the motors may be spinning in a test
             self._setpoints.stop(now)                 # zeros at once, whatever the mode turns out to be
             self._store.set(setpoint=self._setpoints.setpoint)
-            seq = StopSequence(self._pilot, now, interrupted, airborne, armed)
+            seq = StopSequence(self._pilot, now, interrupted, airborne, armed, testing)
             self._sequence.start(seq)
         self._outbox.wake()
         return seq.future

@@ -129,10 +129,14 @@ class FlightRules:
             return self.disarm_problem(int(round(params[1])) == ARM_FORCE_MAGIC, s, now)
         what = GROUND_ONLY_COMMANDS.get(command)
         if what is not None:
-            if command == mavlink.MAV_CMD_DO_MOTOR_TEST and params[3] == 0 and s.setup.motor_test_running:
+            if command == mavlink.MAV_CMD_DO_MOTOR_TEST and params[3] == 0 and self.motor_test_may_run(s, now):
                 return None                        # the stop of a running test (timeout 0) ends it, never starts
             return self.ground_problem(what, s, now, command)
         return None
+
+    def motor_test_may_run(self, s: VehicleState, now: float) -> bool:
+        """The vehicle says a test of ours runs, or one went out that may be running (armed) still."""
+        return s.setup.motor_test_running or now < self._motor_test_until
 
     def disarm_problem(self, forced: bool, s: VehicleState, now: float) -> str | None:
         if not self.may_be_airborne(s):

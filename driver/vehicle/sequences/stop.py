@@ -1,6 +1,7 @@
 """Stop: the vehicle ends holding where it is, or on the ground disarmed; never in a mode that needs a throttle.
 
     on the ground, disarmed ───────────────────────────────→ done ("nothing to stop")
+    a motor test may run:          end test ──────────────→ done  (DO_MOTOR_TEST, timeout 0: the vehicle disarms)
     before liftoff, not airborne:  disarm → restore → done  (what a cancelled takeoff changed, undone)
                                      └ refused ──────┐
     may be airborne (or armed):    guided ─→ holding ─→ watching → done
@@ -37,7 +38,8 @@ class StopSequence:
     exclusive = False
     altitude = 0.0
 
-    def __init__(self, pilot: Pilot, now: float, interrupted=None, airborne: bool = True, armed: bool = True) -> None:
+    def __init__(self, pilot: Pilot, now: float, interrupted=None, airborne: bool = True, armed: bool = True,
+                 testing: bool = False) -> None:
         self.pilot = pilot
         self.future: Future = CommandFuture()
         self.answer: Outcome | None = None
@@ -45,8 +47,9 @@ class StopSequence:
         self._interrupted = interrupted
         self.machine = Machine("decide", now, {
             "decide": self._decide, "disarm": self._disarm, "restore": self._restore, "guided": self._guided,
-            "brake": self._brake, "holding": self._holding, "watching": self._watching})
+            "brake": self._brake, "holding": self._holding, "watching": self._watching, "end test": self._end_test})
         self._airborne = airborne
+        self._testing = testing                       # a motor test runs, or one went out that may
         self._armed = armed                           # armed, or an arm or disarm on its way may have made it so
         self._held_in = ""
         self._guided_refusal = ""
@@ -63,6 +66,9 @@ class StopSequence:
     def _decide(self, s: VehicleState, now: float):
         m, seq = self.machine, self._interrupted
         armed = self._armed or s.armed
+        if self._testing and not self._airborne:      # motors spinning on the bench: they stop first
+            m.go("end test", now)
+            return None
         if not self._airborne and seq is not None and not seq.armed_before and (seq.ground.arm_sent or armed):
             m.go("disarm", now)                       # armed by the cancelled takeoff, nothing lifted: undo it (the
             return None                               # state may not show the arm yet: disarm all the same)
@@ -77,6 +83,17 @@ class StopSequence:
         else:                                           # the mode shown may be older than a MISSION_START on its way:
             m.go("guided", now)                         # ask, and hold once a fresh heartbeat shows GUIDED
         return None
+
+    def _end_test(self, s: VehicleState, now: float):
+        """ArduCopter's motor test takes a timeout of 0 as the end of the test: it stops and disarms itself
+        (motor_test.cpp); the test asked before, if still unanswered, is replaced and never sent again."""
+        r = self.machine.ask(lambda: self.pilot.long(mavlink.MAV_CMD_DO_MOTOR_TEST, (1, 0, 0, 0, 0),
+                                                     "stop motor test"))
+        if r is None:
+            return None
+        if r.ok:
+            return Outcome(CommandStatus.ACCEPTED, "motor test stopped: the vehicle disarms itself")
+        return Outcome(r.status, f"the motor test may still run: {r.reason}", SequencePhase.FAILED)
 
     def _disarm(self, s: VehicleState, now: float):
         r = self.machine.ask(lambda: self.pilot.disarm())
