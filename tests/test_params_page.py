@@ -166,6 +166,30 @@ def test_fix_on_the_gcs_failsafe_warning_opens_the_parameter(qtbot, sim, window)
     assert sim.autopilot.params["FS_GCS_ENABLE"] == 1
 
 
+def row_in_sight(page, name: str) -> bool:
+    """``name`` is the row picked and the table shows it whole."""
+    table = page.table
+    return page.current_name() == name and table.viewport().rect().contains(table.visualRect(table.currentIndex()))
+
+
+def fix_gcs_failsafe(qtbot, window):
+    messages = window.messages
+    qtbot.waitUntil(lambda: any("FS_GCS_ENABLE=0" in t for t in messages.texts()), timeout=15000)
+    row = next(i for i, t in enumerate(messages.texts()) if "FS_GCS_ENABLE=0" in t)
+    qtbot.mouseClick(messages.fix_button(row), Qt.LeftButton)
+    return window.params.page
+
+
+def test_fix_before_the_list_is_read_shows_the_row_once_it_is(qtbot, sim, window):
+    """Fix… as the vehicle connects: the driver has read FS_GCS_ENABLE alone, the page picks it among a few rows,
+    then the whole list comes in around it; the row is in sight at the end (it was left at row 401 of 1,392, the
+    table at its top)."""
+    page = fix_gcs_failsafe(qtbot, window)
+    assert not window.params.model.table.complete
+    qtbot.waitUntil(lambda: window.params.model.table.complete, timeout=DOWNLOAD_MS)
+    qtbot.waitUntil(lambda: row_in_sight(page, "FS_GCS_ENABLE"), timeout=3000)
+
+
 def test_messages_naming_parameters():
     assert named_parameter("GCS failsafe is off on the vehicle (FS_GCS_ENABLE=0): if") == "FS_GCS_ENABLE"
     assert named_parameter("Fence breached: above FENCE_ALT_MAX; (FENCE_ACTION: RTL or land)") == "FENCE_ALT_MAX"

@@ -51,6 +51,7 @@ class ParamsController(QObject):
         self.question: QMessageBox | None = None
         self._state = VehicleState()
         self._wanted = ""                        # a parameter to show once the vehicle reports it (Fix…)
+        self._recentre = ""                      # ... shown before the list was complete: again once it is
         self._asked = False                      # the download was asked for on this link
         self._fetch_problem = ""
         self._writing: dict[str, float] = {}      # name → the value on its way
@@ -106,6 +107,7 @@ class ParamsController(QObject):
             self._wanted = name                  # shown once the vehicle reports it
         elif name:
             page.editor.focus_value()
+            self._recentre = "" if self.model.table.complete else name
         self._show_download()
         return page
 
@@ -131,8 +133,13 @@ class ParamsController(QObject):
         if self.page is None:
             return
         if self._wanted and self.page.select(self._wanted):
+            self._recentre = "" if self.model.table.complete else self._wanted
             self._wanted = ""
             self.page.editor.focus_value()
+        elif self._recentre and self.model.table.complete:
+            if self.page.current_name() == self._recentre:      # the rest of the list came in around it
+                self.page.select(self._recentre)
+            self._recentre = ""
         if self.page.isVisible():
             self.fetch_if_needed()
             self._show_download()

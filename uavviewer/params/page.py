@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import re
 
-from PyQt5.QtCore import QItemSelectionModel, QModelIndex, Qt, pyqtSignal
+from PyQt5.QtCore import QItemSelectionModel, QModelIndex, Qt, QTimer, pyqtSignal
 from PyQt5.QtGui import QKeySequence
 from PyQt5.QtWidgets import (
     QAbstractItemView, QCheckBox, QFileDialog, QHBoxLayout, QHeaderView, QLabel, QLineEdit, QListWidget,
@@ -101,6 +101,9 @@ class ParametersPage(QWidget):
         self.groups.setMinimumWidth(120)
         self.table = QTableView()
         self.table.setObjectName("paramTable")
+        self._to_centre = ""
+        self._centring = QTimer(self, singleShot=True, interval=0)
+        self._centring.timeout.connect(self._centre)
         self.table.setModel(self.proxy)
         self.table.setSelectionBehavior(QAbstractItemView.SelectRows)
         self.table.setSelectionMode(QAbstractItemView.SingleSelection)
@@ -259,8 +262,15 @@ class ParametersPage(QWidget):
         self.table.selectionModel().setCurrentIndex(
             index, QItemSelectionModel.ClearAndSelect | QItemSelectionModel.Rows)
         self.table.scrollTo(index, QAbstractItemView.PositionAtCenter)
+        self._to_centre = name                  # and again once laid out (the page just opened, rows just in)
+        self._centring.start()
         self.show_current()
         return True
+
+    def _centre(self) -> None:
+        """The row :meth:`select` picked in the middle of the table, if it is still the one picked."""
+        if self.current_name() == self._to_centre:
+            self.table.scrollTo(self.table.currentIndex(), QAbstractItemView.PositionAtCenter)
 
     def visible_names(self) -> list[str]:
         """The names listed now, top to bottom."""
