@@ -198,7 +198,7 @@ def test_cruise_speed_is_the_vehicles_from_the_start(qtbot, vehicle, window_fact
     w, view, plan = planning_window(qtbot, vehicle, window_factory)
     label = plan.panel.totalsLabel
     # never opened Parameters: WPNAV_SPEED is read by name at connect (the simulated ArduCopter's 1000 cm/s)
-    qtbot.waitUntil(lambda: "cruise 10 m/s, WPNAV_SPEED from the vehicle" in label.text(), timeout=15000)
+    qtbot.waitUntil(lambda: "cruise 10 m/s (WPNAV_SPEED)" in label.text(), timeout=15000)
     assert plan.editor.perf.cruise == 10.0
     click(qtbot, view, 40, 0)
     assert plan.panel.tables["mission"].item(1, 3).text() == "10"

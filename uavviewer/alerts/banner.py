@@ -54,8 +54,8 @@ class AlertBanner(QWidget):
     def show_alert(self, text: str, severity: Severity, when: float = 0.0) -> None:
         """``when``: the event's wall clock (a replay's is the recording's); now when 0."""
         self._count = self._count + 1 if self.isVisible() else 1
-        more = f"  (+{self._count - 1} more in Messages)" if self._count > 1 else ""
-        self.label.setText(f"{time.strftime('%H:%M:%S', time.localtime(when or None))}  {text}{more}")
+        more = f"  (+{self._count - 1} more in Messages)" if self._count > 1 else ""   # before the text: a long
+        self.label.setText(f"{time.strftime('%H:%M:%S', time.localtime(when or None))}{more}  {text}")   # one is cut
         self.label.setToolTip(text)
         level = "critical" if severity <= Severity.CRITICAL else "warning"
         if self.property("level") != level:

@@ -342,6 +342,7 @@ class PlanEditor(QObject):
         totals_text = ("Plan: " + totals.text()) if self.home is not None else \
             "Plan totals need the vehicle's home position"
         p.totalsLabel.setText(f"{totals_text} · cruise {self.perf.cruise_text()}")
+        p.totalsLabel.setToolTip(self.perf.cruise_source())
         p.totalsLabel.setStyleSheet("color: #ff4d4d;" if totals.beyond_reserve else "")
         self.refreshed.emit()
 

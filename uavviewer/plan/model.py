@@ -117,10 +117,15 @@ class Performance:
         return replace(out, known=frozenset(known))
 
     def cruise_text(self) -> str:
-        """The cruise speed and where it comes from: "10 m/s, WPNAV_SPEED from the vehicle" or "5 m/s assumed"."""
+        """The cruise speed and where it comes from, short enough for the totals' three lines beside the list at
+        1366×768: "10 m/s (WPNAV_SPEED)" or "5 m/s (assumed)"; :meth:`cruise_source` says it in full."""
+        return f"{self.cruise:g} m/s (WPNAV_SPEED)" if "WPNAV_SPEED" in self.known else f"{self.cruise:g} m/s (assumed)"
+
+    def cruise_source(self) -> str:
         if "WPNAV_SPEED" in self.known:
-            return f"{self.cruise:g} m/s, WPNAV_SPEED from the vehicle"
-        return f"{self.cruise:g} m/s assumed (ArduCopter's default; the vehicle has not said its WPNAV_SPEED)"
+            return f"Cruise {self.cruise:g} m/s: the vehicle's WPNAV_SPEED"
+        return (f"Cruise {self.cruise:g} m/s assumed: ArduCopter's default, as the vehicle has not said its "
+                "WPNAV_SPEED")
 
 
 @dataclass(frozen=True)
