@@ -190,9 +190,11 @@ class ParametersPage(QWidget):
 
     def resizeEvent(self, event) -> None:  # noqa: N802 (Qt's name)
         """Beside the flight controls (430 px at 1024×600) the groups, the table and the editor stand one above the
-        other."""
+        other; stacked, the editor keeps the height its fields need (the table scrolls), as the value is what the
+        pilot came to change (at 1366×768 it was squeezed to its title)."""
         super().resizeEvent(event)
-        stack_when_narrow(self.splitter, event.size().width(), [140, 640, 300], [90, 300, 200])
+        stack_when_narrow(self.splitter, event.size().width(), [140, 640, 300],
+                          [70, 260, self.editor.sizeHint().height()])
 
     # -- shown state -------------------------------------------------------------------------------
     def show_download(self, table: ParameterTable, connected: bool) -> None:
