@@ -63,7 +63,7 @@ class MissionControl:
                                        ports.outbox.target, ports.state.record_locked, self._settle_later,
                                        lambda: ports.state.state.home, ports.firmware, ports.roundtrip)
         self._settling: list = []      # transfers ended, settled once the state shows what they did (_publish)
-        self._last_in_air: tuple = (None, "")     # (item, name) last current while the vehicle flew
+        self._last_in_air: tuple = (None, "")     # (item, name) furthest current while the vehicle flew
         self._armed = ports.state.state.armed     # as the last heartbeat showed it
         self._watches: list[_Watch] = []
         self._currents: collections.deque = collections.deque(maxlen=64)   # (time, item) as the vehicle says
@@ -216,7 +216,12 @@ class MissionControl:
         view = self._state.view()
         if view["armed"] and view["landed_state"] is not LandedState.ON_GROUND and view["system_status"] != 3:
             p = view["mission"]
-            self._last_in_air = (p.current, p.current_name)
+            item = self._last_in_air[0]
+            if item is None or p.current is None or p.current >= item:
+                # never back: through loss the heartbeat that shows the disarm can come after the MISSION_CURRENT
+                # of the mission ArduCopter rewound at the disarm (item 1, while we still think it flies)
+                self._last_in_air = (p.current, p.current_name if p.current != item or p.current_name
+                                     else self._last_in_air[1])
 
     def on_heartbeat(self, m) -> None:
         """The autopilot's heartbeat, folded (reader, lock held): arming or disarming changes the mission's story."""
