@@ -57,7 +57,11 @@ def test_stop_during_a_mission_start_on_a_slow_radio_holds_on_the_drivers_clock(
     # Stop pressed while the motors spin in a test the heartbeat does not show yet: the test is ended
     (0, FaultSet(), [Action("motor test", 0.0, 3.8), Action("motor test", 0.0, 5.1), Action("pause", 0.0, 1.1),
                      Action("stop", 0.0, 0.2), Action("motor test", 0.0, 0.2), Action("stop", 0.0, 3.0)]),
-], ids=["late-acks-of-a-replaced-land", "stop-after-a-restart", "stop-during-a-motor-test"])
+    # a calibration's retry right after a takeoff's arm was ACCEPTED, before the heartbeat showed it armed
+    (0, FaultSet(latency=0.1), [Action("calibrate", 0.0, 0.75), Action("calibrate", 0.0, 0.84375),
+                                Action("sticks", 0.0, 0.8125), Action("sticks", 1.0, 0.875), Action("takeoff", 0.0, 1.0)]),
+], ids=["late-acks-of-a-replaced-land", "stop-after-a-restart", "stop-during-a-motor-test",
+        "calibration-after-an-early-arm"])
 def test_sequences_the_big_search_found_stay_right(seed_, fault, sequence):
     """Sequences ``bench/chaos.py`` shrank from thousands, kept as they flew."""
     fly(seed_, fault, sequence)

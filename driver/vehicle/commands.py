@@ -158,6 +158,8 @@ class CommandSender:
         self._firmware = firmware             # learns what the vehicle calls UNSUPPORTED
         self._pending: dict[object, _Command] = {}
         self._echoes: dict[object, _Echo] = {}     # command id -> earlier requests not all answered
+        self._unshown: dict[object, tuple[bool, float]] = {}   # an arm or disarm accepted early: (armed wanted,
+                                                               # until when) the heartbeat has not shown it yet
         self._custom_mode: int | None = None       # the mode the heartbeat shows now
         self._armed = False                        # the armed bit it shows
         self._heartbeat_at = -1e18                 # when it was heard
@@ -178,7 +180,9 @@ class CommandSender:
     def settled_by_state(self, command: int, now: float, pending: bool = True) -> bool:
         """Whether the state now tells the truth about ``command`` (no request of that id could still change it;
         ``pending`` False: leaving out the one pending now, which is being judged)."""
-        return (not pending or command not in self._pending) and not self._echo_due(command, now)
+        unshown = self._unshown.get(command)
+        return ((not pending or command not in self._pending) and not self._echo_due(command, now)
+                and (unshown is None or now >= unshown[1]))
 
     def submit_mode(self, name: str, number: int, now: float, *, tag=None, early: bool = False) -> Future:
         """A mode change, confirmed by the heartbeat; SET_MODE on firmware known to lack DO_SET_MODE."""
@@ -304,6 +308,8 @@ class CommandSender:
             if result == mavlink.MAV_RESULT_ACCEPTED:
                 if c.early:                       # its answer, and only its own: the vehicle did it
                     self._resolve(c, CommandStatus.ACCEPTED, "accepted (its heartbeat shows it next)", now=now)
+                    if c.armed is not None:       # armed (or not) from now, though the state says so a beat later
+                        self._unshown[c.key] = (c.armed, now + self._answer_window() + self._cfg.heartbeat_interval)
                     return
                 c.acked, c.acked_at = True, now   # the heartbeat settles it
                 c.next_send = now + ACKED_MODE_WAIT
@@ -326,6 +332,9 @@ class CommandSender:
         """The autopilot's heartbeat shows ``custom_mode`` and ``armed``: the truth for every mode change and
         every arming, once no earlier request could still be what made it so."""
         self._custom_mode, self._armed, self._heartbeat_at = custom_mode, armed, now
+        for key, (wanted, _) in list(self._unshown.items()):
+            if armed == wanted:
+                del self._unshown[key]
         for c in list(self._pending.values()):
             if self._shows(c, now):
                 self._resolve(c, CommandStatus.ACCEPTED, "" if c.acked or not c.legacy else "shown by the heartbeat",
