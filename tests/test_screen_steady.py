@@ -109,8 +109,7 @@ def test_no_control_moves_as_the_state_changes(qtbot, sim_factory, vehicle_facto
     # the start answered (the next click is a stop, not a second start superseding a start still pending)
     qtbot.waitUntil(lambda: w.adapter.state.camera.recording and "●" in w.gimbal_bar.record_button.text()
                     and any(r.command == "record on" and r.ok for r in w.adapter.state.results), timeout=10000)
-    QApplication.processEvents()
-    assert w.gimbal_bar.record_button.isChecked()
+    qtbot.waitUntil(w.gimbal_bar.record_button.isChecked, timeout=5000)       # it follows the camera, every snapshot
     watch.step("record")
     qtbot.mouseClick(w.gimbal_bar.record_button, Qt.LeftButton)
     qtbot.waitUntil(lambda: w.adapter.state.camera.recording is False, timeout=10000)
