@@ -77,7 +77,8 @@ class MessagesView(QTreeWidget):
             self._put(last, when, severity, text, last.data(0, _COUNT) + 1)
             return last
         if gesture and last is not None and last.data(0, _GESTURE) == gesture \
-                and when - last.data(0, _GESTURE + 1) <= GESTURE_GAP:
+                and (when - last.data(0, _GESTURE + 1) <= GESTURE_GAP or "superseded by" in last.data(0, _BASE)):
+            # (a step the next one superseded is that one's line however long the vehicle took to answer it)
             self._put(last, when, severity, text, 1)
             return last
         item = QTreeWidgetItem(["", source, ""])
