@@ -286,6 +286,8 @@ class LinkSigning:
             now = signing_time()
             if now > sig.timestamp:
                 sig.timestamp = now
+            if sig.timestamp <= self._floor:      # above a SETUP_SIGNING frame packed on a codec of its own
+                sig.timestamp = self._floor + 1
 
     # -- what the reader sees (vehicle lock held) -------------------------------------------------
     def rejected(self, msg) -> None:

@@ -72,6 +72,10 @@ class Ticker:
         """
         if self._transport.is_replay or not msgs:
             return
+        # a frame packed already (SETUP_SIGNING, signed with the key the vehicle has) carries the timestamp of the
+        # moment it was made: first, so that nothing packed now with a later one goes out before it (the vehicle
+        # would drop it as a replay, and a key's removal was lost so in 1 of 5 loaded runs)
+        msgs = [m for m in msgs if isinstance(m, bytes)] + [m for m in msgs if not isinstance(m, bytes)]
         if len(msgs) == 1 or not self._transport.byte_stream:
             for msg in msgs:
                 self.send(msg)
