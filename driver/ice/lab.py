@@ -223,7 +223,9 @@ def main(argv: list[str], prog: str = "python -m driver registry") -> int:
     opts = p.parse_args(argv)
     logging.basicConfig(level=logging.INFO, format="%(asctime)s %(levelname)s %(name)s: %(message)s")
     lab = Lab(opts.host, opts.port, opts.data, opts.certs, opts.insecure, icestorm=not opts.no_icestorm)
-    try:
+    stop = []
+    signal.signal(signal.SIGTERM, lambda *_: stop.append(1))   # before the line that says it is up: whoever
+    try:                                                        # reads it may stop it at once, and cleanly
         lab.start()
     except LabError as exc:
         print(exc, file=sys.stderr)
@@ -231,8 +233,6 @@ def main(argv: list[str], prog: str = "python -m driver registry") -> int:
     print(f"IceGrid registry on {lab.address}" + (" with IceStorm" if lab.icestorm else "") +
           f"; servers: python -m driver --registry {lab.address} --name NAME; "
           f"viewers: python main.py --registry {lab.address}; their logs: {', '.join(lab.logs())}", flush=True)
-    stop = []
-    signal.signal(signal.SIGTERM, lambda *_: stop.append(1))
     try:
         while not stop and lab.running():
             time.sleep(0.2)
