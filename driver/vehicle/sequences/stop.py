@@ -93,6 +93,10 @@ class StopSequence:
             return None
         if r.ok:
             return Outcome(CommandStatus.ACCEPTED, "motor test stopped: the vehicle disarms itself")
+        if r.status is CommandStatus.REJECTED:        # the flight rules: the test's run is over (it ended by
+            self._testing = False                     # itself meanwhile): Stop decides as for any other state
+            self.machine.go("decide", now)
+            return None
         return Outcome(r.status, f"the motor test may still run: {r.reason}", SequencePhase.FAILED)
 
     def _disarm(self, s: VehicleState, now: float):
