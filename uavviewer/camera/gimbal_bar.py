@@ -36,6 +36,7 @@ class GimbalBar(QWidget):
         self.record_button = self._button("Video", "Start or stop video on the vehicle's own camera "
                                           "(not this window's recording)")
         self.record_button.setCheckable(True)
+        self._recording: bool | None = None         # the camera's last word (None: it has said nothing)
         self.stop_looking_button = self._button("Stop looking", "The camera stops looking at the point chosen on "
                                                 "the map (DO_SET_ROI_NONE) and goes back to the pilot")
         self.stop_looking_button.setStyleSheet("color: #ff6ad5; font-weight: bold")
@@ -43,7 +44,7 @@ class GimbalBar(QWidget):
         self.level_button.clicked.connect(self.levelRequested)
         self.down_button.clicked.connect(self.downRequested)
         self.photo_button.clicked.connect(self.photoRequested)
-        self.record_button.clicked.connect(lambda: self.recordRequested.emit(self.record_button.isChecked()))
+        self.record_button.clicked.connect(self._record_clicked)
         self.stop_looking_button.clicked.connect(self.stopLookingRequested)
         row = QHBoxLayout(self)
         row.setContentsMargins(0, 0, 0, 0)
@@ -63,10 +64,19 @@ class GimbalBar(QWidget):
         b.setAutoRaise(True)
         return b
 
+    def _record_clicked(self) -> None:
+        """Start when the camera says it is not recording, stop when it says it is: the click asks, the button's
+        own toggle is undone at once and only the camera's report presses it (a toggle left to the next snapshot
+        crossed it, and a second click then asked to start again)."""
+        recording = bool(self._recording)
+        self.record_button.setChecked(recording)
+        self.recordRequested.emit(not recording)
+
     def show_state(self, s: VehicleState) -> None:
         """What the vehicle says about its gimbal and camera; the Record button follows the camera, not the click.
         Every snapshot: the texts are set only when what they show changed."""
         c = s.camera
+        self._recording = c.recording
         if self.record_button.isChecked() != bool(c.recording):     # a click the camera did not follow is undone
             self.record_button.setChecked(bool(c.recording))
         live = s.connected and not s.link.replay       # a recording's camera cannot be asked for anything
